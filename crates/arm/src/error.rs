@@ -1,0 +1,35 @@
+//! Typed errors of the arm crate: what a move can be refused for.
+use tactrace_geometry::Pose;
+
+/// Why an arm refused or failed a move.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ArmError {
+    /// The target position leaves the workspace box along one axis.
+    #[error("pose {pose:?} is outside the workspace: {axis} = {value_mm:.3} mm, allowed [{min_mm}, {max_mm}] mm")]
+    OutsideWorkspace {
+        pose: Pose,
+        axis: char,
+        value_mm: f64,
+        min_mm: f64,
+        max_mm: f64,
+    },
+    /// The move is longer than the largest allowed single step.
+    #[error("step of {step_mm:.3} mm exceeds the maximum of {max_mm} mm")]
+    StepTooLarge { step_mm: f64, max_mm: f64 },
+    /// The move turns the tool by more than the largest allowed rotation.
+    #[error("rotation step of {step_deg:.3} deg exceeds the maximum of {max_deg} deg")]
+    RotationTooLarge { step_deg: f64, max_deg: f64 },
+    /// A pose with a NaN or infinite component.
+    #[error("pose {pose:?} has a non-finite component")]
+    NonFinitePose { pose: Pose },
+    /// A configuration value that cannot be used.
+    #[error("invalid arm configuration: {field} = {value} ({reason})")]
+    InvalidConfig {
+        field: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
+    /// A failure reported by a real robot driver.
+    #[error("arm hardware error: {0}")]
+    Hardware(String),
+}

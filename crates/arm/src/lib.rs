@@ -1,0 +1,17 @@
+//! The arm: a robot that moves the tactile sensor and taps it on objects.
+//!
+//! [`Arm`] is the hardware seam. [`SimArm`] is the simulated UR5-class arm
+//! (poses reached up to a configurable repeatability); [`LimitedArm`] wraps
+//! any arm and refuses or clamps moves outside a workspace box or larger
+//! than a maximum step. A real UR5 driver implements the same trait.
+
+mod error;
+mod limiter;
+mod sim;
+mod traits;
+
+pub use error::ArmError;
+pub use limiter::{LimitMode, LimitedArm, Workspace};
+pub use sim::{PoseProbe, SimArm, SimArmConfig};
+pub use tactrace_geometry::Pose;
+pub use traits::Arm;

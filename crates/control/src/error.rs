@@ -1,0 +1,15 @@
+//! Typed errors of the control crate.
+
+/// What can be wrong with a controller configuration or input.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ControlError {
+    /// A gain, reference or bound that is NaN or infinite.
+    #[error("controller setting {field}[{index}] is not finite")]
+    NonFinite { field: &'static str, index: usize },
+    /// A negative anti-windup bound.
+    #[error("integral_clip[{index}] = {value} must be >= 0")]
+    NegativeClip { index: usize, value: f64 },
+    /// A pose prediction that is NaN or infinite.
+    #[error("sensed pose r = {r_mm} mm, theta = {theta_deg} deg is not finite")]
+    NonFiniteInput { r_mm: f64, theta_deg: f64 },
+}

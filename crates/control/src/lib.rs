@@ -1,0 +1,14 @@
+//! The policy: pose-based tactile servo (PBTS) control, report ch. 5.1.
+//!
+//! A PI(D) controller in the sensor frame: error e = s* - s(m) (eq. 5.3),
+//! delta_s = Kp e + Ki F(sum e) + Kd (e - e_prev) (eq. 5.5-5.6, derivative
+//! term from the report's further work), anti-windup F clipping the integral,
+//! and the move applied in the robot frame by quaternion composition
+//! (eq. 5.7-5.8). Frames and sign conventions: see [`pbts`].
+
+mod error;
+pub mod pbts;
+
+pub use error::ControlError;
+
+pub use pbts::{next_pose, PbtsConfig, PbtsController, SensedPose};

@@ -1,0 +1,317 @@
+//! [`Ur5Arm`]: a real UR5 behind the [`Arm`] trait, over plain TCP.
+//!
+//! Units and frames: poses handed in and out are the sensor tip in the work
+//! frame, millimetres and degrees (extrinsic x-y-z), exactly as for
+//! `SimArm`. The work frame is given as the base -> work transform
+//! ([`Ur5Config::work_frame`]); the tool centre point as the flange -> tip
+//! transform ([`Ur5Config::tcp`]). On the wire everything is metres and
+//! rotation vectors in the robot base frame (see `script`).
+//!
+//! Blocking: [`Ur5Arm::connect`] blocks until both connections are open and
+//! a first state packet arrived; [`Arm::move_to`] blocks until the measured
+//! TCP pose is within tolerance of the target, the controller reports a
+//! stop, or the timeout passes (then a `stopl` is sent).
+use std::time::{Duration, Instant};
+
+use nalgebra::Isometry3;
+use serde::{Deserialize, Serialize};
+use tactrace_arm::{Arm, ArmError};
+use tactrace_geometry::Pose;
+
+use super::link::{connect, CommandChannel, StateStream};
+use super::realtime::{check_can_move, RobotState};
+use super::script::{
+    base_to_work, check_finite, isometry_to_tool_vector, movel_program, pose_error,
+    pose_to_tool_vector, set_tcp_program, stopl_program, tool_vector_to_isometry, work_to_base,
+};
+use crate::HwError;
+
+/// Highest linear speed accepted, mm/s (a tactile rig never needs more).
+pub const MAX_LINEAR_SPEED_MM_S: f64 = 250.0;
+/// Highest linear acceleration accepted, mm/s^2.
+pub const MAX_LINEAR_ACCEL_MM_S2: f64 = 2500.0;
+
+/// Connection and motion settings of the UR5 driver.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ur5Config {
+    /// Controller host name or IP address.
+    pub host: String,
+    /// URScript port (secondary interface), 30002.
+    #[serde(default = "default_command_port")]
+    pub command_port: u16,
+    /// Real-time state port, 30003.
+    #[serde(default = "default_state_port")]
+    pub state_port: u16,
+    /// Base -> work frame transform, mm and degrees.
+    #[serde(default)]
+    pub work_frame: Pose,
+    /// Flange -> sensor tip (TCP) transform, mm and degrees.
+    #[serde(default)]
+    pub tcp: Pose,
+    /// Linear speed of `movel`, mm/s (Bristol collection: 10).
+    #[serde(default = "default_speed")]
+    pub linear_speed_mm_s: f64,
+    /// Linear acceleration of `movel`, mm/s^2.
+    #[serde(default = "default_accel")]
+    pub linear_accel_mm_s2: f64,
+    /// Position tolerance for "target reached", mm.
+    #[serde(default = "default_tolerance")]
+    pub tolerance_mm: f64,
+    /// Rotation tolerance for "target reached", degrees.
+    #[serde(default = "default_tolerance")]
+    pub tolerance_deg: f64,
+    /// Longest wait for a connection, a first packet or a move, s.
+    #[serde(default = "default_timeout")]
+    pub timeout_s: f64,
+}
+
+fn default_command_port() -> u16 {
+    30002
+}
+fn default_state_port() -> u16 {
+    30003
+}
+fn default_speed() -> f64 {
+    10.0
+}
+fn default_accel() -> f64 {
+    100.0
+}
+fn default_tolerance() -> f64 {
+    0.1
+}
+fn default_timeout() -> f64 {
+    60.0
+}
+
+impl Ur5Config {
+    /// Defaults for everything but the host.
+    pub fn new(host: impl Into<String>) -> Self {
+        Self {
+            host: host.into(),
+            command_port: default_command_port(),
+            state_port: default_state_port(),
+            work_frame: Pose::default(),
+            tcp: Pose::default(),
+            linear_speed_mm_s: default_speed(),
+            linear_accel_mm_s2: default_accel(),
+            tolerance_mm: default_tolerance(),
+            tolerance_deg: default_tolerance(),
+            timeout_s: default_timeout(),
+        }
+    }
+
+    /// Checks ranges: positive finite speeds, tolerances and timeout,
+    /// speeds under the caps, finite frames, a host.
+    pub fn validate(&self) -> Result<(), HwError> {
+        if self.host.trim().is_empty() {
+            return Err(config_err("host", "empty"));
+        }
+        check_range(
+            "linear_speed_mm_s",
+            self.linear_speed_mm_s,
+            MAX_LINEAR_SPEED_MM_S,
+        )?;
+        check_range(
+            "linear_accel_mm_s2",
+            self.linear_accel_mm_s2,
+            MAX_LINEAR_ACCEL_MM_S2,
+        )?;
+        check_range("tolerance_mm", self.tolerance_mm, 10.0)?;
+        check_range("tolerance_deg", self.tolerance_deg, 10.0)?;
+        check_range("timeout_s", self.timeout_s, 3600.0)?;
+        check_finite(self.work_frame).map_err(|e| config_err("work_frame", &e.to_string()))?;
+        check_finite(self.tcp).map_err(|e| config_err("tcp", &e.to_string()))
+    }
+
+    fn timeout(&self) -> Duration {
+        Duration::from_secs_f64(self.timeout_s)
+    }
+}
+
+fn config_err(field: &'static str, reason: &str) -> HwError {
+    HwError::Config {
+        field,
+        reason: reason.to_string(),
+    }
+}
+
+fn check_range(field: &'static str, value: f64, max: f64) -> Result<(), HwError> {
+    if value.is_finite() && value > 0.0 && value <= max {
+        Ok(())
+    } else {
+        Err(config_err(field, &format!("{value} is not in (0, {max}]")))
+    }
+}
+
+/// A UR5 (CB3 or e-series) driven by URScript `movel` over TCP.
+pub struct Ur5Arm {
+    config: Ur5Config,
+    commands: CommandChannel,
+    states: StateStream,
+    commanded: Pose,
+}
+
+impl Ur5Arm {
+    /// Connects to the controller, sets the TCP and reads the current pose.
+    /// Blocks up to `timeout_s` for each connection and the first packet.
+    pub fn connect(config: Ur5Config) -> Result<Self, HwError> {
+        config.validate()?;
+        let timeout = config.timeout();
+        let command_stream = connect(&config.host, config.command_port, timeout)?;
+        let state_stream = connect(&config.host, config.state_port, timeout)?;
+        let mut commands = CommandChannel::start(command_stream)?;
+        let states = StateStream::start(state_stream)?;
+        commands.send(&set_tcp_program(pose_to_tool_vector(config.tcp)))?;
+        let (_, state) = states.wait_newer(0, timeout)?;
+        let commanded = base_to_work(
+            config.work_frame,
+            &tool_vector_to_isometry(state.tool_actual),
+        );
+        Ok(Self {
+            config,
+            commands,
+            states,
+            commanded,
+        })
+    }
+
+    /// The settings in use.
+    pub fn config(&self) -> &Ur5Config {
+        &self.config
+    }
+
+    /// The newest measured TCP pose in the work frame (mm, deg). Does not
+    /// block once a packet has arrived (the reader thread keeps the newest);
+    /// fails if the state stream has failed.
+    pub fn actual_pose(&self) -> Result<Pose, HwError> {
+        let state = self.fresh_state()?;
+        Ok(base_to_work(
+            self.config.work_frame,
+            &tool_vector_to_isometry(state.tool_actual),
+        ))
+    }
+
+    /// The newest raw controller state; blocks like [`Ur5Arm::actual_pose`].
+    pub fn fresh_state(&self) -> Result<RobotState, HwError> {
+        let after = self.states.seq().saturating_sub(1);
+        self.states
+            .wait_newer(after, self.config.timeout())
+            .map(|(_, s)| s)
+    }
+
+    /// Sends `movel` to the base-frame target and waits for arrival.
+    fn move_blocking(&mut self, pose: Pose) -> Result<(), HwError> {
+        check_finite(pose)?;
+        check_can_move(&self.fresh_state()?)?;
+        let target = work_to_base(self.config.work_frame, pose);
+        let program = movel_program(
+            isometry_to_tool_vector(&target),
+            pose_to_tool_vector(self.config.tcp),
+            self.config.linear_accel_mm_s2 / 1000.0,
+            self.config.linear_speed_mm_s / 1000.0,
+        );
+        self.commands.send(&program)?;
+        match self.wait_arrival(&target, pose) {
+            Ok(()) => {
+                self.commanded = pose;
+                Ok(())
+            }
+            Err(e) => {
+                // Best effort: stop a move that is still going.
+                let _ = self
+                    .commands
+                    .send(&stopl_program(self.config.linear_accel_mm_s2 / 1000.0));
+                Err(e)
+            }
+        }
+    }
+
+    /// Polls the state stream until the TCP is within tolerance of `target`.
+    fn wait_arrival(&self, target: &Isometry3<f64>, pose: Pose) -> Result<(), HwError> {
+        let timeout = self.config.timeout();
+        let start = Instant::now();
+        let mut seq = self.states.seq();
+        let mut errors = (f64::INFINITY, f64::INFINITY);
+        loop {
+            let remaining = timeout.saturating_sub(start.elapsed());
+            if remaining.is_zero() {
+                return Err(HwError::MoveTimeout {
+                    seconds: self.config.timeout_s,
+                    target: format!("{pose:?}"),
+                    position_error_mm: errors.0,
+                    rotation_error_deg: errors.1,
+                });
+            }
+            let (next, state) = match self.states.wait_newer(seq, remaining) {
+                Ok(found) => found,
+                Err(HwError::NoState { .. }) => continue,
+                Err(e) => return Err(e),
+            };
+            seq = next;
+            check_can_move(&state)?;
+            errors = pose_error(&tool_vector_to_isometry(state.tool_actual), target);
+            if errors.0 <= self.config.tolerance_mm && errors.1 <= self.config.tolerance_deg {
+                return Ok(());
+            }
+        }
+    }
+}
+
+impl Arm for Ur5Arm {
+    /// Linear move of the sensor tip to `pose` (work frame, mm/deg) at the
+    /// configured speed. Blocks until the measured pose is within
+    /// tolerance; on timeout or a safety stop, sends `stopl` and returns
+    /// `ArmError::Hardware` (the timeout message starts with "timeout").
+    fn move_to(&mut self, pose: Pose) -> Result<(), ArmError> {
+        if check_finite(pose).is_err() {
+            return Err(ArmError::NonFinitePose { pose });
+        }
+        self.move_blocking(pose).map_err(ArmError::from)
+    }
+
+    /// The last target reached (within tolerance), or the measured pose at
+    /// connection before any move; does not block.
+    fn pose(&self) -> Pose {
+        self.commanded
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn config_defaults_from_host_only() {
+        let config: Ur5Config = serde_json::from_str(r#"{"host": "192.168.1.10"}"#).unwrap();
+        assert_eq!(config, Ur5Config::new("192.168.1.10"));
+        assert_eq!((config.command_port, config.state_port), (30002, 30003));
+        assert_eq!(config.linear_speed_mm_s, 10.0);
+        assert!(config.validate().is_ok());
+    }
+
+    #[test]
+    fn config_rejects_unknown_fields_and_bad_ranges() {
+        let unknown = serde_json::from_str::<Ur5Config>(r#"{"host": "h", "speed": 3}"#);
+        assert!(unknown.is_err());
+        let mut config = Ur5Config::new("h");
+        config.linear_speed_mm_s = 1000.0;
+        assert!(matches!(
+            config.validate(),
+            Err(HwError::Config {
+                field: "linear_speed_mm_s",
+                ..
+            })
+        ));
+        config.linear_speed_mm_s = 10.0;
+        config.tolerance_mm = f64::NAN;
+        assert!(config.validate().is_err());
+        config.tolerance_mm = 0.1;
+        config.tcp.z = f64::INFINITY;
+        assert!(matches!(
+            config.validate(),
+            Err(HwError::Config { field: "tcp", .. })
+        ));
+    }
+}

@@ -1,0 +1,290 @@
+//! A fake UR controller on the loopback interface, for tests without a robot.
+//!
+//! It listens on two ephemeral ports of 127.0.0.1 (command and state),
+//! accepts one client on each, reads URScript lines, takes the target of
+//! each `movel(p[...]` and streams real-time packets (CB3 3.5 layout) whose
+//! "tool vector actual" moves towards that target at a fixed speed. Every
+//! loop is bounded: the server stops by itself after `lifetime`, when a
+//! client leaves, or when dropped. Behaviours cover the failure paths a
+//! driver must survive (a frozen arm, a malformed packet, a protective stop).
+use std::io::{ErrorKind, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use nalgebra::Isometry3;
+
+use super::arm::Ur5Config;
+use super::realtime::{encode_packet, RobotState, ROBOT_MODE_RUNNING, SAFETY_MODE_NORMAL};
+use super::script::{
+    find_movel_target, isometry_to_tool_vector, pose_error, tool_vector_to_isometry,
+};
+use crate::HwError;
+
+/// What the fake does when it receives a `movel`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FakeBehaviour {
+    /// Move towards the target (the normal case).
+    Follow,
+    /// Never move: the driver must time out.
+    IgnoreMoves,
+    /// Send a packet with an impossible length: the driver must fail cleanly.
+    MalformedOnMove,
+    /// Switch to safety mode 3 (protective stop) without moving.
+    ProtectiveStopOnMove,
+}
+
+/// Settings of the fake controller.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FakeUrOptions {
+    /// Initial TCP pose in the base frame (m, rotation vector rad).
+    pub start: [f64; 6],
+    /// Linear speed of the simulated TCP, mm/s.
+    pub speed_mm_s: f64,
+    /// Angular speed of the simulated TCP, deg/s.
+    pub speed_deg_s: f64,
+    /// Packet period (8 ms = 125 Hz like a CB3).
+    pub period: Duration,
+    /// The server stops by itself after this long.
+    pub lifetime: Duration,
+    /// Reaction to `movel`.
+    pub behaviour: FakeBehaviour,
+}
+
+impl Default for FakeUrOptions {
+    fn default() -> Self {
+        Self {
+            start: [0.4, 0.0, 0.3, std::f64::consts::PI, 0.0, 0.0],
+            speed_mm_s: 400.0,
+            speed_deg_s: 180.0,
+            period: Duration::from_millis(8),
+            lifetime: Duration::from_secs(20),
+            behaviour: FakeBehaviour::Follow,
+        }
+    }
+}
+
+/// A running fake controller; stops and joins its thread on drop.
+pub struct FakeUrController {
+    command_port: u16,
+    state_port: u16,
+    lines: Arc<Mutex<Vec<String>>>,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl FakeUrController {
+    /// Binds two loopback ports and starts serving in a thread.
+    pub fn start(options: FakeUrOptions) -> Result<Self, HwError> {
+        let io_err = |source| HwError::Io {
+            what: "fake controller".into(),
+            source,
+        };
+        let command = TcpListener::bind("127.0.0.1:0").map_err(io_err)?;
+        let state = TcpListener::bind("127.0.0.1:0").map_err(io_err)?;
+        let command_port = command.local_addr().map_err(io_err)?.port();
+        let state_port = state.local_addr().map_err(io_err)?.port();
+        let lines = Arc::new(Mutex::new(Vec::new()));
+        let stop = Arc::new(AtomicBool::new(false));
+        let server = Server {
+            options,
+            lines: lines.clone(),
+            stop: stop.clone(),
+            deadline: Instant::now() + options.lifetime,
+        };
+        let thread = std::thread::spawn(move || server.run(command, state));
+        Ok(Self {
+            command_port,
+            state_port,
+            lines,
+            stop,
+            thread: Some(thread),
+        })
+    }
+
+    /// A driver configuration pointing at this fake (127.0.0.1).
+    pub fn config(&self) -> Ur5Config {
+        let mut config = Ur5Config::new("127.0.0.1");
+        config.command_port = self.command_port;
+        config.state_port = self.state_port;
+        config
+    }
+
+    /// Every URScript line received so far.
+    pub fn received_lines(&self) -> Vec<String> {
+        self.lines.lock().map(|l| l.clone()).unwrap_or_default()
+    }
+}
+
+impl Drop for FakeUrController {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+struct Server {
+    options: FakeUrOptions,
+    lines: Arc<Mutex<Vec<String>>>,
+    stop: Arc<AtomicBool>,
+    deadline: Instant,
+}
+
+/// The simulated robot: where the TCP is and where it is going.
+struct Motion {
+    current: Isometry3<f64>,
+    target: Option<Isometry3<f64>>,
+    safety_mode: i32,
+    malformed: bool,
+}
+
+impl Server {
+    fn should_stop(&self) -> bool {
+        self.stop.load(Ordering::Relaxed) || Instant::now() >= self.deadline
+    }
+
+    fn run(self, command: TcpListener, state: TcpListener) {
+        let Some(mut command) = self.accept(&command) else {
+            return;
+        };
+        let Some(mut state) = self.accept(&state) else {
+            return;
+        };
+        let _ = command.set_nonblocking(true);
+        let mut motion = Motion {
+            current: tool_vector_to_isometry(self.options.start),
+            target: None,
+            safety_mode: SAFETY_MODE_NORMAL,
+            malformed: false,
+        };
+        let mut pending = String::new();
+        let start = Instant::now();
+        while !self.should_stop() {
+            if !self.read_commands(&mut command, &mut pending, &mut motion) {
+                return;
+            }
+            let moving = self.step(&mut motion);
+            let packet = self.packet(&motion, moving, start.elapsed().as_secs_f64());
+            if state.write_all(&packet).is_err() {
+                return;
+            }
+            std::thread::sleep(self.options.period);
+        }
+    }
+
+    fn accept(&self, listener: &TcpListener) -> Option<TcpStream> {
+        listener.set_nonblocking(true).ok()?;
+        while !self.should_stop() {
+            match listener.accept() {
+                Ok((stream, _)) => {
+                    stream.set_nonblocking(false).ok()?;
+                    return Some(stream);
+                }
+                Err(e) if e.kind() == ErrorKind::WouldBlock => {
+                    std::thread::sleep(Duration::from_millis(2));
+                }
+                Err(_) => return None,
+            }
+        }
+        None
+    }
+
+    /// Reads whatever URScript arrived; false when the client has gone.
+    fn read_commands(
+        &self,
+        stream: &mut TcpStream,
+        pending: &mut String,
+        motion: &mut Motion,
+    ) -> bool {
+        let mut chunk = [0u8; 4096];
+        loop {
+            match stream.read(&mut chunk) {
+                Ok(0) => return false,
+                Ok(n) => pending.push_str(&String::from_utf8_lossy(&chunk[..n])),
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                Err(_) => return false,
+            }
+        }
+        while let Some(end) = pending.find('\n') {
+            let line: String = pending.drain(..=end).collect();
+            self.handle_line(line.trim_end(), motion);
+        }
+        true
+    }
+
+    fn handle_line(&self, line: &str, motion: &mut Motion) {
+        if let Ok(mut lines) = self.lines.lock() {
+            lines.push(line.to_string());
+        }
+        if line.contains("stopl(") {
+            motion.target = None;
+        }
+        let Some(target) = find_movel_target(line) else {
+            return;
+        };
+        match self.options.behaviour {
+            FakeBehaviour::Follow => motion.target = Some(tool_vector_to_isometry(target)),
+            FakeBehaviour::IgnoreMoves => {}
+            FakeBehaviour::MalformedOnMove => motion.malformed = true,
+            FakeBehaviour::ProtectiveStopOnMove => motion.safety_mode = 3,
+        }
+    }
+
+    /// Advances the TCP one period towards the target; true while moving.
+    fn step(&self, motion: &mut Motion) -> bool {
+        let Some(target) = motion.target else {
+            return false;
+        };
+        let dt = self.options.period.as_secs_f64();
+        let (dp, dr) = pose_error(&motion.current, &target);
+        let steps = (dp / (self.options.speed_mm_s * dt)).max(dr / (self.options.speed_deg_s * dt));
+        if steps <= 1.0 {
+            motion.current = target;
+            motion.target = None;
+            return true;
+        }
+        let fraction = 1.0 / steps;
+        let rotation = motion
+            .current
+            .rotation
+            .try_slerp(&target.rotation, fraction, 1e-9)
+            .unwrap_or(target.rotation);
+        let translation = motion
+            .current
+            .translation
+            .vector
+            .lerp(&target.translation.vector, fraction);
+        motion.current = Isometry3::from_parts(translation.into(), rotation);
+        true
+    }
+
+    fn packet(&self, motion: &Motion, moving: bool, time_s: f64) -> Vec<u8> {
+        if motion.malformed {
+            // Declares 12 bytes: far below any real packet.
+            let mut bad = 12i32.to_be_bytes().to_vec();
+            bad.extend_from_slice(&[0u8; 8]);
+            return bad;
+        }
+        let speed = if moving {
+            self.options.speed_mm_s / 1000.0
+        } else {
+            0.0
+        };
+        let tool = isometry_to_tool_vector(&motion.current);
+        let target = motion.target.map_or(tool, |t| isometry_to_tool_vector(&t));
+        encode_packet(&RobotState {
+            time_s,
+            joints_rad: [0.0; 6],
+            tool_actual: tool,
+            tcp_speed: [speed, 0.0, 0.0, 0.0, 0.0, 0.0],
+            tool_target: target,
+            robot_mode: ROBOT_MODE_RUNNING,
+            safety_mode: motion.safety_mode,
+            program_state: Some(if moving { 2 } else { 1 }),
+        })
+    }
+}

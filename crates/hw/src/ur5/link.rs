@@ -1,0 +1,241 @@
+//! The two TCP connections to the UR controller, each with a reader thread.
+//!
+//! The controller pushes state continuously (125 Hz on the real-time port
+//! for CB3, 500 Hz on e-series; 10 Hz on the secondary port). A client that
+//! stops reading lets stale packets pile up in the socket, so both
+//! connections get a background thread that keeps reading: the state thread
+//! keeps only the newest parsed packet, the command thread discards what the
+//! secondary interface sends (UR recommend always reading that socket).
+//! The threads check a stop flag every read timeout and end on drop.
+use std::io::{ErrorKind, Read, Write};
+use std::net::{TcpStream, ToSocketAddrs};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use super::realtime::{declared_length, parse_packet, RobotState};
+use crate::HwError;
+
+/// How often the reader threads look at their stop flag.
+const READ_POLL: Duration = Duration::from_millis(50);
+
+/// Opens a TCP connection with a connect timeout.
+pub fn connect(host: &str, port: u16, timeout: Duration) -> Result<TcpStream, HwError> {
+    let addr_text = format!("{host}:{port}");
+    let io_err = |source| HwError::Connect {
+        addr: addr_text.clone(),
+        source,
+    };
+    let addrs = (host, port).to_socket_addrs().map_err(io_err)?;
+    let mut last = std::io::Error::new(ErrorKind::NotFound, "no address resolved");
+    for addr in addrs {
+        match TcpStream::connect_timeout(&addr, timeout) {
+            Ok(stream) => {
+                stream.set_nodelay(true).map_err(io_err)?;
+                return Ok(stream);
+            }
+            Err(e) => last = e,
+        }
+    }
+    Err(io_err(last))
+}
+
+#[derive(Default)]
+struct Latest {
+    state: Option<RobotState>,
+    seq: u64,
+    failure: Option<String>,
+}
+
+type Shared = Arc<(Mutex<Latest>, Condvar)>;
+
+fn lock(shared: &Shared) -> MutexGuard<'_, Latest> {
+    // A poisoned lock only means a reader thread panicked mid-update; the
+    // data is plain values, so keep using it.
+    shared.0.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// The real-time state connection and its reader thread.
+pub struct StateStream {
+    shared: Shared,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl StateStream {
+    /// Starts reading `stream` in a background thread.
+    pub fn start(stream: TcpStream) -> Result<Self, HwError> {
+        stream
+            .set_read_timeout(Some(READ_POLL))
+            .map_err(|source| HwError::Io {
+                what: "state socket".into(),
+                source,
+            })?;
+        let shared: Shared = Arc::default();
+        let stop = Arc::new(AtomicBool::new(false));
+        let (s, f) = (shared.clone(), stop.clone());
+        let thread = std::thread::spawn(move || read_states(stream, &s, &f));
+        Ok(Self {
+            shared,
+            stop,
+            thread: Some(thread),
+        })
+    }
+
+    /// The newest state and its sequence number; blocks until one arrives
+    /// with a sequence number above `after`, or fails after `timeout`.
+    pub fn wait_newer(&self, after: u64, timeout: Duration) -> Result<(u64, RobotState), HwError> {
+        let deadline = Instant::now() + timeout;
+        let mut latest = lock(&self.shared);
+        loop {
+            if let Some(reason) = &latest.failure {
+                return Err(HwError::StateStream {
+                    reason: reason.clone(),
+                });
+            }
+            if let (Some(state), true) = (latest.state, latest.seq > after) {
+                return Ok((latest.seq, state));
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                return Err(HwError::NoState {
+                    seconds: timeout.as_secs_f64(),
+                });
+            }
+            let (guard, _) = self
+                .shared
+                .1
+                .wait_timeout(latest, deadline - now)
+                .unwrap_or_else(|p| p.into_inner());
+            latest = guard;
+        }
+    }
+
+    /// Sequence number of the newest state (0 before the first).
+    pub fn seq(&self) -> u64 {
+        lock(&self.shared).seq
+    }
+}
+
+impl Drop for StateStream {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+fn read_states(mut stream: TcpStream, shared: &Shared, stop: &AtomicBool) {
+    let mut buffer = Vec::with_capacity(8192);
+    let mut chunk = [0u8; 4096];
+    let failure = loop {
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        match stream.read(&mut chunk) {
+            Ok(0) => break "connection closed by the controller".to_string(),
+            Ok(n) => buffer.extend_from_slice(&chunk[..n]),
+            Err(e) if is_poll_timeout(&e) => continue,
+            Err(e) => break format!("read failed: {e}"),
+        }
+        match take_packets(&mut buffer) {
+            Ok(Some(state)) => publish(shared, state),
+            Ok(None) => {}
+            Err(e) => break e.to_string(),
+        }
+    };
+    lock(shared).failure = Some(failure);
+    shared.1.notify_all();
+}
+
+/// Removes every complete packet from the front of `buffer`; returns the
+/// newest parsed state.
+fn take_packets(buffer: &mut Vec<u8>) -> Result<Option<RobotState>, HwError> {
+    let mut newest = None;
+    while buffer.len() >= 4 {
+        let len = declared_length([buffer[0], buffer[1], buffer[2], buffer[3]])?;
+        if buffer.len() < len {
+            break;
+        }
+        newest = Some(parse_packet(&buffer[..len])?);
+        buffer.drain(..len);
+    }
+    Ok(newest)
+}
+
+fn publish(shared: &Shared, state: RobotState) {
+    let mut latest = lock(shared);
+    latest.state = Some(state);
+    latest.seq += 1;
+    drop(latest);
+    shared.1.notify_all();
+}
+
+fn is_poll_timeout(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted
+    )
+}
+
+/// The secondary-interface connection: URScript goes out, replies are read
+/// and dropped by a background thread.
+pub struct CommandChannel {
+    stream: TcpStream,
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl CommandChannel {
+    /// Starts draining `stream` in a background thread.
+    pub fn start(stream: TcpStream) -> Result<Self, HwError> {
+        let io_err = |source| HwError::Io {
+            what: "command socket".into(),
+            source,
+        };
+        let mut reader = stream.try_clone().map_err(io_err)?;
+        reader.set_read_timeout(Some(READ_POLL)).map_err(io_err)?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let thread = std::thread::spawn(move || drain(&mut reader, &flag));
+        Ok(Self {
+            stream,
+            stop,
+            thread: Some(thread),
+        })
+    }
+
+    /// Sends URScript text; blocks only until the bytes are handed to the OS.
+    pub fn send(&mut self, script: &str) -> Result<(), HwError> {
+        self.stream
+            .write_all(script.as_bytes())
+            .and_then(|()| self.stream.flush())
+            .map_err(|source| HwError::Io {
+                what: "command socket".into(),
+                source,
+            })
+    }
+}
+
+impl Drop for CommandChannel {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+fn drain(reader: &mut TcpStream, stop: &AtomicBool) {
+    let mut sink = [0u8; 4096];
+    while !stop.load(Ordering::Relaxed) {
+        match reader.read(&mut sink) {
+            Ok(0) => return,
+            Ok(_) => {}
+            Err(e) if is_poll_timeout(&e) => {}
+            Err(_) => return,
+        }
+    }
+}

@@ -1,0 +1,87 @@
+//! Throughput and latency figures (`tactrace bench`): simulated taps per
+//! second (render + detect + order) and the control-loop latency from frame
+//! to command (detect, order, PCA, both nets, controller). Timings are
+//! measured here, never asserted in tests.
+use crate::collect::pose_at_edge;
+use crate::error::Result;
+use crate::rig::RigConfig;
+use serde::Serialize;
+use std::time::Instant;
+use tactrace_control::{PbtsConfig, PbtsController, SensedPose};
+use tactrace_geometry::{builtin_shape, BuiltinShape};
+use tactrace_learn::PoseModel;
+use tactrace_sensor::TacTipModel;
+use tactrace_vision::PinExtractor;
+
+/// Figures from one benchmark run (single thread).
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchFigures {
+    pub taps: usize,
+    /// Pin model + rendering, microseconds per tap.
+    pub simulate_us: f64,
+    /// Blob detection + ordering + displacement, microseconds per frame.
+    pub extract_us: f64,
+    /// Simulated taps per second, render + detect + order.
+    pub taps_per_second: f64,
+    /// Frame -> command (extract, model, controller), microseconds; None without a model.
+    pub control_latency_us: Option<f64>,
+}
+
+/// Time `taps` simulated taps on the disk edge, and the control loop when a
+/// model is given.
+pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<BenchFigures> {
+    let disk = builtin_shape(BuiltinShape::Disk);
+    let sensor = TacTipModel::new(rig.sensor.clone())?;
+    let reference = sensor.render(sensor.rest_pins(), None);
+    let extractor = PinExtractor::from_reference_frame(&reference, rig.blob.clone())?;
+    let (edge, normal) = disk.at_arc_length(0.0);
+    let poses: Vec<_> = (0..taps)
+        .map(|i| {
+            let u = i as f64 / taps.max(1) as f64;
+            pose_at_edge(
+                edge,
+                normal,
+                -5.0 + 10.0 * u,
+                -45.0 + 90.0 * ((u * 7.0) % 1.0),
+                -3.0,
+            )
+        })
+        .collect();
+    let t0 = Instant::now();
+    let frames: Vec<_> = poses
+        .iter()
+        .map(|p| sensor.render(&sensor.pins(&disk, *p, None), None))
+        .collect();
+    let simulate = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let mut disps = Vec::with_capacity(taps);
+    for f in &frames {
+        let tracked = extractor.extract(f)?;
+        disps.push(tracked.displacement(extractor.tracker.reference()));
+    }
+    let extract = t1.elapsed().as_secs_f64();
+    let control_latency_us = match model {
+        Some(m) => {
+            let mut ctl = PbtsController::new(PbtsConfig::default());
+            let t2 = Instant::now();
+            for f in &frames {
+                let tracked = extractor.extract(f)?;
+                let [r, theta] = m.predict(&tracked.displacement(extractor.tracker.reference()))?;
+                std::hint::black_box(ctl.step(SensedPose {
+                    r_mm: r,
+                    theta_deg: theta,
+                }));
+            }
+            Some(t2.elapsed().as_secs_f64() * 1e6 / taps as f64)
+        }
+        None => None,
+    };
+    let n = taps.max(1) as f64;
+    Ok(BenchFigures {
+        taps,
+        simulate_us: simulate * 1e6 / n,
+        extract_us: extract * 1e6 / n,
+        taps_per_second: n / (simulate + extract),
+        control_latency_us,
+    })
+}

@@ -1,0 +1,147 @@
+//! Data collection on an edge, report ch. 4.1.
+//!
+//! 1. Align the sensor centre with the edge.
+//! 2. Set r uniformly at random in [-r_range, r_range] mm along the outward
+//!    edge normal and theta on a sweep from -theta_range to +theta_range deg
+//!    over the run.
+//! 3. Tap and capture.
+//! 4. Extract the pins and their displacement from the undeformed frame.
+use crate::dataset::{DatasetMeta, TapData};
+use crate::error::{LabError, Result};
+use crate::rig::{tap, RigConfig, SimRig};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use tactrace_arm::{Arm, Pose};
+use tactrace_geometry::{Contour, Vec2};
+use tactrace_vision::PinExtractor;
+
+/// What to collect.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CollectConfig {
+    pub samples: usize,
+    pub seed: u64,
+    /// Edge positions are uniform in [-r_range_mm, r_range_mm].
+    pub r_range_mm: f64,
+    /// Angles sweep from -theta_range_deg to +theta_range_deg.
+    pub theta_range_deg: f64,
+    /// Arc length of the edge point the sensor is aligned with, mm.
+    pub edge_arc_mm: f64,
+    /// Keep the PNG of every tap.
+    pub save_frames: bool,
+}
+
+impl Default for CollectConfig {
+    fn default() -> Self {
+        Self {
+            samples: 1000,
+            seed: 1,
+            r_range_mm: 5.0,
+            theta_range_deg: 45.0,
+            edge_arc_mm: 0.0,
+            save_frames: false,
+        }
+    }
+}
+
+/// One collected sample: the target and (optionally) the frame.
+pub struct Collected {
+    pub data: TapData,
+    /// (file name, PNG bytes) when `save_frames`.
+    pub frames: Vec<(String, Vec<u8>)>,
+}
+
+/// The sensor pose (tip, work frame) for edge position `r` and angle `theta`
+/// at edge point `edge` with outward normal `normal`; `height` above the top.
+pub fn pose_at_edge(edge: Vec2, normal: Vec2, r_mm: f64, theta_deg: f64, height_mm: f64) -> Pose {
+    let p = edge + normal * r_mm;
+    let yaw = normal.y.atan2(normal.x).to_degrees();
+    Pose::planar(p.x, p.y, height_mm, yaw + theta_deg)
+}
+
+/// Run the collection over `shape` with the simulated rig.
+pub fn collect(
+    rig_cfg: &RigConfig,
+    shape: &Contour,
+    cfg: &CollectConfig,
+    origin: &str,
+    mut progress: impl FnMut(usize),
+) -> Result<Collected> {
+    if cfg.samples == 0 {
+        return Err(LabError::Config("--samples must be at least 1".into()));
+    }
+    let (edge, normal) = shape.at_arc_length(cfg.edge_arc_mm);
+    let start = pose_at_edge(
+        edge,
+        normal,
+        0.0,
+        -cfg.theta_range_deg,
+        rig_cfg.tap.height_mm,
+    );
+    let mut rig = SimRig::new(rig_cfg, shape.clone(), start, cfg.seed)?;
+    let reference = rig.reference_frame();
+    let extractor = PinExtractor::from_reference_frame(&reference, rig_cfg.blob.clone())?;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let dim = 2 * extractor.tracker.reference().len();
+    let mut inputs = Vec::with_capacity(cfg.samples * dim);
+    let mut targets = Vec::with_capacity(cfg.samples * 2);
+    let mut frames = Vec::new();
+    let mut with_missing = 0;
+    for i in 0..cfg.samples {
+        let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
+        let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
+        let depth =
+            rig_cfg.tap.depth_mm + rng.random_range(-1.0..=1.0) * rig_cfg.tap.depth_jitter_mm;
+        rig.arm
+            .move_to(pose_at_edge(edge, normal, r, theta, rig_cfg.tap.height_mm))?;
+        let frame = tap(&mut rig.arm, &mut rig.sensor, depth)?;
+        let tracked = extractor.extract(&frame)?;
+        if tracked.missing > 0 {
+            with_missing += 1;
+        }
+        inputs.extend(tracked.displacement(extractor.tracker.reference()));
+        targets.extend([r as f32, theta as f32]);
+        if cfg.save_frames {
+            frames.push((
+                format!("frame_{i:05}.png"),
+                crate::images::png_bytes(&frame)?,
+            ));
+        }
+        progress(i + 1);
+    }
+    if cfg.save_frames {
+        frames.push((
+            "reference.png".into(),
+            crate::images::png_bytes(&reference)?,
+        ));
+    }
+    let meta = DatasetMeta {
+        source: "simulated".into(),
+        origin: origin.into(),
+        seed: Some(cfg.seed),
+        samples: cfg.samples,
+        pins: dim / 2,
+        targets: ["r_mm".into(), "theta_deg".into()],
+        frames_with_missing_pins: with_missing,
+        reference_pins: extractor.tracker.reference().to_vec(),
+        settings: serde_json::json!({ "rig": rig_cfg, "collect": cfg }),
+        tactrace_version: crate::VERSION.into(),
+    };
+    Ok(Collected {
+        data: TapData {
+            inputs,
+            targets,
+            meta,
+        },
+        frames,
+    })
+}
+
+/// theta for sample `i` of `n`, sweeping linearly from -range to +range.
+fn sweep(i: usize, n: usize, range: f64) -> f64 {
+    if n <= 1 {
+        return 0.0;
+    }
+    -range + 2.0 * range * i as f64 / (n - 1) as f64
+}

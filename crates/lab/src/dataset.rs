@@ -1,0 +1,191 @@
+//! The on-disk dataset: readable from Python as well as from tactrace.
+//!
+//! A dataset directory holds
+//! - `inputs.npy`: N x 2P float32 pin displacements in pixels (all x, then all y);
+//! - `targets.npy`: N x 2 float32, edge position r (mm) and angle theta (deg);
+//! - `meta.json`: how it was made ([`DatasetMeta`]);
+//! - optionally `frames/` with one PNG a sample and `reference.png`.
+use crate::error::{io_err, LabError, Result};
+use crate::fsutil::StagedDir;
+use ndarray::Array2;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Provenance of a dataset, written as `meta.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct DatasetMeta {
+    /// "simulated" or "real".
+    pub source: String,
+    /// Shape tapped (simulated) or the frames folder (real).
+    pub origin: String,
+    /// Seed of every random choice (simulated runs).
+    pub seed: Option<u64>,
+    pub samples: usize,
+    pub pins: usize,
+    /// Target column names and units.
+    pub targets: [String; 2],
+    /// Frames on which some pin was not matched (filled from its neighbours).
+    pub frames_with_missing_pins: usize,
+    /// Reference (undeformed) pin centres, px.
+    pub reference_pins: Vec<[f64; 2]>,
+    /// Sensor and detector settings as resolved for the run.
+    pub settings: serde_json::Value,
+    pub tactrace_version: String,
+}
+
+/// A dataset in memory.
+#[derive(Debug, Clone)]
+pub struct TapData {
+    /// N x 2P displacements, row-major.
+    pub inputs: Vec<f32>,
+    /// N x 2 targets (r mm, theta deg), row-major.
+    pub targets: Vec<f32>,
+    pub meta: DatasetMeta,
+}
+
+impl TapData {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.meta.samples
+    }
+    /// True when there is no sample.
+    pub fn is_empty(&self) -> bool {
+        self.meta.samples == 0
+    }
+    /// Input dimension (2P).
+    pub fn dim(&self) -> usize {
+        self.inputs
+            .len()
+            .checked_div(self.meta.samples)
+            .unwrap_or(0)
+    }
+    /// Split into (first, second) with `frac` of the samples in the first,
+    /// after a seeded shuffle; metadata is copied with the counts updated.
+    pub fn split(&self, frac: f64, seed: u64) -> (TapData, TapData) {
+        use rand::seq::SliceRandom;
+        use rand::SeedableRng;
+        let mut idx: Vec<usize> = (0..self.len()).collect();
+        idx.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+        let cut = ((self.len() as f64 * frac).round() as usize).min(self.len());
+        (self.subset(&idx[..cut]), self.subset(&idx[cut..]))
+    }
+
+    /// The samples at `rows`, in that order.
+    pub fn subset(&self, rows: &[usize]) -> TapData {
+        let d = self.dim();
+        let mut inputs = Vec::with_capacity(rows.len() * d);
+        let mut targets = Vec::with_capacity(rows.len() * 2);
+        for &r in rows {
+            inputs.extend_from_slice(&self.inputs[r * d..(r + 1) * d]);
+            targets.extend_from_slice(&self.targets[r * 2..r * 2 + 2]);
+        }
+        let mut meta = self.meta.clone();
+        meta.samples = rows.len();
+        TapData {
+            inputs,
+            targets,
+            meta,
+        }
+    }
+
+    /// As the learning crate's dataset (checks finiteness and shapes).
+    pub fn to_learn(&self) -> Result<tactrace_learn::Dataset> {
+        Ok(tactrace_learn::Dataset::new(
+            self.inputs.clone(),
+            self.targets.clone(),
+            self.len(),
+            self.dim(),
+            2,
+        )?)
+    }
+}
+
+/// Write a dataset atomically into `dir`, with optional frames (name, PNG bytes).
+pub fn write_dataset(
+    dir: &Path,
+    data: &TapData,
+    frames: &[(String, Vec<u8>)],
+    force: bool,
+) -> Result<PathBuf> {
+    let n = data.len();
+    let dim = data.dim();
+    let stage = StagedDir::new(dir, force)?;
+    let inputs = Array2::from_shape_vec((n, dim), data.inputs.clone())
+        .map_err(|e| LabError::Config(format!("inputs shape: {e}")))?;
+    let targets = Array2::from_shape_vec((n, 2), data.targets.clone())
+        .map_err(|e| LabError::Config(format!("targets shape: {e}")))?;
+    let p = stage.path().join("inputs.npy");
+    ndarray_npy::write_npy(&p, &inputs).map_err(|e| LabError::Format {
+        path: p.clone(),
+        reason: e.to_string(),
+    })?;
+    let p = stage.path().join("targets.npy");
+    ndarray_npy::write_npy(&p, &targets).map_err(|e| LabError::Format {
+        path: p.clone(),
+        reason: e.to_string(),
+    })?;
+    if !frames.is_empty() {
+        let fdir = stage.path().join("frames");
+        std::fs::create_dir_all(&fdir).map_err(io_err(&fdir))?;
+        for (name, bytes) in frames {
+            let p = fdir.join(name);
+            std::fs::write(&p, bytes).map_err(io_err(&p))?;
+        }
+    }
+    let meta = serde_json::to_string_pretty(&data.meta).expect("meta serialises");
+    let p = stage.path().join("meta.json");
+    std::fs::write(&p, meta).map_err(io_err(&p))?;
+    stage.commit()
+}
+
+/// Read a dataset directory written by [`write_dataset`] (or by hand in Python).
+pub fn read_dataset(dir: &Path) -> Result<TapData> {
+    if !dir.is_dir() {
+        return Err(LabError::Format {
+            path: dir.into(),
+            reason: "not a dataset directory (expected inputs.npy, targets.npy, meta.json)".into(),
+        });
+    }
+    let meta_path = dir.join("meta.json");
+    let meta_text = crate::fsutil::read_text(&meta_path)?;
+    let meta: DatasetMeta = serde_json::from_str(&meta_text).map_err(|e| LabError::Format {
+        path: meta_path.clone(),
+        reason: e.to_string(),
+    })?;
+    let inputs: Array2<f32> = read_npy(&dir.join("inputs.npy"))?;
+    let targets: Array2<f32> = read_npy(&dir.join("targets.npy"))?;
+    let (n, dim) = inputs.dim();
+    if targets.dim() != (n, 2) {
+        return Err(LabError::Format {
+            path: dir.join("targets.npy"),
+            reason: format!(
+                "expected {n} x 2 targets to match inputs.npy, found {:?}",
+                targets.dim()
+            ),
+        });
+    }
+    if n == 0 || dim == 0 {
+        return Err(LabError::Format {
+            path: dir.join("inputs.npy"),
+            reason: "empty dataset".into(),
+        });
+    }
+    if meta.samples != n {
+        return Err(LabError::Format {
+            path: meta_path,
+            reason: format!("meta says {} samples, inputs.npy has {n}", meta.samples),
+        });
+    }
+    Ok(TapData {
+        inputs: inputs.iter().copied().collect(),
+        targets: targets.iter().copied().collect(),
+        meta,
+    })
+}
+
+fn read_npy(path: &Path) -> Result<Array2<f32>> {
+    ndarray_npy::read_npy(path).map_err(|e| LabError::Format {
+        path: path.into(),
+        reason: format!("not a 2-D float32 .npy file: {e}"),
+    })
+}

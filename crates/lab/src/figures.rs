@@ -1,0 +1,161 @@
+//! The report's figures, built from the generic [`crate::plot`] module.
+use crate::error::{LabError, Result};
+use crate::plot::{chart, grid, Axes, Series, Style};
+use crate::train::Validation;
+use std::path::{Path, PathBuf};
+use tactrace_geometry::Contour;
+use tactrace_learn::TrainingHistory;
+
+fn plot_err(e: crate::plot::PlotError) -> LabError {
+    LabError::Config(format!("figure: {e}"))
+}
+
+fn axes(title: &str, x: &str, y: &str) -> Axes {
+    Axes {
+        title: title.into(),
+        x_label: x.into(),
+        y_label: y.into(),
+        log_y: false,
+        equal_aspect: false,
+        size: (640, 480),
+    }
+}
+
+/// Fig. 4.5: loss and total energy per epoch for every network, log y.
+pub fn training_curves(stem: &Path, history: &TrainingHistory) -> Result<Vec<PathBuf>> {
+    let names: Vec<String> = history
+        .epochs
+        .first()
+        .map(|e| e.nets.iter().map(|n| n.name.clone()).collect())
+        .unwrap_or_default();
+    let series_of = |pick: &dyn Fn(&tactrace_learn::NetEpoch) -> f64| -> Vec<Series> {
+        names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| Series {
+                name: name.clone(),
+                points: history
+                    .epochs
+                    .iter()
+                    .map(|e| (e.epoch as f64 + 1.0, pick(&e.nets[k])))
+                    .collect(),
+                style: Style::Line,
+            })
+            .collect()
+    };
+    let mut loss = axes("Loss per epoch", "epoch", "loss");
+    loss.log_y = true;
+    let mut energy = axes("Total energy per epoch", "epoch", "energy");
+    energy.log_y = true;
+    let panels = vec![
+        (loss, series_of(&|n| n.loss)),
+        (energy, series_of(&|n| n.energy)),
+    ];
+    grid(stem, 2, &panels, (1200, 480)).map_err(plot_err)
+}
+
+/// Fig. 4.4: predicted against true position and angle.
+pub fn predicted_vs_true(stem: &Path, name: &str, v: &Validation) -> Result<Vec<PathBuf>> {
+    let panel = |k: usize, what: &str, unit: &str| {
+        let pts: Vec<(f64, f64)> = v
+            .truth
+            .iter()
+            .zip(&v.predictions)
+            .map(|(t, p)| (t[k], p[k]))
+            .collect();
+        let lo = pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        let hi = pts.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+        let a = axes(
+            &format!("{name}: {what}"),
+            &format!("true {what} ({unit})"),
+            &format!("predicted {what} ({unit})"),
+        );
+        (
+            a,
+            vec![
+                Series {
+                    name: "prediction".into(),
+                    points: pts,
+                    style: Style::Points,
+                },
+                Series {
+                    name: "ideal".into(),
+                    points: vec![(lo, lo), (hi, hi)],
+                    style: Style::Dashed,
+                },
+            ],
+        )
+    };
+    grid(
+        stem,
+        2,
+        &[panel(0, "position r", "mm"), panel(1, "angle theta", "deg")],
+        (1200, 480),
+    )
+    .map_err(plot_err)
+}
+
+/// Fig. 5.3: the trajectory over the true contour.
+pub fn trajectory(
+    stem: &Path,
+    title: &str,
+    contour: &Contour,
+    traj: &[(f64, f64)],
+) -> Result<Vec<PathBuf>> {
+    let mut a = axes(title, "x (mm)", "y (mm)");
+    a.equal_aspect = true;
+    chart(
+        stem,
+        &a,
+        &[
+            contour_series(contour),
+            Series {
+                name: "trajectory".into(),
+                points: traj.to_vec(),
+                style: Style::LinePoints,
+            },
+        ],
+    )
+    .map_err(plot_err)
+}
+
+/// The true contour as a closed dashed line.
+pub fn contour_series(contour: &Contour) -> Series {
+    let mut pts: Vec<(f64, f64)> = contour.resample(600).iter().map(|p| (p.x, p.y)).collect();
+    if let Some(&first) = pts.first() {
+        pts.push(first);
+    }
+    Series {
+        name: "true contour".into(),
+        points: pts,
+        style: Style::Dashed,
+    }
+}
+
+/// Fig. 5.4: L2 error along the contour with its mean.
+pub fn error_curve(stem: &Path, title: &str, curve: &[f64]) -> Result<Vec<PathBuf>> {
+    let mean = curve.iter().sum::<f64>() / curve.len().max(1) as f64;
+    let n = curve.len() as f64;
+    let pts = curve
+        .iter()
+        .enumerate()
+        .map(|(i, d)| (i as f64, *d))
+        .collect();
+    chart(
+        stem,
+        &axes(title, "contour point", "L2 error (mm)"),
+        &[
+            Series {
+                name: "L2 error".into(),
+                points: pts,
+                style: Style::Line,
+            },
+            Series {
+                name: format!("mean {mean:.2} mm"),
+                points: vec![(0.0, mean), (n, mean)],
+                style: Style::Dashed,
+            },
+        ],
+    )
+    .map_err(plot_err)
+}

@@ -1,0 +1,200 @@
+//! The contour-following experiment (report ch. 5.2-5.3): a simulated rig
+//! over one shape, the servo loop, metrics and figures in a run directory.
+//!
+//! The trajectory is written step by step and flushed, so an interrupted run
+//! keeps what it did; `metrics.json` is written last and marks completion.
+use crate::error::{io_err, LabError, Result};
+use crate::metrics::{evaluate, l2_curve, FollowMetrics};
+use crate::rig::{RigConfig, SimRig};
+use crate::servo::{
+    check_follow_config, follow, FollowConfig, FollowSummary, Perception, StepRecord, StepSink,
+};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::Path;
+use tactrace_arm::Pose;
+use tactrace_control::{PbtsConfig, PbtsController};
+use tactrace_geometry::{Contour, Vec2};
+use tactrace_learn::PoseModel;
+use tactrace_vision::PinExtractor;
+
+/// Where the run starts: on the edge point at `arc_mm`, offset along the
+/// outward normal and rotated, at tap height (the report: "2 mm above the
+/// surface, roughly aligned with an edge").
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StartConfig {
+    pub arc_mm: f64,
+    pub offset_mm: f64,
+    pub angle_deg: f64,
+    /// Refuse to start further than this from the edge, mm.
+    pub max_start_distance_mm: f64,
+}
+
+impl Default for StartConfig {
+    fn default() -> Self {
+        Self {
+            arc_mm: 0.0,
+            offset_mm: 0.0,
+            angle_deg: 0.0,
+            max_start_distance_mm: 6.0,
+        }
+    }
+}
+
+/// Everything a follow run needs besides the model and the shape.
+#[derive(Debug, Clone, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct FollowRunConfig {
+    pub rig: RigConfig,
+    pub controller: PbtsConfig,
+    pub follow: FollowConfig,
+    pub start: StartConfig,
+    /// Mean pin displacement (px) below which a tap counts as no contact.
+    pub contact_threshold_px: f64,
+}
+
+impl FollowRunConfig {
+    /// Defaults for the simulated rig.
+    pub fn simulated() -> Self {
+        Self {
+            rig: RigConfig::simulated(),
+            contact_threshold_px: 0.5,
+            ..Self::default()
+        }
+    }
+}
+
+/// The outcome of a follow run.
+pub struct FollowOutcome {
+    pub summary: FollowSummary,
+    pub metrics: FollowMetrics,
+    pub records: Vec<StepRecord>,
+    pub l2_curve: Vec<f64>,
+}
+
+/// Writes each step to `trajectory.csv` as it happens.
+struct TrajectoryCsv(std::io::BufWriter<std::fs::File>, std::path::PathBuf);
+
+impl StepSink for TrajectoryCsv {
+    fn on_step(&mut self, r: &StepRecord) -> Result<()> {
+        let p = &r.percept;
+        writeln!(
+            self.0,
+            "{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{}",
+            r.step,
+            r.pose.x,
+            r.pose.y,
+            r.pose.rz,
+            p.r_mm,
+            p.theta_deg,
+            p.mean_displacement_px,
+            p.contact
+        )
+        .and_then(|_| self.0.flush())
+        .map_err(io_err(&self.1))
+    }
+}
+
+/// A sink that calls a closure (progress bars).
+pub struct FnSink<F: FnMut(&StepRecord)>(pub F);
+
+impl<F: FnMut(&StepRecord)> StepSink for FnSink<F> {
+    fn on_step(&mut self, r: &StepRecord) -> Result<()> {
+        (self.0)(r);
+        Ok(())
+    }
+}
+
+/// The start pose for `cfg` on `shape`.
+pub fn start_pose(shape: &Contour, cfg: &StartConfig, height_mm: f64) -> Result<Pose> {
+    if cfg.offset_mm.abs() > cfg.max_start_distance_mm {
+        return Err(LabError::Servo(format!(
+            "the start pose is {:.1} mm from the edge; the sensor cannot feel an edge further than {:.1} mm away",
+            cfg.offset_mm.abs(),
+            cfg.max_start_distance_mm
+        )));
+    }
+    let (edge, normal) = shape.at_arc_length(cfg.arc_mm);
+    Ok(crate::collect::pose_at_edge(
+        edge,
+        normal,
+        cfg.offset_mm,
+        cfg.angle_deg,
+        height_mm,
+    ))
+}
+
+/// Run the experiment on `shape` with `model`, writing into `out` (created).
+pub fn run_follow(
+    cfg: &FollowRunConfig,
+    model: PoseModel,
+    shape: &Contour,
+    out: &Path,
+    progress: &mut dyn FnMut(&StepRecord),
+) -> Result<FollowOutcome> {
+    check_follow_config(&cfg.follow)?;
+    std::fs::create_dir_all(out).map_err(io_err(out))?;
+    let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
+    let mut rig = SimRig::new(&cfg.rig, shape.clone(), start, cfg.follow.seed)?;
+    let extractor =
+        PinExtractor::from_reference_frame(&rig.reference_frame(), cfg.rig.blob.clone())?;
+    if model.input_dim() != 2 * extractor.tracker.reference().len() {
+        return Err(LabError::Config(format!(
+            "the model expects {} inputs but the sensor gives {} (2 x pins)",
+            model.input_dim(),
+            2 * extractor.tracker.reference().len()
+        )));
+    }
+    let perception = Perception {
+        extractor,
+        model,
+        contact_threshold_px: cfg.contact_threshold_px,
+    };
+    let mut controller = PbtsController::new(cfg.controller.clone());
+    let path = out.join("trajectory.csv");
+    let mut file = std::fs::File::create(&path).map_err(io_err(&path))?;
+    writeln!(
+        file,
+        "step,x_mm,y_mm,angle_deg,r_pred_mm,theta_pred_deg,mean_displacement_px,contact"
+    )
+    .map_err(io_err(&path))?;
+    let mut csv = TrajectoryCsv(std::io::BufWriter::new(file), path);
+    let mut records: Vec<StepRecord> = Vec::new();
+    let mut bar = FnSink(|r: &StepRecord| progress(r));
+    let summary = follow(
+        &mut rig.arm,
+        &mut rig.sensor,
+        &perception,
+        &mut controller,
+        &cfg.follow,
+        &mut [&mut csv, &mut records, &mut bar],
+    )?;
+    let traj: Vec<Vec2> = records
+        .iter()
+        .map(|r| Vec2::new(r.pose.x, r.pose.y))
+        .collect();
+    let metrics = evaluate(
+        shape,
+        &traj,
+        cfg.follow.close_radius_mm.max(2.5),
+        cfg.follow.min_excursion_mm,
+    );
+    let curve = l2_curve(shape, &traj, 1000);
+    let json = serde_json::json!({ "metrics": metrics, "summary": summary });
+    let mut flat = serde_json::to_value(&metrics).expect("metrics serialise");
+    flat["ending"] = serde_json::to_value(summary.ending).expect("ending serialises");
+    flat["summary"] = json["summary"].clone();
+    crate::fsutil::write_atomic(
+        &out.join("metrics.json"),
+        serde_json::to_string_pretty(&flat)
+            .expect("json")
+            .as_bytes(),
+    )?;
+    Ok(FollowOutcome {
+        summary,
+        metrics,
+        records,
+        l2_curve: curve,
+    })
+}

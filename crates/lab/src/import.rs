@@ -1,0 +1,185 @@
+//! Import real TacTip frames (Bristol layout) into the dataset format,
+//! through the same pin extraction as simulated taps.
+use crate::dataset::{DatasetMeta, TapData};
+use crate::error::{LabError, Result};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use tactrace_sensor::read_frame;
+use tactrace_vision::{BlobParams, PinExtractor};
+
+/// One frame's displacement and whether pins were missing, or the frame
+/// name with the reason it was rejected.
+type FrameOutcome = std::result::Result<(Vec<f32>, bool), (String, String)>;
+
+/// Where the real frames and their labels are.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ImportConfig {
+    pub frames: PathBuf,
+    pub targets: PathBuf,
+    pub reference: PathBuf,
+    pub image_column: String,
+    pub r_column: String,
+    pub theta_column: String,
+    /// Import at most this many rows (all when `None`).
+    pub limit: Option<usize>,
+}
+
+/// Result of an import: the dataset and a summary.
+pub struct Imported {
+    pub data: TapData,
+    /// Frames on which at least one pin was not matched.
+    pub frames_with_missing_pins: usize,
+    /// Frames skipped because too few pins were found (named with the reason).
+    pub rejected: Vec<(String, String)>,
+}
+
+/// One labelled row of the targets CSV.
+struct Row {
+    image: String,
+    r: f32,
+    theta: f32,
+}
+
+/// Read the labels: the image column and the two target columns, by header name.
+fn read_rows(cfg: &ImportConfig) -> Result<Vec<Row>> {
+    let path = &cfg.targets;
+    let fmt = |reason: String| LabError::Format {
+        path: path.clone(),
+        reason,
+    };
+    let mut rdr = csv::Reader::from_path(path).map_err(|e| fmt(e.to_string()))?;
+    let headers = rdr.headers().map_err(|e| fmt(e.to_string()))?.clone();
+    let col = |name: &str| {
+        headers
+            .iter()
+            .position(|h| h.trim() == name)
+            .ok_or_else(|| {
+                fmt(format!(
+                    "no column `{name}` (columns: {})",
+                    headers.iter().collect::<Vec<_>>().join(", ")
+                ))
+            })
+    };
+    let (ci, cr, ct) = (
+        col(&cfg.image_column)?,
+        col(&cfg.r_column)?,
+        col(&cfg.theta_column)?,
+    );
+    let mut rows = Vec::new();
+    for (k, rec) in rdr.records().enumerate() {
+        let rec = rec.map_err(|e| fmt(e.to_string()))?;
+        let num = |c: usize| -> Result<f32> {
+            let v: f32 = rec.get(c).unwrap_or("").trim().parse().map_err(|_| {
+                fmt(format!(
+                    "row {}: `{}` is not a number",
+                    k + 2,
+                    rec.get(c).unwrap_or("")
+                ))
+            })?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(fmt(format!("row {}: non-finite value", k + 2)))
+            }
+        };
+        rows.push(Row {
+            image: rec.get(ci).unwrap_or("").trim().to_string(),
+            r: num(cr)?,
+            theta: num(ct)?,
+        });
+        if cfg.limit.is_some_and(|l| rows.len() >= l) {
+            break;
+        }
+    }
+    if rows.is_empty() {
+        return Err(fmt("no data rows".into()));
+    }
+    Ok(rows)
+}
+
+/// Import real frames. `progress` is called once per frame processed.
+pub fn import(
+    cfg: &ImportConfig,
+    blob: &BlobParams,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Imported> {
+    let rows = read_rows(cfg)?;
+    let reference = read_frame(&cfg.reference)?;
+    let extractor = PinExtractor::from_reference_frame(&reference, blob.clone()).map_err(|e| {
+        LabError::Format {
+            path: cfg.reference.clone(),
+            reason: e.to_string(),
+        }
+    })?;
+    let pins = extractor.tracker.reference().len();
+    let results: Vec<FrameOutcome> = rows
+        .par_iter()
+        .map(|row| {
+            let path = cfg.frames.join(&row.image);
+            let out =
+                extract_one(&extractor, &path).map_err(|e| (row.image.clone(), e.to_string()));
+            progress();
+            out
+        })
+        .collect();
+    let mut inputs = Vec::with_capacity(rows.len() * 2 * pins);
+    let mut targets = Vec::with_capacity(rows.len() * 2);
+    let (mut missing, mut rejected) = (0, Vec::new());
+    for (row, res) in rows.iter().zip(results) {
+        match res {
+            Ok((disp, had_missing)) => {
+                inputs.extend(disp);
+                targets.extend([row.r, row.theta]);
+                missing += had_missing as usize;
+            }
+            Err(err) => rejected.push(err),
+        }
+    }
+    // An unreadable file is an error of the whole import: nothing is lost silently.
+    if let Some((name, reason)) = rejected.iter().find(|(_, r)| !r.contains("pins")) {
+        return Err(LabError::Format {
+            path: cfg.frames.join(name),
+            reason: reason.clone(),
+        });
+    }
+    let samples = targets.len() / 2;
+    if samples == 0 {
+        return Err(LabError::Format {
+            path: cfg.frames.clone(),
+            reason: "no frame gave enough pins".into(),
+        });
+    }
+    let meta = DatasetMeta {
+        source: "real".into(),
+        origin: cfg.frames.display().to_string(),
+        seed: None,
+        samples,
+        pins,
+        targets: [
+            format!("r_mm ({})", cfg.r_column),
+            format!("theta_deg ({})", cfg.theta_column),
+        ],
+        frames_with_missing_pins: missing,
+        reference_pins: extractor.tracker.reference().to_vec(),
+        settings: serde_json::json!({ "import": cfg, "blob": blob, "rejected": rejected.len() }),
+        tactrace_version: crate::VERSION.into(),
+    };
+    Ok(Imported {
+        data: TapData {
+            inputs,
+            targets,
+            meta,
+        },
+        frames_with_missing_pins: missing,
+        rejected,
+    })
+}
+
+fn extract_one(extractor: &PinExtractor, path: &Path) -> Result<(Vec<f32>, bool)> {
+    let frame = read_frame(path)?;
+    let tracked = extractor.extract(&frame)?;
+    Ok((
+        tracked.displacement(extractor.tracker.reference()),
+        tracked.missing > 0,
+    ))
+}

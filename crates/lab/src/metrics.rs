@@ -1,0 +1,144 @@
+//! Contour-following metrics: the report's L2 measure (ch. 5.3, Fig. 5.4)
+//! and what the report lacks (tracking error, coverage, closure).
+use serde::Serialize;
+use tactrace_geometry::{Contour, Vec2};
+
+/// Everything measured on one trajectory against the true contour.
+#[derive(Debug, Clone, Serialize)]
+pub struct FollowMetrics {
+    /// The report's metric: mean over 1000 evenly spaced contour points of
+    /// the distance to the nearest trajectory point, mm.
+    pub mean_l2_mm: f64,
+    /// Largest of those distances, mm.
+    pub max_l2_mm: f64,
+    /// Mean |distance| of each trajectory point to the contour, mm.
+    pub mean_track_error_mm: f64,
+    /// 95th percentile of that distance, mm.
+    pub p95_track_error_mm: f64,
+    pub max_track_error_mm: f64,
+    /// Fraction of the contour points within `coverage_radius_mm` of the trajectory.
+    pub coverage: f64,
+    pub coverage_radius_mm: f64,
+    /// The trajectory came back to its start after leaving it.
+    pub closed: bool,
+    pub steps: usize,
+    /// Trajectory length, mm.
+    pub path_length_mm: f64,
+}
+
+/// The report's error curve: for each of `n` contour points evenly spaced by
+/// arc length, the distance to the nearest trajectory point (mm).
+pub fn l2_curve(contour: &Contour, trajectory: &[Vec2], n: usize) -> Vec<f64> {
+    contour
+        .resample(n)
+        .iter()
+        .map(|c| {
+            trajectory
+                .iter()
+                .map(|t| (t - c).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect()
+}
+
+/// Whether a trajectory closes: after getting at least `min_excursion` from
+/// its first point, a later segment passes within `radius` of it.
+pub fn trajectory_closes(trajectory: &[Vec2], radius: f64, min_excursion: f64) -> bool {
+    let Some(&start) = trajectory.first() else {
+        return false;
+    };
+    let mut away = false;
+    for w in trajectory.windows(2) {
+        away |= (w[1] - start).norm() >= min_excursion;
+        if away && point_segment_distance(start, w[0], w[1]) <= radius {
+            return true;
+        }
+    }
+    false
+}
+
+fn point_segment_distance(p: Vec2, a: Vec2, b: Vec2) -> f64 {
+    let ab = b - a;
+    let len2 = ab.norm_squared();
+    let t = if len2 > 0.0 {
+        ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + ab * t - p).norm()
+}
+
+/// Compute all metrics for a trajectory (sensor tip x, y per step, mm).
+pub fn evaluate(
+    contour: &Contour,
+    trajectory: &[Vec2],
+    close_radius: f64,
+    min_excursion: f64,
+) -> FollowMetrics {
+    let curve = l2_curve(contour, trajectory, 1000);
+    let coverage_radius_mm = 2.0;
+    let mut track: Vec<f64> = trajectory
+        .iter()
+        .map(|p| contour.signed_distance(*p).abs())
+        .collect();
+    track.sort_by(f64::total_cmp);
+    let mean = |v: &[f64]| {
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
+    let p95 = track
+        .get(((track.len() as f64 * 0.95).ceil() as usize).saturating_sub(1))
+        .copied()
+        .unwrap_or(f64::NAN);
+    FollowMetrics {
+        mean_l2_mm: mean(&curve),
+        max_l2_mm: curve.iter().copied().fold(0.0, f64::max),
+        mean_track_error_mm: mean(&track),
+        p95_track_error_mm: p95,
+        max_track_error_mm: track.last().copied().unwrap_or(f64::NAN),
+        coverage: curve.iter().filter(|d| **d <= coverage_radius_mm).count() as f64
+            / curve.len().max(1) as f64,
+        coverage_radius_mm,
+        closed: trajectory_closes(trajectory, close_radius, min_excursion),
+        steps: trajectory.len(),
+        path_length_mm: trajectory.windows(2).map(|w| (w[1] - w[0]).norm()).sum(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn circle(r: f64, n: usize) -> Vec<Vec2> {
+        (0..n)
+            .map(|i| {
+                let t = i as f64 / n as f64 * std::f64::consts::TAU;
+                Vec2::new(r * t.cos(), r * t.sin())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn concentric_trajectory_has_offset_error() {
+        let contour = Contour::new(circle(50.0, 2000)).unwrap();
+        let traj = circle(51.0, 3000);
+        let m = evaluate(&contour, &traj, 1.5, 20.0);
+        assert!((m.mean_l2_mm - 1.0).abs() < 0.02, "{}", m.mean_l2_mm);
+        assert!((m.mean_track_error_mm - 1.0).abs() < 0.02);
+        assert!(m.closed);
+        assert!((m.coverage - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn half_trajectory_is_open_and_half_covered() {
+        let contour = Contour::new(circle(50.0, 2000)).unwrap();
+        let traj: Vec<Vec2> = circle(50.0, 2000).into_iter().take(1000).collect();
+        let m = evaluate(&contour, &traj, 1.5, 20.0);
+        assert!(!m.closed);
+        assert!((m.coverage - 0.5).abs() < 0.03, "{}", m.coverage);
+        assert!(m.mean_l2_mm > 10.0);
+    }
+}

@@ -1,0 +1,96 @@
+//! The simulated rig: a simulated UR5-class arm carrying a simulated TacTip
+//! over an extruded object, run through the same traits a real rig uses.
+//!
+//! The arm's physical pose (with repeatability noise) reaches the simulated
+//! sensor through a [`tactrace_arm::PoseProbe`]; nothing else sees it.
+use crate::error::Result;
+use serde::{Deserialize, Serialize};
+use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig, Workspace};
+use tactrace_geometry::Contour;
+use tactrace_sensor::{Frame, SimTacTip, TacTipConfig, TacTipModel, TactileSensor};
+use tactrace_vision::BlobParams;
+
+/// How a tap is made (report ch. 4.1: 2 mm above the surface, 5 +- 1 mm down).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TapConfig {
+    /// Height of the dome tip above the object's top face between taps, mm.
+    pub height_mm: f64,
+    /// Nominal downward move of a tap, mm.
+    pub depth_mm: f64,
+    /// Half-width of the uniform random variation of the tap move, mm.
+    pub depth_jitter_mm: f64,
+}
+
+impl Default for TapConfig {
+    fn default() -> Self {
+        Self {
+            height_mm: 2.0,
+            depth_mm: 5.0,
+            depth_jitter_mm: 1.0,
+        }
+    }
+}
+
+/// Everything that defines the simulated rig; a TOML file with these tables.
+#[derive(Debug, Clone, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct RigConfig {
+    pub sensor: TacTipConfig,
+    pub arm: SimArmConfig,
+    pub workspace: Workspace,
+    pub tap: TapConfig,
+    pub blob: BlobParams,
+}
+
+impl RigConfig {
+    /// Defaults with the simulated-frame blob preset.
+    pub fn simulated() -> Self {
+        Self {
+            blob: BlobParams::preset("sim").expect("built-in preset"),
+            ..Self::default()
+        }
+    }
+}
+
+/// A simulated arm and sensor over one object.
+pub struct SimRig {
+    pub arm: LimitedArm<SimArm>,
+    pub sensor: SimTacTip,
+    pub model: TacTipModel,
+}
+
+impl SimRig {
+    /// Build the rig over `shape`, the arm starting at `start`; `seed` drives
+    /// the arm's repeatability noise and the sensor's nuisance.
+    pub fn new(cfg: &RigConfig, shape: Contour, start: Pose, seed: u64) -> Result<Self> {
+        let model = TacTipModel::new(cfg.sensor.clone())?;
+        let arm_cfg = SimArmConfig {
+            seed: seed ^ 0xA5A5_0001,
+            ..cfg.arm.clone()
+        };
+        let sim_arm = SimArm::new(arm_cfg, start);
+        let probe = sim_arm.probe();
+        let sensor = SimTacTip::new(
+            model.clone(),
+            shape,
+            Box::new(move || probe.actual()),
+            seed ^ 0x5E45_0002,
+        );
+        let arm = LimitedArm::new(sim_arm, cfg.workspace.clone(), LimitMode::Refuse);
+        Ok(Self { arm, sensor, model })
+    }
+
+    /// The undeformed frame (sensor in the air).
+    pub fn reference_frame(&self) -> Frame {
+        self.sensor.reference_frame()
+    }
+}
+
+/// One tap through the traits: down by `depth_mm`, capture, back up.
+pub fn tap(arm: &mut dyn Arm, sensor: &mut dyn TactileSensor, depth_mm: f64) -> Result<Frame> {
+    arm.tap_down(depth_mm)?;
+    let frame = sensor.capture();
+    arm.tap_up(depth_mm)?;
+    Ok(frame?)
+}

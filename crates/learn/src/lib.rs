@@ -1,0 +1,33 @@
+//! The brain of tactrace (report ch. 3 and 4.2-4.3): standardisation and PCA
+//! of pin displacements, dendritic neural networks trained by equilibrium
+//! propagation, a backprop twin for comparison, and pose models that map one
+//! displacement vector to the edge pose `[r mm, theta deg]`.
+//!
+//! Everything here is pure: no files, no printing. Models serialise to a JSON
+//! string plus safetensors bytes; the lab crate writes them.
+mod config;
+mod dataset;
+mod dennn;
+mod ep;
+mod error;
+mod kernels;
+mod mlp;
+mod net;
+mod pca;
+mod pose_model;
+mod search;
+mod serialise;
+mod standardise;
+mod trainer;
+
+pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling};
+pub use dataset::{mean_absolute_error, Dataset};
+pub use dennn::{ClampedPhase, DenNN, EpConfig, FreePhase, SampleStats};
+pub use error::LearnError;
+pub use mlp::Mlp;
+pub use net::Layers;
+pub use pca::{Components, Pca};
+pub use pose_model::{EpochReport, NetEpoch, PoseModel, TrainingHistory};
+pub use search::{hyperparameter_search, SearchSpace, Trial};
+pub use serialise::FORMAT_VERSION;
+pub use standardise::Standardiser;

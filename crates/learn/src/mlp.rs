@@ -1,0 +1,79 @@
+//! The backprop twin of the dendritic network: same layers, same
+//! initialisation, plain per-sample SGD on `0.5 ||y - t||^2`. It is the
+//! baseline the DenNN must match (report ch. 3.2).
+use crate::dennn::check_dims;
+use crate::ep::update;
+use crate::error::LearnError;
+use crate::net::{has_fma, Layers, States};
+
+/// A fully connected network trained by error backpropagation.
+#[derive(Debug, Clone)]
+pub struct Mlp {
+    layers: Layers,
+    st: States,
+}
+
+impl Mlp {
+    /// Random weights from `seed` (identical to `DenNN::new(sizes, seed)`).
+    pub fn new(sizes: &[usize], seed: u64) -> Result<Self, LearnError> {
+        Ok(Self::from_layers(Layers::new(sizes, seed)?))
+    }
+
+    /// Wrap existing parameters.
+    pub fn from_layers(layers: Layers) -> Self {
+        let st = States::new(&layers.sizes);
+        Mlp { layers, st }
+    }
+
+    /// The parameters.
+    pub fn layers(&self) -> &Layers {
+        &self.layers
+    }
+
+    /// Feed-forward prediction into `out`; wrong lengths are errors.
+    pub fn predict(&self, x: &[f32], out: &mut [f32]) -> Result<(), LearnError> {
+        self.layers.predict(x, out)
+    }
+
+    /// One SGD step with learning rate `lr`; returns `0.5 ||y - t||^2`
+    /// before the step.
+    pub fn train_sample(&mut self, x: &[f32], t: &[f32], lr: f64) -> Result<f64, LearnError> {
+        check_dims(&self.layers, x, t)?;
+        if has_fma() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the CPU supports AVX2 and FMA (checked just above).
+            return Ok(unsafe { train_fma(self, x, t, lr as f32) });
+        }
+        Ok(train_impl::<false>(self, x, t, lr as f32))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn train_fma(net: &mut Mlp, x: &[f32], t: &[f32], lr: f32) -> f64 {
+    train_impl::<true>(net, x, t, lr)
+}
+
+/// Forward pass, output error `t - y` (the negative loss gradient), deltas
+/// `e(l) = phi'(s(l)) . W(l+1) e(l+1)`, then the same rank-one update as EP.
+#[inline(always)]
+fn train_impl<const F: bool>(net: &mut Mlp, x: &[f32], t: &[f32], lr: f32) -> f64 {
+    let Mlp { layers, st } = net;
+    let n = layers.depth();
+    layers.forward::<F>(x, st);
+    let mut loss = 0.0f64;
+    for ((e, &y), &t) in st.e[n].iter_mut().zip(&st.s[n]).zip(t) {
+        loss += 0.5 * ((y - t) as f64).powi(2);
+        *e = t - y;
+    }
+    for l in (1..n).rev() {
+        let (lower, upper) = st.e.split_at_mut(l + 1);
+        layers.back::<F>(l + 1, &upper[0], &mut lower[l]);
+        lower[l]
+            .iter_mut()
+            .zip(&st.phi[l])
+            .for_each(|(e, p)| *e *= p * (1.0 - p));
+    }
+    update::<F>(layers, st, lr, None);
+    loss
+}

@@ -1,0 +1,114 @@
+//! A small random/grid hyper-parameter search over learning rate, beta,
+//! hidden size and number of components, scored on a validation split that
+//! the caller carves out of the training data (never the test data).
+use crate::config::ModelConfig;
+use crate::dataset::{mean_absolute_error, Dataset};
+use crate::error::LearnError;
+use crate::pose_model::PoseModel;
+use crate::standardise::Standardiser;
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// The grid to sample from. Each value applies to every net of the model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SearchSpace {
+    pub learning_rates: Vec<f64>,
+    pub betas: Vec<f64>,
+    pub hidden: Vec<usize>,
+    /// Ignored by nets without PCA (DisDenNN).
+    pub n_components: Vec<usize>,
+    /// Configurations to try; the whole grid when it is not larger.
+    pub trials: usize,
+    pub seed: u64,
+}
+
+/// One evaluated configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trial {
+    pub config: ModelConfig,
+    /// Validation mean absolute error `[r mm, theta deg]`.
+    pub val_mae: [f64; 2],
+    /// `mae_r / std_r + mae_theta / std_theta` (training target stds), so
+    /// both targets weigh alike; lower is better. Diverged runs score +inf.
+    pub score: f64,
+}
+
+/// Try configurations drawn from `space` on top of `base`; trials sorted
+/// best first.
+pub fn hyperparameter_search(
+    base: &ModelConfig,
+    space: &SearchSpace,
+    train: &Dataset,
+    val: &Dataset,
+) -> Result<Vec<Trial>, LearnError> {
+    let grid = grid(space);
+    if grid.is_empty() {
+        return Err(LearnError::Config {
+            field: "search space",
+            reason: "every list needs at least one value".into(),
+        });
+    }
+    let scale = Standardiser::fit(&train.y, train.n, train.dim_y)?;
+    let mut picks: Vec<usize> = (0..grid.len()).collect();
+    picks.shuffle(&mut ChaCha8Rng::seed_from_u64(space.seed));
+    picks.truncate(space.trials.max(1));
+    let mut trials = Vec::with_capacity(picks.len());
+    for k in picks {
+        let config = apply(base, grid[k]);
+        let trial = match PoseModel::fit(&config, train, &mut |_| {}) {
+            Ok((model, _)) => {
+                let mae = mean_absolute_error(&model.predict_batch(val)?, val);
+                let score = mae[0] / scale.std()[0] + mae[1] / scale.std()[1];
+                Trial {
+                    config,
+                    val_mae: mae,
+                    score,
+                }
+            }
+            Err(LearnError::Diverged { .. }) => Trial {
+                config,
+                val_mae: [f64::INFINITY; 2],
+                score: f64::INFINITY,
+            },
+            Err(e) => return Err(e),
+        };
+        trials.push(trial);
+    }
+    trials.sort_by(|a, b| a.score.total_cmp(&b.score));
+    Ok(trials)
+}
+
+type Point = (f64, f64, usize, usize);
+
+fn grid(space: &SearchSpace) -> Vec<Point> {
+    let mut out = Vec::new();
+    for &lr in &space.learning_rates {
+        for &beta in &space.betas {
+            for &h in &space.hidden {
+                for &c in &space.n_components {
+                    out.push((lr, beta, h, c));
+                }
+            }
+        }
+    }
+    out
+}
+
+fn apply(base: &ModelConfig, (lr, beta, hidden, comps): Point) -> ModelConfig {
+    let mut cfg = base.clone();
+    for net in [&mut cfg.pose, &mut cfg.position, &mut cfg.angle]
+        .into_iter()
+        .flatten()
+    {
+        net.learning_rate = lr;
+        net.beta = beta;
+        net.hidden = vec![hidden];
+        if net.n_components.is_some() {
+            net.n_components = Some(comps);
+        }
+    }
+    cfg
+}

@@ -1,0 +1,240 @@
+//! Model (de)serialisation to a JSON string (format version, kind, config,
+//! architecture, standardiser, PCA, target scaling) plus safetensors bytes
+//! (the weights, in the report's `W(l)` orientation `d(l-1) x d(l)`). Pure:
+//! the lab crate writes the files.
+use crate::config::{ModelConfig, ModelKind};
+use crate::error::LearnError;
+use crate::net::Layers;
+use crate::pca::Pca;
+use crate::pose_model::{FittedNet, PoseModel};
+use crate::standardise::Standardiser;
+use safetensors::tensor::TensorView;
+use safetensors::{Dtype, SafeTensors};
+use serde::{Deserialize, Serialize};
+
+/// Identifies our model files.
+const FORMAT: &str = "tactrace-pose-model";
+/// Bumped on any incompatible change.
+pub const FORMAT_VERSION: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelFile {
+    format: String,
+    version: u32,
+    kind: ModelKind,
+    config: ModelConfig,
+    input_dim: usize,
+    standardiser: Standardiser,
+    target_scaling: Standardiser,
+    nets: Vec<NetFile>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NetFile {
+    name: String,
+    targets: Vec<usize>,
+    sizes: Vec<usize>,
+    pca: Option<Pca>,
+}
+
+fn corrupt(reason: impl ToString) -> LearnError {
+    LearnError::Corrupt {
+        reason: reason.to_string(),
+    }
+}
+
+fn tensor_name(net: usize, what: &str, l: usize) -> String {
+    format!("net{net}.{what}{l}")
+}
+
+fn le_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+impl PoseModel {
+    /// Serialise: `(json, safetensors weights)`.
+    pub fn to_bytes(&self) -> Result<(String, Vec<u8>), LearnError> {
+        let file = ModelFile {
+            format: FORMAT.into(),
+            version: FORMAT_VERSION,
+            kind: self.config.kind,
+            config: self.config.clone(),
+            input_dim: self.input_dim(),
+            standardiser: self.standardiser.clone(),
+            target_scaling: self.targets.clone(),
+            nets: self
+                .nets
+                .iter()
+                .map(|n| NetFile {
+                    name: n.name.clone(),
+                    targets: n.targets.clone(),
+                    sizes: n.layers.sizes().to_vec(),
+                    pca: n.pca.clone(),
+                })
+                .collect(),
+        };
+        let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
+        let mut buffers = Vec::new();
+        for (k, net) in self.nets.iter().enumerate() {
+            let sizes = net.layers.sizes();
+            for l in 1..sizes.len() {
+                buffers.push((
+                    tensor_name(k, "W", l),
+                    vec![sizes[l - 1], sizes[l]],
+                    le_bytes(&net.layers.weight(l)),
+                ));
+                buffers.push((
+                    tensor_name(k, "b", l),
+                    vec![sizes[l]],
+                    le_bytes(net.layers.bias(l)),
+                ));
+            }
+        }
+        let views = buffers
+            .iter()
+            .map(|(name, shape, bytes)| {
+                TensorView::new(Dtype::F32, shape.clone(), bytes).map(|v| (name.clone(), v))
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(corrupt)?;
+        let weights = safetensors::serialize(views, None).map_err(corrupt)?;
+        Ok((json, weights))
+    }
+
+    /// Rebuild a model from [`Self::to_bytes`] output. Another format
+    /// version, truncated or inconsistent data are errors.
+    pub fn from_bytes(json: &str, safetensors: &[u8]) -> Result<Self, LearnError> {
+        let value: serde_json::Value =
+            serde_json::from_str(json).map_err(|e| corrupt(format!("model json: {e}")))?;
+        if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT) {
+            return Err(corrupt(format!("not a {FORMAT} file")));
+        }
+        let version = value
+            .get("version")
+            .and_then(|v| v.as_u64())
+            .ok_or_else(|| corrupt("model json has no version"))?;
+        if version != FORMAT_VERSION as u64 {
+            return Err(LearnError::Version {
+                found: version.min(u32::MAX as u64) as u32,
+                supported: FORMAT_VERSION,
+            });
+        }
+        let file: ModelFile =
+            serde_json::from_value(value).map_err(|e| corrupt(format!("model json: {e}")))?;
+        file.config.validate()?;
+        let standardiser = Standardiser::from_parts(
+            file.standardiser.mean().to_vec(),
+            file.standardiser.std().to_vec(),
+        )?;
+        let targets = Standardiser::from_parts(
+            file.target_scaling.mean().to_vec(),
+            file.target_scaling.std().to_vec(),
+        )?;
+        if standardiser.dim() != file.input_dim || targets.dim() != 2 {
+            return Err(corrupt("standardiser dimensions disagree with the model"));
+        }
+        let tensors =
+            SafeTensors::deserialize(safetensors).map_err(|e| corrupt(format!("weights: {e}")))?;
+        let nets = file
+            .nets
+            .into_iter()
+            .enumerate()
+            .map(|(k, n)| load_net(k, n, &tensors, file.input_dim))
+            .collect::<Result<Vec<_>, _>>()?;
+        check_targets(&nets)?;
+        Ok(PoseModel {
+            config: file.config,
+            standardiser,
+            targets,
+            nets,
+        })
+    }
+}
+
+fn load_net(
+    k: usize,
+    n: NetFile,
+    tensors: &SafeTensors,
+    input_dim: usize,
+) -> Result<FittedNet, LearnError> {
+    let expected_in = match &n.pca {
+        Some(p) => {
+            p.validate()?;
+            if p.dim() != input_dim {
+                return Err(corrupt(format!(
+                    "net {}: PCA expects {} inputs, model has {input_dim}",
+                    n.name,
+                    p.dim()
+                )));
+            }
+            p.n_components()
+        }
+        None => input_dim,
+    };
+    if n.sizes.len() < 2
+        || n.sizes[0] != expected_in
+        || n.sizes[n.sizes.len() - 1] != n.targets.len()
+    {
+        return Err(corrupt(format!(
+            "net {}: layer sizes {:?} do not fit its inputs/targets",
+            n.name, n.sizes
+        )));
+    }
+    let mut w = Vec::new();
+    let mut b = Vec::new();
+    for l in 1..n.sizes.len() {
+        w.push(read_f32(
+            tensors,
+            &tensor_name(k, "W", l),
+            &[n.sizes[l - 1], n.sizes[l]],
+        )?);
+        b.push(read_f32(tensors, &tensor_name(k, "b", l), &[n.sizes[l]])?);
+    }
+    let layers = Layers::from_parts(n.sizes, w, b)?;
+    if !layers.is_finite() {
+        return Err(corrupt(format!("net {}: non-finite weights", n.name)));
+    }
+    Ok(FittedNet {
+        name: n.name,
+        targets: n.targets,
+        pca: n.pca,
+        layers,
+    })
+}
+
+fn read_f32(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f32>, LearnError> {
+    let view = tensors
+        .tensor(name)
+        .map_err(|e| corrupt(format!("tensor {name}: {e}")))?;
+    if view.dtype() != Dtype::F32 || view.shape() != shape {
+        return Err(corrupt(format!(
+            "tensor {name}: expected f32 {shape:?}, found {:?} {:?}",
+            view.dtype(),
+            view.shape()
+        )));
+    }
+    Ok(view
+        .data()
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
+}
+
+/// Every target column (0 and 1) is predicted by exactly one net.
+fn check_targets(nets: &[FittedNet]) -> Result<(), LearnError> {
+    let mut seen = [0usize; 2];
+    for &t in nets.iter().flat_map(|n| &n.targets) {
+        *seen
+            .get_mut(t)
+            .ok_or_else(|| corrupt(format!("target column {t} out of range")))? += 1;
+    }
+    if seen == [1, 1] {
+        Ok(())
+    } else {
+        Err(corrupt(
+            "each of r and theta must come from exactly one net",
+        ))
+    }
+}

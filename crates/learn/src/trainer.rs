@@ -1,0 +1,218 @@
+//! The training loop of a pose model: per-epoch shuffling with a seeded RNG,
+//! one EP (or backprop) pass per net, the two PDenNN nets on two cores with
+//! `rayon::join`, and the per-epoch history of report Fig. 4.5.
+use crate::config::{ModelConfig, ModelKind, NetConfig};
+use crate::dataset::Dataset;
+use crate::dennn::{DenNN, EpConfig};
+use crate::error::LearnError;
+use crate::mlp::Mlp;
+use crate::net::{Layers, States};
+use crate::standardise::Standardiser;
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// One net's figures for one epoch.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NetEpoch {
+    pub name: String,
+    /// Mean over the epoch's samples of eq. 3.16 with `beta = 1`,
+    /// `0.5 ||y - t||^2`, at the free-phase output before each update, in
+    /// scaled target units (standardised when `TargetScaling::Standardise`).
+    pub loss: f64,
+    /// Mean total energy, eq. 3.17, at the weakly clamped equilibrium. For
+    /// the backprop twin (no clamped phase) it equals `loss`.
+    pub energy: f64,
+    /// `0.5 ||y - t||^2` on the validation set after the epoch, same units.
+    pub val_loss: Option<f64>,
+}
+
+/// All nets' figures for one epoch (`epoch` counts from 0).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EpochReport {
+    pub epoch: usize,
+    pub nets: Vec<NetEpoch>,
+}
+
+/// The per-epoch history of a fit.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TrainingHistory {
+    pub epochs: Vec<EpochReport>,
+}
+
+/// One net's training inputs and scaled targets.
+pub(crate) struct NetData {
+    pub set: Dataset,
+}
+
+impl NetData {
+    /// `inputs` is `n x dim` row-major (f64); targets are `src`'s columns
+    /// `cols`, scaled by `scaler`.
+    pub fn new(
+        inputs: Vec<f64>,
+        src: &Dataset,
+        cols: &[usize],
+        scaler: &Standardiser,
+    ) -> Result<Self, LearnError> {
+        let dim = inputs.len() / src.n.max(1);
+        let x = inputs.into_iter().map(|v| v as f32).collect();
+        let mut y = Vec::with_capacity(src.n * cols.len());
+        for i in 0..src.n {
+            let row = src.y_row(i);
+            y.extend(
+                cols.iter()
+                    .map(|&c| ((row[c] as f64 - scaler.mean()[c]) / scaler.std()[c]) as f32),
+            );
+        }
+        Ok(NetData {
+            set: Dataset::new(x, y, src.n, dim, cols.len())?,
+        })
+    }
+}
+
+enum Engine {
+    Ep(DenNN, EpConfig),
+    Backprop(Mlp, f64),
+}
+
+/// One net being trained.
+pub(crate) struct Trainer {
+    name: String,
+    engine: Engine,
+    data: NetData,
+    val: Option<NetData>,
+    rng: ChaCha8Rng,
+    order: Vec<usize>,
+}
+
+impl Trainer {
+    pub fn new(
+        name: &str,
+        layers: Layers,
+        cfg: &ModelConfig,
+        net: &NetConfig,
+        data: NetData,
+        val: Option<NetData>,
+        k: u64,
+    ) -> Self {
+        let engine = if cfg.kind == ModelKind::Mlp {
+            Engine::Backprop(Mlp::from_layers(layers), net.learning_rate)
+        } else {
+            let ep = EpConfig {
+                learning_rate: net.learning_rate,
+                beta: net.beta,
+                free_phase: cfg.free_phase,
+                clamped_phase: cfg.clamped_phase,
+                epochs: cfg.epochs,
+                seed: cfg.seed,
+            };
+            Engine::Ep(DenNN::from_layers(layers), ep)
+        };
+        let rng =
+            ChaCha8Rng::seed_from_u64(cfg.seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k + 1)));
+        let order = (0..data.set.n).collect();
+        Trainer {
+            name: name.to_string(),
+            engine,
+            data,
+            val,
+            rng,
+            order,
+        }
+    }
+
+    /// One shuffled pass over the training data.
+    pub fn epoch(&mut self, epoch: usize) -> Result<NetEpoch, LearnError> {
+        self.order.shuffle(&mut self.rng);
+        let (loss, energy) = match &mut self.engine {
+            Engine::Ep(net, cfg) => {
+                let s = net.train_sequence(&self.data.set, &self.order, cfg)?;
+                (s.loss, s.energy)
+            }
+            Engine::Backprop(net, lr) => {
+                let mut total = 0.0;
+                for &i in &self.order {
+                    total +=
+                        net.train_sample(self.data.set.x_row(i), self.data.set.y_row(i), *lr)?;
+                }
+                let mean = total / self.order.len() as f64;
+                (mean, mean)
+            }
+        };
+        if !loss.is_finite() || !self.layers().is_finite() {
+            return Err(LearnError::Diverged {
+                net: self.name.clone(),
+                epoch,
+                loss,
+            });
+        }
+        let val_loss = self.val.as_ref().map(|v| mean_loss(self.layers(), &v.set));
+        Ok(NetEpoch {
+            name: self.name.clone(),
+            loss,
+            energy,
+            val_loss,
+        })
+    }
+
+    fn layers(&self) -> &Layers {
+        match &self.engine {
+            Engine::Ep(net, _) => net.layers(),
+            Engine::Backprop(net, _) => net.layers(),
+        }
+    }
+
+    pub fn into_layers(self) -> Layers {
+        match self.engine {
+            Engine::Ep(net, _) => net.layers().clone(),
+            Engine::Backprop(net, _) => net.layers().clone(),
+        }
+    }
+}
+
+/// Mean `0.5 ||y - t||^2` of `layers` over `data`.
+pub(crate) fn mean_loss(layers: &Layers, data: &Dataset) -> f64 {
+    let mut st = States::new(layers.sizes());
+    let mut out = vec![0.0f32; data.dim_y];
+    let mut total = 0.0;
+    for i in 0..data.n {
+        if layers
+            .predict_with(data.x_row(i), &mut out, &mut st)
+            .is_err()
+        {
+            return f64::NAN;
+        }
+        total += out
+            .iter()
+            .zip(data.y_row(i))
+            .map(|(y, t)| 0.5 * ((y - t) as f64).powi(2))
+            .sum::<f64>();
+    }
+    total / data.n as f64
+}
+
+/// Train every net for `epochs`, two at a time on two cores.
+pub(crate) fn train_nets(
+    trainers: &mut [Trainer],
+    epochs: usize,
+    progress: &mut dyn FnMut(&EpochReport),
+) -> Result<TrainingHistory, LearnError> {
+    let mut history = TrainingHistory::default();
+    for epoch in 0..epochs {
+        let nets = match trainers {
+            [a, b] => {
+                let (ra, rb) = rayon::join(|| a.epoch(epoch), || b.epoch(epoch));
+                vec![ra?, rb?]
+            }
+            _ => trainers
+                .iter_mut()
+                .map(|t| t.epoch(epoch))
+                .collect::<Result<Vec<_>, _>>()?,
+        };
+        let report = EpochReport { epoch, nets };
+        progress(&report);
+        history.epochs.push(report);
+    }
+    Ok(history)
+}

@@ -1,0 +1,293 @@
+//! Parameters of the simulated TacTip, grouped as the physics is: skin
+//! geometry, internal camera, contact mechanics, nuisance, and the
+//! calibration that maps the real data set's labels onto the model.
+//!
+//! Defaults are fitted to the real 127-pin frames in `shared/data`
+//! (see docs/sensor-model.md); every field can be overridden from TOML.
+use crate::SensorError;
+use serde::{Deserialize, Serialize};
+
+/// Everything the simulated TacTip needs; `Default` is the calibrated preset.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct TacTipConfig {
+    pub geometry: SkinGeometry,
+    pub camera: CameraConfig,
+    pub mechanics: Mechanics,
+    pub nuisance: Nuisance,
+    pub calibration: Calibration,
+}
+
+/// The hemispherical skin and its pin lattice.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SkinGeometry {
+    /// Radius of the hemispherical dome, mm (the skin is ~40 mm across).
+    pub dome_radius_mm: f64,
+    /// Pin spacing along the skin surface, mm (hexagonal lattice).
+    pub pin_spacing_mm: f64,
+    /// Hexagonal rings round the centre pin: 6 gives 127 pins.
+    pub rings: usize,
+    /// Pin radius on the skin, mm (sets the rendered disc size).
+    pub pin_radius_mm: f64,
+}
+
+impl Default for SkinGeometry {
+    fn default() -> Self {
+        Self {
+            dome_radius_mm: 20.0,
+            pin_spacing_mm: 4.243,
+            rings: 6,
+            pin_radius_mm: 0.8,
+        }
+    }
+}
+
+/// The camera inside the sensor, looking along the dome's axis at the skin.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraConfig {
+    /// Frame width, px.
+    pub width: u32,
+    /// Frame height, px.
+    pub height: u32,
+    /// Image position of the dome's axis (the centre pin at rest), px.
+    pub centre_px: [f64; 2],
+    /// Pinhole focal length, px.
+    pub focal_px: f64,
+    /// Height of the camera's optical centre above the dome's lowest point, mm.
+    pub height_mm: f64,
+    /// Angle of the sensor's x axis in the image (from the image x axis
+    /// towards the image y axis), degrees.
+    pub rotation_deg: f64,
+    /// True when the sensor's y axis appears mirrored in the image.
+    pub mirror: bool,
+}
+
+impl Default for CameraConfig {
+    fn default() -> Self {
+        Self {
+            width: 256,
+            height: 256,
+            centre_px: [126.88, 128.99],
+            focal_px: 78.05,
+            height_mm: 29.06,
+            rotation_deg: 179.51,
+            mirror: true,
+        }
+    }
+}
+
+/// Contact mechanics (docs/sensor-model.md, eqs. S1-S6).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Mechanics {
+    /// Width of the Gaussian that spreads indentation into the skin's
+    /// upward push (and the contact weight), mm.
+    pub kernel_width_mm: f64,
+    /// Fraction of the smoothed indentation that lifts pins towards the
+    /// camera (0 = no perspective effect, 1 = skin follows the object).
+    pub lift_gain: f64,
+    /// Core radius of the sideways gel-flow kernel, mm.
+    pub flow_core_mm: f64,
+    /// Thickness of the gel layer carrying the displaced volume, mm
+    /// (smaller = larger pin motion).
+    pub layer_thickness_mm: f64,
+    /// Quadrature spacing of the contact patch on the skin, mm.
+    pub patch_grid_mm: f64,
+    /// Spacing of the grid where the object's signed distance is sampled, mm.
+    pub distance_grid_mm: f64,
+    /// Deepest indentation the model resolves, mm (deeper is clipped).
+    pub max_depth_mm: f64,
+    /// Slide (mm) at which the skin's stick-slip drag saturates.
+    pub shear_limit_mm: f64,
+    /// Twist (deg) at which the skin's rotational drag saturates.
+    pub shear_limit_deg: f64,
+    /// Smoothed indentation (mm) at which a pin counts as half in contact.
+    pub contact_scale_mm: f64,
+}
+
+impl Default for Mechanics {
+    fn default() -> Self {
+        Self {
+            kernel_width_mm: 4.0,
+            lift_gain: 1.0,
+            flow_core_mm: 2.0,
+            layer_thickness_mm: 5.0,
+            patch_grid_mm: 1.0,
+            distance_grid_mm: 3.0,
+            max_depth_mm: 8.0,
+            shear_limit_mm: 1.0,
+            shear_limit_deg: 5.0,
+            contact_scale_mm: 0.3,
+        }
+    }
+}
+
+/// Measurement nuisance added when rendering with a random generator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Nuisance {
+    /// Standard deviation of independent pin-centre jitter, px.
+    pub pin_jitter_px: f64,
+    /// Standard deviation of additive Gaussian image noise, grey levels.
+    pub image_noise_std: f64,
+}
+
+impl Default for Nuisance {
+    fn default() -> Self {
+        Self {
+            pin_jitter_px: 0.2,
+            image_noise_std: 0.0,
+        }
+    }
+}
+
+/// How the real edge data set's labels map onto the model
+/// (used by [`crate::EdgeTap`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Calibration {
+    /// Added to the labelled angle (pose_6), degrees.
+    pub angle_offset_deg: f64,
+    /// Added to the labelled edge position (pose_2), mm.
+    pub edge_offset_mm: f64,
+    /// Indentation depth at zero vertical offset (pose_3 = 0), mm.
+    pub tap_depth_mm: f64,
+    /// Depth change per mm of labelled vertical offset (sign included).
+    pub depth_per_offset: f64,
+    /// +1 when the object lies on the sensor's -y side at zero angle.
+    pub object_side: f64,
+    /// The slide the sensor made is `shear_sign` times the labelled move
+    /// (move_1, move_2, move_6); -1 when the label is where the tap began
+    /// relative to the final pose.
+    pub shear_sign: f64,
+}
+
+impl Default for Calibration {
+    fn default() -> Self {
+        Self {
+            angle_offset_deg: -22.0,
+            edge_offset_mm: 0.0,
+            tap_depth_mm: 3.0,
+            depth_per_offset: -1.0,
+            object_side: -1.0,
+            shear_sign: 1.0,
+        }
+    }
+}
+
+fn positive(field: &'static str, value: f64) -> Result<(), SensorError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(SensorError::InvalidConfig {
+            field,
+            value,
+            reason: "must be a positive finite number",
+        })
+    }
+}
+
+fn non_negative(field: &'static str, value: f64) -> Result<(), SensorError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(SensorError::InvalidConfig {
+            field,
+            value,
+            reason: "must be a finite number >= 0",
+        })
+    }
+}
+
+fn finite(field: &'static str, value: f64) -> Result<(), SensorError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(SensorError::InvalidConfig {
+            field,
+            value,
+            reason: "must be finite",
+        })
+    }
+}
+
+impl TacTipConfig {
+    /// Check every field's range; the model calls this on construction.
+    pub fn validate(&self) -> Result<(), SensorError> {
+        let (g, c, m, n, k) = (
+            &self.geometry,
+            &self.camera,
+            &self.mechanics,
+            &self.nuisance,
+            &self.calibration,
+        );
+        positive("geometry.dome_radius_mm", g.dome_radius_mm)?;
+        positive("geometry.pin_spacing_mm", g.pin_spacing_mm)?;
+        positive("geometry.pin_radius_mm", g.pin_radius_mm)?;
+        if g.rings == 0 || g.rings > 20 {
+            return Err(SensorError::InvalidConfig {
+                field: "geometry.rings",
+                value: g.rings as f64,
+                reason: "must be between 1 and 20",
+            });
+        }
+        let outer = g.rings as f64 * g.pin_spacing_mm / g.dome_radius_mm;
+        if outer >= std::f64::consts::FRAC_PI_2 {
+            return Err(SensorError::InvalidConfig {
+                field: "geometry.pin_spacing_mm",
+                value: g.pin_spacing_mm,
+                reason: "outer ring reaches past the dome's equator",
+            });
+        }
+        for (field, v) in [("camera.width", c.width), ("camera.height", c.height)] {
+            if v == 0 || v > 4096 {
+                return Err(SensorError::InvalidConfig {
+                    field,
+                    value: v as f64,
+                    reason: "must be between 1 and 4096 px",
+                });
+            }
+        }
+        finite("camera.centre_px[0]", c.centre_px[0])?;
+        finite("camera.centre_px[1]", c.centre_px[1])?;
+        positive("camera.focal_px", c.focal_px)?;
+        positive("camera.height_mm", c.height_mm)?;
+        finite("camera.rotation_deg", c.rotation_deg)?;
+        let rim_height = g.dome_radius_mm * (1.0 - outer.cos());
+        if c.height_mm <= rim_height {
+            return Err(SensorError::InvalidConfig {
+                field: "camera.height_mm",
+                value: c.height_mm,
+                reason: "camera must sit above the outer pin ring",
+            });
+        }
+        positive("mechanics.kernel_width_mm", m.kernel_width_mm)?;
+        non_negative("mechanics.lift_gain", m.lift_gain)?;
+        positive("mechanics.flow_core_mm", m.flow_core_mm)?;
+        positive("mechanics.layer_thickness_mm", m.layer_thickness_mm)?;
+        positive("mechanics.patch_grid_mm", m.patch_grid_mm)?;
+        positive("mechanics.distance_grid_mm", m.distance_grid_mm)?;
+        positive("mechanics.max_depth_mm", m.max_depth_mm)?;
+        if m.max_depth_mm >= g.dome_radius_mm {
+            return Err(SensorError::InvalidConfig {
+                field: "mechanics.max_depth_mm",
+                value: m.max_depth_mm,
+                reason: "must be below the dome radius",
+            });
+        }
+        positive("mechanics.shear_limit_mm", m.shear_limit_mm)?;
+        positive("mechanics.shear_limit_deg", m.shear_limit_deg)?;
+        positive("mechanics.contact_scale_mm", m.contact_scale_mm)?;
+        non_negative("nuisance.pin_jitter_px", n.pin_jitter_px)?;
+        non_negative("nuisance.image_noise_std", n.image_noise_std)?;
+        finite("calibration.angle_offset_deg", k.angle_offset_deg)?;
+        finite("calibration.edge_offset_mm", k.edge_offset_mm)?;
+        finite("calibration.tap_depth_mm", k.tap_depth_mm)?;
+        finite("calibration.depth_per_offset", k.depth_per_offset)?;
+        finite("calibration.object_side", k.object_side)?;
+        finite("calibration.shear_sign", k.shear_sign)?;
+        Ok(())
+    }
+}

@@ -1,0 +1,239 @@
+//! Contact mechanics of the dome pressed onto an extruded object's top face,
+//! and the pin motion it causes (docs/sensor-model.md, eqs. S4-S7).
+//!
+//! The skin is sampled by a hexagonal quadrature patch in surface
+//! coordinates. Where the dome dips below the object's top face (z = 0)
+//! inside the contour, the penetration is the indentation (eq. S4). An
+//! elastic Gaussian kernel spreads it (eq. S5) and pins move down its
+//! gradient, away from the pressed region (eq. S6). The pin-patch kernel
+//! weights are precomputed, so a tap costs one pass over the contact patch
+//! and a few dozen signed-distance queries.
+use crate::config::Mechanics;
+use crate::layout::{hex_lattice, Projection};
+use tactrace_geometry::{Pose, Vec2};
+
+/// A slide the sensor made while in contact, in the sensor frame
+/// (mm, mm, deg): the skin sticks to the object and lags behind.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct Shear {
+    pub dx_mm: f64,
+    pub dy_mm: f64,
+    pub drz_deg: f64,
+}
+
+/// One quadrature point of the skin.
+#[derive(Debug, Clone, Copy)]
+struct PatchPoint {
+    /// Horizontal position in the sensor frame, mm.
+    horiz: [f64; 2],
+    /// Height above the dome's lowest point, mm.
+    height: f64,
+}
+
+/// Pin displacements on the skin and the smoothed indentation under each pin.
+#[derive(Debug, Clone)]
+pub(crate) struct ContactField {
+    /// Surface displacement of each pin, mm, sensor frame.
+    pub disp: Vec<[f64; 2]>,
+    /// Smoothed indentation D at each pin, mm (eq. S5).
+    pub smoothed: Vec<f64>,
+}
+
+/// Precomputed elastic response of every pin to every patch point.
+#[derive(Debug, Clone)]
+pub(crate) struct ContactModel {
+    patch: Vec<PatchPoint>,
+    /// `kernel[j * pins + i]` = (K_x, K_y, G) of patch point j on pin i.
+    kernel: Vec<[f32; 3]>,
+    pins_g: Vec<[f64; 2]>,
+    mech: Mechanics,
+}
+
+impl ContactModel {
+    /// Lay the patch over the part of the dome within `max_depth_mm` of its
+    /// lowest point and tabulate eq. S5/S6 weights for the pins `pins_g`.
+    pub fn new(pins_g: Vec<[f64; 2]>, proj: &Projection, radius_mm: f64, mech: &Mechanics) -> Self {
+        let h = mech.patch_grid_mm;
+        let reach = radius_mm * (1.0 - mech.max_depth_mm / radius_mm).acos();
+        let rings = (reach / h).ceil() as usize + 1;
+        let mut patch: Vec<([f64; 2], PatchPoint)> = hex_lattice(rings, h)
+            .into_iter()
+            .filter(|g| g[0].hypot(g[1]) <= reach + 1e-9)
+            .map(|g| {
+                let (horiz, height) = proj.skin_point(g);
+                (g, PatchPoint { horiz, height })
+            })
+            .collect();
+        patch.sort_by(|a, b| a.1.height.total_cmp(&b.1.height));
+        let area = 3f64.sqrt() / 2.0 * h * h;
+        let widths = (mech.flow_core_mm, mech.kernel_width_mm);
+        let mut kernel = Vec::with_capacity(patch.len() * pins_g.len());
+        for (gj, _) in &patch {
+            for gi in &pins_g {
+                kernel.push(kernel_weights(*gi, *gj, widths, area));
+            }
+        }
+        Self {
+            patch: patch.into_iter().map(|(_, p)| p).collect(),
+            kernel,
+            pins_g,
+            mech: mech.clone(),
+        }
+    }
+
+    /// Pin displacements for the tip pose `tip` over the object whose top
+    /// face is the region `sd(p) < 0` of the plane z = 0 (world frame, mm).
+    pub fn field(&self, sd: &dyn Fn(Vec2) -> f64, tip: Pose, shear: Option<Shear>) -> ContactField {
+        let n = self.pins_g.len();
+        let mut field = ContactField {
+            disp: vec![[0.0; 2]; n],
+            smoothed: vec![0.0; n],
+        };
+        let depth = (-tip.z).min(self.mech.max_depth_mm);
+        if depth.is_nan() || depth <= 0.0 {
+            return field;
+        }
+        let active = self.patch.partition_point(|p| p.height < depth);
+        let reach = self.patch[..active]
+            .iter()
+            .map(|p| p.horiz[0].hypot(p.horiz[1]))
+            .fold(0.0, f64::max);
+        let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, tip);
+        let h = self.mech.patch_grid_mm;
+        for (j, point) in self.patch[..active].iter().enumerate() {
+            let dist = grid.interpolate(sd, point.horiz);
+            let inside = (0.5 - dist / h).clamp(0.0, 1.0);
+            let pen = inside * (depth - point.height);
+            if pen > 0.0 {
+                self.accumulate(j, pen, &mut field);
+            }
+        }
+        if let Some(shear) = shear {
+            self.apply_shear(shear, &mut field);
+        }
+        field
+    }
+
+    /// Add patch point j's indentation `pen` to every pin (eqs. S5, S6).
+    fn accumulate(&self, j: usize, pen: f64, field: &mut ContactField) {
+        let n = self.pins_g.len();
+        let gain = 1.0 / self.mech.layer_thickness_mm;
+        let row = &self.kernel[j * n..(j + 1) * n];
+        for (i, k) in row.iter().enumerate() {
+            field.disp[i][0] += gain * pen * k[0] as f64;
+            field.disp[i][1] += gain * pen * k[1] as f64;
+            field.smoothed[i] += pen * k[2] as f64;
+        }
+    }
+
+    /// Stick-slip drag of the skin in contact (eq. S7): pins lag the slide
+    /// by a tanh-saturated amount, weighted by how much they are in contact.
+    fn apply_shear(&self, shear: Shear, field: &mut ContactField) {
+        let weights: Vec<f64> = field
+            .smoothed
+            .iter()
+            .map(|d| d / (d + self.mech.contact_scale_mm))
+            .collect();
+        let total: f64 = weights.iter().sum();
+        if total <= 1e-12 {
+            return;
+        }
+        let mut centre = [0.0; 2];
+        for (g, w) in self.pins_g.iter().zip(&weights) {
+            centre[0] += w * g[0] / total;
+            centre[1] += w * g[1] / total;
+        }
+        let slide = shear.dx_mm.hypot(shear.dy_mm);
+        let lim = self.mech.shear_limit_mm;
+        let lag = if slide > 1e-12 {
+            lim * (slide / lim).tanh() / slide
+        } else {
+            0.0
+        };
+        let lim_deg = self.mech.shear_limit_deg;
+        let twist = -(lim_deg * (shear.drz_deg / lim_deg).tanh()).to_radians();
+        let (c, s) = (twist.cos(), twist.sin());
+        for ((g, w), d) in self.pins_g.iter().zip(&weights).zip(field.disp.iter_mut()) {
+            let r = [g[0] - centre[0], g[1] - centre[1]];
+            d[0] += w * (-lag * shear.dx_mm + (c * r[0] - s * r[1] - r[0]));
+            d[1] += w * (-lag * shear.dy_mm + (s * r[0] + c * r[1] - r[1]));
+        }
+    }
+}
+
+/// Eq. S5/S6 weights of a patch point at `gj` on a pin at `gi`.
+///
+/// Displacement: the indented gel volume flows sideways in a layer, like a
+/// regularised 2-D source, K = dA (gi - gj) / (2 pi (r^2 + c^2)) (divided
+/// by the layer thickness later; c = flow core). Smoothing: the unit-mass
+/// Gaussian G = dA exp(-r^2 / 2 a^2) / (2 pi a^2) (a = kernel width).
+fn kernel_weights(gi: [f64; 2], gj: [f64; 2], (c, a): (f64, f64), area: f64) -> [f32; 3] {
+    let d = [gi[0] - gj[0], gi[1] - gj[1]];
+    let r2 = d[0] * d[0] + d[1] * d[1];
+    let tau = std::f64::consts::TAU;
+    let source = area / (tau * (r2 + c * c));
+    let gauss = area * (-r2 / (2.0 * a * a)).exp() / (tau * a * a);
+    [(source * d[0]) as f32, (source * d[1]) as f32, gauss as f32]
+}
+
+/// The object's signed distance sampled lazily on a square grid in the
+/// sensor's horizontal plane and interpolated bilinearly (exact for a
+/// straight edge).
+struct DistanceGrid {
+    spacing: f64,
+    half: i64,
+    values: Vec<f64>,
+    tip: Pose,
+    rot: [f64; 2],
+}
+
+impl DistanceGrid {
+    fn new(reach: f64, spacing: f64, tip: Pose) -> Self {
+        let half = (reach / spacing).ceil() as i64 + 1;
+        let side = (2 * half + 1) as usize;
+        let r = tip.rz.to_radians();
+        Self {
+            spacing,
+            half,
+            values: vec![f64::NAN; side * side],
+            tip,
+            rot: [r.cos(), r.sin()],
+        }
+    }
+
+    fn node(&mut self, sd: &dyn Fn(Vec2) -> f64, ia: i64, ib: i64) -> f64 {
+        let ia = ia.clamp(-self.half, self.half);
+        let ib = ib.clamp(-self.half, self.half);
+        let side = 2 * self.half + 1;
+        let k = ((ib + self.half) * side + ia + self.half) as usize;
+        if self.values[k].is_nan() {
+            let (a, b) = (ia as f64 * self.spacing, ib as f64 * self.spacing);
+            let world = Vec2::new(
+                self.tip.x + self.rot[0] * a - self.rot[1] * b,
+                self.tip.y + self.rot[1] * a + self.rot[0] * b,
+            );
+            let v = sd(world);
+            self.values[k] = if v.is_finite() {
+                v
+            } else if v < 0.0 {
+                -1e9
+            } else {
+                1e9
+            };
+        }
+        self.values[k]
+    }
+
+    fn interpolate(&mut self, sd: &dyn Fn(Vec2) -> f64, q: [f64; 2]) -> f64 {
+        let (u, v) = (q[0] / self.spacing, q[1] / self.spacing);
+        let (ia, ib) = (u.floor() as i64, v.floor() as i64);
+        let (fu, fv) = (u - ia as f64, v - ib as f64);
+        let v00 = self.node(sd, ia, ib);
+        let v10 = self.node(sd, ia + 1, ib);
+        let v01 = self.node(sd, ia, ib + 1);
+        let v11 = self.node(sd, ia + 1, ib + 1);
+        let top = v00 + fu * (v10 - v00);
+        let bottom = v01 + fu * (v11 - v01);
+        top + fv * (bottom - top)
+    }
+}

@@ -1,0 +1,37 @@
+//! Typed errors of the sensor crate: bad configuration, mismatched rest
+//! layouts and unreadable frames, each naming what was wrong.
+use std::path::PathBuf;
+
+/// What can go wrong building a sensor model or capturing a frame.
+#[derive(Debug, thiserror::Error)]
+pub enum SensorError {
+    /// A configuration value outside its valid range.
+    #[error("invalid sensor config `{field}` = {value}: {reason}")]
+    InvalidConfig {
+        field: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
+    /// Measured rest pins that do not fit the configured layout.
+    #[error("rest pin layout mismatch: expected {expected} pins, got {got}: {reason}")]
+    RestPins {
+        expected: usize,
+        got: usize,
+        reason: String,
+    },
+    /// A frame file that does not exist.
+    #[error("frame file `{path}` does not exist")]
+    FrameMissing { path: PathBuf },
+    /// A frame file that could not be opened or read.
+    #[error("cannot read frame file `{path}`: {reason}")]
+    FrameUnreadable { path: PathBuf, reason: String },
+    /// A file that is not in a supported image format.
+    #[error("frame file `{path}` is not a supported image: {reason}")]
+    NotAnImage { path: PathBuf, reason: String },
+    /// An image file whose contents are damaged.
+    #[error("frame file `{path}` is corrupt: {reason}")]
+    CorruptFrame { path: PathBuf, reason: String },
+    /// The replay sensor has handed out every frame it was given.
+    #[error("replay sensor exhausted: all {count} frames were already captured")]
+    ReplayExhausted { count: usize },
+}

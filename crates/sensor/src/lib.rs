@@ -1,0 +1,29 @@
+//! The TacTip optical tactile sensor, simulated and replayed.
+//!
+//! A 127-pin hemispherical skin seen by an internal camera: the pin layout
+//! and its projection, a contact-mechanics model of the dome pressed onto
+//! an extruded object (docs/sensor-model.md), fast anti-aliased rendering,
+//! the [`TactileSensor`] trait with a simulated implementation
+//! ([`SimTacTip`]) and a replay implementation ([`ReplaySensor`]).
+//! Only the replay sensor and [`read_frame`] touch files.
+
+mod config;
+mod contact;
+mod edge_tap;
+mod error;
+mod layout;
+mod model;
+mod render;
+mod replay;
+mod sensor;
+mod sim;
+
+pub use config::{Calibration, CameraConfig, Mechanics, Nuisance, SkinGeometry, TacTipConfig};
+pub use contact::Shear;
+pub use edge_tap::EdgeTap;
+pub use error::SensorError;
+pub use layout::{hex_lattice, pin_count};
+pub use model::TacTipModel;
+pub use replay::{read_frame, ReplaySensor};
+pub use sensor::{Frame, TactileSensor};
+pub use sim::{PoseSource, SimTacTip};

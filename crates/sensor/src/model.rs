@@ -1,0 +1,222 @@
+//! The simulated TacTip: pin layout, contact response and rendering in one
+//! checked model, shared by simulated taps and (through measured rest pins)
+//! the real sensor's geometry.
+use crate::config::TacTipConfig;
+use crate::contact::{ContactModel, Shear};
+use crate::layout::{hex_lattice, pin_count, Projection};
+use crate::render::{add_noise, draw_disc, jitter};
+use crate::{Frame, SensorError};
+use rand_chacha::ChaCha8Rng;
+use tactrace_geometry::{Contour, Pose, Vec2};
+
+/// A checked TacTip model: rest pins (px), their skin coordinates and the
+/// precomputed contact response.
+#[derive(Debug, Clone)]
+pub struct TacTipModel {
+    cfg: TacTipConfig,
+    proj: Projection,
+    /// Surface coordinates of each pin, mm (same order as `rest_px`).
+    pins_g: Vec<[f64; 2]>,
+    rest_px: Vec<[f64; 2]>,
+    radii_px: Vec<f64>,
+    contact: ContactModel,
+    lift_gain: f64,
+}
+
+impl TacTipModel {
+    /// Build the model from a configuration; rest pins are the projection of
+    /// the hexagonal skin lattice (eqs. S1-S3), centre first, ring by ring.
+    pub fn new(cfg: TacTipConfig) -> Result<Self, SensorError> {
+        cfg.validate()?;
+        let proj = Projection::new(&cfg.geometry, &cfg.camera);
+        let pins_g = hex_lattice(cfg.geometry.rings, cfg.geometry.pin_spacing_mm);
+        let rest_px = pins_g.iter().map(|g| proj.project(*g)).collect();
+        Ok(Self::assemble(cfg, proj, pins_g, rest_px))
+    }
+
+    /// Rest layout taken from pin centres measured on a real undeformed
+    /// frame (px), so simulated and real frames share one geometry. Each
+    /// measured pin is matched to the nearest model pin; the output of
+    /// [`Self::pins`] keeps the order of `rest_px`.
+    pub fn with_rest_pins(cfg: TacTipConfig, rest_px: Vec<[f64; 2]>) -> Result<Self, SensorError> {
+        cfg.validate()?;
+        let proj = Projection::new(&cfg.geometry, &cfg.camera);
+        let lattice = hex_lattice(cfg.geometry.rings, cfg.geometry.pin_spacing_mm);
+        let order = match_rest_pins(&proj, &lattice, &rest_px)?;
+        let pins_g = order.iter().map(|&k| lattice[k]).collect();
+        Ok(Self::assemble(cfg, proj, pins_g, rest_px))
+    }
+
+    fn assemble(
+        cfg: TacTipConfig,
+        proj: Projection,
+        pins_g: Vec<[f64; 2]>,
+        rest_px: Vec<[f64; 2]>,
+    ) -> Self {
+        let radius = cfg.geometry.pin_radius_mm;
+        let radii_px = pins_g.iter().map(|g| radius * proj.scale(*g)).collect();
+        let contact = ContactModel::new(
+            pins_g.clone(),
+            &proj,
+            cfg.geometry.dome_radius_mm,
+            &cfg.mechanics,
+        );
+        Self {
+            lift_gain: cfg.mechanics.lift_gain,
+            cfg,
+            proj,
+            pins_g,
+            rest_px,
+            radii_px,
+            contact,
+        }
+    }
+
+    /// The configuration the model was built from.
+    pub fn config(&self) -> &TacTipConfig {
+        &self.cfg
+    }
+
+    /// Rest pin centres, px, image coordinates.
+    pub fn rest_pins(&self) -> &[[f64; 2]] {
+        &self.rest_px
+    }
+
+    /// Rendered pin radii, px (grow outwards with the camera's perspective).
+    pub fn pin_radii(&self) -> &[f64] {
+        &self.radii_px
+    }
+
+    /// Frame size (width, height), px.
+    pub fn image_size(&self) -> (u32, u32) {
+        (self.cfg.camera.width, self.cfg.camera.height)
+    }
+
+    /// True pin centres (px) for the sensor tip at `tip` (work frame: x, y
+    /// mm; z = height of the dome's lowest point above the object's top
+    /// face, negative = indentation depth; rz = sensor yaw, deg) over the
+    /// extruded `shape`. `shear` is an optional slide (sensor frame) made
+    /// while in contact. Eqs. S4-S8.
+    pub fn pins(&self, shape: &Contour, tip: Pose, shear: Option<Shear>) -> Vec<[f64; 2]> {
+        if tip.z >= 0.0 {
+            return self.rest_px.clone();
+        }
+        self.pins_sdf(&|p| shape.signed_distance(p), tip, shear)
+    }
+
+    /// As [`Self::pins`] for any object given by its signed distance in the
+    /// plane (mm, negative inside), e.g. an infinite straight edge.
+    pub fn pins_sdf(
+        &self,
+        sd: &dyn Fn(Vec2) -> f64,
+        tip: Pose,
+        shear: Option<Shear>,
+    ) -> Vec<[f64; 2]> {
+        let field = self.contact.field(sd, tip, shear);
+        self.rest_px
+            .iter()
+            .zip(&self.pins_g)
+            .zip(field.disp.iter().zip(&field.smoothed))
+            .map(|((rest, g), (u, lift))| {
+                if u[0] == 0.0 && u[1] == 0.0 && *lift == 0.0 {
+                    return *rest;
+                }
+                let lift = self.lift_gain * lift;
+                let moved = self.proj.project_lifted([g[0] + u[0], g[1] + u[1]], lift);
+                let base = self.proj.project(*g);
+                [rest[0] + moved[0] - base[0], rest[1] + moved[1] - base[1]]
+            })
+            .collect()
+    }
+
+    /// Render pins (one per rest pin, same order) as a frame of
+    /// anti-aliased discs; with `rng`, add the configured pin jitter and
+    /// image noise.
+    pub fn render(&self, pins: &[[f64; 2]], rng: Option<&mut ChaCha8Rng>) -> Frame {
+        let (w, h) = self.image_size();
+        let mut frame = Frame::new(w, h);
+        let nuisance = &self.cfg.nuisance;
+        let drawn = match rng {
+            Some(rng) => {
+                let moved = jitter(pins, nuisance.pin_jitter_px, rng);
+                self.draw(&mut frame, &moved);
+                if nuisance.image_noise_std > 0.0 {
+                    add_noise(&mut frame, nuisance.image_noise_std, rng);
+                }
+                return frame;
+            }
+            None => pins,
+        };
+        self.draw(&mut frame, drawn);
+        frame
+    }
+
+    fn draw(&self, frame: &mut Frame, pins: &[[f64; 2]]) {
+        let fallback = self.radii_px.first().copied().unwrap_or(2.0);
+        for (i, p) in pins.iter().enumerate() {
+            let r = self.radii_px.get(i).copied().unwrap_or(fallback);
+            draw_disc(frame, *p, r);
+        }
+    }
+}
+
+/// For each measured rest pin, the index of the model lattice pin it is
+/// (greedy nearest pairs in the image; every pair must be closer than half
+/// the local pin spacing).
+fn match_rest_pins(
+    proj: &Projection,
+    lattice: &[[f64; 2]],
+    rest_px: &[[f64; 2]],
+) -> Result<Vec<usize>, SensorError> {
+    let expected = lattice.len();
+    let mismatch = |reason: String| SensorError::RestPins {
+        expected,
+        got: rest_px.len(),
+        reason,
+    };
+    if rest_px.len() != expected || expected != pin_count_of(lattice) {
+        return Err(mismatch("wrong number of pins".into()));
+    }
+    if let Some(i) = rest_px
+        .iter()
+        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
+        return Err(mismatch(format!("pin {i} is not a finite position")));
+    }
+    let model: Vec<[f64; 2]> = lattice.iter().map(|g| proj.project(*g)).collect();
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(expected * expected);
+    for (i, p) in rest_px.iter().enumerate() {
+        for (k, q) in model.iter().enumerate() {
+            pairs.push(((p[0] - q[0]).hypot(p[1] - q[1]), i, k));
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut of_measured = vec![usize::MAX; expected];
+    let mut taken = vec![false; expected];
+    for (d, i, k) in pairs {
+        if of_measured[i] != usize::MAX || taken[k] {
+            continue;
+        }
+        let limit = 0.5 * proj.scale(lattice[k]) * spacing_of(lattice);
+        if d > limit {
+            return Err(mismatch(format!(
+                "measured pin {i} at ({:.1}, {:.1}) px is {d:.1} px from its nearest free model pin (limit {limit:.1} px); check camera calibration",
+                rest_px[i][0], rest_px[i][1]
+            )));
+        }
+        of_measured[i] = k;
+        taken[k] = true;
+    }
+    Ok(of_measured)
+}
+
+fn spacing_of(lattice: &[[f64; 2]]) -> f64 {
+    lattice.get(1).map(|g| g[0].hypot(g[1])).unwrap_or(1.0)
+}
+
+fn pin_count_of(lattice: &[[f64; 2]]) -> usize {
+    let rings = (1..=20)
+        .find(|&n| pin_count(n) >= lattice.len())
+        .unwrap_or(0);
+    pin_count(rings)
+}

@@ -1,0 +1,79 @@
+//! Replay of saved frames: stands in for the camera when re-running
+//! experiments from disk. This and [`read_frame`] are the crate's only I/O.
+use crate::{Frame, SensorError, TactileSensor};
+use std::path::{Path, PathBuf};
+
+/// A sensor that returns saved frames from a list of files, in order.
+#[derive(Debug, Clone)]
+pub struct ReplaySensor {
+    paths: Vec<PathBuf>,
+    next: usize,
+}
+
+impl ReplaySensor {
+    /// Replay `paths` in the order given; files are read at capture time.
+    pub fn new(paths: Vec<PathBuf>) -> Self {
+        Self { paths, next: 0 }
+    }
+
+    /// How many frames are left to capture.
+    pub fn remaining(&self) -> usize {
+        self.paths.len() - self.next
+    }
+}
+
+impl TactileSensor for ReplaySensor {
+    /// Reads the next file; errors after the last one.
+    fn capture(&mut self) -> Result<Frame, SensorError> {
+        let path = self
+            .paths
+            .get(self.next)
+            .ok_or(SensorError::ReplayExhausted {
+                count: self.paths.len(),
+            })?;
+        let frame = read_frame(path)?;
+        self.next += 1;
+        Ok(frame)
+    }
+}
+
+/// Read one frame from an image file, converting colour to 8-bit grey.
+///
+/// Errors name the file and say whether it is missing, unreadable, not an
+/// image or corrupt.
+pub fn read_frame(path: &Path) -> Result<Frame, SensorError> {
+    if !path.exists() {
+        return Err(SensorError::FrameMissing {
+            path: path.to_path_buf(),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|e| SensorError::FrameUnreadable {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    let format = image::guess_format(&bytes).map_err(|_| SensorError::NotAnImage {
+        path: path.to_path_buf(),
+        reason: "contents match no supported image format".into(),
+    })?;
+    let image = image::load_from_memory_with_format(&bytes, format)
+        .map_err(|e| classify_decode_error(path, e))?;
+    Ok(image.into_luma8())
+}
+
+fn classify_decode_error(path: &Path, err: image::ImageError) -> SensorError {
+    let path = path.to_path_buf();
+    match err {
+        image::ImageError::Unsupported(e) => SensorError::NotAnImage {
+            path,
+            reason: e.to_string(),
+        },
+        image::ImageError::IoError(e) => SensorError::FrameUnreadable {
+            path,
+            reason: e.to_string(),
+        },
+        other => SensorError::CorruptFrame {
+            path,
+            reason: other.to_string(),
+        },
+    }
+}

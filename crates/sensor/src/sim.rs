@@ -1,0 +1,57 @@
+//! The simulated TacTip as a [`TactileSensor`]: asks the simulated arm where
+//! the tip physically is, deforms the model skin against the object and
+//! renders the frame with seeded nuisance.
+use crate::{Frame, SensorError, Shear, TacTipModel, TactileSensor};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use tactrace_geometry::{Contour, Pose};
+
+/// Where the tip physically is (mm, deg), e.g. read from a simulated arm.
+pub type PoseSource = Box<dyn Fn() -> Pose + Send>;
+
+/// A simulated TacTip touching one extruded object.
+pub struct SimTacTip {
+    model: TacTipModel,
+    shape: Contour,
+    pose_source: PoseSource,
+    rng: ChaCha8Rng,
+    shear: Option<Shear>,
+}
+
+impl SimTacTip {
+    /// `pose_source` returns the PHYSICAL pose of the sensor tip (from the
+    /// simulated arm); `seed` fixes the nuisance stream.
+    pub fn new(model: TacTipModel, shape: Contour, pose_source: PoseSource, seed: u64) -> Self {
+        Self {
+            model,
+            shape,
+            pose_source,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            shear: None,
+        }
+    }
+
+    /// The undeformed frame (no contact, no nuisance).
+    pub fn reference_frame(&self) -> Frame {
+        self.model.render(self.model.rest_pins(), None)
+    }
+
+    /// Slide applied to subsequent captures (None = plain taps).
+    pub fn set_shear(&mut self, shear: Option<Shear>) {
+        self.shear = shear;
+    }
+
+    /// The sensor model.
+    pub fn model(&self) -> &TacTipModel {
+        &self.model
+    }
+}
+
+impl TactileSensor for SimTacTip {
+    /// Reads the tip pose, computes the pins and renders with nuisance.
+    fn capture(&mut self) -> Result<Frame, SensorError> {
+        let tip = (self.pose_source)();
+        let pins = self.model.pins(&self.shape, tip, self.shear);
+        Ok(self.model.render(&pins, Some(&mut self.rng)))
+    }
+}

@@ -1,0 +1,215 @@
+//! Contact mechanics against theory: rest pattern without contact, and the
+//! symmetries and monotonicity the physics demands (docs/sensor-model.md).
+#![allow(clippy::needless_range_loop)]
+mod common;
+use common::*;
+use tactrace_geometry::{Pose, Vec2};
+use tactrace_sensor::Shear;
+
+#[test]
+fn no_contact_gives_the_rest_pins_exactly() {
+    let model = plain_model();
+    let object = square([0.0, 0.0], 30.0);
+    let above = model.pins(&object, Pose::planar(0.0, 0.0, 0.5, 17.0), None);
+    assert_eq!(above, model.rest_pins());
+    let off_object = model.pins(&object, tap(80.0, 0.0, 4.0, 0.0), None);
+    assert_eq!(off_object, model.rest_pins());
+    let with_shear = Some(Shear {
+        dx_mm: 3.0,
+        dy_mm: 0.0,
+        drz_deg: 4.0,
+    });
+    assert_eq!(
+        model.pins(&object, tap(80.0, 0.0, 4.0, 0.0), with_shear),
+        model.rest_pins()
+    );
+}
+
+#[test]
+fn rotating_the_sensor_by_60_degrees_permutes_and_rotates_the_field() {
+    // Straight edge y = -2 (object below). Sensor yaw +60 turns the object by
+    // -60 in the sensor frame: d60(p) = R(-60) d0(R(60) p) on the hexagonal
+    // lattice, which is symmetric under 60 degree turns.
+    let model = plain_model();
+    let sd = |p: Vec2| p.y + 2.0;
+    let d0 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 0.0), None));
+    let d60 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 60.0), None));
+    let rest = model.rest_pins();
+    assert!(mean_magnitude(&d0) > 1.0, "edge contact must move pins");
+    for i in 0..rest.len() {
+        let j = partner(rest, i, |v| rotate(v, 60.0));
+        let expected = rotate(d0[j], -60.0);
+        let err = (d60[i][0] - expected[0]).hypot(d60[i][1] - expected[1]);
+        assert!(err < 1e-3, "pin {i}: {:?} vs {:?}", d60[i], expected);
+    }
+}
+
+#[test]
+fn rotating_the_sensor_by_any_angle_rotates_the_net_displacement() {
+    let model = plain_model();
+    let sd = |p: Vec2| p.y + 1.0;
+    let net = |rz: f64| {
+        let d = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, rz), None));
+        let s = d.iter().fold([0.0, 0.0], |a, v| [a[0] + v[0], a[1] + v[1]]);
+        (s, mean_magnitude(&d))
+    };
+    let (n0, m0) = net(0.0);
+    for rz in [17.0, 37.0, -41.0] {
+        let (n, m) = net(rz);
+        let expected = rotate(n0, -rz);
+        let angle = (n[1].atan2(n[0]) - expected[1].atan2(expected[0])).to_degrees();
+        let angle = (angle + 180.0).rem_euclid(360.0) - 180.0;
+        assert!(
+            angle.abs() < 2.0,
+            "rz {rz}: net displacement off by {angle} deg"
+        );
+        assert!(
+            (m / m0 - 1.0).abs() < 0.03,
+            "rz {rz}: mean magnitude {m} vs {m0}"
+        );
+    }
+}
+
+#[test]
+fn edge_at_r_and_mirrored_edge_at_minus_r_give_mirrored_fields() {
+    // Object on -y with the edge at y = -r, versus object on +y with the
+    // edge at y = +r: mirror images about the sensor's x axis.
+    let model = plain_model();
+    let rest = model.rest_pins();
+    for r in [-3.0, 0.0, 2.5] {
+        let below = move |p: Vec2| p.y + r;
+        let above = move |p: Vec2| -p.y + r;
+        let a = displacement(
+            &model,
+            &model.pins_sdf(&below, tap(0.0, 0.0, 3.0, 0.0), None),
+        );
+        let b = displacement(
+            &model,
+            &model.pins_sdf(&above, tap(0.0, 0.0, 3.0, 0.0), None),
+        );
+        for i in 0..rest.len() {
+            let j = partner(rest, i, |v| [v[0], -v[1]]);
+            let err = (b[i][0] - a[j][0]).hypot(b[i][1] + a[j][1]);
+            assert!(
+                err < 1e-3,
+                "r {r} pin {i}: {:?} vs mirrored {:?}",
+                b[i],
+                a[j]
+            );
+        }
+    }
+}
+
+#[test]
+fn angle_and_minus_angle_give_mirrored_fields() {
+    let model = plain_model();
+    let rest = model.rest_pins();
+    let sd = |p: Vec2| p.y + 1.5;
+    let a = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 25.0), None));
+    let b = displacement(
+        &model,
+        &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, -25.0), None),
+    );
+    for i in 0..rest.len() {
+        let j = partner(rest, i, |v| [-v[0], v[1]]);
+        let err = (b[i][0] + a[j][0]).hypot(b[i][1] - a[j][1]);
+        assert!(err < 0.05, "pin {i}: {:?} vs mirrored {:?}", b[i], a[j]);
+    }
+}
+
+#[test]
+fn deeper_taps_move_pins_further() {
+    let model = plain_model();
+    let object = square([0.0, -30.0], 30.0);
+    let mut last = 0.0;
+    for depth in [0.5, 1.0, 2.0, 3.0, 4.0, 5.0] {
+        let d = displacement(
+            &model,
+            &model.pins(&object, tap(0.0, 0.0, depth, 0.0), None),
+        );
+        let m = mean_magnitude(&d);
+        assert!(m > last * 1.05, "depth {depth}: mean {m} not above {last}");
+        last = m;
+    }
+}
+
+#[test]
+fn moving_the_edge_changes_the_field_and_pins_near_the_edge_respond() {
+    let model = plain_model();
+    let at = |r: f64| {
+        let sd = move |p: Vec2| p.y + r;
+        displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 0.0), None))
+    };
+    let (a, b) = (at(1.0), at(1.5));
+    let change: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(u, v)| (u[0] - v[0]).hypot(u[1] - v[1]))
+        .sum::<f64>()
+        / a.len() as f64;
+    assert!(
+        change > 0.1,
+        "0.5 mm edge shift changed pins by only {change} px on average"
+    );
+    // The pins next to the centre straddle an edge through the origin.
+    let through = at(0.0);
+    for (i, d) in through.iter().enumerate().take(7) {
+        assert!(
+            d[0].hypot(d[1]) > 0.3,
+            "pin {i} next to the edge moved {d:?}"
+        );
+    }
+}
+
+#[test]
+fn curvature_and_corners_change_the_pattern() {
+    let model = plain_model();
+    let straight = square([0.0, -40.0], 40.0);
+    let corner = square([-40.0, -40.0], 40.0);
+    let disk_vertices = (0..720)
+        .map(|k| {
+            let t = k as f64 / 720.0 * std::f64::consts::TAU;
+            Vec2::new(12.0 * t.cos(), 12.0 * t.sin() - 12.0)
+        })
+        .collect();
+    let small_disk = tactrace_geometry::Contour::new(disk_vertices).expect("disk");
+    let pose = tap(0.0, 0.0, 3.0, 0.0);
+    let d_straight = displacement(&model, &model.pins(&straight, pose, None));
+    for other in [&corner, &small_disk] {
+        let d = displacement(&model, &model.pins(other, pose, None));
+        let diff: f64 = d
+            .iter()
+            .zip(&d_straight)
+            .map(|(u, v)| (u[0] - v[0]).hypot(u[1] - v[1]))
+            .sum::<f64>()
+            / d.len() as f64;
+        assert!(diff > 0.3, "pattern barely changed: {diff} px");
+    }
+}
+
+#[test]
+fn shear_drags_contact_pins_against_the_slide_and_saturates() {
+    let model = plain_model();
+    let object = square([0.0, 0.0], 30.0);
+    let pose = tap(0.0, 0.0, 3.0, 0.0);
+    let base = model.pins(&object, pose, None);
+    let slid = |dx: f64| {
+        let pins = model.pins(
+            &object,
+            pose,
+            Some(Shear {
+                dx_mm: dx,
+                dy_mm: 0.0,
+                drz_deg: 0.0,
+            }),
+        );
+        pins[0][0] - base[0][0]
+    };
+    let (small, big, huge) = (slid(0.5), slid(5.0), slid(10.0));
+    assert!(small < -0.5, "centre pin lags the slide: {small}");
+    assert!(big < small, "more slide, more drag: {big} vs {small}");
+    assert!(
+        (huge - big).abs() < 0.05 * big.abs(),
+        "drag saturates: {huge} vs {big}"
+    );
+}

@@ -1,0 +1,294 @@
+//! Sparse minimum-cost assignment (successive shortest augmenting paths with
+//! dual potentials, i.e. the Hungarian / Jonker-Volgenant method run as
+//! Dijkstra over candidate edges only). The pin tracker uses it to give each
+//! reference pin at most one detected blob, so that a missing or extra blob
+//! costs one "unassigned" and never shifts the order of the others.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+/// A candidate pairing of a row with column `col` at `cost`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Edge {
+    pub col: usize,
+    pub cost: f64,
+}
+
+/// The optimal assignment: for each row its column, or `None` when leaving
+/// the row unassigned was cheaper.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Assignment {
+    pub row_to_col: Vec<Option<usize>>,
+    pub total_cost: f64,
+}
+
+const FREE: usize = usize::MAX;
+
+/// Solves min sum of costs over matchings where every row takes one of its
+/// candidate columns (each column at most once) or stays unassigned at
+/// `unassigned_cost`. Edges with a non-finite cost, a cost not below
+/// `unassigned_cost` or a column `>= n_cols` are ignored. O(rows x
+/// explored edges x log) — near linear when candidates are local.
+pub fn assign(n_cols: usize, rows: &[Vec<Edge>], unassigned_cost: f64) -> Assignment {
+    let unassigned_cost = if unassigned_cost.is_finite() {
+        unassigned_cost
+    } else {
+        f64::MAX / 4.0
+    };
+    let edges: Vec<Vec<Edge>> = rows
+        .iter()
+        .enumerate()
+        .map(|(r, row)| usable_edges(row, r, n_cols, unassigned_cost))
+        .collect();
+    let mut solver = Solver::new(n_cols + rows.len(), &edges);
+    for row in 0..rows.len() {
+        solver.augment_from(row);
+    }
+    solver.into_assignment(n_cols, &edges)
+}
+
+/// The row's valid edges plus its private "unassigned" column `n_cols + row`.
+fn usable_edges(row: &[Edge], index: usize, n_cols: usize, unassigned: f64) -> Vec<Edge> {
+    let mut out: Vec<Edge> = row
+        .iter()
+        .filter(|e| e.col < n_cols && e.cost.is_finite() && e.cost < unassigned)
+        .copied()
+        .collect();
+    out.push(Edge {
+        col: n_cols + index,
+        cost: unassigned,
+    });
+    out
+}
+
+/// Heap entry ordered so that `BinaryHeap` pops the smallest distance.
+#[derive(PartialEq)]
+struct Pending(f64, usize);
+
+impl Eq for Pending {}
+
+impl PartialOrd for Pending {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Pending {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
+    }
+}
+
+/// Dual potentials and the current matching. Reduced costs
+/// `cost - row_pot - col_pot` stay >= 0 and are 0 on matched edges.
+struct Solver<'a> {
+    edges: &'a [Vec<Edge>],
+    row_pot: Vec<f64>,
+    col_pot: Vec<f64>,
+    owner: Vec<usize>,
+    row_col: Vec<usize>,
+    dist: Vec<f64>,
+    via_row: Vec<usize>,
+    done: Vec<bool>,
+    touched: Vec<usize>,
+    settled: Vec<usize>,
+    heap: BinaryHeap<Pending>,
+}
+
+impl<'a> Solver<'a> {
+    fn new(n_cols: usize, edges: &'a [Vec<Edge>]) -> Self {
+        let row_pot = edges
+            .iter()
+            .map(|row| row.iter().map(|e| e.cost).fold(f64::INFINITY, f64::min))
+            .collect();
+        Self {
+            edges,
+            row_pot,
+            col_pot: vec![0.0; n_cols],
+            owner: vec![FREE; n_cols],
+            row_col: vec![FREE; edges.len()],
+            dist: vec![f64::INFINITY; n_cols],
+            via_row: vec![FREE; n_cols],
+            done: vec![false; n_cols],
+            touched: Vec::new(),
+            settled: Vec::new(),
+            heap: BinaryHeap::new(),
+        }
+    }
+
+    /// Dijkstra from the free row `start` to the nearest free column, then
+    /// potential update and augmentation along the path.
+    fn augment_from(&mut self, start: usize) {
+        self.reset();
+        self.relax_row(start, 0.0);
+        let sink = loop {
+            let Some(Pending(d, col)) = self.heap.pop() else {
+                return; // unreachable: the row's own unassigned column is free
+            };
+            if self.done[col] || d > self.dist[col] {
+                continue;
+            }
+            self.done[col] = true;
+            if self.owner[col] == FREE {
+                break col;
+            }
+            self.settled.push(col);
+            self.relax_row(self.owner[col], d);
+        };
+        self.update_potentials(start, self.dist[sink]);
+        self.flip_path(start, sink);
+    }
+
+    fn reset(&mut self) {
+        for &c in &self.touched {
+            self.dist[c] = f64::INFINITY;
+            self.done[c] = false;
+            self.via_row[c] = FREE;
+        }
+        self.touched.clear();
+        self.settled.clear();
+        self.heap.clear();
+    }
+
+    fn relax_row(&mut self, row: usize, base: f64) {
+        for e in &self.edges[row] {
+            if self.done[e.col] {
+                continue;
+            }
+            let d = base + e.cost - self.row_pot[row] - self.col_pot[e.col];
+            if d < self.dist[e.col] {
+                if self.dist[e.col].is_infinite() {
+                    self.touched.push(e.col);
+                }
+                self.dist[e.col] = d;
+                self.via_row[e.col] = row;
+                self.heap.push(Pending(d, e.col));
+            }
+        }
+    }
+
+    fn update_potentials(&mut self, start: usize, delta: f64) {
+        self.row_pot[start] += delta;
+        for &col in &self.settled {
+            let gain = delta - self.dist[col];
+            self.col_pot[col] -= gain;
+            self.row_pot[self.owner[col]] += gain;
+        }
+    }
+
+    fn flip_path(&mut self, start: usize, sink: usize) {
+        let mut col = sink;
+        loop {
+            let row = self.via_row[col];
+            let previous = self.row_col[row];
+            self.row_col[row] = col;
+            self.owner[col] = row;
+            if row == start {
+                return;
+            }
+            col = previous;
+        }
+    }
+
+    fn into_assignment(self, n_cols: usize, edges: &[Vec<Edge>]) -> Assignment {
+        let mut total_cost = 0.0;
+        let row_to_col = self
+            .row_col
+            .iter()
+            .zip(edges)
+            .map(|(&col, row)| {
+                total_cost += row.iter().find(|e| e.col == col).map_or(0.0, |e| e.cost);
+                (col < n_cols).then_some(col)
+            })
+            .collect();
+        Assignment {
+            row_to_col,
+            total_cost,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn dense(costs: &[Vec<f64>]) -> Vec<Vec<Edge>> {
+        costs
+            .iter()
+            .map(|row| {
+                row.iter()
+                    .enumerate()
+                    .map(|(col, &cost)| Edge { col, cost })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Exhaustive minimum over all injective row -> column maps (and skips).
+    fn brute_force(costs: &[Vec<f64>], skip: f64, row: usize, used: &mut Vec<bool>) -> f64 {
+        if row == costs.len() {
+            return 0.0;
+        }
+        let mut best = skip + brute_force(costs, skip, row + 1, used);
+        for col in 0..used.len() {
+            if !used[col] && costs[row][col] < skip {
+                used[col] = true;
+                best = best.min(costs[row][col] + brute_force(costs, skip, row + 1, used));
+                used[col] = false;
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn matches_brute_force_on_random_problems() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for trial in 0..200 {
+            let rows = rng.random_range(1..6);
+            let cols = rng.random_range(1..7);
+            let costs: Vec<Vec<f64>> = (0..rows)
+                .map(|_| (0..cols).map(|_| rng.random_range(0.0..10.0)).collect())
+                .collect();
+            let skip = rng.random_range(1.0..12.0);
+            let got = assign(cols, &dense(&costs), skip);
+            let want = brute_force(&costs, skip, 0, &mut vec![false; cols]);
+            assert!(
+                (got.total_cost - want).abs() < 1e-9,
+                "trial {trial}: {} vs {want}",
+                got.total_cost
+            );
+            let skipped = got.row_to_col.iter().filter(|c| c.is_none()).count();
+            let used: Vec<usize> = got.row_to_col.iter().flatten().copied().collect();
+            let mut unique = used.clone();
+            unique.sort_unstable();
+            unique.dedup();
+            assert_eq!(unique.len(), used.len(), "a column used twice");
+            assert!(skipped <= rows);
+        }
+    }
+
+    #[test]
+    fn prefers_the_globally_cheaper_pairing() {
+        // Greedy would give row 0 column 0 (cost 1) and row 1 column 1 (100).
+        let costs = vec![vec![1.0, 2.0], vec![2.0, 100.0]];
+        let got = assign(2, &dense(&costs), 1000.0);
+        assert_eq!(got.row_to_col, vec![Some(1), Some(0)]);
+        assert!((got.total_cost - 4.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_edges_are_ignored() {
+        let rows = vec![vec![
+            Edge { col: 5, cost: 0.0 },
+            Edge {
+                col: 0,
+                cost: f64::NAN,
+            },
+        ]];
+        let got = assign(1, &rows, 3.0);
+        assert_eq!(got.row_to_col, vec![None]);
+        assert_eq!(assign(0, &[], 1.0).row_to_col, Vec::<Option<usize>>::new());
+    }
+}

@@ -1,0 +1,334 @@
+//! Multi-threshold blob detection with the semantics of OpenCV's
+//! `SimpleBlobDetector` (report ch. 4.1: the pins are found as white blobs
+//! with the appendix's parameters). Per threshold: binarise, trace borders,
+//! filter each contour by area, circularity, inertia, convexity and colour;
+//! then merge centres across thresholds and keep the repeatable ones.
+
+use serde::{Deserialize, Serialize};
+
+use crate::contour::ContourScanner;
+use crate::params::BlobParams;
+use crate::shape::{circularity, hull_area, median_radius, perimeter, Moments};
+
+/// An 8-bit grey camera frame.
+pub type Frame = image::GrayImage;
+
+/// A detected blob: centre (x right, y down) and diameter, all in pixels
+/// (OpenCV's `KeyPoint.size` convention).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct KeyPoint {
+    pub x: f64,
+    pub y: f64,
+    pub size: f64,
+}
+
+/// A blob found at one threshold.
+#[derive(Clone, Copy, Debug)]
+struct Centre {
+    x: f64,
+    y: f64,
+    radius: f64,
+    confidence: f64,
+}
+
+/// Centres found at successive thresholds for the same blob, kept sorted by
+/// radius; the middle one stands for the group.
+struct Group {
+    members: Vec<Centre>,
+}
+
+impl Group {
+    fn representative(&self) -> &Centre {
+        &self.members[self.members.len() / 2]
+    }
+
+    fn insert(&mut self, centre: Centre) {
+        let at = self.members.partition_point(|m| m.radius <= centre.radius);
+        self.members.insert(at, centre);
+    }
+
+    fn keypoint(&self) -> KeyPoint {
+        let weight: f64 = self.members.iter().map(|m| m.confidence).sum();
+        let (sx, sy) = self.members.iter().fold((0.0, 0.0), |(sx, sy), m| {
+            (sx + m.confidence * m.x, sy + m.confidence * m.y)
+        });
+        let (x, y) = if weight > 0.0 {
+            (sx / weight, sy / weight)
+        } else {
+            let n = self.members.len() as f64;
+            let (ux, uy) = self
+                .members
+                .iter()
+                .fold((0.0, 0.0), |(a, b), m| (a + m.x, b + m.y));
+            (ux / n, uy / n)
+        };
+        KeyPoint {
+            x,
+            y,
+            size: 2.0 * self.representative().radius,
+        }
+    }
+}
+
+/// Detects blobs as OpenCV's `SimpleBlobDetector::detect` does.
+///
+/// Thresholds run from `min_threshold` by `threshold_step` while below
+/// `max_threshold`; a threshold whose binary image equals the previous one
+/// reuses its blobs (binarised frames cost one contour pass). A centre joins
+/// the first existing group whose representative lies closer than
+/// `min_dist_between_blobs` or either radius; groups with at least
+/// `min_repeatability` members become keypoints at their confidence-weighted
+/// mean centre (confidence = inertia ratio squared when filtering by
+/// inertia, else 1), size twice the representative's radius.
+/// Parameters are used as given: call [`BlobParams::validate`] first.
+pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
+    let (width, height) = (img.width() as usize, img.height() as usize);
+    if width == 0 || height == 0 {
+        return Vec::new();
+    }
+    let pixels = img.as_raw();
+    let histogram = cumulative_histogram(pixels);
+    let mut scanner = ContourScanner::new(width, height);
+    let mut groups: Vec<Group> = Vec::new();
+    let mut found: Vec<Centre> = Vec::new();
+    let mut previous_level: Option<i64> = None;
+    for threshold in p.thresholds() {
+        let level = threshold.floor() as i64;
+        let unchanged =
+            previous_level.is_some_and(|prev| white_count_equal(&histogram, prev, level));
+        if !unchanged {
+            scanner.binarise(pixels, threshold);
+            scanner.trace_all();
+            found = blobs_in(&scanner, p);
+        }
+        previous_level = Some(level);
+        merge_into(&mut groups, &found, f64::from(p.min_dist_between_blobs));
+    }
+    groups
+        .iter()
+        .filter(|g| g.members.len() >= p.min_repeatability)
+        .map(Group::keypoint)
+        .collect()
+}
+
+/// `counts[v]` = number of pixels with value <= v.
+fn cumulative_histogram(pixels: &[u8]) -> [usize; 256] {
+    let mut counts = [0usize; 256];
+    for &v in pixels {
+        counts[usize::from(v)] += 1;
+    }
+    for v in 1..256 {
+        counts[v] += counts[v - 1];
+    }
+    counts
+}
+
+/// True when no pixel value lies in (a, b]: thresholds at floor levels a and
+/// b then give the same binary image.
+fn white_count_equal(counts: &[usize; 256], a: i64, b: i64) -> bool {
+    let at = |level: i64| -> usize {
+        if level < 0 {
+            0
+        } else {
+            counts[level.min(255) as usize]
+        }
+    };
+    at(a) == at(b)
+}
+
+/// Blobs of the current binary image that pass the filters, in contour order.
+fn blobs_in(scanner: &ContourScanner, p: &BlobParams) -> Vec<Centre> {
+    let mut scratch = Vec::new();
+    scanner
+        .contours()
+        .filter_map(|contour| measure(contour, scanner, p, &mut scratch))
+        .collect()
+}
+
+/// Whether one contour of the current binary image passes all filters.
+pub(crate) fn passes_filters(
+    contour: &[[i32; 2]],
+    scanner: &ContourScanner,
+    p: &BlobParams,
+) -> bool {
+    measure(contour, scanner, p, &mut Vec::new()).is_some()
+}
+
+/// Applies the filters to one contour in OpenCV's order; `None` if rejected.
+fn measure(
+    contour: &[[i32; 2]],
+    scanner: &ContourScanner,
+    p: &BlobParams,
+    scratch: &mut Vec<f64>,
+) -> Option<Centre> {
+    let moments = Moments::of_polygon(contour);
+    let area = moments.m00;
+    if p.filter_by_area && !within(area, p.min_area, p.max_area) {
+        return None;
+    }
+    if p.filter_by_circularity
+        && !within(
+            circularity(area, perimeter(contour)),
+            p.min_circularity,
+            p.max_circularity,
+        )
+    {
+        return None;
+    }
+    let mut confidence = 1.0;
+    if p.filter_by_inertia {
+        let ratio = moments.inertia_ratio();
+        if !within(ratio, p.min_inertia_ratio, p.max_inertia_ratio) {
+            return None;
+        }
+        confidence = ratio * ratio;
+    }
+    if p.filter_by_convexity {
+        let hull = hull_area(contour);
+        if hull.abs() < f64::EPSILON || !within(area / hull, p.min_convexity, p.max_convexity) {
+            return None;
+        }
+    }
+    if area == 0.0 {
+        return None;
+    }
+    let (x, y) = (moments.m10 / area, moments.m01 / area);
+    if p.filter_by_color && colour_at(scanner, x, y) != p.blob_color {
+        return None;
+    }
+    let radius = median_radius(contour, [x, y], scratch);
+    Some(Centre {
+        x,
+        y,
+        radius,
+        confidence,
+    })
+}
+
+/// OpenCV's range test: NaN-tolerant `!(v < min || v >= max)`.
+fn within(value: f64, min: f32, max: f32) -> bool {
+    !(value < f64::from(min) || value >= f64::from(max))
+}
+
+/// Binary value (0 or 255) at the pixel nearest to (x, y), ties to even.
+fn colour_at(scanner: &ContourScanner, x: f64, y: f64) -> u8 {
+    let (col, row) = (x.round_ties_even(), y.round_ties_even());
+    if col < 0.0 || row < 0.0 {
+        return 0;
+    }
+    if scanner.is_white(col as usize, row as usize) {
+        255
+    } else {
+        0
+    }
+}
+
+/// Adds this threshold's centres to the groups (OpenCV's grouping rule: the
+/// first group whose representative is nearer than the minimum distance or
+/// either radius). New groups become visible only at the next threshold.
+fn merge_into(groups: &mut Vec<Group>, found: &[Centre], min_dist: f64) {
+    let existing = groups.len();
+    // Every representative is a stored centre, so this bounds their radii.
+    let max_radius = groups
+        .iter()
+        .map(|g| g.representative().radius)
+        .chain(found.iter().map(|c| c.radius))
+        .fold(0.0f64, f64::max);
+    for centre in found {
+        let reach = min_dist.max(max_radius).max(centre.radius);
+        let target =
+            (0..existing).find(|&j| joins(groups[j].representative(), centre, min_dist, reach));
+        match target {
+            Some(j) => groups[j].insert(*centre),
+            None => groups.push(Group {
+                members: vec![*centre],
+            }),
+        }
+    }
+}
+
+/// Whether `centre` belongs to the group represented by `rep`. `reach`
+/// bounds every distance that can qualify and only prunes the square root.
+fn joins(rep: &Centre, centre: &Centre, min_dist: f64, reach: f64) -> bool {
+    let (dx, dy) = (rep.x - centre.x, rep.y - centre.y);
+    if dx.abs() > reach || dy.abs() > reach {
+        return false;
+    }
+    let dist = dx.hypot(dy);
+    !(dist >= min_dist && dist >= rep.radius && dist >= centre.radius)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn disc_frame(centres: &[(f64, f64, f64)], size: u32) -> Frame {
+        Frame::from_fn(size, size, |x, y| {
+            let inside = centres
+                .iter()
+                .any(|&(cx, cy, r)| (f64::from(x) - cx).hypot(f64::from(y) - cy) <= r);
+            image::Luma([if inside { 255 } else { 0 }])
+        })
+    }
+
+    /// OpenCV defaults for white blobs; convexity relaxed because small
+    /// digital discs have polygon/hull area ratios near 0.9 (cv2 agrees).
+    fn white_blobs() -> BlobParams {
+        BlobParams {
+            blob_color: 255,
+            min_convexity: 0.8,
+            ..BlobParams::default()
+        }
+    }
+
+    #[test]
+    fn finds_each_disc_at_its_centre() {
+        let discs = [(20.0, 20.0, 5.0), (50.0, 30.0, 6.0), (30.0, 50.0, 4.0)];
+        let keypoints = detect_blobs(&disc_frame(&discs, 64), &white_blobs());
+        assert_eq!(keypoints.len(), 3);
+        for &(cx, cy, r) in &discs {
+            let k = keypoints
+                .iter()
+                .find(|k| (k.x - cx).hypot(k.y - cy) < 0.5)
+                .expect("disc found");
+            assert!(
+                (k.size / 2.0 - r).abs() < 1.0,
+                "radius {} vs {r}",
+                k.size / 2.0
+            );
+        }
+    }
+
+    #[test]
+    fn dark_blob_colour_rejects_white_discs() {
+        let frame = disc_frame(&[(20.0, 20.0, 5.0)], 40);
+        assert!(detect_blobs(&frame, &BlobParams::default()).is_empty());
+    }
+
+    #[test]
+    fn area_filter_rejects_small_and_large() {
+        let frame = disc_frame(&[(15.0, 15.0, 2.0), (40.0, 40.0, 12.0)], 64);
+        let p = BlobParams {
+            min_area: 30.0,
+            max_area: 200.0,
+            ..white_blobs()
+        };
+        assert!(detect_blobs(&frame, &p).is_empty());
+    }
+
+    #[test]
+    fn blank_and_empty_frames_give_no_blobs() {
+        assert!(detect_blobs(&Frame::new(32, 32), &white_blobs()).is_empty());
+        assert!(detect_blobs(&Frame::new(0, 0), &white_blobs()).is_empty());
+    }
+
+    #[test]
+    fn repeatability_above_threshold_count_gives_nothing() {
+        let frame = disc_frame(&[(20.0, 20.0, 5.0)], 40);
+        let p = BlobParams {
+            min_repeatability: 100,
+            ..white_blobs()
+        };
+        assert!(detect_blobs(&frame, &p).is_empty());
+    }
+}

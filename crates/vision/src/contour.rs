@@ -1,0 +1,240 @@
+//! Border following on a binary image (Suzuki & Abe 1985), reproducing what
+//! OpenCV's `findContours(RETR_LIST, CHAIN_APPROX_NONE)` returns: the outer
+//! border of every 8-connected white component and the border of every
+//! 4-connected hole, each as the full closed sequence of boundary pixels.
+//! The blob detector (report ch. 4.1) measures its blobs on these polygons,
+//! so their exact shape fixes the areas, perimeters and centres it reports.
+
+/// Pixel offsets of the eight chain directions, counter-clockwise on screen
+/// starting east: E, NE, N, NW, W, SW, S, SE (image y grows downwards).
+const DIRECTIONS: [(isize, isize); 8] = [
+    (1, 0),
+    (1, -1),
+    (0, -1),
+    (-1, -1),
+    (-1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
+
+/// Chain code of "west", where an outer border's search starts.
+const WEST: usize = 4;
+/// Chain code of "east", where a hole border's search starts.
+const EAST: usize = 0;
+
+/// Marks written into the label image while following borders.
+const UNVISITED: i8 = 1;
+const VISITED: i8 = 2;
+const RIGHT_BOUND: i8 = -2;
+
+/// A binary image with a one-pixel zero frame, plus the contours traced on it.
+/// Reused across thresholds to avoid reallocating.
+pub struct ContourScanner {
+    width: usize,
+    height: usize,
+    stride: usize,
+    labels: Vec<i8>,
+    offsets: [isize; 8],
+    points: Vec<[i32; 2]>,
+    spans: Vec<(usize, usize, bool)>,
+}
+
+impl ContourScanner {
+    /// A scanner for images of `width` x `height` pixels.
+    pub fn new(width: usize, height: usize) -> Self {
+        let stride = width + 2;
+        let offsets = DIRECTIONS.map(|(dx, dy)| dx + dy * stride as isize);
+        Self {
+            width,
+            height,
+            stride,
+            labels: vec![0; stride * (height + 2)],
+            offsets,
+            points: Vec::new(),
+            spans: Vec::new(),
+        }
+    }
+
+    /// Binarises `pixels` (row-major, `width * height` grey levels) with
+    /// OpenCV's `THRESH_BINARY` rule for 8-bit images: white where the value
+    /// exceeds `floor(threshold)`.
+    pub fn binarise(&mut self, pixels: &[u8], threshold: f64) {
+        let level = threshold.floor();
+        for (y, row) in pixels
+            .chunks_exact(self.width)
+            .take(self.height)
+            .enumerate()
+        {
+            let start = (y + 1) * self.stride + 1;
+            let dst = &mut self.labels[start..start + self.width];
+            for (d, &v) in dst.iter_mut().zip(row) {
+                *d = i8::from(f64::from(v) > level);
+            }
+        }
+    }
+
+    /// Whether pixel (x, y) is white in the current binary image.
+    pub fn is_white(&self, x: usize, y: usize) -> bool {
+        x < self.width && y < self.height && self.labels[(y + 1) * self.stride + x + 1] != 0
+    }
+
+    /// Traces every border of the current binary image; afterwards
+    /// [`ContourScanner::contours`] yields them.
+    pub fn trace_all(&mut self) {
+        self.points.clear();
+        self.spans.clear();
+        for y in 1..=self.height {
+            let row = y * self.stride;
+            for i in row + 1..=row + self.width {
+                let here = self.labels[i];
+                let left = self.labels[i - 1];
+                if here == UNVISITED && left == 0 {
+                    self.follow_border(i, WEST);
+                } else if here == 0 && left >= UNVISITED {
+                    self.follow_border(i - 1, EAST);
+                }
+            }
+        }
+    }
+
+    /// The traced contours, each a closed sequence of pixel coordinates, in
+    /// OpenCV's order (the reverse of their discovery in raster order).
+    pub fn contours(&self) -> impl Iterator<Item = &[[i32; 2]]> {
+        self.spans.iter().rev().map(|&(a, b, _)| &self.points[a..b])
+    }
+
+    /// Like [`ContourScanner::contours`], only the outer borders of white
+    /// components (no hole borders).
+    pub fn outer_contours(&self) -> impl Iterator<Item = &[[i32; 2]]> {
+        self.spans
+            .iter()
+            .rev()
+            .filter(|s| !s.2)
+            .map(|&(a, b, _)| &self.points[a..b])
+    }
+
+    /// Image size in pixels (width, height).
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    fn push_point(&mut self, index: usize) {
+        let x = (index % self.stride) as i32 - 1;
+        let y = (index / self.stride) as i32 - 1;
+        self.points.push([x, y]);
+    }
+
+    fn step(&self, index: usize, direction: usize) -> usize {
+        index.wrapping_add_signed(self.offsets[direction & 7])
+    }
+
+    /// Follows one border from `start`, whose neighbour in direction
+    /// `empty_side` is background (west for outer borders, east for holes).
+    fn follow_border(&mut self, start: usize, empty_side: usize) {
+        let first = self.points.len();
+        match self.first_neighbour(start, empty_side) {
+            None => {
+                self.labels[start] = RIGHT_BOUND;
+                self.push_point(start);
+            }
+            Some((last, direction)) => self.walk(start, last, direction),
+        }
+        self.spans
+            .push((first, self.points.len(), empty_side == EAST));
+    }
+
+    /// Searches clockwise around `start` from `empty_side` for a white pixel:
+    /// it is the last pixel of the border walk. `None` for an isolated pixel.
+    fn first_neighbour(&self, start: usize, empty_side: usize) -> Option<(usize, usize)> {
+        let mut direction = empty_side;
+        loop {
+            direction = (direction + 7) & 7;
+            if direction == empty_side {
+                return None;
+            }
+            let candidate = self.step(start, direction);
+            if self.labels[candidate] != 0 {
+                return Some((candidate, direction));
+            }
+        }
+    }
+
+    /// The border walk proper: at each pixel search counter-clockwise from the
+    /// previous pixel for the next white one, until the walk is about to
+    /// repeat its first move. Marks pixels whose east side was seen empty.
+    fn walk(&mut self, start: usize, last: usize, first_direction: usize) {
+        let mut current = start;
+        let mut back = first_direction;
+        loop {
+            let mut direction = back;
+            let next = loop {
+                direction += 1;
+                let candidate = self.step(current, direction);
+                if self.labels[candidate] != 0 {
+                    break candidate;
+                }
+            };
+            direction &= 7;
+            if direction >= 1 && direction <= back {
+                self.labels[current] = RIGHT_BOUND;
+            } else if self.labels[current] == UNVISITED {
+                self.labels[current] = VISITED;
+            }
+            self.push_point(current);
+            if next == start && current == last {
+                return;
+            }
+            current = next;
+            back = (direction + 4) & 7;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trace(width: usize, rows: &[&str]) -> Vec<Vec<[i32; 2]>> {
+        let pixels: Vec<u8> = rows
+            .iter()
+            .flat_map(|r| r.bytes().map(|b| if b == b'#' { 255 } else { 0 }))
+            .collect();
+        let mut scanner = ContourScanner::new(width, rows.len());
+        scanner.binarise(&pixels, 127.0);
+        scanner.trace_all();
+        scanner.contours().map(|c| c.to_vec()).collect()
+    }
+
+    #[test]
+    fn isolated_pixel_is_a_one_point_contour() {
+        let contours = trace(3, &["...", ".#.", "..."]);
+        assert_eq!(contours, vec![vec![[1, 1]]]);
+    }
+
+    #[test]
+    fn square_border_lists_every_boundary_pixel_once() {
+        let contours = trace(5, &[".....", ".###.", ".###.", ".###.", "....."]);
+        assert_eq!(contours.len(), 1);
+        assert_eq!(contours[0].len(), 8);
+        assert_eq!(contours[0][..4], [[1, 1], [1, 2], [1, 3], [2, 3]]);
+    }
+
+    #[test]
+    fn ring_gives_outer_border_and_hole_border() {
+        let contours = trace(5, &["#####", "#...#", "#...#", "#...#", "#####"]);
+        // Values checked against cv2.findContours: hole first, corners skipped.
+        assert_eq!(contours.len(), 2);
+        assert_eq!(contours[0].len(), 12);
+        assert_eq!(contours[0][..3], [[0, 1], [1, 0], [2, 0]]);
+        assert_eq!(contours[1].len(), 16);
+    }
+
+    #[test]
+    fn diagonal_pixels_form_one_component() {
+        let contours = trace(4, &["#...", ".#..", "..#.", "...#"]);
+        assert_eq!(contours.len(), 1);
+        // A one-pixel-wide line is walked out and back.
+        assert_eq!(contours[0].len(), 6);
+    }
+}

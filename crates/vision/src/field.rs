@@ -1,0 +1,201 @@
+//! A smooth displacement field over the reference pin layout, fitted to the
+//! pins matched so far: a least-squares affine map plus a Gaussian-weighted
+//! (Nadaraya-Watson) average of the residuals. The tracker uses it to predict
+//! where every pin has moved before matching, and to fill in missing pins.
+
+use nalgebra::{Matrix3, Vector3};
+
+/// Gaussian kernel weights between reference pins for one width.
+pub struct Kernel {
+    n: usize,
+    weights: Vec<f64>,
+}
+
+impl Kernel {
+    /// Weights `exp(-|r_i - r_j|^2 / (2 sigma^2))`, dropped below 1e-4.
+    pub fn new(reference: &[[f64; 2]], sigma: f64) -> Self {
+        let n = reference.len();
+        let scale = -0.5 / (sigma * sigma);
+        let mut weights = Vec::with_capacity(n * n);
+        for a in reference {
+            for b in reference {
+                let d2 = (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
+                let w = (scale * d2).exp();
+                weights.push(if w < 1e-4 { 0.0 } else { w });
+            }
+        }
+        Self { n, weights }
+    }
+
+    fn row(&self, i: usize) -> &[f64] {
+        &self.weights[i * self.n..(i + 1) * self.n]
+    }
+}
+
+/// Observed displacements: `Some(d)` for a matched pin, `None` otherwise.
+pub type Observations = [Option<[f64; 2]>];
+
+/// Displacement of every reference pin under the field fitted to the
+/// observations; `prior` (in matched-pin units) pulls the local correction
+/// towards the affine part where few neighbours are matched.
+pub fn smooth_field(
+    reference: &[[f64; 2]],
+    observed: &Observations,
+    kernel: &Kernel,
+    prior: f64,
+) -> Vec<[f64; 2]> {
+    let affine = fit_affine(reference, observed);
+    let residual: Vec<Option<[f64; 2]>> = reference
+        .iter()
+        .zip(observed)
+        .map(|(r, o)| {
+            o.map(|d| {
+                let a = affine.apply(*r);
+                [d[0] - a[0], d[1] - a[1]]
+            })
+        })
+        .collect();
+    reference
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let base = affine.apply(*r);
+            let local = local_average(kernel.row(i), &residual, prior);
+            [base[0] + local[0], base[1] + local[1]]
+        })
+        .collect()
+}
+
+fn local_average(weights: &[f64], residual: &[Option<[f64; 2]>], prior: f64) -> [f64; 2] {
+    let (mut sx, mut sy, mut sw) = (0.0, 0.0, prior);
+    for (w, r) in weights.iter().zip(residual) {
+        if let (Some(r), true) = (r, *w > 0.0) {
+            sx += w * r[0];
+            sy += w * r[1];
+            sw += w;
+        }
+    }
+    if sw > 0.0 {
+        [sx / sw, sy / sw]
+    } else {
+        [0.0, 0.0]
+    }
+}
+
+/// Displacement d(r) = origin-centred affine map of the reference position.
+#[derive(Clone, Copy, Debug)]
+pub struct Affine {
+    centre: [f64; 2],
+    x: Vector3<f64>,
+    y: Vector3<f64>,
+}
+
+impl Affine {
+    fn zero() -> Self {
+        Self {
+            centre: [0.0; 2],
+            x: Vector3::zeros(),
+            y: Vector3::zeros(),
+        }
+    }
+
+    pub fn apply(&self, r: [f64; 2]) -> [f64; 2] {
+        let v = Vector3::new(r[0] - self.centre[0], r[1] - self.centre[1], 1.0);
+        [self.x.dot(&v), self.y.dot(&v)]
+    }
+}
+
+/// Least-squares affine displacement; a pure translation when the matched
+/// pins are fewer than three or collinear; zero when none is matched.
+pub fn fit_affine(reference: &[[f64; 2]], observed: &Observations) -> Affine {
+    let pairs: Vec<([f64; 2], [f64; 2])> = reference
+        .iter()
+        .zip(observed)
+        .filter_map(|(r, o)| o.map(|d| (*r, d)))
+        .collect();
+    if pairs.is_empty() {
+        return Affine::zero();
+    }
+    let n = pairs.len() as f64;
+    let centre = [
+        pairs.iter().map(|p| p.0[0]).sum::<f64>() / n,
+        pairs.iter().map(|p| p.0[1]).sum::<f64>() / n,
+    ];
+    let mean_d = [
+        pairs.iter().map(|p| p.1[0]).sum::<f64>() / n,
+        pairs.iter().map(|p| p.1[1]).sum::<f64>() / n,
+    ];
+    let translation = Affine {
+        centre,
+        x: Vector3::new(0.0, 0.0, mean_d[0]),
+        y: Vector3::new(0.0, 0.0, mean_d[1]),
+    };
+    let mut normal = Matrix3::<f64>::zeros();
+    let (mut bx, mut by) = (Vector3::zeros(), Vector3::zeros());
+    for (r, d) in &pairs {
+        let v = Vector3::new(r[0] - centre[0], r[1] - centre[1], 1.0);
+        normal += v * v.transpose();
+        bx += v * d[0];
+        by += v * d[1];
+    }
+    let spread = normal[(0, 0)] + normal[(1, 1)];
+    if pairs.len() < 3 || normal.determinant().abs() <= 1e-9 * spread * spread * n {
+        return translation;
+    }
+    match normal.try_inverse() {
+        Some(inv) => Affine {
+            centre,
+            x: inv * bx,
+            y: inv * by,
+        },
+        None => translation,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid() -> Vec<[f64; 2]> {
+        (0..7)
+            .flat_map(|i| (0..7).map(move |j| [10.0 * f64::from(i), 10.0 * f64::from(j)]))
+            .collect()
+    }
+
+    #[test]
+    fn recovers_an_exact_affine_field_with_gaps() {
+        let reference = grid();
+        let truth = |r: [f64; 2]| {
+            [
+                0.1 * r[0] - 0.05 * r[1] + 3.0,
+                0.02 * r[0] + 0.2 * r[1] - 1.0,
+            ]
+        };
+        let observed: Vec<Option<[f64; 2]>> = reference
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (i % 5 != 0).then(|| truth(*r)))
+            .collect();
+        let field = smooth_field(&reference, &observed, &Kernel::new(&reference, 15.0), 0.1);
+        for (r, d) in reference.iter().zip(&field) {
+            let t = truth(*r);
+            assert!((d[0] - t[0]).abs() < 1e-9 && (d[1] - t[1]).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn degenerate_observations_fall_back_gracefully() {
+        let reference = grid();
+        let none = vec![None; reference.len()];
+        let kernel = Kernel::new(&reference, 15.0);
+        assert!(smooth_field(&reference, &none, &kernel, 0.1)
+            .iter()
+            .all(|d| d == &[0.0, 0.0]));
+        let mut one = none.clone();
+        one[3] = Some([2.0, -1.0]);
+        let field = smooth_field(&reference, &one, &kernel, 0.1);
+        assert!(field
+            .iter()
+            .all(|d| (d[0] - 2.0).abs() < 1e-12 && (d[1] + 1.0).abs() < 1e-12));
+    }
+}

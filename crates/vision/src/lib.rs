@@ -1,0 +1,24 @@
+//! Pin extraction for the TacTip optical tactile sensor (report ch. 4.1):
+//! find the white pin tips in a camera frame with an OpenCV-compatible
+//! multi-threshold blob detector, put them in the order of the undeformed
+//! reference, and turn them into the displacement vector the pose models
+//! learn from. Pure algorithms: no files, no printing.
+
+mod assign;
+mod blob;
+mod contour;
+mod error;
+mod extractor;
+mod field;
+mod merged;
+mod params;
+mod shape;
+mod tracker;
+
+pub use assign::{assign, Assignment, Edge};
+pub use blob::{detect_blobs, Frame, KeyPoint};
+pub use error::VisionError;
+pub use extractor::PinExtractor;
+pub use merged::{find_clusters, Cluster};
+pub use params::{BlobParams, BLOB_PARAM_KEYS, PRESET_NAMES};
+pub use tracker::{PinTracker, Tracked};

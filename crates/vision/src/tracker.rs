@@ -1,0 +1,326 @@
+//! Puts detected blobs into the order of the reference pins (report ch. 4.1:
+//! the displacement vector compares each pin with its own rest position).
+//! Pins can move further than their spacing, so nearest-neighbour matching
+//! swaps them; instead the tracker works coarse to fine: predict every pin
+//! from a smooth displacement field, solve an optimal one-to-one assignment
+//! within a gate, refit the field from the matches with a narrower kernel,
+//! and repeat. Missing pins are filled from the final field.
+
+use crate::assign::{assign, Edge};
+use crate::blob::KeyPoint;
+use crate::error::VisionError;
+use crate::field::{smooth_field, Kernel, Observations};
+use crate::merged::Cluster;
+
+/// Fewest reference pins that define an affine field.
+const MIN_REFERENCE_PINS: usize = 3;
+/// Weight of the affine prior in the local residual average (matched pins).
+const PRIOR_WEIGHT: f64 = 0.2;
+/// A missing pin predicted within this many spacings of a cluster's pixels
+/// is taken to be inside it.
+const CLUSTER_REACH: f64 = 0.35;
+
+/// One coarse-to-fine pass: matching gate, then the kernel refitted after it
+/// (both in units of the reference pin spacing).
+struct Stage {
+    gate: f64,
+    kernel: Kernel,
+}
+
+/// Orders keypoints like a fixed reference pin set.
+pub struct PinTracker {
+    reference: Vec<[f64; 2]>,
+    spacing: f64,
+    stages: Vec<Stage>,
+}
+
+/// Pins in reference order for one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tracked {
+    /// Pin centres, px, same order and length as the reference; a missing
+    /// pin holds the position the smooth field of its neighbours predicts.
+    pub pins: Vec<[f64; 2]>,
+    /// `false` where the pin was filled in rather than detected.
+    pub matched: Vec<bool>,
+    /// Reference pins with no detected blob.
+    pub missing: usize,
+    /// Detected blobs assigned to no pin.
+    pub extra: usize,
+}
+
+impl Tracked {
+    /// Displacement vector, all x then all y (2P values, px), pins minus
+    /// reference (report ch. 4.1). Pairs beyond the shorter slice are dropped.
+    pub fn displacement(&self, reference: &[[f64; 2]]) -> Vec<f32> {
+        let pairs = self.pins.iter().zip(reference);
+        let xs = pairs.clone().map(|(p, r)| (p[0] - r[0]) as f32);
+        let ys = pairs.map(|(p, r)| (p[1] - r[1]) as f32);
+        xs.chain(ys).collect()
+    }
+
+    /// Number of pins matched to a detected blob.
+    pub fn matched_count(&self) -> usize {
+        self.matched.iter().filter(|&&m| m).count()
+    }
+}
+
+impl PinTracker {
+    /// A tracker for the rest pin centres `reference` (px, from the
+    /// undeformed frame). Needs at least three distinct, finite pins.
+    pub fn new(reference: Vec<[f64; 2]>) -> Result<Self, VisionError> {
+        if reference.len() < MIN_REFERENCE_PINS {
+            return Err(VisionError::TooFewReferencePins {
+                found: reference.len(),
+                required: MIN_REFERENCE_PINS,
+            });
+        }
+        if let Some(index) = reference
+            .iter()
+            .position(|p| !p.iter().all(|v| v.is_finite()))
+        {
+            return Err(VisionError::NonFiniteReference { index });
+        }
+        let spacing = median_spacing(&reference);
+        if spacing.is_nan() || spacing <= 0.0 {
+            return Err(VisionError::DegenerateReference);
+        }
+        let stage = |gate: f64, sigma: f64| Stage {
+            gate: gate * spacing,
+            kernel: Kernel::new(&reference, sigma * spacing),
+        };
+        let stages = vec![
+            stage(3.0, 3.0),
+            stage(1.5, 2.0),
+            stage(1.0, 1.2),
+            stage(0.6, 1.0),
+        ];
+        Ok(Self {
+            reference,
+            spacing,
+            stages,
+        })
+    }
+
+    /// The rest pin centres, px.
+    pub fn reference(&self) -> &[[f64; 2]] {
+        &self.reference
+    }
+
+    /// Median nearest-neighbour distance of the reference pins, px.
+    pub fn spacing(&self) -> f64 {
+        self.spacing
+    }
+
+    /// Assigns keypoints to reference pins (see the module docs). Never
+    /// fails: with no keypoints every pin is missing and sits at rest.
+    pub fn order(&self, keypoints: &[KeyPoint]) -> Tracked {
+        self.order_points(&finite_centres(keypoints)).0
+    }
+
+    /// [`PinTracker::order`], then, if pins are missing, a second pass where
+    /// each cluster of touching pins (see [`crate::find_clusters`]) that has
+    /// missing pins predicted on it is split into as many centres as pins
+    /// it holds. The second pass is kept when it matches at least as many pins.
+    pub fn order_with_clusters(&self, keypoints: &[KeyPoint], clusters: &[Cluster]) -> Tracked {
+        let points = finite_centres(keypoints);
+        let (first, sources) = self.order_points(&points);
+        if first.missing == 0 || clusters.is_empty() {
+            return first;
+        }
+        let missing_in = self.missing_per_cluster(&first, clusters);
+        if missing_in.iter().all(|&m| m == 0) {
+            return first;
+        }
+        let owner: Vec<Option<usize>> = points
+            .iter()
+            .map(|q| owning_cluster(q, clusters, &missing_in))
+            .collect();
+        let mut retry: Vec<[f64; 2]> = points
+            .iter()
+            .zip(&owner)
+            .filter(|(_, o)| o.is_none())
+            .map(|(q, _)| *q)
+            .collect();
+        for (c, cluster) in clusters
+            .iter()
+            .enumerate()
+            .filter(|(c, _)| missing_in[*c] > 0)
+        {
+            let held = sources
+                .iter()
+                .flatten()
+                .filter(|&&k| owner[k] == Some(c))
+                .count();
+            retry.extend(cluster.split(held + missing_in[c]));
+        }
+        let (second, _) = self.order_points(&retry);
+        if second.matched_count() >= first.matched_count() {
+            second
+        } else {
+            first
+        }
+    }
+
+    /// For each cluster, how many missing pins are predicted on or next to
+    /// it (each missing pin counts for its nearest cluster only).
+    fn missing_per_cluster(&self, tracked: &Tracked, clusters: &[Cluster]) -> Vec<usize> {
+        let reach2 = (CLUSTER_REACH * self.spacing).powi(2);
+        let mut counts = vec![0; clusters.len()];
+        for (pin, _) in tracked
+            .pins
+            .iter()
+            .zip(&tracked.matched)
+            .filter(|(_, m)| !**m)
+        {
+            let nearest = clusters
+                .iter()
+                .map(|c| c.distance2(*pin))
+                .enumerate()
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((c, d2)) = nearest {
+                if d2 < reach2 {
+                    counts[c] += 1;
+                }
+            }
+        }
+        counts
+    }
+
+    /// The coarse-to-fine matching on finite points; also returns, per pin,
+    /// the index of its point.
+    fn order_points(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
+        let mut predicted = self.centroid_shift(points);
+        let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
+        let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
+        for stage in &self.stages {
+            matches = self.match_points(&predicted, points, stage.gate);
+            observed = self.displacements(&matches, points);
+            predicted = self.predict(&observed, &stage.kernel);
+        }
+        let tracked = self.finish(&matches, &observed, &predicted, points.len());
+        (tracked, matches)
+    }
+
+    /// Reference moved by the difference of the two point sets' centroids.
+    fn centroid_shift(&self, points: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let shift = match (centroid(points), centroid(&self.reference)) {
+            (Some(a), Some(b)) => [a[0] - b[0], a[1] - b[1]],
+            _ => [0.0, 0.0],
+        };
+        self.reference
+            .iter()
+            .map(|r| [r[0] + shift[0], r[1] + shift[1]])
+            .collect()
+    }
+
+    /// Optimal one-to-one matching of predicted pins to points, squared
+    /// distance cost, pairs farther than `gate` not allowed.
+    fn match_points(
+        &self,
+        predicted: &[[f64; 2]],
+        points: &[[f64; 2]],
+        gate: f64,
+    ) -> Vec<Option<usize>> {
+        let gate2 = gate * gate;
+        let rows: Vec<Vec<Edge>> = predicted
+            .iter()
+            .map(|p| {
+                points
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(col, q)| {
+                        let cost = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                        (cost < gate2).then_some(Edge { col, cost })
+                    })
+                    .collect()
+            })
+            .collect();
+        assign(points.len(), &rows, gate2).row_to_col
+    }
+
+    fn displacements(
+        &self,
+        matches: &[Option<usize>],
+        points: &[[f64; 2]],
+    ) -> Vec<Option<[f64; 2]>> {
+        self.reference
+            .iter()
+            .zip(matches)
+            .map(|(r, m)| m.map(|k| [points[k][0] - r[0], points[k][1] - r[1]]))
+            .collect()
+    }
+
+    fn predict(&self, observed: &Observations, kernel: &Kernel) -> Vec<[f64; 2]> {
+        smooth_field(&self.reference, observed, kernel, PRIOR_WEIGHT)
+            .iter()
+            .zip(&self.reference)
+            .map(|(d, r)| [r[0] + d[0], r[1] + d[1]])
+            .collect()
+    }
+
+    fn finish(
+        &self,
+        matches: &[Option<usize>],
+        observed: &Observations,
+        predicted: &[[f64; 2]],
+        n_points: usize,
+    ) -> Tracked {
+        let pins: Vec<[f64; 2]> = self
+            .reference
+            .iter()
+            .zip(observed)
+            .zip(predicted)
+            .map(|((r, o), p)| o.map_or(*p, |d| [r[0] + d[0], r[1] + d[1]]))
+            .collect();
+        let matched: Vec<bool> = matches.iter().map(Option::is_some).collect();
+        let matched_count = matched.iter().filter(|&&m| m).count();
+        Tracked {
+            pins,
+            matched,
+            missing: self.reference.len() - matched_count,
+            extra: n_points - matched_count,
+        }
+    }
+}
+
+fn finite_centres(keypoints: &[KeyPoint]) -> Vec<[f64; 2]> {
+    keypoints
+        .iter()
+        .filter(|k| k.x.is_finite() && k.y.is_finite())
+        .map(|k| [k.x, k.y])
+        .collect()
+}
+
+/// The cluster (among those with missing pins) whose pixel holds `point`.
+fn owning_cluster(point: &[f64; 2], clusters: &[Cluster], missing_in: &[usize]) -> Option<usize> {
+    let (x, y) = (point[0].round() as i32, point[1].round() as i32);
+    (0..clusters.len()).find(|&c| missing_in[c] > 0 && clusters[c].contains(x, y))
+}
+
+fn centroid(points: &[[f64; 2]]) -> Option<[f64; 2]> {
+    if points.is_empty() {
+        return None;
+    }
+    let n = points.len() as f64;
+    let sx: f64 = points.iter().map(|p| p[0]).sum();
+    let sy: f64 = points.iter().map(|p| p[1]).sum();
+    Some([sx / n, sy / n])
+}
+
+/// Median over pins of the distance to the nearest other pin.
+fn median_spacing(points: &[[f64; 2]]) -> f64 {
+    let mut nearest: Vec<f64> = points
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            points
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    nearest.sort_unstable_by(f64::total_cmp);
+    nearest[nearest.len() / 2]
+}

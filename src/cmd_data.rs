@@ -1,0 +1,219 @@
+//! Data commands: `collect`, `import`, `sensor render`, `sensor pins`.
+use crate::progress::bar;
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use std::path::{Path, PathBuf};
+use tactrace_geometry::ShapeSpec;
+use tactrace_lab::collect::{collect as run_collect, pose_at_edge, CollectConfig};
+use tactrace_lab::rig::RigConfig;
+use tactrace_lab::{dataset, fsutil, images, import as imp, shape_io, LabError};
+use tactrace_vision::BlobParams;
+
+#[derive(Args)]
+pub struct CollectArgs {
+    /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points (mm).
+    #[arg(long, default_value = "disk")]
+    shape: String,
+    #[arg(long, default_value_t = 1000)]
+    samples: usize,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output dataset directory.
+    #[arg(long)]
+    out: PathBuf,
+    /// Keep every tap's frame as PNG under frames/.
+    #[arg(long)]
+    save_frames: bool,
+    /// Rig configuration TOML (tables sensor, arm, workspace, tap, blob).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Replace an existing output directory.
+    #[arg(long)]
+    force: bool,
+}
+
+/// Read a rig configuration, or the simulated defaults.
+pub fn rig_config(path: Option<&Path>) -> Result<RigConfig> {
+    let Some(path) = path else {
+        return Ok(RigConfig::simulated());
+    };
+    let text = fsutil::read_text(path)?;
+    toml::from_str(&text).with_context(|| format!("{}: invalid rig configuration", path.display()))
+}
+
+pub fn collect(a: CollectArgs) -> Result<()> {
+    let spec = ShapeSpec::parse(&a.shape);
+    let shape = shape_io::load_shape(&spec)?;
+    let rig = rig_config(a.config.as_deref())?;
+    let cfg = CollectConfig {
+        samples: a.samples,
+        seed: a.seed,
+        save_frames: a.save_frames,
+        ..CollectConfig::default()
+    };
+    let pb = bar(a.samples as u64, "collect");
+    let got = run_collect(&rig, &shape, &cfg, &spec.name(), |i| {
+        pb.set_position(i as u64)
+    })?;
+    pb.finish_and_clear();
+    let dir = dataset::write_dataset(&a.out, &got.data, &got.frames, a.force)?;
+    eprintln!(
+        "collected {} taps on {} into {} ({} with missing pins)",
+        got.data.len(),
+        spec.name(),
+        dir.display(),
+        got.data.meta.frames_with_missing_pins
+    );
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct ImportArgs {
+    /// Folder of frames.
+    #[arg(long)]
+    frames: PathBuf,
+    /// CSV of labels, one row per frame.
+    #[arg(long)]
+    targets: PathBuf,
+    /// The undeformed frame whose pins define the order.
+    #[arg(long)]
+    reference: PathBuf,
+    #[arg(long, default_value = "image_name")]
+    image_column: String,
+    #[arg(long, default_value = "pose_2")]
+    r_column: String,
+    #[arg(long, default_value = "pose_6")]
+    theta_column: String,
+    /// Blob detector parameters (TOML, OpenCV key names); default: the real256 preset.
+    #[arg(long)]
+    params: Option<PathBuf>,
+    /// Import only the first N rows.
+    #[arg(long)]
+    limit: Option<usize>,
+    #[arg(long)]
+    out: PathBuf,
+    #[arg(long)]
+    force: bool,
+}
+
+/// Blob parameters from a file, or a named preset.
+pub fn blob_params(path: Option<&Path>, preset: &str) -> Result<BlobParams> {
+    match path {
+        Some(p) => {
+            let text = fsutil::read_text(p)?;
+            BlobParams::from_toml(&text)
+                .map_err(LabError::from)
+                .with_context(|| format!("{}: invalid blob parameters", p.display()))
+        }
+        None => Ok(BlobParams::preset(preset).map_err(LabError::from)?),
+    }
+}
+
+pub fn import(a: ImportArgs) -> Result<()> {
+    let blob = blob_params(a.params.as_deref(), "real256")?;
+    let cfg = imp::ImportConfig {
+        frames: a.frames,
+        targets: a.targets,
+        reference: a.reference,
+        image_column: a.image_column,
+        r_column: a.r_column,
+        theta_column: a.theta_column,
+        limit: a.limit,
+    };
+    let pb = bar(0, "import");
+    let tick = || pb.inc(1);
+    let got = imp::import(&cfg, &blob, &tick)?;
+    pb.finish_and_clear();
+    let dir = dataset::write_dataset(&a.out, &got.data, &[], a.force)?;
+    let n = got.data.len();
+    eprintln!(
+        "imported {n} frames into {}: all pins matched on {} ({:.2}%), {} with missing pins, {} rejected (too few pins)",
+        dir.display(),
+        n - got.frames_with_missing_pins,
+        100.0 * (n - got.frames_with_missing_pins) as f64 / n as f64,
+        got.frames_with_missing_pins,
+        got.rejected.len()
+    );
+    for (name, why) in got.rejected.iter().take(10) {
+        eprintln!("  rejected {name}: {why}");
+    }
+    Ok(())
+}
+
+#[derive(Subcommand)]
+pub enum SensorCommand {
+    /// Render one simulated tap as a PNG (r, theta relative to the edge).
+    Render {
+        #[arg(long, default_value = "disk")]
+        shape: String,
+        /// Edge position, mm (positive: sensor centre outside the object).
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        r: f64,
+        /// Sensor angle relative to the edge, degrees.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        theta: f64,
+        /// Indentation depth, mm (the report's nominal tap: 3 mm).
+        #[arg(long, default_value_t = 3.0)]
+        depth: f64,
+        /// Arc length of the edge point, mm.
+        #[arg(long, default_value_t = 0.0)]
+        arc: f64,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        config: Option<PathBuf>,
+    },
+    /// Detect the pins of a frame; prints CSV `x,y,size` (px, size = diameter).
+    Pins {
+        image: PathBuf,
+        /// Blob parameters TOML (OpenCV key names).
+        #[arg(long)]
+        params: Option<PathBuf>,
+        /// Preset when no --params: opencv, report, real256, sim.
+        #[arg(long, default_value = "real256")]
+        preset: String,
+    },
+}
+
+pub fn sensor(c: SensorCommand) -> Result<()> {
+    match c {
+        SensorCommand::Render {
+            shape,
+            r,
+            theta,
+            depth,
+            arc,
+            out,
+            config,
+        } => {
+            let spec = ShapeSpec::parse(&shape);
+            let contour = shape_io::load_shape(&spec)?;
+            let rig = rig_config(config.as_deref())?;
+            let model =
+                tactrace_sensor::TacTipModel::new(rig.sensor.clone()).map_err(LabError::from)?;
+            let (edge, normal) = contour.at_arc_length(arc);
+            let pose = pose_at_edge(edge, normal, r, theta, -depth);
+            let pins = model.pins(&contour, pose, None);
+            let frame = model.render(&pins, None);
+            fsutil::write_atomic(&out, &images::png_bytes(&frame)?)?;
+            eprintln!("wrote {}", out.display());
+            Ok(())
+        }
+        SensorCommand::Pins {
+            image,
+            params,
+            preset,
+        } => {
+            let blob = blob_params(params.as_deref(), &preset)?;
+            let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
+            let kps = tactrace_vision::detect_blobs(&frame, &blob);
+            let mut out = String::from("x,y,size\n");
+            for k in &kps {
+                out.push_str(&format!("{:.3},{:.3},{:.3}\n", k.x, k.y, k.size));
+            }
+            print!("{out}");
+            eprintln!("{} pins", kps.len());
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,174 @@
+//! Experiment commands: `follow` and `reproduce`.
+use crate::progress::bar;
+use anyhow::{Context, Result};
+use clap::Args;
+use std::path::PathBuf;
+use tactrace_geometry::ShapeSpec;
+use tactrace_lab::follow::{run_follow, FollowRunConfig};
+use tactrace_lab::report::{reproduce as run_reproduce, ReproduceConfig};
+use tactrace_lab::{figures, fsutil, model_io, shape_io};
+
+#[derive(Args)]
+pub struct FollowArgs {
+    /// Model directory (from `tactrace train`).
+    #[arg(long)]
+    model: PathBuf,
+    /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points (mm).
+    #[arg(long)]
+    shape: String,
+    /// Run exactly N steps (default: until the loop closes, capped).
+    #[arg(long)]
+    steps: Option<usize>,
+    /// Follow-run TOML (tables rig, controller, follow, start).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Run directory.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn follow_config(path: Option<&std::path::Path>) -> Result<FollowRunConfig> {
+    let Some(path) = path else {
+        return Ok(FollowRunConfig::simulated());
+    };
+    let text = fsutil::read_text(path)?;
+    let mut base = toml::Value::try_from(FollowRunConfig::simulated())?;
+    let over: toml::Value = toml::from_str(&text).with_context(|| path.display().to_string())?;
+    merge_into(&mut base, over);
+    base.try_into()
+        .with_context(|| format!("{}: invalid follow configuration", path.display()))
+}
+
+/// Overlay `over` on `base` table by table (so a config names only what it changes).
+fn merge_into(base: &mut toml::Value, over: toml::Value) {
+    match (base, over) {
+        (toml::Value::Table(b), toml::Value::Table(o)) => {
+            for (k, v) in o {
+                match b.get_mut(&k) {
+                    Some(old) => merge_into(old, v),
+                    None => {
+                        b.insert(k, v);
+                    }
+                }
+            }
+        }
+        (b, o) => *b = o,
+    }
+}
+
+pub fn follow(a: FollowArgs) -> Result<()> {
+    let mut cfg = follow_config(a.config.as_deref())?;
+    if a.steps.is_some() {
+        cfg.follow.steps = a.steps;
+    }
+    if let Some(s) = a.seed {
+        cfg.follow.seed = s;
+    }
+    let spec = ShapeSpec::parse(&a.shape);
+    let contour = shape_io::load_shape(&spec)?;
+    let model = model_io::load_model(&a.model)?;
+    std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
+    fsutil::write_atomic(
+        &a.out.join("config.toml"),
+        toml::to_string(&cfg)?.as_bytes(),
+    )?;
+    let pb = bar(a.steps.unwrap_or(cfg.follow.max_steps) as u64, "follow");
+    let res = run_follow(&cfg, model, &contour, &a.out, &mut |r| {
+        pb.set_position(r.step as u64 + 1)
+    })?;
+    pb.finish_and_clear();
+    let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
+    figures::trajectory(&a.out.join("trajectory"), &spec.name(), &contour, &traj)?;
+    figures::error_curve(&a.out.join("l2_error"), &spec.name(), &res.l2_curve)?;
+    let m = &res.metrics;
+    println!(
+        "{}: {} steps, {:?}; mean L2 {:.3} mm, track error mean {:.3} / max {:.3} mm, coverage {:.0}%",
+        spec.name(),
+        m.steps,
+        res.summary.ending,
+        m.mean_l2_mm,
+        m.mean_track_error_mm,
+        m.max_track_error_mm,
+        100.0 * m.coverage
+    );
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct ReproduceArgs {
+    /// Output directory for data, models, runs, figures and the report.
+    #[arg(long, default_value = "runs/reproduce")]
+    out: PathBuf,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Epochs for every network (default: the preset's).
+    #[arg(long)]
+    epochs: Option<usize>,
+    /// Use the report's fixed step counts (266, 272, 222, 260).
+    #[arg(long)]
+    report_steps: bool,
+    /// Add results on real frames from this folder (Bristol layout).
+    #[arg(long)]
+    real: Option<PathBuf>,
+}
+
+pub fn reproduce(a: ReproduceArgs) -> Result<()> {
+    let cfg = ReproduceConfig {
+        seed: a.seed,
+        epochs: a.epochs,
+        report_steps: a.report_steps,
+        real: a.real,
+        ..ReproduceConfig::default()
+    };
+    let log = |msg: &str| eprintln!("[reproduce] {msg}");
+    let r = run_reproduce(&cfg, &a.out, &log)?;
+    for n in &r.networks {
+        println!(
+            "{:<16} angle {:.2} deg, position {:.3} mm",
+            n.name, n.angle_mae_deg, n.position_mae_mm
+        );
+    }
+    for s in &r.shapes {
+        println!(
+            "{:<16} mean L2 {:.2} mm (report {:.2}), closed {}",
+            s.shape, s.metrics.mean_l2_mm, s.report_l2_mm, s.metrics.closed
+        );
+    }
+    println!("report: {}", a.out.join("report.html").display());
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Number of simulated taps to time.
+    #[arg(long, default_value_t = 2000)]
+    taps: usize,
+    /// A model directory: also time the control loop (frame -> command).
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn bench(a: BenchArgs) -> Result<()> {
+    let model = a.model.as_deref().map(model_io::load_model).transpose()?;
+    let rig = tactrace_lab::rig::RigConfig::simulated();
+    let f = tactrace_lab::bench::bench(&rig, a.taps.max(1), model.as_ref())?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&f)?);
+    } else {
+        println!("simulate (pins + render): {:.1} us/tap", f.simulate_us);
+        println!("extract (detect + order): {:.1} us/frame", f.extract_us);
+        println!(
+            "simulated taps per second (one core): {:.0}",
+            f.taps_per_second
+        );
+        if let Some(l) = f.control_latency_us {
+            println!("control loop, frame -> command: {l:.1} us");
+        }
+    }
+    Ok(())
+}

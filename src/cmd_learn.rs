@@ -1,0 +1,185 @@
+//! Learning commands: `train`, `validate`, `predict`.
+use crate::progress::bar;
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+use tactrace_lab::{dataset, figures, fsutil, model_io, train as tr, LabError};
+use tactrace_learn::{ModelKind, Preset};
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum ModelArg {
+    Pdennn,
+    Pcadennn,
+    Disdennn,
+    /// Backprop twin of the PDenNN (same architecture, SGD backprop).
+    Mlp,
+}
+
+impl From<ModelArg> for ModelKind {
+    fn from(m: ModelArg) -> Self {
+        match m {
+            ModelArg::Pdennn => ModelKind::PDenNN,
+            ModelArg::Pcadennn => ModelKind::PcaDenNN,
+            ModelArg::Disdennn => ModelKind::DisDenNN,
+            ModelArg::Mlp => ModelKind::Mlp,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum PresetArg {
+    /// Tuned to work on simulated and real data alike.
+    Default,
+    /// The report's Table 4.1 exactly.
+    Report,
+}
+
+impl From<PresetArg> for Preset {
+    fn from(p: PresetArg) -> Self {
+        match p {
+            PresetArg::Default => Preset::Default,
+            PresetArg::Report => Preset::Report,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct TrainArgs {
+    #[arg(long, value_enum, default_value = "pdennn")]
+    model: ModelArg,
+    /// Training dataset directory.
+    #[arg(long)]
+    train: PathBuf,
+    /// Validation dataset directory (scored after training).
+    #[arg(long)]
+    val: Option<PathBuf>,
+    /// Output model directory.
+    #[arg(long)]
+    out: PathBuf,
+    #[arg(long)]
+    epochs: Option<usize>,
+    #[arg(long, value_enum, default_value = "default")]
+    preset: PresetArg,
+    /// TOML overriding any hyper-parameter of the preset.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Print the resolved configuration as TOML and exit.
+    #[arg(long)]
+    print_config: bool,
+    #[arg(long)]
+    force: bool,
+}
+
+pub fn train(a: TrainArgs) -> Result<()> {
+    let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
+    let cfg = tr::resolve_config(a.model.into(), a.preset.into(), text.as_deref(), a.epochs)
+        .with_context(|| {
+            a.config
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        })?;
+    if a.print_config {
+        print!("{}", toml::to_string(&cfg)?);
+        return Ok(());
+    }
+    let data = dataset::read_dataset(&a.train)?;
+    let val = a.val.as_deref().map(dataset::read_dataset).transpose()?;
+    let pb = bar(cfg.epochs as u64, "train");
+    let (model, history) = tr::train(&cfg, &data, &mut |e| pb.set_position(e as u64))?;
+    pb.finish_and_clear();
+    let dir = model_io::save_model(&a.out, &model, &history, a.force)?;
+    eprintln!("saved model to {}", dir.display());
+    if let Some(val) = val {
+        let v = tr::validate(&model, &val)?;
+        println!(
+            "validation: position {:.3} mm, angle {:.3} deg over {} samples",
+            v.position_mae_mm, v.angle_mae_deg, v.samples
+        );
+    }
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct ValidateArgs {
+    /// Model directory.
+    #[arg(long)]
+    model: PathBuf,
+    /// Dataset directory.
+    #[arg(long)]
+    data: PathBuf,
+    /// Print exactly one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Write predicted-vs-true plots (report Fig. 4.4) here.
+    #[arg(long)]
+    plots: Option<PathBuf>,
+}
+
+pub fn validate(a: ValidateArgs) -> Result<()> {
+    let model = model_io::load_model(&a.model)?;
+    let data = dataset::read_dataset(&a.data)?;
+    let v = tr::validate(&model, &data)?;
+    if let Some(dir) = &a.plots {
+        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+        figures::predicted_vs_true(&dir.join("predicted_vs_true"), "model", &v)?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string(&v)?);
+    } else {
+        println!(
+            "position MAE {:.3} mm, angle MAE {:.3} deg, {} samples",
+            v.position_mae_mm, v.angle_mae_deg, v.samples
+        );
+    }
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct PredictArgs {
+    #[arg(long)]
+    model: PathBuf,
+    /// One frame (needs --reference).
+    #[arg(long, conflicts_with = "data")]
+    image: Option<PathBuf>,
+    /// The undeformed frame of the same sensor.
+    #[arg(long, requires = "image")]
+    reference: Option<PathBuf>,
+    /// A dataset directory: prints one CSV row per sample.
+    #[arg(long)]
+    data: Option<PathBuf>,
+    /// Blob parameters TOML; default: the real256 preset.
+    #[arg(long)]
+    params: Option<PathBuf>,
+}
+
+pub fn predict(a: PredictArgs) -> Result<()> {
+    let model = model_io::load_model(&a.model)?;
+    match (a.image, a.reference, a.data) {
+        (Some(image), Some(reference), None) => {
+            let blob = crate::cmd_data::blob_params(a.params.as_deref(), "real256")?;
+            let refr = tactrace_sensor::read_frame(&reference).map_err(LabError::from)?;
+            let ex = tactrace_vision::PinExtractor::from_reference_frame(&refr, blob)
+                .map_err(LabError::from)?;
+            let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
+            let tracked = ex.extract(&frame).map_err(LabError::from)?;
+            let [r, t] = model.predict(&tracked.displacement(ex.tracker.reference()))?;
+            println!("r_mm,theta_deg\n{r:.4},{t:.4}");
+        }
+        (None, None, Some(dir)) => {
+            let data = dataset::read_dataset(&dir)?;
+            let v = tr::validate(&model, &data)?;
+            println!("r_mm,theta_deg,true_r_mm,true_theta_deg");
+            for (p, t) in v.predictions.iter().zip(&v.truth) {
+                println!("{:.4},{:.4},{:.4},{:.4}", p[0], p[1], t[0], t[1]);
+            }
+        }
+        _ => {
+            return Err(LabError::Config(
+                "give either --image FRAME --reference FRAME, or --data DIR".into(),
+            )
+            .into())
+        }
+    }
+    Ok(())
+}

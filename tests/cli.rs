@@ -1,0 +1,120 @@
+//! End-to-end tests of the `tactrace` binary.
+mod util;
+use util::{real_data, tactrace, TempDir};
+
+#[test]
+fn collect_writes_a_python_readable_dataset() {
+    let t = TempDir::new("collect");
+    let r = tactrace(
+        &t.0,
+        &[
+            "collect",
+            "--shape",
+            "disk",
+            "--samples",
+            "30",
+            "--seed",
+            "7",
+            "--out",
+            "ds",
+            "--save-frames",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    for f in [
+        "inputs.npy",
+        "targets.npy",
+        "meta.json",
+        "frames/frame_00000.png",
+        "frames/reference.png",
+    ] {
+        assert!(t.join("ds").join(f).exists(), "missing {f}");
+    }
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(t.join("ds/meta.json")).unwrap()).unwrap();
+    assert_eq!(meta["seed"], 7);
+    assert_eq!(meta["samples"], 30);
+    assert_eq!(meta["pins"], 127);
+    // The same seed gives the same bytes.
+    let r = tactrace(
+        &t.0,
+        &["collect", "--samples", "30", "--seed", "7", "--out", "ds2"],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert_eq!(
+        std::fs::read(t.join("ds/inputs.npy")).unwrap(),
+        std::fs::read(t.join("ds2/inputs.npy")).unwrap()
+    );
+    // An existing output is not overwritten without --force.
+    let r = tactrace(&t.0, &["collect", "--samples", "5", "--out", "ds"]);
+    assert_eq!(r.code, 2);
+    assert!(r.stderr.contains("already exists"), "{}", r.stderr);
+}
+
+#[test]
+fn unknown_shape_is_a_clear_error() {
+    let t = TempDir::new("badshape");
+    let r = tactrace(
+        &t.0,
+        &[
+            "collect",
+            "--shape",
+            "hexagon",
+            "--samples",
+            "5",
+            "--out",
+            "x",
+        ],
+    );
+    assert_eq!(r.code, 2);
+    assert!(r.stderr.contains("unknown shape `hexagon`"), "{}", r.stderr);
+    assert!(!t.join("x").exists());
+}
+
+#[test]
+fn open_contour_csv_is_rejected_with_the_file_name() {
+    let t = TempDir::new("opencsv");
+    std::fs::write(t.join("open.csv"), "x,y\n0,0\n10,0\n20,0\n20,10\n20,20\n").unwrap();
+    let r = tactrace(
+        &t.0,
+        &["sensor", "render", "--shape", "open.csv", "--out", "a.png"],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("open.csv"), "{}", r.stderr);
+}
+
+#[test]
+fn corrupt_image_is_a_clear_error() {
+    let t = TempDir::new("corrupt");
+    std::fs::write(t.join("bad.png"), b"not a png").unwrap();
+    let r = tactrace(&t.0, &["sensor", "pins", "bad.png"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("bad.png"), "{}", r.stderr);
+}
+
+#[test]
+fn render_then_detect_gives_127_pins() {
+    let t = TempDir::new("render");
+    let r = tactrace(
+        &t.0,
+        &[
+            "sensor", "render", "--shape", "disk", "--r", "2", "--theta", "10", "--out", "tap.png",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let r = tactrace(&t.0, &["sensor", "pins", "tap.png", "--preset", "sim"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let mut lines = r.stdout.lines();
+    assert_eq!(lines.next(), Some("x,y,size"));
+    assert_eq!(lines.count(), 127);
+}
+
+#[test]
+fn real_reference_frame_gives_127_pins() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("realpins");
+    let init = data.join("frames/init_0.png");
+    let r = tactrace(&t.0, &["sensor", "pins", init.to_str().unwrap()]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert_eq!(r.stdout.lines().count(), 128);
+}

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use tactrace_geometry::ShapeSpec;
 use tactrace_lab::follow::{run_follow, FollowRunConfig};
 use tactrace_lab::report::{reproduce as run_reproduce, ReproduceConfig};
-use tactrace_lab::{figures, fsutil, model_io, shape_io};
+use tactrace_lab::{figures, fsutil, model_io, settings, shape_io};
 
 #[derive(Args)]
 pub struct FollowArgs {
@@ -30,32 +30,13 @@ pub struct FollowArgs {
 }
 
 fn follow_config(path: Option<&std::path::Path>) -> Result<FollowRunConfig> {
+    let base = FollowRunConfig::simulated();
     let Some(path) = path else {
-        return Ok(FollowRunConfig::simulated());
+        return Ok(base);
     };
     let text = fsutil::read_text(path)?;
-    let mut base = toml::Value::try_from(FollowRunConfig::simulated())?;
-    let over: toml::Value = toml::from_str(&text).with_context(|| path.display().to_string())?;
-    merge_into(&mut base, over);
-    base.try_into()
-        .with_context(|| format!("{}: invalid follow configuration", path.display()))
-}
-
-/// Overlay `over` on `base` table by table (so a config names only what it changes).
-fn merge_into(base: &mut toml::Value, over: toml::Value) {
-    match (base, over) {
-        (toml::Value::Table(b), toml::Value::Table(o)) => {
-            for (k, v) in o {
-                match b.get_mut(&k) {
-                    Some(old) => merge_into(old, v),
-                    None => {
-                        b.insert(k, v);
-                    }
-                }
-            }
-        }
-        (b, o) => *b = o,
-    }
+    let what = format!("{}: follow configuration", path.display());
+    Ok(settings::overlay(&base, &text, &what)?)
 }
 
 pub fn follow(a: FollowArgs) -> Result<()> {
@@ -93,6 +74,7 @@ pub fn follow(a: FollowArgs) -> Result<()> {
         m.max_track_error_mm,
         100.0 * m.coverage
     );
+    eprintln!("{}", res.summary.message);
     Ok(())
 }
 

@@ -1,6 +1,6 @@
 //! The report's figures, built from the generic [`crate::plot`] module.
 use crate::error::{LabError, Result};
-use crate::plot::{chart, grid, Axes, Series, Style};
+use crate::plot::{chart, grid, pins_figure, Axes, Series, Style};
 use crate::train::Validation;
 use std::path::{Path, PathBuf};
 use tactrace_geometry::Contour;
@@ -158,4 +158,17 @@ pub fn error_curve(stem: &Path, title: &str, curve: &[f64]) -> Result<Vec<PathBu
         ],
     )
     .map_err(plot_err)
+}
+
+/// Fig. 4.1: a camera frame, the pins extracted from it and their
+/// displacement arrows from the undeformed frame's pins (`arrow_scale` x).
+pub fn frame_pins_displacements(
+    stem: &Path,
+    frame: &image::GrayImage,
+    extractor: &tactrace_vision::PinExtractor,
+    arrow_scale: f64,
+) -> Result<Vec<PathBuf>> {
+    let tracked = extractor.extract(frame)?;
+    let reference = extractor.tracker.reference();
+    pins_figure(stem, frame, reference, &tracked.pins, arrow_scale).map_err(plot_err)
 }

@@ -168,6 +168,7 @@ pub fn run_follow(
         &perception,
         &mut controller,
         &cfg.follow,
+        &cfg.rig.tap,
         &mut [&mut csv, &mut records, &mut bar],
     )?;
     let traj: Vec<Vec2> = records
@@ -177,7 +178,7 @@ pub fn run_follow(
     let metrics = evaluate(
         shape,
         &traj,
-        cfg.follow.close_radius_mm.max(2.5),
+        cfg.follow.close_radius_mm,
         cfg.follow.min_excursion_mm,
     );
     let curve = l2_curve(shape, &traj, 1000);

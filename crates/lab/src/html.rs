@@ -1,6 +1,11 @@
 //! A small renderer from the report's own Markdown (headings, paragraphs,
 //! pipe tables, images) to a standalone HTML page. It handles only what
-//! tactrace writes, not Markdown at large.
+//! tactrace writes, not Markdown at large. Images can be embedded as data
+//! URIs (the caller reads the files), so the page is self-contained.
+
+/// Maps an image `src` to what the page should load instead (a data URI),
+/// or `None` to keep the link.
+pub type Embed<'a> = &'a dyn Fn(&str) -> Option<String>;
 
 /// Escape text for HTML.
 fn esc(s: &str) -> String {
@@ -11,7 +16,7 @@ fn esc(s: &str) -> String {
 }
 
 /// Inline images `![alt](src)` in a line become `<img>`; the rest is escaped.
-fn inline(line: &str) -> String {
+fn inline(line: &str, embed: Embed) -> String {
     let mut out = String::new();
     let mut rest = line;
     while let Some(start) = rest.find("![") {
@@ -23,9 +28,10 @@ fn inline(line: &str) -> String {
         };
         out.push_str(&esc(&rest[..start]));
         let (alt, src) = (&rest[start + 2..mid], &rest[mid + 2..end]);
+        let src = embed(src).unwrap_or_else(|| src.to_owned());
         out.push_str(&format!(
             "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
-            esc(src),
+            esc(&src),
             esc(alt),
             esc(alt)
         ));
@@ -43,8 +49,9 @@ fn cells(line: &str) -> Vec<&str> {
         .collect()
 }
 
-/// Render tactrace's Markdown as a complete HTML document.
-pub fn markdown_to_html(md: &str) -> String {
+/// Render tactrace's Markdown as a complete HTML document, images passed
+/// through `embed`.
+pub fn markdown_to_html(md: &str, embed: Embed) -> String {
     let mut body = String::new();
     let lines: Vec<&str> = md.lines().collect();
     let mut i = 0;
@@ -77,7 +84,7 @@ pub fn markdown_to_html(md: &str) -> String {
             body.push_str("</table>\n");
             continue;
         } else if !line.trim().is_empty() {
-            body.push_str(&format!("<p>{}</p>\n", inline(line)));
+            body.push_str(&format!("<p>{}</p>\n", inline(line, embed)));
         }
         i += 1;
     }
@@ -93,9 +100,12 @@ mod tests {
 
     #[test]
     fn renders_tables_and_images() {
-        let html = markdown_to_html("# T\n\n| a | b |\n|---|---|\n| 1 | <2> |\n\n![cap](f.svg)\n");
+        let md = "# T\n\n| a | b |\n|---|---|\n| 1 | <2> |\n\n![cap](f.svg) ![other](g.svg)\n";
+        let embed = |src: &str| (src == "g.svg").then(|| "data:x".to_owned());
+        let html = markdown_to_html(md, &embed);
         assert!(html.contains("<h1>T</h1>"));
         assert!(html.contains("<td>&lt;2&gt;</td>"));
         assert!(html.contains("<img src=\"f.svg\" alt=\"cap\">"));
+        assert!(html.contains("<img src=\"data:x\" alt=\"other\">"));
     }
 }

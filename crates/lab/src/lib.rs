@@ -22,8 +22,10 @@ pub mod metrics;
 pub mod model_io;
 pub mod plot;
 pub mod report;
+pub mod report_doc;
 pub mod rig;
 pub mod servo;
+pub mod settings;
 pub mod shape_io;
 pub mod train;
 

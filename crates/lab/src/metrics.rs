@@ -41,20 +41,50 @@ pub fn l2_curve(contour: &Contour, trajectory: &[Vec2], n: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Whether a trajectory closes: after getting at least `min_excursion` from
-/// its first point, a later segment passes within `radius` of it.
-pub fn trajectory_closes(trajectory: &[Vec2], radius: f64, min_excursion: f64) -> bool {
-    let Some(&start) = trajectory.first() else {
-        return false;
-    };
-    let mut away = false;
-    for w in trajectory.windows(2) {
-        away |= (w[1] - start).norm() >= min_excursion;
-        if away && point_segment_distance(start, w[0], w[1]) <= radius {
-            return true;
+/// Detects, point by point, that a trajectory has come back to its start:
+/// after getting at least `min_excursion` mm from its first point, a later
+/// segment (not just a vertex, so a step cannot jump over the start) passes
+/// within `radius` mm of it. Used live by the servo loop and after the run
+/// by the metrics, so both agree.
+#[derive(Debug, Clone)]
+pub struct ClosureDetector {
+    radius: f64,
+    min_excursion: f64,
+    start: Option<Vec2>,
+    last: Option<Vec2>,
+    away: bool,
+}
+
+impl ClosureDetector {
+    pub fn new(radius: f64, min_excursion: f64) -> Self {
+        Self {
+            radius,
+            min_excursion,
+            start: None,
+            last: None,
+            away: false,
         }
     }
-    false
+
+    /// Add the next trajectory point; true once the loop has closed.
+    pub fn observe(&mut self, p: Vec2) -> bool {
+        let start = *self.start.get_or_insert(p);
+        let closed = match self.last {
+            Some(prev) => {
+                self.away |= (p - start).norm() >= self.min_excursion;
+                self.away && point_segment_distance(start, prev, p) <= self.radius
+            }
+            None => false,
+        };
+        self.last = Some(p);
+        closed
+    }
+}
+
+/// Whether a trajectory closes (see [`ClosureDetector`]).
+pub fn trajectory_closes(trajectory: &[Vec2], radius: f64, min_excursion: f64) -> bool {
+    let mut detector = ClosureDetector::new(radius, min_excursion);
+    trajectory.iter().any(|p| detector.observe(*p))
 }
 
 fn point_segment_distance(p: Vec2, a: Vec2, b: Vec2) -> f64 {
@@ -130,6 +160,19 @@ mod tests {
         assert!((m.mean_track_error_mm - 1.0).abs() < 0.02);
         assert!(m.closed);
         assert!((m.coverage - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_step_over_the_start_closes_the_loop() {
+        // Second lap 2 mm outside the first, 4 mm steps: no vertex comes
+        // within 3 mm of the start, but a segment passes 2 mm from it.
+        let mut traj = circle(50.0, 80);
+        traj.extend(circle(52.0, 80).into_iter().skip(1).take(10));
+        assert!(traj.iter().skip(1).all(|p| (p - traj[0]).norm() > 2.0 + 1e-9));
+        let mut detector = ClosureDetector::new(3.0, 20.0);
+        let first = traj.iter().position(|p| detector.observe(*p));
+        assert_eq!(first, Some(81));
+        assert!(!trajectory_closes(&traj, 1.5, 20.0));
     }
 
     #[test]

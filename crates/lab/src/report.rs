@@ -13,7 +13,8 @@ use crate::{figures, fsutil, model_io};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use tactrace_geometry::{builtin_shape, BuiltinShape};
+use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
+use tactrace_vision::PinExtractor;
 use tactrace_learn::{ModelKind, Preset};
 
 /// The report's Table 4.1 errors (angle deg, position mm) and contour L2 (mm).
@@ -85,6 +86,8 @@ pub struct ShapeRow {
 #[derive(Debug, Clone, Serialize)]
 pub struct ReproduceResults {
     pub networks: Vec<NetRow>,
+    /// The same networks trained and validated on real frames (`--real`).
+    pub real_networks: Vec<NetRow>,
     pub shapes: Vec<ShapeRow>,
     pub seconds: f64,
     pub seed: u64,
@@ -131,7 +134,8 @@ fn train_and_score(
     Ok((row, v))
 }
 
-fn slug(s: &str) -> String {
+/// File-name form of a network name ("MLP (backprop)" -> "mlpbackprop").
+pub(crate) fn slug(s: &str) -> String {
     s.chars()
         .filter(|c| c.is_ascii_alphanumeric())
         .collect::<String>()
@@ -172,6 +176,7 @@ pub fn reproduce(
     let (tr, va) = (tr?.data, va?.data);
     crate::dataset::write_dataset(&out.join("data/train"), &tr, &[], true)?;
     crate::dataset::write_dataset(&out.join("data/val"), &va, &[], true)?;
+    fig_4_1_simulated(rig, &disk, &out.join("figures/fig4_1_simulated"))?;
     log("training DisDenNN, PCADenNN, PDenNN and the backprop twin");
     let trained: Vec<Result<(NetRow, Validation)>> = NETS
         .par_iter()
@@ -216,22 +221,26 @@ pub fn reproduce(
         })
         .collect();
     let shapes = shapes.into_iter().collect::<Result<Vec<_>>>()?;
-    if let Some(real) = &cfg.real {
-        log("importing real frames and training on them");
-        networks.extend(real_rows(cfg, real, out)?);
-    }
+    let real_networks = match &cfg.real {
+        Some(real) => {
+            log("importing real frames and training on them");
+            real_rows(cfg, real, out)?
+        }
+        None => Vec::new(),
+    };
     let results = ReproduceResults {
         networks,
+        real_networks,
         shapes,
         seconds: t0.elapsed().as_secs_f64(),
         seed: cfg.seed,
         tactrace_version: crate::VERSION.into(),
     };
-    write_report(out, &results)?;
+    crate::report_doc::write_report(out, &results)?;
     Ok(results)
 }
 
-/// Train the PDenNN and its backprop twin on real frames (80/20 split).
+/// Train every network on real frames (seeded 80/20 split) and validate on the 20 %.
 fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<Vec<NetRow>> {
     let icfg = crate::import::ImportConfig {
         frames: dir.join("frames"),
@@ -243,83 +252,44 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<Vec<NetRow
         limit: None,
     };
     let blob = tactrace_vision::BlobParams::preset("real256")?;
+    fig_4_1_real(dir, &blob, &out.join("figures/fig4_1_real"))?;
     let imported = crate::import::import(&icfg, &blob, &|| {})?;
     let (tr, va) = imported.data.split(0.8, cfg.seed);
-    let rows: Vec<Result<NetRow>> = [
-        (ModelKind::PDenNN, "PDenNN"),
-        (ModelKind::Mlp, "MLP (backprop)"),
-    ]
-    .par_iter()
-    .map(|(k, name)| {
-        let (mut row, _) = train_and_score(
-            *k,
-            &format!("{name} real"),
-            cfg,
-            &tr,
-            &va,
-            &out.join("real"),
-        )?;
-        row.name = name.to_string();
-        Ok(row)
-    })
-    .collect();
+    let rows: Vec<Result<NetRow>> = NETS
+        .par_iter()
+        .map(|(k, name)| {
+            let (mut row, _) = train_and_score(
+                *k,
+                &format!("{name} real"),
+                cfg,
+                &tr,
+                &va,
+                &out.join("real"),
+            )?;
+            row.name = name.to_string();
+            Ok(row)
+        })
+        .collect();
     rows.into_iter().collect()
 }
 
-fn opt(v: Option<f64>) -> String {
-    v.map(|x| format!("{x:.2}")).unwrap_or_else(|| "-".into())
+/// Fig. 4.1 on a simulated tap: 2 mm onto the disk edge, 10 deg, 3 mm deep.
+fn fig_4_1_simulated(rig: &crate::rig::RigConfig, disk: &Contour, stem: &Path) -> Result<()> {
+    let model = tactrace_sensor::TacTipModel::new(rig.sensor.clone())?;
+    let reference = model.render(model.rest_pins(), None);
+    let extractor = PinExtractor::from_reference_frame(&reference, rig.blob.clone())?;
+    let (edge, normal) = disk.at_arc_length(0.0);
+    let pose = crate::collect::pose_at_edge(edge, normal, 2.0, 10.0, -3.0);
+    let frame = model.render(&model.pins(disk, pose, None), None);
+    figures::frame_pins_displacements(stem, &frame, &extractor, 3.0)?;
+    Ok(())
 }
 
-/// report.md, report.html and metrics.json.
-fn write_report(out: &Path, r: &ReproduceResults) -> Result<()> {
-    let mut md = String::from(
-        "# tactrace reproduction of \"A Bio-Inspired System for Human-Like Contour Following\"\n\n",
-    );
-    md.push_str(&format!("tactrace {}, seed {}, {:.1} s in all. Simulated rig; the report used a real UR5 and TacTip.\n\n", r.tactrace_version, r.seed, r.seconds));
-    md.push_str("## Table 4.1: validation errors\n\n| network | data | angle MAE (deg) | position MAE (mm) | report angle (deg) | report position (mm) | train time (s) |\n|---|---|---|---|---|---|---|\n");
-    for n in &r.networks {
-        let rep = REPORT_TABLE_4_1.iter().find(|(name, _, _)| *name == n.name);
-        md.push_str(&format!(
-            "| {} | {} | {:.2} | {:.3} | {} | {} | {:.1} |\n",
-            n.name,
-            n.data,
-            n.angle_mae_deg,
-            n.position_mae_mm,
-            opt(rep.and_then(|x| x.1)),
-            opt(rep.and_then(|x| x.2)),
-            n.train_seconds
-        ));
-    }
-    md.push_str("\n![Fig. 4.4 PDenNN](figures/fig4_4_pdennn.svg)\n\n![Fig. 4.5 PDenNN loss and energy](models/pdennn/loss_energy.svg)\n\n");
-    md.push_str("## Contour following (Fig. 5.3, 5.4)\n\n| shape | mean L2 (mm) | report L2 (mm) | mean track error (mm) | p95 (mm) | max (mm) | coverage | closed | steps | ending |\n|---|---|---|---|---|---|---|---|---|---|\n");
-    for s in &r.shapes {
-        let m = &s.metrics;
-        md.push_str(&format!(
-            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0}% | {} | {} | {:?} |\n",
-            s.shape,
-            m.mean_l2_mm,
-            s.report_l2_mm,
-            m.mean_track_error_mm,
-            m.p95_track_error_mm,
-            m.max_track_error_mm,
-            100.0 * m.coverage,
-            m.closed,
-            m.steps,
-            s.ending
-        ));
-    }
-    md.push('\n');
-    for s in &r.shapes {
-        md.push_str(&format!(
-            "![Fig. 5.3 {0}](figures/fig5_3_{0}.svg) ![Fig. 5.4 {0}](figures/fig5_4_{0}.svg)\n\n",
-            s.shape
-        ));
-    }
-    fsutil::write_atomic(&out.join("report.md"), md.as_bytes())?;
-    fsutil::write_atomic(
-        &out.join("report.html"),
-        crate::html::markdown_to_html(&md).as_bytes(),
-    )?;
-    let json = serde_json::to_string_pretty(r).expect("results serialise");
-    fsutil::write_atomic(&out.join("metrics.json"), json.as_bytes())
+/// Fig. 4.1 on a real frame of the Bristol set in `dir`.
+fn fig_4_1_real(dir: &Path, blob: &tactrace_vision::BlobParams, stem: &Path) -> Result<()> {
+    let reference = tactrace_sensor::read_frame(&dir.join("frames/init_0.png"))?;
+    let frame = tactrace_sensor::read_frame(&dir.join("frames/frame_0_0.png"))?;
+    let extractor = PinExtractor::from_reference_frame(&reference, blob.clone())?;
+    figures::frame_pins_displacements(stem, &frame, &extractor, 3.0)?;
+    Ok(())
 }

@@ -8,9 +8,12 @@
 //! sensor's frames. It never reads the true pose of the sensor relative to
 //! the object; loop closure is detected from the commanded trajectory alone.
 use crate::error::{LabError, Result};
+use crate::metrics::ClosureDetector;
+use crate::rig::TapConfig;
 use serde::{Deserialize, Serialize};
-use tactrace_arm::{Arm, Pose};
+use tactrace_arm::{Arm, ArmError, Pose};
 use tactrace_control::{PbtsController, SensedPose};
+use tactrace_geometry::Vec2;
 use tactrace_learn::PoseModel;
 use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_vision::PinExtractor;
@@ -63,15 +66,13 @@ pub struct FollowConfig {
     pub steps: Option<usize>,
     /// Step cap when running until closure, so a lost run stays finite.
     pub max_steps: usize,
-    /// Closure: back within this distance of the start, mm...
+    /// Closure: a commanded move passes within this distance of the start, mm...
     pub close_radius_mm: f64,
     /// ...after having been at least this far from it, mm.
     pub min_excursion_mm: f64,
     /// Consecutive taps without contact before stopping safely.
     pub max_no_contact: usize,
-    /// Tap move, mm, and its random variation (report: 5 +- 1 mm).
-    pub tap_depth_mm: f64,
-    pub tap_jitter_mm: f64,
+    /// Seed of the tap-depth variation.
     pub seed: u64,
 }
 
@@ -80,11 +81,9 @@ impl Default for FollowConfig {
         Self {
             steps: None,
             max_steps: 1500,
-            close_radius_mm: 1.5,
+            close_radius_mm: 3.0,
             min_excursion_mm: 20.0,
             max_no_contact: 3,
-            tap_depth_mm: 5.0,
-            tap_jitter_mm: 1.0,
             seed: 1,
         }
     }
@@ -125,6 +124,9 @@ pub enum Ending {
     StepCap,
     /// Lost contact with the object and stopped.
     LostContact,
+    /// The arm's limiter refused the next move (workspace box or step size)
+    /// and the run stopped there.
+    Refused,
 }
 
 /// Summary of a run.
@@ -133,26 +135,41 @@ pub struct FollowSummary {
     pub steps: usize,
     pub ending: Ending,
     pub closed: bool,
+    /// Why the run ended, for people.
+    pub message: String,
+}
+
+impl FollowSummary {
+    fn new(steps: usize, ending: Ending, message: String) -> Self {
+        Self {
+            steps,
+            ending,
+            closed: ending == Ending::Closed,
+            message,
+        }
+    }
 }
 
 /// Follow the contour from the arm's current pose (above the object,
-/// roughly on an edge). Only the commanded pose and the frames are used.
+/// roughly on an edge), tapping as `tap` says. Only the commanded pose and
+/// the frames are used.
 pub fn follow(
     arm: &mut dyn Arm,
     sensor: &mut dyn TactileSensor,
     perception: &Perception,
     controller: &mut PbtsController,
     cfg: &FollowConfig,
+    tap: &TapConfig,
     sinks: &mut [&mut dyn StepSink],
 ) -> Result<FollowSummary> {
     use rand::{Rng, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(cfg.seed);
     let limit = cfg.steps.unwrap_or(cfg.max_steps);
-    let start = arm.pose();
-    let (mut excursion, mut no_contact) = (0.0_f64, 0usize);
+    let mut closure = ClosureDetector::new(cfg.close_radius_mm, cfg.min_excursion_mm);
+    let mut no_contact = 0usize;
     for step in 0..limit {
         let pose = arm.pose();
-        let depth = cfg.tap_depth_mm + rng.random_range(-1.0..=1.0) * cfg.tap_jitter_mm;
+        let depth = tap.depth_mm + rng.random_range(-1.0..=1.0) * tap.depth_jitter_mm;
         let frame = crate::rig::tap(arm, sensor, depth)?;
         let percept = perception.perceive(&frame)?;
         no_contact = if percept.contact { 0 } else { no_contact + 1 };
@@ -174,37 +191,36 @@ pub fn follow(
             sink.on_step(&rec)?;
         }
         if no_contact >= cfg.max_no_contact {
-            return Ok(FollowSummary {
-                steps: step + 1,
-                ending: Ending::LostContact,
-                closed: false,
-            });
+            let message = format!(
+                "lost the object: {no_contact} taps in a row without contact; stopped at step {step}"
+            );
+            return Ok(FollowSummary::new(step + 1, Ending::LostContact, message));
         }
-        let from_start = pose.distance(start);
-        excursion = excursion.max(from_start);
-        if cfg.steps.is_none()
-            && excursion >= cfg.min_excursion_mm
-            && from_start <= cfg.close_radius_mm
-        {
-            return Ok(FollowSummary {
-                steps: step + 1,
-                ending: Ending::Closed,
-                closed: true,
-            });
+        if closure.observe(Vec2::new(pose.x, pose.y)) && cfg.steps.is_none() {
+            let message = format!("the loop closed after {} steps", step + 1);
+            return Ok(FollowSummary::new(step + 1, Ending::Closed, message));
         }
         if step + 1 < limit {
-            arm.move_to(tactrace_control::next_pose(pose, delta))?;
+            match arm.move_to(tactrace_control::next_pose(pose, delta)) {
+                Ok(()) => {}
+                Err(
+                    e @ (ArmError::OutsideWorkspace { .. }
+                    | ArmError::StepTooLarge { .. }
+                    | ArmError::RotationTooLarge { .. }
+                    | ArmError::NonFinitePose { .. }),
+                ) => {
+                    let message = format!("stopped safely at step {step}: {e}");
+                    return Ok(FollowSummary::new(step + 1, Ending::Refused, message));
+                }
+                Err(e) => return Err(e.into()),
+            }
         }
     }
-    let ending = if cfg.steps.is_some() {
-        Ending::StepsDone
+    Ok(if cfg.steps.is_some() {
+        FollowSummary::new(limit, Ending::StepsDone, format!("ran the {limit} requested steps"))
     } else {
-        Ending::StepCap
-    };
-    Ok(FollowSummary {
-        steps: limit,
-        ending,
-        closed: false,
+        let message = format!("reached the step cap of {limit} without closing the loop");
+        FollowSummary::new(limit, Ending::StepCap, message)
     })
 }
 

@@ -1,0 +1,121 @@
+//! The documents `reproduce` writes: report.md, a self-contained
+//! report.html (figures embedded) and metrics.json, every measured number
+//! beside the report's.
+use crate::error::Result;
+use crate::fsutil;
+use crate::report::{slug, NetRow, ReproduceResults, REPORT_TABLE_4_1};
+use std::fmt::Write as _;
+use std::path::Path;
+
+fn opt(v: Option<f64>) -> String {
+    v.map(|x| format!("{x:.2}")).unwrap_or_else(|| "-".into())
+}
+
+fn networks_table(md: &mut String, rows: &[NetRow], reference: &str) {
+    let _ = writeln!(
+        md,
+        "| network | angle MAE (deg) | position MAE (mm) | {reference} angle (deg) | {reference} position (mm) | train time (s) |\n|---|---|---|---|---|---|"
+    );
+    for n in rows {
+        let rep = REPORT_TABLE_4_1.iter().find(|(name, _, _)| *name == n.name);
+        let (angle, position) = match reference {
+            "report" => (rep.and_then(|x| x.1), rep.and_then(|x| x.2)),
+            _ => (Some(1.45), Some(0.15)),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {:.2} | {:.3} | {} | {} | {:.1} |",
+            n.name,
+            n.angle_mae_deg,
+            n.position_mae_mm,
+            opt(angle),
+            opt(position),
+            n.train_seconds
+        );
+    }
+    md.push('\n');
+}
+
+/// The Markdown text of the report.
+pub fn report_markdown(r: &ReproduceResults) -> String {
+    let mut md = String::from(
+        "# tactrace reproduction of \"A Bio-Inspired System for Human-Like Contour Following\"\n\n",
+    );
+    let _ = writeln!(
+        md,
+        "tactrace {}, seed {}, {:.1} s in all. Simulated TacTip on a simulated arm (the report used a real UR5 and TacTip); the resolved configuration is in config.toml.\n",
+        r.tactrace_version, r.seed, r.seconds
+    );
+    md.push_str("## Fig. 4.1: frame, extracted pins, displacements\n\n");
+    md.push_str("![Fig. 4.1 simulated tap (r = 2 mm, theta = 10 deg, 3 mm deep)](figures/fig4_1_simulated.svg)\n\n");
+    if !r.real_networks.is_empty() {
+        md.push_str("![Fig. 4.1 real frame frame_0_0 of tactip127-edge2d](figures/fig4_1_real.svg)\n\n");
+    }
+    md.push_str("## Table 4.1: validation errors (simulated disk, train and validation from separate runs)\n\n");
+    networks_table(&mut md, &r.networks, "report");
+    for n in &r.networks {
+        let _ = writeln!(
+            md,
+            "![Fig. 4.4 {0}: predicted against true](figures/fig4_4_{1}.svg)\n",
+            n.name,
+            slug(&n.name)
+        );
+    }
+    md.push_str("![Fig. 4.5 PDenNN: loss and total energy per epoch](models/pdennn/loss_energy.svg)\n\n");
+    if !r.real_networks.is_empty() {
+        md.push_str("## Real TacTip frames (tactip127-edge2d, seeded 80/20 split; reference: CNN on the images)\n\n");
+        networks_table(&mut md, &r.real_networks, "CNN");
+    }
+    md.push_str("## Contour following with the PDenNN (Fig. 5.3, 5.4)\n\n| shape | mean L2 (mm) | report L2 (mm) | mean track error (mm) | p95 (mm) | max (mm) | coverage | closed | steps | ending |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    for s in &r.shapes {
+        let m = &s.metrics;
+        let _ = writeln!(
+            md,
+            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0}% | {} | {} | {:?} |",
+            s.shape,
+            m.mean_l2_mm,
+            s.report_l2_mm,
+            m.mean_track_error_mm,
+            m.p95_track_error_mm,
+            m.max_track_error_mm,
+            100.0 * m.coverage,
+            m.closed,
+            m.steps,
+            s.ending
+        );
+    }
+    md.push('\n');
+    for s in &r.shapes {
+        let _ = writeln!(
+            md,
+            "![Fig. 5.3 {0}: trajectory over the true contour](figures/fig5_3_{0}.svg) ![Fig. 5.4 {0}: L2 error along the contour](figures/fig5_4_{0}.svg)\n",
+            s.shape
+        );
+    }
+    md
+}
+
+/// A data URI for the image file `src` (relative to `dir`), if readable.
+fn data_uri(dir: &Path, src: &str) -> Option<String> {
+    let mime = match Path::new(src).extension()?.to_str()? {
+        "svg" => "image/svg+xml",
+        "png" => "image/png",
+        _ => return None,
+    };
+    let bytes = std::fs::read(dir.join(src)).ok()?;
+    Some(format!(
+        "data:{mime};base64,{}",
+        crate::plot::base64(&bytes)
+    ))
+}
+
+/// report.md, report.html (self-contained) and metrics.json in `out`.
+pub fn write_report(out: &Path, r: &ReproduceResults) -> Result<()> {
+    let md = report_markdown(r);
+    fsutil::write_atomic(&out.join("report.md"), md.as_bytes())?;
+    let embed = |src: &str| data_uri(out, src);
+    let html = crate::html::markdown_to_html(&md, &embed);
+    fsutil::write_atomic(&out.join("report.html"), html.as_bytes())?;
+    let json = serde_json::to_string_pretty(r).expect("results serialise");
+    fsutil::write_atomic(&out.join("metrics.json"), json.as_bytes())
+}

@@ -83,8 +83,9 @@ pub struct ReproduceArgs {
     /// Output directory for data, models, runs, figures and the report.
     #[arg(long, default_value = "runs/reproduce")]
     out: PathBuf,
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
+    /// Seed of every random choice (default 1, or the config's).
+    #[arg(long)]
+    seed: Option<u64>,
     /// Epochs for every network (default: the preset's).
     #[arg(long)]
     epochs: Option<usize>,
@@ -94,16 +95,26 @@ pub struct ReproduceArgs {
     /// Add results on real frames from this folder (Bristol layout).
     #[arg(long)]
     real: Option<PathBuf>,
+    /// Reproduce TOML overlaying the defaults (keys: seed, train_samples,
+    /// val_samples, epochs, preset, report_steps, real, and the follow
+    /// tables rig, controller, follow, start).
+    #[arg(long)]
+    config: Option<PathBuf>,
 }
 
 pub fn reproduce(a: ReproduceArgs) -> Result<()> {
-    let cfg = ReproduceConfig {
-        seed: a.seed,
-        epochs: a.epochs,
-        report_steps: a.report_steps,
-        real: a.real,
-        ..ReproduceConfig::default()
+    let mut cfg = match &a.config {
+        Some(path) => {
+            let text = fsutil::read_text(path)?;
+            let what = format!("{}: reproduce configuration", path.display());
+            settings::overlay(&ReproduceConfig::default(), &text, &what)?
+        }
+        None => ReproduceConfig::default(),
     };
+    cfg.seed = a.seed.unwrap_or(cfg.seed);
+    cfg.epochs = a.epochs.or(cfg.epochs);
+    cfg.report_steps |= a.report_steps;
+    cfg.real = a.real.or(cfg.real);
     let log = |msg: &str| eprintln!("[reproduce] {msg}");
     let r = run_reproduce(&cfg, &a.out, &log)?;
     for n in &r.networks {

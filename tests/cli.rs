@@ -118,3 +118,42 @@ fn real_reference_frame_gives_127_pins() {
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert_eq!(r.stdout.lines().count(), 128);
 }
+
+#[test]
+fn follow_rejects_unknown_config_keys_and_unreachable_contours() {
+    let t = TempDir::new("followbad");
+    let ok = |args: &[&str]| {
+        let r = tactrace(&t.0, args);
+        assert_eq!(r.code, 0, "{}", r.stderr);
+    };
+    ok(&["collect", "--samples", "40", "--seed", "3", "--out", "ds"]);
+    ok(&[
+        "train", "--model", "pdennn", "--train", "ds", "--epochs", "2", "--out", "m",
+    ]);
+    std::fs::write(t.join("bad.toml"), "[follow]\nbogus = 1\n").unwrap();
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow", "--model", "m", "--shape", "disk", "--config", "bad.toml", "--out", "r1",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("bogus") && r.stderr.contains("bad.toml"),
+        "{}",
+        r.stderr
+    );
+    std::fs::write(
+        t.join("far.csv"),
+        "1000,1000\n1100,1000\n1100,1100\n1000,1100\n",
+    )
+    .unwrap();
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow", "--model", "m", "--shape", "far.csv", "--out", "r2",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("cannot reach"), "{}", r.stderr);
+}

@@ -109,7 +109,7 @@ impl<F: FnMut(&StepRecord)> StepSink for FnSink<F> {
 /// The start pose for `cfg` on `shape`.
 pub fn start_pose(shape: &Contour, cfg: &StartConfig, height_mm: f64) -> Result<Pose> {
     if cfg.offset_mm.abs() > cfg.max_start_distance_mm {
-        return Err(LabError::Servo(format!(
+        return Err(LabError::Config(format!(
             "the start pose is {:.1} mm from the edge; the sensor cannot feel an edge further than {:.1} mm away",
             cfg.offset_mm.abs(),
             cfg.max_start_distance_mm
@@ -136,6 +136,13 @@ pub fn run_follow(
     check_follow_config(&cfg.follow)?;
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
+    cfg.rig.workspace.validate()?;
+    cfg.rig.workspace.check_inside(start).map_err(|e| {
+        LabError::Config(format!(
+            "the arm cannot reach the start on this contour ({:.1}, {:.1}) mm: {e}",
+            start.x, start.y
+        ))
+    })?;
     let mut rig = SimRig::new(&cfg.rig, shape.clone(), start, cfg.follow.seed)?;
     let extractor =
         PinExtractor::from_reference_frame(&rig.reference_frame(), cfg.rig.blob.clone())?;

@@ -168,7 +168,10 @@ mod tests {
         // within 3 mm of the start, but a segment passes 2 mm from it.
         let mut traj = circle(50.0, 80);
         traj.extend(circle(52.0, 80).into_iter().skip(1).take(10));
-        assert!(traj.iter().skip(1).all(|p| (p - traj[0]).norm() > 2.0 + 1e-9));
+        assert!(traj
+            .iter()
+            .skip(1)
+            .all(|p| (p - traj[0]).norm() > 2.0 + 1e-9));
         let mut detector = ClosureDetector::new(3.0, 20.0);
         let first = traj.iter().position(|p| detector.observe(*p));
         assert_eq!(first, Some(81));

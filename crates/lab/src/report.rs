@@ -14,8 +14,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
-use tactrace_vision::PinExtractor;
 use tactrace_learn::{ModelKind, Preset};
+use tactrace_vision::PinExtractor;
 
 /// The report's Table 4.1 errors (angle deg, position mm) and contour L2 (mm).
 pub const REPORT_TABLE_4_1: [(&str, Option<f64>, Option<f64>); 3] = [

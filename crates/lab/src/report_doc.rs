@@ -49,7 +49,9 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
     md.push_str("## Fig. 4.1: frame, extracted pins, displacements\n\n");
     md.push_str("![Fig. 4.1 simulated tap (r = 2 mm, theta = 10 deg, 3 mm deep)](figures/fig4_1_simulated.svg)\n\n");
     if !r.real_networks.is_empty() {
-        md.push_str("![Fig. 4.1 real frame frame_0_0 of tactip127-edge2d](figures/fig4_1_real.svg)\n\n");
+        md.push_str(
+            "![Fig. 4.1 real frame frame_0_0 of tactip127-edge2d](figures/fig4_1_real.svg)\n\n",
+        );
     }
     md.push_str("## Table 4.1: validation errors (simulated disk, train and validation from separate runs)\n\n");
     networks_table(&mut md, &r.networks, "report");
@@ -61,7 +63,9 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
             slug(&n.name)
         );
     }
-    md.push_str("![Fig. 4.5 PDenNN: loss and total energy per epoch](models/pdennn/loss_energy.svg)\n\n");
+    md.push_str(
+        "![Fig. 4.5 PDenNN: loss and total energy per epoch](models/pdennn/loss_energy.svg)\n\n",
+    );
     if !r.real_networks.is_empty() {
         md.push_str("## Real TacTip frames (tactip127-edge2d, seeded 80/20 split; reference: CNN on the images)\n\n");
         networks_table(&mut md, &r.real_networks, "CNN");

@@ -217,7 +217,11 @@ pub fn follow(
         }
     }
     Ok(if cfg.steps.is_some() {
-        FollowSummary::new(limit, Ending::StepsDone, format!("ran the {limit} requested steps"))
+        FollowSummary::new(
+            limit,
+            Ending::StepsDone,
+            format!("ran the {limit} requested steps"),
+        )
     } else {
         let message = format!("reached the step cap of {limit} without closing the loop");
         FollowSummary::new(limit, Ending::StepCap, message)

@@ -95,7 +95,7 @@ pub fn predicted_vs_true(stem: &Path, name: &str, v: &Validation) -> Result<Vec<
     .map_err(plot_err)
 }
 
-/// Fig. 5.3: the trajectory over the true contour.
+/// Fig. 5.3: the trajectory, with the true contour dashed on top of it.
 pub fn trajectory(
     stem: &Path,
     title: &str,
@@ -108,12 +108,12 @@ pub fn trajectory(
         stem,
         &a,
         &[
-            contour_series(contour),
             Series {
                 name: "trajectory".into(),
                 points: traj.to_vec(),
-                style: Style::LinePoints,
+                style: Style::Line,
             },
+            contour_series(contour),
         ],
     )
     .map_err(plot_err)

@@ -96,6 +96,16 @@ impl StepSink for TrajectoryCsv {
     }
 }
 
+/// metrics.json of a follow run: every metric at the top level (the keys
+/// scripts read: `mean_l2_mm`, `closed`, `steps`, ...) and how it ended.
+#[derive(Serialize)]
+struct MetricsDocument<'a> {
+    #[serde(flatten)]
+    metrics: &'a FollowMetrics,
+    ending: crate::servo::Ending,
+    message: &'a str,
+}
+
 /// A sink that calls a closure (progress bars).
 pub struct FnSink<F: FnMut(&StepRecord)>(pub F);
 
@@ -189,16 +199,13 @@ pub fn run_follow(
         cfg.follow.min_excursion_mm,
     );
     let curve = l2_curve(shape, &traj, 1000);
-    let json = serde_json::json!({ "metrics": metrics, "summary": summary });
-    let mut flat = serde_json::to_value(&metrics).expect("metrics serialise");
-    flat["ending"] = serde_json::to_value(summary.ending).expect("ending serialises");
-    flat["summary"] = json["summary"].clone();
-    crate::fsutil::write_atomic(
-        &out.join("metrics.json"),
-        serde_json::to_string_pretty(&flat)
-            .expect("json")
-            .as_bytes(),
-    )?;
+    let document = MetricsDocument {
+        metrics: &metrics,
+        ending: summary.ending,
+        message: &summary.message,
+    };
+    let json = serde_json::to_string_pretty(&document).expect("metrics serialise");
+    crate::fsutil::write_atomic(&out.join("metrics.json"), json.as_bytes())?;
     Ok(FollowOutcome {
         summary,
         metrics,

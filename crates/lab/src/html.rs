@@ -90,7 +90,7 @@ pub fn markdown_to_html(md: &str, embed: Embed) -> String {
     }
     format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>tactrace report</title>\n<style>{}</style></head>\n<body>\n{body}</body></html>\n",
-        "body{font-family:sans-serif;max-width:1250px;margin:2em auto;padding:0 1em}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:.3em .6em;text-align:right}th{background:#eee}figure{display:inline-block;margin:.5em}img{max-width:600px}figcaption{font-size:.85em;color:#555}"
+        "body{font-family:sans-serif;max-width:1250px;margin:2em auto;padding:0 1em}table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:.3em .6em;text-align:right}th{background:#eee}figure{display:inline-block;margin:.5em}img{max-width:100%}figure img{max-height:560px}figcaption{font-size:.85em;color:#555}"
     )
 }
 

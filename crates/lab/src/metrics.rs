@@ -164,18 +164,28 @@ mod tests {
 
     #[test]
     fn a_step_over_the_start_closes_the_loop() {
-        // Second lap 2 mm outside the first, 4 mm steps: no vertex comes
-        // within 3 mm of the start, but a segment passes 2 mm from it.
-        let mut traj = circle(50.0, 80);
-        traj.extend(circle(52.0, 80).into_iter().skip(1).take(10));
-        assert!(traj
-            .iter()
-            .skip(1)
-            .all(|p| (p - traj[0]).norm() > 2.0 + 1e-9));
-        let mut detector = ClosureDetector::new(3.0, 20.0);
-        let first = traj.iter().position(|p| detector.observe(*p));
-        assert_eq!(first, Some(81));
+        // Out along y = 0 and back along y = 2 with a 4 mm step across
+        // x = 0: no later vertex comes within 2.8 mm of the start, but the
+        // step's segment passes 2 mm from it.
+        let traj: Vec<Vec2> = [
+            (0.0, 0.0),
+            (10.0, 0.0),
+            (20.0, 0.0),
+            (30.0, 0.0),
+            (30.0, 2.0),
+            (20.0, 2.0),
+            (10.0, 2.0),
+            (2.0, 2.0),
+            (-2.0, 2.0),
+        ]
+        .iter()
+        .map(|&(x, y)| Vec2::new(x, y))
+        .collect();
+        let mut detector = ClosureDetector::new(2.5, 20.0);
+        assert_eq!(traj.iter().position(|p| detector.observe(*p)), Some(8));
         assert!(!trajectory_closes(&traj, 1.5, 20.0));
+        // Without the excursion the same path is not a loop.
+        assert!(!trajectory_closes(&traj, 2.5, 40.0));
     }
 
     #[test]

@@ -4,7 +4,7 @@ use std::time::{Duration, Instant};
 
 use tactrace_arm::{Arm, ArmError};
 use tactrace_geometry::Pose;
-use tactrace_hw::ur5::script::{pose_to_isometry, script_to_pose, work_to_base};
+use tactrace_hw::ur5::script::{script_to_pose, work_to_base};
 use tactrace_hw::{FakeBehaviour, FakeUrController, FakeUrOptions, HwError, Ur5Arm};
 
 fn fake(behaviour: FakeBehaviour) -> FakeUrController {
@@ -29,7 +29,7 @@ fn wait_for_line(server: &FakeUrController, text: &str) -> bool {
 }
 
 fn assert_pose_near(a: Pose, b: Pose, tol_mm: f64, tol_deg: f64) {
-    let (ia, ib) = (pose_to_isometry(a), pose_to_isometry(b));
+    let (ia, ib) = (a.to_isometry(), b.to_isometry());
     let dp = (ia.translation.vector - ib.translation.vector).norm();
     let dr = ia.rotation.angle_to(&ib.rotation).to_degrees();
     assert!(
@@ -46,7 +46,7 @@ fn connect_then_move_twice_and_read_back() {
     config.tcp = Pose::new(0.0, 0.0, 101.0, 0.0, 0.0, 0.0);
     let mut arm = Ur5Arm::connect(config.clone()).expect("connects");
     // Start pose of the fake: base (400, 0, 300) mm, flange down (rx = 180).
-    let start_base = pose_to_isometry(Pose::new(400.0, 0.0, 300.0, 180.0, 0.0, 0.0));
+    let start_base = Pose::new(400.0, 0.0, 300.0, 180.0, 0.0, 0.0).to_isometry();
     let expected_start = tactrace_hw::ur5::script::base_to_work(config.work_frame, &start_base);
     assert_pose_near(arm.pose(), expected_start, 1e-6, 1e-6);
 
@@ -68,7 +68,7 @@ fn connect_then_move_twice_and_read_back() {
     let movel: Vec<&String> = lines.iter().filter(|l| l.contains("movel(")).collect();
     assert_eq!(movel.len(), 3, "{lines:?}");
     let literal = &movel[0][movel[0].find("p[").unwrap()..=movel[0].find(']').unwrap()];
-    let sent = pose_to_isometry(script_to_pose(literal).unwrap());
+    let sent = script_to_pose(literal).unwrap().to_isometry();
     let want = work_to_base(config.work_frame, first);
     assert!((sent.translation.vector - want.translation.vector).norm() < 1e-3);
     assert!(movel[0].contains("a=0.1000, v=0.0100"), "{}", movel[0]);

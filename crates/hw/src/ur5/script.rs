@@ -13,40 +13,15 @@ use tactrace_geometry::Pose;
 
 use crate::HwError;
 
-/// A pose as a rigid transform: translation in mm, rotation from the
-/// extrinsic x-y-z Euler angles (deg) of `pose`.
-pub fn pose_to_isometry(pose: Pose) -> Isometry3<f64> {
-    let rotation = UnitQuaternion::from_euler_angles(
-        pose.rx.to_radians(),
-        pose.ry.to_radians(),
-        pose.rz.to_radians(),
-    );
-    Isometry3::from_parts(Translation3::new(pose.x, pose.y, pose.z), rotation)
-}
-
-/// Inverse of [`pose_to_isometry`]: mm and extrinsic x-y-z Euler degrees.
-pub fn isometry_to_pose(iso: &Isometry3<f64>) -> Pose {
-    let (rx, ry, rz) = iso.rotation.euler_angles();
-    let t = iso.translation.vector;
-    Pose::new(
-        t.x,
-        t.y,
-        t.z,
-        rx.to_degrees(),
-        ry.to_degrees(),
-        rz.to_degrees(),
-    )
-}
-
 /// A pose as the UR "tool vector" [x, y, z (m), rx, ry, rz (rotation
 /// vector, rad)]: mm -> m, Euler degrees -> `UnitQuaternion::scaled_axis`.
 pub fn pose_to_tool_vector(pose: Pose) -> [f64; 6] {
-    isometry_to_tool_vector(&pose_to_isometry(pose))
+    isometry_to_tool_vector(&pose.to_isometry())
 }
 
 /// Inverse of [`pose_to_tool_vector`].
 pub fn tool_vector_to_pose(v: [f64; 6]) -> Pose {
-    isometry_to_pose(&tool_vector_to_isometry(v))
+    Pose::from_isometry(&tool_vector_to_isometry(v))
 }
 
 /// A rigid transform (mm) as a UR tool vector (m, rotation vector rad).
@@ -65,12 +40,12 @@ pub fn tool_vector_to_isometry(v: [f64; 6]) -> Isometry3<f64> {
 
 /// The base-frame transform of a work-frame pose: `work_frame * pose`.
 pub fn work_to_base(work_frame: Pose, pose: Pose) -> Isometry3<f64> {
-    pose_to_isometry(work_frame) * pose_to_isometry(pose)
+    work_frame.to_isometry() * pose.to_isometry()
 }
 
 /// The work-frame pose of a base-frame transform: `work_frame^-1 * base`.
 pub fn base_to_work(work_frame: Pose, base: &Isometry3<f64>) -> Pose {
-    isometry_to_pose(&(pose_to_isometry(work_frame).inverse() * base))
+    Pose::from_isometry(&(work_frame.to_isometry().inverse() * base))
 }
 
 /// Fails on the first NaN or infinite component of `pose`.
@@ -208,7 +183,7 @@ mod tests {
     fn euler_order_is_extrinsic_xyz() {
         // rx = 90 then rz = 90 about fixed axes maps the x axis to y
         // and the y axis to z.
-        let iso = pose_to_isometry(Pose::new(0.0, 0.0, 0.0, 90.0, 0.0, 90.0));
+        let iso = Pose::new(0.0, 0.0, 0.0, 90.0, 0.0, 90.0).to_isometry();
         let ex = iso.rotation * Vector3::x();
         let ey = iso.rotation * Vector3::y();
         assert!((ex - Vector3::y()).norm() < 1e-12, "{ex}");
@@ -232,8 +207,8 @@ mod tests {
             text.starts_with("p[-0.288000, 0.010500, -0.100000,"),
             "{text}"
         );
-        let back = pose_to_isometry(script_to_pose(&text).unwrap());
-        let (dp, dr) = pose_error(&pose_to_isometry(pose), &back);
+        let back = script_to_pose(&text).unwrap().to_isometry();
+        let (dp, dr) = pose_error(&pose.to_isometry(), &back);
         assert!(dp < 1e-3 && dr < 1e-4, "{dp} mm {dr} deg");
     }
 

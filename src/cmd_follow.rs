@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use tactrace_geometry::ShapeSpec;
 use tactrace_lab::follow::{run_follow, FollowRunConfig};
 use tactrace_lab::report::{reproduce as run_reproduce, ReproduceConfig};
-use tactrace_lab::{figures, fsutil, model_io, settings, shape_io};
+use tactrace_lab::{figures, fsutil, model_io, settings, shape_io, LabError};
 
 #[derive(Args)]
 pub struct FollowArgs {
@@ -141,6 +141,10 @@ pub struct BenchArgs {
     /// A model directory: also time the control loop (frame -> command).
     #[arg(long)]
     model: Option<PathBuf>,
+    /// A folder of real frames (Bristol layout, with init_0.png): also time
+    /// the control loop on them (needs --model).
+    #[arg(long)]
+    real_frames: Option<PathBuf>,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -162,6 +166,11 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         if let Some(l) = f.control_latency_us {
             println!("control loop, frame -> command: {l:.1} us");
         }
+    }
+    if let (Some(dir), Some(m)) = (&a.real_frames, &model) {
+        let blob = tactrace_vision::BlobParams::preset("real256").map_err(LabError::from)?;
+        let us = tactrace_lab::bench::real_control_latency(dir, &blob, m, a.taps)?;
+        println!("control loop on real frames, frame -> command: {us:.1} us");
     }
     Ok(())
 }

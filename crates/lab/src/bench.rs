@@ -85,3 +85,39 @@ pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<
         control_latency_us,
     })
 }
+
+/// Frame -> command latency on real frames: the `.png` frames of `frames`
+/// (Bristol layout, reference `init_0.png`), up to `limit` of them, through
+/// the `blob` preset's detection, ordering, `model` and the controller.
+/// Microseconds per frame; frames are read before the clock starts.
+pub fn real_control_latency(
+    frames: &std::path::Path,
+    blob: &tactrace_vision::BlobParams,
+    model: &PoseModel,
+    limit: usize,
+) -> Result<f64> {
+    let reference = tactrace_sensor::read_frame(&frames.join("init_0.png"))?;
+    let extractor = PinExtractor::from_reference_frame(&reference, blob.clone())?;
+    let mut paths: Vec<_> = std::fs::read_dir(frames)
+        .map_err(crate::error::io_err(frames))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "png") && !p.ends_with("init_0.png"))
+        .collect();
+    paths.sort();
+    paths.truncate(limit.max(1));
+    let images = paths
+        .iter()
+        .map(|p| tactrace_sensor::read_frame(p))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let mut ctl = PbtsController::new(PbtsConfig::default());
+    let t0 = Instant::now();
+    for f in &images {
+        let tracked = extractor.extract(f)?;
+        let [r, theta] = model.predict(&tracked.displacement(extractor.tracker.reference()))?;
+        std::hint::black_box(ctl.step(SensedPose {
+            r_mm: r,
+            theta_deg: theta,
+        }));
+    }
+    Ok(t0.elapsed().as_secs_f64() * 1e6 / images.len().max(1) as f64)
+}

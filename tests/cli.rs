@@ -157,3 +157,40 @@ fn follow_rejects_unknown_config_keys_and_unreachable_contours() {
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("cannot reach"), "{}", r.stderr);
 }
+
+#[test]
+fn reproduce_writes_the_report_with_every_table_and_figure() {
+    let t = TempDir::new("reproduce");
+    // A miniature run: few taps, few epochs, short follow runs.
+    let config =
+        "train_samples = 60\nval_samples = 30\nepochs = 3\n[follow.follow]\nmax_steps = 40\n";
+    std::fs::write(t.join("small.toml"), config).unwrap();
+    let r = tactrace(
+        &t.0,
+        &[
+            "reproduce",
+            "--config",
+            "small.toml",
+            "--seed",
+            "4",
+            "--out",
+            "rep",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let rep = t.join("rep");
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(rep.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(metrics["networks"].as_array().unwrap().len(), 4);
+    assert_eq!(metrics["shapes"].as_array().unwrap().len(), 4);
+    assert_eq!(metrics["seed"], 4);
+    let html = std::fs::read_to_string(rep.join("report.html")).unwrap();
+    for fig in ["Fig. 4.1", "Fig. 4.4", "Fig. 4.5", "Fig. 5.3", "Fig. 5.4"] {
+        assert!(html.contains(fig), "report.html lacks {fig}");
+    }
+    // Self-contained: every figure is embedded, none is a broken link.
+    assert!(!html.contains("src=\"figures/") && !html.contains("src=\"models/"));
+    assert!(html.matches("data:image/svg+xml;base64,").count() >= 14);
+    let config = std::fs::read_to_string(rep.join("config.toml")).unwrap();
+    assert!(config.contains("seed = 4") && config.contains("train_samples = 60"));
+}

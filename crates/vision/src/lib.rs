@@ -6,6 +6,7 @@
 
 mod assign;
 mod blob;
+mod components;
 mod contour;
 mod error;
 mod extractor;

@@ -69,16 +69,23 @@ impl Moments {
 }
 
 /// Length of the closed polyline through `points` (OpenCV `arcLength(.., true)`).
+/// Steps between 8-neighbours (all steps of a traced border) take their
+/// length from a table holding exactly what `hypot` gives; the sum runs in
+/// the same order, so the result is the same as summing `hypot` per step.
 pub fn perimeter(points: &[[i32; 2]]) -> f64 {
     let Some(&last) = points.last() else {
         return 0.0;
     };
+    let steps = [0.0, 1.0, 1.0f64.hypot(1.0)];
     let mut prev = last;
     let mut total = 0.0;
     for &p in points {
-        let dx = f64::from(p[0] - prev[0]);
-        let dy = f64::from(p[1] - prev[1]);
-        total += dx.hypot(dy);
+        let (dx, dy) = (p[0] - prev[0], p[1] - prev[1]);
+        total += if dx.abs() <= 1 && dy.abs() <= 1 {
+            steps[(dx * dx + dy * dy) as usize]
+        } else {
+            f64::from(dx).hypot(f64::from(dy))
+        };
         prev = p;
     }
     total
@@ -89,41 +96,72 @@ pub fn circularity(area: f64, perimeter: f64) -> f64 {
     4.0 * std::f64::consts::PI * area / (perimeter * perimeter)
 }
 
-/// Area of the convex hull of `points` (Andrew's monotone chain).
-pub fn hull_area(points: &[[i32; 2]]) -> f64 {
-    let mut sorted: Vec<[i64; 2]> = points
-        .iter()
-        .map(|&[x, y]| [i64::from(x), i64::from(y)])
-        .collect();
-    sorted.sort_unstable();
-    sorted.dedup();
-    if sorted.len() < 3 {
-        return 0.0;
-    }
-    let lower = half_hull(sorted.iter());
-    let upper = half_hull(sorted.iter().rev());
-    let hull = lower[..lower.len() - 1]
-        .iter()
-        .chain(&upper[..upper.len() - 1]);
-    let ring: Vec<[i64; 2]> = hull.copied().collect();
-    let mut twice_area = 0i64;
-    for (i, p) in ring.iter().enumerate() {
-        let q = ring[(i + 1) % ring.len()];
-        twice_area += p[0] * q[1] - q[0] * p[1];
-    }
-    twice_area.abs() as f64 / 2.0
+/// Reusable buffers for [`hull_area_with`].
+#[derive(Default)]
+pub struct HullScratch {
+    rows: Vec<[i32; 2]>,
+    sorted: Vec<[i64; 2]>,
+    chain: Vec<[i64; 2]>,
 }
 
-/// One monotone half of the hull, keeping only strict left turns.
-fn half_hull<'a>(points: impl Iterator<Item = &'a [i64; 2]>) -> Vec<[i64; 2]> {
-    let mut chain: Vec<[i64; 2]> = Vec::new();
-    for &p in points {
-        while chain.len() >= 2 && turn(chain[chain.len() - 2], chain[chain.len() - 1], p) <= 0 {
-            chain.pop();
-        }
-        chain.push(p);
+/// Area of the convex hull of `points` (Andrew's monotone chain).
+#[cfg(test)]
+pub fn hull_area(points: &[[i32; 2]]) -> f64 {
+    hull_area_with(points, &mut HullScratch::default())
+}
+
+/// [`hull_area`] with caller-owned buffers. Only the leftmost and rightmost
+/// point of each row can be hull vertices (the others lie on the segment
+/// between them), so the chain runs over those, already sorted by (y, x):
+/// no sort, and the same hull (integer area) as over all points.
+pub fn hull_area_with(points: &[[i32; 2]], s: &mut HullScratch) -> f64 {
+    let Some(y0) = points.iter().map(|p| p[1]).min() else {
+        return 0.0;
+    };
+    let y1 = points.iter().map(|p| p[1]).max().unwrap_or(y0);
+    s.rows.clear();
+    s.rows.resize((y1 - y0) as usize + 1, [i32::MAX, i32::MIN]);
+    for &[x, y] in points {
+        let r = &mut s.rows[(y - y0) as usize];
+        *r = [r[0].min(x), r[1].max(x)];
     }
-    chain
+    s.sorted.clear();
+    for (dy, &[lo, hi]) in s.rows.iter().enumerate() {
+        if lo > hi {
+            continue;
+        }
+        let y = i64::from(y0) + dy as i64;
+        s.sorted.push([y, i64::from(lo)]);
+        if hi > lo {
+            s.sorted.push([y, i64::from(hi)]);
+        }
+    }
+    if s.sorted.len() < 3 {
+        return 0.0;
+    }
+    // Points are (y, x): a mirror image of the set, with the same hull area.
+    let mut twice_area = 0i64;
+    for upper in [false, true] {
+        s.chain.clear();
+        let mut push = |p: [i64; 2]| {
+            while s.chain.len() >= 2
+                && turn(s.chain[s.chain.len() - 2], s.chain[s.chain.len() - 1], p) <= 0
+            {
+                s.chain.pop();
+            }
+            s.chain.push(p);
+        };
+        if upper {
+            s.sorted.iter().rev().for_each(|&p| push(p));
+        } else {
+            s.sorted.iter().for_each(|&p| push(p));
+        }
+        // Shoelace over this half's edges; the two halves close the ring.
+        for w in s.chain.windows(2) {
+            twice_area += w[0][0] * w[1][1] - w[1][0] * w[0][1];
+        }
+    }
+    twice_area.abs() as f64 / 2.0
 }
 
 fn turn(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
@@ -131,7 +169,8 @@ fn turn(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
 }
 
 /// Median distance from `centre` to the contour points (mean of the two
-/// middle values for an even count): OpenCV's blob radius.
+/// middle values for an even count): OpenCV's blob radius. Found by
+/// selection rather than a full sort (same values).
 pub fn median_radius(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f64>) -> f64 {
     scratch.clear();
     scratch.extend(
@@ -139,12 +178,23 @@ pub fn median_radius(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f6
             .iter()
             .map(|&[x, y]| (f64::from(x) - centre[0]).hypot(f64::from(y) - centre[1])),
     );
-    if scratch.is_empty() {
+    let n = scratch.len();
+    if n == 0 {
         return 0.0;
     }
-    scratch.sort_unstable_by(f64::total_cmp);
-    let n = scratch.len();
-    (scratch[(n - 1) / 2] + scratch[n / 2]) / 2.0
+    let (below, &mut upper, _) = scratch.select_nth_unstable_by(n / 2, f64::total_cmp);
+    let lower = if n & 1 == 0 {
+        below.iter().copied().fold(f64::NEG_INFINITY, |a, b| {
+            if b.total_cmp(&a).is_gt() {
+                b
+            } else {
+                a
+            }
+        })
+    } else {
+        upper
+    };
+    (lower + upper) / 2.0
 }
 
 #[cfg(test)]
@@ -199,5 +249,84 @@ mod tests {
         assert_eq!(Moments::of_polygon(&[[3, 3]]), Moments::default());
         assert_eq!(Moments::of_polygon(&[]), Moments::default());
         assert_eq!(hull_area(&[[0, 0], [1, 1], [2, 2]]), 0.0);
+    }
+
+    /// Hull area by sorting every point (the textbook monotone chain).
+    fn hull_area_sorted(points: &[[i32; 2]]) -> f64 {
+        let mut pts: Vec<[i64; 2]> = points
+            .iter()
+            .map(|p| [i64::from(p[0]), i64::from(p[1])])
+            .collect();
+        pts.sort_unstable();
+        pts.dedup();
+        if pts.len() < 3 {
+            return 0.0;
+        }
+        let chain = |it: &mut dyn Iterator<Item = [i64; 2]>| {
+            let mut c: Vec<[i64; 2]> = Vec::new();
+            for p in it {
+                while c.len() >= 2 && turn(c[c.len() - 2], c[c.len() - 1], p) <= 0 {
+                    c.pop();
+                }
+                c.push(p);
+            }
+            c
+        };
+        let lower = chain(&mut pts.iter().copied());
+        let upper = chain(&mut pts.iter().rev().copied());
+        let ring: Vec<[i64; 2]> = lower[..lower.len() - 1]
+            .iter()
+            .chain(&upper[..upper.len() - 1])
+            .copied()
+            .collect();
+        let twice: i64 = (0..ring.len())
+            .map(|i| {
+                let (p, q) = (ring[i], ring[(i + 1) % ring.len()]);
+                p[0] * q[1] - q[0] * p[1]
+            })
+            .sum();
+        twice.abs() as f64 / 2.0
+    }
+
+    #[test]
+    fn row_extreme_hull_equals_full_sort_hull() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..500 {
+            let n = rng.random_range(0..30);
+            let span = rng.random_range(1..12);
+            let pts: Vec<[i32; 2]> = (0..n)
+                .map(|_| [rng.random_range(-span..span), rng.random_range(-span..span)])
+                .collect();
+            assert_eq!(hull_area(&pts), hull_area_sorted(&pts), "{pts:?}");
+        }
+    }
+
+    #[test]
+    fn median_radius_matches_sorting() {
+        let pts = [[0, 0], [3, 0], [0, 4], [5, 5], [1, 1], [2, 7]];
+        let mut scratch = Vec::new();
+        for n in 1..=pts.len() {
+            let c = [0.7, 1.3];
+            let mut d: Vec<f64> = pts[..n]
+                .iter()
+                .map(|p| (f64::from(p[0]) - c[0]).hypot(f64::from(p[1]) - c[1]))
+                .collect();
+            d.sort_by(f64::total_cmp);
+            let want = (d[(n - 1) / 2] + d[n / 2]) / 2.0;
+            assert_eq!(median_radius(&pts[..n], c, &mut scratch), want);
+        }
+    }
+
+    #[test]
+    fn perimeter_table_matches_hypot() {
+        let ring = [[0, 0], [1, 1], [2, 1], [2, 2], [5, 2], [4, 1]];
+        let mut want = 0.0;
+        let mut prev = ring[ring.len() - 1];
+        for p in ring {
+            want += f64::from(p[0] - prev[0]).hypot(f64::from(p[1] - prev[1]));
+            prev = p;
+        }
+        assert_eq!(perimeter(&ring), want);
     }
 }

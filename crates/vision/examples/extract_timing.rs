@@ -6,7 +6,7 @@
 //!
 //! Prints mean microseconds per frame (thread CPU time, and wall time) for blob detection, ordering (tracker)
 //! and the whole `PinExtractor::extract` (detect + order + cluster split when
-//! pins are missing). `--dump` writes every keypoint and ordered pin with
+//! pins are missing); `--only` times one of them. `--dump` writes every keypoint and ordered pin with
 //! full precision, to check that a change leaves the results bit-identical.
 
 use std::fmt::Write as _;
@@ -19,12 +19,13 @@ struct Args {
     reference: Frame,
     reps: usize,
     dump: Option<String>,
+    only: Option<String>,
     frames: Vec<(String, Frame)>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage =
-        "usage: extract_timing <preset|file.toml> <reference.png> [--reps N] [--dump F] <png>...";
+        "usage: extract_timing <preset|file.toml> <reference.png> [--reps N] [--dump F] [--only detect|order|extract] <png>...";
     let mut args = std::env::args().skip(1);
     let which = args.next().ok_or(usage)?;
     let params = if which.ends_with(".toml") {
@@ -33,11 +34,12 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         BlobParams::preset(&which)?
     };
     let reference = image::open(args.next().ok_or(usage)?)?.to_luma8();
-    let (mut reps, mut dump, mut frames) = (3, None, Vec::new());
+    let (mut reps, mut dump, mut only, mut frames) = (3, None, None, Vec::new());
     while let Some(a) = args.next() {
         match a.as_str() {
             "--reps" => reps = args.next().ok_or(usage)?.parse()?,
             "--dump" => dump = Some(args.next().ok_or(usage)?),
+            "--only" => only = Some(args.next().ok_or(usage)?),
             _ => {
                 let frame = image::open(&a)?.to_luma8();
                 frames.push((a, frame));
@@ -52,6 +54,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         reference,
         reps: reps.max(1),
         dump,
+        only,
         frames,
     })
 }
@@ -90,14 +93,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .map(|(_, f)| detect_blobs(f, &a.params))
         .collect();
-    let detect_us = time_per_frame(&a.frames, a.reps, |i| {
+    let runs = |stage: &str| !matches!(a.only.as_deref(), Some(o) if o != stage);
+    let reps = |stage: &str| if runs(stage) { a.reps } else { 0 };
+    let detect_us = time_per_frame(&a.frames, reps("detect"), |i| {
         std::hint::black_box(detect_blobs(&a.frames[i].1, &a.params));
     });
-    let order_us = time_per_frame(&a.frames, a.reps, |i| {
+    let order_us = time_per_frame(&a.frames, reps("order"), |i| {
         std::hint::black_box(extractor.tracker.order(&keypoints[i]));
     });
     let mut failed = 0;
-    let extract_us = time_per_frame(&a.frames, a.reps, |i| {
+    let extract_us = time_per_frame(&a.frames, reps("extract"), |i| {
         failed += usize::from(extractor.extract(&a.frames[i].1).is_err());
     });
     println!(
@@ -113,7 +118,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "extract: {:.1} ({:.1}) detect + order + split; {} failures",
         extract_us.0,
         extract_us.1,
-        failed / a.reps
+        failed / a.reps.max(1)
     );
     if let Some(path) = a.dump {
         let mut out = String::new();

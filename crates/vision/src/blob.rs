@@ -8,8 +8,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::components::label_components;
 use crate::contour::ContourScanner;
+use crate::grouping::{Centre, Grouper};
 use crate::params::BlobParams;
-use crate::shape::{circularity, hull_area_with, median_radius, perimeter, HullScratch, Moments};
+use crate::shape::{
+    circularity, hull_area_upper_bound, hull_area_with, median_radius, perimeter, HullScratch,
+    Moments,
+};
 
 /// An 8-bit grey camera frame.
 pub type Frame = image::GrayImage;
@@ -21,54 +25,6 @@ pub struct KeyPoint {
     pub x: f64,
     pub y: f64,
     pub size: f64,
-}
-
-/// A blob found at one threshold.
-#[derive(Clone, Copy, Debug)]
-struct Centre {
-    x: f64,
-    y: f64,
-    radius: f64,
-    confidence: f64,
-}
-
-/// Centres found at successive thresholds for the same blob, kept sorted by
-/// radius; the middle one stands for the group.
-struct Group {
-    members: Vec<Centre>,
-}
-
-impl Group {
-    fn representative(&self) -> &Centre {
-        &self.members[self.members.len() / 2]
-    }
-
-    fn insert(&mut self, centre: Centre) {
-        let at = self.members.partition_point(|m| m.radius <= centre.radius);
-        self.members.insert(at, centre);
-    }
-
-    fn keypoint(&self) -> KeyPoint {
-        let weight: f64 = self.members.iter().map(|m| m.confidence).sum();
-        let (sx, sy) = self.members.iter().fold((0.0, 0.0), |(sx, sy), m| {
-            (sx + m.confidence * m.x, sy + m.confidence * m.y)
-        });
-        let (x, y) = if weight > 0.0 {
-            (sx / weight, sy / weight)
-        } else {
-            let n = self.members.len() as f64;
-            let (ux, uy) = self
-                .members
-                .iter()
-                .fold((0.0, 0.0), |(a, b), m| (a + m.x, b + m.y));
-            (ux / n, uy / n)
-        };
-        KeyPoint {
-            x,
-            y,
-            size: 2.0 * self.representative().radius,
-        }
-    }
 }
 
 /// Detects blobs as OpenCV's `SimpleBlobDetector::detect` does.
@@ -103,7 +59,7 @@ pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
     let mut scratch = Scratch::default();
     let mut keyed: Vec<(usize, Centre)> = Vec::new();
     let mut found: Vec<Centre> = Vec::new();
-    let mut groups: Vec<Group> = Vec::new();
+    let mut grouper = Grouper::default();
     for threshold in thresholds {
         let level = level_of(threshold);
         keyed.clear();
@@ -141,13 +97,9 @@ pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
         keyed.sort_unstable_by_key(|&(key, _)| std::cmp::Reverse(key));
         found.clear();
         found.extend(keyed.iter().map(|&(_, c)| c));
-        merge_into(&mut groups, &found, f64::from(p.min_dist_between_blobs));
+        grouper.add(&found, f64::from(p.min_dist_between_blobs));
     }
-    groups
-        .iter()
-        .filter(|g| g.members.len() >= p.min_repeatability)
-        .map(Group::keypoint)
-        .collect()
+    grouper.keypoints(p.min_repeatability)
 }
 
 /// A contour that passed every filter but colour: its raster key (of the
@@ -211,7 +163,7 @@ fn measure_shape(contour: &[[i32; 2]], p: &BlobParams, scratch: &mut Scratch) ->
         }
         confidence = ratio * ratio;
     }
-    if p.filter_by_convexity {
+    if p.filter_by_convexity && !surely_convex_enough(contour, area, p) {
         let hull = hull_area_with(contour, &mut scratch.hull);
         if hull.abs() < f64::EPSILON || !within(area / hull, p.min_convexity, p.max_convexity) {
             return None;
@@ -230,6 +182,17 @@ fn measure_shape(contour: &[[i32; 2]], p: &BlobParams, scratch: &mut Scratch) ->
     })
 }
 
+/// True when the convexity test `area / hull` in `[min, max)` passes
+/// whatever the exact hull: with U >= hull the octagon bound,
+/// `area / hull >= area / U >= min` (division rounds monotonically), and a
+/// non-degenerate lattice hull has area >= 1/2, so `area / hull <= 2 area`.
+/// (area > 0 rules out a degenerate hull: collinear points enclose nothing.)
+/// Saves the exact hull for most pins.
+fn surely_convex_enough(contour: &[[i32; 2]], area: f64, p: &BlobParams) -> bool {
+    let (min, max) = (f64::from(p.min_convexity), f64::from(p.max_convexity));
+    min > 0.0 && area > 0.0 && 2.0 * area < max && area / hull_area_upper_bound(contour) >= min
+}
+
 /// OpenCV's range test: NaN-tolerant `!(v < min || v >= max)`.
 fn within(value: f64, min: f32, max: f32) -> bool {
     !(value < f64::from(min) || value >= f64::from(max))
@@ -246,41 +209,6 @@ fn colour_at(scanner: &ContourScanner, x: f64, y: f64) -> u8 {
     } else {
         0
     }
-}
-
-/// Adds this threshold's centres to the groups (OpenCV's grouping rule: the
-/// first group whose representative is nearer than the minimum distance or
-/// either radius). New groups become visible only at the next threshold.
-fn merge_into(groups: &mut Vec<Group>, found: &[Centre], min_dist: f64) {
-    let existing = groups.len();
-    // Every representative is a stored centre, so this bounds their radii.
-    let max_radius = groups
-        .iter()
-        .map(|g| g.representative().radius)
-        .chain(found.iter().map(|c| c.radius))
-        .fold(0.0f64, f64::max);
-    for centre in found {
-        let reach = min_dist.max(max_radius).max(centre.radius);
-        let target =
-            (0..existing).find(|&j| joins(groups[j].representative(), centre, min_dist, reach));
-        match target {
-            Some(j) => groups[j].insert(*centre),
-            None => groups.push(Group {
-                members: vec![*centre],
-            }),
-        }
-    }
-}
-
-/// Whether `centre` belongs to the group represented by `rep`. `reach`
-/// bounds every distance that can qualify and only prunes the square root.
-fn joins(rep: &Centre, centre: &Centre, min_dist: f64, reach: f64) -> bool {
-    let (dx, dy) = (rep.x - centre.x, rep.y - centre.y);
-    if dx.abs() > reach || dy.abs() > reach {
-        return false;
-    }
-    let dist = dx.hypot(dy);
-    !(dist >= min_dist && dist >= rep.radius && dist >= centre.radius)
 }
 
 #[cfg(test)]

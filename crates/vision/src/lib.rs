@@ -11,6 +11,7 @@ mod contour;
 mod error;
 mod extractor;
 mod field;
+mod grouping;
 mod merged;
 mod params;
 mod shape;

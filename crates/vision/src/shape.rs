@@ -164,37 +164,89 @@ pub fn hull_area_with(points: &[[i32; 2]], s: &mut HullScratch) -> f64 {
     twice_area.abs() as f64 / 2.0
 }
 
+/// An upper bound on [`hull_area`] in O(n): the area of the octagon cut
+/// from the bounding box by the extreme values of x + y and x - y, which
+/// holds every point and so their hull. Infinite when the corner cuts
+/// overlap (the formula would not be the octagon's area then).
+pub fn hull_area_upper_bound(points: &[[i32; 2]]) -> f64 {
+    let Some(&[x, y]) = points.first() else {
+        return f64::INFINITY;
+    };
+    let [mut x0, mut x1, mut y0, mut y1] = [x, x, y, y].map(i64::from);
+    let [mut s0, mut s1, mut d0, mut d1] = [x + y, x + y, x - y, x - y].map(i64::from);
+    for &[x, y] in points {
+        let (x, y) = (i64::from(x), i64::from(y));
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        (s0, s1, d0, d1) = (s0.min(x + y), s1.max(x + y), d0.min(x - y), d1.max(x - y));
+    }
+    let (w, h) = (x1 - x0, y1 - y0);
+    // Legs of the corner triangles cut off: top-left, top-right,
+    // bottom-left, bottom-right (y down).
+    let (tl, tr) = (s0 - (x0 + y0), (x1 - y0) - d1);
+    let (bl, br) = (d0 - (x0 - y1), (x1 + y1) - s1);
+    if tl + tr > w || bl + br > w || tl + bl > h || tr + br > h {
+        return f64::INFINITY;
+    }
+    let twice = 2 * w * h - tl * tl - tr * tr - bl * bl - br * br;
+    twice as f64 / 2.0
+}
+
 fn turn(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
 /// Median distance from `centre` to the contour points (mean of the two
-/// middle values for an even count): OpenCV's blob radius. Found by
-/// selection rather than a full sort (same values).
+/// middle values for an even count): OpenCV's blob radius, as the values
+/// `hypot` gives. The middle ranks are selected on squared distances; only
+/// the points whose squared distance is within a relative 1e-9 of the
+/// middle ones (far above rounding error, so every other point is surely
+/// nearer or farther) get `hypot`, and the exact middle values are picked
+/// among those.
 pub fn median_radius(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f64>) -> f64 {
+    let n = points.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let offsets = |&[x, y]: &[i32; 2]| (f64::from(x) - centre[0], f64::from(y) - centre[1]);
+    scratch.clear();
+    scratch.extend(points.iter().map(offsets).map(|(dx, dy)| dx * dx + dy * dy));
+    let (lower_rank, upper_rank) = ((n - 1) / 2, n / 2);
+    let (below, &mut upper_d2, _) = scratch.select_nth_unstable_by(upper_rank, f64::total_cmp);
+    let lower_d2 = if lower_rank == upper_rank {
+        upper_d2
+    } else {
+        below.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+    };
+    if !(lower_d2.is_finite() && upper_d2.is_finite()) {
+        return exact_median(points, centre, scratch);
+    }
+    let (lo, hi) = (lower_d2 * (1.0 - 1e-9), upper_d2 * (1.0 + 1e-9));
+    let mut nearer = 0;
+    scratch.clear();
+    for p in points {
+        let (dx, dy) = offsets(p);
+        let d2 = dx * dx + dy * dy;
+        if d2 < lo {
+            nearer += 1;
+        } else if d2 <= hi {
+            scratch.push(dx.hypot(dy));
+        }
+    }
+    scratch.sort_unstable_by(f64::total_cmp);
+    (scratch[lower_rank - nearer] + scratch[upper_rank - nearer]) / 2.0
+}
+
+/// The median of all `hypot` distances by sorting (reference definition).
+fn exact_median(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f64>) -> f64 {
     scratch.clear();
     scratch.extend(
         points
             .iter()
             .map(|&[x, y]| (f64::from(x) - centre[0]).hypot(f64::from(y) - centre[1])),
     );
+    scratch.sort_unstable_by(f64::total_cmp);
     let n = scratch.len();
-    if n == 0 {
-        return 0.0;
-    }
-    let (below, &mut upper, _) = scratch.select_nth_unstable_by(n / 2, f64::total_cmp);
-    let lower = if n & 1 == 0 {
-        below.iter().copied().fold(f64::NEG_INFINITY, |a, b| {
-            if b.total_cmp(&a).is_gt() {
-                b
-            } else {
-                a
-            }
-        })
-    } else {
-        upper
-    };
-    (lower + upper) / 2.0
+    (scratch[(n - 1) / 2] + scratch[n / 2]) / 2.0
 }
 
 #[cfg(test)]
@@ -303,6 +355,20 @@ mod tests {
     }
 
     #[test]
+    fn octagon_bounds_the_hull_and_is_tight_for_a_square() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        for _ in 0..2000 {
+            let n = rng.random_range(1..30);
+            let pts: Vec<[i32; 2]> = (0..n)
+                .map(|_| [rng.random_range(-6..6), rng.random_range(-6..6)])
+                .collect();
+            assert!(hull_area_upper_bound(&pts) >= hull_area(&pts), "{pts:?}");
+        }
+        assert_eq!(hull_area_upper_bound(&SQUARE), 16.0);
+    }
+
+    #[test]
     fn median_radius_matches_sorting() {
         let pts = [[0, 0], [3, 0], [0, 4], [5, 5], [1, 1], [2, 7]];
         let mut scratch = Vec::new();
@@ -315,6 +381,33 @@ mod tests {
             d.sort_by(f64::total_cmp);
             let want = (d[(n - 1) / 2] + d[n / 2]) / 2.0;
             assert_eq!(median_radius(&pts[..n], c, &mut scratch), want);
+        }
+    }
+
+    #[test]
+    fn banded_median_radius_equals_full_sort_on_random_sets() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut a = Vec::new();
+        let mut b = Vec::new();
+        for _ in 0..2000 {
+            let n = rng.random_range(1..40);
+            let pts: Vec<[i32; 2]> = (0..n)
+                .map(|_| [rng.random_range(0..12), rng.random_range(0..12)])
+                .collect();
+            // Half the centres on the half-pixel grid: many exact ties.
+            let c = if rng.random_bool(0.5) {
+                [
+                    f64::from(rng.random_range(0..24)) / 2.0,
+                    f64::from(rng.random_range(0..24)) / 2.0,
+                ]
+            } else {
+                [rng.random_range(0.0..12.0), rng.random_range(0.0..12.0)]
+            };
+            assert_eq!(
+                median_radius(&pts, c, &mut a),
+                exact_median(&pts, c, &mut b)
+            );
         }
     }
 

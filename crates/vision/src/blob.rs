@@ -59,7 +59,7 @@ pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
     let mut scratch = Scratch::default();
     let mut keyed: Vec<(usize, Centre)> = Vec::new();
     let mut found: Vec<Centre> = Vec::new();
-    let mut grouper = Grouper::default();
+    let mut grouper = Grouper::new(width, height, thresholds.len());
     for threshold in thresholds {
         let level = level_of(threshold);
         keyed.clear();

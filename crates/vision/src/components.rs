@@ -151,6 +151,11 @@ fn white_runs(pixels: &[u8], width: usize, height: usize, level: i16) -> Vec<Run
     for (y, row) in pixels.chunks_exact(width).take(height).enumerate() {
         let mut x = 0;
         while x < width {
+            // Zero pixels are never white (level >= 0): skip them 8 at a time.
+            if level >= 0 && x + 8 <= width && row[x..x + 8] == [0; 8] {
+                x += 8;
+                continue;
+            }
             if i16::from(row[x]) <= level {
                 x += 1;
                 continue;

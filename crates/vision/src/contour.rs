@@ -129,7 +129,14 @@ impl ContourScanner {
         self.spans.clear();
         for y in 1..=self.height {
             let row = y * self.stride;
-            for i in row + 1..=row + self.width {
+            let end = row + self.width;
+            let mut i = row + 1;
+            while i <= end {
+                // Eight background pixels after a background one start nothing.
+                if i + 8 <= end + 1 && self.labels[i - 1] == 0 && self.zero_word(i) {
+                    i += 8;
+                    continue;
+                }
                 let here = self.labels[i];
                 let left = self.labels[i - 1];
                 if here == UNVISITED && left == 0 {
@@ -137,8 +144,15 @@ impl ContourScanner {
                 } else if here == 0 && left >= UNVISITED {
                     self.follow_border(i - 1, EAST, i);
                 }
+                i += 1;
             }
         }
+    }
+
+    /// Whether labels `i..i + 8` are all zero.
+    fn zero_word(&self, i: usize) -> bool {
+        let bytes: [i8; 8] = self.labels[i..i + 8].try_into().expect("eight labels");
+        u64::from_ne_bytes(bytes.map(|b| b as u8)) == 0
     }
 
     /// The traced contours, each a closed sequence of pixel coordinates, in

@@ -57,13 +57,32 @@ impl Group {
 }
 
 /// Groups built so far, plus the grid over their representatives.
-#[derive(Default)]
 pub struct Grouper {
     groups: Vec<Group>,
+    /// Most members a group can get (one per threshold).
+    capacity: usize,
     grid: RepGrid,
 }
 
 impl Grouper {
+    /// A grouper for centres of a `width` x `height` frame (centres outside
+    /// it are handled too, just without the grid's help) over `thresholds`
+    /// thresholds.
+    pub fn new(width: usize, height: usize, thresholds: usize) -> Self {
+        Self {
+            groups: Vec::new(),
+            capacity: thresholds,
+            grid: RepGrid {
+                size: [width as f64, height as f64],
+                cell: 0.0,
+                dims: [0, 0],
+                cells: Vec::new(),
+                cell_of: Vec::new(),
+                outside: Vec::new(),
+            },
+        }
+    }
+
     /// Adds one threshold's centres, in contour order. New groups become
     /// visible only at the next threshold.
     pub fn add(&mut self, found: &[Centre], min_dist: f64) {
@@ -78,25 +97,25 @@ impl Grouper {
             .chain(found.iter().map(|c| c.radius))
             .fold(0.0f64, f64::max);
         let reach = min_dist.max(max_radius);
-        self.grid.build(&self.groups, found, reach);
+        self.grid.index(&self.groups, reach);
         for centre in found {
-            let target = self
-                .grid
-                .candidates(centre)
-                .filter(|&j| joins(self.groups[j].representative(), centre, min_dist, reach))
-                .min();
+            let groups = &self.groups;
+            let target = self.grid.first_joining(centre, existing, |j| {
+                joins(groups[j].representative(), centre, min_dist, reach)
+            });
             match target {
                 Some(j) => {
                     self.groups[j].insert(*centre);
                     let rep = *self.groups[j].representative();
-                    self.grid.moved_to(j, &rep);
+                    self.grid.relocate(j, &rep);
                 }
-                None => self.groups.push(Group {
-                    members: vec![*centre],
-                }),
+                None => {
+                    let mut members = Vec::with_capacity(self.capacity);
+                    members.push(*centre);
+                    self.groups.push(Group { members });
+                }
             }
         }
-        debug_assert!(self.groups.len() >= existing);
     }
 
     /// Keypoints of the groups with at least `min_repeatability` members.
@@ -110,117 +129,125 @@ impl Grouper {
 }
 
 /// Most cells per axis (cells widen beyond the joining distance if needed).
-const MAX_CELLS: f64 = 24.0;
+const MAX_CELLS: f64 = 64.0;
 
-/// Representatives of the existing groups bucketed by cell (compressed rows).
-/// A representative that leaves its cell during a threshold (or its grid)
-/// is moved to a short list that every query checks.
-#[derive(Default)]
+/// Where group `j`'s representative is filed.
+#[derive(Clone, Copy, PartialEq)]
+enum Slot {
+    Cell(usize),
+    Outside,
+}
+
+/// Representatives bucketed by square cells over the frame, at least as
+/// wide as the joining reach, so every group that can join a centre is
+/// filed in the 3 x 3 cells around it (or in the short `outside` list).
+/// Kept across thresholds: new groups are filed at the next threshold,
+/// moved representatives are refiled, and the grid is rebuilt only when
+/// the reach outgrows the cells.
 struct RepGrid {
-    origin: [f64; 2],
+    size: [f64; 2],
     cell: f64,
     dims: [usize; 2],
-    cell_of: Vec<usize>,
-    starts: Vec<usize>,
-    entries: Vec<usize>,
-    moved: Vec<usize>,
-    is_moved: Vec<bool>,
-    scratch: Vec<usize>,
+    cells: Vec<Vec<usize>>,
+    cell_of: Vec<Slot>,
+    outside: Vec<usize>,
 }
 
 impl RepGrid {
-    fn build(&mut self, groups: &[Group], found: &[Centre], reach: f64) {
-        let points = groups.iter().map(Group::representative).chain(found);
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for c in points {
-            lo = [lo[0].min(c.x), lo[1].min(c.y)];
-            hi = [hi[0].max(c.x), hi[1].max(c.y)];
-        }
-        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(0.0);
-        self.origin = lo;
-        self.cell = reach.max(1.0).max(extent / MAX_CELLS);
-        self.dims = [0, 1].map(|a| {
-            let span = ((hi[a] - lo[a]) / self.cell).floor();
-            if span.is_finite() && span >= 0.0 {
-                span as usize + 1
-            } else {
-                1
-            }
-        });
-        let n_cells = self.dims[0] * self.dims[1];
-        self.cell_of.clear();
-        self.moved.clear();
-        self.is_moved.clear();
-        self.is_moved.resize(groups.len(), false);
-        self.starts.clear();
-        self.starts.resize(n_cells + 1, 0);
-        for (j, g) in groups.iter().enumerate() {
-            match self.cell_index(g.representative()) {
-                Some(k) => {
-                    self.cell_of.push(k);
-                    self.starts[k + 1] += 1;
+    /// Files every group not yet filed; rebuilds when `reach` exceeds the cells.
+    fn index(&mut self, groups: &[Group], reach: f64) {
+        if !(reach <= self.cell) {
+            self.cell = reach
+                .max(1.0)
+                .max(self.size[0].max(self.size[1]) / MAX_CELLS);
+            self.dims = [0, 1].map(|a| {
+                let n = (self.size[a] / self.cell).ceil();
+                if n.is_finite() && n >= 1.0 {
+                    n as usize
+                } else {
+                    1
                 }
-                None => {
-                    self.cell_of.push(usize::MAX);
-                    self.is_moved[j] = true;
-                    self.moved.push(j);
-                }
-            }
+            });
+            self.cells.clear();
+            self.cells.resize(self.dims[0] * self.dims[1], Vec::new());
+            self.cell_of.clear();
+            self.outside.clear();
         }
-        for k in 0..n_cells {
-            self.starts[k + 1] += self.starts[k];
+        for j in self.cell_of.len()..groups.len() {
+            let slot = self.slot(groups[j].representative());
+            self.file(j, slot);
+            self.cell_of.push(slot);
         }
-        self.entries.clear();
-        self.entries.resize(self.starts[n_cells], 0);
-        self.scratch.clear();
-        self.scratch.extend_from_slice(&self.starts[..n_cells]);
-        for (j, &k) in self.cell_of.iter().enumerate() {
-            if k != usize::MAX {
-                self.entries[self.scratch[k]] = j;
-                self.scratch[k] += 1;
-            }
+    }
+
+    fn file(&mut self, j: usize, slot: Slot) {
+        match slot {
+            Slot::Cell(k) => self.cells[k].push(j),
+            Slot::Outside => self.outside.push(j),
         }
     }
 
     fn cell_xy(&self, c: &Centre) -> Option<[usize; 2]> {
-        let fx = ((c.x - self.origin[0]) / self.cell).floor();
-        let fy = ((c.y - self.origin[1]) / self.cell).floor();
+        // Truncation is floor for the non-negative values kept.
+        let (fx, fy) = (c.x / self.cell, c.y / self.cell);
         let inside = |f: f64, n: usize| f >= 0.0 && f < n as f64;
         (inside(fx, self.dims[0]) && inside(fy, self.dims[1])).then_some([fx as usize, fy as usize])
     }
 
-    fn cell_index(&self, c: &Centre) -> Option<usize> {
-        self.cell_xy(c).map(|[x, y]| y * self.dims[0] + x)
+    fn slot(&self, c: &Centre) -> Slot {
+        match self.cell_xy(c) {
+            Some([x, y]) => Slot::Cell(y * self.dims[0] + x),
+            None => Slot::Outside,
+        }
     }
 
-    /// Existing groups whose representative may lie within the cell width
-    /// of `c` on both axes (a superset of those that can join).
-    fn candidates<'a>(&'a self, c: &Centre) -> impl Iterator<Item = usize> + 'a {
-        let near = self.cell_xy(c).map(|[x, y]| {
+    /// The smallest group index `j < existing` for which `joins(j)` holds,
+    /// among the groups filed around `c` (a superset of those whose
+    /// representative is within the cell width on both axes).
+    fn first_joining(
+        &self,
+        c: &Centre,
+        existing: usize,
+        mut joins: impl FnMut(usize) -> bool,
+    ) -> Option<usize> {
+        let mut best = existing;
+        let mut consider = |j: usize| {
+            if j < best && joins(j) {
+                best = j;
+            }
+        };
+        if let Some([x, y]) = self.cell_xy(c) {
             let xs = x.saturating_sub(1)..=(x + 1).min(self.dims[0] - 1);
-            let ys = y.saturating_sub(1)..=(y + 1).min(self.dims[1] - 1);
-            ys.flat_map(move |cy| {
-                let row = cy * self.dims[0];
-                let (a, b) = (
-                    self.starts[row + xs.start()],
-                    self.starts[row + xs.end() + 1],
-                );
-                self.entries[a..b].iter().copied()
-            })
-        });
-        near.into_iter()
-            .flatten()
-            .filter(|&j| !self.is_moved[j])
-            .chain(self.moved.iter().copied())
+            for cy in y.saturating_sub(1)..=(y + 1).min(self.dims[1] - 1) {
+                for cx in xs.clone() {
+                    for &j in &self.cells[cy * self.dims[0] + cx] {
+                        consider(j);
+                    }
+                }
+            }
+        }
+        for &j in &self.outside {
+            consider(j);
+        }
+        (best < existing).then_some(best)
     }
 
-    /// Records that group `j`'s representative is now `rep`.
-    fn moved_to(&mut self, j: usize, rep: &Centre) {
-        if self.is_moved[j] || self.cell_index(rep) == Some(self.cell_of[j]) {
+    /// Refiles group `j`, whose representative is now `rep`.
+    fn relocate(&mut self, j: usize, rep: &Centre) {
+        let slot = self.slot(rep);
+        let old = self.cell_of[j];
+        if slot == old {
             return;
         }
-        self.is_moved[j] = true;
-        self.moved.push(j);
+        let list = match old {
+            Slot::Cell(k) => &mut self.cells[k],
+            Slot::Outside => &mut self.outside,
+        };
+        if let Some(at) = list.iter().position(|&g| g == j) {
+            list.swap_remove(at);
+        }
+        self.file(j, slot);
+        self.cell_of[j] = slot;
     }
 }
 

@@ -156,7 +156,8 @@ struct RepGrid {
 impl RepGrid {
     /// Files every group not yet filed; rebuilds when `reach` exceeds the cells.
     fn index(&mut self, groups: &[Group], reach: f64) {
-        if !(reach <= self.cell) {
+        let fits = reach <= self.cell;
+        if !fits {
             self.cell = reach
                 .max(1.0)
                 .max(self.size[0].max(self.size[1]) / MAX_CELLS);
@@ -173,8 +174,8 @@ impl RepGrid {
             self.cell_of.clear();
             self.outside.clear();
         }
-        for j in self.cell_of.len()..groups.len() {
-            let slot = self.slot(groups[j].representative());
+        for (j, group) in groups.iter().enumerate().skip(self.cell_of.len()) {
+            let slot = self.slot(group.representative());
             self.file(j, slot);
             self.cell_of.push(slot);
         }

@@ -203,8 +203,9 @@ impl RepGrid {
     }
 
     /// The smallest group index `j < existing` for which `joins(j)` holds,
-    /// among the groups filed around `c` (a superset of those whose
-    /// representative is within the cell width on both axes).
+    /// among the groups filed in the cells that meet the square of half-side
+    /// 1.5 cell widths around `c` (a superset of those whose representative
+    /// is within the reach on both axes), wherever `c` lies.
     fn first_joining(
         &self,
         c: &Centre,
@@ -217,10 +218,11 @@ impl RepGrid {
                 best = j;
             }
         };
-        if let Some([x, y]) = self.cell_xy(c) {
-            let xs = x.saturating_sub(1)..=(x + 1).min(self.dims[0] - 1);
-            for cy in y.saturating_sub(1)..=(y + 1).min(self.dims[1] - 1) {
-                for cx in xs.clone() {
+        let xs = cell_range(c.x, self.cell, self.dims[0]);
+        let ys = cell_range(c.y, self.cell, self.dims[1]);
+        if let (Some((x0, x1)), Some((y0, y1))) = (xs, ys) {
+            for cy in y0..=y1 {
+                for cx in x0..=x1 {
                     for &j in &self.cells[cy * self.dims[0] + cx] {
                         consider(j);
                     }
@@ -252,6 +254,17 @@ impl RepGrid {
     }
 }
 
+/// Indices of the cells (of `n` along one axis) that meet
+/// `[v - 1.5 cell, v + 1.5 cell]`; `None` when none does.
+fn cell_range(v: f64, cell: f64, n: usize) -> Option<(usize, usize)> {
+    if n == 0 {
+        return None;
+    }
+    let lo = ((v - 1.5 * cell) / cell).floor().max(0.0);
+    let hi = ((v + 1.5 * cell) / cell).floor().min((n - 1) as f64);
+    (lo <= hi).then_some((lo as usize, hi as usize))
+}
+
 /// Whether `centre` belongs to the group represented by `rep`. `reach`
 /// bounds every distance that can qualify and only prunes the square root.
 fn joins(rep: &Centre, centre: &Centre, min_dist: f64, reach: f64) -> bool {
@@ -261,4 +274,66 @@ fn joins(rep: &Centre, centre: &Centre, min_dist: f64, reach: f64) -> bool {
     }
     let dist = dx.hypot(dy);
     !(dist >= min_dist && dist >= rep.radius && dist >= centre.radius)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The plain linear scan the grid replaces (OpenCV's loop).
+    fn linear(thresholds: &[Vec<Centre>], min_dist: f64) -> Vec<KeyPoint> {
+        let mut groups: Vec<Group> = Vec::new();
+        for found in thresholds {
+            let existing = groups.len();
+            for centre in found {
+                let target = (0..existing)
+                    .find(|&j| joins(groups[j].representative(), centre, min_dist, f64::INFINITY));
+                match target {
+                    Some(j) => groups[j].insert(*centre),
+                    None => groups.push(Group {
+                        members: vec![*centre],
+                    }),
+                }
+            }
+        }
+        groups
+            .iter()
+            .filter(|g| g.members.len() >= 2)
+            .map(Group::keypoint)
+            .collect()
+    }
+
+    #[test]
+    fn grid_search_matches_the_linear_scan() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..200 {
+            let size = rng.random_range(4.0..80.0);
+            let seeds: Vec<[f64; 2]> = (0..rng.random_range(1..40))
+                .map(|_| [rng.random_range(-3.0..size), rng.random_range(-3.0..size)])
+                .collect();
+            let mut thresholds: Vec<Vec<Centre>> = Vec::new();
+            for _ in 0..rng.random_range(1..8) {
+                let mut found = Vec::new();
+                for s in &seeds {
+                    if rng.random_bool(0.8) {
+                        found.push(Centre {
+                            x: s[0] + rng.random_range(-2.0..2.0),
+                            y: s[1] + rng.random_range(-2.0..2.0),
+                            radius: rng.random_range(0.0..6.0),
+                            confidence: rng.random_range(0.0..1.0),
+                        });
+                    }
+                }
+                thresholds.push(found);
+            }
+            let min_dist = rng.random_range(0.0..8.0);
+            let mut grouper = Grouper::new(size as usize, size as usize, thresholds.len());
+            for found in &thresholds {
+                grouper.add(found, min_dist);
+            }
+            assert_eq!(grouper.keypoints(2), linear(&thresholds, min_dist));
+        }
+    }
 }

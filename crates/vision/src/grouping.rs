@@ -204,7 +204,7 @@ impl RepGrid {
 
     /// The smallest group index `j < existing` for which `joins(j)` holds,
     /// among the groups filed in the cells that meet the square of half-side
-    /// 1.5 cell widths around `c` (a superset of those whose representative
+    /// 1.001 cell widths around `c` (a superset of those whose representative
     /// is within the reach on both axes), wherever `c` lies.
     fn first_joining(
         &self,
@@ -255,13 +255,14 @@ impl RepGrid {
 }
 
 /// Indices of the cells (of `n` along one axis) that meet
-/// `[v - 1.5 cell, v + 1.5 cell]`; `None` when none does.
+/// `[v - 1.001 cell, v + 1.001 cell]` (a margin against rounding at cell
+/// edges); `None` when none does.
 fn cell_range(v: f64, cell: f64, n: usize) -> Option<(usize, usize)> {
     if n == 0 {
         return None;
     }
-    let lo = ((v - 1.5 * cell) / cell).floor().max(0.0);
-    let hi = ((v + 1.5 * cell) / cell).floor().min((n - 1) as f64);
+    let lo = ((v - 1.001 * cell) / cell).floor().max(0.0);
+    let hi = ((v + 1.001 * cell) / cell).floor().min((n - 1) as f64);
     (lo <= hi).then_some((lo as usize, hi as usize))
 }
 

@@ -30,35 +30,71 @@ const FREE: usize = usize::MAX;
 /// `unassigned_cost` or a column `>= n_cols` are ignored. O(rows x
 /// explored edges x log) — near linear when candidates are local.
 pub fn assign(n_cols: usize, rows: &[Vec<Edge>], unassigned_cost: f64) -> Assignment {
+    let mut flat = EdgeRows::new();
+    for row in rows {
+        flat.edges.extend_from_slice(row);
+        flat.end_row();
+    }
+    assign_rows(n_cols, &flat, unassigned_cost)
+}
+
+/// Candidate edges of every row stored in one buffer: row `r` is
+/// `edges[starts[r]..starts[r + 1]]` (no allocation per row).
+#[derive(Clone, Debug)]
+pub(crate) struct EdgeRows {
+    pub edges: Vec<Edge>,
+    starts: Vec<usize>,
+}
+
+impl EdgeRows {
+    pub fn new() -> Self {
+        Self {
+            edges: Vec::new(),
+            starts: vec![0],
+        }
+    }
+
+    /// Closes the current row (the edges pushed since the last call).
+    pub fn end_row(&mut self) {
+        self.starts.push(self.edges.len());
+    }
+
+    pub fn len(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    pub fn row(&self, r: usize) -> &[Edge] {
+        &self.edges[self.starts[r]..self.starts[r + 1]]
+    }
+}
+
+/// [`assign`] on rows stored flat.
+pub(crate) fn assign_rows(n_cols: usize, rows: &EdgeRows, unassigned_cost: f64) -> Assignment {
     let unassigned_cost = if unassigned_cost.is_finite() {
         unassigned_cost
     } else {
         f64::MAX / 4.0
     };
-    let edges: Vec<Vec<Edge>> = rows
-        .iter()
-        .enumerate()
-        .map(|(r, row)| usable_edges(row, r, n_cols, unassigned_cost))
-        .collect();
-    let mut solver = Solver::new(n_cols + rows.len(), &edges);
+    // Each row's valid edges plus its private "unassigned" column n_cols + row.
+    let mut usable = EdgeRows::new();
+    usable.edges.reserve(rows.edges.len() + rows.len());
+    for r in 0..rows.len() {
+        let valid = rows
+            .row(r)
+            .iter()
+            .filter(|e| e.col < n_cols && e.cost.is_finite() && e.cost < unassigned_cost);
+        usable.edges.extend(valid);
+        usable.edges.push(Edge {
+            col: n_cols + r,
+            cost: unassigned_cost,
+        });
+        usable.end_row();
+    }
+    let mut solver = Solver::new(n_cols + rows.len(), &usable);
     for row in 0..rows.len() {
         solver.augment_from(row);
     }
-    solver.into_assignment(n_cols, &edges)
-}
-
-/// The row's valid edges plus its private "unassigned" column `n_cols + row`.
-fn usable_edges(row: &[Edge], index: usize, n_cols: usize, unassigned: f64) -> Vec<Edge> {
-    let mut out: Vec<Edge> = row
-        .iter()
-        .filter(|e| e.col < n_cols && e.cost.is_finite() && e.cost < unassigned)
-        .copied()
-        .collect();
-    out.push(Edge {
-        col: n_cols + index,
-        cost: unassigned,
-    });
-    out
+    solver.into_assignment(n_cols)
 }
 
 /// Heap entry ordered so that `BinaryHeap` pops the smallest distance.
@@ -82,7 +118,7 @@ impl Ord for Pending {
 /// Dual potentials and the current matching. Reduced costs
 /// `cost - row_pot - col_pot` stay >= 0 and are 0 on matched edges.
 struct Solver<'a> {
-    edges: &'a [Vec<Edge>],
+    edges: &'a EdgeRows,
     row_pot: Vec<f64>,
     col_pot: Vec<f64>,
     owner: Vec<usize>,
@@ -96,10 +132,15 @@ struct Solver<'a> {
 }
 
 impl<'a> Solver<'a> {
-    fn new(n_cols: usize, edges: &'a [Vec<Edge>]) -> Self {
-        let row_pot = edges
-            .iter()
-            .map(|row| row.iter().map(|e| e.cost).fold(f64::INFINITY, f64::min))
+    fn new(n_cols: usize, edges: &'a EdgeRows) -> Self {
+        let row_pot = (0..edges.len())
+            .map(|r| {
+                edges
+                    .row(r)
+                    .iter()
+                    .map(|e| e.cost)
+                    .fold(f64::INFINITY, f64::min)
+            })
             .collect();
         Self {
             edges,
@@ -151,7 +192,8 @@ impl<'a> Solver<'a> {
     }
 
     fn relax_row(&mut self, row: usize, base: f64) {
-        for e in &self.edges[row] {
+        let edges = self.edges;
+        for e in edges.row(row) {
             if self.done[e.col] {
                 continue;
             }
@@ -190,13 +232,14 @@ impl<'a> Solver<'a> {
         }
     }
 
-    fn into_assignment(self, n_cols: usize, edges: &[Vec<Edge>]) -> Assignment {
+    fn into_assignment(self, n_cols: usize) -> Assignment {
         let mut total_cost = 0.0;
         let row_to_col = self
             .row_col
             .iter()
-            .zip(edges)
-            .map(|(&col, row)| {
+            .enumerate()
+            .map(|(r, &col)| {
+                let row = self.edges.row(r);
                 total_cost += row.iter().find(|e| e.col == col).map_or(0.0, |e| e.cost);
                 (col < n_cols).then_some(col)
             })

@@ -6,9 +6,14 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::components::label_components;
 use crate::contour::ContourScanner;
+use crate::grouping::{Centre, Grouper};
 use crate::params::BlobParams;
-use crate::shape::{circularity, hull_area, median_radius, perimeter, Moments};
+use crate::shape::{
+    circularity, hull_area_upper_bound, hull_area_with, median_radius, perimeter, HullScratch,
+    Moments,
+};
 
 /// An 8-bit grey camera frame.
 pub type Frame = image::GrayImage;
@@ -22,127 +27,104 @@ pub struct KeyPoint {
     pub size: f64,
 }
 
-/// A blob found at one threshold.
-#[derive(Clone, Copy, Debug)]
-struct Centre {
-    x: f64,
-    y: f64,
-    radius: f64,
-    confidence: f64,
-}
-
-/// Centres found at successive thresholds for the same blob, kept sorted by
-/// radius; the middle one stands for the group.
-struct Group {
-    members: Vec<Centre>,
-}
-
-impl Group {
-    fn representative(&self) -> &Centre {
-        &self.members[self.members.len() / 2]
-    }
-
-    fn insert(&mut self, centre: Centre) {
-        let at = self.members.partition_point(|m| m.radius <= centre.radius);
-        self.members.insert(at, centre);
-    }
-
-    fn keypoint(&self) -> KeyPoint {
-        let weight: f64 = self.members.iter().map(|m| m.confidence).sum();
-        let (sx, sy) = self.members.iter().fold((0.0, 0.0), |(sx, sy), m| {
-            (sx + m.confidence * m.x, sy + m.confidence * m.y)
-        });
-        let (x, y) = if weight > 0.0 {
-            (sx / weight, sy / weight)
-        } else {
-            let n = self.members.len() as f64;
-            let (ux, uy) = self
-                .members
-                .iter()
-                .fold((0.0, 0.0), |(a, b), m| (a + m.x, b + m.y));
-            (ux / n, uy / n)
-        };
-        KeyPoint {
-            x,
-            y,
-            size: 2.0 * self.representative().radius,
-        }
-    }
-}
-
 /// Detects blobs as OpenCV's `SimpleBlobDetector::detect` does.
 ///
 /// Thresholds run from `min_threshold` by `threshold_step` while below
-/// `max_threshold`; a threshold whose binary image equals the previous one
-/// reuses its blobs (binarised frames cost one contour pass). A centre joins
-/// the first existing group whose representative lies closer than
-/// `min_dist_between_blobs` or either radius; groups with at least
-/// `min_repeatability` members become keypoints at their confidence-weighted
-/// mean centre (confidence = inertia ratio squared when filtering by
-/// inertia, else 1), size twice the representative's radius.
-/// Parameters are used as given: call [`BlobParams::validate`] first.
+/// `max_threshold`. A centre joins the first existing group whose
+/// representative lies closer than `min_dist_between_blobs` or either
+/// radius; groups with at least `min_repeatability` members become
+/// keypoints at their confidence-weighted mean centre (confidence = inertia
+/// ratio squared when filtering by inertia, else 1), size twice the
+/// representative's radius. Parameters are used as given: call
+/// [`BlobParams::validate`] first.
+///
+/// Same result as binarising and tracing the whole frame per threshold, but
+/// traced per component of the lowest threshold (see `components.rs`); a
+/// component is re-traced only when some of its pixels change side, and the
+/// blobs are put back in OpenCV's contour order (reverse raster order of the
+/// pixel that started each border).
 pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
     let (width, height) = (img.width() as usize, img.height() as usize);
-    if width == 0 || height == 0 {
+    let thresholds = p.thresholds();
+    if width == 0 || height == 0 || thresholds.is_empty() {
         return Vec::new();
     }
     let pixels = img.as_raw();
-    let histogram = cumulative_histogram(pixels);
-    let mut scanner = ContourScanner::new(width, height);
-    let mut groups: Vec<Group> = Vec::new();
+    let level_of = |t: f64| t.floor().clamp(-1.0, 255.0) as i16;
+    // Thresholds increase, so the first one has the largest white set.
+    let components = label_components(pixels, width, height, level_of(thresholds[0]));
+    let mut cache: Vec<Vec<Measured>> = (0..components.len()).map(|_| Vec::new()).collect();
+    let mut counts: Vec<Option<usize>> = vec![None; components.len()];
+    let mut scanner = ContourScanner::new(0, 0);
+    let mut scratch = Scratch::default();
+    let mut keyed: Vec<(usize, Centre)> = Vec::new();
     let mut found: Vec<Centre> = Vec::new();
-    let mut previous_level: Option<i64> = None;
-    for threshold in p.thresholds() {
-        let level = threshold.floor() as i64;
-        let unchanged =
-            previous_level.is_some_and(|prev| white_count_equal(&histogram, prev, level));
-        if !unchanged {
-            scanner.binarise(pixels, threshold);
-            scanner.trace_all();
-            found = blobs_in(&scanner, p);
+    let mut grouper = Grouper::new(width, height, thresholds.len());
+    for threshold in thresholds {
+        let level = level_of(threshold);
+        keyed.clear();
+        for k in 0..components.len() {
+            let white = components.count_above(k, level);
+            if counts[k] != Some(white) {
+                counts[k] = Some(white);
+                cache[k].clear();
+                if white > 0 {
+                    components.trace(k, &mut scanner, level);
+                    for (trigger, contour) in scanner.contours_with_trigger() {
+                        if let Some(centre) = measure_shape(contour, p, &mut scratch) {
+                            let key = trigger[1] as usize * width + trigger[0] as usize;
+                            let colour_pixel = pixel_index(centre.x, centre.y, width, height);
+                            cache[k].push(Measured {
+                                key,
+                                centre,
+                                colour_pixel,
+                            });
+                        }
+                    }
+                }
+            }
+            for m in &cache[k] {
+                let colour = match m.colour_pixel {
+                    Some(i) if i16::from(pixels[i]) > level => 255,
+                    _ => 0,
+                };
+                if !p.filter_by_color || colour == p.blob_color {
+                    keyed.push((m.key, m.centre));
+                }
+            }
         }
-        previous_level = Some(level);
-        merge_into(&mut groups, &found, f64::from(p.min_dist_between_blobs));
+        // OpenCV lists contours in reverse order of discovery.
+        keyed.sort_unstable_by_key(|&(key, _)| std::cmp::Reverse(key));
+        found.clear();
+        found.extend(keyed.iter().map(|&(_, c)| c));
+        grouper.add(&found, f64::from(p.min_dist_between_blobs));
     }
-    groups
-        .iter()
-        .filter(|g| g.members.len() >= p.min_repeatability)
-        .map(Group::keypoint)
-        .collect()
+    grouper.keypoints(p.min_repeatability)
 }
 
-/// `counts[v]` = number of pixels with value <= v.
-fn cumulative_histogram(pixels: &[u8]) -> [usize; 256] {
-    let mut counts = [0usize; 256];
-    for &v in pixels {
-        counts[usize::from(v)] += 1;
-    }
-    for v in 1..256 {
-        counts[v] += counts[v - 1];
-    }
-    counts
+/// A contour that passed every filter but colour: its raster key (of the
+/// pixel that started it), centre, and the pixel that decides its colour.
+struct Measured {
+    key: usize,
+    centre: Centre,
+    colour_pixel: Option<usize>,
 }
 
-/// True when no pixel value lies in (a, b]: thresholds at floor levels a and
-/// b then give the same binary image.
-fn white_count_equal(counts: &[usize; 256], a: i64, b: i64) -> bool {
-    let at = |level: i64| -> usize {
-        if level < 0 {
-            0
-        } else {
-            counts[level.min(255) as usize]
-        }
-    };
-    at(a) == at(b)
+/// Reusable buffers for the shape measures.
+#[derive(Default)]
+struct Scratch {
+    radii: Vec<f64>,
+    hull: HullScratch,
 }
 
-/// Blobs of the current binary image that pass the filters, in contour order.
-fn blobs_in(scanner: &ContourScanner, p: &BlobParams) -> Vec<Centre> {
-    let mut scratch = Vec::new();
-    scanner
-        .contours()
-        .filter_map(|contour| measure(contour, scanner, p, &mut scratch))
-        .collect()
+/// Row-major index of the pixel nearest to (x, y) (ties to even), if inside.
+fn pixel_index(x: f64, y: f64, width: usize, height: usize) -> Option<usize> {
+    let (col, row) = (x.round_ties_even(), y.round_ties_even());
+    if col < 0.0 || row < 0.0 {
+        return None;
+    }
+    let (col, row) = (col as usize, row as usize);
+    (col < width && row < height).then_some(row * width + col)
 }
 
 /// Whether one contour of the current binary image passes all filters.
@@ -151,16 +133,14 @@ pub(crate) fn passes_filters(
     scanner: &ContourScanner,
     p: &BlobParams,
 ) -> bool {
-    measure(contour, scanner, p, &mut Vec::new()).is_some()
+    measure_shape(contour, p, &mut Scratch::default())
+        .is_some_and(|c| !p.filter_by_color || colour_at(scanner, c.x, c.y) == p.blob_color)
 }
 
-/// Applies the filters to one contour in OpenCV's order; `None` if rejected.
-fn measure(
-    contour: &[[i32; 2]],
-    scanner: &ContourScanner,
-    p: &BlobParams,
-    scratch: &mut Vec<f64>,
-) -> Option<Centre> {
+/// Applies the area, circularity, inertia and convexity filters to one
+/// contour in OpenCV's order; `None` if rejected. The colour filter (which
+/// OpenCV applies next) is left to the caller.
+fn measure_shape(contour: &[[i32; 2]], p: &BlobParams, scratch: &mut Scratch) -> Option<Centre> {
     let moments = Moments::of_polygon(contour);
     let area = moments.m00;
     if p.filter_by_area && !within(area, p.min_area, p.max_area) {
@@ -183,8 +163,8 @@ fn measure(
         }
         confidence = ratio * ratio;
     }
-    if p.filter_by_convexity {
-        let hull = hull_area(contour);
+    if p.filter_by_convexity && !surely_convex_enough(contour, area, p) {
+        let hull = hull_area_with(contour, &mut scratch.hull);
         if hull.abs() < f64::EPSILON || !within(area / hull, p.min_convexity, p.max_convexity) {
             return None;
         }
@@ -193,16 +173,24 @@ fn measure(
         return None;
     }
     let (x, y) = (moments.m10 / area, moments.m01 / area);
-    if p.filter_by_color && colour_at(scanner, x, y) != p.blob_color {
-        return None;
-    }
-    let radius = median_radius(contour, [x, y], scratch);
+    let radius = median_radius(contour, [x, y], &mut scratch.radii);
     Some(Centre {
         x,
         y,
         radius,
         confidence,
     })
+}
+
+/// True when the convexity test `area / hull` in `[min, max)` passes
+/// whatever the exact hull: with U >= hull the octagon bound,
+/// `area / hull >= area / U >= min` (division rounds monotonically), and a
+/// non-degenerate lattice hull has area >= 1/2, so `area / hull <= 2 area`.
+/// (area > 0 rules out a degenerate hull: collinear points enclose nothing.)
+/// Saves the exact hull for most pins.
+fn surely_convex_enough(contour: &[[i32; 2]], area: f64, p: &BlobParams) -> bool {
+    let (min, max) = (f64::from(p.min_convexity), f64::from(p.max_convexity));
+    min > 0.0 && area > 0.0 && 2.0 * area < max && area / hull_area_upper_bound(contour) >= min
 }
 
 /// OpenCV's range test: NaN-tolerant `!(v < min || v >= max)`.
@@ -221,41 +209,6 @@ fn colour_at(scanner: &ContourScanner, x: f64, y: f64) -> u8 {
     } else {
         0
     }
-}
-
-/// Adds this threshold's centres to the groups (OpenCV's grouping rule: the
-/// first group whose representative is nearer than the minimum distance or
-/// either radius). New groups become visible only at the next threshold.
-fn merge_into(groups: &mut Vec<Group>, found: &[Centre], min_dist: f64) {
-    let existing = groups.len();
-    // Every representative is a stored centre, so this bounds their radii.
-    let max_radius = groups
-        .iter()
-        .map(|g| g.representative().radius)
-        .chain(found.iter().map(|c| c.radius))
-        .fold(0.0f64, f64::max);
-    for centre in found {
-        let reach = min_dist.max(max_radius).max(centre.radius);
-        let target =
-            (0..existing).find(|&j| joins(groups[j].representative(), centre, min_dist, reach));
-        match target {
-            Some(j) => groups[j].insert(*centre),
-            None => groups.push(Group {
-                members: vec![*centre],
-            }),
-        }
-    }
-}
-
-/// Whether `centre` belongs to the group represented by `rep`. `reach`
-/// bounds every distance that can qualify and only prunes the square root.
-fn joins(rep: &Centre, centre: &Centre, min_dist: f64, reach: f64) -> bool {
-    let (dx, dy) = (rep.x - centre.x, rep.y - centre.y);
-    if dx.abs() > reach || dy.abs() > reach {
-        return false;
-    }
-    let dist = dx.hypot(dy);
-    !(dist >= min_dist && dist >= rep.radius && dist >= centre.radius)
 }
 
 #[cfg(test)]

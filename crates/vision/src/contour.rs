@@ -28,16 +28,28 @@ const UNVISITED: i8 = 1;
 const VISITED: i8 = 2;
 const RIGHT_BOUND: i8 = -2;
 
+/// One traced border: its points `start..end`, whether it is a hole border,
+/// and the padded index of the pixel whose raster-scan visit started it.
+#[derive(Clone, Copy, Debug)]
+struct Span {
+    start: usize,
+    end: usize,
+    hole: bool,
+    trigger: usize,
+}
+
 /// A binary image with a one-pixel zero frame, plus the contours traced on it.
-/// Reused across thresholds to avoid reallocating.
+/// Reused across thresholds (and windows) to avoid reallocating. The image
+/// may be a window of a larger one: `origin` is added to every point.
 pub struct ContourScanner {
     width: usize,
     height: usize,
     stride: usize,
+    origin: [i32; 2],
     labels: Vec<i8>,
     offsets: [isize; 8],
     points: Vec<[i32; 2]>,
-    spans: Vec<(usize, usize, bool)>,
+    spans: Vec<Span>,
 }
 
 impl ContourScanner {
@@ -49,10 +61,41 @@ impl ContourScanner {
             width,
             height,
             stride,
+            origin: [0, 0],
             labels: vec![0; stride * (height + 2)],
             offsets,
             points: Vec::new(),
             spans: Vec::new(),
+        }
+    }
+
+    /// Makes this a blank `width` x `height` window whose pixel (0, 0) is
+    /// pixel `origin` of the full image (points are reported in full-image
+    /// coordinates).
+    pub fn reset_window(&mut self, width: usize, height: usize, origin: [i32; 2]) {
+        self.width = width;
+        self.height = height;
+        self.stride = width + 2;
+        self.origin = origin;
+        self.offsets = DIRECTIONS.map(|(dx, dy)| dx + dy * self.stride as isize);
+        self.labels.clear();
+        self.labels.resize(self.stride * (height + 2), 0);
+    }
+
+    /// Binarises a window of grey levels (row-major, `width * height`,
+    /// negative outside the component of interest): white where the value
+    /// exceeds `level`, which must be at least -1.
+    pub fn binarise_levels(&mut self, values: &[i16], level: i16) {
+        for (y, row) in values
+            .chunks_exact(self.width)
+            .take(self.height)
+            .enumerate()
+        {
+            let start = (y + 1) * self.stride + 1;
+            let dst = &mut self.labels[start..start + self.width];
+            for (d, &v) in dst.iter_mut().zip(row) {
+                *d = i8::from(v > level);
+            }
         }
     }
 
@@ -86,22 +129,50 @@ impl ContourScanner {
         self.spans.clear();
         for y in 1..=self.height {
             let row = y * self.stride;
-            for i in row + 1..=row + self.width {
+            let end = row + self.width;
+            let mut i = row + 1;
+            while i <= end {
+                // Eight background pixels after a background one start nothing.
+                if i + 8 <= end + 1 && self.labels[i - 1] == 0 && self.zero_word(i) {
+                    i += 8;
+                    continue;
+                }
                 let here = self.labels[i];
                 let left = self.labels[i - 1];
                 if here == UNVISITED && left == 0 {
-                    self.follow_border(i, WEST);
+                    self.follow_border(i, WEST, i);
                 } else if here == 0 && left >= UNVISITED {
-                    self.follow_border(i - 1, EAST);
+                    self.follow_border(i - 1, EAST, i);
                 }
+                i += 1;
             }
         }
     }
 
+    /// Whether labels `i..i + 8` are all zero.
+    fn zero_word(&self, i: usize) -> bool {
+        let bytes: [i8; 8] = self.labels[i..i + 8].try_into().expect("eight labels");
+        u64::from_ne_bytes(bytes.map(|b| b as u8)) == 0
+    }
+
     /// The traced contours, each a closed sequence of pixel coordinates, in
     /// OpenCV's order (the reverse of their discovery in raster order).
+    #[cfg(test)]
     pub fn contours(&self) -> impl Iterator<Item = &[[i32; 2]]> {
-        self.spans.iter().rev().map(|&(a, b, _)| &self.points[a..b])
+        self.spans
+            .iter()
+            .rev()
+            .map(|s| &self.points[s.start..s.end])
+    }
+
+    /// The traced contours in discovery order, each with the full-image
+    /// (x, y) of the pixel whose raster-scan visit started it. Within one
+    /// 8-connected component these pixels and contours are the same whether
+    /// the component is traced alone or in the full image.
+    pub fn contours_with_trigger(&self) -> impl Iterator<Item = ([i32; 2], &[[i32; 2]])> {
+        self.spans
+            .iter()
+            .map(|s| (self.full_xy(s.trigger), &self.points[s.start..s.end]))
     }
 
     /// Like [`ContourScanner::contours`], only the outer borders of white
@@ -110,8 +181,8 @@ impl ContourScanner {
         self.spans
             .iter()
             .rev()
-            .filter(|s| !s.2)
-            .map(|&(a, b, _)| &self.points[a..b])
+            .filter(|s| !s.hole)
+            .map(|s| &self.points[s.start..s.end])
     }
 
     /// Image size in pixels (width, height).
@@ -119,10 +190,15 @@ impl ContourScanner {
         (self.width, self.height)
     }
 
+    fn full_xy(&self, index: usize) -> [i32; 2] {
+        let x = (index % self.stride) as i32 - 1 + self.origin[0];
+        let y = (index / self.stride) as i32 - 1 + self.origin[1];
+        [x, y]
+    }
+
     fn push_point(&mut self, index: usize) {
-        let x = (index % self.stride) as i32 - 1;
-        let y = (index / self.stride) as i32 - 1;
-        self.points.push([x, y]);
+        let xy = self.full_xy(index);
+        self.points.push(xy);
     }
 
     fn step(&self, index: usize, direction: usize) -> usize {
@@ -131,7 +207,7 @@ impl ContourScanner {
 
     /// Follows one border from `start`, whose neighbour in direction
     /// `empty_side` is background (west for outer borders, east for holes).
-    fn follow_border(&mut self, start: usize, empty_side: usize) {
+    fn follow_border(&mut self, start: usize, empty_side: usize, trigger: usize) {
         let first = self.points.len();
         match self.first_neighbour(start, empty_side) {
             None => {
@@ -140,8 +216,12 @@ impl ContourScanner {
             }
             Some((last, direction)) => self.walk(start, last, direction),
         }
-        self.spans
-            .push((first, self.points.len(), empty_side == EAST));
+        self.spans.push(Span {
+            start: first,
+            end: self.points.len(),
+            hole: empty_side == EAST,
+            trigger,
+        });
     }
 
     /// Searches clockwise around `start` from `empty_side` for a white pixel:

@@ -45,13 +45,15 @@ pub fn smooth_field(
     prior: f64,
 ) -> Vec<[f64; 2]> {
     let affine = fit_affine(reference, observed);
-    let residual: Vec<Option<[f64; 2]>> = reference
+    // Residuals of the matched pins only, in pin order.
+    let residual: Vec<(usize, [f64; 2])> = reference
         .iter()
         .zip(observed)
-        .map(|(r, o)| {
+        .enumerate()
+        .filter_map(|(j, (r, o))| {
             o.map(|d| {
                 let a = affine.apply(*r);
-                [d[0] - a[0], d[1] - a[1]]
+                (j, [d[0] - a[0], d[1] - a[1]])
             })
         })
         .collect();
@@ -66,10 +68,13 @@ pub fn smooth_field(
         .collect()
 }
 
-fn local_average(weights: &[f64], residual: &[Option<[f64; 2]>], prior: f64) -> [f64; 2] {
+/// Kernel-weighted mean of the matched residuals `(pin, residual)`, with
+/// `prior` weight on zero (pins with zero weight are skipped).
+fn local_average(weights: &[f64], residual: &[(usize, [f64; 2])], prior: f64) -> [f64; 2] {
     let (mut sx, mut sy, mut sw) = (0.0, 0.0, prior);
-    for (w, r) in weights.iter().zip(residual) {
-        if let (Some(r), true) = (r, *w > 0.0) {
+    for &(j, r) in residual {
+        let w = weights[j];
+        if w > 0.0 {
             sx += w * r[0];
             sy += w * r[1];
             sw += w;

@@ -6,10 +6,12 @@
 
 mod assign;
 mod blob;
+mod components;
 mod contour;
 mod error;
 mod extractor;
 mod field;
+mod grouping;
 mod merged;
 mod params;
 mod shape;

@@ -69,16 +69,23 @@ impl Moments {
 }
 
 /// Length of the closed polyline through `points` (OpenCV `arcLength(.., true)`).
+/// Steps between 8-neighbours (all steps of a traced border) take their
+/// length from a table holding exactly what `hypot` gives; the sum runs in
+/// the same order, so the result is the same as summing `hypot` per step.
 pub fn perimeter(points: &[[i32; 2]]) -> f64 {
     let Some(&last) = points.last() else {
         return 0.0;
     };
+    let steps = [0.0, 1.0, 1.0f64.hypot(1.0)];
     let mut prev = last;
     let mut total = 0.0;
     for &p in points {
-        let dx = f64::from(p[0] - prev[0]);
-        let dy = f64::from(p[1] - prev[1]);
-        total += dx.hypot(dy);
+        let (dx, dy) = (p[0] - prev[0], p[1] - prev[1]);
+        total += if dx.abs() <= 1 && dy.abs() <= 1 {
+            steps[(dx * dx + dy * dy) as usize]
+        } else {
+            f64::from(dx).hypot(f64::from(dy))
+        };
         prev = p;
     }
     total
@@ -89,41 +96,99 @@ pub fn circularity(area: f64, perimeter: f64) -> f64 {
     4.0 * std::f64::consts::PI * area / (perimeter * perimeter)
 }
 
+/// Reusable buffers for [`hull_area_with`].
+#[derive(Default)]
+pub struct HullScratch {
+    rows: Vec<[i32; 2]>,
+    sorted: Vec<[i64; 2]>,
+    chain: Vec<[i64; 2]>,
+}
+
 /// Area of the convex hull of `points` (Andrew's monotone chain).
+#[cfg(test)]
 pub fn hull_area(points: &[[i32; 2]]) -> f64 {
-    let mut sorted: Vec<[i64; 2]> = points
-        .iter()
-        .map(|&[x, y]| [i64::from(x), i64::from(y)])
-        .collect();
-    sorted.sort_unstable();
-    sorted.dedup();
-    if sorted.len() < 3 {
+    hull_area_with(points, &mut HullScratch::default())
+}
+
+/// [`hull_area`] with caller-owned buffers. Only the leftmost and rightmost
+/// point of each row can be hull vertices (the others lie on the segment
+/// between them), so the chain runs over those, already sorted by (y, x):
+/// no sort, and the same hull (integer area) as over all points.
+pub fn hull_area_with(points: &[[i32; 2]], s: &mut HullScratch) -> f64 {
+    let Some(y0) = points.iter().map(|p| p[1]).min() else {
+        return 0.0;
+    };
+    let y1 = points.iter().map(|p| p[1]).max().unwrap_or(y0);
+    s.rows.clear();
+    s.rows.resize((y1 - y0) as usize + 1, [i32::MAX, i32::MIN]);
+    for &[x, y] in points {
+        let r = &mut s.rows[(y - y0) as usize];
+        *r = [r[0].min(x), r[1].max(x)];
+    }
+    s.sorted.clear();
+    for (dy, &[lo, hi]) in s.rows.iter().enumerate() {
+        if lo > hi {
+            continue;
+        }
+        let y = i64::from(y0) + dy as i64;
+        s.sorted.push([y, i64::from(lo)]);
+        if hi > lo {
+            s.sorted.push([y, i64::from(hi)]);
+        }
+    }
+    if s.sorted.len() < 3 {
         return 0.0;
     }
-    let lower = half_hull(sorted.iter());
-    let upper = half_hull(sorted.iter().rev());
-    let hull = lower[..lower.len() - 1]
-        .iter()
-        .chain(&upper[..upper.len() - 1]);
-    let ring: Vec<[i64; 2]> = hull.copied().collect();
+    // Points are (y, x): a mirror image of the set, with the same hull area.
     let mut twice_area = 0i64;
-    for (i, p) in ring.iter().enumerate() {
-        let q = ring[(i + 1) % ring.len()];
-        twice_area += p[0] * q[1] - q[0] * p[1];
+    for upper in [false, true] {
+        s.chain.clear();
+        let mut push = |p: [i64; 2]| {
+            while s.chain.len() >= 2
+                && turn(s.chain[s.chain.len() - 2], s.chain[s.chain.len() - 1], p) <= 0
+            {
+                s.chain.pop();
+            }
+            s.chain.push(p);
+        };
+        if upper {
+            s.sorted.iter().rev().for_each(|&p| push(p));
+        } else {
+            s.sorted.iter().for_each(|&p| push(p));
+        }
+        // Shoelace over this half's edges; the two halves close the ring.
+        for w in s.chain.windows(2) {
+            twice_area += w[0][0] * w[1][1] - w[1][0] * w[0][1];
+        }
     }
     twice_area.abs() as f64 / 2.0
 }
 
-/// One monotone half of the hull, keeping only strict left turns.
-fn half_hull<'a>(points: impl Iterator<Item = &'a [i64; 2]>) -> Vec<[i64; 2]> {
-    let mut chain: Vec<[i64; 2]> = Vec::new();
-    for &p in points {
-        while chain.len() >= 2 && turn(chain[chain.len() - 2], chain[chain.len() - 1], p) <= 0 {
-            chain.pop();
-        }
-        chain.push(p);
+/// An upper bound on [`hull_area`] in O(n): the area of the octagon cut
+/// from the bounding box by the extreme values of x + y and x - y, which
+/// holds every point and so their hull. Infinite when the corner cuts
+/// overlap (the formula would not be the octagon's area then).
+pub fn hull_area_upper_bound(points: &[[i32; 2]]) -> f64 {
+    let Some(&[x, y]) = points.first() else {
+        return f64::INFINITY;
+    };
+    let [mut x0, mut x1, mut y0, mut y1] = [x, x, y, y].map(i64::from);
+    let [mut s0, mut s1, mut d0, mut d1] = [x + y, x + y, x - y, x - y].map(i64::from);
+    for &[x, y] in points {
+        let (x, y) = (i64::from(x), i64::from(y));
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        (s0, s1, d0, d1) = (s0.min(x + y), s1.max(x + y), d0.min(x - y), d1.max(x - y));
     }
-    chain
+    let (w, h) = (x1 - x0, y1 - y0);
+    // Legs of the corner triangles cut off: top-left, top-right,
+    // bottom-left, bottom-right (y down).
+    let (tl, tr) = (s0 - (x0 + y0), (x1 - y0) - d1);
+    let (bl, br) = (d0 - (x0 - y1), (x1 + y1) - s1);
+    if tl + tr > w || bl + br > w || tl + bl > h || tr + br > h {
+        return f64::INFINITY;
+    }
+    let twice = 2 * w * h - tl * tl - tr * tr - bl * bl - br * br;
+    twice as f64 / 2.0
 }
 
 fn turn(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
@@ -131,17 +196,54 @@ fn turn(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
 }
 
 /// Median distance from `centre` to the contour points (mean of the two
-/// middle values for an even count): OpenCV's blob radius.
+/// middle values for an even count): OpenCV's blob radius, as the values
+/// `hypot` gives. The middle ranks are selected on squared distances; only
+/// the points whose squared distance is within a relative 1e-9 of the
+/// middle ones (far above rounding error, so every other point is surely
+/// nearer or farther) get `hypot`, and the exact middle values are picked
+/// among those.
 pub fn median_radius(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f64>) -> f64 {
+    let n = points.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let offsets = |&[x, y]: &[i32; 2]| (f64::from(x) - centre[0], f64::from(y) - centre[1]);
+    scratch.clear();
+    scratch.extend(points.iter().map(offsets).map(|(dx, dy)| dx * dx + dy * dy));
+    let (lower_rank, upper_rank) = ((n - 1) / 2, n / 2);
+    let (below, &mut upper_d2, _) = scratch.select_nth_unstable_by(upper_rank, f64::total_cmp);
+    let lower_d2 = if lower_rank == upper_rank {
+        upper_d2
+    } else {
+        below.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+    };
+    if !(lower_d2.is_finite() && upper_d2.is_finite()) {
+        return exact_median(points, centre, scratch);
+    }
+    let (lo, hi) = (lower_d2 * (1.0 - 1e-9), upper_d2 * (1.0 + 1e-9));
+    let mut nearer = 0;
+    scratch.clear();
+    for p in points {
+        let (dx, dy) = offsets(p);
+        let d2 = dx * dx + dy * dy;
+        if d2 < lo {
+            nearer += 1;
+        } else if d2 <= hi {
+            scratch.push(dx.hypot(dy));
+        }
+    }
+    scratch.sort_unstable_by(f64::total_cmp);
+    (scratch[lower_rank - nearer] + scratch[upper_rank - nearer]) / 2.0
+}
+
+/// The median of all `hypot` distances by sorting (reference definition).
+fn exact_median(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f64>) -> f64 {
     scratch.clear();
     scratch.extend(
         points
             .iter()
             .map(|&[x, y]| (f64::from(x) - centre[0]).hypot(f64::from(y) - centre[1])),
     );
-    if scratch.is_empty() {
-        return 0.0;
-    }
     scratch.sort_unstable_by(f64::total_cmp);
     let n = scratch.len();
     (scratch[(n - 1) / 2] + scratch[n / 2]) / 2.0
@@ -199,5 +301,125 @@ mod tests {
         assert_eq!(Moments::of_polygon(&[[3, 3]]), Moments::default());
         assert_eq!(Moments::of_polygon(&[]), Moments::default());
         assert_eq!(hull_area(&[[0, 0], [1, 1], [2, 2]]), 0.0);
+    }
+
+    /// Hull area by sorting every point (the textbook monotone chain).
+    fn hull_area_sorted(points: &[[i32; 2]]) -> f64 {
+        let mut pts: Vec<[i64; 2]> = points
+            .iter()
+            .map(|p| [i64::from(p[0]), i64::from(p[1])])
+            .collect();
+        pts.sort_unstable();
+        pts.dedup();
+        if pts.len() < 3 {
+            return 0.0;
+        }
+        let chain = |it: &mut dyn Iterator<Item = [i64; 2]>| {
+            let mut c: Vec<[i64; 2]> = Vec::new();
+            for p in it {
+                while c.len() >= 2 && turn(c[c.len() - 2], c[c.len() - 1], p) <= 0 {
+                    c.pop();
+                }
+                c.push(p);
+            }
+            c
+        };
+        let lower = chain(&mut pts.iter().copied());
+        let upper = chain(&mut pts.iter().rev().copied());
+        let ring: Vec<[i64; 2]> = lower[..lower.len() - 1]
+            .iter()
+            .chain(&upper[..upper.len() - 1])
+            .copied()
+            .collect();
+        let twice: i64 = (0..ring.len())
+            .map(|i| {
+                let (p, q) = (ring[i], ring[(i + 1) % ring.len()]);
+                p[0] * q[1] - q[0] * p[1]
+            })
+            .sum();
+        twice.abs() as f64 / 2.0
+    }
+
+    #[test]
+    fn row_extreme_hull_equals_full_sort_hull() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..500 {
+            let n = rng.random_range(0..30);
+            let span = rng.random_range(1..12);
+            let pts: Vec<[i32; 2]> = (0..n)
+                .map(|_| [rng.random_range(-span..span), rng.random_range(-span..span)])
+                .collect();
+            assert_eq!(hull_area(&pts), hull_area_sorted(&pts), "{pts:?}");
+        }
+    }
+
+    #[test]
+    fn octagon_bounds_the_hull_and_is_tight_for_a_square() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        for _ in 0..2000 {
+            let n = rng.random_range(1..30);
+            let pts: Vec<[i32; 2]> = (0..n)
+                .map(|_| [rng.random_range(-6..6), rng.random_range(-6..6)])
+                .collect();
+            assert!(hull_area_upper_bound(&pts) >= hull_area(&pts), "{pts:?}");
+        }
+        assert_eq!(hull_area_upper_bound(&SQUARE), 16.0);
+    }
+
+    #[test]
+    fn median_radius_matches_sorting() {
+        let pts = [[0, 0], [3, 0], [0, 4], [5, 5], [1, 1], [2, 7]];
+        let mut scratch = Vec::new();
+        for n in 1..=pts.len() {
+            let c = [0.7, 1.3];
+            let mut d: Vec<f64> = pts[..n]
+                .iter()
+                .map(|p| (f64::from(p[0]) - c[0]).hypot(f64::from(p[1]) - c[1]))
+                .collect();
+            d.sort_by(f64::total_cmp);
+            let want = (d[(n - 1) / 2] + d[n / 2]) / 2.0;
+            assert_eq!(median_radius(&pts[..n], c, &mut scratch), want);
+        }
+    }
+
+    #[test]
+    fn banded_median_radius_equals_full_sort_on_random_sets() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut a = Vec::new();
+        let mut b = Vec::new();
+        for _ in 0..2000 {
+            let n = rng.random_range(1..40);
+            let pts: Vec<[i32; 2]> = (0..n)
+                .map(|_| [rng.random_range(0..12), rng.random_range(0..12)])
+                .collect();
+            // Half the centres on the half-pixel grid: many exact ties.
+            let c = if rng.random_bool(0.5) {
+                [
+                    f64::from(rng.random_range(0..24)) / 2.0,
+                    f64::from(rng.random_range(0..24)) / 2.0,
+                ]
+            } else {
+                [rng.random_range(0.0..12.0), rng.random_range(0.0..12.0)]
+            };
+            assert_eq!(
+                median_radius(&pts, c, &mut a),
+                exact_median(&pts, c, &mut b)
+            );
+        }
+    }
+
+    #[test]
+    fn perimeter_table_matches_hypot() {
+        let ring = [[0, 0], [1, 1], [2, 1], [2, 2], [5, 2], [4, 1]];
+        let mut want = 0.0;
+        let mut prev = ring[ring.len() - 1];
+        for p in ring {
+            want += f64::from(p[0] - prev[0]).hypot(f64::from(p[1] - prev[1]));
+            prev = p;
+        }
+        assert_eq!(perimeter(&ring), want);
     }
 }

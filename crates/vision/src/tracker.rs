@@ -6,7 +6,7 @@
 //! within a gate, refit the field from the matches with a narrower kernel,
 //! and repeat. Missing pins are filled from the final field.
 
-use crate::assign::{assign, Edge};
+use crate::assign::{assign_rows, Edge, EdgeRows};
 use crate::blob::KeyPoint;
 use crate::error::VisionError;
 use crate::field::{smooth_field, Kernel, Observations};
@@ -192,8 +192,9 @@ impl PinTracker {
         let mut predicted = self.centroid_shift(points);
         let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
         let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
+        let by_x = ByX::new(points);
         for stage in &self.stages {
-            matches = self.match_points(&predicted, points, stage.gate);
+            matches = self.match_points(&predicted, points, &by_x, stage.gate);
             observed = self.displacements(&matches, points);
             predicted = self.predict(&observed, &stage.kernel);
         }
@@ -214,28 +215,34 @@ impl PinTracker {
     }
 
     /// Optimal one-to-one matching of predicted pins to points, squared
-    /// distance cost, pairs farther than `gate` not allowed.
+    /// distance cost, pairs farther than `gate` not allowed. Candidates come
+    /// from the x-window of each prediction, listed by point index.
     fn match_points(
         &self,
         predicted: &[[f64; 2]],
         points: &[[f64; 2]],
+        by_x: &ByX,
         gate: f64,
     ) -> Vec<Option<usize>> {
         let gate2 = gate * gate;
-        let rows: Vec<Vec<Edge>> = predicted
-            .iter()
-            .map(|p| {
-                points
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(col, q)| {
-                        let cost = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
-                        (cost < gate2).then_some(Edge { col, cost })
-                    })
-                    .collect()
-            })
-            .collect();
-        assign(points.len(), &rows, gate2).row_to_col
+        let mut rows = EdgeRows::new();
+        for p in predicted {
+            let first = rows.edges.len();
+            let from = by_x.xs.partition_point(|&x| x < p[0] - gate);
+            for (&x, &col) in by_x.xs[from..].iter().zip(&by_x.order[from..]) {
+                if x > p[0] + gate {
+                    break;
+                }
+                let q = points[col];
+                let cost = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                if cost < gate2 {
+                    rows.edges.push(Edge { col, cost });
+                }
+            }
+            rows.edges[first..].sort_unstable_by_key(|e| e.col);
+            rows.end_row();
+        }
+        assign_rows(points.len(), &rows, gate2).row_to_col
     }
 
     fn displacements(
@@ -280,6 +287,21 @@ impl PinTracker {
             missing: self.reference.len() - matched_count,
             extra: n_points - matched_count,
         }
+    }
+}
+
+/// Point indices sorted by x, with their x values.
+struct ByX {
+    order: Vec<usize>,
+    xs: Vec<f64>,
+}
+
+impl ByX {
+    fn new(points: &[[f64; 2]]) -> Self {
+        let mut order: Vec<usize> = (0..points.len()).collect();
+        order.sort_unstable_by(|&a, &b| points[a][0].total_cmp(&points[b][0]));
+        let xs = order.iter().map(|&i| points[i][0]).collect();
+        Self { order, xs }
     }
 }
 

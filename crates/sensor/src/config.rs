@@ -108,18 +108,21 @@ pub struct Mechanics {
 }
 
 impl Default for Mechanics {
+    /// Fitted to the real edge frames (docs/sensor-model.md, "Mechanics
+    /// fit"; `examples/fit_mechanics`); the grids and `max_depth_mm` are
+    /// numerical settings, not fitted.
     fn default() -> Self {
         Self {
-            kernel_width_mm: 4.0,
-            lift_gain: 1.0,
-            flow_core_mm: 2.0,
-            layer_thickness_mm: 5.0,
+            kernel_width_mm: 5.717,
+            lift_gain: 1.184,
+            flow_core_mm: 0.407,
+            layer_thickness_mm: 18.59,
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 1.0,
-            shear_limit_deg: 5.0,
-            contact_scale_mm: 0.3,
+            shear_limit_mm: 1.833,
+            shear_limit_deg: 0.251,
+            contact_scale_mm: 0.226,
         }
     }
 }
@@ -165,11 +168,13 @@ pub struct Calibration {
 }
 
 impl Default for Calibration {
+    /// Orientation conventions found on the real data; offsets and tap
+    /// depth fitted with the mechanics (docs/sensor-model.md).
     fn default() -> Self {
         Self {
-            angle_offset_deg: -22.0,
-            edge_offset_mm: 0.0,
-            tap_depth_mm: 3.0,
+            angle_offset_deg: -15.645,
+            edge_offset_mm: 2.990,
+            tap_depth_mm: 5.526,
             depth_per_offset: -1.0,
             object_side: -1.0,
             shear_sign: 1.0,

@@ -18,6 +18,8 @@ pub struct TacTipModel {
     /// Surface coordinates of each pin, mm (same order as `rest_px`).
     pins_g: Vec<[f64; 2]>,
     rest_px: Vec<[f64; 2]>,
+    /// Model projection of each pin at rest (eq. S3), px.
+    base_px: Vec<[f64; 2]>,
     radii_px: Vec<f64>,
     contact: ContactModel,
     lift_gain: f64,
@@ -61,12 +63,14 @@ impl TacTipModel {
             cfg.geometry.dome_radius_mm,
             &cfg.mechanics,
         );
+        let base_px = pins_g.iter().map(|g| proj.project(*g)).collect();
         Self {
             lift_gain: cfg.mechanics.lift_gain,
             cfg,
             proj,
             pins_g,
             rest_px,
+            base_px,
             radii_px,
             contact,
         }
@@ -115,15 +119,14 @@ impl TacTipModel {
         let field = self.contact.field(sd, tip, shear);
         self.rest_px
             .iter()
-            .zip(&self.pins_g)
+            .zip(self.pins_g.iter().zip(&self.base_px))
             .zip(field.disp.iter().zip(&field.smoothed))
-            .map(|((rest, g), (u, lift))| {
+            .map(|((rest, (g, base)), (u, lift))| {
                 if u[0] == 0.0 && u[1] == 0.0 && *lift == 0.0 {
                     return *rest;
                 }
                 let lift = self.lift_gain * lift;
                 let moved = self.proj.project_lifted([g[0] + u[0], g[1] + u[1]], lift);
-                let base = self.proj.project(*g);
                 [rest[0] + moved[0] - base[0], rest[1] + moved[1] - base[1]]
             })
             .collect()

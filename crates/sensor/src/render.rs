@@ -19,17 +19,48 @@ pub(crate) fn draw_disc(frame: &mut Frame, c: [f64; 2], r: f64) {
     let y1 = ((c[1] + r + 1.0).ceil() as i64).min(h as i64 - 1);
     let width = w as usize;
     let buf: &mut [u8] = frame;
+    // Pixels with d <= r - 1/2 are fully covered and those with
+    // d >= r + 1/2 not at all: only the ring between needs a square root.
+    let outer2 = (r + 0.5) * (r + 0.5);
+    let inner2 = if r > 0.5 { (r - 0.5) * (r - 0.5) } else { -1.0 };
     for y in y0..=y1 {
         let dy = y as f64 - c[1];
-        let row = y as usize * width;
-        for x in x0..=x1 {
+        let dy2 = dy * dy;
+        if dy2 >= outer2 {
+            continue;
+        }
+        let half = (outer2 - dy2).sqrt();
+        let xa = ((c[0] - half).floor() as i64).max(x0);
+        let xb = ((c[0] + half).ceil() as i64).min(x1);
+        // Fully covered span of this row (any pixel misplaced by rounding
+        // at its ends has coverage 1 - eps, which also rounds to 255).
+        let (fa, fb) = if dy2 < inner2 {
+            let inner = (inner2 - dy2).sqrt();
+            (
+                ((c[0] - inner).ceil() as i64).max(xa),
+                ((c[0] + inner).floor() as i64).min(xb),
+            )
+        } else {
+            (xb + 1, xb)
+        };
+        let row = &mut buf[y as usize * width..(y as usize + 1) * width];
+        if fa <= fb {
+            row[fa as usize..=fb as usize].fill(255);
+        }
+        let edge = (xa..fa.min(xb + 1)).chain((fb + 1).max(xa)..=xb);
+        for x in edge {
             let dx = x as f64 - c[0];
-            let cover = (r + 0.5 - (dx * dx + dy * dy).sqrt()).clamp(0.0, 1.0);
-            if cover > 0.0 {
-                let v = (255.0 * cover + 0.5) as u8;
-                let px = &mut buf[row + x as usize];
-                *px = (*px).max(v);
+            let d2 = dx * dx + dy2;
+            if d2 >= outer2 {
+                continue;
             }
+            let cover = (r + 0.5 - d2.sqrt()).clamp(0.0, 1.0);
+            if cover <= 0.0 {
+                continue;
+            }
+            let v = (255.0 * cover + 0.5) as u8;
+            let px = &mut row[x as usize];
+            *px = (*px).max(v);
         }
     }
 }
@@ -53,5 +84,47 @@ pub(crate) fn jitter(pins: &[[f64; 2]], std: f64, rng: &mut ChaCha8Rng) -> Vec<[
             .map(|p| [p[0] + normal.sample(rng), p[1] + normal.sample(rng)])
             .collect(),
         _ => pins.to_vec(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plain per-pixel definition the fast span-based drawing must match.
+    fn draw_disc_reference(frame: &mut Frame, c: [f64; 2], r: f64) {
+        let (w, h) = frame.dimensions();
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as f64 - c[0], y as f64 - c[1]);
+                let cover = (r + 0.5 - (dx * dx + dy * dy).sqrt()).clamp(0.0, 1.0);
+                if cover > 0.0 {
+                    let v = (255.0 * cover + 0.5) as u8;
+                    let px = &mut frame.get_pixel_mut(x, y)[0];
+                    *px = (*px).max(v);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn span_drawing_matches_the_per_pixel_definition() {
+        let mut k = 0u64;
+        let mut next = || {
+            k = k
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (k >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..40 {
+            let (mut fast, mut slow) = (Frame::new(40, 30), Frame::new(40, 30));
+            for _ in 0..6 {
+                let c = [-6.0 + 52.0 * next(), -6.0 + 42.0 * next()];
+                let r = 0.2 + 7.0 * next();
+                draw_disc(&mut fast, c, r);
+                draw_disc_reference(&mut slow, c, r);
+            }
+            assert_eq!(fast, slow);
+        }
     }
 }

@@ -6,6 +6,10 @@ use common::*;
 use tactrace_geometry::{Pose, Vec2};
 use tactrace_sensor::Shear;
 
+/// A typical tap, mm: the rig's default depth; the real edge taps fit
+/// 4.5-6.5 mm (docs/sensor-model.md).
+const TAP: f64 = 5.0;
+
 #[test]
 fn no_contact_gives_the_rest_pins_exactly() {
     let model = plain_model();
@@ -32,8 +36,8 @@ fn rotating_the_sensor_by_60_degrees_permutes_and_rotates_the_field() {
     // lattice, which is symmetric under 60 degree turns.
     let model = plain_model();
     let sd = |p: Vec2| p.y + 2.0;
-    let d0 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 0.0), None));
-    let d60 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 60.0), None));
+    let d0 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, TAP, 0.0), None));
+    let d60 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, TAP, 60.0), None));
     let rest = model.rest_pins();
     assert!(mean_magnitude(&d0) > 1.0, "edge contact must move pins");
     for i in 0..rest.len() {
@@ -138,7 +142,7 @@ fn moving_the_edge_changes_the_field_and_pins_near_the_edge_respond() {
     let model = plain_model();
     let at = |r: f64| {
         let sd = move |p: Vec2| p.y + r;
-        displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 0.0), None))
+        displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, TAP, 0.0), None))
     };
     let (a, b) = (at(1.0), at(1.5));
     let change: f64 = a
@@ -173,7 +177,7 @@ fn curvature_and_corners_change_the_pattern() {
         })
         .collect();
     let small_disk = tactrace_geometry::Contour::new(disk_vertices).expect("disk");
-    let pose = tap(0.0, 0.0, 3.0, 0.0);
+    let pose = tap(0.0, 0.0, TAP, 0.0);
     let d_straight = displacement(&model, &model.pins(&straight, pose, None));
     for other in [&corner, &small_disk] {
         let d = displacement(&model, &model.pins(other, pose, None));

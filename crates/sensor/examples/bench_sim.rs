@@ -16,6 +16,30 @@ fn cpu_seconds() -> f64 {
 use tactrace_geometry::{builtin_shape, BuiltinShape, Pose};
 use tactrace_sensor::{TacTipConfig, TacTipModel};
 
+/// The previous renderer's disc loop (whole bounding box, one square root
+/// per pixel), kept here only to time the span-based one against it.
+fn old_disc(frame: &mut image::GrayImage, c: [f64; 2], r: f64) {
+    let (w, h) = frame.dimensions();
+    let x0 = (c[0] - r - 1.0).floor().max(0.0) as i64;
+    let y0 = (c[1] - r - 1.0).floor().max(0.0) as i64;
+    let x1 = ((c[0] + r + 1.0).ceil() as i64).min(w as i64 - 1);
+    let y1 = ((c[1] + r + 1.0).ceil() as i64).min(h as i64 - 1);
+    let width = w as usize;
+    let buf: &mut [u8] = frame;
+    for y in y0..=y1 {
+        let dy = y as f64 - c[1];
+        for x in x0..=x1 {
+            let dx = x as f64 - c[0];
+            let cover = (r + 0.5 - (dx * dx + dy * dy).sqrt()).clamp(0.0, 1.0);
+            if cover > 0.0 {
+                let v = (255.0 * cover + 0.5) as u8;
+                let px = &mut buf[y as usize * width + x as usize];
+                *px = (*px).max(v);
+            }
+        }
+    }
+}
+
 fn main() {
     let taps: usize = std::env::args()
         .nth(1)
@@ -59,4 +83,27 @@ fn main() {
         (c2 - c0) * 1e6 / n
     );
     println!("checksum: pins {sum:.6} pixels {pix}");
+    // The same renders with each frame dropped at once: no fresh memory
+    // to fault in, which `tactrace bench` pays by keeping every frame.
+    let c3 = cpu_seconds();
+    let mut same = true;
+    for (p, f) in pins.iter().zip(&frames) {
+        same &= model.render(p, None) == *f;
+    }
+    let c4 = cpu_seconds();
+    let (w, h) = model.image_size();
+    let mut old_same = true;
+    for (p, f) in pins.iter().zip(&frames) {
+        let mut g = image::GrayImage::new(w, h);
+        for (c, r) in p.iter().zip(model.pin_radii()) {
+            old_disc(&mut g, *c, *r);
+        }
+        old_same &= g == *f;
+    }
+    let c5 = cpu_seconds();
+    println!(
+        "cpu:  frames dropped (+ compare): render {:.1} us/frame, previous renderer {:.1} us/frame; identical frames: {old_same} (repeat {same})",
+        (c4 - c3) * 1e6 / n,
+        (c5 - c4) * 1e6 / n
+    );
 }

@@ -10,6 +10,7 @@
 //! and a few dozen signed-distance queries.
 use crate::config::Mechanics;
 use crate::layout::{hex_lattice, Projection};
+use crate::render::floor_i64;
 use tactrace_geometry::{Pose, Vec2};
 
 /// A slide the sensor made while in contact, in the sensor frame
@@ -258,7 +259,7 @@ impl DistanceGrid {
 
     fn interpolate(&mut self, sd: &dyn Fn(Vec2) -> f64, q: [f64; 2]) -> f64 {
         let (u, v) = (q[0] / self.spacing, q[1] / self.spacing);
-        let (ia, ib) = (u.floor() as i64, v.floor() as i64);
+        let (ia, ib) = (floor_i64(u), floor_i64(v));
         let (fu, fv) = (u - ia as f64, v - ib as f64);
         let v00 = self.node(sd, ia, ib);
         let v10 = self.node(sd, ia + 1, ib);

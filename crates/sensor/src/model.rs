@@ -20,6 +20,8 @@ pub struct TacTipModel {
     rest_px: Vec<[f64; 2]>,
     /// Model projection of each pin at rest (eq. S3), px.
     base_px: Vec<[f64; 2]>,
+    /// Rim clamp factor of each pin, 1 - (s / S)^2 clipped at 0 (eq. S8a).
+    clamp: Vec<f64>,
     radii_px: Vec<f64>,
     contact: ContactModel,
     lift_gain: f64,
@@ -64,6 +66,11 @@ impl TacTipModel {
             &cfg.mechanics,
         );
         let base_px = pins_g.iter().map(|g| proj.project(*g)).collect();
+        let rim = cfg.mechanics.rim_clamp_mm;
+        let clamp = pins_g
+            .iter()
+            .map(|g| (1.0 - (g[0].hypot(g[1]) / rim).powi(2)).max(0.0))
+            .collect();
         Self {
             lift_gain: cfg.mechanics.lift_gain,
             cfg,
@@ -71,6 +78,7 @@ impl TacTipModel {
             pins_g,
             rest_px,
             base_px,
+            clamp,
             radii_px,
             contact,
         }
@@ -121,11 +129,16 @@ impl TacTipModel {
             .iter()
             .zip(self.pins_g.iter().zip(&self.base_px))
             .zip(field.disp.iter().zip(&field.smoothed))
-            .map(|((rest, (g, base)), (u, lift))| {
+            .zip(&self.clamp)
+            .map(|(((rest, (g, base)), (u, lift)), k)| {
                 if u[0] == 0.0 && u[1] == 0.0 && *lift == 0.0 {
                     return *rest;
                 }
-                let lift = self.lift_gain * lift;
+                let (u, lift) = if *k < 1.0 {
+                    ([k * u[0], k * u[1]], k * self.lift_gain * lift)
+                } else {
+                    (*u, self.lift_gain * lift)
+                };
                 let moved = self.proj.project_lifted([g[0] + u[0], g[1] + u[1]], lift);
                 [rest[0] + moved[0] - base[0], rest[1] + moved[1] - base[1]]
             })

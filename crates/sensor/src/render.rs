@@ -13,10 +13,10 @@ pub(crate) fn draw_disc(frame: &mut Frame, c: [f64; 2], r: f64) {
     if !(c[0].is_finite() && c[1].is_finite() && r > 0.0) {
         return;
     }
-    let x0 = (c[0] - r - 1.0).floor().max(0.0) as i64;
-    let y0 = (c[1] - r - 1.0).floor().max(0.0) as i64;
-    let x1 = ((c[0] + r + 1.0).ceil() as i64).min(w as i64 - 1);
-    let y1 = ((c[1] + r + 1.0).ceil() as i64).min(h as i64 - 1);
+    let x0 = floor_i64(c[0] - r - 1.0).max(0);
+    let y0 = floor_i64(c[1] - r - 1.0).max(0);
+    let x1 = ceil_i64(c[0] + r + 1.0).min(w as i64 - 1);
+    let y1 = ceil_i64(c[1] + r + 1.0).min(h as i64 - 1);
     let width = w as usize;
     let buf: &mut [u8] = frame;
     // Pixels with d <= r - 1/2 are fully covered and those with
@@ -30,15 +30,15 @@ pub(crate) fn draw_disc(frame: &mut Frame, c: [f64; 2], r: f64) {
             continue;
         }
         let half = (outer2 - dy2).sqrt();
-        let xa = ((c[0] - half).floor() as i64).max(x0);
-        let xb = ((c[0] + half).ceil() as i64).min(x1);
+        let xa = floor_i64(c[0] - half).max(x0);
+        let xb = ceil_i64(c[0] + half).min(x1);
         // Fully covered span of this row (any pixel misplaced by rounding
         // at its ends has coverage 1 - eps, which also rounds to 255).
         let (fa, fb) = if dy2 < inner2 {
             let inner = (inner2 - dy2).sqrt();
             (
-                ((c[0] - inner).ceil() as i64).max(xa),
-                ((c[0] + inner).floor() as i64).min(xb),
+                ceil_i64(c[0] - inner).max(xa),
+                floor_i64(c[0] + inner).min(xb),
             )
         } else {
             (xb + 1, xb)
@@ -62,6 +62,29 @@ pub(crate) fn draw_disc(frame: &mut Frame, c: [f64; 2], r: f64) {
             let px = &mut row[x as usize];
             *px = (*px).max(v);
         }
+    }
+}
+
+/// `x.floor() as i64` without the libm call (baseline x86-64 has no
+/// rounding instruction); identical for every input, NaN giving 0.
+#[inline]
+pub(crate) fn floor_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
+/// `x.ceil() as i64` without the libm call; identical for every input.
+#[inline]
+pub(crate) fn ceil_i64(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) < x {
+        t.saturating_add(1)
+    } else {
+        t
     }
 }
 
@@ -104,6 +127,32 @@ mod tests {
                     *px = (*px).max(v);
                 }
             }
+        }
+    }
+
+    #[test]
+    fn integer_floor_and_ceil_match_the_float_ones() {
+        let xs = [
+            -3.5,
+            -3.0,
+            -2.9999999,
+            -0.5,
+            -0.0,
+            0.0,
+            0.2,
+            1.0,
+            2.5,
+            1e15 + 0.5,
+            -1e15 - 0.5,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        for x in xs {
+            assert_eq!(floor_i64(x), x.floor() as i64, "floor {x}");
+            assert_eq!(ceil_i64(x), x.ceil() as i64, "ceil {x}");
         }
     }
 

@@ -98,7 +98,7 @@ fn bin_pairs(model: &TacTipModel, bins: &[Bin]) -> Vec<Pair> {
         .collect()
 }
 
-const NAMES: [&str; 7] = [
+const NAMES: [&str; 8] = [
     "angle_offset_deg",
     "edge_offset_mm",
     "tap_depth_mm",
@@ -106,6 +106,7 @@ const NAMES: [&str; 7] = [
     "kernel_width_mm",
     "1/layer_thickness",
     "lift_gain",
+    "rim_clamp_mm",
 ];
 
 fn with_params(base: &TacTipConfig, x: &[f64]) -> Option<TacTipConfig> {
@@ -115,7 +116,8 @@ fn with_params(base: &TacTipConfig, x: &[f64]) -> Option<TacTipConfig> {
         && (0.1..10.0).contains(&x[3])
         && (0.5..15.0).contains(&x[4])
         && (0.002..2.0).contains(&x[5])
-        && (0.0..6.0).contains(&x[6]);
+        && (0.0..6.0).contains(&x[6])
+        && (12.0..1e4).contains(&x[7]);
     let mut c = base.clone();
     c.calibration.angle_offset_deg = x[0];
     c.calibration.edge_offset_mm = x[1];
@@ -124,6 +126,7 @@ fn with_params(base: &TacTipConfig, x: &[f64]) -> Option<TacTipConfig> {
     c.mechanics.kernel_width_mm = x[4];
     c.mechanics.layer_thickness_mm = 1.0 / x[5];
     c.mechanics.lift_gain = x[6];
+    c.mechanics.rim_clamp_mm = x[7];
     ok.then_some(c)
 }
 
@@ -136,6 +139,7 @@ fn params_of(c: &TacTipConfig) -> Vec<f64> {
         c.mechanics.kernel_width_mm,
         1.0 / c.mechanics.layer_thickness_mm,
         c.mechanics.lift_gain,
+        c.mechanics.rim_clamp_mm.min(60.0),
     ]
 }
 
@@ -173,7 +177,7 @@ fn main() {
             build(&c).map_or(1e12, |m| compare(&bin_pairs(&m, &bins)).sse)
         };
         let x0 = params_of(&cfg);
-        let step = [3.0, 1.0, 0.7, 0.5, 1.5, 0.03, 0.5];
+        let step = [3.0, 1.0, 0.7, 0.5, 1.5, 0.03, 0.5, -10.0];
         let (mut x, _) = nelder_mead(&objective, &x0, &step, 400);
         for round in 0..2 {
             let s: Vec<f64> = step.iter().map(|s| s * 0.3).collect();
@@ -220,12 +224,30 @@ fn main() {
         compare(&frame_pairs(&model, &low, false)),
     );
     report(
+        "low-shear frames, sim with label shear",
+        compare(&frame_pairs(&model, &low, true)),
+    );
+    report(
         "all frames, sim with label shear",
         compare(&frame_pairs(&model, &all, true)),
     );
     report(
         "all frames, sim without shear",
         compare(&frame_pairs(&model, &all, false)),
+    );
+    let rings = |pairs: &[Pair]| -> Vec<String> {
+        support::ring_profile(model.rest_pins(), pairs)
+            .iter()
+            .map(|r| format!("{:.2}/{:.2}", r[0], r[1]))
+            .collect()
+    };
+    println!(
+        "mean |d| by hex ring 0..6, sim/real, low-shear frames: {}",
+        rings(&frame_pairs(&model, &low, false)).join(" ")
+    );
+    println!(
+        "mean |d| by hex ring 0..6, sim/real, all frames with shear: {}",
+        rings(&frame_pairs(&model, &all, true)).join(" ")
     );
     if let Ok(out) = std::env::var("FIGURE") {
         let pairs = bin_pairs(&model, &bins);

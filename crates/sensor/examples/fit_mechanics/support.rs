@@ -126,6 +126,43 @@ pub fn bins(taps: &[RealTap]) -> Vec<Bin> {
         .collect()
 }
 
+/// Mean |displacement| (sim, real) per hexagonal ring, rings found by
+/// sorting the rest pins by distance from the centre-most pin.
+pub fn ring_profile(rest: &[[f64; 2]], pairs: &[Pair]) -> Vec<[f64; 2]> {
+    let mean = rest.iter().fold([0.0; 2], |a, p| {
+        [
+            a[0] + p[0] / rest.len() as f64,
+            a[1] + p[1] / rest.len() as f64,
+        ]
+    });
+    let d = |p: &[f64; 2], q: &[f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+    let centre = rest
+        .iter()
+        .min_by(|a, b| d(a, &mean).total_cmp(&d(b, &mean)))
+        .copied()
+        .unwrap_or(mean);
+    let mut order: Vec<usize> = (0..rest.len()).collect();
+    order.sort_by(|&a, &b| d(&rest[a], &centre).total_cmp(&d(&rest[b], &centre)));
+    let mut ring = vec![0usize; rest.len()];
+    for (rank, &i) in order.iter().enumerate() {
+        ring[i] = (0..20).find(|&k| rank < 1 + 3 * k * (k + 1)).unwrap_or(20);
+    }
+    let top = ring.iter().copied().max().unwrap_or(0);
+    let mut acc = vec![[0.0; 3]; top + 1];
+    for (sim, real) in pairs {
+        for (i, (e, r)) in sim.iter().zip(real).enumerate() {
+            if let Some(r) = r {
+                acc[ring[i]][0] += e[0].hypot(e[1]);
+                acc[ring[i]][1] += r[0].hypot(r[1]);
+                acc[ring[i]][2] += 1.0;
+            }
+        }
+    }
+    acc.iter()
+        .map(|a| [a[0] / a[2].max(1.0), a[1] / a[2].max(1.0)])
+        .collect()
+}
+
 /// Minimise `f` from `x0` with initial steps `step` (Nelder-Mead).
 pub fn nelder_mead(
     f: &dyn Fn(&[f64]) -> f64,
@@ -189,8 +226,11 @@ fn line(img: &mut RgbImage, a: [f64; 2], b: [f64; 2], off: [f64; 2], colour: Rgb
         let t = s as f64 / steps as f64;
         let x = off[0] + (a[0] + t * (b[0] - a[0])) * SCALE;
         let y = off[1] + (a[1] + t * (b[1] - a[1])) * SCALE;
-        if x >= 0.0 && y >= 0.0 && (x as u32) < img.width() && (y as u32) < img.height() {
-            img.put_pixel(x as u32, y as u32, colour);
+        for (ox, oy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+            let (x, y) = (x + ox, y + oy);
+            if x >= 0.0 && y >= 0.0 && (x as u32) < img.width() && (y as u32) < img.height() {
+                img.put_pixel(x as u32, y as u32, colour);
+            }
         }
     }
 }

@@ -78,7 +78,8 @@ impl Default for CameraConfig {
     }
 }
 
-/// Contact mechanics (docs/sensor-model.md, eqs. S1-S6).
+/// Contact mechanics (docs/sensor-model.md, eqs. S4-S8a), fitted to the
+/// real edge frames.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Mechanics {

@@ -108,7 +108,7 @@ impl TacTipModel {
     /// mm; z = height of the dome's lowest point above the object's top
     /// face, negative = indentation depth; rz = sensor yaw, deg) over the
     /// extruded `shape`. `shear` is an optional slide (sensor frame) made
-    /// while in contact. Eqs. S4-S8.
+    /// while in contact. Eqs. S4-S8a.
     pub fn pins(&self, shape: &Contour, tip: Pose, shear: Option<Shear>) -> Vec<[f64; 2]> {
         if tip.z >= 0.0 {
             return self.rest_px.clone();

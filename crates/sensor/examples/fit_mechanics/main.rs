@@ -9,7 +9,7 @@
 //!      cargo run --release -p tactrace-sensor --example fit_mechanics
 //! Env: REAL_FIELDS (cache path), FIT=1 (refit; else score the defaults),
 //! FIGURE=path.png (draw matched cases).
-use tactrace_sensor::{EdgeTap, Shear, TacTipConfig, TacTipModel};
+use tactrace_sensor::{EdgeTap, TacTipConfig, TacTipModel};
 
 mod support;
 use support::{draw_figure, nelder_mead, Bin, Pair, RealTap};
@@ -256,5 +256,4 @@ fn main() {
             Err(e) => eprintln!("figure failed: {e}"),
         }
     }
-    let _ = Shear::default();
 }

@@ -1,8 +1,8 @@
 //! Calibration of the simulated TacTip against the real 127-pin edge frames
 //! (shared/data/tactip127-edge2d). Not part of the product: a throwaway
-//! pin detector, a rest-layout fit of the camera, and a fit of the contact
-//! mechanics to low-shear taps, printing the comparison figures quoted in
-//! docs/sensor-model.md.
+//! pin detector, a rest-layout fit of the camera (eqs. S1-S3, quoted in
+//! docs/sensor-model.md), and an early mechanics fit now superseded by
+//! `examples/fit_mechanics` (robust tracking, binned fields).
 //!
 //! Run: cargo run --release -p tactrace-sensor --example calibrate
 use std::path::{Path, PathBuf};

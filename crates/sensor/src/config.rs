@@ -78,7 +78,8 @@ impl Default for CameraConfig {
     }
 }
 
-/// Contact mechanics (docs/sensor-model.md, eqs. S1-S6).
+/// Contact mechanics (docs/sensor-model.md, eqs. S4-S8a), fitted to the
+/// real edge frames.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Mechanics {
@@ -105,21 +106,29 @@ pub struct Mechanics {
     pub shear_limit_deg: f64,
     /// Smoothed indentation (mm) at which a pin counts as half in contact.
     pub contact_scale_mm: f64,
+    /// Distance along the skin from the pole (mm) at which the sensor body
+    /// holds the skin still: pin motion is scaled by 1 - (s / S)^2, zero
+    /// beyond S (eq. S8a). A very large value switches the clamp off.
+    pub rim_clamp_mm: f64,
 }
 
 impl Default for Mechanics {
+    /// Fitted to the real edge frames (docs/sensor-model.md, "Mechanics
+    /// fit"; `examples/fit_mechanics`); the grids and `max_depth_mm` are
+    /// numerical settings, not fitted.
     fn default() -> Self {
         Self {
-            kernel_width_mm: 4.0,
-            lift_gain: 1.0,
-            flow_core_mm: 2.0,
-            layer_thickness_mm: 5.0,
+            kernel_width_mm: 5.567,
+            lift_gain: 0.2457,
+            flow_core_mm: 0.676,
+            layer_thickness_mm: 9.94,
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 1.0,
-            shear_limit_deg: 5.0,
-            contact_scale_mm: 0.3,
+            shear_limit_mm: 1.897,
+            shear_limit_deg: 0.248,
+            contact_scale_mm: 0.0374,
+            rim_clamp_mm: 29.81,
         }
     }
 }
@@ -165,11 +174,13 @@ pub struct Calibration {
 }
 
 impl Default for Calibration {
+    /// Orientation conventions found on the real data; offsets and tap
+    /// depth fitted with the mechanics (docs/sensor-model.md).
     fn default() -> Self {
         Self {
-            angle_offset_deg: -22.0,
-            edge_offset_mm: 0.0,
-            tap_depth_mm: 3.0,
+            angle_offset_deg: -15.67,
+            edge_offset_mm: 2.317,
+            tap_depth_mm: 6.249,
             depth_per_offset: -1.0,
             object_side: -1.0,
             shear_sign: 1.0,
@@ -280,6 +291,7 @@ impl TacTipConfig {
         positive("mechanics.shear_limit_mm", m.shear_limit_mm)?;
         positive("mechanics.shear_limit_deg", m.shear_limit_deg)?;
         positive("mechanics.contact_scale_mm", m.contact_scale_mm)?;
+        positive("mechanics.rim_clamp_mm", m.rim_clamp_mm)?;
         non_negative("nuisance.pin_jitter_px", n.pin_jitter_px)?;
         non_negative("nuisance.image_noise_std", n.image_noise_std)?;
         finite("calibration.angle_offset_deg", k.angle_offset_deg)?;

@@ -10,6 +10,7 @@
 //! and a few dozen signed-distance queries.
 use crate::config::Mechanics;
 use crate::layout::{hex_lattice, Projection};
+use crate::render::floor_i64;
 use tactrace_geometry::{Pose, Vec2};
 
 /// A slide the sensor made while in contact, in the sensor frame
@@ -28,6 +29,8 @@ struct PatchPoint {
     horiz: [f64; 2],
     /// Height above the dome's lowest point, mm.
     height: f64,
+    /// Horizontal distance from the axis, mm.
+    radius: f64,
 }
 
 /// Pin displacements on the skin and the smoothed indentation under each pin.
@@ -43,8 +46,12 @@ pub(crate) struct ContactField {
 #[derive(Debug, Clone)]
 pub(crate) struct ContactModel {
     patch: Vec<PatchPoint>,
-    /// `kernel[j * pins + i]` = (K_x, K_y, G) of patch point j on pin i.
-    kernel: Vec<[f32; 3]>,
+    /// `kernel_x[j * pins + i]` = K_x of patch point j on pin i (eq. S6);
+    /// likewise K_y and the smoothing weight G (eq. S5). Separate rows keep
+    /// the per-tap accumulation a vectorisable pass.
+    kernel_x: Vec<f32>,
+    kernel_y: Vec<f32>,
+    kernel_g: Vec<f32>,
     pins_g: Vec<[f64; 2]>,
     mech: Mechanics,
 }
@@ -61,21 +68,39 @@ impl ContactModel {
             .filter(|g| g[0].hypot(g[1]) <= reach + 1e-9)
             .map(|g| {
                 let (horiz, height) = proj.skin_point(g);
-                (g, PatchPoint { horiz, height })
+                let radius = horiz[0].hypot(horiz[1]);
+                (
+                    g,
+                    PatchPoint {
+                        horiz,
+                        height,
+                        radius,
+                    },
+                )
             })
             .collect();
         patch.sort_by(|a, b| a.1.height.total_cmp(&b.1.height));
         let area = 3f64.sqrt() / 2.0 * h * h;
         let widths = (mech.flow_core_mm, mech.kernel_width_mm);
-        let mut kernel = Vec::with_capacity(patch.len() * pins_g.len());
+        let size = patch.len() * pins_g.len();
+        let (mut kernel_x, mut kernel_y, mut kernel_g) = (
+            Vec::with_capacity(size),
+            Vec::with_capacity(size),
+            Vec::with_capacity(size),
+        );
         for (gj, _) in &patch {
             for gi in &pins_g {
-                kernel.push(kernel_weights(*gi, *gj, widths, area));
+                let k = kernel_weights(*gi, *gj, widths, area);
+                kernel_x.push(k[0]);
+                kernel_y.push(k[1]);
+                kernel_g.push(k[2]);
             }
         }
         Self {
             patch: patch.into_iter().map(|(_, p)| p).collect(),
-            kernel,
+            kernel_x,
+            kernel_y,
+            kernel_g,
             pins_g,
             mech: mech.clone(),
         }
@@ -96,17 +121,21 @@ impl ContactModel {
         let active = self.patch.partition_point(|p| p.height < depth);
         let reach = self.patch[..active]
             .iter()
-            .map(|p| p.horiz[0].hypot(p.horiz[1]))
+            .map(|p| p.radius)
             .fold(0.0, f64::max);
         let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, tip);
         let h = self.mech.patch_grid_mm;
+        let (mut ux, mut uy) = (vec![0.0; n], vec![0.0; n]);
         for (j, point) in self.patch[..active].iter().enumerate() {
             let dist = grid.interpolate(sd, point.horiz);
             let inside = (0.5 - dist / h).clamp(0.0, 1.0);
             let pen = inside * (depth - point.height);
             if pen > 0.0 {
-                self.accumulate(j, pen, &mut field);
+                self.accumulate(j, pen, [&mut ux, &mut uy, &mut field.smoothed]);
             }
+        }
+        for ((d, x), y) in field.disp.iter_mut().zip(&ux).zip(&uy) {
+            *d = [*x, *y];
         }
         if let Some(shear) = shear {
             self.apply_shear(shear, &mut field);
@@ -115,14 +144,18 @@ impl ContactModel {
     }
 
     /// Add patch point j's indentation `pen` to every pin (eqs. S5, S6).
-    fn accumulate(&self, j: usize, pen: f64, field: &mut ContactField) {
+    fn accumulate(&self, j: usize, pen: f64, [ux, uy, smoothed]: [&mut Vec<f64>; 3]) {
         let n = self.pins_g.len();
-        let gain = 1.0 / self.mech.layer_thickness_mm;
-        let row = &self.kernel[j * n..(j + 1) * n];
-        for (i, k) in row.iter().enumerate() {
-            field.disp[i][0] += gain * pen * k[0] as f64;
-            field.disp[i][1] += gain * pen * k[1] as f64;
-            field.smoothed[i] += pen * k[2] as f64;
+        let flow = 1.0 / self.mech.layer_thickness_mm * pen;
+        let rows = j * n..(j + 1) * n;
+        for (u, k) in ux.iter_mut().zip(&self.kernel_x[rows.clone()]) {
+            *u += flow * *k as f64;
+        }
+        for (u, k) in uy.iter_mut().zip(&self.kernel_y[rows.clone()]) {
+            *u += flow * *k as f64;
+        }
+        for (u, k) in smoothed.iter_mut().zip(&self.kernel_g[rows]) {
+            *u += pen * *k as f64;
         }
     }
 
@@ -226,7 +259,7 @@ impl DistanceGrid {
 
     fn interpolate(&mut self, sd: &dyn Fn(Vec2) -> f64, q: [f64; 2]) -> f64 {
         let (u, v) = (q[0] / self.spacing, q[1] / self.spacing);
-        let (ia, ib) = (u.floor() as i64, v.floor() as i64);
+        let (ia, ib) = (floor_i64(u), floor_i64(v));
         let (fu, fv) = (u - ia as f64, v - ib as f64);
         let v00 = self.node(sd, ia, ib);
         let v10 = self.node(sd, ia + 1, ib);

@@ -18,6 +18,10 @@ pub struct TacTipModel {
     /// Surface coordinates of each pin, mm (same order as `rest_px`).
     pins_g: Vec<[f64; 2]>,
     rest_px: Vec<[f64; 2]>,
+    /// Model projection of each pin at rest (eq. S3), px.
+    base_px: Vec<[f64; 2]>,
+    /// Rim clamp factor of each pin, 1 - (s / S)^2 clipped at 0 (eq. S8a).
+    clamp: Vec<f64>,
     radii_px: Vec<f64>,
     contact: ContactModel,
     lift_gain: f64,
@@ -61,12 +65,20 @@ impl TacTipModel {
             cfg.geometry.dome_radius_mm,
             &cfg.mechanics,
         );
+        let base_px = pins_g.iter().map(|g| proj.project(*g)).collect();
+        let rim = cfg.mechanics.rim_clamp_mm;
+        let clamp = pins_g
+            .iter()
+            .map(|g| (1.0 - (g[0].hypot(g[1]) / rim).powi(2)).max(0.0))
+            .collect();
         Self {
             lift_gain: cfg.mechanics.lift_gain,
             cfg,
             proj,
             pins_g,
             rest_px,
+            base_px,
+            clamp,
             radii_px,
             contact,
         }
@@ -96,7 +108,7 @@ impl TacTipModel {
     /// mm; z = height of the dome's lowest point above the object's top
     /// face, negative = indentation depth; rz = sensor yaw, deg) over the
     /// extruded `shape`. `shear` is an optional slide (sensor frame) made
-    /// while in contact. Eqs. S4-S8.
+    /// while in contact. Eqs. S4-S8a.
     pub fn pins(&self, shape: &Contour, tip: Pose, shear: Option<Shear>) -> Vec<[f64; 2]> {
         if tip.z >= 0.0 {
             return self.rest_px.clone();
@@ -115,15 +127,19 @@ impl TacTipModel {
         let field = self.contact.field(sd, tip, shear);
         self.rest_px
             .iter()
-            .zip(&self.pins_g)
+            .zip(self.pins_g.iter().zip(&self.base_px))
             .zip(field.disp.iter().zip(&field.smoothed))
-            .map(|((rest, g), (u, lift))| {
+            .zip(&self.clamp)
+            .map(|(((rest, (g, base)), (u, lift)), k)| {
                 if u[0] == 0.0 && u[1] == 0.0 && *lift == 0.0 {
                     return *rest;
                 }
-                let lift = self.lift_gain * lift;
+                let (u, lift) = if *k < 1.0 {
+                    ([k * u[0], k * u[1]], k * self.lift_gain * lift)
+                } else {
+                    (*u, self.lift_gain * lift)
+                };
                 let moved = self.proj.project_lifted([g[0] + u[0], g[1] + u[1]], lift);
-                let base = self.proj.project(*g);
                 [rest[0] + moved[0] - base[0], rest[1] + moved[1] - base[1]]
             })
             .collect()

@@ -33,9 +33,12 @@ fn rendered_pins_are_found_again_by_centroids() {
                 nearest(&pins, *weighted) < 0.1,
                 "weighted centroid {weighted:?}"
             );
+            // Thresholding a ~2 px disc quantises its centroid: up to
+            // ~1/3 px off depending on the sub-pixel position.
             assert!(
-                nearest(&pins, *thresholded) < 0.3,
-                "thresholded centroid {thresholded:?}"
+                nearest(&pins, *thresholded) < 0.35,
+                "thresholded centroid {thresholded:?} weighted {weighted:?} d {}",
+                nearest(&pins, *thresholded)
             );
         }
     }

@@ -6,6 +6,10 @@ use common::*;
 use tactrace_geometry::{Pose, Vec2};
 use tactrace_sensor::Shear;
 
+/// A typical tap, mm: the rig's default depth; the real edge taps fit
+/// 4.5-6.5 mm (docs/sensor-model.md).
+const TAP: f64 = 5.0;
+
 #[test]
 fn no_contact_gives_the_rest_pins_exactly() {
     let model = plain_model();
@@ -32,8 +36,8 @@ fn rotating_the_sensor_by_60_degrees_permutes_and_rotates_the_field() {
     // lattice, which is symmetric under 60 degree turns.
     let model = plain_model();
     let sd = |p: Vec2| p.y + 2.0;
-    let d0 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 0.0), None));
-    let d60 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 60.0), None));
+    let d0 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, TAP, 0.0), None));
+    let d60 = displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, TAP, 60.0), None));
     let rest = model.rest_pins();
     assert!(mean_magnitude(&d0) > 1.0, "edge contact must move pins");
     for i in 0..rest.len() {
@@ -138,7 +142,7 @@ fn moving_the_edge_changes_the_field_and_pins_near_the_edge_respond() {
     let model = plain_model();
     let at = |r: f64| {
         let sd = move |p: Vec2| p.y + r;
-        displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, 3.0, 0.0), None))
+        displacement(&model, &model.pins_sdf(&sd, tap(0.0, 0.0, TAP, 0.0), None))
     };
     let (a, b) = (at(1.0), at(1.5));
     let change: f64 = a
@@ -151,9 +155,19 @@ fn moving_the_edge_changes_the_field_and_pins_near_the_edge_respond() {
         change > 0.1,
         "0.5 mm edge shift changed pins by only {change} px on average"
     );
-    // The pins next to the centre straddle an edge through the origin.
+    // The ring-1 pins at +-30 and +-150 deg sit 2.1 mm either side of an
+    // edge through the origin and must respond. (The ones at +-90 deg are
+    // 4.2 mm away: the one in the middle of the pressed half barely moves
+    // sideways, as pins in the middle of the contact do on the real frames.)
     let through = at(0.0);
-    for (i, d) in through.iter().enumerate().take(7) {
+    let rest = model.rest_pins();
+    let beside_edge = |i: &usize| {
+        let (dx, dy) = (rest[*i][0] - rest[0][0], rest[*i][1] - rest[0][1]);
+        dy.abs() < dx.abs()
+    };
+    let near: Vec<usize> = (1..7).filter(beside_edge).collect();
+    assert_eq!(near.len(), 4);
+    for (i, d) in near.iter().map(|&i| (i, through[i])) {
         assert!(
             d[0].hypot(d[1]) > 0.3,
             "pin {i} next to the edge moved {d:?}"
@@ -173,7 +187,7 @@ fn curvature_and_corners_change_the_pattern() {
         })
         .collect();
     let small_disk = tactrace_geometry::Contour::new(disk_vertices).expect("disk");
-    let pose = tap(0.0, 0.0, 3.0, 0.0);
+    let pose = tap(0.0, 0.0, TAP, 0.0);
     let d_straight = displacement(&model, &model.pins(&straight, pose, None));
     for other in [&corner, &small_disk] {
         let d = displacement(&model, &model.pins(other, pose, None));
@@ -212,4 +226,30 @@ fn shear_drags_contact_pins_against_the_slide_and_saturates() {
         (huge - big).abs() < 0.05 * big.abs(),
         "drag saturates: {huge} vs {big}"
     );
+}
+
+#[test]
+fn the_rim_clamp_holds_the_outer_ring_and_leaves_the_centre() {
+    let object = square([0.0, -30.0], 30.0);
+    let pose = tap(0.0, 2.0, TAP, 10.0);
+    let run = |rim: f64| {
+        let mut cfg = tactrace_sensor::TacTipConfig::default();
+        cfg.camera.rotation_deg = 0.0;
+        cfg.camera.mirror = false;
+        cfg.mechanics.rim_clamp_mm = rim;
+        let model = tactrace_sensor::TacTipModel::new(cfg).expect("valid");
+        displacement(&model, &model.pins(&object, pose, None))
+    };
+    let (free, clamped, tight) = (run(1e6), run(29.81), run(20.0));
+    let outer = |d: &[[f64; 2]]| mean_magnitude(&d[91..]);
+    assert!(
+        outer(&clamped) < 0.5 * outer(&free),
+        "outer ring {} vs free {}",
+        outer(&clamped),
+        outer(&free)
+    );
+    let c = (clamped[0][0] - free[0][0]).hypot(clamped[0][1] - free[0][1]);
+    assert!(c < 1e-9, "centre pin unaffected by the clamp: {c}");
+    // The outer ring (index 91 on) lies beyond 20 mm of skin: held still.
+    assert!(tight[91..].iter().all(|d| d[0] == 0.0 && d[1] == 0.0));
 }

@@ -152,9 +152,10 @@ pub enum SensorCommand {
         /// Sensor angle relative to the edge, degrees.
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
         theta: f64,
-        /// Indentation depth, mm (the report's nominal tap: 3 mm).
-        #[arg(long, default_value_t = 3.0)]
-        depth: f64,
+        /// Indentation depth, mm (default: the rig's nominal tap, 6.25 mm
+        /// in the calibrated model; see docs/sensor-model.md).
+        #[arg(long)]
+        depth: Option<f64>,
         /// Arc length of the edge point, mm.
         #[arg(long, default_value_t = 0.0)]
         arc: f64,
@@ -192,6 +193,7 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             let model =
                 tactrace_sensor::TacTipModel::new(rig.sensor.clone()).map_err(LabError::from)?;
             let (edge, normal) = contour.at_arc_length(arc);
+            let depth = depth.unwrap_or(rig.tap.nominal_indentation_mm());
             let pose = pose_at_edge(edge, normal, r, theta, -depth);
             let pins = model.pins(&contour, pose, None);
             let frame = model.render(&pins, None);

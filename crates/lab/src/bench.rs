@@ -43,7 +43,7 @@ pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<
                 normal,
                 -5.0 + 10.0 * u,
                 -45.0 + 90.0 * ((u * 7.0) % 1.0),
-                -3.0,
+                -rig.tap.nominal_indentation_mm(),
             )
         })
         .collect();

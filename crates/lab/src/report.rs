@@ -273,13 +273,14 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<Vec<NetRow
     rows.into_iter().collect()
 }
 
-/// Fig. 4.1 on a simulated tap: 2 mm onto the disk edge, 10 deg, 3 mm deep.
+/// Fig. 4.1 on a simulated tap: 2 mm onto the disk edge, 10 deg, nominal depth.
 fn fig_4_1_simulated(rig: &crate::rig::RigConfig, disk: &Contour, stem: &Path) -> Result<()> {
     let model = tactrace_sensor::TacTipModel::new(rig.sensor.clone())?;
     let reference = model.render(model.rest_pins(), None);
     let extractor = PinExtractor::from_reference_frame(&reference, rig.blob.clone())?;
     let (edge, normal) = disk.at_arc_length(0.0);
-    let pose = crate::collect::pose_at_edge(edge, normal, 2.0, 10.0, -3.0);
+    let depth = rig.tap.nominal_indentation_mm();
+    let pose = crate::collect::pose_at_edge(edge, normal, 2.0, 10.0, -depth);
     let frame = model.render(&model.pins(disk, pose, None), None);
     figures::frame_pins_displacements(stem, &frame, &extractor, 3.0)?;
     Ok(())

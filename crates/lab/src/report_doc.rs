@@ -47,7 +47,7 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
         r.tactrace_version, r.seed, r.seconds
     );
     md.push_str("## Fig. 4.1: frame, extracted pins, displacements\n\n");
-    md.push_str("![Fig. 4.1 simulated tap (r = 2 mm, theta = 10 deg, 3 mm deep)](figures/fig4_1_simulated.svg)\n\n");
+    md.push_str("![Fig. 4.1 simulated tap (r = 2 mm, theta = 10 deg, nominal depth)](figures/fig4_1_simulated.svg)\n\n");
     if !r.real_networks.is_empty() {
         md.push_str(
             "![Fig. 4.1 real frame frame_0_0 of tactip127-edge2d](figures/fig4_1_real.svg)\n\n",

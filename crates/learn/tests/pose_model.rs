@@ -4,7 +4,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_learn::{
     hyperparameter_search, mean_absolute_error, Dataset, LearnError, ModelConfig, ModelKind,
-    PoseModel, Preset, SearchSpace,
+    PoseModel, Preset, SearchSpace, FORMAT_VERSION,
 };
 
 /// Displacement-like features that depend smoothly on (r, theta).
@@ -125,12 +125,16 @@ fn bad_model_bytes_are_errors() {
         PoseModel::from_bytes(&json[..json.len() / 2], &weights),
         Err(LearnError::Corrupt { .. })
     ));
-    let other = json.replacen("\"version\": 1", "\"version\": 2", 1);
+    let other = json.replacen(
+        &format!("\"version\": {FORMAT_VERSION}"),
+        "\"version\": 1",
+        1,
+    );
     assert!(matches!(
         PoseModel::from_bytes(&other, &weights),
         Err(LearnError::Version {
-            found: 2,
-            supported: 1
+            found: 1,
+            supported: FORMAT_VERSION
         })
     ));
     assert!(PoseModel::from_bytes(&json, b"not safetensors").is_err());
@@ -230,8 +234,16 @@ fn search_ranks_trials_on_the_validation_split() {
         trials: 2,
         seed: 1,
     };
-    let trials = hyperparameter_search(&small(ModelKind::PDenNN, 5), &space, &train, &val).unwrap();
-    assert_eq!(trials.len(), 2);
+    let mut seen = 0;
+    let trials = hyperparameter_search(
+        &small(ModelKind::PDenNN, 5),
+        &space,
+        &train,
+        &val,
+        &mut |_| seen += 1,
+    )
+    .unwrap();
+    assert_eq!((trials.len(), seen), (2, 2));
     assert!(trials[0].score <= trials[1].score);
     assert_eq!(trials[0].config.angle.as_ref().unwrap().learning_rate, 0.02);
 }

@@ -204,3 +204,39 @@ pub fn validate(model: &PoseModel, data: &TapData) -> Result<Validation> {
         truth,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::DatasetMeta;
+
+    fn data(n: usize) -> TapData {
+        let meta: DatasetMeta = serde_json::from_value(serde_json::json!({
+            "source": "test", "origin": "", "seed": null, "samples": n, "pins": 1,
+            "targets": ["r", "theta"], "frames_with_missing_pins": 0,
+            "reference_pins": [[0.0, 0.0]], "settings": null, "tactrace_version": ""
+        }))
+        .expect("meta");
+        TapData {
+            inputs: (0..2 * n).map(|v| v as f32).collect(),
+            targets: (0..2 * n).map(|v| v as f32).collect(),
+            meta,
+        }
+    }
+
+    #[test]
+    fn holdout_is_seeded_disjoint_and_checked() {
+        let d = data(50);
+        let (tr, va) = holdout(&d, 0.2, 1).unwrap();
+        assert_eq!((tr.len(), va.len()), (40, 10));
+        let (tr2, _) = holdout(&d, 0.2, 1).unwrap();
+        assert_eq!(tr.inputs, tr2.inputs);
+        for row in va.inputs.chunks(2) {
+            assert!(!tr.inputs.chunks(2).any(|r| r == row));
+        }
+        for bad in [0.0, 1.0, -0.5, f64::NAN] {
+            assert!(holdout(&d, bad, 1).is_err());
+        }
+        assert!(holdout(&data(1), 0.5, 1).is_err());
+    }
+}

@@ -113,6 +113,31 @@ fn whitened_training_data_has_identity_covariance() {
 }
 
 #[test]
+fn unit_mean_scaling_keeps_the_shape_and_averages_unit_variance() {
+    let (n, dim) = (400, 10);
+    let x = correlated(n, dim, 2);
+    let z = Standardiser::fit(&x, n, dim).unwrap().transform(&x);
+    let k = 5;
+    let raw = Pca::fit(&z, n, dim, Components::Count(k), PcScaling::Raw).unwrap();
+    let unit = Pca::fit(&z, n, dim, Components::Count(k), PcScaling::UnitMean).unwrap();
+    let (cr, cu) = (
+        covariance(&raw.transform(&z), n, k),
+        covariance(&unit.transform(&z), n, k),
+    );
+    let mean_var: f64 = (0..k).map(|p| cu[p * k + p]).sum::<f64>() / k as f64;
+    assert!((mean_var - 1.0).abs() < 1e-9, "mean variance {mean_var}");
+    // One common factor: the ratios between components are the raw ones.
+    let f = cu[0] / cr[0];
+    for p in 0..k {
+        assert!(
+            (cu[p * k + p] / cr[p * k + p] - f).abs() < 1e-9,
+            "component {p}"
+        );
+        assert!((cr[p * k + p] - raw.eigenvalues()[p]).abs() < 1e-9);
+    }
+}
+
+#[test]
 fn explained_variance_equals_independent_eigenvalue_ratio() {
     let (n, dim) = (250, 9);
     let x = correlated(n, dim, 3);

@@ -79,6 +79,39 @@ fn training_lowers_the_loss_for_every_kind() {
     }
 }
 
+/// The default preset at full size (35 PCs, 1000 hidden units): the
+/// backprop twin used to diverge at epoch 0 with a plain learning rate.
+#[test]
+fn default_preset_trains_stably_at_full_size() {
+    let data = synthetic(300, 60, 11);
+    for kind in [ModelKind::Mlp, ModelKind::PDenNN] {
+        let mut cfg = ModelConfig::preset(kind, Preset::Default);
+        cfg.epochs = 4;
+        let (model, history) = PoseModel::fit(&cfg, &data, &mut |_| {}).unwrap();
+        for net in 0..2 {
+            let losses: Vec<f64> = history.epochs.iter().map(|e| e.nets[net].loss).collect();
+            assert!(losses.iter().all(|l| l.is_finite()), "{kind:?}: {losses:?}");
+            assert!(losses[3] < losses[0], "{kind:?}: {losses:?}");
+        }
+        let mae = mean_absolute_error(&model.predict_batch(&data).unwrap(), &data);
+        assert!(mae[0] < 2.0 && mae[1] < 18.0, "{kind:?}: MAE {mae:?}");
+    }
+}
+
+#[test]
+fn diverging_training_is_an_error_not_a_panic() {
+    let data = synthetic(100, 12, 12);
+    let mut cfg = small(ModelKind::Mlp, 3);
+    cfg.lr_scaling = tactrace_learn::LrScaling::None;
+    for net in [&mut cfg.position, &mut cfg.angle].into_iter().flatten() {
+        net.learning_rate = 1e4;
+    }
+    assert!(matches!(
+        PoseModel::fit(&cfg, &data, &mut |_| {}),
+        Err(LearnError::Diverged { .. })
+    ));
+}
+
 #[test]
 fn validation_loss_is_reported_and_falls() {
     let (train, val) = synthetic(500, 20, 2).split(0.8, 3);

@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use tactrace_lab::{dataset, figures, fsutil, model_io, train as tr, LabError};
-use tactrace_learn::{ModelKind, Preset};
+use tactrace_learn::{ModelKind, Preset, SearchSpace};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ModelArg {
@@ -51,8 +51,15 @@ pub struct TrainArgs {
     #[arg(long)]
     train: PathBuf,
     /// Validation dataset directory (scored after training).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "val_fraction")]
     val: Option<PathBuf>,
+    /// Hold out this fraction of --train (seeded shuffle) as the validation
+    /// set instead of a separate --val directory; the model never sees it.
+    #[arg(long)]
+    val_fraction: Option<f64>,
+    /// Seed of the --val-fraction shuffle.
+    #[arg(long, default_value_t = 1)]
+    split_seed: u64,
     /// Output model directory.
     #[arg(long)]
     out: PathBuf,
@@ -63,6 +70,20 @@ pub struct TrainArgs {
     /// TOML overriding any hyper-parameter of the preset.
     #[arg(long)]
     config: Option<PathBuf>,
+    /// Run a hyper-parameter search first (on a validation split carved out
+    /// of the training data), then train the best configuration on all of it.
+    #[arg(long)]
+    search: bool,
+    /// TOML with the search grid (keys of `SearchSpace`; missing keys take
+    /// the built-in grid).
+    #[arg(long, requires = "search")]
+    search_space: Option<PathBuf>,
+    /// Fraction of the training data the search validates on.
+    #[arg(long, default_value_t = 0.25, requires = "search")]
+    search_fraction: f64,
+    /// Number of grid points to try (overrides the grid file).
+    #[arg(long, requires = "search")]
+    trials: Option<usize>,
     /// Print the resolved configuration as TOML and exit.
     #[arg(long)]
     print_config: bool,
@@ -83,19 +104,102 @@ pub fn train(a: TrainArgs) -> Result<()> {
         print!("{}", toml::to_string(&cfg)?);
         return Ok(());
     }
+    fsutil_check_out(&a.out, a.force)?;
     let data = dataset::read_dataset(&a.train)?;
-    let val = a.val.as_deref().map(dataset::read_dataset).transpose()?;
+    let (data, val) = match (a.val.as_deref(), a.val_fraction) {
+        (Some(dir), _) => (data, Some(dataset::read_dataset(dir)?)),
+        (None, Some(f)) => {
+            let (tr, va) = tr::holdout(&data, f, a.split_seed)?;
+            eprintln!(
+                "training on {} samples, holding out {} (fraction {f}, seed {})",
+                tr.len(),
+                va.len(),
+                a.split_seed
+            );
+            (tr, Some(va))
+        }
+        (None, None) => (data, None),
+    };
+    let (cfg, extra) = if a.search {
+        let space = search_space(a.search_space.as_deref(), a.trials)?;
+        let t0 = std::time::Instant::now();
+        let mut k = 0;
+        let trials = tr::search(
+            &cfg,
+            &space,
+            &data,
+            a.search_fraction,
+            a.split_seed.wrapping_add(1),
+            &mut |t| {
+                k += 1;
+                eprintln!(
+                    "trial {k}: {} -> validation {:.3} mm, {:.3} deg ({:.0} s so far)",
+                    tr::trial_summary(t),
+                    t.val_mae[0],
+                    t.val_mae[1],
+                    t0.elapsed().as_secs_f64()
+                );
+            },
+        )?;
+        let best = trials
+            .first()
+            .filter(|t| t.score.is_finite())
+            .ok_or_else(|| LabError::Config("every search trial diverged".into()))?;
+        eprintln!("best: {}", tr::trial_summary(best));
+        let extra = vec![
+            ("search.csv", tr::trials_csv(&trials)),
+            ("search_best.toml", toml::to_string(&best.config)?),
+        ];
+        (best.config.clone(), extra)
+    } else {
+        (cfg, Vec::new())
+    };
     let pb = bar(cfg.epochs as u64, "train");
-    let (model, history) = tr::train(&cfg, &data, &mut |e| pb.set_position(e as u64))?;
+    let t0 = std::time::Instant::now();
+    let (model, history) = tr::train_with_validation(&cfg, &data, val.as_ref(), &mut |e| {
+        pb.set_position(e as u64)
+    })?;
     pb.finish_and_clear();
-    let dir = model_io::save_model(&a.out, &model, &history, a.force)?;
-    eprintln!("saved model to {}", dir.display());
+    let secs = t0.elapsed().as_secs_f64();
+    let extra: Vec<(&str, String)> = extra;
+    let dir = model_io::save_model_with(&a.out, &model, &history, a.force, &extra)?;
+    eprintln!("trained in {secs:.1} s; saved model to {}", dir.display());
     if let Some(val) = val {
         let v = tr::validate(&model, &val)?;
         println!(
             "validation: position {:.3} mm, angle {:.3} deg over {} samples",
             v.position_mae_mm, v.angle_mae_deg, v.samples
         );
+    }
+    Ok(())
+}
+
+/// The search grid: a TOML file's keys over the built-in grid.
+fn search_space(path: Option<&std::path::Path>, trials: Option<usize>) -> Result<SearchSpace> {
+    let mut space = match path {
+        Some(p) => {
+            let text = fsutil::read_text(p)?;
+            toml::from_str(&text).with_context(|| format!("search space {}", p.display()))?
+        }
+        None => SearchSpace::default(),
+    };
+    if let Some(t) = trials {
+        space.trials = t;
+    }
+    Ok(space)
+}
+
+/// Refuse an existing, non-empty output directory before any work (unless
+/// `force`), so a long run cannot end in "output exists".
+fn fsutil_check_out(out: &std::path::Path, force: bool) -> Result<()> {
+    let has_entries = std::fs::read_dir(out)
+        .map(|mut d| d.next().is_some())
+        .unwrap_or(false);
+    if has_entries && !force {
+        return Err(LabError::OutputExists {
+            path: out.to_path_buf(),
+        }
+        .into());
     }
     Ok(())
 }

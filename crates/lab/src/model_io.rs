@@ -16,7 +16,22 @@ pub fn save_model(
     history: &TrainingHistory,
     force: bool,
 ) -> Result<PathBuf> {
+    save_model_with(dir, model, history, force, &[])
+}
+
+/// As [`save_model`], with extra text files `(name, contents)` in the same
+/// atomic commit (e.g. the hyper-parameter search's trials).
+pub fn save_model_with(
+    dir: &Path,
+    model: &PoseModel,
+    history: &TrainingHistory,
+    force: bool,
+    extra: &[(&str, String)],
+) -> Result<PathBuf> {
     let stage = StagedDir::new(dir, force)?;
+    for (name, text) in extra {
+        write(&stage.path().join(name), text.as_bytes())?;
+    }
     let (json, weights) = model.to_bytes()?;
     write(&stage.path().join(MODEL_JSON), json.as_bytes())?;
     write(&stage.path().join(WEIGHTS), &weights)?;

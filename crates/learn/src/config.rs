@@ -1,8 +1,9 @@
 //! Model configurations: which of the report's three networks (Table 4.1)
 //! or the backprop baseline, with every hyper-parameter explicit, checked
 //! before any training starts.
-use crate::dennn::{ClampedPhase, FreePhase};
+use crate::dennn::{ClampedPhase, FreePhase, LrScaling};
 use crate::error::LearnError;
+use crate::pca::PcScaling;
 use serde::{Deserialize, Serialize};
 
 /// The model families of report ch. 4.2, plus the backprop baseline.
@@ -64,8 +65,10 @@ pub struct ModelConfig {
     pub epochs: usize,
     pub seed: u64,
     pub target_scaling: TargetScaling,
-    /// Divide each principal component by its standard deviation.
-    pub whiten: bool,
+    /// How principal components are scaled before the nets.
+    pub pc_scaling: PcScaling,
+    /// How `learning_rate` applies to each layer.
+    pub lr_scaling: LrScaling,
     pub free_phase: FreePhase,
     pub clamped_phase: ClampedPhase,
     /// The single net of DisDenNN / PcaDenNN (outputs r and theta).
@@ -220,7 +223,8 @@ fn report(kind: ModelKind) -> ModelConfig {
         epochs: 200,
         seed: 0,
         target_scaling: TargetScaling::Standardise,
-        whiten: false,
+        pc_scaling: PcScaling::Raw,
+        lr_scaling: LrScaling::None,
         free_phase: FreePhase::Euler { n_i: 5, dt: 1.0 },
         clamped_phase: ClampedPhase::Euler { n_i: 5, dt: 1.0 },
         pose: None,
@@ -242,22 +246,25 @@ fn report(kind: ModelKind) -> ModelConfig {
     cfg
 }
 
+/// The default preset's learning rate, per fan-in ([`LrScaling::FanIn`]):
+/// each layer's per-sample step moves the output by roughly this fraction
+/// of the error times `||phi||^2 / fan-in` (about 0.3 for the sigmoid layer).
+const DEFAULT_LR: f64 = 3.0;
+
 /// Tuned defaults (docs/learning.md records the search behind them).
 fn tuned(kind: ModelKind) -> ModelConfig {
     let mut cfg = report(kind);
-    cfg.whiten = true;
+    cfg.pc_scaling = PcScaling::UnitMean;
+    cfg.lr_scaling = LrScaling::FanIn;
     cfg.free_phase = FreePhase::FeedForward;
     cfg.clamped_phase = ClampedPhase::Linearised;
+    let (lr, beta) = (DEFAULT_LR, 1.0);
     match kind {
-        ModelKind::DisDenNN => cfg.pose = net(None, 500, 0.01, 1.0),
-        ModelKind::PcaDenNN => cfg.pose = net(Some(35), 1000, 0.01, 1.0),
-        ModelKind::PDenNN => {
-            cfg.position = net(Some(35), 1000, 0.01, 1.0);
-            cfg.angle = net(Some(35), 1000, 0.01, 1.0);
-        }
-        ModelKind::Mlp => {
-            cfg.position = net(Some(35), 1000, 0.01, 1.0);
-            cfg.angle = net(Some(35), 1000, 0.01, 1.0);
+        ModelKind::DisDenNN => cfg.pose = net(None, 500, lr, beta),
+        ModelKind::PcaDenNN => cfg.pose = net(Some(35), 1000, lr, beta),
+        ModelKind::PDenNN | ModelKind::Mlp => {
+            cfg.position = net(Some(35), 1000, lr, beta);
+            cfg.angle = net(Some(35), 1000, lr, beta);
         }
     }
     cfg

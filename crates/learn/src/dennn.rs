@@ -44,12 +44,43 @@ pub enum ClampedPhase {
     Euler { n_i: usize, dt: f64 },
 }
 
+/// How the learning rate `eta` of eq. 3.21 is applied to each layer.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LrScaling {
+    /// The same `eta` for every layer (the report's rule).
+    #[default]
+    None,
+    /// `eta / d(l-1)` for layer `l` (its fan-in). Per-sample SGD on a layer
+    /// moves the output by about `eta ||phi(s(l-1))||^2` times the error, and
+    /// `||phi||^2` grows with the layer's width: with a plain `eta` a
+    /// 1000-unit hidden layer turns `eta = 0.01` into a step of about 2.5
+    /// (unstable for backprop) while the first layer barely learns. Dividing
+    /// by the fan-in makes `eta` mean the same for any width or input count,
+    /// which keeps one default (and one search grid) valid for all nets.
+    FanIn,
+}
+
+impl LrScaling {
+    /// The rate for a layer with `fan_in` inputs.
+    #[inline(always)]
+    pub fn rate(self, eta: f32, fan_in: usize) -> f32 {
+        match self {
+            LrScaling::None => eta,
+            LrScaling::FanIn => eta / fan_in.max(1) as f32,
+        }
+    }
+}
+
 /// Hyper-parameters of one equilibrium-propagation step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EpConfig {
     /// `eta` of eq. 3.21.
     pub learning_rate: f64,
+    /// Per-layer application of `eta`.
+    #[serde(default)]
+    pub lr_scaling: LrScaling,
     /// Nudging coefficient `beta` (eq. 3.16).
     pub beta: f64,
     pub free_phase: FreePhase,
@@ -62,6 +93,7 @@ impl Default for EpConfig {
     fn default() -> Self {
         EpConfig {
             learning_rate: 0.001,
+            lr_scaling: LrScaling::None,
             beta: 1.0,
             free_phase: FreePhase::FeedForward,
             clamped_phase: ClampedPhase::Linearised,

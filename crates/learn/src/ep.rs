@@ -2,7 +2,7 @@
 //! 1, with ERRATA.md's corrections): free phase, nudge, weakly clamped phase,
 //! local weight update. Kept apart from the [`crate::DenNN`] type so the hot
 //! loop reads top to bottom.
-use crate::dennn::{ClampedPhase, EpConfig, FreePhase, SampleStats};
+use crate::dennn::{ClampedPhase, EpConfig, FreePhase, LrScaling, SampleStats};
 use crate::kernels::{dot, dot3, sigmoid_into};
 use crate::net::{Layers, States};
 
@@ -50,21 +50,24 @@ pub(crate) fn step<const F: bool>(
     for e in &st.e[1..] {
         energy += 0.5 * e.iter().map(|v| (*v as f64).powi(2)).sum::<f64>();
     }
-    update::<F>(layers, st, cfg.learning_rate as f32, next);
+    update::<F>(layers, st, cfg.learning_rate as f32, cfg.lr_scaling, next);
     SampleStats { loss, energy }
 }
 
 /// Eqs. 3.21-3.22 with ERRATA signs: `W(l) += eta phi(s(l-1)) e(l)^T`,
-/// `b(l) += eta e(l)`, presynaptic activity taken from `st.phi`. With `next`,
-/// the first layer's update is fused with the next sample's drive.
+/// `b(l) += eta e(l)`, presynaptic activity taken from `st.phi`, `eta` per
+/// layer as `scaling` says. With `next`, the first layer's update is fused
+/// with the next sample's drive.
 #[inline(always)]
 pub(crate) fn update<const F: bool>(
     layers: &mut Layers,
     st: &mut States,
     eta: f32,
+    scaling: LrScaling,
     next: Option<&[f32]>,
 ) {
     for l in (1..=layers.depth()).rev() {
+        let eta = scaling.rate(eta, layers.sizes[l - 1]);
         let scaled = &mut st.tmp[l];
         scaled
             .iter_mut()

@@ -42,7 +42,10 @@ pub enum LearnError {
     #[error("corrupt model data: {reason}")]
     Corrupt { reason: String },
     /// Training produced non-finite weights (learning rate or beta too large).
-    #[error("training diverged in network {net} at epoch {epoch} (loss {loss})")]
+    #[error(
+        "training diverged in network {net} at epoch {epoch} (loss {loss}); \
+         lower the learning rate (or beta), e.g. with --config"
+    )]
     Diverged {
         net: String,
         epoch: usize,

@@ -22,11 +22,11 @@ mod trainer;
 
 pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling};
 pub use dataset::{mean_absolute_error, Dataset};
-pub use dennn::{ClampedPhase, DenNN, EpConfig, FreePhase, SampleStats};
+pub use dennn::{ClampedPhase, DenNN, EpConfig, FreePhase, LrScaling, SampleStats};
 pub use error::LearnError;
 pub use mlp::Mlp;
 pub use net::Layers;
-pub use pca::{Components, Pca};
+pub use pca::{Components, PcScaling, Pca};
 pub use pose_model::{EpochReport, NetEpoch, PoseModel, TrainingHistory};
 pub use search::{hyperparameter_search, SearchSpace, Trial};
 pub use serialise::FORMAT_VERSION;

@@ -1,7 +1,7 @@
 //! The backprop twin of the dendritic network: same layers, same
 //! initialisation, plain per-sample SGD on `0.5 ||y - t||^2`. It is the
 //! baseline the DenNN must match (report ch. 3.2).
-use crate::dennn::check_dims;
+use crate::dennn::{check_dims, LrScaling};
 use crate::ep::update;
 use crate::error::LearnError;
 use crate::net::{has_fma, Layers, States};
@@ -11,6 +11,7 @@ use crate::net::{has_fma, Layers, States};
 pub struct Mlp {
     layers: Layers,
     st: States,
+    lr_scaling: LrScaling,
 }
 
 impl Mlp {
@@ -22,7 +23,18 @@ impl Mlp {
     /// Wrap existing parameters.
     pub fn from_layers(layers: Layers) -> Self {
         let st = States::new(&layers.sizes);
-        Mlp { layers, st }
+        Mlp {
+            layers,
+            st,
+            lr_scaling: LrScaling::None,
+        }
+    }
+
+    /// Apply the learning rate per layer as `scaling` says (default: the
+    /// same rate everywhere), exactly as the EP twin does.
+    pub fn with_lr_scaling(mut self, scaling: LrScaling) -> Self {
+        self.lr_scaling = scaling;
+        self
     }
 
     /// The parameters.
@@ -58,7 +70,11 @@ fn train_fma(net: &mut Mlp, x: &[f32], t: &[f32], lr: f32) -> f64 {
 /// `e(l) = phi'(s(l)) . W(l+1) e(l+1)`, then the same rank-one update as EP.
 #[inline(always)]
 fn train_impl<const F: bool>(net: &mut Mlp, x: &[f32], t: &[f32], lr: f32) -> f64 {
-    let Mlp { layers, st } = net;
+    let Mlp {
+        layers,
+        st,
+        lr_scaling,
+    } = net;
     let n = layers.depth();
     layers.forward::<F>(x, st);
     let mut loss = 0.0f64;
@@ -74,6 +90,6 @@ fn train_impl<const F: bool>(net: &mut Mlp, x: &[f32], t: &[f32], lr: f32) -> f6
             .zip(&st.phi[l])
             .for_each(|(e, p)| *e *= p * (1.0 - p));
     }
-    update::<F>(layers, st, lr, None);
+    update::<F>(layers, st, lr, *lr_scaling, None);
     loss
 }

@@ -16,6 +16,24 @@ pub enum Components {
     Variance(f64),
 }
 
+/// How the projections onto the kept components are scaled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PcScaling {
+    /// Plain projections (the report): component `c` has variance
+    /// `lambda_c`.
+    Raw,
+    /// Each projection divided by `sqrt(lambda_c)`: unit variance per
+    /// component. Amplifies the small, noisy components as much as the
+    /// leading ones.
+    Whiten,
+    /// All projections divided by one factor, `sqrt(mean kept lambda)`: the
+    /// inputs have unit variance on average (like standardised features, so
+    /// the `1/sqrt(fan-in)` initialisation suits them) while the leading
+    /// components keep their larger share.
+    UnitMean,
+}
+
 /// A fitted PCA projection.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Pca {
@@ -27,8 +45,10 @@ pub struct Pca {
     eigenvalues: Vec<f64>,
     /// Kept eigenvalues over the sum of all eigenvalues.
     explained_variance_ratio: Vec<f64>,
-    /// Divide each projection by sqrt(eigenvalue) (unit-variance outputs).
-    whiten: bool,
+    /// How projections are scaled.
+    scaling: PcScaling,
+    /// The factor applied to each projection (from `scaling`).
+    scales: Vec<f64>,
 }
 
 impl Pca {
@@ -38,7 +58,7 @@ impl Pca {
         n: usize,
         dim: usize,
         keep: Components,
-        whiten: bool,
+        scaling: PcScaling,
     ) -> Result<Self, LearnError> {
         if n == 0 || dim == 0 || x.len() != n * dim {
             return Err(LearnError::Shape {
@@ -70,12 +90,15 @@ impl Pca {
             let col = dim - 1 - c;
             components.extend((0..dim).map(|r| eig.U()[(r, col)]));
         }
+        let eigenvalues = values[..k].to_vec();
+        let scales = scales_for(scaling, &eigenvalues);
         Ok(Pca {
             mean,
             components,
-            eigenvalues: values[..k].to_vec(),
+            eigenvalues,
             explained_variance_ratio: ratio[..k].to_vec(),
-            whiten,
+            scaling,
+            scales,
         })
     }
 
@@ -104,18 +127,18 @@ impl Pca {
         &self.components
     }
 
-    /// Whether projections are whitened.
-    pub fn whitened(&self) -> bool {
-        self.whiten
+    /// How projections are scaled.
+    pub fn scaling(&self) -> PcScaling {
+        self.scaling
     }
 
     /// Project one sample (length [`Self::dim`]) into `out` (length k).
     pub fn transform_into(&self, x: &[f64], out: &mut [f64]) {
         let dim = self.dim();
-        for ((o, w), lambda) in out
+        for ((o, w), scale) in out
             .iter_mut()
             .zip(self.components.chunks_exact(dim))
-            .zip(&self.eigenvalues)
+            .zip(&self.scales)
         {
             let proj: f64 = w
                 .iter()
@@ -123,11 +146,7 @@ impl Pca {
                 .zip(&self.mean)
                 .map(|((w, x), m)| w * (x - m))
                 .sum();
-            *o = if self.whiten {
-                proj / lambda.max(f64::MIN_POSITIVE).sqrt()
-            } else {
-                proj
-            };
+            *o = proj * scale;
         }
     }
 
@@ -148,6 +167,8 @@ impl Pca {
         let ok = k > 0
             && self.components.len() == k * self.mean.len()
             && self.explained_variance_ratio.len() == k
+            && self.scales.len() == k
+            && self.scales.iter().all(|v| v.is_finite() && *v > 0.0)
             && self
                 .components
                 .iter()
@@ -160,6 +181,19 @@ impl Pca {
             Err(LearnError::Corrupt {
                 reason: "PCA shapes or values are inconsistent".into(),
             })
+        }
+    }
+}
+
+/// The factor applied to each projection.
+fn scales_for(scaling: PcScaling, eigenvalues: &[f64]) -> Vec<f64> {
+    let inv_sqrt = |v: f64| 1.0 / v.max(f64::MIN_POSITIVE).sqrt();
+    match scaling {
+        PcScaling::Raw => vec![1.0; eigenvalues.len()],
+        PcScaling::Whiten => eigenvalues.iter().map(|&l| inv_sqrt(l)).collect(),
+        PcScaling::UnitMean => {
+            let mean = eigenvalues.iter().sum::<f64>() / eigenvalues.len().max(1) as f64;
+            vec![inv_sqrt(mean); eigenvalues.len()]
         }
     }
 }

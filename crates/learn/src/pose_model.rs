@@ -79,7 +79,7 @@ impl PoseModel {
                     train.n,
                     train.dim_x,
                     Components::Count(c),
-                    cfg.whiten,
+                    cfg.pc_scaling,
                 )?),
                 None => None,
             };

@@ -12,8 +12,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 /// The grid to sample from. Each value applies to every net of the model.
+/// Missing keys in a TOML file take the [`Default`] grid's values.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct SearchSpace {
     pub learning_rates: Vec<f64>,
     pub betas: Vec<f64>,
@@ -23,6 +24,21 @@ pub struct SearchSpace {
     /// Configurations to try; the whole grid when it is not larger.
     pub trials: usize,
     pub seed: u64,
+}
+
+impl Default for SearchSpace {
+    /// Around the default preset (learning rates are per fan-in, see
+    /// [`crate::LrScaling::FanIn`]): 8 of the 36 grid points.
+    fn default() -> Self {
+        SearchSpace {
+            learning_rates: vec![0.3, 1.0, 3.0],
+            betas: vec![0.5, 1.0],
+            hidden: vec![500, 1000],
+            n_components: vec![20, 35, 50],
+            trials: 8,
+            seed: 0,
+        }
+    }
 }
 
 /// One evaluated configuration.
@@ -36,13 +52,15 @@ pub struct Trial {
     pub score: f64,
 }
 
-/// Try configurations drawn from `space` on top of `base`; trials sorted
-/// best first.
+/// Try configurations drawn from `space` on top of `base`, calling
+/// `progress` after each; trials sorted best first. `val` must be carved
+/// out of the training data (never the test data).
 pub fn hyperparameter_search(
     base: &ModelConfig,
     space: &SearchSpace,
     train: &Dataset,
     val: &Dataset,
+    progress: &mut dyn FnMut(&Trial),
 ) -> Result<Vec<Trial>, LearnError> {
     let grid = grid(space);
     if grid.is_empty() {
@@ -75,6 +93,7 @@ pub fn hyperparameter_search(
             },
             Err(e) => return Err(e),
         };
+        progress(&trial);
         trials.push(trial);
     }
     trials.sort_by(|a, b| a.score.total_cmp(&b.score));

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 /// Identifies our model files.
 const FORMAT: &str = "tactrace-pose-model";
 /// Bumped on any incompatible change.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -97,10 +97,14 @@ impl Trainer {
         k: u64,
     ) -> Self {
         let engine = if cfg.kind == ModelKind::Mlp {
-            Engine::Backprop(Mlp::from_layers(layers), net.learning_rate)
+            Engine::Backprop(
+                Mlp::from_layers(layers).with_lr_scaling(cfg.lr_scaling),
+                net.learning_rate,
+            )
         } else {
             let ep = EpConfig {
                 learning_rate: net.learning_rate,
+                lr_scaling: cfg.lr_scaling,
                 beta: net.beta,
                 free_phase: cfg.free_phase,
                 clamped_phase: cfg.clamped_phase,

@@ -4,7 +4,7 @@
 //! steps lower the energy of eq. 3.10.
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tactrace_learn::{ClampedPhase, DenNN, EpConfig, FreePhase, Layers, Mlp};
+use tactrace_learn::{ClampedPhase, DenNN, EpConfig, FreePhase, Layers, LrScaling, Mlp};
 
 fn sample(dim_x: usize, dim_y: usize, seed: u64) -> (Vec<f32>, Vec<f32>) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -188,4 +188,48 @@ fn wrong_lengths_are_errors() {
     assert!(net.predict(&[0.0; 5], &mut [0.0]).is_err());
     assert!(DenNN::new(&[4], 0).is_err());
     assert!(DenNN::new(&[4, 0, 1], 0).is_err());
+}
+
+#[test]
+fn fan_in_scaling_divides_each_layer_step_by_its_fan_in() {
+    let sizes = [6, 40, 1];
+    let layers = Layers::new(&sizes, 12).unwrap();
+    let (x, t) = sample(6, 1, 13);
+    let before = flat(&layers);
+    let mut plain = Mlp::from_layers(layers.clone());
+    // A large rate keeps the f32 weight changes well above rounding.
+    plain.train_sample(&x, &t, 1.0).unwrap();
+    let mut scaled = Mlp::from_layers(layers.clone()).with_lr_scaling(LrScaling::FanIn);
+    scaled.train_sample(&x, &t, 1.0).unwrap();
+    let (dp, ds) = (
+        delta(&before, plain.layers()),
+        delta(&before, scaled.layers()),
+    );
+    // Parameter blocks in `flat` order: W1, b1, W2, b2.
+    let blocks = [
+        (0, 6 * 40, 6.0),
+        (240, 40, 6.0),
+        (280, 40, 40.0),
+        (320, 1, 40.0),
+    ];
+    for (start, len, fan_in) in blocks {
+        for i in start..start + len {
+            if dp[i].abs() > 1e-4 {
+                let r = ds[i] / dp[i];
+                assert!((r * fan_in - 1.0).abs() < 1e-2, "param {i}: ratio {r}");
+            }
+        }
+    }
+    // The EP twin applies the same scaling: its update still points along
+    // the (scaled) backprop step.
+    let cfg = EpConfig {
+        learning_rate: 0.05,
+        lr_scaling: LrScaling::FanIn,
+        beta: 1e-3,
+        ..EpConfig::default()
+    };
+    let mut ep = DenNN::from_layers(layers.clone());
+    ep.train_sample(&x, &t, &cfg).unwrap();
+    let c = cosine(&delta(&before, ep.layers()), &ds);
+    assert!(c > 0.99, "cosine {c}");
 }

@@ -3,7 +3,7 @@
 //! eigenvalue ratio of an independent (Jacobi) eigen solve.
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tactrace_learn::{Components, Pca, Standardiser};
+use tactrace_learn::{Components, PcScaling, Pca, Standardiser};
 
 /// Correlated data: `n x dim`, built from a few latent factors plus noise.
 fn correlated(n: usize, dim: usize, seed: u64) -> Vec<f32> {
@@ -81,7 +81,7 @@ fn components_are_orthonormal() {
     let (n, dim) = (300, 12);
     let x = correlated(n, dim, 1);
     let z = Standardiser::fit(&x, n, dim).unwrap().transform(&x);
-    let pca = Pca::fit(&z, n, dim, Components::Count(6), false).unwrap();
+    let pca = Pca::fit(&z, n, dim, Components::Count(6), PcScaling::Raw).unwrap();
     let w = pca.components();
     for a in 0..6 {
         for b in 0..6 {
@@ -98,7 +98,7 @@ fn whitened_training_data_has_identity_covariance() {
     let x = correlated(n, dim, 2);
     let z = Standardiser::fit(&x, n, dim).unwrap().transform(&x);
     let k = 4;
-    let pca = Pca::fit(&z, n, dim, Components::Count(k), true).unwrap();
+    let pca = Pca::fit(&z, n, dim, Components::Count(k), PcScaling::Whiten).unwrap();
     let c = covariance(&pca.transform(&z), n, k);
     for p in 0..k {
         for q in 0..k {
@@ -113,11 +113,36 @@ fn whitened_training_data_has_identity_covariance() {
 }
 
 #[test]
+fn unit_mean_scaling_keeps_the_shape_and_averages_unit_variance() {
+    let (n, dim) = (400, 10);
+    let x = correlated(n, dim, 2);
+    let z = Standardiser::fit(&x, n, dim).unwrap().transform(&x);
+    let k = 5;
+    let raw = Pca::fit(&z, n, dim, Components::Count(k), PcScaling::Raw).unwrap();
+    let unit = Pca::fit(&z, n, dim, Components::Count(k), PcScaling::UnitMean).unwrap();
+    let (cr, cu) = (
+        covariance(&raw.transform(&z), n, k),
+        covariance(&unit.transform(&z), n, k),
+    );
+    let mean_var: f64 = (0..k).map(|p| cu[p * k + p]).sum::<f64>() / k as f64;
+    assert!((mean_var - 1.0).abs() < 1e-9, "mean variance {mean_var}");
+    // One common factor: the ratios between components are the raw ones.
+    let f = cu[0] / cr[0];
+    for p in 0..k {
+        assert!(
+            (cu[p * k + p] / cr[p * k + p] - f).abs() < 1e-9,
+            "component {p}"
+        );
+        assert!((cr[p * k + p] - raw.eigenvalues()[p]).abs() < 1e-9);
+    }
+}
+
+#[test]
 fn explained_variance_equals_independent_eigenvalue_ratio() {
     let (n, dim) = (250, 9);
     let x = correlated(n, dim, 3);
     let z = Standardiser::fit(&x, n, dim).unwrap().transform(&x);
-    let pca = Pca::fit(&z, n, dim, Components::Count(dim), false).unwrap();
+    let pca = Pca::fit(&z, n, dim, Components::Count(dim), PcScaling::Raw).unwrap();
     let ev = jacobi_eigenvalues(covariance(&z, n, dim), dim);
     let total: f64 = ev.iter().sum();
     // Standardised data: the covariance trace is the dimension.
@@ -132,7 +157,7 @@ fn variance_target_picks_the_fewest_components() {
     let (n, dim) = (300, 12);
     let x = correlated(n, dim, 4);
     let z = Standardiser::fit(&x, n, dim).unwrap().transform(&x);
-    let pca = Pca::fit(&z, n, dim, Components::Variance(0.95), false).unwrap();
+    let pca = Pca::fit(&z, n, dim, Components::Variance(0.95), PcScaling::Raw).unwrap();
     let r = pca.explained_variance_ratio();
     let kept: f64 = r.iter().sum();
     assert!(kept >= 0.95 - 1e-12, "kept {kept}");
@@ -140,8 +165,8 @@ fn variance_target_picks_the_fewest_components() {
         kept - r[r.len() - 1] < 0.95,
         "one fewer would also reach 0.95"
     );
-    assert!(Pca::fit(&z, n, dim, Components::Variance(1.5), false).is_err());
-    assert!(Pca::fit(&z, n, dim, Components::Count(0), false).is_err());
+    assert!(Pca::fit(&z, n, dim, Components::Variance(1.5), PcScaling::Raw).is_err());
+    assert!(Pca::fit(&z, n, dim, Components::Count(0), PcScaling::Raw).is_err());
 }
 
 #[test]

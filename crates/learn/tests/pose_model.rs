@@ -4,7 +4,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_learn::{
     hyperparameter_search, mean_absolute_error, Dataset, LearnError, ModelConfig, ModelKind,
-    PoseModel, Preset, SearchSpace,
+    PoseModel, Preset, SearchSpace, FORMAT_VERSION,
 };
 
 /// Displacement-like features that depend smoothly on (r, theta).
@@ -79,6 +79,39 @@ fn training_lowers_the_loss_for_every_kind() {
     }
 }
 
+/// The default preset at full size (35 PCs, 1000 hidden units): the
+/// backprop twin used to diverge at epoch 0 with a plain learning rate.
+#[test]
+fn default_preset_trains_stably_at_full_size() {
+    let data = synthetic(300, 60, 11);
+    for kind in [ModelKind::Mlp, ModelKind::PDenNN] {
+        let mut cfg = ModelConfig::preset(kind, Preset::Default);
+        cfg.epochs = 4;
+        let (model, history) = PoseModel::fit(&cfg, &data, &mut |_| {}).unwrap();
+        for net in 0..2 {
+            let losses: Vec<f64> = history.epochs.iter().map(|e| e.nets[net].loss).collect();
+            assert!(losses.iter().all(|l| l.is_finite()), "{kind:?}: {losses:?}");
+            assert!(losses[3] < losses[0], "{kind:?}: {losses:?}");
+        }
+        let mae = mean_absolute_error(&model.predict_batch(&data).unwrap(), &data);
+        assert!(mae[0] < 2.0 && mae[1] < 18.0, "{kind:?}: MAE {mae:?}");
+    }
+}
+
+#[test]
+fn diverging_training_is_an_error_not_a_panic() {
+    let data = synthetic(100, 12, 12);
+    let mut cfg = small(ModelKind::Mlp, 3);
+    cfg.lr_scaling = tactrace_learn::LrScaling::None;
+    for net in [&mut cfg.position, &mut cfg.angle].into_iter().flatten() {
+        net.learning_rate = 1e4;
+    }
+    assert!(matches!(
+        PoseModel::fit(&cfg, &data, &mut |_| {}),
+        Err(LearnError::Diverged { .. })
+    ));
+}
+
 #[test]
 fn validation_loss_is_reported_and_falls() {
     let (train, val) = synthetic(500, 20, 2).split(0.8, 3);
@@ -125,12 +158,16 @@ fn bad_model_bytes_are_errors() {
         PoseModel::from_bytes(&json[..json.len() / 2], &weights),
         Err(LearnError::Corrupt { .. })
     ));
-    let other = json.replacen("\"version\": 1", "\"version\": 2", 1);
+    let other = json.replacen(
+        &format!("\"version\": {FORMAT_VERSION}"),
+        "\"version\": 1",
+        1,
+    );
     assert!(matches!(
         PoseModel::from_bytes(&other, &weights),
         Err(LearnError::Version {
-            found: 2,
-            supported: 1
+            found: 1,
+            supported: FORMAT_VERSION
         })
     ));
     assert!(PoseModel::from_bytes(&json, b"not safetensors").is_err());
@@ -230,8 +267,16 @@ fn search_ranks_trials_on_the_validation_split() {
         trials: 2,
         seed: 1,
     };
-    let trials = hyperparameter_search(&small(ModelKind::PDenNN, 5), &space, &train, &val).unwrap();
-    assert_eq!(trials.len(), 2);
+    let mut seen = 0;
+    let trials = hyperparameter_search(
+        &small(ModelKind::PDenNN, 5),
+        &space,
+        &train,
+        &val,
+        &mut |_| seen += 1,
+    )
+    .unwrap();
+    assert_eq!((trials.len(), seen), (2, 2));
     assert!(trials[0].score <= trials[1].score);
     assert_eq!(trials[0].config.angle.as_ref().unwrap().learning_rate, 0.02);
 }

@@ -24,7 +24,10 @@ use tactrace_vision::PinExtractor;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct StartConfig {
-    pub arc_mm: f64,
+    /// Arc length of the start point along the contour, mm. `None` (the
+    /// default): the middle of the flattest 20 mm of the contour, as an
+    /// operator would align the sensor with an edge rather than a corner.
+    pub arc_mm: Option<f64>,
     pub offset_mm: f64,
     pub angle_deg: f64,
     /// Refuse to start further than this from the edge, mm.
@@ -34,7 +37,7 @@ pub struct StartConfig {
 impl Default for StartConfig {
     fn default() -> Self {
         Self {
-            arc_mm: 0.0,
+            arc_mm: None,
             offset_mm: 0.0,
             angle_deg: 0.0,
             max_start_distance_mm: 6.0,
@@ -125,7 +128,8 @@ pub fn start_pose(shape: &Contour, cfg: &StartConfig, height_mm: f64) -> Result<
             cfg.max_start_distance_mm
         )));
     }
-    let (edge, normal) = shape.at_arc_length(cfg.arc_mm);
+    let arc = cfg.arc_mm.unwrap_or_else(|| flattest_arc_mm(shape, 20.0));
+    let (edge, normal) = shape.at_arc_length(arc);
     Ok(crate::collect::pose_at_edge(
         edge,
         normal,
@@ -133,6 +137,29 @@ pub fn start_pose(shape: &Contour, cfg: &StartConfig, height_mm: f64) -> Result<
         cfg.angle_deg,
         height_mm,
     ))
+}
+
+/// Arc length (mm) of the middle of the stretch of length `window_mm` over
+/// which the outward normal turns least: the place to set the sensor down.
+pub fn flattest_arc_mm(shape: &Contour, window_mm: f64) -> f64 {
+    let n = (shape.perimeter() / 0.5).ceil().max(8.0) as usize;
+    let step = shape.perimeter() / n as f64;
+    let heading: Vec<f64> = (0..n)
+        .map(|i| {
+            let (_, normal) = shape.at_arc_length(i as f64 * step);
+            normal.y.atan2(normal.x)
+        })
+        .collect();
+    let turn = |i: usize| {
+        let d = heading[(i + 1) % n] - heading[i];
+        (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+    };
+    let k = ((window_mm / step).round() as usize).clamp(1, n);
+    let total = |start: usize| (0..k).map(|j| turn((start + j) % n).abs()).sum::<f64>();
+    let best = (0..n)
+        .min_by(|&a, &b| total(a).total_cmp(&total(b)))
+        .unwrap_or(0);
+    (best as f64 + k as f64 / 2.0) * step % shape.perimeter()
 }
 
 /// Run the experiment on `shape` with `model`, writing into `out` (created).

@@ -62,6 +62,11 @@ pub struct CameraConfig {
     pub rotation_deg: f64,
     /// True when the sensor's y axis appears mirrored in the image.
     pub mirror: bool,
+    /// Binarise the frame as the real camera pipeline does (the Bristol
+    /// frames are thresholded white pins on black): grey levels above this
+    /// value become 255, the rest 0, after any image noise. `None` keeps
+    /// the anti-aliased grey frame.
+    pub binarise_above: Option<u8>,
 }
 
 impl Default for CameraConfig {
@@ -74,6 +79,7 @@ impl Default for CameraConfig {
             height_mm: 29.06,
             rotation_deg: 179.51,
             mirror: true,
+            binarise_above: Some(127),
         }
     }
 }

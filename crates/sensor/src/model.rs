@@ -147,23 +147,27 @@ impl TacTipModel {
 
     /// Render pins (one per rest pin, same order) as a frame of
     /// anti-aliased discs; with `rng`, add the configured pin jitter and
-    /// image noise.
+    /// image noise; then binarise when `camera.binarise_above` is set (the
+    /// default, as the real frames are).
     pub fn render(&self, pins: &[[f64; 2]], rng: Option<&mut ChaCha8Rng>) -> Frame {
         let (w, h) = self.image_size();
         let mut frame = Frame::new(w, h);
         let nuisance = &self.cfg.nuisance;
-        let drawn = match rng {
+        match rng {
             Some(rng) => {
                 let moved = jitter(pins, nuisance.pin_jitter_px, rng);
                 self.draw(&mut frame, &moved);
                 if nuisance.image_noise_std > 0.0 {
                     add_noise(&mut frame, nuisance.image_noise_std, rng);
                 }
-                return frame;
             }
-            None => pins,
-        };
-        self.draw(&mut frame, drawn);
+            None => self.draw(&mut frame, pins),
+        }
+        if let Some(level) = self.cfg.camera.binarise_above {
+            for px in frame.iter_mut() {
+                *px = if *px > level { 255 } else { 0 };
+            }
+        }
         frame
     }
 

@@ -36,7 +36,7 @@ enum Command {
     Follow(cmd_follow::FollowArgs),
     /// Regenerate the report's tables and figures end to end.
     Reproduce(cmd_follow::ReproduceArgs),
-    /// Time simulated taps and the control loop (figures for docs/benchmarks.md).
+    /// Time simulated taps and the control loop (figures in docs/results.md, "Speed").
     Bench(cmd_follow::BenchArgs),
     /// Inspect the sensor: render a simulated tap, detect pins in a frame.
     #[command(subcommand)]

@@ -60,22 +60,9 @@ pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<
         disps.push(tracked.displacement(extractor.tracker.reference()));
     }
     let extract = t1.elapsed().as_secs_f64();
-    let control_latency_us = match model {
-        Some(m) => {
-            let mut ctl = PbtsController::new(PbtsConfig::default());
-            let t2 = Instant::now();
-            for f in &frames {
-                let tracked = extractor.extract(f)?;
-                let [r, theta] = m.predict(&tracked.displacement(extractor.tracker.reference()))?;
-                std::hint::black_box(ctl.step(SensedPose {
-                    r_mm: r,
-                    theta_deg: theta,
-                }));
-            }
-            Some(t2.elapsed().as_secs_f64() * 1e6 / taps as f64)
-        }
-        None => None,
-    };
+    let control_latency_us = model
+        .map(|m| control_loop_us(&extractor, m, &frames))
+        .transpose()?;
     let n = taps.max(1) as f64;
     Ok(BenchFigures {
         taps,
@@ -109,9 +96,19 @@ pub fn real_control_latency(
         .iter()
         .map(|p| tactrace_sensor::read_frame(p))
         .collect::<std::result::Result<Vec<_>, _>>()?;
+    control_loop_us(&extractor, model, &images)
+}
+
+/// Mean time from frame to command over `frames`, microseconds: extract
+/// and order the pins, predict (r, theta), one controller step.
+fn control_loop_us(
+    extractor: &PinExtractor,
+    model: &PoseModel,
+    frames: &[tactrace_sensor::Frame],
+) -> Result<f64> {
     let mut ctl = PbtsController::new(PbtsConfig::default());
     let t0 = Instant::now();
-    for f in &images {
+    for f in frames {
         let tracked = extractor.extract(f)?;
         let [r, theta] = model.predict(&tracked.displacement(extractor.tracker.reference()))?;
         std::hint::black_box(ctl.step(SensedPose {
@@ -119,5 +116,5 @@ pub fn real_control_latency(
             theta_deg: theta,
         }));
     }
-    Ok(t0.elapsed().as_secs_f64() * 1e6 / images.len().max(1) as f64)
+    Ok(t0.elapsed().as_secs_f64() * 1e6 / frames.len().max(1) as f64)
 }

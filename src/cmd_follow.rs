@@ -117,11 +117,13 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     cfg.real = a.real.or(cfg.real);
     let log = |msg: &str| eprintln!("[reproduce] {msg}");
     let r = run_reproduce(&cfg, &a.out, &log)?;
-    for n in &r.networks {
-        println!(
-            "{:<16} angle {:.2} deg, position {:.3} mm",
-            n.name, n.angle_mae_deg, n.position_mae_mm
-        );
+    for (data, rows) in [("simulated", &r.networks), ("real", &r.real_networks)] {
+        for n in rows.iter() {
+            println!(
+                "{:<16} {data:<9} angle {:.2} deg, position {:.3} mm",
+                n.name, n.angle_mae_deg, n.position_mae_mm
+            );
+        }
     }
     for s in &r.shapes {
         println!(

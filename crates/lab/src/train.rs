@@ -17,35 +17,12 @@ pub fn resolve_config(
 ) -> Result<ModelConfig> {
     let mut cfg = ModelConfig::preset(kind, preset);
     if let Some(text) = toml_text {
-        let base = toml::Value::try_from(&cfg).map_err(|e| LabError::Config(e.to_string()))?;
-        let over: toml::Value =
-            toml::from_str(text).map_err(|e| LabError::Config(format!("model config: {e}")))?;
-        let merged = merge(base, over);
-        cfg = merged
-            .try_into()
-            .map_err(|e: toml::de::Error| LabError::Config(format!("model config: {e}")))?;
+        cfg = crate::settings::overlay(&cfg, text, "model config")?;
     }
     if let Some(e) = epochs {
         cfg.set_epochs(e);
     }
     Ok(cfg)
-}
-
-/// Overlay `over` on `base`, table by table.
-fn merge(base: toml::Value, over: toml::Value) -> toml::Value {
-    match (base, over) {
-        (toml::Value::Table(mut b), toml::Value::Table(o)) => {
-            for (k, v) in o {
-                let merged = match b.remove(&k) {
-                    Some(old) => merge(old, v),
-                    None => v,
-                };
-                b.insert(k, merged);
-            }
-            toml::Value::Table(b)
-        }
-        (_, o) => o,
-    }
 }
 
 /// Fit a model on a training set.

@@ -12,7 +12,7 @@ use tactrace_sensor::{read_frame, EdgeTap, Frame, Shear, TacTipConfig, TacTipMod
 #[allow(dead_code)]
 #[path = "fit_mechanics/support.rs"]
 mod support;
-use support::nelder_mead;
+use support::{nelder_mead, FieldSums};
 
 fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/tactip127-edge2d")
@@ -220,26 +220,18 @@ fn score(model: &TacTipModel, taps: &[RealTap], use_shear: bool) -> Score {
             tap.shear = None;
         }
         let sim = model.edge_tap_pins(&tap);
-        let (mut dot, mut rr, mut ss, mut diff, mut ar, mut asim, mut count, mut mx) =
-            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0f64);
+        let mut f = FieldSums::default();
         for (i, d) in t.disp.iter().enumerate() {
-            let Some(d) = d else { continue };
-            let e = [sim[i][0] - rest[i][0], sim[i][1] - rest[i][1]];
-            dot += d[0] * e[0] + d[1] * e[1];
-            rr += d[0] * d[0] + d[1] * d[1];
-            ss += e[0] * e[0] + e[1] * e[1];
-            diff += (d[0] - e[0]).powi(2) + (d[1] - e[1]).powi(2);
-            ar += d[0].hypot(d[1]);
-            asim += e[0].hypot(e[1]);
-            mx = mx.max(d[0].hypot(d[1]));
-            count += 1.0;
+            if let Some(d) = d {
+                f.add(*d, [sim[i][0] - rest[i][0], sim[i][1] - rest[i][1]]);
+            }
         }
-        s.sq += diff / n;
-        s.rms += (diff / count).sqrt() / n;
-        s.cosine += dot / (rr.sqrt() * ss.sqrt()).max(1e-12) / n;
-        s.ratio += asim / ar.max(1e-12) / n;
-        s.mean_real += ar / count / n;
-        s.max_real += mx / n;
+        s.sq += f.diff_sq / n;
+        s.rms += (f.diff_sq / f.count).sqrt() / n;
+        s.cosine += f.cosine() / n;
+        s.ratio += f.sim_abs / f.real_abs.max(1e-12) / n;
+        s.mean_real += f.real_abs / f.count / n;
+        s.max_real += f.real_max / n;
     }
     s
 }

@@ -12,7 +12,7 @@
 use tactrace_sensor::{EdgeTap, TacTipConfig, TacTipModel};
 
 mod support;
-use support::{draw_figure, nelder_mead, Bin, Pair, RealTap};
+use support::{draw_figure, nelder_mead, Bin, FieldSums, Pair, RealTap};
 
 /// Per-field comparison: mean cosine, median cosine, RMS (px), ratio.
 #[derive(Debug, Default, Clone, Copy)]
@@ -32,27 +32,20 @@ fn compare(pairs: &[Pair]) -> Score {
     let mut cosines = Vec::new();
     let n = pairs.len().max(1) as f64;
     for (sim, real) in pairs {
-        let (mut dot, mut rr, mut ss, mut diff, mut ar, mut asim, mut cnt, mut mx) =
-            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0f64, 0.0f64);
+        let mut f = FieldSums::default();
         for (e, d) in sim.iter().zip(real) {
-            let Some(d) = d else { continue };
-            dot += d[0] * e[0] + d[1] * e[1];
-            rr += d[0] * d[0] + d[1] * d[1];
-            ss += e[0] * e[0] + e[1] * e[1];
-            diff += (d[0] - e[0]).powi(2) + (d[1] - e[1]).powi(2);
-            ar += d[0].hypot(d[1]);
-            asim += e[0].hypot(e[1]);
-            mx = mx.max(d[0].hypot(d[1]));
-            cnt += 1.0;
+            if let Some(d) = d {
+                f.add(*d, *e);
+            }
         }
-        let cos = dot / (rr.sqrt() * ss.sqrt()).max(1e-12);
+        let cos = f.cosine();
         cosines.push(cos);
         s.cosine += cos / n;
-        s.sse += diff;
-        s.rms += (diff / cnt.max(1.0)).sqrt() / n;
-        s.ratio += asim / ar.max(1e-12) / n;
-        s.mean_real += ar / cnt.max(1.0) / n;
-        s.max_real += mx / n;
+        s.sse += f.diff_sq;
+        s.rms += (f.diff_sq / f.count.max(1.0)).sqrt() / n;
+        s.ratio += f.sim_abs / f.real_abs.max(1e-12) / n;
+        s.mean_real += f.real_abs / f.count.max(1.0) / n;
+        s.max_real += f.real_max / n;
     }
     cosines.sort_by(f64::total_cmp);
     s.median_cosine = cosines.get(cosines.len() / 2).copied().unwrap_or(0.0);

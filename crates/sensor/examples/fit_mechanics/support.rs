@@ -313,3 +313,37 @@ pub fn draw_figure(
     }
     img.save(out)
 }
+
+/// Running sums comparing a real displacement field with a simulated one,
+/// pin by pin (px): their dot product and norms (cosine), the squared
+/// difference (RMS), the mean magnitudes (ratio) and the largest real one.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct FieldSums {
+    pub dot: f64,
+    pub real_sq: f64,
+    pub sim_sq: f64,
+    pub diff_sq: f64,
+    pub real_abs: f64,
+    pub sim_abs: f64,
+    pub real_max: f64,
+    pub count: f64,
+}
+
+impl FieldSums {
+    /// Add one pin: real displacement `d`, simulated `e`.
+    pub fn add(&mut self, d: [f64; 2], e: [f64; 2]) {
+        self.dot += d[0] * e[0] + d[1] * e[1];
+        self.real_sq += d[0] * d[0] + d[1] * d[1];
+        self.sim_sq += e[0] * e[0] + e[1] * e[1];
+        self.diff_sq += (d[0] - e[0]).powi(2) + (d[1] - e[1]).powi(2);
+        self.real_abs += d[0].hypot(d[1]);
+        self.sim_abs += e[0].hypot(e[1]);
+        self.real_max = self.real_max.max(d[0].hypot(d[1]));
+        self.count += 1.0;
+    }
+
+    /// Cosine between the two fields.
+    pub fn cosine(&self) -> f64 {
+        self.dot / (self.real_sq.sqrt() * self.sim_sq.sqrt()).max(1e-12)
+    }
+}

@@ -164,6 +164,14 @@ pub fn train(a: TrainArgs) -> Result<()> {
     let extra: Vec<(&str, String)> = extra;
     let dir = model_io::save_model_with(&a.out, &model, &history, a.force, &extra)?;
     eprintln!("trained in {secs:.1} s; saved model to {}", dir.display());
+    if history.lr_halvings > 0 {
+        eprintln!(
+            "note: training diverged and was restarted with the learning rates halved {} time(s); \
+             {} records the rates used",
+            history.lr_halvings,
+            dir.join("model.json").display()
+        );
+    }
     if let Some(val) = val {
         let v = tr::validate(&model, &val)?;
         println!(

@@ -71,6 +71,8 @@ pub struct NetRow {
     pub position_mae_mm: f64,
     pub angle_mae_deg: f64,
     pub train_seconds: f64,
+    /// Learning-rate halvings after divergence (`divergence_retries`).
+    pub lr_halvings: usize,
 }
 
 /// One row of the contour table.
@@ -130,6 +132,7 @@ fn train_and_score(
         position_mae_mm: v.position_mae_mm,
         angle_mae_deg: v.angle_mae_deg,
         train_seconds: secs,
+        lr_halvings: history.lr_halvings,
     };
     Ok((row, v))
 }

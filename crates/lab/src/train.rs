@@ -102,8 +102,9 @@ pub fn trial_summary(t: &Trial) -> String {
         .or(c.angle.as_ref())
         .expect("a validated config has a net");
     format!(
-        "lr {} beta {} hidden {:?} components {}",
+        "lr {} output lr {} beta {} hidden {:?} components {}",
         net.learning_rate,
+        net.output_learning_rate.unwrap_or(net.learning_rate),
         net.beta,
         net.hidden,
         net.n_components
@@ -115,15 +116,16 @@ pub fn trial_summary(t: &Trial) -> String {
 /// The trials as CSV (best first).
 pub fn trials_csv(trials: &[Trial]) -> String {
     let mut out = String::from(
-        "rank,learning_rate,beta,hidden,n_components,position_mae_mm,angle_mae_deg,score\n",
+        "rank,learning_rate,output_learning_rate,beta,hidden,n_components,position_mae_mm,angle_mae_deg,score\n",
     );
     for (k, t) in trials.iter().enumerate() {
         let c = &t.config;
         if let Some(net) = c.pose.as_ref().or(c.angle.as_ref()) {
             out.push_str(&format!(
-                "{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{}\n",
                 k + 1,
                 net.learning_rate,
+                net.output_learning_rate.unwrap_or(net.learning_rate),
                 net.beta,
                 net.hidden
                     .iter()

@@ -51,8 +51,13 @@ pub struct NetConfig {
     pub n_components: Option<usize>,
     /// Hidden layer sizes (the report uses one hidden layer).
     pub hidden: Vec<usize>,
-    /// `eta` of eq. 3.21 (or the SGD step for the backprop twin).
+    /// `eta` of eq. 3.21 (or the SGD step for the backprop twin) of the
+    /// hidden layers' input weights, and of the output layer unless
+    /// `output_learning_rate` is set.
     pub learning_rate: f64,
+    /// `eta` of the output layer's weights; `None`: `learning_rate`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_learning_rate: Option<f64>,
     /// Nudging coefficient `beta` (ignored by the backprop twin).
     pub beta: f64,
 }
@@ -71,6 +76,12 @@ pub struct ModelConfig {
     pub lr_scaling: LrScaling,
     pub free_phase: FreePhase,
     pub clamped_phase: ClampedPhase,
+    /// When training diverges (non-finite weights or loss), halve every
+    /// net's learning rates and start again from the same initialisation,
+    /// at most this many times. The model records the rates finally used.
+    /// Default preset: 2; report preset: 0 (a divergence is an error).
+    #[serde(default)]
+    pub divergence_retries: usize,
     /// The single net of DisDenNN / PcaDenNN (outputs r and theta).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<NetConfig>,
@@ -82,16 +93,19 @@ pub struct ModelConfig {
     pub angle: Option<NetConfig>,
 }
 
+/// One net; `rates` = (hidden, output); equal rates leave the output
+/// rate unset (the report's single `eta`).
 fn net(
     n_components: Option<usize>,
     hidden: usize,
-    learning_rate: f64,
+    (learning_rate, output): (f64, f64),
     beta: f64,
 ) -> Option<NetConfig> {
     Some(NetConfig {
         n_components,
         hidden: vec![hidden],
         learning_rate,
+        output_learning_rate: (output != learning_rate).then_some(output),
         beta,
     })
 }
@@ -102,6 +116,19 @@ impl ModelConfig {
         match preset {
             Preset::Report => report(kind),
             Preset::Default => tuned(kind),
+        }
+    }
+
+    /// Multiply every net's learning rates (hidden and output) by `factor`.
+    pub fn scale_learning_rates(&mut self, factor: f64) {
+        for net in [&mut self.pose, &mut self.position, &mut self.angle]
+            .into_iter()
+            .flatten()
+        {
+            net.learning_rate *= factor;
+            if let Some(o) = &mut net.output_learning_rate {
+                *o *= factor;
+            }
         }
     }
 
@@ -162,6 +189,14 @@ fn check_net(n: &NetConfig, kind: ModelKind) -> Result<(), LearnError> {
             "learning_rate",
             format!("{} must be positive", n.learning_rate),
         ));
+    }
+    if let Some(lr) = n.output_learning_rate {
+        if !(lr.is_finite() && lr > 0.0) {
+            return Err(config_err(
+                "output_learning_rate",
+                format!("{lr} must be positive"),
+            ));
+        }
     }
     if kind != ModelKind::Mlp && !(n.beta.is_finite() && n.beta > 0.0) {
         return Err(config_err("beta", format!("{} must be positive", n.beta)));
@@ -227,16 +262,17 @@ fn report(kind: ModelKind) -> ModelConfig {
         lr_scaling: LrScaling::None,
         free_phase: FreePhase::Euler { n_i: 5, dt: 1.0 },
         clamped_phase: ClampedPhase::Euler { n_i: 5, dt: 1.0 },
+        divergence_retries: 0,
         pose: None,
         position: None,
         angle: None,
     };
     match kind {
-        ModelKind::DisDenNN => cfg.pose = net(None, 500, 0.001, 0.3),
-        ModelKind::PcaDenNN => cfg.pose = net(Some(35), 1000, 0.001, 1.0),
+        ModelKind::DisDenNN => cfg.pose = net(None, 500, (0.001, 0.001), 0.3),
+        ModelKind::PcaDenNN => cfg.pose = net(Some(35), 1000, (0.001, 0.001), 1.0),
         ModelKind::PDenNN | ModelKind::Mlp => {
-            cfg.position = net(Some(30), 500, 0.001, 1.2);
-            cfg.angle = net(Some(35), 1000, 0.001, 0.5);
+            cfg.position = net(Some(30), 500, (0.001, 0.001), 1.2);
+            cfg.angle = net(Some(35), 1000, (0.001, 0.001), 0.5);
         }
     }
     if kind == ModelKind::Mlp {
@@ -246,10 +282,18 @@ fn report(kind: ModelKind) -> ModelConfig {
     cfg
 }
 
-/// The default preset's learning rate, per fan-in ([`LrScaling::FanIn`]):
-/// each layer's per-sample step moves the output by roughly this fraction
-/// of the error times `||phi||^2 / fan-in` (about 0.3 for the sigmoid layer).
-const DEFAULT_LR: f64 = 3.0;
+/// The default preset's learning rates, per fan-in ([`LrScaling::FanIn`]):
+/// `(hidden layers' inputs, output layer)`. A per-sample step on the output
+/// layer moves the output by about `eta ||phi||^2 / fan-in` (about
+/// `0.3 eta` for a sigmoid layer) times the error, which must stay below 2:
+/// the output rate sits below that edge. The first layer moves the output
+/// by only about `eta a` (`a = sum W2^2 phi'^2`, small), so it takes a
+/// larger rate. docs/learning.md records the sweep behind these values.
+const DEFAULT_LR: (f64, f64) = (18.0, 5.0);
+
+/// DisDenNN: its 254 correlated raw inputs saturate more hidden units, which
+/// raises `||phi||^2`; output rate 6 diverged on the real frames.
+const DISDENNN_LR: (f64, f64) = (12.0, 3.0);
 
 /// Tuned defaults (docs/learning.md records the search behind them).
 fn tuned(kind: ModelKind) -> ModelConfig {
@@ -258,13 +302,14 @@ fn tuned(kind: ModelKind) -> ModelConfig {
     cfg.lr_scaling = LrScaling::FanIn;
     cfg.free_phase = FreePhase::FeedForward;
     cfg.clamped_phase = ClampedPhase::Linearised;
-    let (lr, beta) = (DEFAULT_LR, 1.0);
+    cfg.divergence_retries = 2;
+    let beta = 1.0;
     match kind {
-        ModelKind::DisDenNN => cfg.pose = net(None, 500, lr, beta),
-        ModelKind::PcaDenNN => cfg.pose = net(Some(35), 1000, lr, beta),
+        ModelKind::DisDenNN => cfg.pose = net(None, 500, DISDENNN_LR, beta),
+        ModelKind::PcaDenNN => cfg.pose = net(Some(35), 1000, DEFAULT_LR, beta),
         ModelKind::PDenNN | ModelKind::Mlp => {
-            cfg.position = net(Some(35), 1000, lr, beta);
-            cfg.angle = net(Some(35), 1000, lr, beta);
+            cfg.position = net(Some(35), 1000, DEFAULT_LR, beta);
+            cfg.angle = net(Some(35), 1000, DEFAULT_LR, beta);
         }
     }
     cfg

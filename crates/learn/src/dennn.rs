@@ -76,8 +76,11 @@ impl LrScaling {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EpConfig {
-    /// `eta` of eq. 3.21.
+    /// `eta` of eq. 3.21 (every layer, unless `output_learning_rate`).
     pub learning_rate: f64,
+    /// `eta` of the output layer, if different (default: `learning_rate`).
+    #[serde(default)]
+    pub output_learning_rate: Option<f64>,
     /// Per-layer application of `eta`.
     #[serde(default)]
     pub lr_scaling: LrScaling,
@@ -93,6 +96,7 @@ impl Default for EpConfig {
     fn default() -> Self {
         EpConfig {
             learning_rate: 0.001,
+            output_learning_rate: None,
             lr_scaling: LrScaling::None,
             beta: 1.0,
             free_phase: FreePhase::FeedForward,

@@ -50,24 +50,56 @@ pub(crate) fn step<const F: bool>(
     for e in &st.e[1..] {
         energy += 0.5 * e.iter().map(|v| (*v as f64).powi(2)).sum::<f64>();
     }
-    update::<F>(layers, st, cfg.learning_rate as f32, cfg.lr_scaling, next);
+    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
+    update::<F>(layers, st, rates, next);
     SampleStats { loss, energy }
+}
+
+/// The learning rates `eta` of eq. 3.21 for each layer: `hidden` for the
+/// layers feeding hidden units, `output` for the output layer, both applied
+/// per layer as `scaling` says.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LayerRates {
+    hidden: f32,
+    output: f32,
+    scaling: LrScaling,
+}
+
+impl LayerRates {
+    /// `output` defaults to `hidden` (the report's single rate).
+    pub fn new(hidden: f64, output: Option<f64>, scaling: LrScaling) -> Self {
+        LayerRates {
+            hidden: hidden as f32,
+            output: output.unwrap_or(hidden) as f32,
+            scaling,
+        }
+    }
+
+    /// The rate of layer `l` (1-based) of `layers`.
+    #[inline(always)]
+    fn rate(&self, layers: &Layers, l: usize) -> f32 {
+        let eta = if l == layers.depth() {
+            self.output
+        } else {
+            self.hidden
+        };
+        self.scaling.rate(eta, layers.sizes[l - 1])
+    }
 }
 
 /// Eqs. 3.21-3.22 with ERRATA signs: `W(l) += eta phi(s(l-1)) e(l)^T`,
 /// `b(l) += eta e(l)`, presynaptic activity taken from `st.phi`, `eta` per
-/// layer as `scaling` says. With `next`, the first layer's update is fused
-/// with the next sample's drive.
+/// layer from `rates`. With `next`, the first layer's update is fused with
+/// the next sample's drive.
 #[inline(always)]
 pub(crate) fn update<const F: bool>(
     layers: &mut Layers,
     st: &mut States,
-    eta: f32,
-    scaling: LrScaling,
+    rates: LayerRates,
     next: Option<&[f32]>,
 ) {
     for l in (1..=layers.depth()).rev() {
-        let eta = scaling.rate(eta, layers.sizes[l - 1]);
+        let eta = rates.rate(layers, l);
         let scaled = &mut st.tmp[l];
         scaled
             .iter_mut()

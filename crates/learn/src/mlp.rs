@@ -2,7 +2,7 @@
 //! initialisation, plain per-sample SGD on `0.5 ||y - t||^2`. It is the
 //! baseline the DenNN must match (report ch. 3.2).
 use crate::dennn::{check_dims, LrScaling};
-use crate::ep::update;
+use crate::ep::{update, LayerRates};
 use crate::error::LearnError;
 use crate::net::{has_fma, Layers, States};
 
@@ -12,6 +12,7 @@ pub struct Mlp {
     layers: Layers,
     st: States,
     lr_scaling: LrScaling,
+    output_lr: Option<f64>,
 }
 
 impl Mlp {
@@ -27,6 +28,7 @@ impl Mlp {
             layers,
             st,
             lr_scaling: LrScaling::None,
+            output_lr: None,
         }
     }
 
@@ -34,6 +36,13 @@ impl Mlp {
     /// same rate everywhere), exactly as the EP twin does.
     pub fn with_lr_scaling(mut self, scaling: LrScaling) -> Self {
         self.lr_scaling = scaling;
+        self
+    }
+
+    /// Train the output layer with its own rate (default: the rate given to
+    /// [`Mlp::train_sample`]), as [`crate::EpConfig::output_learning_rate`].
+    pub fn with_output_learning_rate(mut self, lr: Option<f64>) -> Self {
+        self.output_lr = lr;
         self
     }
 
@@ -54,26 +63,27 @@ impl Mlp {
         if has_fma() {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the CPU supports AVX2 and FMA (checked just above).
-            return Ok(unsafe { train_fma(self, x, t, lr as f32) });
+            return Ok(unsafe { train_fma(self, x, t, lr) });
         }
-        Ok(train_impl::<false>(self, x, t, lr as f32))
+        Ok(train_impl::<false>(self, x, t, lr))
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn train_fma(net: &mut Mlp, x: &[f32], t: &[f32], lr: f32) -> f64 {
+fn train_fma(net: &mut Mlp, x: &[f32], t: &[f32], lr: f64) -> f64 {
     train_impl::<true>(net, x, t, lr)
 }
 
 /// Forward pass, output error `t - y` (the negative loss gradient), deltas
 /// `e(l) = phi'(s(l)) . W(l+1) e(l+1)`, then the same rank-one update as EP.
 #[inline(always)]
-fn train_impl<const F: bool>(net: &mut Mlp, x: &[f32], t: &[f32], lr: f32) -> f64 {
+fn train_impl<const F: bool>(net: &mut Mlp, x: &[f32], t: &[f32], lr: f64) -> f64 {
     let Mlp {
         layers,
         st,
         lr_scaling,
+        output_lr,
     } = net;
     let n = layers.depth();
     layers.forward::<F>(x, st);
@@ -90,6 +100,11 @@ fn train_impl<const F: bool>(net: &mut Mlp, x: &[f32], t: &[f32], lr: f32) -> f6
             .zip(&st.phi[l])
             .for_each(|(e, p)| *e *= p * (1.0 - p));
     }
-    update::<F>(layers, st, lr, *lr_scaling, None);
+    update::<F>(
+        layers,
+        st,
+        LayerRates::new(lr, *output_lr, *lr_scaling),
+        None,
+    );
     loss
 }

@@ -43,8 +43,33 @@ impl PoseModel {
     }
 
     /// As [`Self::fit`], also reporting each net's loss on `val` per epoch
-    /// (never used for fitting).
+    /// (never used for fitting). A divergence restarts the fit with halved
+    /// learning rates up to `cfg.divergence_retries` times (the history
+    /// counts the halvings; the model's config holds the rates used).
     pub fn fit_with_validation(
+        cfg: &ModelConfig,
+        train: &Dataset,
+        val: Option<&Dataset>,
+        progress: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(PoseModel, TrainingHistory), LearnError> {
+        let mut cfg = cfg.clone();
+        let mut halvings = 0;
+        loop {
+            match Self::fit_once(&cfg, train, val, progress) {
+                Err(LearnError::Diverged { .. }) if halvings < cfg.divergence_retries => {
+                    cfg.scale_learning_rates(0.5);
+                    halvings += 1;
+                }
+                Ok((model, mut history)) => {
+                    history.lr_halvings = halvings;
+                    return Ok((model, history));
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    fn fit_once(
         cfg: &ModelConfig,
         train: &Dataset,
         val: Option<&Dataset>,

@@ -1,5 +1,5 @@
-//! A small random/grid hyper-parameter search over learning rate, beta,
-//! hidden size and number of components, scored on a validation split that
+//! A small random/grid hyper-parameter search over learning rates (hidden
+//! and output layer), beta, hidden size and number of components, scored on a validation split that
 //! the caller carves out of the training data (never the test data).
 use crate::config::ModelConfig;
 use crate::dataset::{mean_absolute_error, Dataset};
@@ -16,7 +16,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SearchSpace {
+    /// `NetConfig::learning_rate` (the hidden layers' input weights).
     pub learning_rates: Vec<f64>,
+    /// `NetConfig::output_learning_rate`.
+    pub output_learning_rates: Vec<f64>,
     pub betas: Vec<f64>,
     pub hidden: Vec<usize>,
     /// Ignored by nets without PCA (DisDenNN).
@@ -28,10 +31,11 @@ pub struct SearchSpace {
 
 impl Default for SearchSpace {
     /// Around the default preset (learning rates are per fan-in, see
-    /// [`crate::LrScaling::FanIn`]): 8 of the 36 grid points.
+    /// [`crate::LrScaling::FanIn`]): 8 of the 96 grid points.
     fn default() -> Self {
         SearchSpace {
-            learning_rates: vec![0.3, 1.0, 3.0],
+            learning_rates: vec![6.0, 18.0],
+            output_learning_rates: vec![3.0, 5.0],
             betas: vec![0.5, 1.0],
             hidden: vec![500, 1000],
             n_components: vec![20, 35, 50],
@@ -100,15 +104,18 @@ pub fn hyperparameter_search(
     Ok(trials)
 }
 
-type Point = (f64, f64, usize, usize);
+/// One grid point: (learning rate, output learning rate, beta, hidden, PCs).
+type Point = (f64, f64, f64, usize, usize);
 
 fn grid(space: &SearchSpace) -> Vec<Point> {
     let mut out = Vec::new();
     for &lr in &space.learning_rates {
-        for &beta in &space.betas {
-            for &h in &space.hidden {
-                for &c in &space.n_components {
-                    out.push((lr, beta, h, c));
+        for &out_lr in &space.output_learning_rates {
+            for &beta in &space.betas {
+                for &h in &space.hidden {
+                    for &c in &space.n_components {
+                        out.push((lr, out_lr, beta, h, c));
+                    }
                 }
             }
         }
@@ -116,13 +123,14 @@ fn grid(space: &SearchSpace) -> Vec<Point> {
     out
 }
 
-fn apply(base: &ModelConfig, (lr, beta, hidden, comps): Point) -> ModelConfig {
+fn apply(base: &ModelConfig, (lr, out_lr, beta, hidden, comps): Point) -> ModelConfig {
     let mut cfg = base.clone();
     for net in [&mut cfg.pose, &mut cfg.position, &mut cfg.angle]
         .into_iter()
         .flatten()
     {
         net.learning_rate = lr;
+        net.output_learning_rate = Some(out_lr);
         net.beta = beta;
         net.hidden = vec![hidden];
         if net.n_components.is_some() {

@@ -39,6 +39,10 @@ pub struct EpochReport {
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct TrainingHistory {
     pub epochs: Vec<EpochReport>,
+    /// How often the learning rates were halved after a divergence
+    /// (`ModelConfig::divergence_retries`); the epochs are the last fit's.
+    #[serde(default)]
+    pub lr_halvings: usize,
 }
 
 /// One net's training inputs and scaled targets.
@@ -98,12 +102,15 @@ impl Trainer {
     ) -> Self {
         let engine = if cfg.kind == ModelKind::Mlp {
             Engine::Backprop(
-                Mlp::from_layers(layers).with_lr_scaling(cfg.lr_scaling),
+                Mlp::from_layers(layers)
+                    .with_lr_scaling(cfg.lr_scaling)
+                    .with_output_learning_rate(net.output_learning_rate),
                 net.learning_rate,
             )
         } else {
             let ep = EpConfig {
                 learning_rate: net.learning_rate,
+                output_learning_rate: net.output_learning_rate,
                 lr_scaling: cfg.lr_scaling,
                 beta: net.beta,
                 free_phase: cfg.free_phase,

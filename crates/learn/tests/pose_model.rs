@@ -105,11 +105,41 @@ fn diverging_training_is_an_error_not_a_panic() {
     cfg.lr_scaling = tactrace_learn::LrScaling::None;
     for net in [&mut cfg.position, &mut cfg.angle].into_iter().flatten() {
         net.learning_rate = 1e4;
+        net.output_learning_rate = None;
     }
     assert!(matches!(
         PoseModel::fit(&cfg, &data, &mut |_| {}),
         Err(LearnError::Diverged { .. })
     ));
+}
+
+#[test]
+fn divergence_retries_halve_the_rates_and_record_them() {
+    let data = synthetic(200, 12, 13);
+    let mut cfg = small(ModelKind::Mlp, 3);
+    // Output step about 0.3 x 40 = 12 times the error: diverges at once.
+    for net in [&mut cfg.position, &mut cfg.angle].into_iter().flatten() {
+        net.learning_rate = 40.0;
+        net.output_learning_rate = Some(40.0);
+    }
+    cfg.divergence_retries = 0;
+    assert!(matches!(
+        PoseModel::fit(&cfg, &data, &mut |_| {}),
+        Err(LearnError::Diverged { .. })
+    ));
+    cfg.divergence_retries = 5;
+    let (model, history) = PoseModel::fit(&cfg, &data, &mut |_| {}).unwrap();
+    let k = history.lr_halvings;
+    assert!((1..=5).contains(&k), "halvings {k}");
+    let used = 40.0 / f64::from(1u32 << k);
+    for net in [&model.config().position, &model.config().angle] {
+        let net = net.as_ref().unwrap();
+        assert_eq!(
+            (net.learning_rate, net.output_learning_rate),
+            (used, Some(used))
+        );
+    }
+    assert_eq!(history.epochs.len(), 3);
 }
 
 #[test]
@@ -260,7 +290,8 @@ fn invalid_configs_are_errors() {
 fn search_ranks_trials_on_the_validation_split() {
     let (train, val) = synthetic(300, 12, 9).split(0.75, 10);
     let space = SearchSpace {
-        learning_rates: vec![1e-4, 0.02],
+        learning_rates: vec![0.02],
+        output_learning_rates: vec![1e-4, 0.02],
         betas: vec![1.0],
         hidden: vec![32],
         n_components: vec![6],
@@ -278,5 +309,6 @@ fn search_ranks_trials_on_the_validation_split() {
     .unwrap();
     assert_eq!((trials.len(), seen), (2, 2));
     assert!(trials[0].score <= trials[1].score);
-    assert_eq!(trials[0].config.angle.as_ref().unwrap().learning_rate, 0.02);
+    let best = trials[0].config.angle.as_ref().unwrap();
+    assert_eq!(best.output_learning_rate, Some(0.02));
 }

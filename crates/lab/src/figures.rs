@@ -11,14 +11,7 @@ fn plot_err(e: crate::plot::PlotError) -> LabError {
 }
 
 fn axes(title: &str, x: &str, y: &str) -> Axes {
-    Axes {
-        title: title.into(),
-        x_label: x.into(),
-        y_label: y.into(),
-        log_y: false,
-        equal_aspect: false,
-        size: (640, 480),
-    }
+    Axes::new(title, x, y)
 }
 
 /// Fig. 4.5: loss and total energy per epoch for every network, log y.
@@ -143,7 +136,10 @@ pub fn error_curve(stem: &Path, title: &str, curve: &[f64]) -> Result<Vec<PathBu
         .collect();
     chart(
         stem,
-        &axes(title, "contour point", "L2 error (mm)"),
+        &Axes {
+            y_from_zero: true,
+            ..axes(title, "contour point", "L2 error (mm)")
+        },
         &[
             Series {
                 name: "L2 error".into(),

@@ -106,7 +106,14 @@ impl<'a> Panel<'a> {
         let all = || series.iter().flat_map(|c| c.points.iter());
         let x = padded(bounds(all().map(|p| p.0))?);
         let y = bounds(all().map(|p| p.1))?;
-        let y = if axes.log_y { padded_log(y) } else { padded(y) };
+        let y = match (axes.log_y, axes.y_from_zero && y.lo >= 0.0) {
+            (true, _) => padded_log(y),
+            (false, true) => Span {
+                lo: 0.0,
+                hi: padded(y).hi,
+            },
+            (false, false) => padded(y),
+        };
         Some(Panel { axes, series, x, y })
     }
 }

@@ -69,6 +69,9 @@ pub struct Axes {
     pub log_y: bool,
     /// One x unit spans as many pixels as one y unit (keeps mm square).
     pub equal_aspect: bool,
+    /// A linear y axis over non-negative data starts at 0 (errors,
+    /// distances) instead of padding below it.
+    pub y_from_zero: bool,
     /// Figure size in pixels for [`chart`]; ignored by [`grid`] panels.
     pub size: (u32, u32),
 }
@@ -82,6 +85,7 @@ impl Axes {
             y_label: y_label.to_owned(),
             log_y: false,
             equal_aspect: false,
+            y_from_zero: false,
             size: (640, 480),
         }
     }

@@ -5,6 +5,7 @@ use clap::Args;
 use std::path::PathBuf;
 use tactrace_geometry::ShapeSpec;
 use tactrace_lab::follow::{run_follow, FollowRunConfig};
+use tactrace_lab::hardware::{run_follow_hardware, HardwareConfig};
 use tactrace_lab::report::{reproduce as run_reproduce, ReproduceConfig};
 use tactrace_lab::{figures, fsutil, model_io, settings, shape_io, LabError};
 
@@ -13,9 +14,15 @@ pub struct FollowArgs {
     /// Model directory (from `tactrace train`).
     #[arg(long)]
     model: PathBuf,
-    /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points (mm).
-    #[arg(long)]
-    shape: String,
+    /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points
+    /// (mm). With --hardware: optional, the object's true contour in the
+    /// work frame, used only to score the run.
+    #[arg(long, required_unless_present = "hardware")]
+    shape: Option<String>,
+    /// Run on a real rig (UR5 + TacTip camera) described by this TOML
+    /// (docs/hardware.md) instead of the simulated world.
+    #[arg(long, conflicts_with = "config")]
+    hardware: Option<PathBuf>,
     /// Run exactly N steps (default: until the loop closes, capped).
     #[arg(long)]
     steps: Option<usize>,
@@ -40,6 +47,9 @@ fn follow_config(path: Option<&std::path::Path>) -> Result<FollowRunConfig> {
 }
 
 pub fn follow(a: FollowArgs) -> Result<()> {
+    if let Some(hw) = a.hardware.clone() {
+        return follow_hardware(a, &hw);
+    }
     let mut cfg = follow_config(a.config.as_deref())?;
     if a.steps.is_some() {
         cfg.follow.steps = a.steps;
@@ -47,7 +57,7 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     if let Some(s) = a.seed {
         cfg.follow.seed = s;
     }
-    let spec = ShapeSpec::parse(&a.shape);
+    let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
     let contour = shape_io::load_shape(&spec)?;
     let model = model_io::load_model(&a.model)?;
     std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
@@ -174,5 +184,53 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         let us = tactrace_lab::bench::real_control_latency(dir, &blob, m, a.taps)?;
         println!("control loop on real frames, frame -> command: {us:.1} us");
     }
+    Ok(())
+}
+
+/// `follow --hardware`: the same loop on the real rig.
+fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
+    let text = fsutil::read_text(path)?;
+    let mut cfg = HardwareConfig::from_toml(&text, &path.display().to_string())?;
+    if a.steps.is_some() {
+        cfg.follow.steps = a.steps;
+    }
+    if let Some(s) = a.seed {
+        cfg.follow.seed = s;
+    }
+    cfg.validate()?;
+    let shape = match &a.shape {
+        Some(s) => {
+            let spec = ShapeSpec::parse(s);
+            Some((spec.name(), shape_io::load_shape(&spec)?))
+        }
+        None => None,
+    };
+    let model = model_io::load_model(&a.model)?;
+    std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
+    fsutil::write_atomic(
+        &a.out.join("config.toml"),
+        toml::to_string(&cfg)?.as_bytes(),
+    )?;
+    let pb = bar(a.steps.unwrap_or(cfg.follow.max_steps) as u64, "follow");
+    let res = run_follow_hardware(
+        &cfg,
+        model,
+        shape.as_ref().map(|s| &s.1),
+        &a.out,
+        &mut |r| pb.set_position(r.step as u64 + 1),
+    )?;
+    pb.finish_and_clear();
+    if let (Some((name, contour)), Some((m, curve))) = (&shape, &res.metrics) {
+        let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
+        figures::trajectory(&a.out.join("trajectory"), name, contour, &traj)?;
+        figures::error_curve(&a.out.join("l2_error"), name, curve)?;
+        println!(
+            "{name}: {} steps, {:?}; mean L2 {:.3} mm, track error mean {:.3} mm",
+            m.steps, res.summary.ending, m.mean_l2_mm, m.mean_track_error_mm
+        );
+    } else {
+        println!("{} steps, {:?}", res.summary.steps, res.summary.ending);
+    }
+    eprintln!("{}", res.summary.message);
     Ok(())
 }

@@ -156,6 +156,29 @@ fn follow_rejects_unknown_config_keys_and_unreachable_contours() {
     );
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("cannot reach"), "{}", r.stderr);
+    // A real-rig file whose start lies outside its workspace is refused
+    // before any connection is attempted (the host does not exist).
+    std::fs::write(
+        t.join("rig.toml"),
+        "[arm]\nhost = \"192.0.2.1\"\n[camera.folder]\npath = \"ds\"\n\
+         [workspace]\nmin = [10.0, 10.0, -15.0]\nmax = [50.0, 50.0, 20.0]\n\
+         [start]\nx_mm = 0.0\ny_mm = 0.0\n",
+    )
+    .unwrap();
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow",
+            "--hardware",
+            "rig.toml",
+            "--model",
+            "m",
+            "--out",
+            "r3",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("outside the workspace"), "{}", r.stderr);
 }
 
 #[test]

@@ -5,17 +5,18 @@
 //! keeps what it did; `metrics.json` is written last and marks completion.
 use crate::error::{io_err, LabError, Result};
 use crate::metrics::{evaluate, l2_curve, FollowMetrics};
-use crate::rig::{RigConfig, SimRig};
+use crate::rig::{RigConfig, SimRig, TapConfig};
 use crate::servo::{
     check_follow_config, follow, FollowConfig, FollowSummary, Perception, StepRecord, StepSink,
 };
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::Path;
-use tactrace_arm::Pose;
+use tactrace_arm::{Arm, Pose};
 use tactrace_control::{PbtsConfig, PbtsController};
 use tactrace_geometry::{Contour, Vec2};
 use tactrace_learn::PoseModel;
+use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_vision::PinExtractor;
 
 /// Where the run starts: on the edge point at `arc_mm`, offset along the
@@ -162,27 +163,32 @@ pub fn flattest_arc_mm(shape: &Contour, window_mm: f64) -> f64 {
     (best as f64 + k as f64 / 2.0) * step % shape.perimeter()
 }
 
-/// Run the experiment on `shape` with `model`, writing into `out` (created).
-pub fn run_follow(
-    cfg: &FollowRunConfig,
+/// What the servo loop needs besides the arm, the sensor and the model.
+pub struct LoopSettings<'a> {
+    pub blob: &'a tactrace_vision::BlobParams,
+    pub controller: &'a PbtsConfig,
+    pub follow: &'a FollowConfig,
+    pub tap: &'a TapConfig,
+    /// Mean pin displacement (px) below which a tap counts as no contact.
+    pub contact_threshold_px: f64,
+}
+
+/// The servo loop on any arm and sensor, simulated or real: pins are
+/// ordered against `reference` (the undeformed frame), each step goes to
+/// `out/trajectory.csv` as it happens (flushed, so an interrupted run keeps
+/// what it did) and to `progress`.
+pub fn run_servo(
+    arm: &mut dyn Arm,
+    sensor: &mut dyn TactileSensor,
+    reference: &Frame,
     model: PoseModel,
-    shape: &Contour,
+    settings: &LoopSettings,
     out: &Path,
     progress: &mut dyn FnMut(&StepRecord),
-) -> Result<FollowOutcome> {
-    check_follow_config(&cfg.follow)?;
+) -> Result<(FollowSummary, Vec<StepRecord>)> {
+    check_follow_config(settings.follow)?;
     std::fs::create_dir_all(out).map_err(io_err(out))?;
-    let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
-    cfg.rig.workspace.validate()?;
-    cfg.rig.workspace.check_inside(start).map_err(|e| {
-        LabError::Config(format!(
-            "the arm cannot reach the start on this contour ({:.1}, {:.1}) mm: {e}",
-            start.x, start.y
-        ))
-    })?;
-    let mut rig = SimRig::new(&cfg.rig, shape.clone(), start, cfg.follow.seed)?;
-    let extractor =
-        PinExtractor::from_reference_frame(&rig.reference_frame(), cfg.rig.blob.clone())?;
+    let extractor = PinExtractor::from_reference_frame(reference, settings.blob.clone())?;
     if model.input_dim() != 2 * extractor.tracker.reference().len() {
         return Err(LabError::Config(format!(
             "the model expects {} inputs but the sensor gives {} (2 x pins)",
@@ -193,9 +199,9 @@ pub fn run_follow(
     let perception = Perception {
         extractor,
         model,
-        contact_threshold_px: cfg.contact_threshold_px,
+        contact_threshold_px: settings.contact_threshold_px,
     };
-    let mut controller = PbtsController::new(cfg.controller.clone());
+    let mut controller = PbtsController::new(settings.controller.clone());
     let path = out.join("trajectory.csv");
     let mut file = std::fs::File::create(&path).map_err(io_err(&path))?;
     writeln!(
@@ -207,14 +213,71 @@ pub fn run_follow(
     let mut records: Vec<StepRecord> = Vec::new();
     let mut bar = FnSink(|r: &StepRecord| progress(r));
     let summary = follow(
-        &mut rig.arm,
-        &mut rig.sensor,
+        arm,
+        sensor,
         &perception,
         &mut controller,
-        &cfg.follow,
-        &cfg.rig.tap,
+        settings.follow,
+        settings.tap,
         &mut [&mut csv, &mut records, &mut bar],
     )?;
+    Ok((summary, records))
+}
+
+/// Run the experiment on `shape` with `model`, writing into `out` (created).
+pub fn run_follow(
+    cfg: &FollowRunConfig,
+    model: PoseModel,
+    shape: &Contour,
+    out: &Path,
+    progress: &mut dyn FnMut(&StepRecord),
+) -> Result<FollowOutcome> {
+    check_follow_config(&cfg.follow)?;
+    let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
+    cfg.rig.workspace.validate()?;
+    cfg.rig.workspace.check_inside(start).map_err(|e| {
+        LabError::Config(format!(
+            "the arm cannot reach the start on this contour ({:.1}, {:.1}) mm: {e}",
+            start.x, start.y
+        ))
+    })?;
+    let mut rig = SimRig::new(&cfg.rig, shape.clone(), start, cfg.follow.seed)?;
+    let settings = LoopSettings {
+        blob: &cfg.rig.blob,
+        controller: &cfg.controller,
+        follow: &cfg.follow,
+        tap: &cfg.rig.tap,
+        contact_threshold_px: cfg.contact_threshold_px,
+    };
+    let reference = rig.reference_frame();
+    let (summary, records) = run_servo(
+        &mut rig.arm,
+        &mut rig.sensor,
+        &reference,
+        model,
+        &settings,
+        out,
+        progress,
+    )?;
+    let (metrics, curve) = score_run(shape, &records, &summary, &cfg.follow, out)?;
+    Ok(FollowOutcome {
+        summary,
+        metrics,
+        records,
+        l2_curve: curve,
+    })
+}
+
+/// The metrics of a finished run against the true `shape` (report ch. 5.3
+/// and beyond), written to `out/metrics.json`; returns them with the L2
+/// error curve (1000 contour points).
+pub fn score_run(
+    shape: &Contour,
+    records: &[StepRecord],
+    summary: &FollowSummary,
+    follow: &FollowConfig,
+    out: &Path,
+) -> Result<(FollowMetrics, Vec<f64>)> {
     let traj: Vec<Vec2> = records
         .iter()
         .map(|r| Vec2::new(r.pose.x, r.pose.y))
@@ -222,8 +285,8 @@ pub fn run_follow(
     let metrics = evaluate(
         shape,
         &traj,
-        cfg.follow.close_radius_mm,
-        cfg.follow.min_excursion_mm,
+        follow.close_radius_mm,
+        follow.min_excursion_mm,
     );
     let curve = l2_curve(shape, &traj, 1000);
     let document = MetricsDocument {
@@ -233,10 +296,5 @@ pub fn run_follow(
     };
     let json = serde_json::to_string_pretty(&document).expect("metrics serialise");
     crate::fsutil::write_atomic(&out.join("metrics.json"), json.as_bytes())?;
-    Ok(FollowOutcome {
-        summary,
-        metrics,
-        records,
-        l2_curve: curve,
-    })
+    Ok((metrics, curve))
 }

@@ -15,6 +15,7 @@ pub mod error;
 pub mod figures;
 pub mod follow;
 pub mod fsutil;
+pub mod hardware;
 pub mod html;
 pub mod images;
 pub mod import;

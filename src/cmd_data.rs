@@ -5,6 +5,7 @@ use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use tactrace_geometry::ShapeSpec;
 use tactrace_lab::collect::{collect as run_collect, pose_at_edge, CollectConfig};
+use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareConfig};
 use tactrace_lab::rig::RigConfig;
 use tactrace_lab::{dataset, fsutil, images, import as imp, shape_io, LabError};
 use tactrace_vision::BlobParams;
@@ -27,6 +28,11 @@ pub struct CollectArgs {
     /// Rig configuration TOML (tables sensor, arm, workspace, tap, blob).
     #[arg(long)]
     config: Option<PathBuf>,
+    /// Collect on a real rig (UR5 + TacTip camera) described by this TOML
+    /// (docs/hardware.md): its `[start]` is a point of the edge and
+    /// `angle_deg` the direction of the edge's outward normal.
+    #[arg(long, conflicts_with_all = ["config", "shape"])]
+    hardware: Option<PathBuf>,
     /// Replace an existing output directory.
     #[arg(long)]
     force: bool,
@@ -42,6 +48,9 @@ pub fn rig_config(path: Option<&Path>) -> Result<RigConfig> {
 }
 
 pub fn collect(a: CollectArgs) -> Result<()> {
+    if let Some(path) = &a.hardware {
+        return collect_hardware(&a, path);
+    }
     let spec = ShapeSpec::parse(&a.shape);
     let shape = shape_io::load_shape(&spec)?;
     let rig = rig_config(a.config.as_deref())?;
@@ -61,6 +70,30 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         "collected {} taps on {} into {} ({} with missing pins)",
         got.data.len(),
         spec.name(),
+        dir.display(),
+        got.data.meta.frames_with_missing_pins
+    );
+    Ok(())
+}
+
+/// `collect --hardware`: the same collection on the real rig.
+fn collect_hardware(a: &CollectArgs, path: &Path) -> Result<()> {
+    let text = fsutil::read_text(path)?;
+    let hw = HardwareConfig::from_toml(&text, &path.display().to_string())?;
+    let cfg = CollectConfig {
+        samples: a.samples,
+        seed: a.seed,
+        save_frames: a.save_frames,
+        ..CollectConfig::default()
+    };
+    fsutil::check_output_dir(&a.out, a.force)?;
+    let pb = bar(a.samples as u64, "collect");
+    let got = collect_hardware_on(&hw, &cfg, "real rig", |i| pb.set_position(i as u64))?;
+    pb.finish_and_clear();
+    let dir = dataset::write_dataset(&a.out, &got.data, &got.frames, a.force)?;
+    eprintln!(
+        "collected {} taps on the rig into {} ({} with missing pins)",
+        got.data.len(),
         dir.display(),
         got.data.meta.frames_with_missing_pins
     );

@@ -8,13 +8,14 @@
 //! 4. Extract the pins and their displacement from the undeformed frame.
 use crate::dataset::{DatasetMeta, TapData};
 use crate::error::{LabError, Result};
-use crate::rig::{tap, RigConfig, SimRig};
+use crate::rig::{tap, RigConfig, SimRig, TapConfig};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use tactrace_arm::{Arm, Pose};
 use tactrace_geometry::{Contour, Vec2};
-use tactrace_vision::PinExtractor;
+use tactrace_sensor::{Frame, TactileSensor};
+use tactrace_vision::{BlobParams, PinExtractor};
 
 /// What to collect.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -66,11 +67,9 @@ pub fn collect(
     shape: &Contour,
     cfg: &CollectConfig,
     origin: &str,
-    mut progress: impl FnMut(usize),
+    progress: impl FnMut(usize),
 ) -> Result<Collected> {
-    if cfg.samples == 0 {
-        return Err(LabError::Config("--samples must be at least 1".into()));
-    }
+    check_samples(cfg)?;
     let (edge, normal) = shape.at_arc_length(cfg.edge_arc_mm);
     let start = pose_at_edge(
         edge,
@@ -81,7 +80,62 @@ pub fn collect(
     );
     let mut rig = SimRig::new(rig_cfg, shape.clone(), start, cfg.seed)?;
     let reference = rig.reference_frame();
-    let extractor = PinExtractor::from_reference_frame(&reference, rig_cfg.blob.clone())?;
+    let on = EdgeRig {
+        arm: &mut rig.arm,
+        sensor: &mut rig.sensor,
+        reference: &reference,
+        blob: &rig_cfg.blob,
+        tap: &rig_cfg.tap,
+        edge,
+        normal,
+    };
+    let settings = serde_json::json!({ "rig": rig_cfg, "collect": cfg });
+    collect_on(on, cfg, "simulated", origin, settings, progress)
+}
+
+/// `--samples` must be positive.
+pub fn check_samples(cfg: &CollectConfig) -> Result<()> {
+    if cfg.samples == 0 {
+        return Err(LabError::Config("--samples must be at least 1".into()));
+    }
+    Ok(())
+}
+
+/// An arm and sensor (simulated or real) at an edge: the undeformed
+/// reference frame, the blob settings, the tap and the edge point with its
+/// outward normal in the work frame.
+pub struct EdgeRig<'a> {
+    pub arm: &'a mut dyn Arm,
+    pub sensor: &'a mut dyn TactileSensor,
+    pub reference: &'a Frame,
+    pub blob: &'a BlobParams,
+    pub tap: &'a TapConfig,
+    pub edge: Vec2,
+    pub normal: Vec2,
+}
+
+/// The collection of report ch. 4.1 on any rig: the labels are the poses
+/// commanded relative to the edge; `source` and `settings` go into the
+/// dataset's metadata.
+pub fn collect_on(
+    on: EdgeRig,
+    cfg: &CollectConfig,
+    source: &str,
+    origin: &str,
+    settings: serde_json::Value,
+    mut progress: impl FnMut(usize),
+) -> Result<Collected> {
+    check_samples(cfg)?;
+    let EdgeRig {
+        arm,
+        sensor,
+        reference,
+        blob,
+        tap: tap_cfg,
+        edge,
+        normal,
+    } = on;
+    let extractor = PinExtractor::from_reference_frame(reference, blob.clone())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let dim = 2 * extractor.tracker.reference().len();
     let mut inputs = Vec::with_capacity(cfg.samples * dim);
@@ -91,11 +145,9 @@ pub fn collect(
     for i in 0..cfg.samples {
         let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
         let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
-        let depth =
-            rig_cfg.tap.depth_mm + rng.random_range(-1.0..=1.0) * rig_cfg.tap.depth_jitter_mm;
-        rig.arm
-            .move_to(pose_at_edge(edge, normal, r, theta, rig_cfg.tap.height_mm))?;
-        let frame = tap(&mut rig.arm, &mut rig.sensor, depth)?;
+        let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
+        arm.move_to(pose_at_edge(edge, normal, r, theta, tap_cfg.height_mm))?;
+        let frame = tap(arm, sensor, depth)?;
         let tracked = extractor.extract(&frame)?;
         if tracked.missing > 0 {
             with_missing += 1;
@@ -111,13 +163,10 @@ pub fn collect(
         progress(i + 1);
     }
     if cfg.save_frames {
-        frames.push((
-            "reference.png".into(),
-            crate::images::png_bytes(&reference)?,
-        ));
+        frames.push(("reference.png".into(), crate::images::png_bytes(reference)?));
     }
     let meta = DatasetMeta {
-        source: "simulated".into(),
+        source: source.into(),
         origin: origin.into(),
         seed: Some(cfg.seed),
         samples: cfg.samples,
@@ -125,7 +174,7 @@ pub fn collect(
         targets: ["r_mm".into(), "theta_deg".into()],
         frames_with_missing_pins: with_missing,
         reference_pins: extractor.tracker.reference().to_vec(),
-        settings: serde_json::json!({ "rig": rig_cfg, "collect": cfg }),
+        settings,
         tactrace_version: crate::VERSION.into(),
     };
     Ok(Collected {

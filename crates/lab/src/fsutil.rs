@@ -8,6 +8,18 @@ use crate::error::{io_err, LabError, Result};
 use std::fs;
 use std::path::{Path, PathBuf};
 
+/// Refuse a non-empty existing `target` unless `force`: the check
+/// [`StagedDir::new`] makes, available before a long run (a collection on
+/// the real rig) starts rather than after it.
+pub fn check_output_dir(target: &Path, force: bool) -> Result<()> {
+    if dir_has_entries(target) && !force {
+        return Err(LabError::OutputExists {
+            path: target.to_path_buf(),
+        });
+    }
+    Ok(())
+}
+
 /// A directory being written; becomes `target` only on [`StagedDir::commit`].
 pub struct StagedDir {
     staging: PathBuf,
@@ -19,11 +31,7 @@ impl StagedDir {
     /// Start writing `target`. Refuses a non-empty existing target unless
     /// `force`, in which case the old one is replaced only at commit time.
     pub fn new(target: &Path, force: bool) -> Result<Self> {
-        if dir_has_entries(target) && !force {
-            return Err(LabError::OutputExists {
-                path: target.to_path_buf(),
-            });
-        }
+        check_output_dir(target, force)?;
         let parent = parent_of(target);
         fs::create_dir_all(&parent).map_err(io_err(&parent))?;
         let name = target

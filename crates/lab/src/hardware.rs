@@ -8,6 +8,7 @@
 //! configuration must name the workspace and the start pose explicitly:
 //! there is no safe default for a real robot. docs/hardware.md explains
 //! the set-up.
+use crate::collect::{check_samples, collect_on, pose_at_edge, CollectConfig, Collected, EdgeRig};
 use crate::error::{LabError, Result};
 use crate::follow::{run_servo, score_run, LoopSettings};
 use crate::metrics::FollowMetrics;
@@ -17,13 +18,13 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
 use tactrace_control::PbtsConfig;
-use tactrace_geometry::Contour;
+use tactrace_geometry::{Contour, Vec2};
 use tactrace_hw::{
     CameraSensor, CommandSource, CommandSourceConfig, FolderSource, FrameSource, PreprocessConfig,
     Ur5Arm, Ur5Config,
 };
 use tactrace_learn::PoseModel;
-use tactrace_sensor::TactileSensor;
+use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_vision::BlobParams;
 
 /// Where the frames come from.
@@ -182,15 +183,7 @@ pub fn run_follow_hardware(
     progress: &mut dyn FnMut(&StepRecord),
 ) -> Result<HardwareOutcome> {
     cfg.validate()?;
-    let mut sensor = cfg.camera()?;
-    let ur5 = Ur5Arm::connect(cfg.arm.clone()).map_err(|e| LabError::Servo(e.to_string()))?;
-    let mut arm = LimitedArm::new(ur5, cfg.workspace.clone(), LimitMode::Refuse);
-    arm.move_to(cfg.start_pose()).map_err(|e| {
-        LabError::Servo(format!(
-            "moving to the start (jog the arm to within the step limit of it first): {e}"
-        ))
-    })?;
-    let reference = sensor.capture()?;
+    let (mut arm, mut sensor, reference) = connect_at(cfg, cfg.start_pose())?;
     let settings = LoopSettings {
         blob: &cfg.blob,
         controller: &cfg.controller,
@@ -225,4 +218,75 @@ pub fn run_follow_hardware(
         records,
         metrics,
     })
+}
+
+/// Open the camera, connect the arm behind the limiter, move to `first`
+/// (tap height, sensor in the air) and capture the undeformed reference
+/// frame there.
+fn connect_at(
+    cfg: &HardwareConfig,
+    first: Pose,
+) -> Result<(LimitedArm<Ur5Arm>, Box<dyn TactileSensor>, Frame)> {
+    let mut sensor = cfg.camera()?;
+    let ur5 = Ur5Arm::connect(cfg.arm.clone()).map_err(|e| LabError::Servo(e.to_string()))?;
+    let mut arm = LimitedArm::new(ur5, cfg.workspace.clone(), LimitMode::Refuse);
+    arm.move_to(first).map_err(|e| {
+        LabError::Servo(format!(
+            "moving to the start (jog the arm to within the step limit of it first): {e}"
+        ))
+    })?;
+    let reference = sensor.capture()?;
+    Ok((arm, sensor, reference))
+}
+
+/// The edge of a collection on the rig: `[start]` is a point of the edge
+/// and `angle_deg` the direction of its outward normal (the sensor's yaw at
+/// theta = 0).
+pub fn collection_edge(cfg: &HardwareConfig) -> (Vec2, Vec2) {
+    let a = cfg.start.angle_deg.to_radians();
+    (
+        Vec2::new(cfg.start.x_mm, cfg.start.y_mm),
+        Vec2::new(a.cos(), a.sin()),
+    )
+}
+
+/// Collect taps at the edge on the real rig (report ch. 4.1), exactly as
+/// the simulated collection does; refuses to start when any collection pose
+/// or the deepest tap lies outside the workspace.
+pub fn collect_hardware(
+    cfg: &HardwareConfig,
+    collect: &CollectConfig,
+    origin: &str,
+    progress: impl FnMut(usize),
+) -> Result<Collected> {
+    check_samples(collect)?;
+    cfg.validate()?;
+    let (edge, normal) = collection_edge(cfg);
+    let t = &cfg.tap;
+    for r in [-collect.r_range_mm, collect.r_range_mm] {
+        for z in [t.height_mm, t.height_mm - t.depth_mm - t.depth_jitter_mm] {
+            let pose = Pose {
+                z,
+                ..pose_at_edge(edge, normal, r, 0.0, t.height_mm)
+            };
+            cfg.workspace.check_inside(pose).map_err(|e| {
+                LabError::Config(format!(
+                    "collection pose r = {r:.1} mm, z = {z:.2} mm is outside the workspace: {e}"
+                ))
+            })?;
+        }
+    }
+    let first = pose_at_edge(edge, normal, 0.0, -collect.theta_range_deg, t.height_mm);
+    let (mut arm, mut sensor, reference) = connect_at(cfg, first)?;
+    let on = EdgeRig {
+        arm: &mut arm,
+        sensor: sensor.as_mut(),
+        reference: &reference,
+        blob: &cfg.blob,
+        tap: &cfg.tap,
+        edge,
+        normal,
+    };
+    let settings = serde_json::json!({ "hardware": cfg, "collect": collect });
+    collect_on(on, collect, "real", origin, settings, progress)
 }

@@ -4,12 +4,14 @@
 //! command exactly the trajectory the simulated path commanded: the same
 //! pipeline runs on both rigs.
 use std::path::{Path, PathBuf};
-use tactrace_arm::Workspace;
+use tactrace_arm::{Pose, Workspace};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig};
-use tactrace_lab::collect::{collect, CollectConfig};
+use tactrace_lab::collect::{collect, pose_at_edge, CollectConfig};
 use tactrace_lab::follow::{run_servo, start_pose, FollowRunConfig, LoopSettings};
-use tactrace_lab::hardware::{run_follow_hardware, CameraConfig, HardwareConfig, HardwareStart};
+use tactrace_lab::hardware::{
+    collect_hardware, run_follow_hardware, CameraConfig, HardwareConfig, HardwareStart,
+};
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_sensor::{Frame, SensorError, TactileSensor};
@@ -47,6 +49,51 @@ fn scratch(tag: &str) -> PathBuf {
 
 fn trajectory(dir: &Path) -> String {
     std::fs::read_to_string(dir.join("trajectory.csv")).unwrap()
+}
+
+/// The loopback fake controller with the tool 5 mm above `near`.
+fn fake_near(near: Pose) -> FakeUrController {
+    FakeUrController::start(FakeUrOptions {
+        start: [
+            near.x / 1000.0,
+            near.y / 1000.0,
+            (near.z + 5.0) / 1000.0,
+            0.0,
+            0.0,
+            near.rz.to_radians(),
+        ],
+        ..FakeUrOptions::default()
+    })
+    .unwrap()
+}
+
+/// A rig file: the fake arm, the camera replaying `frames`, the simulated
+/// rig's tap and blob settings, a workspace around the start.
+fn rig_file(fake: &FakeUrController, frames: &Path, x: f64, y: f64, angle: f64) -> HardwareConfig {
+    let sim = FollowRunConfig::simulated();
+    HardwareConfig {
+        arm: fake.config(),
+        camera: CameraConfig::Folder {
+            path: frames.to_path_buf(),
+            looping: false,
+        },
+        preprocess: PreprocessConfig::grayscale_only(),
+        workspace: Workspace {
+            min: [x - 60.0, y - 60.0, -15.0],
+            max: [x + 60.0, y + 60.0, 20.0],
+            ..Workspace::default()
+        },
+        start: HardwareStart {
+            x_mm: x,
+            y_mm: y,
+            angle_deg: angle,
+        },
+        tap: sim.rig.tap,
+        blob: sim.rig.blob.clone(),
+        controller: sim.controller.clone(),
+        follow: sim.follow.clone(),
+        contact_threshold_px: sim.contact_threshold_px,
+    }
 }
 
 #[test]
@@ -105,40 +152,10 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     assert_eq!(sim_summary.steps, STEPS, "{}", sim_summary.message);
 
     // The same frames through the UR5 driver and the camera sensor.
-    let fake = FakeUrController::start(FakeUrOptions {
-        start: [
-            start.x / 1000.0,
-            start.y / 1000.0,
-            (start.z + 5.0) / 1000.0,
-            0.0,
-            0.0,
-            start.rz.to_radians(),
-        ],
-        ..FakeUrOptions::default()
-    })
-    .unwrap();
+    let fake = fake_near(start);
     let hw = HardwareConfig {
-        arm: fake.config(),
-        camera: CameraConfig::Folder {
-            path: frames.clone(),
-            looping: false,
-        },
-        preprocess: PreprocessConfig::grayscale_only(),
-        workspace: Workspace {
-            min: [start.x - 60.0, start.y - 60.0, -15.0],
-            max: [start.x + 60.0, start.y + 60.0, 20.0],
-            ..Workspace::default()
-        },
-        start: HardwareStart {
-            x_mm: start.x,
-            y_mm: start.y,
-            angle_deg: start.rz,
-        },
-        tap: sim.rig.tap,
-        blob: sim.rig.blob.clone(),
-        controller: sim.controller.clone(),
         follow: follow.clone(),
-        contact_threshold_px: sim.contact_threshold_px,
+        ..rig_file(&fake, &frames, start.x, start.y, start.rz)
     };
     let hw_out = scratch("hw");
     let res = run_follow_hardware(&hw, model, Some(&disk), &hw_out, &mut |_| {}).unwrap();
@@ -155,6 +172,55 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     for d in [frames, sim_out, hw_out] {
         std::fs::remove_dir_all(d).ok();
     }
+}
+
+#[test]
+fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
+    let sim = FollowRunConfig::simulated();
+    let disk = builtin_shape(BuiltinShape::Disk);
+    let cfg = CollectConfig {
+        samples: 20,
+        seed: 8,
+        save_frames: true,
+        ..CollectConfig::default()
+    };
+    let simulated = collect(&sim.rig, &disk, &cfg, "disk", |_| {}).unwrap();
+    // Replay order: the reference first, then the taps.
+    let frames = scratch("collect-frames");
+    let mut files = simulated.frames.clone();
+    files.sort_by_key(|(name, _)| (name != "reference.png", name.clone()));
+    for (k, (_, png)) in files.iter().enumerate() {
+        std::fs::write(frames.join(format!("{k:05}.png")), png).unwrap();
+    }
+    let (edge, normal) = disk.at_arc_length(cfg.edge_arc_mm);
+    let angle = normal.y.atan2(normal.x).to_degrees();
+    let first = pose_at_edge(
+        edge,
+        normal,
+        0.0,
+        -cfg.theta_range_deg,
+        sim.rig.tap.height_mm,
+    );
+    let fake = fake_near(first);
+    let hw = rig_file(&fake, &frames, edge.x, edge.y, angle);
+    let real = collect_hardware(&hw, &cfg, "rig", |_| {}).unwrap();
+    assert_eq!(real.data.targets, simulated.data.targets);
+    assert_eq!(real.data.inputs, simulated.data.inputs);
+    assert_eq!(real.data.meta.source, "real");
+    // A collection that would leave the workspace never moves the arm.
+    let narrow = HardwareConfig {
+        workspace: Workspace {
+            min: [edge.x - 2.0, edge.y - 2.0, -15.0],
+            max: [edge.x + 2.0, edge.y + 2.0, 20.0],
+            ..Workspace::default()
+        },
+        ..hw
+    };
+    let err = collect_hardware(&narrow, &cfg, "rig", |_| {})
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("outside the workspace"), "{err}");
+    std::fs::remove_dir_all(frames).ok();
 }
 
 #[test]

@@ -246,3 +246,21 @@ y_mm = 0.0
     let unknown = format!("{text}speed = 3\n");
     assert!(HardwareConfig::from_toml(&unknown, "rig.toml").is_err());
 }
+
+#[test]
+fn the_rig_file_example_of_the_hardware_guide_is_valid() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/hardware.md");
+    let Ok(text) = std::fs::read_to_string(path) else {
+        eprintln!("skipping: {path} not found");
+        return;
+    };
+    let block = text
+        .split("```toml\n")
+        .skip(1)
+        .filter_map(|rest| rest.split("```").next())
+        .find(|b| b.contains("[camera.command]"))
+        .expect("docs/hardware.md has a rig file example");
+    let cfg = HardwareConfig::from_toml(block, "docs/hardware.md").unwrap();
+    cfg.validate().unwrap();
+    assert_eq!(cfg.arm.tcp.rx, 180.0);
+}

@@ -65,8 +65,9 @@ fn trained_model_follows_the_disk_and_an_unseen_csv_ellipse_to_closure() {
 fn randomly_initialised_model_fails_to_follow() {
     // One epoch at a negligible learning rate: the weights stay at their
     // random initialisation (standardisation and PCA are fitted as usual).
-    let toml = "[position]\nlearning_rate = 1e-12\n[angle]\nlearning_rate = 1e-12\n";
-    let untrained = model(Some(toml), 1);
+    let rates = "learning_rate = 1e-12\noutput_learning_rate = 1e-12\n";
+    let toml = format!("[position]\n{rates}[angle]\n{rates}");
+    let untrained = model(Some(&toml), 1);
     let res = run(untrained, &builtin_shape(BuiltinShape::Disk), "untrained");
     assert!(!res.summary.closed, "{}", res.summary.message);
     let lost = matches!(res.summary.ending, Ending::LostContact | Ending::Refused);

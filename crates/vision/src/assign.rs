@@ -54,6 +54,16 @@ impl EdgeRows {
         }
     }
 
+    /// Empty, with room for `rows` rows and `edges` edges.
+    pub fn with_capacity(rows: usize, edges: usize) -> Self {
+        let mut starts = Vec::with_capacity(rows + 1);
+        starts.push(0);
+        Self {
+            edges: Vec::with_capacity(edges),
+            starts,
+        }
+    }
+
     /// Closes the current row (the edges pushed since the last call).
     pub fn end_row(&mut self) {
         self.starts.push(self.edges.len());
@@ -76,8 +86,7 @@ pub(crate) fn assign_rows(n_cols: usize, rows: &EdgeRows, unassigned_cost: f64) 
         f64::MAX / 4.0
     };
     // Each row's valid edges plus its private "unassigned" column n_cols + row.
-    let mut usable = EdgeRows::new();
-    usable.edges.reserve(rows.edges.len() + rows.len());
+    let mut usable = EdgeRows::with_capacity(rows.len(), rows.edges.len() + rows.len());
     for r in 0..rows.len() {
         let valid = rows
             .row(r)
@@ -90,11 +99,70 @@ pub(crate) fn assign_rows(n_cols: usize, rows: &EdgeRows, unassigned_cost: f64) 
         });
         usable.end_row();
     }
-    let mut solver = Solver::new(n_cols + rows.len(), &usable);
-    for row in 0..rows.len() {
+    if let Some(row_col) = distinct_unique_minima(n_cols, &usable) {
+        return assignment(&usable, &row_col, n_cols);
+    }
+    assignment(&usable, &solve(n_cols, &usable), n_cols)
+}
+
+/// Each row's column (its own "unassigned" column is `n_cols + row`) by
+/// successive shortest paths, rows in order.
+fn solve(n_cols: usize, usable: &EdgeRows) -> Vec<usize> {
+    let mut solver = Solver::new(n_cols + usable.len(), usable);
+    for row in 0..usable.len() {
         solver.augment_from(row);
     }
-    solver.into_assignment(n_cols)
+    solver.row_col
+}
+
+/// Each row's cheapest column, when every row has a single cheapest one
+/// and no column is the cheapest of two rows: then each row at its own
+/// minimum is the unique optimum, and the solver below returns exactly it
+/// (every row's first Dijkstra pop is its cheapest column, at reduced cost
+/// 0, still free; no potential changes). `None` otherwise.
+fn distinct_unique_minima(n_cols: usize, rows: &EdgeRows) -> Option<Vec<usize>> {
+    let mut taken = vec![false; n_cols];
+    let mut row_col = Vec::with_capacity(rows.len());
+    for r in 0..rows.len() {
+        let (mut best, mut col, mut tie) = (f64::INFINITY, FREE, false);
+        for e in rows.row(r) {
+            if e.cost < best {
+                (best, col, tie) = (e.cost, e.col, false);
+            } else if e.cost == best {
+                tie = true;
+            }
+        }
+        if tie || col == FREE {
+            return None;
+        }
+        if col < n_cols {
+            if taken[col] {
+                return None;
+            }
+            taken[col] = true;
+        }
+        row_col.push(col);
+    }
+    Some(row_col)
+}
+
+/// The assignment for each row's column `row_col` (columns `>= n_cols`
+/// are the rows' own "unassigned" columns), with its total cost.
+fn assignment(rows: &EdgeRows, row_col: &[usize], n_cols: usize) -> Assignment {
+    let mut total_cost = 0.0;
+    let row_to_col = row_col
+        .iter()
+        .enumerate()
+        .map(|(r, &col)| {
+            let row = rows.row(r);
+            total_cost += row.iter().find(|e| e.col == col).map_or(0.0, |e| e.cost);
+            (col < n_cols).then_some(col)
+        })
+        .collect();
+    Assignment {
+        row_to_col,
+        total_cost,
+    }
 }
 
 /// Heap entry ordered so that `BinaryHeap` pops the smallest distance.
@@ -231,24 +299,6 @@ impl<'a> Solver<'a> {
             col = previous;
         }
     }
-
-    fn into_assignment(self, n_cols: usize) -> Assignment {
-        let mut total_cost = 0.0;
-        let row_to_col = self
-            .row_col
-            .iter()
-            .enumerate()
-            .map(|(r, &col)| {
-                let row = self.edges.row(r);
-                total_cost += row.iter().find(|e| e.col == col).map_or(0.0, |e| e.cost);
-                (col < n_cols).then_some(col)
-            })
-            .collect();
-        Assignment {
-            row_to_col,
-            total_cost,
-        }
-    }
 }
 
 #[cfg(test)]
@@ -310,6 +360,42 @@ mod tests {
             assert_eq!(unique.len(), used.len(), "a column used twice");
             assert!(skipped <= rows);
         }
+    }
+
+    /// Where every row's cheapest column is its own, the shortcut gives
+    /// exactly the solver's answer; sparse local problems like the
+    /// tracker's, with and without conflicts.
+    #[test]
+    fn distinct_minima_shortcut_equals_the_solver() {
+        let mut rng = ChaCha8Rng::seed_from_u64(17);
+        let mut shortcuts = 0;
+        for _ in 0..300 {
+            let n = rng.random_range(1..30);
+            let spread = rng.random_range(0.0..0.6);
+            let cols: Vec<f64> = (0..n)
+                .map(|c| c as f64 + rng.random_range(-spread..spread))
+                .collect();
+            let mut usable = EdgeRows::new();
+            for r in 0..n {
+                let at = r as f64 + rng.random_range(-spread..spread);
+                for (c, &x) in cols.iter().enumerate() {
+                    let cost = (x - at).powi(2);
+                    if cost < 4.0 && rng.random_bool(0.9) {
+                        usable.edges.push(Edge { col: c, cost });
+                    }
+                }
+                usable.edges.push(Edge {
+                    col: n + r,
+                    cost: 4.0,
+                });
+                usable.end_row();
+            }
+            if let Some(fast) = distinct_unique_minima(n, &usable) {
+                shortcuts += 1;
+                assert_eq!(fast, solve(n, &usable));
+            }
+        }
+        assert!(shortcuts > 50, "{shortcuts}");
     }
 
     #[test]

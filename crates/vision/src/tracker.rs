@@ -216,7 +216,8 @@ impl PinTracker {
 
     /// Optimal one-to-one matching of predicted pins to points, squared
     /// distance cost, pairs farther than `gate` not allowed. Candidates come
-    /// from the x-window of each prediction, listed by point index.
+    /// from the x-window of each prediction and are listed by point index
+    /// (as a scan over all points would list them), through a bit set.
     fn match_points(
         &self,
         predicted: &[[f64; 2]],
@@ -225,9 +226,10 @@ impl PinTracker {
         gate: f64,
     ) -> Vec<Option<usize>> {
         let gate2 = gate * gate;
-        let mut rows = EdgeRows::new();
+        let mut rows = EdgeRows::with_capacity(predicted.len(), 16 * predicted.len());
+        let mut candidates = vec![0u64; points.len().div_ceil(64)];
+        let mut costs = vec![0.0; points.len()];
         for p in predicted {
-            let first = rows.edges.len();
             let from = by_x.xs.partition_point(|&x| x < p[0] - gate);
             for (&x, &col) in by_x.xs[from..].iter().zip(&by_x.order[from..]) {
                 if x > p[0] + gate {
@@ -236,10 +238,20 @@ impl PinTracker {
                 let q = points[col];
                 let cost = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
                 if cost < gate2 {
-                    rows.edges.push(Edge { col, cost });
+                    candidates[col / 64] |= 1 << (col % 64);
+                    costs[col] = cost;
                 }
             }
-            rows.edges[first..].sort_unstable_by_key(|e| e.col);
+            for (w, word) in candidates.iter_mut().enumerate() {
+                while *word != 0 {
+                    let col = 64 * w + word.trailing_zeros() as usize;
+                    *word &= *word - 1;
+                    rows.edges.push(Edge {
+                        col,
+                        cost: costs[col],
+                    });
+                }
+            }
             rows.end_row();
         }
         assign_rows(points.len(), &rows, gate2).row_to_col

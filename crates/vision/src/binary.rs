@@ -76,15 +76,27 @@ fn found_centres(
     level: i16,
     p: &BlobParams,
 ) -> Vec<Centre> {
-    let mut scanner = ContourScanner::new(width, height);
-    scanner.binarise_above(pixels, level);
-    scanner.trace_all();
-    let mut scratch = Scratch::default();
-    scanner
-        .contours()
-        .filter_map(|contour| measure_shape(contour, p, &mut scratch))
-        .filter(|c| colour_passes(c, pixels, width, height, level, p))
-        .collect()
+    SCANNER.with_borrow_mut(|scanner| {
+        if scanner.size() != (width, height) {
+            *scanner = ContourScanner::new(width, height);
+        }
+        // Every pixel is rewritten; the zero frame around them never is.
+        scanner.binarise_above(pixels, level);
+        scanner.trace_all();
+        let mut scratch = Scratch::default();
+        scanner
+            .contours()
+            .filter_map(|contour| measure_shape(contour, p, &mut scratch))
+            .filter(|c| colour_passes(c, pixels, width, height, level, p))
+            .collect()
+    })
+}
+
+thread_local! {
+    /// The full-frame scanner, kept between frames of the same size (its
+    /// label image and point buffers are the bulk of the allocations).
+    static SCANNER: std::cell::RefCell<ContourScanner> =
+        std::cell::RefCell::new(ContourScanner::new(0, 0));
 }
 
 /// True when the grouping of the same `found` list at every threshold is

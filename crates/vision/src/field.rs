@@ -36,16 +36,6 @@ impl Kernel {
         Self { n, weights, bands }
     }
 
-    /// Weights of source pin `j` at pins `band(j)`.
-    fn of_source(&self, j: usize) -> (std::ops::Range<usize>, &[f64]) {
-        let band = self.bands[j].clone();
-        let row = j * self.n;
-        (
-            band.clone(),
-            &self.weights[row + band.start..row + band.end],
-        )
-    }
-
     /// Weight of pin `j`'s residual at pin `i`.
     #[cfg(test)]
     fn at(&self, i: usize, j: usize) -> f64 {
@@ -91,17 +81,16 @@ pub fn smooth_field(
         .iter()
         .all(|(_, r)| r[0].is_finite() && r[1].is_finite());
     if finite && kernel.n == n {
-        for &(j, [rx, ry]) in &residual {
-            let (band, weights) = kernel.of_source(j);
-            let sums = sx[band.clone()]
-                .iter_mut()
-                .zip(&mut sy[band.clone()])
-                .zip(&mut sw[band]);
-            for (((x, y), s), &w) in sums.zip(weights) {
-                *x += w * rx;
-                *y += w * ry;
-                *s += w;
-            }
+        let mut blocks = residual.chunks_exact(4);
+        for block in &mut blocks {
+            add_sources::<4>(kernel, block, [&mut sx, &mut sy, &mut sw]);
+        }
+        for source in blocks.remainder() {
+            add_sources::<1>(
+                kernel,
+                std::slice::from_ref(source),
+                [&mut sx, &mut sy, &mut sw],
+            );
         }
     } else {
         // Non-finite residuals: 0 * inf would not add zero; sum pin by pin.
@@ -123,6 +112,47 @@ pub fn smooth_field(
             [base[0] + local[0], base[1] + local[1]]
         })
         .collect()
+}
+
+/// Adds the weighted residuals of `N` sources `(pin, residual)` to the
+/// sums (x, y, weight) of every pin in the union of their bands, one source
+/// after the other for each pin (the order of a source-by-source pass; the
+/// pin's sums stay in registers across the `N` sources).
+fn add_sources<const N: usize>(
+    kernel: &Kernel,
+    sources: &[(usize, [f64; 2])],
+    [sx, sy, sw]: [&mut [f64]; 3],
+) {
+    let lo = sources
+        .iter()
+        .map(|s| kernel.bands[s.0].start)
+        .min()
+        .unwrap_or(0);
+    let hi = sources
+        .iter()
+        .map(|s| kernel.bands[s.0].end)
+        .max()
+        .unwrap_or(0);
+    if lo >= hi {
+        return;
+    }
+    let len = hi - lo;
+    let rows: [&[f64]; N] = std::array::from_fn(|m| {
+        let row = sources[m].0 * kernel.n;
+        &kernel.weights[row + lo..row + hi]
+    });
+    let res: [[f64; 2]; N] = std::array::from_fn(|m| sources[m].1);
+    let (x, y, s) = (&mut sx[lo..hi], &mut sy[lo..hi], &mut sw[lo..hi]);
+    for k in 0..len {
+        let (mut a, mut b, mut c) = (x[k], y[k], s[k]);
+        for m in 0..N {
+            let w = rows[m][k];
+            a += w * res[m][0];
+            b += w * res[m][1];
+            c += w;
+        }
+        (x[k], y[k], s[k]) = (a, b, c);
+    }
 }
 
 /// Kernel-weighted sums (x, y, weight) of the matched residuals

@@ -231,12 +231,16 @@ impl PinTracker {
         let mut costs = vec![0.0; points.len()];
         for p in predicted {
             let from = by_x.xs.partition_point(|&x| x < p[0] - gate);
-            for (&x, &col) in by_x.xs[from..].iter().zip(&by_x.order[from..]) {
+            let window = by_x.xs[from..].iter().zip(&by_x.ys[from..]);
+            for ((&x, &y), &col) in window.zip(&by_x.order[from..]) {
                 if x > p[0] + gate {
                     break;
                 }
-                let q = points[col];
-                let cost = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
+                let dy2 = (p[1] - y).powi(2);
+                if dy2 >= gate2 {
+                    continue; // the cost is at least dy2
+                }
+                let cost = (p[0] - x).powi(2) + dy2;
                 if cost < gate2 {
                     candidates[col / 64] |= 1 << (col % 64);
                     costs[col] = cost;
@@ -302,10 +306,11 @@ impl PinTracker {
     }
 }
 
-/// Point indices sorted by x, with their x values.
+/// Point indices sorted by x, with their x and y values.
 struct ByX {
     order: Vec<usize>,
     xs: Vec<f64>,
+    ys: Vec<f64>,
 }
 
 impl ByX {
@@ -313,7 +318,8 @@ impl ByX {
         let mut order: Vec<usize> = (0..points.len()).collect();
         order.sort_unstable_by(|&a, &b| points[a][0].total_cmp(&points[b][0]));
         let xs = order.iter().map(|&i| points[i][0]).collect();
-        Self { order, xs }
+        let ys = order.iter().map(|&i| points[i][1]).collect();
+        Self { order, xs, ys }
     }
 }
 

@@ -99,10 +99,18 @@ pub(crate) fn assign_rows(n_cols: usize, rows: &EdgeRows, unassigned_cost: f64) 
         });
         usable.end_row();
     }
-    if let Some(row_col) = distinct_unique_minima(n_cols, &usable) {
-        return assignment(&usable, &row_col, n_cols);
-    }
-    assignment(&usable, &solve(n_cols, &usable), n_cols)
+    let row_col = distinct_unique_minima(n_cols, &usable).unwrap_or_else(|| solve(n_cols, &usable));
+    assignment(&usable, &row_col, n_cols)
+}
+
+/// The optimal columns for rows already in the solver's form: every edge
+/// valid (column below `n_cols`, finite cost below the row's last edge),
+/// each row ending with its own "unassigned" column `n_cols + row` at the
+/// finite unassigned cost. Same columns as [`assign_rows`] on the rows
+/// without their last edges; no copy.
+pub(crate) fn assign_usable(n_cols: usize, usable: &EdgeRows) -> Vec<Option<usize>> {
+    let row_col = distinct_unique_minima(n_cols, usable).unwrap_or_else(|| solve(n_cols, usable));
+    row_col.iter().map(|&c| (c < n_cols).then_some(c)).collect()
 }
 
 /// Each row's column (its own "unassigned" column is `n_cols + row`) by

@@ -6,7 +6,7 @@
 //! within a gate, refit the field from the matches with a narrower kernel,
 //! and repeat. Missing pins are filled from the final field.
 
-use crate::assign::{assign_rows, Edge, EdgeRows};
+use crate::assign::{assign_usable, Edge, EdgeRows};
 use crate::blob::KeyPoint;
 use crate::error::VisionError;
 use crate::field::{smooth_field, Kernel, Observations};
@@ -226,6 +226,12 @@ impl PinTracker {
         gate: f64,
     ) -> Vec<Option<usize>> {
         let gate2 = gate * gate;
+        // The cost of leaving a pin unassigned (as `assign_rows` takes it).
+        let unassigned = if gate2.is_finite() {
+            gate2
+        } else {
+            f64::MAX / 4.0
+        };
         let mut rows = EdgeRows::with_capacity(predicted.len(), 16 * predicted.len());
         let mut candidates = vec![0u64; points.len().div_ceil(64)];
         let mut costs = vec![0.0; points.len()];
@@ -237,11 +243,11 @@ impl PinTracker {
                     break;
                 }
                 let dy2 = (p[1] - y).powi(2);
-                if dy2 >= gate2 {
+                if dy2 >= unassigned {
                     continue; // the cost is at least dy2
                 }
                 let cost = (p[0] - x).powi(2) + dy2;
-                if cost < gate2 {
+                if cost < unassigned {
                     candidates[col / 64] |= 1 << (col % 64);
                     costs[col] = cost;
                 }
@@ -256,9 +262,14 @@ impl PinTracker {
                     });
                 }
             }
+            // The pin's own "unassigned" column.
+            rows.edges.push(Edge {
+                col: points.len() + rows.len(),
+                cost: unassigned,
+            });
             rows.end_row();
         }
-        assign_rows(points.len(), &rows, gate2).row_to_col
+        assign_usable(points.len(), &rows)
     }
 
     fn displacements(

@@ -54,6 +54,16 @@ impl EdgeRows {
         }
     }
 
+    /// Empty, with room for `rows` rows and `edges` edges.
+    pub fn with_capacity(rows: usize, edges: usize) -> Self {
+        let mut starts = Vec::with_capacity(rows + 1);
+        starts.push(0);
+        Self {
+            edges: Vec::with_capacity(edges),
+            starts,
+        }
+    }
+
     /// Closes the current row (the edges pushed since the last call).
     pub fn end_row(&mut self) {
         self.starts.push(self.edges.len());
@@ -76,8 +86,7 @@ pub(crate) fn assign_rows(n_cols: usize, rows: &EdgeRows, unassigned_cost: f64) 
         f64::MAX / 4.0
     };
     // Each row's valid edges plus its private "unassigned" column n_cols + row.
-    let mut usable = EdgeRows::new();
-    usable.edges.reserve(rows.edges.len() + rows.len());
+    let mut usable = EdgeRows::with_capacity(rows.len(), rows.edges.len() + rows.len());
     for r in 0..rows.len() {
         let valid = rows
             .row(r)
@@ -90,11 +99,84 @@ pub(crate) fn assign_rows(n_cols: usize, rows: &EdgeRows, unassigned_cost: f64) 
         });
         usable.end_row();
     }
-    let mut solver = Solver::new(n_cols + rows.len(), &usable);
-    for row in 0..rows.len() {
+    let row_col = distinct_unique_minima(n_cols, &usable).unwrap_or_else(|| solve(n_cols, &usable));
+    assignment(&usable, &row_col, n_cols)
+}
+
+/// The optimal columns for rows already in the solver's form: every edge
+/// valid (column below `n_cols`, finite cost below the row's last edge),
+/// each row ending with its own "unassigned" column `n_cols + row` at the
+/// finite unassigned cost. Same columns as [`assign_rows`] on the rows
+/// without their last edges; no copy.
+pub(crate) fn assign_usable(n_cols: usize, usable: &EdgeRows) -> Vec<Option<usize>> {
+    let row_col = distinct_unique_minima(n_cols, usable).unwrap_or_else(|| solve(n_cols, usable));
+    row_col.iter().map(|&c| (c < n_cols).then_some(c)).collect()
+}
+
+/// Each row's column (its own "unassigned" column is `n_cols + row`) by
+/// successive shortest paths, rows in order.
+fn solve(n_cols: usize, usable: &EdgeRows) -> Vec<usize> {
+    solve_with(n_cols, usable, true)
+}
+
+/// [`solve`], optionally without the search-free first step.
+fn solve_with(n_cols: usize, usable: &EdgeRows, direct: bool) -> Vec<usize> {
+    let mut solver = Solver::new(n_cols + usable.len(), usable);
+    solver.direct = direct;
+    for row in 0..usable.len() {
         solver.augment_from(row);
     }
-    solver.into_assignment(n_cols)
+    solver.row_col
+}
+
+/// Each row's cheapest column, when every row has a single cheapest one
+/// and no column is the cheapest of two rows: then each row at its own
+/// minimum is the unique optimum, and the solver below returns exactly it
+/// (every row's first Dijkstra pop is its cheapest column, at reduced cost
+/// 0, still free; no potential changes). `None` otherwise.
+fn distinct_unique_minima(n_cols: usize, rows: &EdgeRows) -> Option<Vec<usize>> {
+    let mut taken = vec![false; n_cols];
+    let mut row_col = Vec::with_capacity(rows.len());
+    for r in 0..rows.len() {
+        let (mut best, mut col, mut tie) = (f64::INFINITY, FREE, false);
+        for e in rows.row(r) {
+            if e.cost < best {
+                (best, col, tie) = (e.cost, e.col, false);
+            } else if e.cost == best {
+                tie = true;
+            }
+        }
+        if tie || col == FREE {
+            return None;
+        }
+        if col < n_cols {
+            if taken[col] {
+                return None;
+            }
+            taken[col] = true;
+        }
+        row_col.push(col);
+    }
+    Some(row_col)
+}
+
+/// The assignment for each row's column `row_col` (columns `>= n_cols`
+/// are the rows' own "unassigned" columns), with its total cost.
+fn assignment(rows: &EdgeRows, row_col: &[usize], n_cols: usize) -> Assignment {
+    let mut total_cost = 0.0;
+    let row_to_col = row_col
+        .iter()
+        .enumerate()
+        .map(|(r, &col)| {
+            let row = rows.row(r);
+            total_cost += row.iter().find(|e| e.col == col).map_or(0.0, |e| e.cost);
+            (col < n_cols).then_some(col)
+        })
+        .collect();
+    Assignment {
+        row_to_col,
+        total_cost,
+    }
 }
 
 /// Heap entry ordered so that `BinaryHeap` pops the smallest distance.
@@ -129,6 +211,8 @@ struct Solver<'a> {
     touched: Vec<usize>,
     settled: Vec<usize>,
     heap: BinaryHeap<Pending>,
+    /// Take a row's nearest column without a search when it is free.
+    direct: bool,
 }
 
 impl<'a> Solver<'a> {
@@ -154,12 +238,16 @@ impl<'a> Solver<'a> {
             touched: Vec::new(),
             settled: Vec::new(),
             heap: BinaryHeap::new(),
+            direct: true,
         }
     }
 
     /// Dijkstra from the free row `start` to the nearest free column, then
     /// potential update and augmentation along the path.
     fn augment_from(&mut self, start: usize) {
+        if self.direct && self.take_nearest_free(start) {
+            return;
+        }
         self.reset();
         self.relax_row(start, 0.0);
         let sink = loop {
@@ -178,6 +266,34 @@ impl<'a> Solver<'a> {
         };
         self.update_potentials(start, self.dist[sink]);
         self.flip_path(start, sink);
+    }
+
+    /// The search's first step without the heap: when the row's smallest
+    /// reduced cost (ties to the smaller column, the heap's order) is at a
+    /// free column, the search would end there at once; assign it, with
+    /// the same potential update. False (nothing changed) otherwise. The
+    /// search's scratch is left alone (the next search resets its own).
+    fn take_nearest_free(&mut self, start: usize) -> bool {
+        let mut best: Option<(f64, usize)> = None;
+        for e in self.edges.row(start) {
+            let d = 0.0 + e.cost - self.row_pot[start] - self.col_pot[e.col];
+            if d.is_nan() || d == f64::INFINITY {
+                continue; // never queued
+            }
+            let nearer = best.is_none_or(|(bd, bc)| d.total_cmp(&bd).then(e.col.cmp(&bc)).is_lt());
+            if nearer {
+                best = Some((d, e.col));
+            }
+        }
+        match best {
+            Some((d, col)) if self.owner[col] == FREE => {
+                self.row_pot[start] += d;
+                self.row_col[start] = col;
+                self.owner[col] = start;
+                true
+            }
+            _ => false,
+        }
     }
 
     fn reset(&mut self) {
@@ -229,24 +345,6 @@ impl<'a> Solver<'a> {
                 return;
             }
             col = previous;
-        }
-    }
-
-    fn into_assignment(self, n_cols: usize) -> Assignment {
-        let mut total_cost = 0.0;
-        let row_to_col = self
-            .row_col
-            .iter()
-            .enumerate()
-            .map(|(r, &col)| {
-                let row = self.edges.row(r);
-                total_cost += row.iter().find(|e| e.col == col).map_or(0.0, |e| e.cost);
-                (col < n_cols).then_some(col)
-            })
-            .collect();
-        Assignment {
-            row_to_col,
-            total_cost,
         }
     }
 }
@@ -310,6 +408,52 @@ mod tests {
             assert_eq!(unique.len(), used.len(), "a column used twice");
             assert!(skipped <= rows);
         }
+    }
+
+    /// The direct first steps and, where every row's cheapest column is its
+    /// own, the whole-problem shortcut give exactly the full search's
+    /// answer; sparse local problems like the tracker's, with and without
+    /// conflicts (and exact ties: costs on a coarse grid half the time).
+    #[test]
+    fn shortcuts_equal_the_full_search() {
+        let mut rng = ChaCha8Rng::seed_from_u64(17);
+        let mut shortcuts = 0;
+        for _ in 0..300 {
+            let n = rng.random_range(1..30);
+            let spread = rng.random_range(0.0..0.9);
+            let coarse = rng.random_bool(0.5);
+            let jitter = |rng: &mut ChaCha8Rng| {
+                let v: f64 = rng.random_range(-spread..spread);
+                if coarse {
+                    (v * 4.0).round() / 4.0
+                } else {
+                    v
+                }
+            };
+            let cols: Vec<f64> = (0..n).map(|c| c as f64 + jitter(&mut rng)).collect();
+            let mut usable = EdgeRows::new();
+            for r in 0..n {
+                let at = r as f64 + jitter(&mut rng);
+                for (c, &x) in cols.iter().enumerate() {
+                    let cost = (x - at).powi(2);
+                    if cost < 4.0 && rng.random_bool(0.9) {
+                        usable.edges.push(Edge { col: c, cost });
+                    }
+                }
+                usable.edges.push(Edge {
+                    col: n + r,
+                    cost: 4.0,
+                });
+                usable.end_row();
+            }
+            let searched = solve_with(n, &usable, false);
+            assert_eq!(solve(n, &usable), searched, "direct first steps");
+            if let Some(fast) = distinct_unique_minima(n, &usable) {
+                shortcuts += 1;
+                assert_eq!(fast, searched);
+            }
+        }
+        assert!(shortcuts > 50, "{shortcuts}");
     }
 
     #[test]

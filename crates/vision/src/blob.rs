@@ -6,6 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::binary::{detect_unchanging, same_at_levels};
 use crate::components::label_components;
 use crate::contour::ContourScanner;
 use crate::grouping::{Centre, Grouper};
@@ -43,14 +44,40 @@ pub struct KeyPoint {
 /// component is re-traced only when some of its pixels change side, and the
 /// blobs are put back in OpenCV's contour order (reverse raster order of the
 /// pixel that started each border).
+///
+/// A frame with no grey level between the first and the last threshold
+/// (a binary frame, as the real and simulated TacTip frames are) gives the
+/// same image at every threshold and takes a shorter, equivalent path
+/// (`binary.rs`).
 pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
+    let (width, height) = (img.width() as usize, img.height() as usize);
+    let levels: Vec<i16> = p.thresholds().into_iter().map(level_of).collect();
+    let (Some(&lo), Some(&hi)) = (levels.iter().min(), levels.iter().max()) else {
+        return Vec::new();
+    };
+    if width == 0 || height == 0 {
+        return Vec::new();
+    }
+    if same_at_levels(img.as_raw(), lo, hi) {
+        return detect_unchanging(img.as_raw(), width, height, &levels, p);
+    }
+    detect_blobs_by_threshold(img, p)
+}
+
+/// The grey level a threshold binarises at: white where the pixel value
+/// exceeds it (OpenCV's `THRESH_BINARY` on 8-bit images).
+fn level_of(t: f64) -> i16 {
+    t.floor().clamp(-1.0, 255.0) as i16
+}
+
+/// [`detect_blobs`] threshold by threshold, for any frame.
+pub(crate) fn detect_blobs_by_threshold(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
     let (width, height) = (img.width() as usize, img.height() as usize);
     let thresholds = p.thresholds();
     if width == 0 || height == 0 || thresholds.is_empty() {
         return Vec::new();
     }
     let pixels = img.as_raw();
-    let level_of = |t: f64| t.floor().clamp(-1.0, 255.0) as i16;
     // Thresholds increase, so the first one has the largest white set.
     let components = label_components(pixels, width, height, level_of(thresholds[0]));
     let mut cache: Vec<Vec<Measured>> = (0..components.len()).map(|_| Vec::new()).collect();
@@ -84,11 +111,7 @@ pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
                 }
             }
             for m in &cache[k] {
-                let colour = match m.colour_pixel {
-                    Some(i) if i16::from(pixels[i]) > level => 255,
-                    _ => 0,
-                };
-                if !p.filter_by_color || colour == p.blob_color {
+                if colour_matches(m.colour_pixel, pixels, level, p) {
                     keyed.push((m.key, m.centre));
                 }
             }
@@ -110,9 +133,31 @@ struct Measured {
     colour_pixel: Option<usize>,
 }
 
+/// Whether the blob whose colour is decided at `colour_pixel` passes the
+/// colour filter in the image binarised at `level`.
+fn colour_matches(colour_pixel: Option<usize>, pixels: &[u8], level: i16, p: &BlobParams) -> bool {
+    let colour = match colour_pixel {
+        Some(i) if i16::from(pixels[i]) > level => 255,
+        _ => 0,
+    };
+    !p.filter_by_color || colour == p.blob_color
+}
+
+/// [`colour_matches`] for a blob centred at `c` in a `width` x `height` frame.
+pub(crate) fn colour_passes(
+    c: &Centre,
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    level: i16,
+    p: &BlobParams,
+) -> bool {
+    colour_matches(pixel_index(c.x, c.y, width, height), pixels, level, p)
+}
+
 /// Reusable buffers for the shape measures.
 #[derive(Default)]
-struct Scratch {
+pub(crate) struct Scratch {
     radii: Vec<f64>,
     hull: HullScratch,
 }
@@ -140,7 +185,11 @@ pub(crate) fn passes_filters(
 /// Applies the area, circularity, inertia and convexity filters to one
 /// contour in OpenCV's order; `None` if rejected. The colour filter (which
 /// OpenCV applies next) is left to the caller.
-fn measure_shape(contour: &[[i32; 2]], p: &BlobParams, scratch: &mut Scratch) -> Option<Centre> {
+pub(crate) fn measure_shape(
+    contour: &[[i32; 2]],
+    p: &BlobParams,
+    scratch: &mut Scratch,
+) -> Option<Centre> {
     let moments = Moments::of_polygon(contour);
     let area = moments.m00;
     if p.filter_by_area && !within(area, p.min_area, p.max_area) {

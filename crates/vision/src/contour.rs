@@ -117,6 +117,23 @@ impl ContourScanner {
         }
     }
 
+    /// Binarises `pixels` (row-major, `width * height`): white where the
+    /// value exceeds `level` (at least -1), i.e. `THRESH_BINARY` at any
+    /// threshold whose floor is `level`.
+    pub fn binarise_above(&mut self, pixels: &[u8], level: i16) {
+        for (y, row) in pixels
+            .chunks_exact(self.width)
+            .take(self.height)
+            .enumerate()
+        {
+            let start = (y + 1) * self.stride + 1;
+            let dst = &mut self.labels[start..start + self.width];
+            for (d, &v) in dst.iter_mut().zip(row) {
+                *d = i8::from(i16::from(v) > level);
+            }
+        }
+    }
+
     /// Whether pixel (x, y) is white in the current binary image.
     pub fn is_white(&self, x: usize, y: usize) -> bool {
         x < self.width && y < self.height && self.labels[(y + 1) * self.stride + x + 1] != 0
@@ -124,27 +141,48 @@ impl ContourScanner {
 
     /// Traces every border of the current binary image; afterwards
     /// [`ContourScanner::contours`] yields them.
+    ///
+    /// The raster scan starts a border only where a pixel and its left
+    /// neighbour differ in being zero (an outer border at a zero -> white
+    /// step, a hole border at a white -> zero step), and border following
+    /// never turns a zero label white or back, so the scan visits just those
+    /// steps, found eight labels at a time; the labels there are read when
+    /// the scan reaches them, as in a pixel-by-pixel scan.
     pub fn trace_all(&mut self) {
         self.points.clear();
         self.spans.clear();
         for y in 1..=self.height {
-            let row = y * self.stride;
-            let end = row + self.width;
-            let mut i = row + 1;
-            while i <= end {
-                // Eight background pixels after a background one start nothing.
-                if i + 8 <= end + 1 && self.labels[i - 1] == 0 && self.zero_word(i) {
+            let first = y * self.stride + 1;
+            let end = first + self.width;
+            // The padding left of the row is zero.
+            let mut left_white = 0u64;
+            let mut i = first;
+            while i < end {
+                let n = (end - i).min(8);
+                if n == 8 && left_white == 0 && self.zero_word(i) {
+                    // Eight zero labels after a zero one: no step.
                     i += 8;
                     continue;
                 }
-                let here = self.labels[i];
-                let left = self.labels[i - 1];
-                if here == UNVISITED && left == 0 {
-                    self.follow_border(i, WEST, i);
-                } else if here == 0 && left >= UNVISITED {
-                    self.follow_border(i - 1, EAST, i);
+                let white = self.white_bytes(i, n);
+                let mut steps = white ^ ((white << 8) | left_white);
+                if n < 8 {
+                    // No step at the padding after the row.
+                    steps &= (1u64 << (8 * n)) - 1;
                 }
-                i += 1;
+                left_white = (white >> 56) & 0x80;
+                while steps != 0 {
+                    let at = i + (steps.trailing_zeros() / 8) as usize;
+                    steps &= steps - 1;
+                    let here = self.labels[at];
+                    let left = self.labels[at - 1];
+                    if here == UNVISITED && left == 0 {
+                        self.follow_border(at, WEST, at);
+                    } else if here == 0 && left >= UNVISITED {
+                        self.follow_border(at - 1, EAST, at);
+                    }
+                }
+                i += n;
             }
         }
     }
@@ -155,9 +193,26 @@ impl ContourScanner {
         u64::from_ne_bytes(bytes.map(|b| b as u8)) == 0
     }
 
+    /// Bit 8k + 7 set where label `i + k` is non-zero, for k < `n` (<= 8).
+    fn white_bytes(&self, i: usize, n: usize) -> u64 {
+        let mut bytes = [0u8; 8];
+        if n == 8 {
+            let word: [i8; 8] = self.labels[i..i + 8].try_into().expect("eight labels");
+            bytes = word.map(|b| b as u8);
+        } else {
+            for (d, &l) in bytes.iter_mut().zip(&self.labels[i..i + n]) {
+                *d = l as u8;
+            }
+        }
+        let w = u64::from_le_bytes(bytes);
+        const LOW: u64 = 0x7f7f_7f7f_7f7f_7f7f;
+        // Per byte: low seven bits plus 0x7f carries into the top bit
+        // unless they are zero (and never into the next byte).
+        (((w & LOW) + LOW) | w) & !LOW
+    }
+
     /// The traced contours, each a closed sequence of pixel coordinates, in
     /// OpenCV's order (the reverse of their discovery in raster order).
-    #[cfg(test)]
     pub fn contours(&self) -> impl Iterator<Item = &[[i32; 2]]> {
         self.spans
             .iter()
@@ -245,6 +300,8 @@ impl ContourScanner {
     /// repeat its first move. Marks pixels whose east side was seen empty.
     fn walk(&mut self, start: usize, last: usize, first_direction: usize) {
         let mut current = start;
+        // Full-image coordinates of `current`, moved along with it.
+        let mut xy = self.full_xy(start);
         let mut back = first_direction;
         loop {
             let mut direction = back;
@@ -261,11 +318,13 @@ impl ContourScanner {
             } else if self.labels[current] == UNVISITED {
                 self.labels[current] = VISITED;
             }
-            self.push_point(current);
+            self.points.push(xy);
             if next == start && current == last {
                 return;
             }
             current = next;
+            let (dx, dy) = DIRECTIONS[direction];
+            xy = [xy[0] + dx as i32, xy[1] + dy as i32];
             back = (direction + 4) & 7;
         }
     }

@@ -34,25 +34,33 @@ impl Group {
     }
 
     fn keypoint(&self) -> KeyPoint {
-        let weight: f64 = self.members.iter().map(|m| m.confidence).sum();
-        let (sx, sy) = self.members.iter().fold((0.0, 0.0), |(sx, sy), m| {
-            (sx + m.confidence * m.x, sy + m.confidence * m.y)
-        });
-        let (x, y) = if weight > 0.0 {
-            (sx / weight, sy / weight)
-        } else {
-            let n = self.members.len() as f64;
-            let (ux, uy) = self
-                .members
-                .iter()
-                .fold((0.0, 0.0), |(a, b), m| (a + m.x, b + m.y));
-            (ux / n, uy / n)
-        };
-        KeyPoint {
-            x,
-            y,
-            size: 2.0 * self.representative().radius,
-        }
+        keypoint_of(self.members.iter().copied(), self.representative().radius)
+    }
+}
+
+/// The keypoint of a group with these members (in order) and representative
+/// radius: confidence-weighted mean centre (plain mean when the weights sum
+/// to zero), size twice the radius. Shared by every path that builds groups,
+/// so that they round alike.
+pub(crate) fn keypoint_of(
+    members: impl Iterator<Item = Centre> + Clone,
+    rep_radius: f64,
+) -> KeyPoint {
+    let weight: f64 = members.clone().map(|m| m.confidence).sum();
+    let (sx, sy) = members.clone().fold((0.0, 0.0), |(sx, sy), m| {
+        (sx + m.confidence * m.x, sy + m.confidence * m.y)
+    });
+    let (x, y) = if weight > 0.0 {
+        (sx / weight, sy / weight)
+    } else {
+        let n = members.clone().count() as f64;
+        let (ux, uy) = members.fold((0.0, 0.0), |(a, b), m| (a + m.x, b + m.y));
+        (ux / n, uy / n)
+    };
+    KeyPoint {
+        x,
+        y,
+        size: 2.0 * rep_radius,
     }
 }
 
@@ -268,7 +276,7 @@ fn cell_range(v: f64, cell: f64, n: usize) -> Option<(usize, usize)> {
 
 /// Whether `centre` belongs to the group represented by `rep`. `reach`
 /// bounds every distance that can qualify and only prunes the square root.
-fn joins(rep: &Centre, centre: &Centre, min_dist: f64, reach: f64) -> bool {
+pub(crate) fn joins(rep: &Centre, centre: &Centre, min_dist: f64, reach: f64) -> bool {
     let (dx, dy) = (rep.x - centre.x, rep.y - centre.y);
     if dx.abs() > reach || dy.abs() > reach {
         return false;

@@ -5,6 +5,7 @@
 //! learn from. Pure algorithms: no files, no printing.
 
 mod assign;
+mod binary;
 mod blob;
 mod components;
 mod contour;

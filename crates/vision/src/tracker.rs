@@ -6,7 +6,7 @@
 //! within a gate, refit the field from the matches with a narrower kernel,
 //! and repeat. Missing pins are filled from the final field.
 
-use crate::assign::{assign_rows, Edge, EdgeRows};
+use crate::assign::{assign_usable, Edge, EdgeRows};
 use crate::blob::KeyPoint;
 use crate::error::VisionError;
 use crate::field::{smooth_field, Kernel, Observations};
@@ -216,7 +216,8 @@ impl PinTracker {
 
     /// Optimal one-to-one matching of predicted pins to points, squared
     /// distance cost, pairs farther than `gate` not allowed. Candidates come
-    /// from the x-window of each prediction, listed by point index.
+    /// from the x-window of each prediction and are listed by point index
+    /// (as a scan over all points would list them), through a bit set.
     fn match_points(
         &self,
         predicted: &[[f64; 2]],
@@ -225,24 +226,50 @@ impl PinTracker {
         gate: f64,
     ) -> Vec<Option<usize>> {
         let gate2 = gate * gate;
-        let mut rows = EdgeRows::new();
+        // The cost of leaving a pin unassigned (as `assign_rows` takes it).
+        let unassigned = if gate2.is_finite() {
+            gate2
+        } else {
+            f64::MAX / 4.0
+        };
+        let mut rows = EdgeRows::with_capacity(predicted.len(), 16 * predicted.len());
+        let mut candidates = vec![0u64; points.len().div_ceil(64)];
+        let mut costs = vec![0.0; points.len()];
         for p in predicted {
-            let first = rows.edges.len();
             let from = by_x.xs.partition_point(|&x| x < p[0] - gate);
-            for (&x, &col) in by_x.xs[from..].iter().zip(&by_x.order[from..]) {
+            let window = by_x.xs[from..].iter().zip(&by_x.ys[from..]);
+            for ((&x, &y), &col) in window.zip(&by_x.order[from..]) {
                 if x > p[0] + gate {
                     break;
                 }
-                let q = points[col];
-                let cost = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2);
-                if cost < gate2 {
-                    rows.edges.push(Edge { col, cost });
+                let dy2 = (p[1] - y).powi(2);
+                if dy2 >= unassigned {
+                    continue; // the cost is at least dy2
+                }
+                let cost = (p[0] - x).powi(2) + dy2;
+                if cost < unassigned {
+                    candidates[col / 64] |= 1 << (col % 64);
+                    costs[col] = cost;
                 }
             }
-            rows.edges[first..].sort_unstable_by_key(|e| e.col);
+            for (w, word) in candidates.iter_mut().enumerate() {
+                while *word != 0 {
+                    let col = 64 * w + word.trailing_zeros() as usize;
+                    *word &= *word - 1;
+                    rows.edges.push(Edge {
+                        col,
+                        cost: costs[col],
+                    });
+                }
+            }
+            // The pin's own "unassigned" column.
+            rows.edges.push(Edge {
+                col: points.len() + rows.len(),
+                cost: unassigned,
+            });
             rows.end_row();
         }
-        assign_rows(points.len(), &rows, gate2).row_to_col
+        assign_usable(points.len(), &rows)
     }
 
     fn displacements(
@@ -290,10 +317,11 @@ impl PinTracker {
     }
 }
 
-/// Point indices sorted by x, with their x values.
+/// Point indices sorted by x, with their x and y values.
 struct ByX {
     order: Vec<usize>,
     xs: Vec<f64>,
+    ys: Vec<f64>,
 }
 
 impl ByX {
@@ -301,7 +329,8 @@ impl ByX {
         let mut order: Vec<usize> = (0..points.len()).collect();
         order.sort_unstable_by(|&a, &b| points[a][0].total_cmp(&points[b][0]));
         let xs = order.iter().map(|&i| points[i][0]).collect();
-        Self { order, xs }
+        let ys = order.iter().map(|&i| points[i][1]).collect();
+        Self { order, xs, ys }
     }
 }
 

@@ -1,0 +1,198 @@
+//! Blob detection on frames that binarise to the same image at every
+//! threshold (report ch. 4.1). The real TacTip frames and tactrace's
+//! simulated ones are already binary (0 or 255), so every threshold of the
+//! sweep sees the same white set, traces the same contours and finds the
+//! same centres. The contours are then traced and measured once, over the
+//! whole frame, and the grouping across thresholds is built directly when
+//! it is trivial: when no two centres are close enough to join each other's
+//! group, OpenCV's rule gives every centre a group of its own holding one
+//! copy of it per threshold. Otherwise the general grouping runs on the one
+//! list of centres. Same keypoints, bit for bit, as the threshold-by-threshold
+//! path (see the tests here and `detect_blobs`).
+
+use crate::blob::{colour_passes, measure_shape, KeyPoint, Scratch};
+use crate::contour::ContourScanner;
+use crate::grouping::{joins, keypoint_of, Centre, Grouper};
+use crate::params::BlobParams;
+
+/// Whether every level in `lo..=hi` binarises `pixels` (white above the
+/// level) to the same image: no pixel value lies in `(lo, hi]`.
+pub(crate) fn same_at_levels(pixels: &[u8], lo: i16, hi: i16) -> bool {
+    if hi <= lo {
+        return true;
+    }
+    if hi - lo > 255 {
+        return pixels.is_empty();
+    }
+    // v in (lo, hi] <=> v - (lo + 1) < hi - lo, wrapping in u8 (lo >= -1).
+    let (base, span) = ((lo + 1) as u8, (hi - lo) as u8);
+    pixels.chunks(64).all(|chunk| {
+        chunk
+            .iter()
+            .fold(0u8, |any, &v| any | u8::from(v.wrapping_sub(base) < span))
+            == 0
+    })
+}
+
+/// [`crate::detect_blobs`] for a `width` x `height` frame that binarises the
+/// same at all `levels` (the floors of the thresholds, see
+/// [`same_at_levels`]): one full-frame border following and shape pass at
+/// `levels[0]`, then the grouping of `levels.len()` identical lists.
+pub(crate) fn detect_unchanging(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    levels: &[i16],
+    p: &BlobParams,
+) -> Vec<KeyPoint> {
+    let Some(&level) = levels.first() else {
+        return Vec::new();
+    };
+    let found = found_centres(pixels, width, height, level, p);
+    let min_dist = f64::from(p.min_dist_between_blobs);
+    let n = levels.len();
+    if apart(&found, min_dist) {
+        if n < p.min_repeatability {
+            return Vec::new();
+        }
+        return found
+            .iter()
+            .map(|c| keypoint_of(std::iter::repeat_n(*c, n), c.radius))
+            .collect();
+    }
+    let mut grouper = Grouper::new(width, height, n);
+    for _ in 0..n {
+        grouper.add(&found, min_dist);
+    }
+    grouper.keypoints(p.min_repeatability)
+}
+
+/// The centres of the blobs that pass every filter at `level`, in
+/// OpenCV's contour order (the reverse of discovery in raster order).
+fn found_centres(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    level: i16,
+    p: &BlobParams,
+) -> Vec<Centre> {
+    SCANNER.with_borrow_mut(|scanner| {
+        if scanner.size() != (width, height) {
+            *scanner = ContourScanner::new(width, height);
+        }
+        // Every pixel is rewritten; the zero frame around them never is.
+        scanner.binarise_above(pixels, level);
+        scanner.trace_all();
+        let mut scratch = Scratch::default();
+        scanner
+            .contours()
+            .filter_map(|contour| measure_shape(contour, p, &mut scratch))
+            .filter(|c| colour_passes(c, pixels, width, height, level, p))
+            .collect()
+    })
+}
+
+thread_local! {
+    /// The full-frame scanner, kept between frames of the same size (its
+    /// label image and point buffers are the bulk of the allocations).
+    static SCANNER: std::cell::RefCell<ContourScanner> =
+        std::cell::RefCell::new(ContourScanner::new(0, 0));
+}
+
+/// True when the grouping of the same `found` list at every threshold is
+/// trivial: all centres finite, each would join a group it represents
+/// (distance 0 below `min_dist` or its radius), and no two would join each
+/// other's group. Then, threshold after threshold, centre `i`'s first
+/// joining group is group `i` (every earlier group still has copies of its
+/// own centre only, so its representative is that centre).
+fn apart(found: &[Centre], min_dist: f64) -> bool {
+    let finite = |c: &Centre| c.x.is_finite() && c.y.is_finite() && c.radius.is_finite();
+    if !found
+        .iter()
+        .all(|c| finite(c) && joins(c, c, min_dist, 0.0))
+    {
+        return false;
+    }
+    // Any pair farther apart than this on one axis cannot join.
+    let reach = found.iter().map(|c| c.radius).fold(min_dist, f64::max);
+    let mut by_x: Vec<&Centre> = found.iter().collect();
+    by_x.sort_unstable_by(|a, b| a.x.total_cmp(&b.x));
+    for (i, a) in by_x.iter().enumerate() {
+        for b in &by_x[i + 1..] {
+            if b.x - a.x > reach {
+                break;
+            }
+            if joins(a, b, min_dist, reach) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blob::detect_blobs_by_threshold;
+    use crate::Frame;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn levels_test_finds_values_in_the_open_closed_range() {
+        let pixels = [0u8, 10, 200, 255];
+        assert!(same_at_levels(&pixels, 10, 199));
+        assert!(!same_at_levels(&pixels, 9, 199));
+        assert!(!same_at_levels(&pixels, 10, 200));
+        assert!(same_at_levels(&pixels, 200, 254));
+        assert!(!same_at_levels(&pixels, -1, 255));
+        assert!(same_at_levels(&pixels, 5, 5));
+        assert!(!same_at_levels(&pixels, -1, 0));
+    }
+
+    /// Random binary frames of discs (some touching, some at the border,
+    /// some with holes): the direct path gives exactly the keypoints of
+    /// the threshold-by-threshold one, for several merge distances.
+    #[test]
+    fn binary_frames_match_the_threshold_loop() {
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let mut branches = [0; 2];
+        for case in 0..100 {
+            let size = rng.random_range(20..90u32);
+            let discs: Vec<(f64, f64, f64, f64)> = (0..rng.random_range(0..25))
+                .map(|_| {
+                    let r = rng.random_range(1.0..7.0);
+                    let hole = if rng.random_bool(0.2) { r * 0.4 } else { -1.0 };
+                    let at = |rng: &mut ChaCha8Rng| rng.random_range(-3.0..f64::from(size) + 3.0);
+                    (at(&mut rng), at(&mut rng), r, hole)
+                })
+                .collect();
+            let frame = Frame::from_fn(size, size, |x, y| {
+                let white = discs.iter().any(|&(cx, cy, r, hole)| {
+                    let d = (f64::from(x) - cx).hypot(f64::from(y) - cy);
+                    d <= r && d > hole
+                });
+                image::Luma([if white { 255 } else { 0 }])
+            });
+            // Dark blobs too: a ring's outer and hole borders then both
+            // pass, with nearly the same centre (the fallback grouping).
+            let p = BlobParams {
+                blob_color: if rng.random_bool(0.3) { 0 } else { 255 },
+                min_area: 2.0,
+                min_convexity: 0.5,
+                min_circularity: 0.3,
+                min_dist_between_blobs: rng.random_range(0.0..20.0),
+                ..BlobParams::preset("real256").expect("preset")
+            };
+            let levels: Vec<i16> = p.thresholds().iter().map(|t| t.floor() as i16).collect();
+            let want = detect_blobs_by_threshold(&frame, &p);
+            let got = detect_unchanging(frame.as_raw(), size as usize, size as usize, &levels, &p);
+            assert_eq!(got, want, "case {case}");
+            let found = found_centres(frame.as_raw(), size as usize, size as usize, levels[0], &p);
+            let min_dist = f64::from(p.min_dist_between_blobs);
+            branches[usize::from(apart(&found, min_dist))] += usize::from(!found.is_empty());
+        }
+        // Both the direct grouping and the fallback were exercised.
+        assert!(branches.iter().all(|&b| b >= 10), "{branches:?}");
+    }
+}

@@ -166,23 +166,44 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let model = a.model.as_deref().map(model_io::load_model).transpose()?;
     let rig = tactrace_lab::rig::RigConfig::simulated();
     let f = tactrace_lab::bench::bench(&rig, a.taps.max(1), model.as_ref())?;
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&f)?);
-    } else {
-        println!("simulate (pins + render): {:.1} us/tap", f.simulate_us);
-        println!("extract (detect + order): {:.1} us/frame", f.extract_us);
-        println!(
-            "simulated taps per second (one core): {:.0}",
-            f.taps_per_second
-        );
-        if let Some(l) = f.control_latency_us {
-            println!("control loop, frame -> command: {l:.1} us");
+    let real = match (&a.real_frames, &model) {
+        (Some(dir), Some(m)) => {
+            let blob = tactrace_vision::BlobParams::preset("real256").map_err(LabError::from)?;
+            Some(tactrace_lab::bench::real_control_latency_stats(
+                dir, &blob, m, a.taps,
+            )?)
         }
+        _ => None,
+    };
+    if a.json {
+        let mut doc = serde_json::to_value(&f)?;
+        if let (Some(r), Some(obj)) = (&real, doc.as_object_mut()) {
+            obj.insert("real_control_latency_us".into(), r.mean_us.into());
+            obj.insert("real_control_latency_median_us".into(), r.median_us.into());
+            obj.insert("real_control_latency_p95_us".into(), r.p95_us.into());
+        }
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
     }
-    if let (Some(dir), Some(m)) = (&a.real_frames, &model) {
-        let blob = tactrace_vision::BlobParams::preset("real256").map_err(LabError::from)?;
-        let us = tactrace_lab::bench::real_control_latency(dir, &blob, m, a.taps)?;
-        println!("control loop on real frames, frame -> command: {us:.1} us");
+    println!("simulate (pins + render): {:.1} us/tap", f.simulate_us);
+    println!("extract (detect + order): {:.1} us/frame", f.extract_us);
+    println!(
+        "simulated taps per second (one core): {:.0}",
+        f.taps_per_second
+    );
+    if let Some(l) = f.control_latency_us {
+        let stat = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
+        println!(
+            "control loop, frame -> command: mean {l:.1} us, median {} us, p95 {} us",
+            stat(f.control_latency_median_us),
+            stat(f.control_latency_p95_us)
+        );
+    }
+    if let Some(r) = real {
+        println!(
+            "control loop on real frames, frame -> command: mean {:.1} us, median {:.1} us, p95 {:.1} us",
+            r.mean_us, r.median_us, r.p95_us
+        );
     }
     Ok(())
 }

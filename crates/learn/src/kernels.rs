@@ -61,29 +61,71 @@ pub fn dot3<const FMA: bool>(a: &[f32], b: &[f32], c: &[f32]) -> f32 {
     acc.iter().sum::<f32>() + tail
 }
 
+/// `sum_i v_i^2` in f64, with eight independent accumulators (vectorises;
+/// a plain iterator sum is one serial chain of f64 additions).
+#[inline(always)]
+pub fn sum_squares_f64(v: &[f32]) -> f64 {
+    let mut acc = [0.0f64; 8];
+    let chunks = v.chunks_exact(8);
+    let tail: f64 = chunks
+        .remainder()
+        .iter()
+        .map(|&x| (x as f64) * (x as f64))
+        .sum();
+    for c in chunks {
+        for k in 0..8 {
+            let x = c[k] as f64;
+            acc[k] += x * x;
+        }
+    }
+    acc.iter().sum::<f64>() + tail
+}
+
+/// Columns per register block of the row-major sweeps: 32 f32 accumulators
+/// (four ymm registers) stay in registers across every row of `W`.
+const BLOCK: usize = 32;
+
 /// `out = b + W^T v` for row-major `W` (`v.len()` rows of `out.len()`
-/// columns): a sweep of row axpys, four rows at a time so `out` is loaded and
-/// stored once per four rows.
+/// columns), register-blocked: for each block of columns the partial sums
+/// stay in registers while the sweep walks down the rows, so each element of
+/// `W` is loaded once and `out` is written once. Rows are accumulated in
+/// order (the same rounding as a sweep of row axpys).
 #[inline(always)]
 pub fn affine_rows<const FMA: bool>(w: &[f32], v: &[f32], b: &[f32], out: &mut [f32]) {
     let cols = out.len();
-    out.copy_from_slice(b);
-    let mut blocks = w.chunks_exact(4 * cols);
-    let mut vs = v.chunks_exact(4);
-    for (block, vb) in (&mut blocks).zip(&mut vs) {
-        let (r0, rest) = block.split_at(cols);
-        let (r1, rest) = rest.split_at(cols);
-        let (r2, r3) = rest.split_at(cols);
-        for ((((o, &a0), &a1), &a2), &a3) in out.iter_mut().zip(r0).zip(r1).zip(r2).zip(r3) {
-            let s = madd::<FMA>(vb[0], a0, *o);
-            let s = madd::<FMA>(vb[1], a1, s);
-            let s = madd::<FMA>(vb[2], a2, s);
-            *o = madd::<FMA>(vb[3], a3, s);
+    let mut j = 0;
+    while j + BLOCK <= cols {
+        affine_block::<FMA, BLOCK>(w, v, b, out, j);
+        j += BLOCK;
+    }
+    while j + 8 <= cols {
+        affine_block::<FMA, 8>(w, v, b, out, j);
+        j += 8;
+    }
+    while j < cols {
+        affine_block::<FMA, 1>(w, v, b, out, j);
+        j += 1;
+    }
+}
+
+/// Columns `j..j + B` of [`affine_rows`].
+#[inline(always)]
+fn affine_block<const FMA: bool, const B: usize>(
+    w: &[f32],
+    v: &[f32],
+    b: &[f32],
+    out: &mut [f32],
+    j: usize,
+) {
+    let cols = out.len();
+    let mut acc: [f32; B] = b[j..j + B].try_into().expect("block of b");
+    for (row, &vi) in w.chunks_exact(cols).zip(v) {
+        let a: &[f32; B] = row[j..j + B].try_into().expect("block of W");
+        for k in 0..B {
+            acc[k] = madd::<FMA>(vi, a[k], acc[k]);
         }
     }
-    for (row, &vi) in blocks.remainder().chunks_exact(cols).zip(vs.remainder()) {
-        axpy::<FMA>(out, vi, row);
-    }
+    out[j..j + B].copy_from_slice(&acc);
 }
 
 /// `out = b + W^T v` with `W` stored transposed (`out.len()` rows of
@@ -129,8 +171,12 @@ pub fn rank1_cols<const FMA: bool>(wt: &mut [f32], u: &[f32], v: &[f32]) {
 }
 
 /// Fused `W += u v^T` then `out = b + W^T next` in one sweep over row-major
-/// `W` (each row is read and written once): the first-layer update of one
-/// sample and the first-layer drive of the next. `b` must already be updated.
+/// `W`: the first-layer update of one sample and the first-layer drive of
+/// the next. Register-blocked like [`affine_rows`]: for each block of
+/// columns, `v` and the drive's partial sums stay in registers while the
+/// sweep walks down the rows, so each element of `W` is loaded, updated,
+/// stored and multiplied once. `b` must already be updated. The same numbers
+/// as [`rank1_rows`] followed by [`affine_rows`].
 #[inline(always)]
 pub fn rank1_then_affine_rows<const FMA: bool>(
     w: &mut [f32],
@@ -141,27 +187,43 @@ pub fn rank1_then_affine_rows<const FMA: bool>(
     out: &mut [f32],
 ) {
     let cols = v.len();
-    out.copy_from_slice(b);
-    let mut blocks = w.chunks_exact_mut(2 * cols);
-    let (mut us, mut ns) = (u.chunks_exact(2), next.chunks_exact(2));
-    for ((block, ub), nb) in (&mut blocks).zip(&mut us).zip(&mut ns) {
-        let (r0, r1) = block.split_at_mut(cols);
-        for (((o, a0), a1), &vj) in out.iter_mut().zip(r0.iter_mut()).zip(r1.iter_mut()).zip(v) {
-            *a0 = madd::<FMA>(ub[0], vj, *a0);
-            *a1 = madd::<FMA>(ub[1], vj, *a1);
-            let s = madd::<FMA>(nb[0], *a0, *o);
-            *o = madd::<FMA>(nb[1], *a1, s);
+    let mut j = 0;
+    while j + BLOCK <= cols {
+        rank1_affine_block::<FMA, BLOCK>(w, u, v, next, b, out, j);
+        j += BLOCK;
+    }
+    while j + 8 <= cols {
+        rank1_affine_block::<FMA, 8>(w, u, v, next, b, out, j);
+        j += 8;
+    }
+    while j < cols {
+        rank1_affine_block::<FMA, 1>(w, u, v, next, b, out, j);
+        j += 1;
+    }
+}
+
+/// Columns `j..j + B` of [`rank1_then_affine_rows`].
+#[inline(always)]
+fn rank1_affine_block<const FMA: bool, const B: usize>(
+    w: &mut [f32],
+    u: &[f32],
+    v: &[f32],
+    next: &[f32],
+    b: &[f32],
+    out: &mut [f32],
+    j: usize,
+) {
+    let cols = v.len();
+    let vb: [f32; B] = v[j..j + B].try_into().expect("block of v");
+    let mut acc: [f32; B] = b[j..j + B].try_into().expect("block of b");
+    for ((row, &ui), &ni) in w.chunks_exact_mut(cols).zip(u).zip(next) {
+        let a: &mut [f32; B] = (&mut row[j..j + B]).try_into().expect("block of W");
+        for k in 0..B {
+            a[k] = madd::<FMA>(ui, vb[k], a[k]);
+            acc[k] = madd::<FMA>(ni, a[k], acc[k]);
         }
     }
-    for ((row, &ui), &ni) in blocks
-        .into_remainder()
-        .chunks_exact_mut(cols)
-        .zip(us.remainder())
-        .zip(ns.remainder())
-    {
-        axpy::<FMA>(row, ui, v);
-        axpy::<FMA>(out, ni, row);
-    }
+    out[j..j + B].copy_from_slice(&acc);
 }
 
 /// The logistic sigmoid `1 / (1 + exp(-x))` of every element, through a
@@ -183,7 +245,10 @@ pub fn exp_approx(x: f32) -> f32 {
     // Adding and removing 1.5 * 2^23 rounds to nearest without a libm call.
     const ROUNDER: f32 = 12_582_912.0;
     let x = x.clamp(-87.0, 88.0);
-    let n = (x * LOG2E + ROUNDER) - ROUNDER;
+    // `t` holds `n = round(x log2 e)` in its low mantissa bits, so the scale
+    // `2^n` is built with integer ops alone (no float-to-int conversion).
+    let t = x * LOG2E + ROUNDER;
+    let n = t - ROUNDER;
     let r = x - n * LN2_HI - n * LN2_LO;
     let p = 1.0 / 720.0;
     let p = p * r + 1.0 / 120.0;
@@ -192,7 +257,7 @@ pub fn exp_approx(x: f32) -> f32 {
     let p = p * r + 0.5;
     let p = p * r + 1.0;
     let p = p * r + 1.0;
-    let scale = f32::from_bits(((n as i32 + 127) as u32) << 23);
+    let scale = f32::from_bits(t.to_bits().wrapping_add(127) << 23);
     p * scale
 }
 
@@ -213,7 +278,8 @@ mod tests {
 
     #[test]
     fn affine_forms_agree_with_naive_product() {
-        let (rows, cols) = (7, 19);
+        // 45 columns: one register block of 32, one of 8, five single columns.
+        let (rows, cols) = (7, 45);
         let w: Vec<f32> = (0..rows * cols)
             .map(|k| ((k * 37 % 11) as f32 - 5.0) * 0.1)
             .collect();
@@ -242,8 +308,15 @@ mod tests {
     }
 
     #[test]
+    fn sum_squares_matches_serial_sum() {
+        let v: Vec<f32> = (0..1003).map(|k| (k as f32 * 0.37).sin() * 3.0).collect();
+        let serial: f64 = v.iter().map(|&x| (x as f64).powi(2)).sum();
+        assert!((sum_squares_f64(&v) - serial).abs() < 1e-12 * serial);
+    }
+
+    #[test]
     fn fused_update_equals_update_then_affine() {
-        let (rows, cols) = (5, 9);
+        let (rows, cols) = (5, 45);
         let mut w1: Vec<f32> = (0..rows * cols)
             .map(|k| ((k * 13 % 7) as f32 - 3.0) * 0.1)
             .collect();
@@ -256,7 +329,8 @@ mod tests {
         rank1_rows::<false>(&mut w1, &u, &v);
         affine_rows::<false>(&w1, &next, &b, &mut o1);
         rank1_then_affine_rows::<false>(&mut w2, &u, &v, &next, &b, &mut o2);
-        assert!(w1.iter().zip(&w2).all(|(a, b)| (a - b).abs() < 1e-6));
-        assert!(o1.iter().zip(&o2).all(|(a, b)| (a - b).abs() < 1e-5));
+        // Same operations in the same order: bitwise equal.
+        assert_eq!(w1, w2);
+        assert_eq!(o1, o2);
     }
 }

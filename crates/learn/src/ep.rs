@@ -3,7 +3,7 @@
 //! local weight update. Kept apart from the [`crate::DenNN`] type so the hot
 //! loop reads top to bottom.
 use crate::dennn::{ClampedPhase, EpConfig, FreePhase, LrScaling, SampleStats};
-use crate::kernels::{dot, dot3, sigmoid_into, sum_squares_f64};
+use crate::kernels::{dot, dot3, sigmoid, sum_squares_f64};
 use crate::net::{Layers, States};
 
 /// One EP step, given the first-layer drive `W(1)^T x + b(1)` in `st.drive`;
@@ -234,6 +234,6 @@ fn euler_step<const F: bool>(layers: &Layers, st: &mut States, dt: f32, clamp_ou
     }
     for l in 1..n {
         let (s, phi) = (&st.s[l], &mut st.phi[l]);
-        sigmoid_into(s, phi);
+        sigmoid::<F>(s, phi);
     }
 }

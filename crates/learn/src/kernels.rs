@@ -22,11 +22,15 @@ pub fn axpy<const FMA: bool>(y: &mut [f32], a: f32, x: &[f32]) {
     }
 }
 
-/// Dot product with eight independent accumulators (vectorisable).
+/// Independent accumulators of the reductions: four ymm registers, enough
+/// to hide the add/FMA latency (one register would be one serial chain).
+const LANES: usize = 32;
+
+/// Dot product with [`LANES`] independent accumulators (vectorisable).
 #[inline(always)]
 pub fn dot<const FMA: bool>(a: &[f32], b: &[f32]) -> f32 {
-    let mut acc = [0.0f32; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let mut acc = [0.0f32; LANES];
+    let (ca, cb) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
     let tail: f32 = ca
         .remainder()
         .iter()
@@ -34,18 +38,22 @@ pub fn dot<const FMA: bool>(a: &[f32], b: &[f32]) -> f32 {
         .map(|(x, y)| x * y)
         .sum();
     for (x, y) in ca.zip(cb) {
-        for k in 0..8 {
+        for k in 0..LANES {
             acc[k] = madd::<FMA>(x[k], y[k], acc[k]);
         }
     }
-    acc.iter().sum::<f32>() + tail
+    reduce(acc) + tail
 }
 
-/// `sum_i a_i b_i c_i` with eight independent accumulators.
+/// `sum_i a_i b_i c_i` with [`LANES`] independent accumulators.
 #[inline(always)]
 pub fn dot3<const FMA: bool>(a: &[f32], b: &[f32], c: &[f32]) -> f32 {
-    let mut acc = [0.0f32; 8];
-    let (ca, cb, cc) = (a.chunks_exact(8), b.chunks_exact(8), c.chunks_exact(8));
+    let mut acc = [0.0f32; LANES];
+    let (ca, cb, cc) = (
+        a.chunks_exact(LANES),
+        b.chunks_exact(LANES),
+        c.chunks_exact(LANES),
+    );
     let tail: f32 = ca
         .remainder()
         .iter()
@@ -54,26 +62,39 @@ pub fn dot3<const FMA: bool>(a: &[f32], b: &[f32], c: &[f32]) -> f32 {
         .map(|((x, y), z)| x * y * z)
         .sum();
     for ((x, y), z) in ca.zip(cb).zip(cc) {
-        for k in 0..8 {
+        for k in 0..LANES {
             acc[k] = madd::<FMA>(x[k] * y[k], z[k], acc[k]);
         }
     }
-    acc.iter().sum::<f32>() + tail
+    reduce(acc) + tail
 }
 
-/// `sum_i v_i^2` in f64, with eight independent accumulators (vectorises;
-/// a plain iterator sum is one serial chain of f64 additions).
+/// Sum of the accumulators, pairwise (vector adds, then one short chain).
+#[inline(always)]
+fn reduce(mut acc: [f32; LANES]) -> f32 {
+    let mut half = LANES / 2;
+    while half >= 8 {
+        for k in 0..half {
+            acc[k] += acc[k + half];
+        }
+        half /= 2;
+    }
+    acc[..8].iter().sum()
+}
+
+/// `sum_i v_i^2` in f64, with 16 independent accumulators (vectorises; a
+/// plain iterator sum is one serial chain of f64 additions).
 #[inline(always)]
 pub fn sum_squares_f64(v: &[f32]) -> f64 {
-    let mut acc = [0.0f64; 8];
-    let chunks = v.chunks_exact(8);
+    let mut acc = [0.0f64; 16];
+    let chunks = v.chunks_exact(16);
     let tail: f64 = chunks
         .remainder()
         .iter()
         .map(|&x| (x as f64) * (x as f64))
         .sum();
     for c in chunks {
-        for k in 0..8 {
+        for k in 0..16 {
             let x = c[k] as f64;
             acc[k] += x * x;
         }
@@ -228,17 +249,24 @@ fn rank1_affine_block<const FMA: bool, const B: usize>(
 
 /// The logistic sigmoid `1 / (1 + exp(-x))` of every element, through a
 /// branch-free `exp` (Cody-Waite range reduction, degree-6 polynomial,
-/// relative error about 2e-7) that vectorises.
+/// relative error about 2e-7) that vectorises. `FMA` as for [`madd`].
 #[inline(always)]
-pub fn sigmoid_into(src: &[f32], dst: &mut [f32]) {
+pub fn sigmoid<const FMA: bool>(src: &[f32], dst: &mut [f32]) {
     for (d, &x) in dst.iter_mut().zip(src) {
-        *d = 1.0 / (1.0 + exp_approx(-x));
+        *d = 1.0 / (1.0 + exp_approx::<FMA>(-x));
     }
 }
 
-/// Branch-free `exp(x)` for f32, saturating outside [-87, 88].
+/// [`sigmoid`] without fused multiply-adds (callable anywhere).
 #[inline(always)]
-pub fn exp_approx(x: f32) -> f32 {
+pub fn sigmoid_into(src: &[f32], dst: &mut [f32]) {
+    sigmoid::<false>(src, dst);
+}
+
+/// Branch-free `exp(x)` for f32, saturating outside [-87, 88]; the range
+/// reduction and the Horner steps use [`madd`].
+#[inline(always)]
+pub fn exp_approx<const FMA: bool>(x: f32) -> f32 {
     const LOG2E: f32 = std::f32::consts::LOG2_E;
     const LN2_HI: f32 = 0.693_359_4;
     const LN2_LO: f32 = -2.121_944_4e-4;
@@ -247,16 +275,16 @@ pub fn exp_approx(x: f32) -> f32 {
     let x = x.clamp(-87.0, 88.0);
     // `t` holds `n = round(x log2 e)` in its low mantissa bits, so the scale
     // `2^n` is built with integer ops alone (no float-to-int conversion).
-    let t = x * LOG2E + ROUNDER;
+    let t = madd::<FMA>(x, LOG2E, ROUNDER);
     let n = t - ROUNDER;
-    let r = x - n * LN2_HI - n * LN2_LO;
-    let p = 1.0 / 720.0;
-    let p = p * r + 1.0 / 120.0;
-    let p = p * r + 1.0 / 24.0;
-    let p = p * r + 1.0 / 6.0;
-    let p = p * r + 0.5;
-    let p = p * r + 1.0;
-    let p = p * r + 1.0;
+    let r = madd::<FMA>(-n, LN2_HI, x);
+    let r = madd::<FMA>(-n, LN2_LO, r);
+    let p = madd::<FMA>(1.0 / 720.0, r, 1.0 / 120.0);
+    let p = madd::<FMA>(p, r, 1.0 / 24.0);
+    let p = madd::<FMA>(p, r, 1.0 / 6.0);
+    let p = madd::<FMA>(p, r, 0.5);
+    let p = madd::<FMA>(p, r, 1.0);
+    let p = madd::<FMA>(p, r, 1.0);
     let scale = f32::from_bits(t.to_bits().wrapping_add(127) << 23);
     p * scale
 }
@@ -265,15 +293,39 @@ pub fn exp_approx(x: f32) -> f32 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn exp_approx_matches_std_within_3e_7_relative() {
+    /// Worst relative error of `exp` over [-80, 80].
+    fn exp_worst(exp: impl Fn(f32) -> f32) -> f64 {
         let mut worst = 0.0f64;
         for k in -8000..=8000 {
             let x = k as f32 * 0.01;
-            let rel = ((exp_approx(x) as f64) - (x as f64).exp()).abs() / (x as f64).exp();
+            let rel = ((exp(x) as f64) - (x as f64).exp()).abs() / (x as f64).exp();
             worst = worst.max(rel);
         }
+        worst
+    }
+
+    #[test]
+    fn exp_approx_matches_std_within_3e_7_relative() {
+        let worst = exp_worst(exp_approx::<false>);
         assert!(worst < 3e-7, "worst relative error {worst}");
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    fn exp_worst_fma() -> f64 {
+        exp_worst(exp_approx::<true>)
+    }
+
+    #[test]
+    fn fused_exp_approx_matches_std_within_3e_7_relative() {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU supports FMA (checked just above).
+            let worst = unsafe { exp_worst_fma() };
+            assert!(worst < 3e-7, "worst relative error {worst}");
+            return;
+        }
+        eprintln!("skipped: no FMA on this CPU");
     }
 
     #[test]

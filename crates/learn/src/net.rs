@@ -6,7 +6,7 @@
 use crate::error::LearnError;
 use crate::kernels::{
     affine_cols, affine_rows, back_cols, back_rows, rank1_cols, rank1_rows, rank1_then_affine_rows,
-    sigmoid_into,
+    sigmoid,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -192,7 +192,7 @@ impl Layers {
                 self.affine::<FMA>(l, &lower[l - 1], &mut st.s[l]);
             }
             if l < n {
-                sigmoid_into(&st.s[l], &mut upper[0]);
+                sigmoid::<FMA>(&st.s[l], &mut upper[0]);
             }
         }
     }
@@ -246,7 +246,7 @@ impl Layers {
             let (lower, upper) = st.phi.split_at_mut(l);
             self.affine::<FMA>(l, &lower[l - 1], &mut st.s[l]);
             if l < n {
-                sigmoid_into(&st.s[l], &mut upper[0]);
+                sigmoid::<FMA>(&st.s[l], &mut upper[0]);
             }
         }
     }

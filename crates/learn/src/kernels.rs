@@ -1,7 +1,8 @@
-//! The few dense f32 kernels the training hot loop needs (axpy-style matrix
-//! products on row-major weights, rank-one updates, a vectorisable sigmoid),
-//! written so LLVM vectorises them; `FMA` picks fused multiply-adds, which are
-//! only used when the caller runs under the `fma` target feature.
+//! The few dense f32 kernels the training hot loop needs (matrix products on
+//! weights stored in column panels or transposed, rank-one updates, a
+//! vectorisable sigmoid), written so LLVM vectorises them; `FMA` picks fused
+//! multiply-adds, which are only used when the caller runs under the `fma`
+//! target feature.
 
 /// `a * b + c`, fused when `FMA` (only instantiate `FMA = true` inside a
 /// function compiled with the `fma` target feature, or it becomes a libm call).
@@ -102,51 +103,99 @@ pub fn sum_squares_f64(v: &[f32]) -> f64 {
     acc.iter().sum::<f64>() + tail
 }
 
-/// Columns per register block of the row-major sweeps: 32 f32 accumulators
-/// (four ymm registers) stay in registers across every row of `W`.
-const BLOCK: usize = 32;
+/// Width of the column panels in which wide weight matrices are stored: 32
+/// f32 accumulators (four ymm registers) stay in registers while a sweep
+/// walks down a panel.
+pub const PANEL: usize = 32;
 
-/// `out = b + W^T v` for row-major `W` (`v.len()` rows of `out.len()`
-/// columns), register-blocked: for each block of columns the partial sums
-/// stay in registers while the sweep walks down the rows, so each element of
-/// `W` is loaded once and `out` is written once. Rows are accumulated in
-/// order (the same rounding as a sweep of row axpys).
+/// The panels of a `rows x cols` matrix: `(first column, width)`; panel
+/// `(j0, width)` occupies `rows * j0 .. rows * (j0 + width)` of the storage,
+/// row-major within the panel (`rows x width`). Every panel is [`PANEL`]
+/// wide but the last.
 #[inline(always)]
-pub fn affine_rows<const FMA: bool>(w: &[f32], v: &[f32], b: &[f32], out: &mut [f32]) {
-    let cols = out.len();
-    let mut j = 0;
-    while j + BLOCK <= cols {
-        affine_block::<FMA, BLOCK>(w, v, b, out, j);
-        j += BLOCK;
+pub fn panels(cols: usize) -> impl Iterator<Item = (usize, usize)> {
+    (0..cols)
+        .step_by(PANEL)
+        .map(move |j0| (j0, PANEL.min(cols - j0)))
+}
+
+/// Row-major `rows x cols` to panel storage (see [`panels`]).
+pub fn to_panels(w: &[f32], rows: usize, cols: usize) -> Vec<f32> {
+    let mut out = Vec::with_capacity(rows * cols);
+    for (j0, width) in panels(cols) {
+        for row in w.chunks_exact(cols) {
+            out.extend_from_slice(&row[j0..j0 + width]);
+        }
     }
-    while j + 8 <= cols {
-        affine_block::<FMA, 8>(w, v, b, out, j);
-        j += 8;
+    out
+}
+
+/// Panel storage (see [`panels`]) back to row-major `rows x cols`.
+pub fn from_panels(p: &[f32], rows: usize, cols: usize) -> Vec<f32> {
+    let mut out = vec![0.0; rows * cols];
+    for (j0, width) in panels(cols) {
+        let panel = &p[rows * j0..rows * (j0 + width)];
+        for (row, prow) in out.chunks_exact_mut(cols).zip(panel.chunks_exact(width)) {
+            row[j0..j0 + width].copy_from_slice(prow);
+        }
     }
-    while j < cols {
-        affine_block::<FMA, 1>(w, v, b, out, j);
-        j += 1;
+    out
+}
+
+/// Calls `block::<FMA, B>(args.., (width, k))` over the columns `k..k + B`
+/// of a panel of `width`: one block of [`PANEL`], or blocks of 8 then single
+/// columns for the narrower last panel.
+macro_rules! blocks {
+    ($width:expr, $block:ident :: <$fma:ident>, ($($arg:expr),*)) => {{
+        let width = $width;
+        if width == PANEL {
+            $block::<$fma, PANEL>($($arg,)* (PANEL, 0));
+        } else {
+            let mut k = 0;
+            while k + 8 <= width {
+                $block::<$fma, 8>($($arg,)* (width, k));
+                k += 8;
+            }
+            while k < width {
+                $block::<$fma, 1>($($arg,)* (width, k));
+                k += 1;
+            }
+        }
+    }};
+}
+
+/// `out = b + W^T v` for `W` in panels (`v.len()` rows of `out.len()`
+/// columns). For each block of columns the partial sums stay in registers
+/// while the sweep walks down the (contiguous) panel, so each element of `W`
+/// is loaded once and `out` is written once. Rows are accumulated in order
+/// (the same rounding as a sweep of row axpys).
+#[inline(always)]
+pub fn affine_panels<const FMA: bool>(w: &[f32], v: &[f32], b: &[f32], out: &mut [f32]) {
+    let rows = v.len();
+    for (j0, width) in panels(out.len()) {
+        let panel = &w[rows * j0..rows * (j0 + width)];
+        let (b, out) = (&b[j0..j0 + width], &mut out[j0..j0 + width]);
+        blocks!(width, affine_block::<FMA>, (panel, v, b, &mut *out));
     }
 }
 
-/// Columns `j..j + B` of [`affine_rows`].
+/// Columns `k..k + B` of a panel of `width` for [`affine_panels`].
 #[inline(always)]
 fn affine_block<const FMA: bool, const B: usize>(
-    w: &[f32],
+    panel: &[f32],
     v: &[f32],
     b: &[f32],
     out: &mut [f32],
-    j: usize,
+    (width, k): (usize, usize),
 ) {
-    let cols = out.len();
-    let mut acc: [f32; B] = b[j..j + B].try_into().expect("block of b");
-    for (row, &vi) in w.chunks_exact(cols).zip(v) {
-        let a: &[f32; B] = row[j..j + B].try_into().expect("block of W");
-        for k in 0..B {
-            acc[k] = madd::<FMA>(vi, a[k], acc[k]);
+    let mut acc: [f32; B] = b[k..k + B].try_into().expect("block of b");
+    for (row, &vi) in panel.chunks_exact(width).zip(v) {
+        let a: &[f32; B] = row[k..k + B].try_into().expect("block of W");
+        for t in 0..B {
+            acc[t] = madd::<FMA>(vi, a[t], acc[t]);
         }
     }
-    out[j..j + B].copy_from_slice(&acc);
+    out[k..k + B].copy_from_slice(&acc);
 }
 
 /// `out = b + W^T v` with `W` stored transposed (`out.len()` rows of
@@ -158,11 +207,22 @@ pub fn affine_cols<const FMA: bool>(wt: &[f32], v: &[f32], b: &[f32], out: &mut 
     }
 }
 
-/// `g = W e` for row-major `W` (`g.len()` rows of `e.len()` columns).
+/// `g = W e` for `W` in panels (`g.len()` rows of `e.len()` columns): an
+/// axpy of the panel's columns into `g` per column.
 #[inline(always)]
-pub fn back_rows<const FMA: bool>(w: &[f32], e: &[f32], g: &mut [f32]) {
-    for (gi, row) in g.iter_mut().zip(w.chunks_exact(e.len())) {
-        *gi = dot::<FMA>(row, e);
+pub fn back_panels<const FMA: bool>(w: &[f32], e: &[f32], g: &mut [f32]) {
+    let rows = g.len();
+    g.iter_mut().for_each(|g| *g = 0.0);
+    for (j0, width) in panels(e.len()) {
+        let panel = &w[rows * j0..rows * (j0 + width)];
+        let e = &e[j0..j0 + width];
+        for (gi, row) in g.iter_mut().zip(panel.chunks_exact(width)) {
+            let mut s = *gi;
+            for (&a, &ej) in row.iter().zip(e) {
+                s = madd::<FMA>(a, ej, s);
+            }
+            *gi = s;
+        }
     }
 }
 
@@ -175,11 +235,15 @@ pub fn back_cols<const FMA: bool>(wt: &[f32], e: &[f32], g: &mut [f32]) {
     }
 }
 
-/// `W += u v^T` for row-major `W` (`u.len()` rows of `v.len()` columns).
+/// `W += u v^T` for `W` in panels (`u.len()` rows of `v.len()` columns).
 #[inline(always)]
-pub fn rank1_rows<const FMA: bool>(w: &mut [f32], u: &[f32], v: &[f32]) {
-    for (row, &ui) in w.chunks_exact_mut(v.len()).zip(u) {
-        axpy::<FMA>(row, ui, v);
+pub fn rank1_panels<const FMA: bool>(w: &mut [f32], u: &[f32], v: &[f32]) {
+    let rows = u.len();
+    for (j0, width) in panels(v.len()) {
+        let panel = &mut w[rows * j0..rows * (j0 + width)];
+        for (row, &ui) in panel.chunks_exact_mut(width).zip(u) {
+            axpy::<FMA>(row, ui, &v[j0..j0 + width]);
+        }
     }
 }
 
@@ -191,15 +255,15 @@ pub fn rank1_cols<const FMA: bool>(wt: &mut [f32], u: &[f32], v: &[f32]) {
     }
 }
 
-/// Fused `W += u v^T` then `out = b + W^T next` in one sweep over row-major
-/// `W`: the first-layer update of one sample and the first-layer drive of
-/// the next. Register-blocked like [`affine_rows`]: for each block of
-/// columns, `v` and the drive's partial sums stay in registers while the
-/// sweep walks down the rows, so each element of `W` is loaded, updated,
-/// stored and multiplied once. `b` must already be updated. The same numbers
-/// as [`rank1_rows`] followed by [`affine_rows`].
+/// Fused `W += u v^T` then `out = b + W^T next` in one sweep over `W` in
+/// panels: the first-layer update of one sample and the first-layer drive
+/// of the next. For each block of columns, `v` and the drive's partial sums
+/// stay in registers while the sweep walks down the (contiguous) panel, so
+/// each element of `W` is loaded, updated, stored and multiplied once. `b`
+/// must already be updated. The same numbers as [`rank1_panels`] followed by
+/// [`affine_panels`].
 #[inline(always)]
-pub fn rank1_then_affine_rows<const FMA: bool>(
+pub fn rank1_then_affine_panels<const FMA: bool>(
     w: &mut [f32],
     u: &[f32],
     v: &[f32],
@@ -207,44 +271,40 @@ pub fn rank1_then_affine_rows<const FMA: bool>(
     b: &[f32],
     out: &mut [f32],
 ) {
-    let cols = v.len();
-    let mut j = 0;
-    while j + BLOCK <= cols {
-        rank1_affine_block::<FMA, BLOCK>(w, u, v, next, b, out, j);
-        j += BLOCK;
-    }
-    while j + 8 <= cols {
-        rank1_affine_block::<FMA, 8>(w, u, v, next, b, out, j);
-        j += 8;
-    }
-    while j < cols {
-        rank1_affine_block::<FMA, 1>(w, u, v, next, b, out, j);
-        j += 1;
+    let rows = u.len();
+    for (j0, width) in panels(v.len()) {
+        let panel = &mut w[rows * j0..rows * (j0 + width)];
+        let (v, b) = (&v[j0..j0 + width], &b[j0..j0 + width]);
+        let out = &mut out[j0..j0 + width];
+        blocks!(
+            width,
+            rank1_affine_block::<FMA>,
+            (&mut *panel, u, v, next, b, &mut *out)
+        );
     }
 }
 
-/// Columns `j..j + B` of [`rank1_then_affine_rows`].
+/// Columns `k..k + B` of a panel of `width` for [`rank1_then_affine_panels`].
 #[inline(always)]
 fn rank1_affine_block<const FMA: bool, const B: usize>(
-    w: &mut [f32],
+    panel: &mut [f32],
     u: &[f32],
     v: &[f32],
     next: &[f32],
     b: &[f32],
     out: &mut [f32],
-    j: usize,
+    (width, k): (usize, usize),
 ) {
-    let cols = v.len();
-    let vb: [f32; B] = v[j..j + B].try_into().expect("block of v");
-    let mut acc: [f32; B] = b[j..j + B].try_into().expect("block of b");
-    for ((row, &ui), &ni) in w.chunks_exact_mut(cols).zip(u).zip(next) {
-        let a: &mut [f32; B] = (&mut row[j..j + B]).try_into().expect("block of W");
-        for k in 0..B {
-            a[k] = madd::<FMA>(ui, vb[k], a[k]);
-            acc[k] = madd::<FMA>(ni, a[k], acc[k]);
+    let vb: [f32; B] = v[k..k + B].try_into().expect("block of v");
+    let mut acc: [f32; B] = b[k..k + B].try_into().expect("block of b");
+    for ((row, &ui), &ni) in panel.chunks_exact_mut(width).zip(u).zip(next) {
+        let a: &mut [f32; B] = (&mut row[k..k + B]).try_into().expect("block of W");
+        for t in 0..B {
+            a[t] = madd::<FMA>(ui, vb[t], a[t]);
+            acc[t] = madd::<FMA>(ni, a[t], acc[t]);
         }
     }
-    out[j..j + B].copy_from_slice(&acc);
+    out[k..k + B].copy_from_slice(&acc);
 }
 
 /// The logistic sigmoid `1 / (1 + exp(-x))` of every element, through a
@@ -329,8 +389,19 @@ mod tests {
     }
 
     #[test]
+    fn panel_storage_round_trips() {
+        let (rows, cols) = (3, 45);
+        let w: Vec<f32> = (0..rows * cols).map(|k| k as f32).collect();
+        let p = to_panels(&w, rows, cols);
+        // Second panel (columns 32..45, width 13), row 1, column 33.
+        assert_eq!(p[rows * 32 + 13 + 1], w[cols + 33]);
+        assert_eq!(from_panels(&p, rows, cols), w);
+    }
+
+    #[test]
     fn affine_forms_agree_with_naive_product() {
-        // 45 columns: one register block of 32, one of 8, five single columns.
+        // 45 columns: one panel of 32, one of 13 (a block of 8, five single
+        // columns).
         let (rows, cols) = (7, 45);
         let w: Vec<f32> = (0..rows * cols)
             .map(|k| ((k * 37 % 11) as f32 - 5.0) * 0.1)
@@ -343,20 +414,28 @@ mod tests {
         let wt: Vec<f32> = (0..cols * rows)
             .map(|k| w[(k % rows) * cols + k / rows])
             .collect();
+        let wp = to_panels(&w, rows, cols);
         let (mut wide, mut narrow) = (vec![0.0; cols], vec![0.0; cols]);
-        affine_rows::<false>(&w, &v, &b, &mut wide);
+        affine_panels::<false>(&wp, &v, &b, &mut wide);
         affine_cols::<false>(&wt, &v, &b, &mut narrow);
         for j in 0..cols {
             assert!((wide[j] - naive[j]).abs() < 1e-5 && (narrow[j] - naive[j]).abs() < 1e-5);
         }
         let e: Vec<f32> = (0..cols).map(|k| 0.2 - k as f32 * 0.05).collect();
         let (mut g1, mut g2) = (vec![0.0; rows], vec![0.0; rows]);
-        back_rows::<false>(&w, &e, &mut g1);
+        back_panels::<false>(&wp, &e, &mut g1);
         back_cols::<false>(&wt, &e, &mut g2);
         for i in 0..rows {
             let naive: f32 = (0..cols).map(|j| w[i * cols + j] * e[j]).sum();
             assert!((g1[i] - naive).abs() < 1e-5 && (g2[i] - naive).abs() < 1e-5);
         }
+        let mut wr = w.clone();
+        let mut wp2 = wp.clone();
+        for (i, row) in wr.chunks_exact_mut(cols).enumerate() {
+            row.iter_mut().zip(&e).for_each(|(a, ej)| *a += v[i] * ej);
+        }
+        rank1_panels::<false>(&mut wp2, &v, &e);
+        assert_eq!(from_panels(&wp2, rows, cols), wr);
     }
 
     #[test]
@@ -378,9 +457,9 @@ mod tests {
         let v: Vec<f32> = (0..cols).map(|k| k as f32 * 0.01).collect();
         let b = vec![0.1; cols];
         let (mut o1, mut o2) = (vec![0.0; cols], vec![0.0; cols]);
-        rank1_rows::<false>(&mut w1, &u, &v);
-        affine_rows::<false>(&w1, &next, &b, &mut o1);
-        rank1_then_affine_rows::<false>(&mut w2, &u, &v, &next, &b, &mut o2);
+        rank1_panels::<false>(&mut w1, &u, &v);
+        affine_panels::<false>(&w1, &next, &b, &mut o1);
+        rank1_then_affine_panels::<false>(&mut w2, &u, &v, &next, &b, &mut o2);
         // Same operations in the same order: bitwise equal.
         assert_eq!(w1, w2);
         assert_eq!(o1, o2);

@@ -235,14 +235,31 @@ pub fn back_cols<const FMA: bool>(wt: &[f32], e: &[f32], g: &mut [f32]) {
     }
 }
 
-/// `W += u v^T` for `W` in panels (`u.len()` rows of `v.len()` columns).
+/// `W += u v^T` for `W` in panels (`u.len()` rows of `v.len()` columns),
+/// with each block of `v` held in registers down the panel.
 #[inline(always)]
 pub fn rank1_panels<const FMA: bool>(w: &mut [f32], u: &[f32], v: &[f32]) {
     let rows = u.len();
     for (j0, width) in panels(v.len()) {
         let panel = &mut w[rows * j0..rows * (j0 + width)];
-        for (row, &ui) in panel.chunks_exact_mut(width).zip(u) {
-            axpy::<FMA>(row, ui, &v[j0..j0 + width]);
+        let v = &v[j0..j0 + width];
+        blocks!(width, rank1_block::<FMA>, (&mut *panel, u, v));
+    }
+}
+
+/// Columns `k..k + B` of a panel of `width` for [`rank1_panels`].
+#[inline(always)]
+fn rank1_block<const FMA: bool, const B: usize>(
+    panel: &mut [f32],
+    u: &[f32],
+    v: &[f32],
+    (width, k): (usize, usize),
+) {
+    let vb: [f32; B] = v[k..k + B].try_into().expect("block of v");
+    for (row, &ui) in panel.chunks_exact_mut(width).zip(u) {
+        let a: &mut [f32; B] = (&mut row[k..k + B]).try_into().expect("block of W");
+        for t in 0..B {
+            a[t] = madd::<FMA>(ui, vb[t], a[t]);
         }
     }
 }

@@ -272,12 +272,12 @@ pub fn rank1_cols<const FMA: bool>(wt: &mut [f32], u: &[f32], v: &[f32]) {
     }
 }
 
-/// Fused `W += u v^T` then `out = b + W^T next` in one sweep over `W` in
-/// panels: the first-layer update of one sample and the first-layer drive
-/// of the next. For each block of columns, `v` and the drive's partial sums
-/// stay in registers while the sweep walks down the (contiguous) panel, so
-/// each element of `W` is loaded, updated, stored and multiplied once. `b`
-/// must already be updated. The same numbers as [`rank1_panels`] followed by
+/// Fused `W += u v^T`, `b += v`, then `out = b + W^T next` in one sweep over
+/// `W` in panels: the first-layer update of one sample and the first-layer
+/// drive of the next. For each block of columns, `v` and the drive's partial
+/// sums stay in registers while the sweep walks down the (contiguous) panel,
+/// so each element of `W` is loaded, updated, stored and multiplied once.
+/// The same numbers as [`rank1_panels`], the bias step, then
 /// [`affine_panels`].
 #[inline(always)]
 pub fn rank1_then_affine_panels<const FMA: bool>(
@@ -285,18 +285,18 @@ pub fn rank1_then_affine_panels<const FMA: bool>(
     u: &[f32],
     v: &[f32],
     next: &[f32],
-    b: &[f32],
+    b: &mut [f32],
     out: &mut [f32],
 ) {
     let rows = u.len();
     for (j0, width) in panels(v.len()) {
         let panel = &mut w[rows * j0..rows * (j0 + width)];
-        let (v, b) = (&v[j0..j0 + width], &b[j0..j0 + width]);
+        let (v, b) = (&v[j0..j0 + width], &mut b[j0..j0 + width]);
         let out = &mut out[j0..j0 + width];
         blocks!(
             width,
             rank1_affine_block::<FMA>,
-            (&mut *panel, u, v, next, b, &mut *out)
+            (&mut *panel, u, v, next, &mut *b, &mut *out)
         );
     }
 }
@@ -308,12 +308,16 @@ fn rank1_affine_block<const FMA: bool, const B: usize>(
     u: &[f32],
     v: &[f32],
     next: &[f32],
-    b: &[f32],
+    b: &mut [f32],
     out: &mut [f32],
     (width, k): (usize, usize),
 ) {
     let vb: [f32; B] = v[k..k + B].try_into().expect("block of v");
-    let mut acc: [f32; B] = b[k..k + B].try_into().expect("block of b");
+    let bb: &mut [f32; B] = (&mut b[k..k + B]).try_into().expect("block of b");
+    for t in 0..B {
+        bb[t] += vb[t];
+    }
+    let mut acc = *bb;
     for ((row, &ui), &ni) in panel.chunks_exact_mut(width).zip(u).zip(next) {
         let a: &mut [f32; B] = (&mut row[k..k + B]).try_into().expect("block of W");
         for t in 0..B {
@@ -472,13 +476,16 @@ mod tests {
         let u: Vec<f32> = (0..rows).map(|k| k as f32 * 0.5 - 1.0).collect();
         let next: Vec<f32> = (0..rows).map(|k| 1.0 - k as f32 * 0.25).collect();
         let v: Vec<f32> = (0..cols).map(|k| k as f32 * 0.01).collect();
-        let b = vec![0.1; cols];
+        let mut b1: Vec<f32> = (0..cols).map(|k| 0.1 - k as f32 * 0.003).collect();
+        let mut b2 = b1.clone();
         let (mut o1, mut o2) = (vec![0.0; cols], vec![0.0; cols]);
         rank1_panels::<false>(&mut w1, &u, &v);
-        affine_panels::<false>(&w1, &next, &b, &mut o1);
-        rank1_then_affine_panels::<false>(&mut w2, &u, &v, &next, &b, &mut o2);
+        b1.iter_mut().zip(&v).for_each(|(b, v)| *b += v);
+        affine_panels::<false>(&w1, &next, &b1, &mut o1);
+        rank1_then_affine_panels::<false>(&mut w2, &u, &v, &next, &mut b2, &mut o2);
         // Same operations in the same order: bitwise equal.
         assert_eq!(w1, w2);
+        assert_eq!(b1, b2);
         assert_eq!(o1, o2);
     }
 }

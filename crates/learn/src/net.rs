@@ -179,8 +179,7 @@ impl Layers {
             self.rank1::<FMA>(1, u, v);
             self.affine::<FMA>(1, next, out);
         } else {
-            self.b[0].iter_mut().zip(v).for_each(|(b, v)| *b += v);
-            rank1_then_affine_panels::<FMA>(&mut self.w[0], u, v, next, &self.b[0], out);
+            rank1_then_affine_panels::<FMA>(&mut self.w[0], u, v, next, &mut self.b[0], out);
         }
     }
 

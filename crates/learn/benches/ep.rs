@@ -1,6 +1,7 @@
 //! Per-sample training time of the report's networks (equilibrium
 //! propagation and the backprop twin). Fixed seeds; plain `Instant` timing.
-//! Run with `cargo bench -p tactrace-learn --bench ep`.
+//! Run with `cargo bench -p tactrace-learn --bench ep`; an argument keeps
+//! only the rows whose name contains it (`... --bench ep -- angle`).
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
@@ -67,6 +68,11 @@ fn bench_mlp(name: &str, sizes: &[usize]) {
 }
 
 fn main() {
+    let filter = std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with('-'))
+        .unwrap_or_default();
+    let wanted = |name: &str| name.contains(filter.as_str());
     let fast = EpConfig::default();
     let faithful = EpConfig {
         free_phase: FreePhase::Euler { n_i: 5, dt: 1.0 },
@@ -79,9 +85,21 @@ fn main() {
         ("PCADenNN 35-1000-2", &[35, 1000, 2]),
         ("DisDenNN 254-500-2", &[254, 500, 2]),
     ] {
-        bench_ep(&format!("EP ff+closed-form {label}"), sizes, &fast);
-        bench_ep_sequence(&format!("EP ff+closed-form fused {label}"), sizes, &fast);
-        bench_ep(&format!("EP Euler n_I=5 {label}"), sizes, &faithful);
-        bench_mlp(&format!("backprop {label}"), sizes);
+        let name = format!("EP ff+closed-form {label}");
+        if wanted(&name) {
+            bench_ep(&name, sizes, &fast);
+        }
+        let name = format!("EP ff+closed-form fused {label}");
+        if wanted(&name) {
+            bench_ep_sequence(&name, sizes, &fast);
+        }
+        let name = format!("EP Euler n_I=5 {label}");
+        if wanted(&name) {
+            bench_ep(&name, sizes, &faithful);
+        }
+        let name = format!("backprop {label}");
+        if wanted(&name) {
+            bench_mlp(&name, sizes);
+        }
     }
 }

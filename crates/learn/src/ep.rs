@@ -3,7 +3,7 @@
 //! local weight update. Kept apart from the [`crate::DenNN`] type so the hot
 //! loop reads top to bottom.
 use crate::dennn::{ClampedPhase, EpConfig, FreePhase, LrScaling, SampleStats};
-use crate::kernels::{dot, dot3, sigmoid_into};
+use crate::kernels::{dot, dot3, sigmoid, sum_squares_f64};
 use crate::net::{Layers, States};
 
 /// One EP step, given the first-layer drive `W(1)^T x + b(1)` in `st.drive`;
@@ -48,7 +48,7 @@ pub(crate) fn step<const F: bool>(
             .map(|(y, t)| ((y - t) as f64).powi(2))
             .sum::<f64>();
     for e in &st.e[1..] {
-        energy += 0.5 * e.iter().map(|v| (*v as f64).powi(2)).sum::<f64>();
+        energy += 0.5 * sum_squares_f64(e);
     }
     let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
     update::<F>(layers, st, rates, next);
@@ -266,6 +266,6 @@ fn euler_step<const F: bool>(layers: &Layers, st: &mut States, dt: f32, clamp_ou
     }
     for l in 1..n {
         let (s, phi) = (&st.s[l], &mut st.phi[l]);
-        sigmoid_into(s, phi);
+        sigmoid::<F>(s, phi);
     }
 }

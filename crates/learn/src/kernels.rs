@@ -1,7 +1,8 @@
-//! The few dense f32 kernels the training hot loop needs (axpy-style matrix
-//! products on row-major weights, rank-one updates, a vectorisable sigmoid),
-//! written so LLVM vectorises them; `FMA` picks fused multiply-adds, which are
-//! only used when the caller runs under the `fma` target feature.
+//! The few dense f32 kernels the training hot loop needs (matrix products on
+//! weights stored in column panels or transposed, rank-one updates, a
+//! vectorisable sigmoid), written so LLVM vectorises them; `FMA` picks fused
+//! multiply-adds, which are only used when the caller runs under the `fma`
+//! target feature.
 
 /// `a * b + c`, fused when `FMA` (only instantiate `FMA = true` inside a
 /// function compiled with the `fma` target feature, or it becomes a libm call).
@@ -22,11 +23,15 @@ pub fn axpy<const FMA: bool>(y: &mut [f32], a: f32, x: &[f32]) {
     }
 }
 
-/// Dot product with eight independent accumulators (vectorisable).
+/// Independent accumulators of the reductions: four ymm registers, enough
+/// to hide the add/FMA latency (one register would be one serial chain).
+const LANES: usize = 32;
+
+/// Dot product with [`LANES`] independent accumulators (vectorisable).
 #[inline(always)]
 pub fn dot<const FMA: bool>(a: &[f32], b: &[f32]) -> f32 {
-    let mut acc = [0.0f32; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let mut acc = [0.0f32; LANES];
+    let (ca, cb) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
     let tail: f32 = ca
         .remainder()
         .iter()
@@ -34,18 +39,22 @@ pub fn dot<const FMA: bool>(a: &[f32], b: &[f32]) -> f32 {
         .map(|(x, y)| x * y)
         .sum();
     for (x, y) in ca.zip(cb) {
-        for k in 0..8 {
+        for k in 0..LANES {
             acc[k] = madd::<FMA>(x[k], y[k], acc[k]);
         }
     }
-    acc.iter().sum::<f32>() + tail
+    reduce(acc) + tail
 }
 
-/// `sum_i a_i b_i c_i` with eight independent accumulators.
+/// `sum_i a_i b_i c_i` with [`LANES`] independent accumulators.
 #[inline(always)]
 pub fn dot3<const FMA: bool>(a: &[f32], b: &[f32], c: &[f32]) -> f32 {
-    let mut acc = [0.0f32; 8];
-    let (ca, cb, cc) = (a.chunks_exact(8), b.chunks_exact(8), c.chunks_exact(8));
+    let mut acc = [0.0f32; LANES];
+    let (ca, cb, cc) = (
+        a.chunks_exact(LANES),
+        b.chunks_exact(LANES),
+        c.chunks_exact(LANES),
+    );
     let tail: f32 = ca
         .remainder()
         .iter()
@@ -54,36 +63,139 @@ pub fn dot3<const FMA: bool>(a: &[f32], b: &[f32], c: &[f32]) -> f32 {
         .map(|((x, y), z)| x * y * z)
         .sum();
     for ((x, y), z) in ca.zip(cb).zip(cc) {
-        for k in 0..8 {
+        for k in 0..LANES {
             acc[k] = madd::<FMA>(x[k] * y[k], z[k], acc[k]);
         }
     }
-    acc.iter().sum::<f32>() + tail
+    reduce(acc) + tail
 }
 
-/// `out = b + W^T v` for row-major `W` (`v.len()` rows of `out.len()`
-/// columns): a sweep of row axpys, four rows at a time so `out` is loaded and
-/// stored once per four rows.
+/// Sum of the accumulators, pairwise (vector adds, then one short chain).
 #[inline(always)]
-pub fn affine_rows<const FMA: bool>(w: &[f32], v: &[f32], b: &[f32], out: &mut [f32]) {
-    let cols = out.len();
-    out.copy_from_slice(b);
-    let mut blocks = w.chunks_exact(4 * cols);
-    let mut vs = v.chunks_exact(4);
-    for (block, vb) in (&mut blocks).zip(&mut vs) {
-        let (r0, rest) = block.split_at(cols);
-        let (r1, rest) = rest.split_at(cols);
-        let (r2, r3) = rest.split_at(cols);
-        for ((((o, &a0), &a1), &a2), &a3) in out.iter_mut().zip(r0).zip(r1).zip(r2).zip(r3) {
-            let s = madd::<FMA>(vb[0], a0, *o);
-            let s = madd::<FMA>(vb[1], a1, s);
-            let s = madd::<FMA>(vb[2], a2, s);
-            *o = madd::<FMA>(vb[3], a3, s);
+fn reduce(mut acc: [f32; LANES]) -> f32 {
+    let mut half = LANES / 2;
+    while half >= 8 {
+        for k in 0..half {
+            acc[k] += acc[k + half];
+        }
+        half /= 2;
+    }
+    acc[..8].iter().sum()
+}
+
+/// `sum_i v_i^2` in f64, with 16 independent accumulators (vectorises; a
+/// plain iterator sum is one serial chain of f64 additions).
+#[inline(always)]
+pub fn sum_squares_f64(v: &[f32]) -> f64 {
+    let mut acc = [0.0f64; 16];
+    let chunks = v.chunks_exact(16);
+    let tail: f64 = chunks
+        .remainder()
+        .iter()
+        .map(|&x| (x as f64) * (x as f64))
+        .sum();
+    for c in chunks {
+        for k in 0..16 {
+            let x = c[k] as f64;
+            acc[k] += x * x;
         }
     }
-    for (row, &vi) in blocks.remainder().chunks_exact(cols).zip(vs.remainder()) {
-        axpy::<FMA>(out, vi, row);
+    acc.iter().sum::<f64>() + tail
+}
+
+/// Width of the column panels in which wide weight matrices are stored: 32
+/// f32 accumulators (four ymm registers) stay in registers while a sweep
+/// walks down a panel.
+pub const PANEL: usize = 32;
+
+/// The panels of a `rows x cols` matrix: `(first column, width)`; panel
+/// `(j0, width)` occupies `rows * j0 .. rows * (j0 + width)` of the storage,
+/// row-major within the panel (`rows x width`). Every panel is [`PANEL`]
+/// wide but the last.
+#[inline(always)]
+pub fn panels(cols: usize) -> impl Iterator<Item = (usize, usize)> {
+    (0..cols)
+        .step_by(PANEL)
+        .map(move |j0| (j0, PANEL.min(cols - j0)))
+}
+
+/// Row-major `rows x cols` to panel storage (see [`panels`]).
+pub fn to_panels(w: &[f32], rows: usize, cols: usize) -> Vec<f32> {
+    let mut out = Vec::with_capacity(rows * cols);
+    for (j0, width) in panels(cols) {
+        for row in w.chunks_exact(cols) {
+            out.extend_from_slice(&row[j0..j0 + width]);
+        }
     }
+    out
+}
+
+/// Panel storage (see [`panels`]) back to row-major `rows x cols`.
+pub fn from_panels(p: &[f32], rows: usize, cols: usize) -> Vec<f32> {
+    let mut out = vec![0.0; rows * cols];
+    for (j0, width) in panels(cols) {
+        let panel = &p[rows * j0..rows * (j0 + width)];
+        for (row, prow) in out.chunks_exact_mut(cols).zip(panel.chunks_exact(width)) {
+            row[j0..j0 + width].copy_from_slice(prow);
+        }
+    }
+    out
+}
+
+/// Calls `block::<FMA, B>(args.., (width, k))` over the columns `k..k + B`
+/// of a panel of `width`: one block of [`PANEL`], or blocks of 8 then single
+/// columns for the narrower last panel.
+macro_rules! blocks {
+    ($width:expr, $block:ident :: <$fma:ident>, ($($arg:expr),*)) => {{
+        let width = $width;
+        if width == PANEL {
+            $block::<$fma, PANEL>($($arg,)* (PANEL, 0));
+        } else {
+            let mut k = 0;
+            while k + 8 <= width {
+                $block::<$fma, 8>($($arg,)* (width, k));
+                k += 8;
+            }
+            while k < width {
+                $block::<$fma, 1>($($arg,)* (width, k));
+                k += 1;
+            }
+        }
+    }};
+}
+
+/// `out = b + W^T v` for `W` in panels (`v.len()` rows of `out.len()`
+/// columns). For each block of columns the partial sums stay in registers
+/// while the sweep walks down the (contiguous) panel, so each element of `W`
+/// is loaded once and `out` is written once. Rows are accumulated in order
+/// (the same rounding as a sweep of row axpys).
+#[inline(always)]
+pub fn affine_panels<const FMA: bool>(w: &[f32], v: &[f32], b: &[f32], out: &mut [f32]) {
+    let rows = v.len();
+    for (j0, width) in panels(out.len()) {
+        let panel = &w[rows * j0..rows * (j0 + width)];
+        let (b, out) = (&b[j0..j0 + width], &mut out[j0..j0 + width]);
+        blocks!(width, affine_block::<FMA>, (panel, v, b, &mut *out));
+    }
+}
+
+/// Columns `k..k + B` of a panel of `width` for [`affine_panels`].
+#[inline(always)]
+fn affine_block<const FMA: bool, const B: usize>(
+    panel: &[f32],
+    v: &[f32],
+    b: &[f32],
+    out: &mut [f32],
+    (width, k): (usize, usize),
+) {
+    let mut acc: [f32; B] = b[k..k + B].try_into().expect("block of b");
+    for (row, &vi) in panel.chunks_exact(width).zip(v) {
+        let a: &[f32; B] = row[k..k + B].try_into().expect("block of W");
+        for t in 0..B {
+            acc[t] = madd::<FMA>(vi, a[t], acc[t]);
+        }
+    }
+    out[k..k + B].copy_from_slice(&acc);
 }
 
 /// `out = b + W^T v` with `W` stored transposed (`out.len()` rows of
@@ -95,11 +207,22 @@ pub fn affine_cols<const FMA: bool>(wt: &[f32], v: &[f32], b: &[f32], out: &mut 
     }
 }
 
-/// `g = W e` for row-major `W` (`g.len()` rows of `e.len()` columns).
+/// `g = W e` for `W` in panels (`g.len()` rows of `e.len()` columns): an
+/// axpy of the panel's columns into `g` per column.
 #[inline(always)]
-pub fn back_rows<const FMA: bool>(w: &[f32], e: &[f32], g: &mut [f32]) {
-    for (gi, row) in g.iter_mut().zip(w.chunks_exact(e.len())) {
-        *gi = dot::<FMA>(row, e);
+pub fn back_panels<const FMA: bool>(w: &[f32], e: &[f32], g: &mut [f32]) {
+    let rows = g.len();
+    g.iter_mut().for_each(|g| *g = 0.0);
+    for (j0, width) in panels(e.len()) {
+        let panel = &w[rows * j0..rows * (j0 + width)];
+        let e = &e[j0..j0 + width];
+        for (gi, row) in g.iter_mut().zip(panel.chunks_exact(width)) {
+            let mut s = *gi;
+            for (&a, &ej) in row.iter().zip(e) {
+                s = madd::<FMA>(a, ej, s);
+            }
+            *gi = s;
+        }
     }
 }
 
@@ -112,11 +235,32 @@ pub fn back_cols<const FMA: bool>(wt: &[f32], e: &[f32], g: &mut [f32]) {
     }
 }
 
-/// `W += u v^T` for row-major `W` (`u.len()` rows of `v.len()` columns).
+/// `W += u v^T` for `W` in panels (`u.len()` rows of `v.len()` columns),
+/// with each block of `v` held in registers down the panel.
 #[inline(always)]
-pub fn rank1_rows<const FMA: bool>(w: &mut [f32], u: &[f32], v: &[f32]) {
-    for (row, &ui) in w.chunks_exact_mut(v.len()).zip(u) {
-        axpy::<FMA>(row, ui, v);
+pub fn rank1_panels<const FMA: bool>(w: &mut [f32], u: &[f32], v: &[f32]) {
+    let rows = u.len();
+    for (j0, width) in panels(v.len()) {
+        let panel = &mut w[rows * j0..rows * (j0 + width)];
+        let v = &v[j0..j0 + width];
+        blocks!(width, rank1_block::<FMA>, (&mut *panel, u, v));
+    }
+}
+
+/// Columns `k..k + B` of a panel of `width` for [`rank1_panels`].
+#[inline(always)]
+fn rank1_block<const FMA: bool, const B: usize>(
+    panel: &mut [f32],
+    u: &[f32],
+    v: &[f32],
+    (width, k): (usize, usize),
+) {
+    let vb: [f32; B] = v[k..k + B].try_into().expect("block of v");
+    for (row, &ui) in panel.chunks_exact_mut(width).zip(u) {
+        let a: &mut [f32; B] = (&mut row[k..k + B]).try_into().expect("block of W");
+        for t in 0..B {
+            a[t] = madd::<FMA>(ui, vb[t], a[t]);
+        }
     }
 }
 
@@ -128,71 +272,101 @@ pub fn rank1_cols<const FMA: bool>(wt: &mut [f32], u: &[f32], v: &[f32]) {
     }
 }
 
-/// Fused `W += u v^T` then `out = b + W^T next` in one sweep over row-major
-/// `W` (each row is read and written once): the first-layer update of one
-/// sample and the first-layer drive of the next. `b` must already be updated.
+/// Fused `W += u v^T`, `b += v`, then `out = b + W^T next` in one sweep over
+/// `W` in panels: the first-layer update of one sample and the first-layer
+/// drive of the next. For each block of columns, `v` and the drive's partial
+/// sums stay in registers while the sweep walks down the (contiguous) panel,
+/// so each element of `W` is loaded, updated, stored and multiplied once.
+/// The same numbers as [`rank1_panels`], the bias step, then
+/// [`affine_panels`].
 #[inline(always)]
-pub fn rank1_then_affine_rows<const FMA: bool>(
+pub fn rank1_then_affine_panels<const FMA: bool>(
     w: &mut [f32],
     u: &[f32],
     v: &[f32],
     next: &[f32],
-    b: &[f32],
+    b: &mut [f32],
     out: &mut [f32],
 ) {
-    let cols = v.len();
-    out.copy_from_slice(b);
-    let mut blocks = w.chunks_exact_mut(2 * cols);
-    let (mut us, mut ns) = (u.chunks_exact(2), next.chunks_exact(2));
-    for ((block, ub), nb) in (&mut blocks).zip(&mut us).zip(&mut ns) {
-        let (r0, r1) = block.split_at_mut(cols);
-        for (((o, a0), a1), &vj) in out.iter_mut().zip(r0.iter_mut()).zip(r1.iter_mut()).zip(v) {
-            *a0 = madd::<FMA>(ub[0], vj, *a0);
-            *a1 = madd::<FMA>(ub[1], vj, *a1);
-            let s = madd::<FMA>(nb[0], *a0, *o);
-            *o = madd::<FMA>(nb[1], *a1, s);
+    let rows = u.len();
+    for (j0, width) in panels(v.len()) {
+        let panel = &mut w[rows * j0..rows * (j0 + width)];
+        let (v, b) = (&v[j0..j0 + width], &mut b[j0..j0 + width]);
+        let out = &mut out[j0..j0 + width];
+        blocks!(
+            width,
+            rank1_affine_block::<FMA>,
+            (&mut *panel, u, v, next, &mut *b, &mut *out)
+        );
+    }
+}
+
+/// Columns `k..k + B` of a panel of `width` for [`rank1_then_affine_panels`].
+#[inline(always)]
+fn rank1_affine_block<const FMA: bool, const B: usize>(
+    panel: &mut [f32],
+    u: &[f32],
+    v: &[f32],
+    next: &[f32],
+    b: &mut [f32],
+    out: &mut [f32],
+    (width, k): (usize, usize),
+) {
+    let vb: [f32; B] = v[k..k + B].try_into().expect("block of v");
+    let bb: &mut [f32; B] = (&mut b[k..k + B]).try_into().expect("block of b");
+    for t in 0..B {
+        bb[t] += vb[t];
+    }
+    let mut acc = *bb;
+    for ((row, &ui), &ni) in panel.chunks_exact_mut(width).zip(u).zip(next) {
+        let a: &mut [f32; B] = (&mut row[k..k + B]).try_into().expect("block of W");
+        for t in 0..B {
+            a[t] = madd::<FMA>(ui, vb[t], a[t]);
+            acc[t] = madd::<FMA>(ni, a[t], acc[t]);
         }
     }
-    for ((row, &ui), &ni) in blocks
-        .into_remainder()
-        .chunks_exact_mut(cols)
-        .zip(us.remainder())
-        .zip(ns.remainder())
-    {
-        axpy::<FMA>(row, ui, v);
-        axpy::<FMA>(out, ni, row);
-    }
+    out[k..k + B].copy_from_slice(&acc);
 }
 
 /// The logistic sigmoid `1 / (1 + exp(-x))` of every element, through a
 /// branch-free `exp` (Cody-Waite range reduction, degree-6 polynomial,
-/// relative error about 2e-7) that vectorises.
+/// relative error about 2e-7) that vectorises. `FMA` as for [`madd`].
 #[inline(always)]
-pub fn sigmoid_into(src: &[f32], dst: &mut [f32]) {
+pub fn sigmoid<const FMA: bool>(src: &[f32], dst: &mut [f32]) {
     for (d, &x) in dst.iter_mut().zip(src) {
-        *d = 1.0 / (1.0 + exp_approx(-x));
+        *d = 1.0 / (1.0 + exp_approx::<FMA>(-x));
     }
 }
 
-/// Branch-free `exp(x)` for f32, saturating outside [-87, 88].
+/// [`sigmoid`] without fused multiply-adds (callable anywhere).
 #[inline(always)]
-pub fn exp_approx(x: f32) -> f32 {
+pub fn sigmoid_into(src: &[f32], dst: &mut [f32]) {
+    sigmoid::<false>(src, dst);
+}
+
+/// Branch-free `exp(x)` for f32, saturating outside [-87, 88]; the range
+/// reduction and the Horner steps use [`madd`].
+#[inline(always)]
+pub fn exp_approx<const FMA: bool>(x: f32) -> f32 {
     const LOG2E: f32 = std::f32::consts::LOG2_E;
     const LN2_HI: f32 = 0.693_359_4;
     const LN2_LO: f32 = -2.121_944_4e-4;
     // Adding and removing 1.5 * 2^23 rounds to nearest without a libm call.
     const ROUNDER: f32 = 12_582_912.0;
     let x = x.clamp(-87.0, 88.0);
-    let n = (x * LOG2E + ROUNDER) - ROUNDER;
-    let r = x - n * LN2_HI - n * LN2_LO;
-    let p = 1.0 / 720.0;
-    let p = p * r + 1.0 / 120.0;
-    let p = p * r + 1.0 / 24.0;
-    let p = p * r + 1.0 / 6.0;
-    let p = p * r + 0.5;
-    let p = p * r + 1.0;
-    let p = p * r + 1.0;
-    let scale = f32::from_bits(((n as i32 + 127) as u32) << 23);
+    // `t` holds `n = round(x log2 e)` in its low mantissa bits, so the scale
+    // `2^n` is built with integer ops alone (no float-to-int conversion).
+    let t = madd::<FMA>(x, LOG2E, ROUNDER);
+    let n = t - ROUNDER;
+    let r = madd::<FMA>(-n, LN2_HI, x);
+    let r = madd::<FMA>(-n, LN2_LO, r);
+    let p = madd::<FMA>(1.0 / 720.0, r, 1.0 / 120.0);
+    let p = madd::<FMA>(p, r, 1.0 / 24.0);
+    let p = madd::<FMA>(p, r, 1.0 / 6.0);
+    let p = madd::<FMA>(p, r, 0.5);
+    let p = madd::<FMA>(p, r, 1.0);
+    let p = madd::<FMA>(p, r, 1.0);
+    let scale = f32::from_bits(t.to_bits().wrapping_add(127) << 23);
     p * scale
 }
 
@@ -200,20 +374,56 @@ pub fn exp_approx(x: f32) -> f32 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn exp_approx_matches_std_within_3e_7_relative() {
+    /// Worst relative error of `exp` over [-80, 80].
+    fn exp_worst(exp: impl Fn(f32) -> f32) -> f64 {
         let mut worst = 0.0f64;
         for k in -8000..=8000 {
             let x = k as f32 * 0.01;
-            let rel = ((exp_approx(x) as f64) - (x as f64).exp()).abs() / (x as f64).exp();
+            let rel = ((exp(x) as f64) - (x as f64).exp()).abs() / (x as f64).exp();
             worst = worst.max(rel);
         }
+        worst
+    }
+
+    #[test]
+    fn exp_approx_matches_std_within_3e_7_relative() {
+        let worst = exp_worst(exp_approx::<false>);
         assert!(worst < 3e-7, "worst relative error {worst}");
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    fn exp_worst_fma() -> f64 {
+        exp_worst(exp_approx::<true>)
+    }
+
+    #[test]
+    fn fused_exp_approx_matches_std_within_3e_7_relative() {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU supports FMA (checked just above).
+            let worst = unsafe { exp_worst_fma() };
+            assert!(worst < 3e-7, "worst relative error {worst}");
+            return;
+        }
+        eprintln!("skipped: no FMA on this CPU");
+    }
+
+    #[test]
+    fn panel_storage_round_trips() {
+        let (rows, cols) = (3, 45);
+        let w: Vec<f32> = (0..rows * cols).map(|k| k as f32).collect();
+        let p = to_panels(&w, rows, cols);
+        // Second panel (columns 32..45, width 13), row 1, column 33.
+        assert_eq!(p[rows * 32 + 13 + 1], w[cols + 33]);
+        assert_eq!(from_panels(&p, rows, cols), w);
     }
 
     #[test]
     fn affine_forms_agree_with_naive_product() {
-        let (rows, cols) = (7, 19);
+        // 45 columns: one panel of 32, one of 13 (a block of 8, five single
+        // columns).
+        let (rows, cols) = (7, 45);
         let w: Vec<f32> = (0..rows * cols)
             .map(|k| ((k * 37 % 11) as f32 - 5.0) * 0.1)
             .collect();
@@ -225,25 +435,40 @@ mod tests {
         let wt: Vec<f32> = (0..cols * rows)
             .map(|k| w[(k % rows) * cols + k / rows])
             .collect();
+        let wp = to_panels(&w, rows, cols);
         let (mut wide, mut narrow) = (vec![0.0; cols], vec![0.0; cols]);
-        affine_rows::<false>(&w, &v, &b, &mut wide);
+        affine_panels::<false>(&wp, &v, &b, &mut wide);
         affine_cols::<false>(&wt, &v, &b, &mut narrow);
         for j in 0..cols {
             assert!((wide[j] - naive[j]).abs() < 1e-5 && (narrow[j] - naive[j]).abs() < 1e-5);
         }
         let e: Vec<f32> = (0..cols).map(|k| 0.2 - k as f32 * 0.05).collect();
         let (mut g1, mut g2) = (vec![0.0; rows], vec![0.0; rows]);
-        back_rows::<false>(&w, &e, &mut g1);
+        back_panels::<false>(&wp, &e, &mut g1);
         back_cols::<false>(&wt, &e, &mut g2);
         for i in 0..rows {
             let naive: f32 = (0..cols).map(|j| w[i * cols + j] * e[j]).sum();
             assert!((g1[i] - naive).abs() < 1e-5 && (g2[i] - naive).abs() < 1e-5);
         }
+        let mut wr = w.clone();
+        let mut wp2 = wp.clone();
+        for (i, row) in wr.chunks_exact_mut(cols).enumerate() {
+            row.iter_mut().zip(&e).for_each(|(a, ej)| *a += v[i] * ej);
+        }
+        rank1_panels::<false>(&mut wp2, &v, &e);
+        assert_eq!(from_panels(&wp2, rows, cols), wr);
+    }
+
+    #[test]
+    fn sum_squares_matches_serial_sum() {
+        let v: Vec<f32> = (0..1003).map(|k| (k as f32 * 0.37).sin() * 3.0).collect();
+        let serial: f64 = v.iter().map(|&x| (x as f64).powi(2)).sum();
+        assert!((sum_squares_f64(&v) - serial).abs() < 1e-12 * serial);
     }
 
     #[test]
     fn fused_update_equals_update_then_affine() {
-        let (rows, cols) = (5, 9);
+        let (rows, cols) = (5, 45);
         let mut w1: Vec<f32> = (0..rows * cols)
             .map(|k| ((k * 13 % 7) as f32 - 3.0) * 0.1)
             .collect();
@@ -251,12 +476,16 @@ mod tests {
         let u: Vec<f32> = (0..rows).map(|k| k as f32 * 0.5 - 1.0).collect();
         let next: Vec<f32> = (0..rows).map(|k| 1.0 - k as f32 * 0.25).collect();
         let v: Vec<f32> = (0..cols).map(|k| k as f32 * 0.01).collect();
-        let b = vec![0.1; cols];
+        let mut b1: Vec<f32> = (0..cols).map(|k| 0.1 - k as f32 * 0.003).collect();
+        let mut b2 = b1.clone();
         let (mut o1, mut o2) = (vec![0.0; cols], vec![0.0; cols]);
-        rank1_rows::<false>(&mut w1, &u, &v);
-        affine_rows::<false>(&w1, &next, &b, &mut o1);
-        rank1_then_affine_rows::<false>(&mut w2, &u, &v, &next, &b, &mut o2);
-        assert!(w1.iter().zip(&w2).all(|(a, b)| (a - b).abs() < 1e-6));
-        assert!(o1.iter().zip(&o2).all(|(a, b)| (a - b).abs() < 1e-5));
+        rank1_panels::<false>(&mut w1, &u, &v);
+        b1.iter_mut().zip(&v).for_each(|(b, v)| *b += v);
+        affine_panels::<false>(&w1, &next, &b1, &mut o1);
+        rank1_then_affine_panels::<false>(&mut w2, &u, &v, &next, &mut b2, &mut o2);
+        // Same operations in the same order: bitwise equal.
+        assert_eq!(w1, w2);
+        assert_eq!(b1, b2);
+        assert_eq!(o1, o2);
     }
 }

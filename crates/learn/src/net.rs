@@ -1,19 +1,22 @@
 //! Weights, biases and the feed-forward pass shared by the dendritic network
 //! and its backprop twin, in the report's notation (ch. 3.3): `W(l)` is
-//! `d(l-1) x d(l)`, stored row-major, and
+//! `d(l-1) x d(l)` (stored in column panels, or transposed when narrow), and
 //! `s(l) = W(l)^T phi(s(l-1)) + b(l)` with `phi` the identity on the input,
 //! the sigmoid on hidden layers, and a linear output `y = s(N)`.
 use crate::error::LearnError;
 use crate::kernels::{
-    affine_cols, affine_rows, back_cols, back_rows, rank1_cols, rank1_rows, rank1_then_affine_rows,
-    sigmoid_into,
+    affine_cols, affine_panels, back_cols, back_panels, from_panels, rank1_cols, rank1_panels,
+    rank1_then_affine_panels, sigmoid, to_panels,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Uniform};
 
 /// Layers narrower than this store `W(l)` transposed (`d(l) x d(l-1)`), so
-/// their products are contiguous dots instead of short strided rows.
+/// their products are contiguous dots instead of short strided rows; wider
+/// layers store it in column panels (see [`crate::kernels::panels`]), so the
+/// sweeps over it keep a panel's partial sums in registers and read memory
+/// contiguously.
 const NARROW: usize = 16;
 
 fn is_narrow(d_out: usize) -> bool {
@@ -31,8 +34,8 @@ fn transpose(w: &[f32], rows: usize, cols: usize) -> Vec<f32> {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layers {
     pub(crate) sizes: Vec<usize>,
-    /// `w[l - 1]` is `W(l)`: row-major `d(l-1) x d(l)`, or its transpose
-    /// for narrow layers (see [`NARROW`]).
+    /// `w[l - 1]` is `W(l)`: `d(l-1) x d(l)` in column panels, or its
+    /// row-major transpose for narrow layers (see [`NARROW`]).
     pub(crate) w: Vec<Vec<f32>>,
     /// `b[l - 1]` is `b(l)`.
     pub(crate) b: Vec<Vec<f32>>,
@@ -103,7 +106,7 @@ impl Layers {
         if is_narrow(cols) {
             transpose(&self.w[l - 1], cols, rows)
         } else {
-            self.w[l - 1].clone()
+            from_panels(&self.w[l - 1], rows, cols)
         }
     }
 
@@ -136,7 +139,7 @@ impl Layers {
         if is_narrow(self.sizes[l]) {
             affine_cols::<FMA>(&self.w[l - 1], a, &self.b[l - 1], out);
         } else {
-            affine_rows::<FMA>(&self.w[l - 1], a, &self.b[l - 1], out);
+            affine_panels::<FMA>(&self.w[l - 1], a, &self.b[l - 1], out);
         }
     }
 
@@ -146,7 +149,7 @@ impl Layers {
         if is_narrow(self.sizes[l]) {
             back_cols::<FMA>(&self.w[l - 1], e, g);
         } else {
-            back_rows::<FMA>(&self.w[l - 1], e, g);
+            back_panels::<FMA>(&self.w[l - 1], e, g);
         }
     }
 
@@ -156,14 +159,14 @@ impl Layers {
         if is_narrow(self.sizes[l]) {
             rank1_cols::<FMA>(&mut self.w[l - 1], u, v);
         } else {
-            rank1_rows::<FMA>(&mut self.w[l - 1], u, v);
+            rank1_panels::<FMA>(&mut self.w[l - 1], u, v);
         }
         self.b[l - 1].iter_mut().zip(v).for_each(|(b, v)| *b += v);
     }
 
     /// `W(1) += u v^T`, `b(1) += v`, then the next sample's first-layer
     /// drive `out = W(1)^T next + b(1)`, fused into one sweep when `W(1)` is
-    /// row-major (the same numbers as doing both in turn).
+    /// wide (the same numbers as doing both in turn).
     #[inline(always)]
     pub(crate) fn rank1_then_drive<const FMA: bool>(
         &mut self,
@@ -176,8 +179,7 @@ impl Layers {
             self.rank1::<FMA>(1, u, v);
             self.affine::<FMA>(1, next, out);
         } else {
-            self.b[0].iter_mut().zip(v).for_each(|(b, v)| *b += v);
-            rank1_then_affine_rows::<FMA>(&mut self.w[0], u, v, next, &self.b[0], out);
+            rank1_then_affine_panels::<FMA>(&mut self.w[0], u, v, next, &mut self.b[0], out);
         }
     }
 
@@ -192,7 +194,7 @@ impl Layers {
                 self.affine::<FMA>(l, &lower[l - 1], &mut st.s[l]);
             }
             if l < n {
-                sigmoid_into(&st.s[l], &mut upper[0]);
+                sigmoid::<FMA>(&st.s[l], &mut upper[0]);
             }
         }
     }
@@ -230,7 +232,8 @@ impl Layers {
         Ok(())
     }
 
-    /// Whether `W(l)` is stored row-major (wide layer).
+    /// Whether `W(l)` is stored in panels (wide layer) rather than
+    /// transposed.
     pub(crate) fn is_row_major(&self, l: usize) -> bool {
         !is_narrow(self.sizes[l])
     }
@@ -246,7 +249,7 @@ impl Layers {
             let (lower, upper) = st.phi.split_at_mut(l);
             self.affine::<FMA>(l, &lower[l - 1], &mut st.s[l]);
             if l < n {
-                sigmoid_into(&st.s[l], &mut upper[0]);
+                sigmoid::<FMA>(&st.s[l], &mut upper[0]);
             }
         }
     }
@@ -256,7 +259,7 @@ fn to_storage(canonical: Vec<f32>, rows: usize, cols: usize) -> Vec<f32> {
     if is_narrow(cols) {
         transpose(&canonical, rows, cols)
     } else {
-        canonical
+        to_panels(&canonical, rows, cols)
     }
 }
 

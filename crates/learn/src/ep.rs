@@ -3,7 +3,7 @@
 //! local weight update. Kept apart from the [`crate::DenNN`] type so the hot
 //! loop reads top to bottom.
 use crate::dennn::{ClampedPhase, EpConfig, FreePhase, LrScaling, SampleStats};
-use crate::kernels::{dot, dot3, sigmoid, sum_squares_f64};
+use crate::kernels::{clamp_update, dot, dot3, output_slope_gain, sigmoid, sum_squares_f64};
 use crate::net::{Layers, States};
 
 /// One EP step, given the first-layer drive `W(1)^T x + b(1)` in `st.drive`;
@@ -17,8 +17,27 @@ pub(crate) fn step<const F: bool>(
     cfg: &EpConfig,
     next: Option<&[f32]>,
 ) -> SampleStats {
+    let beta = cfg.beta as f32;
+    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
+    if single_output_fast_path(layers, cfg) {
+        return step_single_output::<F>(layers, st, x, t[0], beta, rates, next);
+    }
+    step_general::<F>(layers, st, x, t, cfg, next)
+}
+
+/// [`step`] for any depth, width and phase method.
+#[inline(always)]
+fn step_general<const F: bool>(
+    layers: &mut Layers,
+    st: &mut States,
+    x: &[f32],
+    t: &[f32],
+    cfg: &EpConfig,
+    next: Option<&[f32]>,
+) -> SampleStats {
     let n = layers.depth();
     let beta = cfg.beta as f32;
+    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
     match cfg.free_phase {
         FreePhase::FeedForward => {
             st.s[0].copy_from_slice(x);
@@ -50,8 +69,76 @@ pub(crate) fn step<const F: bool>(
     for e in &st.e[1..] {
         energy += 0.5 * sum_squares_f64(e);
     }
-    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
     update::<F>(layers, st, rates, next);
+    SampleStats { loss, energy }
+}
+
+/// Whether [`step_single_output`] applies: one hidden layer, one output
+/// (stored as a column), feed-forward free phase, closed-form clamped phase.
+#[inline(always)]
+fn single_output_fast_path(layers: &Layers, cfg: &EpConfig) -> bool {
+    layers.depth() == 2
+        && layers.sizes[2] == 1
+        && !layers.is_row_major(2)
+        && cfg.free_phase == FreePhase::FeedForward
+        && cfg.clamped_phase == ClampedPhase::Linearised
+}
+
+/// The general step's equations for a one-hidden-layer, one-output net
+/// (the PDenNN's nets) in three passes over the hidden layer plus the
+/// fused first-layer sweep, instead of a dozen: the exact free phase
+/// (`phi = sigmoid(drive)`, `y = w2 . phi + b2`), the nudge, the closed-form
+/// clamped phase of [`clamp_linearised`] (`a = sum (phi'_i w2_i)^2`,
+/// `e2 = beta (t - y) / (1 + a)`, `e1 = phi' w2 e2`), the energy (eq. 3.17)
+/// and the update (eqs. 3.21-3.22). Tested against the general path.
+#[inline(always)]
+fn step_single_output<const F: bool>(
+    layers: &mut Layers,
+    st: &mut States,
+    x: &[f32],
+    t: f32,
+    beta: f32,
+    rates: LayerRates,
+    next: Option<&[f32]>,
+) -> SampleStats {
+    let eta2 = rates.rate(layers, 2);
+    let eta1 = rates.rate(layers, 1);
+    st.s[0].copy_from_slice(x);
+    st.phi[0].copy_from_slice(x);
+    let [_, d, _] = &mut st.tmp[..] else {
+        unreachable!("two layers")
+    };
+    let [_, e1, e2] = &mut st.e[..] else {
+        unreachable!("two layers")
+    };
+    sigmoid::<F>(&st.drive, &mut st.phi[1]);
+    let (wphi, a) = output_slope_gain::<F>(&st.phi[1], &layers.w[1], d, e1);
+    let y = wphi + layers.b[1][0];
+    let loss = 0.5 * ((y - t) as f64).powi(2);
+    let y_nudged = y + beta * (t - y);
+    let err2 = beta * (t - y) / (1.0 + a);
+    e2[0] = err2;
+    let c2 = eta2 * err2;
+    let sum_e1 = clamp_update::<F>(
+        e1,
+        d,
+        &mut st.phi[1],
+        &mut st.s[1],
+        &st.drive,
+        &mut layers.w[1],
+        [err2, c2, eta1],
+    );
+    layers.b[1][0] += c2;
+    st.s[2][0] = y_nudged;
+    st.nudged[0] = y_nudged;
+    let energy = 0.5 * beta as f64 * ((y_nudged - t) as f64).powi(2)
+        + 0.5 * (sum_e1 as f64 + (err2 as f64).powi(2));
+    // `d` now holds eta1 e1, the first layer's scaled error.
+    let scaled = &st.tmp[1];
+    match next {
+        Some(next) => layers.rank1_then_drive::<F>(&st.phi[0], scaled, next, &mut st.drive),
+        None => layers.rank1::<F>(1, &st.phi[0], scaled),
+    }
     SampleStats { loss, energy }
 }
 
@@ -267,5 +354,90 @@ fn euler_step<const F: bool>(layers: &Layers, st: &mut States, dt: f32, clamp_ou
     for l in 1..n {
         let (s, phi) = (&st.s[l], &mut st.phi[l]);
         sigmoid::<F>(s, phi);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// The three-pass single-output step gives the general step's weights,
+    /// drive, states, loss and energy (up to float rounding) over a run of
+    /// samples with the fused next-sample drive.
+    #[test]
+    fn single_output_step_matches_the_general_step() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let sizes = [7, 70, 1];
+        let xs: Vec<Vec<f32>> = (0..30)
+            .map(|_| (0..7).map(|_| rng.random_range(-2.0..2.0)).collect())
+            .collect();
+        let ts: Vec<f32> = (0..30).map(|_| rng.random_range(-1.5..1.5)).collect();
+        let cfg = EpConfig {
+            learning_rate: 18.0,
+            output_learning_rate: Some(5.0),
+            lr_scaling: LrScaling::FanIn,
+            beta: 0.7,
+            ..EpConfig::default()
+        };
+        assert!(single_output_fast_path(
+            &Layers::new(&sizes, 1).unwrap(),
+            &cfg
+        ));
+        let run = |fast: bool| {
+            let mut layers = Layers::new(&sizes, 1).unwrap();
+            let mut st = States::new(&sizes);
+            layers.affine::<false>(1, &xs[0], &mut st.drive);
+            let mut stats = Vec::new();
+            for i in 0..xs.len() {
+                let next = xs.get(i + 1).map(|v| v.as_slice());
+                let t = [ts[i]];
+                stats.push(if fast {
+                    let rates = LayerRates::new(18.0, Some(5.0), LrScaling::FanIn);
+                    step_single_output::<false>(
+                        &mut layers,
+                        &mut st,
+                        &xs[i],
+                        t[0],
+                        0.7,
+                        rates,
+                        next,
+                    )
+                } else {
+                    step_general::<false>(&mut layers, &mut st, &xs[i], &t, &cfg, next)
+                });
+            }
+            (layers, st, stats)
+        };
+        let (lf, sf, af) = run(true);
+        let (lg, sg, ag) = run(false);
+        let close = |a: &[f32], b: &[f32], what: &str| {
+            for (x, y) in a.iter().zip(b) {
+                assert!(
+                    (x - y).abs() <= 1e-4 * (1.0 + y.abs()),
+                    "{what}: {x} vs {y}"
+                );
+            }
+        };
+        for l in 0..2 {
+            close(&lf.w[l], &lg.w[l], "weights");
+            close(&lf.b[l], &lg.b[l], "biases");
+        }
+        close(&sf.drive, &sg.drive, "next drive");
+        for l in 1..3 {
+            close(&sf.e[l], &sg.e[l], "errors");
+            close(&sf.s[l], &sg.s[l], "potentials");
+        }
+        close(&sf.phi[1], &sg.phi[1], "clamped activity");
+        for (a, b) in af.iter().zip(&ag) {
+            assert!(
+                (a.loss - b.loss).abs() <= 1e-5 * (1.0 + b.loss),
+                "{a:?} {b:?}"
+            );
+            assert!(
+                (a.energy - b.energy).abs() <= 1e-5 * (1.0 + b.energy),
+                "{a:?} {b:?}"
+            );
+        }
     }
 }

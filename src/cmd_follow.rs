@@ -51,20 +51,10 @@ pub fn follow(a: FollowArgs) -> Result<()> {
         return follow_hardware(a, &hw);
     }
     let mut cfg = follow_config(a.config.as_deref())?;
-    if a.steps.is_some() {
-        cfg.follow.steps = a.steps;
-    }
-    if let Some(s) = a.seed {
-        cfg.follow.seed = s;
-    }
+    overrides(&a, &mut cfg.follow);
     let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
     let contour = shape_io::load_shape(&spec)?;
-    let model = model_io::load_model(&a.model)?;
-    std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
-    fsutil::write_atomic(
-        &a.out.join("config.toml"),
-        toml::to_string(&cfg)?.as_bytes(),
-    )?;
+    let model = start_run(&a, &toml::to_string(&cfg)?)?;
     let pb = bar(a.steps.unwrap_or(cfg.follow.max_steps) as u64, "follow");
     let res = run_follow(&cfg, model, &contour, &a.out, &mut |r| {
         pb.set_position(r.step as u64 + 1)
@@ -208,16 +198,30 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--steps` and `--seed` over the configuration's follow settings.
+fn overrides(a: &FollowArgs, follow: &mut tactrace_lab::servo::FollowConfig) {
+    if a.steps.is_some() {
+        follow.steps = a.steps;
+    }
+    if let Some(s) = a.seed {
+        follow.seed = s;
+    }
+}
+
+/// Load the model, create the run directory and record the resolved
+/// configuration in it (before anything moves).
+fn start_run(a: &FollowArgs, config_toml: &str) -> Result<tactrace_learn::PoseModel> {
+    let model = model_io::load_model(&a.model)?;
+    std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
+    fsutil::write_atomic(&a.out.join("config.toml"), config_toml.as_bytes())?;
+    Ok(model)
+}
+
 /// `follow --hardware`: the same loop on the real rig.
 fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
     let text = fsutil::read_text(path)?;
     let mut cfg = HardwareConfig::from_toml(&text, &path.display().to_string())?;
-    if a.steps.is_some() {
-        cfg.follow.steps = a.steps;
-    }
-    if let Some(s) = a.seed {
-        cfg.follow.seed = s;
-    }
+    overrides(&a, &mut cfg.follow);
     cfg.validate()?;
     let shape = match &a.shape {
         Some(s) => {
@@ -226,12 +230,7 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
         }
         None => None,
     };
-    let model = model_io::load_model(&a.model)?;
-    std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
-    fsutil::write_atomic(
-        &a.out.join("config.toml"),
-        toml::to_string(&cfg)?.as_bytes(),
-    )?;
+    let model = start_run(&a, &toml::to_string(&cfg)?)?;
     let pb = bar(a.steps.unwrap_or(cfg.follow.max_steps) as u64, "follow");
     let res = run_follow_hardware(
         &cfg,

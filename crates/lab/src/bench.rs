@@ -117,19 +117,9 @@ pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<
 
 /// Frame -> command latency on real frames: the `.png` frames of `frames`
 /// (Bristol layout, reference `init_0.png`), up to `limit` of them, through
-/// the `blob` preset's detection, ordering, `model` and the controller.
-/// Mean microseconds per frame; frames are read before the clock starts.
-pub fn real_control_latency(
-    frames: &std::path::Path,
-    blob: &tactrace_vision::BlobParams,
-    model: &PoseModel,
-    limit: usize,
-) -> Result<f64> {
-    Ok(real_control_latency_stats(frames, blob, model, limit)?.mean_us)
-}
-
-/// [`real_control_latency`] with the median and 95th percentile of the
-/// per-frame times as well.
+/// the `blob` preset's detection, ordering, `model` and the controller:
+/// mean, median and 95th percentile of the per-frame times, microseconds;
+/// frames are read before the clock starts.
 pub fn real_control_latency_stats(
     frames: &std::path::Path,
     blob: &tactrace_vision::BlobParams,

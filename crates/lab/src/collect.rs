@@ -69,7 +69,6 @@ pub fn collect(
     origin: &str,
     progress: impl FnMut(usize),
 ) -> Result<Collected> {
-    check_samples(cfg)?;
     let (edge, normal) = shape.at_arc_length(cfg.edge_arc_mm);
     let start = pose_at_edge(
         edge,

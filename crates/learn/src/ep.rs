@@ -17,10 +17,8 @@ pub(crate) fn step<const F: bool>(
     cfg: &EpConfig,
     next: Option<&[f32]>,
 ) -> SampleStats {
-    let beta = cfg.beta as f32;
-    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
     if single_output_fast_path(layers, cfg) {
-        return step_single_output::<F>(layers, st, x, t[0], beta, rates, next);
+        return step_single_output::<F>(layers, st, x, t[0], cfg, next);
     }
     step_general::<F>(layers, st, x, t, cfg, next)
 }
@@ -97,10 +95,11 @@ fn step_single_output<const F: bool>(
     st: &mut States,
     x: &[f32],
     t: f32,
-    beta: f32,
-    rates: LayerRates,
+    cfg: &EpConfig,
     next: Option<&[f32]>,
 ) -> SampleStats {
+    let beta = cfg.beta as f32;
+    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
     let eta2 = rates.rate(layers, 2);
     let eta1 = rates.rate(layers, 1);
     st.s[0].copy_from_slice(x);
@@ -393,16 +392,7 @@ mod tests {
                 let next = xs.get(i + 1).map(|v| v.as_slice());
                 let t = [ts[i]];
                 stats.push(if fast {
-                    let rates = LayerRates::new(18.0, Some(5.0), LrScaling::FanIn);
-                    step_single_output::<false>(
-                        &mut layers,
-                        &mut st,
-                        &xs[i],
-                        t[0],
-                        0.7,
-                        rates,
-                        next,
-                    )
+                    step_single_output::<false>(&mut layers, &mut st, &xs[i], t[0], &cfg, next)
                 } else {
                     step_general::<false>(&mut layers, &mut st, &xs[i], &t, &cfg, next)
                 });

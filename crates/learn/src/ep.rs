@@ -3,7 +3,7 @@
 //! local weight update. Kept apart from the [`crate::DenNN`] type so the hot
 //! loop reads top to bottom.
 use crate::dennn::{ClampedPhase, EpConfig, FreePhase, LrScaling, SampleStats};
-use crate::kernels::{clamp_update, dot, dot3, output_slope_gain, sigmoid, sum_squares_f64};
+use crate::kernels::{dot, dot3, output_slope_gain, output_update, sigmoid, sum_squares_f64};
 use crate::net::{Layers, States};
 
 /// One EP step, given the first-layer drive `W(1)^T x + b(1)` in `st.drive`;
@@ -102,43 +102,54 @@ fn step_single_output<const F: bool>(
     let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
     let eta2 = rates.rate(layers, 2);
     let eta1 = rates.rate(layers, 1);
-    st.s[0].copy_from_slice(x);
-    st.phi[0].copy_from_slice(x);
-    let [_, d, _] = &mut st.tmp[..] else {
+    let [x_scaled, d, _] = &mut st.tmp[..] else {
         unreachable!("two layers")
     };
-    let [_, e1, e2] = &mut st.e[..] else {
-        unreachable!("two layers")
-    };
+    // `gains` holds u = phi' w2; the hidden errors are e1 = e2 u.
+    let gains = &mut st.e[1];
     sigmoid::<F>(&st.drive, &mut st.phi[1]);
-    let (wphi, a) = output_slope_gain::<F>(&st.phi[1], &layers.w[1], d, e1);
+    let (wphi, a) = output_slope_gain::<F>(&st.phi[1], &layers.w[1], d, gains);
     let y = wphi + layers.b[1][0];
     let loss = 0.5 * ((y - t) as f64).powi(2);
     let y_nudged = y + beta * (t - y);
     let err2 = beta * (t - y) / (1.0 + a);
-    e2[0] = err2;
     let c2 = eta2 * err2;
-    let sum_e1 = clamp_update::<F>(
-        e1,
-        d,
-        &mut st.phi[1],
-        &mut st.s[1],
-        &st.drive,
-        &mut layers.w[1],
-        [err2, c2, eta1],
-    );
+    output_update::<F>(&st.phi[1], d, gains, &mut layers.w[1], [err2, c2]);
     layers.b[1][0] += c2;
-    st.s[2][0] = y_nudged;
-    st.nudged[0] = y_nudged;
-    let energy = 0.5 * beta as f64 * ((y_nudged - t) as f64).powi(2)
-        + 0.5 * (sum_e1 as f64 + (err2 as f64).powi(2));
-    // `d` now holds eta1 e1, the first layer's scaled error.
-    let scaled = &st.tmp[1];
+    // sum e1_i^2 = e2^2 sum u_i^2 = e2^2 a.
+    let e2_sq = (err2 as f64).powi(2);
+    let energy =
+        0.5 * beta as f64 * ((y_nudged - t) as f64).powi(2) + 0.5 * e2_sq * (1.0 + a as f64);
+    // W1 += eta1 x e1^T = (eta1 e2 x) u^T and b1 += eta1 e1 = (eta1 e2) u.
+    let g = eta1 * err2;
+    x_scaled.iter_mut().zip(x).for_each(|(s, &x)| *s = g * x);
     match next {
-        Some(next) => layers.rank1_then_drive::<F>(&st.phi[0], scaled, next, &mut st.drive),
-        None => layers.rank1::<F>(1, &st.phi[0], scaled),
+        Some(next) => layers.rank1_then_drive::<F>(x_scaled, (gains, g), next, &mut st.drive),
+        None => {
+            layers.rank1::<F>(1, x_scaled, (gains, g));
+            keep_clamped_state(st, x, err2, y_nudged);
+        }
     }
     SampleStats { loss, energy }
+}
+
+/// Leaves the weakly clamped state of the last sample in `st` (what the
+/// general step leaves there): `s(0) = phi(0) = x`, `e1 = e2 u` (over the
+/// gains `u`), the clamped `phi(1) += phi' e1` and `s(1) = drive + e1`, the
+/// output error and the nudged output. [`step_single_output`] skips these
+/// stores for all but a sequence's last sample; nothing reads them between.
+fn keep_clamped_state(st: &mut States, x: &[f32], err2: f32, y_nudged: f32) {
+    st.s[0].copy_from_slice(x);
+    st.phi[0].copy_from_slice(x);
+    let hidden = st.e[1].iter_mut().zip(&st.tmp[1]).zip(&st.drive);
+    for (((e, &d), &drive), (phi, s)) in hidden.zip(st.phi[1].iter_mut().zip(&mut st.s[1])) {
+        *e *= err2;
+        *phi += d * *e;
+        *s = drive + *e;
+    }
+    st.e[2][0] = err2;
+    st.s[2][0] = y_nudged;
+    st.nudged[0] = y_nudged;
 }
 
 /// The learning rates `eta` of eq. 3.21 for each layer: `hidden` for the
@@ -193,9 +204,9 @@ pub(crate) fn update<const F: bool>(
             .for_each(|(s, e)| *s = eta * e);
         match next {
             Some(next) if l == 1 => {
-                layers.rank1_then_drive::<F>(&st.phi[0], scaled, next, &mut st.drive)
+                layers.rank1_then_drive::<F>(&st.phi[0], (scaled, 1.0), next, &mut st.drive)
             }
-            _ => layers.rank1::<F>(l, &st.phi[l - 1], scaled),
+            _ => layers.rank1::<F>(l, &st.phi[l - 1], (scaled, 1.0)),
         }
     }
 }
@@ -366,6 +377,17 @@ mod tests {
     /// samples with the fused next-sample drive.
     #[test]
     fn single_output_step_matches_the_general_step() {
+        single_output_matches_general::<false>();
+        if crate::net::has_fma() {
+            single_output_matches_general::<true>();
+        } else {
+            eprintln!("fused variant skipped: no AVX2/FMA on this CPU");
+        }
+    }
+
+    /// The fast and the general step with the same `F` agree on 30 samples
+    /// (70 hidden units: two whole panels and a tail).
+    fn single_output_matches_general<const F: bool>() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
         let sizes = [7, 70, 1];
         let xs: Vec<Vec<f32>> = (0..30)
@@ -386,15 +408,15 @@ mod tests {
         let run = |fast: bool| {
             let mut layers = Layers::new(&sizes, 1).unwrap();
             let mut st = States::new(&sizes);
-            layers.affine::<false>(1, &xs[0], &mut st.drive);
+            layers.affine::<F>(1, &xs[0], &mut st.drive);
             let mut stats = Vec::new();
             for i in 0..xs.len() {
                 let next = xs.get(i + 1).map(|v| v.as_slice());
                 let t = [ts[i]];
                 stats.push(if fast {
-                    step_single_output::<false>(&mut layers, &mut st, &xs[i], t[0], &cfg, next)
+                    step_single_output::<F>(&mut layers, &mut st, &xs[i], t[0], &cfg, next)
                 } else {
-                    step_general::<false>(&mut layers, &mut st, &xs[i], &t, &cfg, next)
+                    step_general::<F>(&mut layers, &mut st, &xs[i], &t, &cfg, next)
                 });
             }
             (layers, st, stats)

@@ -80,90 +80,46 @@ pub fn output_slope_gain<const FMA: bool>(
     d: &mut [f32],
     u: &mut [f32],
 ) -> (f32, f32) {
-    let n = phi.len();
+    let n = phi.len().min(w.len()).min(d.len()).min(u.len());
+    let body = n - n % LANES;
     let (mut acc_y, mut acc_a) = ([0.0f32; LANES], [0.0f32; LANES]);
-    let mut c = 0;
-    while c < n {
-        let len = LANES.min(n - c);
-        let r = c..c + len;
-        let (p, dd, uu, ww) = (&phi[r.clone()], &mut d[r.clone()], &mut u[r.clone()], &w[r]);
-        for k in 0..len {
+    // Whole chunks of LANES keep the accumulators in registers.
+    for c in (0..body).step_by(LANES) {
+        let (p, ww) = (&phi[c..c + LANES], &w[c..c + LANES]);
+        let (dd, uu) = (&mut d[c..c + LANES], &mut u[c..c + LANES]);
+        for k in 0..LANES {
             dd[k] = p[k] * (1.0 - p[k]);
             uu[k] = dd[k] * ww[k];
             acc_y[k] = madd::<FMA>(ww[k], p[k], acc_y[k]);
             acc_a[k] = madd::<FMA>(uu[k], uu[k], acc_a[k]);
         }
-        c += len;
     }
-    (reduce(acc_y), reduce(acc_a))
+    let (mut tail_y, mut tail_a) = (0.0f32, 0.0f32);
+    for i in body..n {
+        d[i] = phi[i] * (1.0 - phi[i]);
+        u[i] = d[i] * w[i];
+        tail_y = madd::<FMA>(w[i], phi[i], tail_y);
+        tail_a = madd::<FMA>(u[i], u[i], tail_a);
+    }
+    (reduce(acc_y) + tail_y, reduce(acc_a) + tail_a)
 }
 
-/// The rest of the single-output closed form and the output-layer update in
-/// one pass: `e1 = u e2`; clamped activity `phi += d e1`; clamped
-/// potential `s = drive + e1`; `w2 += c2 phi` (clamped `phi`);
-/// `scaled = eta1 e1` (written over `d`). Returns `sum e1_i^2`.
+/// The output-layer update of the single-output closed form in one pass
+/// over the hidden layer, storing only `w2`: `w2 += c2 (phi + d u e2)`, where
+/// `phi + d (u e2)` is the clamped activity (`e1 = u e2` the hidden error of
+/// [`output_slope_gain`]'s gains). The hidden errors themselves are not
+/// stored: the first-layer update takes them as `e2 u`.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub fn clamp_update<const FMA: bool>(
-    u_e1: &mut [f32],
-    d_scaled: &mut [f32],
-    phi: &mut [f32],
-    s: &mut [f32],
-    drive: &[f32],
+pub fn output_update<const FMA: bool>(
+    phi: &[f32],
+    d: &[f32],
+    u: &[f32],
     w2: &mut [f32],
-    [e2, c2, eta1]: [f32; 3],
-) -> f32 {
-    let n = phi.len();
-    let mut acc = [0.0f32; LANES];
-    let mut c = 0;
-    while c < n {
-        let len = LANES.min(n - c);
-        let r = c..c + len;
-        clamp_chunk::<FMA>(
-            &mut u_e1[r.clone()],
-            &mut d_scaled[r.clone()],
-            &mut phi[r.clone()],
-            &mut s[r.clone()],
-            &drive[r.clone()],
-            &mut w2[r],
-            &mut acc[..len],
-            [e2, c2, eta1],
-        );
-        c += len;
-    }
-    reduce(acc)
-}
-
-/// [`clamp_update`] on one chunk (equal lengths; `acc` collects `e1^2`).
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn clamp_chunk<const FMA: bool>(
-    ue: &mut [f32],
-    ds: &mut [f32],
-    p: &mut [f32],
-    ss: &mut [f32],
-    dr: &[f32],
-    w: &mut [f32],
-    acc: &mut [f32],
-    [e2, c2, eta1]: [f32; 3],
+    [e2, c2]: [f32; 2],
 ) {
-    let len = acc.len();
-    let (ue, ds, p, ss, dr, w) = (
-        &mut ue[..len],
-        &mut ds[..len],
-        &mut p[..len],
-        &mut ss[..len],
-        &dr[..len],
-        &mut w[..len],
-    );
-    for k in 0..len {
-        let e1 = ue[k] * e2;
-        ue[k] = e1;
-        p[k] = madd::<FMA>(ds[k], e1, p[k]);
-        ss[k] = dr[k] + e1;
-        w[k] = madd::<FMA>(p[k], c2, w[k]);
-        ds[k] = eta1 * e1;
-        acc[k] = madd::<FMA>(e1, e1, acc[k]);
+    for (((w, &p), &d), &u) in w2.iter_mut().zip(phi).zip(d).zip(u) {
+        let clamped = madd::<FMA>(d, u * e2, p);
+        *w = madd::<FMA>(clamped, c2, *w);
     }
 }
 
@@ -369,18 +325,19 @@ pub fn rank1_cols<const FMA: bool>(wt: &mut [f32], u: &[f32], v: &[f32]) {
     }
 }
 
-/// Fused `W += u v^T`, `b += v`, then `out = b + W^T next` in one sweep over
+/// Fused `W += u v^T`, `b += g v`, then `out = b + W^T next` in one sweep over
 /// `W` in panels: the first-layer update of one sample and the first-layer
 /// drive of the next. For each block of columns, `v` and the drive's partial
 /// sums stay in registers while the sweep walks down the (contiguous) panel,
 /// so each element of `W` is loaded, updated, stored and multiplied once.
 /// The same numbers as [`rank1_panels`], the bias step, then
-/// [`affine_panels`].
+/// [`affine_panels`]. (`g` lets a caller pass `W += (g x) e^T`, `b += g e`
+/// without forming `g e`; `g = 1` is the plain update, bit for bit.)
 #[inline(always)]
 pub fn rank1_then_affine_panels<const FMA: bool>(
     w: &mut [f32],
     u: &[f32],
-    v: &[f32],
+    (v, g): (&[f32], f32),
     next: &[f32],
     b: &mut [f32],
     out: &mut [f32],
@@ -393,7 +350,7 @@ pub fn rank1_then_affine_panels<const FMA: bool>(
         blocks!(
             width,
             rank1_affine_block::<FMA>,
-            (&mut *panel, u, v, next, &mut *b, &mut *out)
+            (&mut *panel, u, (v, g), next, &mut *b, &mut *out)
         );
     }
 }
@@ -403,7 +360,7 @@ pub fn rank1_then_affine_panels<const FMA: bool>(
 fn rank1_affine_block<const FMA: bool, const B: usize>(
     panel: &mut [f32],
     u: &[f32],
-    v: &[f32],
+    (v, g): (&[f32], f32),
     next: &[f32],
     b: &mut [f32],
     out: &mut [f32],
@@ -412,7 +369,7 @@ fn rank1_affine_block<const FMA: bool, const B: usize>(
     let vb: [f32; B] = v[k..k + B].try_into().expect("block of v");
     let bb: &mut [f32; B] = (&mut b[k..k + B]).try_into().expect("block of b");
     for t in 0..B {
-        bb[t] += vb[t];
+        bb[t] = madd::<FMA>(g, vb[t], bb[t]);
     }
     let mut acc = *bb;
     for ((row, &ui), &ni) in panel.chunks_exact_mut(width).zip(u).zip(next) {
@@ -651,7 +608,7 @@ mod tests {
         rank1_panels::<false>(&mut w1, &u, &v);
         b1.iter_mut().zip(&v).for_each(|(b, v)| *b += v);
         affine_panels::<false>(&w1, &next, &b1, &mut o1);
-        rank1_then_affine_panels::<false>(&mut w2, &u, &v, &next, &mut b2, &mut o2);
+        rank1_then_affine_panels::<false>(&mut w2, &u, (&v, 1.0), &next, &mut b2, &mut o2);
         // Same operations in the same order: bitwise equal.
         assert_eq!(w1, w2);
         assert_eq!(b1, b2);

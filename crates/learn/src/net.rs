@@ -5,8 +5,8 @@
 //! the sigmoid on hidden layers, and a linear output `y = s(N)`.
 use crate::error::LearnError;
 use crate::kernels::{
-    affine_cols, affine_panels, back_cols, back_panels, from_panels, rank1_cols, rank1_panels,
-    rank1_then_affine_panels, sigmoid, to_panels,
+    affine_cols, affine_panels, back_cols, back_panels, from_panels, madd, rank1_cols,
+    rank1_panels, rank1_then_affine_panels, sigmoid, to_panels,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -153,25 +153,26 @@ impl Layers {
         }
     }
 
-    /// `W(l) += u v^T`, `b(l) += v`.
+    /// `W(l) += u v^T`, `b(l) += g v`.
     #[inline(always)]
-    pub(crate) fn rank1<const FMA: bool>(&mut self, l: usize, u: &[f32], v: &[f32]) {
+    pub(crate) fn rank1<const FMA: bool>(&mut self, l: usize, u: &[f32], (v, g): (&[f32], f32)) {
         if is_narrow(self.sizes[l]) {
             rank1_cols::<FMA>(&mut self.w[l - 1], u, v);
         } else {
             rank1_panels::<FMA>(&mut self.w[l - 1], u, v);
         }
-        self.b[l - 1].iter_mut().zip(v).for_each(|(b, v)| *b += v);
+        let bias = self.b[l - 1].iter_mut().zip(v);
+        bias.for_each(|(b, &v)| *b = madd::<FMA>(g, v, *b));
     }
 
-    /// `W(1) += u v^T`, `b(1) += v`, then the next sample's first-layer
+    /// `W(1) += u v^T`, `b(1) += g v`, then the next sample's first-layer
     /// drive `out = W(1)^T next + b(1)`, fused into one sweep when `W(1)` is
     /// wide (the same numbers as doing both in turn).
     #[inline(always)]
     pub(crate) fn rank1_then_drive<const FMA: bool>(
         &mut self,
         u: &[f32],
-        v: &[f32],
+        v: (&[f32], f32),
         next: &[f32],
         out: &mut [f32],
     ) {

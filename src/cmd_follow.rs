@@ -117,7 +117,12 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     cfg.real = a.real.or(cfg.real);
     let log = |msg: &str| eprintln!("[reproduce] {msg}");
     let r = run_reproduce(&cfg, &a.out, &log)?;
-    for (data, rows) in [("simulated", &r.networks), ("real", &r.real_networks)] {
+    let runs = [
+        ("simulated", &r.networks),
+        ("real", &r.real_networks),
+        ("sim->real", &r.sim_to_real),
+    ];
+    for (data, rows) in runs {
         for n in rows.iter() {
             println!(
                 "{:<16} {data:<9} angle {:.2} deg, position {:.3} mm",

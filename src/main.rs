@@ -6,6 +6,7 @@
 mod cmd_data;
 mod cmd_follow;
 mod cmd_learn;
+mod cmd_twin;
 mod progress;
 
 use clap::{Parser, Subcommand};
@@ -26,6 +27,8 @@ enum Command {
     Collect(cmd_data::CollectArgs),
     /// Turn real TacTip frames (Bristol layout) into a dataset.
     Import(cmd_data::ImportArgs),
+    /// Simulate a real labelled data set's taps (the simulator judged by real frames).
+    Twin(cmd_twin::TwinArgs),
     /// Train a pose model (report ch. 4.2).
     Train(cmd_learn::TrainArgs),
     /// Mean absolute errors of a model on a dataset (report ch. 4.3).
@@ -48,6 +51,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Collect(a) => cmd_data::collect(a),
         Command::Import(a) => cmd_data::import(a),
+        Command::Twin(a) => cmd_twin::twin(a),
         Command::Train(a) => cmd_learn::train(a),
         Command::Validate(a) => cmd_learn::validate(a),
         Command::Predict(a) => cmd_learn::predict(a),

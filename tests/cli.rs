@@ -120,6 +120,43 @@ fn real_reference_frame_gives_127_pins() {
 }
 
 #[test]
+fn twin_of_real_frames_writes_a_dataset_and_refuses_bad_input() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("twin");
+    let (targets, init) = (data.join("targets.csv"), data.join("frames/init_0.png"));
+    let (targets, init) = (targets.to_str().unwrap(), init.to_str().unwrap());
+    let args = [
+        "twin",
+        "--targets",
+        targets,
+        "--reference",
+        init,
+        "--limit",
+        "30",
+    ];
+    let r = tactrace(&t.0, &[&args[..], &["--out", "twin"]].concat());
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("simulated 30 labelled taps"),
+        "{}",
+        r.stderr
+    );
+    let meta = std::fs::read_to_string(t.join("twin/meta.json")).unwrap();
+    assert!(meta.contains("simulated twin"), "{meta}");
+    // Nothing is overwritten without --force; a bad column list is bad input.
+    let again = tactrace(&t.0, &[&args[..], &["--out", "twin"]].concat());
+    assert_eq!(again.code, 2, "{}", again.stderr);
+    let bad = [
+        &args[..],
+        &["--shear-columns", "move_1,move_2", "--out", "t2"],
+    ]
+    .concat();
+    let r = tactrace(&t.0, &bad);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("three columns"), "{}", r.stderr);
+}
+
+#[test]
 fn follow_rejects_unknown_config_keys_and_unreachable_contours() {
     let t = TempDir::new("followbad");
     let ok = |args: &[&str]| {

@@ -34,15 +34,41 @@ pub struct Imported {
 }
 
 /// One labelled row of the targets CSV.
-struct Row {
-    image: String,
-    r: f32,
-    theta: f32,
+pub(crate) struct Row {
+    pub image: String,
+    pub r: f32,
+    pub theta: f32,
+    /// The values of the `extra` columns asked of [`read_rows`], in order.
+    pub extra: Vec<f32>,
 }
 
-/// Read the labels: the image column and the two target columns, by header name.
-fn read_rows(cfg: &ImportConfig) -> Result<Vec<Row>> {
-    let path = &cfg.targets;
+/// The label columns of a targets CSV, by header name.
+pub(crate) struct LabelColumns<'a> {
+    pub image: &'a str,
+    pub r: &'a str,
+    pub theta: &'a str,
+    /// Further numeric columns, returned in [`Row::extra`].
+    pub extra: &'a [&'a str],
+}
+
+impl<'a> LabelColumns<'a> {
+    pub fn of(cfg: &'a ImportConfig) -> Self {
+        LabelColumns {
+            image: &cfg.image_column,
+            r: &cfg.r_column,
+            theta: &cfg.theta_column,
+            extra: &[],
+        }
+    }
+}
+
+/// Read the labels of the first `limit` rows (all when `None`).
+pub(crate) fn read_rows(
+    path: &Path,
+    cols: &LabelColumns,
+    limit: Option<usize>,
+) -> Result<Vec<Row>> {
+    let path = &path.to_path_buf();
     let fmt = |reason: String| LabError::Format {
         path: path.clone(),
         reason,
@@ -60,11 +86,12 @@ fn read_rows(cfg: &ImportConfig) -> Result<Vec<Row>> {
                 ))
             })
     };
-    let (ci, cr, ct) = (
-        col(&cfg.image_column)?,
-        col(&cfg.r_column)?,
-        col(&cfg.theta_column)?,
-    );
+    let (ci, cr, ct) = (col(cols.image)?, col(cols.r)?, col(cols.theta)?);
+    let extra_cols = cols
+        .extra
+        .iter()
+        .map(|c| col(c))
+        .collect::<Result<Vec<_>>>()?;
     let mut rows = Vec::new();
     for (k, rec) in rdr.records().enumerate() {
         let rec = rec.map_err(|e| fmt(e.to_string()))?;
@@ -86,8 +113,9 @@ fn read_rows(cfg: &ImportConfig) -> Result<Vec<Row>> {
             image: rec.get(ci).unwrap_or("").trim().to_string(),
             r: num(cr)?,
             theta: num(ct)?,
+            extra: extra_cols.iter().map(|&c| num(c)).collect::<Result<_>>()?,
         });
-        if cfg.limit.is_some_and(|l| rows.len() >= l) {
+        if limit.is_some_and(|l| rows.len() >= l) {
             break;
         }
     }
@@ -103,14 +131,8 @@ pub fn import(
     blob: &BlobParams,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
-    let rows = read_rows(cfg)?;
-    let reference = read_frame(&cfg.reference)?;
-    let extractor = PinExtractor::from_reference_frame(&reference, blob.clone()).map_err(|e| {
-        LabError::Format {
-            path: cfg.reference.clone(),
-            reason: e.to_string(),
-        }
-    })?;
+    let rows = read_rows(&cfg.targets, &LabelColumns::of(cfg), cfg.limit)?;
+    let extractor = reference_extractor(&cfg.reference, blob)?;
     let pins = extractor.tracker.reference().len();
     let results: Vec<FrameOutcome> = rows
         .par_iter()
@@ -172,6 +194,15 @@ pub fn import(
         },
         frames_with_missing_pins: missing,
         rejected,
+    })
+}
+
+/// The pin extractor whose order is that of the undeformed frame at `path`.
+pub(crate) fn reference_extractor(path: &Path, blob: &BlobParams) -> Result<PinExtractor> {
+    let reference = read_frame(path)?;
+    PinExtractor::from_reference_frame(&reference, blob.clone()).map_err(|e| LabError::Format {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
     })
 }
 

@@ -29,6 +29,7 @@ pub mod servo;
 pub mod settings;
 pub mod shape_io;
 pub mod train;
+pub mod twin;
 
 pub use error::{LabError, Result};
 

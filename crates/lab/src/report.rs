@@ -90,6 +90,10 @@ pub struct ReproduceResults {
     pub networks: Vec<NetRow>,
     /// The same networks trained and validated on real frames (`--real`).
     pub real_networks: Vec<NetRow>,
+    /// The PDenNN and its backprop twin trained on the simulated twin of
+    /// the real set and validated on the same held-out real frames
+    /// (`--real`): the simulator judged by real data.
+    pub sim_to_real: Vec<NetRow>,
     pub shapes: Vec<ShapeRow>,
     pub seconds: f64,
     pub seed: u64,
@@ -224,16 +228,17 @@ pub fn reproduce(
         })
         .collect();
     let shapes = shapes.into_iter().collect::<Result<Vec<_>>>()?;
-    let real_networks = match &cfg.real {
+    let (real_networks, sim_to_real) = match &cfg.real {
         Some(real) => {
-            log("importing real frames and training on them");
+            log("importing real frames and training on them, and on their simulated twin");
             real_rows(cfg, real, out)?
         }
-        None => Vec::new(),
+        None => (Vec::new(), Vec::new()),
     };
     let results = ReproduceResults {
         networks,
         real_networks,
+        sim_to_real,
         shapes,
         seconds: t0.elapsed().as_secs_f64(),
         seed: cfg.seed,
@@ -243,8 +248,10 @@ pub fn reproduce(
     Ok(results)
 }
 
-/// Train every network on real frames (seeded 80/20 split) and validate on the 20 %.
-fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<Vec<NetRow>> {
+/// Train every network on real frames (seeded 80/20 split) and validate on
+/// the 20 %; then train the PDenNN and the MLP on the simulated twin of the
+/// real set (its own 80 %) and validate them on the same real 20 %.
+fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<(Vec<NetRow>, Vec<NetRow>)> {
     let icfg = crate::import::ImportConfig {
         frames: dir.join("frames"),
         targets: dir.join("targets.csv"),
@@ -258,17 +265,29 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<Vec<NetRow
     fig_4_1_real(dir, &blob, &out.join("figures/fig4_1_real"))?;
     let imported = crate::import::import(&icfg, &blob, &|| {})?;
     let (tr, va) = imported.data.split(0.8, cfg.seed);
-    let rows: Vec<Result<NetRow>> = NETS
+    let real = train_rows(cfg, &NETS, "real", &tr, &va, &out.join("real"))?;
+    let twin_cfg = crate::twin::TwinConfig::bristol(dir, cfg.seed);
+    let twin = crate::twin::simulate_twin(&twin_cfg, &cfg.follow.rig.sensor, &blob, &|| {})?;
+    let (twin_tr, _) = twin.data.split(0.8, cfg.seed);
+    let nets = [NETS[2], NETS[3]];
+    let transfer = train_rows(cfg, &nets, "twin", &twin_tr, &va, &out.join("twin"))?;
+    Ok((real, transfer))
+}
+
+/// Train `nets` in parallel on `tr`, validate on `va`; rows named plainly,
+/// files under `dir` with the `tag` in the figure names.
+fn train_rows(
+    cfg: &ReproduceConfig,
+    nets: &[(ModelKind, &str)],
+    tag: &str,
+    tr: &TapData,
+    va: &TapData,
+    dir: &Path,
+) -> Result<Vec<NetRow>> {
+    let rows: Vec<Result<NetRow>> = nets
         .par_iter()
         .map(|(k, name)| {
-            let (mut row, _) = train_and_score(
-                *k,
-                &format!("{name} real"),
-                cfg,
-                &tr,
-                &va,
-                &out.join("real"),
-            )?;
+            let (mut row, _) = train_and_score(*k, &format!("{name} {tag}"), cfg, tr, va, dir)?;
             row.name = name.to_string();
             Ok(row)
         })

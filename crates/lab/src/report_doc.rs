@@ -36,6 +36,25 @@ fn networks_table(md: &mut String, rows: &[NetRow], reference: &str) {
     md.push('\n');
 }
 
+/// The simulated-to-real rows beside the same network trained on real frames.
+fn transfer_table(md: &mut String, rows: &[NetRow], real: &[NetRow]) {
+    md.push_str("| network | angle MAE (deg) | position MAE (mm) | trained on real: angle (deg) | trained on real: position (mm) | train time (s) |\n|---|---|---|---|---|---|\n");
+    for n in rows {
+        let same = real.iter().find(|r| r.name == n.name);
+        let _ = writeln!(
+            md,
+            "| {} | {:.2} | {:.3} | {} | {} | {:.1} |",
+            n.name,
+            n.angle_mae_deg,
+            n.position_mae_mm,
+            opt(same.map(|r| r.angle_mae_deg)),
+            opt(same.map(|r| r.position_mae_mm)),
+            n.train_seconds
+        );
+    }
+    md.push('\n');
+}
+
 /// The Markdown text of the report.
 pub fn report_markdown(r: &ReproduceResults) -> String {
     let mut md = String::from(
@@ -69,6 +88,10 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
     if !r.real_networks.is_empty() {
         md.push_str("## Real TacTip frames (tactip127-edge2d, seeded 80/20 split; reference: CNN on the images)\n\n");
         networks_table(&mut md, &r.real_networks, "CNN");
+    }
+    if !r.sim_to_real.is_empty() {
+        md.push_str("## Simulated to real: trained on the simulated twin of the real set (same labels, shear and depth; docs/results.md), validated on the same held-out real frames\n\n");
+        transfer_table(&mut md, &r.sim_to_real, &r.real_networks);
     }
     md.push_str("## Contour following with the PDenNN (Fig. 5.3, 5.4)\n\n| shape | mean L2 (mm) | report L2 (mm) | mean track error (mm) | p95 (mm) | max (mm) | coverage | closed | steps | ending |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for s in &r.shapes {

@@ -1,0 +1,186 @@
+//! A simulated twin of a real labelled data set: every real tap's labels
+//! (edge position, angle and, when given, vertical offset and shear) are
+//! replayed on the simulated TacTip over a straight edge (the labels mapped
+//! onto the model by its calibration, docs/sensor-model.md), and the
+//! rendered frames go through the same detection and ordering as the real
+//! ones, against the real reference frame. Twin and real set then share
+//! labels, pin order and rest layout, so a model trained on one can be
+//! validated on the other: the simulator judged by what it predicts about
+//! real frames (docs/results.md, "Simulated to real").
+use crate::dataset::{DatasetMeta, TapData};
+use crate::error::{LabError, Result};
+use crate::import::{read_rows, reference_extractor, Imported, LabelColumns, Row};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use tactrace_sensor::{EdgeTap, Shear, TacTipConfig, TacTipModel};
+use tactrace_vision::{BlobParams, PinExtractor};
+
+/// Which labels to replay, and the seed of the rendering noise.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TwinConfig {
+    /// CSV of labels, one row per real frame.
+    pub targets: PathBuf,
+    /// The real undeformed frame: its pins are the twin's rest layout and
+    /// define the pin order.
+    pub reference: PathBuf,
+    pub image_column: String,
+    pub r_column: String,
+    pub theta_column: String,
+    /// Vertical offset of the tap, mm (`None`: every tap at the nominal depth).
+    pub dz_column: Option<String>,
+    /// Shear perturbation columns: x and y (mm, work frame) and rotation
+    /// (deg) (`None`: taps without shear).
+    pub shear_columns: Option<[String; 3]>,
+    /// Replay at most this many rows (all when `None`).
+    pub limit: Option<usize>,
+    /// Seed of the pin jitter and image noise (row `k` draws from stream `k`).
+    pub seed: u64,
+}
+
+impl TwinConfig {
+    /// The Bristol edge set's layout in `dir` (targets.csv, frames/init_0.png;
+    /// r = pose_2, theta = pose_6, offset pose_3, shear move_1, move_2, move_6).
+    pub fn bristol(dir: &Path, seed: u64) -> Self {
+        TwinConfig {
+            targets: dir.join("targets.csv"),
+            reference: dir.join("frames/init_0.png"),
+            image_column: "image_name".into(),
+            r_column: "pose_2".into(),
+            theta_column: "pose_6".into(),
+            dz_column: Some("pose_3".into()),
+            shear_columns: Some(["move_1".into(), "move_2".into(), "move_6".into()]),
+            limit: None,
+            seed,
+        }
+    }
+
+    /// The same columns with another labels file and reference frame.
+    pub fn with_paths(self, targets: PathBuf, reference: PathBuf) -> Self {
+        TwinConfig {
+            targets,
+            reference,
+            ..self
+        }
+    }
+}
+
+/// Simulate every labelled row of `cfg.targets` with the sensor `sensor`;
+/// `progress` is called once per frame.
+pub fn simulate_twin(
+    cfg: &TwinConfig,
+    sensor: &TacTipConfig,
+    blob: &BlobParams,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Imported> {
+    let mut extra: Vec<&str> = cfg.dz_column.iter().map(String::as_str).collect();
+    extra.extend(cfg.shear_columns.iter().flatten().map(String::as_str));
+    let cols = LabelColumns {
+        image: &cfg.image_column,
+        r: &cfg.r_column,
+        theta: &cfg.theta_column,
+        extra: &extra,
+    };
+    let rows = read_rows(&cfg.targets, &cols, cfg.limit)?;
+    let extractor = reference_extractor(&cfg.reference, blob)?;
+    let rest = extractor.tracker.reference().to_vec();
+    let model = TacTipModel::with_rest_pins(sensor.clone(), rest.clone())?;
+    let outcomes: Vec<std::result::Result<(Vec<f32>, bool), String>> = rows
+        .par_iter()
+        .enumerate()
+        .map(|(k, row)| {
+            let out = simulate_row(&model, &extractor, cfg, row, k as u64);
+            progress();
+            out
+        })
+        .collect();
+    let pins = rest.len();
+    let mut inputs = Vec::with_capacity(rows.len() * 2 * pins);
+    let mut targets = Vec::with_capacity(rows.len() * 2);
+    let (mut missing, mut rejected) = (0, Vec::new());
+    for (row, outcome) in rows.iter().zip(outcomes) {
+        match outcome {
+            Ok((disp, had_missing)) => {
+                inputs.extend(disp);
+                targets.extend([row.r, row.theta]);
+                missing += usize::from(had_missing);
+            }
+            Err(reason) => rejected.push((row.image.clone(), reason)),
+        }
+    }
+    let samples = targets.len() / 2;
+    if samples == 0 {
+        return Err(LabError::Format {
+            path: cfg.targets.clone(),
+            reason: "no simulated frame gave enough pins".into(),
+        });
+    }
+    let meta = DatasetMeta {
+        source: "simulated twin".into(),
+        origin: cfg.targets.display().to_string(),
+        seed: Some(cfg.seed),
+        samples,
+        pins,
+        targets: [
+            format!("r_mm ({})", cfg.r_column),
+            format!("theta_deg ({})", cfg.theta_column),
+        ],
+        frames_with_missing_pins: missing,
+        reference_pins: rest,
+        settings: serde_json::json!({
+            "twin": cfg, "sensor": sensor, "blob": blob, "rejected": rejected.len()
+        }),
+        tactrace_version: crate::VERSION.into(),
+    };
+    Ok(Imported {
+        data: TapData {
+            inputs,
+            targets,
+            meta,
+        },
+        frames_with_missing_pins: missing,
+        rejected,
+    })
+}
+
+/// The labelled tap of one row (extra values: dz, then the shear columns).
+fn edge_tap(cfg: &TwinConfig, row: &Row) -> EdgeTap {
+    let mut extra = row.extra.iter().map(|&v| v as f64);
+    let dz_mm = if cfg.dz_column.is_some() {
+        extra.next().unwrap_or(0.0)
+    } else {
+        0.0
+    };
+    let shear = cfg.shear_columns.as_ref().map(|_| Shear {
+        dx_mm: extra.next().unwrap_or(0.0),
+        dy_mm: extra.next().unwrap_or(0.0),
+        drz_deg: extra.next().unwrap_or(0.0),
+    });
+    EdgeTap {
+        r_mm: row.r as f64,
+        theta_deg: row.theta as f64,
+        dz_mm,
+        shear,
+    }
+}
+
+/// Render, detect and order one row's tap: its displacement vector and
+/// whether pins were missing, or why the frame was rejected.
+fn simulate_row(
+    model: &TacTipModel,
+    extractor: &PinExtractor,
+    cfg: &TwinConfig,
+    row: &Row,
+    k: u64,
+) -> std::result::Result<(Vec<f32>, bool), String> {
+    let pins = model.edge_tap_pins(&edge_tap(cfg, row));
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    rng.set_stream(k);
+    let frame = model.render(&pins, Some(&mut rng));
+    let tracked = extractor.extract(&frame).map_err(|e| e.to_string())?;
+    Ok((
+        tracked.displacement(extractor.tracker.reference()),
+        tracked.missing > 0,
+    ))
+}

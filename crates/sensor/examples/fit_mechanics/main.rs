@@ -7,7 +7,8 @@
 //!
 //! Run: cargo run --release -p tactrace-sensor --example real_fields -- /tmp/real_fields.txt
 //!      cargo run --release -p tactrace-sensor --example fit_mechanics
-//! Env: REAL_FIELDS (cache path), FIT=1 (refit; else score the defaults),
+//! Env: REAL_FIELDS (cache path), FIT=1 (refit; else score the defaults;
+//! FIT=frames: one joint per-frame fit of all eleven parameters with shear),
 //! FIGURE=path.png (draw matched cases).
 use tactrace_sensor::{EdgeTap, TacTipConfig, TacTipModel};
 
@@ -162,7 +163,44 @@ fn main() {
     );
     let mut cfg = TacTipConfig::default();
     let build = |c: &TacTipConfig| TacTipModel::with_rest_pins(c.clone(), rest.clone()).ok();
-    if std::env::var("FIT").is_ok() {
+    if std::env::var("FIT").is_ok_and(|v| v == "frames") {
+        // Joint fit of calibration, mechanics and shear on every tenth
+        // frame with its label shear (per-frame misfit, not binned means).
+        let objective = |x: &[f64]| -> f64 {
+            let Some(mut c) = with_params(&cfg, &x[..8]) else {
+                return 1e12;
+            };
+            if x[8..].iter().any(|v| *v <= 0.01) {
+                return 1e12;
+            }
+            c.mechanics.shear_limit_mm = x[8];
+            c.mechanics.shear_limit_deg = x[9];
+            c.mechanics.contact_scale_mm = x[10];
+            build(&c).map_or(1e12, |m| compare(&frame_pairs(&m, &every10, true)).sse)
+        };
+        let m = &cfg.mechanics;
+        let mut x = params_of(&cfg);
+        x.extend([m.shear_limit_mm, m.shear_limit_deg, m.contact_scale_mm]);
+        let step = [3.0, 1.0, 0.7, 0.5, 1.5, 0.03, 0.5, -10.0, 0.3, 2.0, 0.2];
+        println!("start: sse {:.1}", objective(&x));
+        for round in 0..3 {
+            let s: Vec<f64> = step.iter().map(|s| s * 0.5f64.powi(round)).collect();
+            let (xr, v) = nelder_mead(&objective, &x, &s, 500);
+            x = xr;
+            println!("round {round}: sse {v:.1}");
+        }
+        for (n, v) in NAMES
+            .iter()
+            .chain(&["shear_limit_mm", "shear_limit_deg", "contact_scale_mm"])
+            .zip(&x)
+        {
+            println!("  {n} = {v:.4}");
+        }
+        cfg = with_params(&cfg, &x[..8]).expect("fit stays in bounds");
+        cfg.mechanics.shear_limit_mm = x[8];
+        cfg.mechanics.shear_limit_deg = x[9];
+        cfg.mechanics.contact_scale_mm = x[10];
+    } else if std::env::var("FIT").is_ok() {
         let objective = |x: &[f64]| -> f64 {
             let Some(c) = with_params(&cfg, x) else {
                 return 1e12;

@@ -42,8 +42,10 @@ pub struct TwinArgs {
     /// Simulate only the first N rows.
     #[arg(long)]
     limit: Option<usize>,
+    /// Output dataset directory.
     #[arg(long)]
     out: PathBuf,
+    /// Replace an existing non-empty `--out`.
     #[arg(long)]
     force: bool,
 }

@@ -22,11 +22,16 @@ const MIN_AREA_SHARE: f64 = 0.1;
 /// The triangles of mutually neighbouring reference pins and their
 /// orientation.
 pub struct FoldCheck {
+    /// Corners of each triangle, ordered so that its reference area is
+    /// positive.
     triangles: Vec<[usize; 3]>,
-    /// Twice the signed reference area of each triangle, px^2.
-    areas: Vec<f64>,
-    /// Reference neighbours of each pin, ascending.
-    neighbours: Vec<Vec<usize>>,
+    /// Per triangle, [`TURNED_RATIO`] times twice its reference area, px^2:
+    /// the triangle has turned over when twice its signed area is below.
+    limits: Vec<f64>,
+    /// Reference neighbours of all pins, ascending per pin; pin `i`'s are
+    /// `neighbours[starts[i]..starts[i + 1]]` (one allocation).
+    neighbours: Vec<usize>,
+    starts: Vec<usize>,
 }
 
 impl FoldCheck {
@@ -36,26 +41,40 @@ impl FoldCheck {
         let reach2 = (NEIGHBOUR_REACH * spacing).powi(2);
         let near = |a: usize, b: usize| distance2(reference[a], reference[b]) < reach2;
         let n = reference.len();
-        let neighbours: Vec<Vec<usize>> = (0..n)
-            .map(|i| (0..n).filter(|&j| j != i && near(i, j)).collect())
-            .collect();
-        let (mut triangles, mut areas) = (Vec::new(), Vec::new());
-        for (i, around) in neighbours.iter().enumerate() {
-            for &j in around.iter().filter(|&&j| j > i) {
-                for &k in neighbours[j].iter().filter(|&&k| k > j) {
+        let (mut neighbours, mut starts) = (Vec::new(), vec![0]);
+        for i in 0..n {
+            neighbours.extend((0..n).filter(|&j| j != i && near(i, j)));
+            starts.push(neighbours.len());
+        }
+        let around = |i: usize| &neighbours[starts[i]..starts[i + 1]];
+        let (mut triangles, mut limits) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            for &j in around(i).iter().filter(|&&j| j > i) {
+                for &k in around(j).iter().filter(|&&k| k > j) {
                     let area = signed_area(reference, [i, j, k]);
                     if near(i, k) && area.abs() >= MIN_AREA_SHARE * spacing * spacing {
-                        triangles.push([i, j, k]);
-                        areas.push(area);
+                        triangles.push(if area > 0.0 { [i, j, k] } else { [i, k, j] });
+                        limits.push(TURNED_RATIO * area.abs());
                     }
                 }
             }
         }
         Self {
             triangles,
-            areas,
+            limits,
             neighbours,
+            starts,
         }
+    }
+
+    /// Reference neighbours of pin `i`, ascending.
+    fn around(&self, i: usize) -> &[usize] {
+        &self.neighbours[self.starts[i]..self.starts[i + 1]]
+    }
+
+    /// Number of reference pins.
+    fn pins(&self) -> usize {
+        self.starts.len() - 1
     }
 
     /// Number of reference triangles.
@@ -67,17 +86,17 @@ impl FoldCheck {
     pub fn any_turned(&self, pins: &[[f64; 2]]) -> bool {
         self.triangles
             .iter()
-            .zip(&self.areas)
-            .any(|(&t, &a)| signed_area(pins, t) / a < TURNED_RATIO)
+            .zip(&self.limits)
+            .any(|(&t, &limit)| signed_area(pins, t) < limit)
     }
 
     /// Indices of the triangles of `pins` that have turned over.
     pub fn turned(&self, pins: &[[f64; 2]]) -> Vec<usize> {
         self.triangles
             .iter()
-            .zip(&self.areas)
+            .zip(&self.limits)
             .enumerate()
-            .filter(|(_, (&t, &a))| signed_area(pins, t) / a < TURNED_RATIO)
+            .filter(|(_, (&t, &limit))| signed_area(pins, t) < limit)
             .map(|(i, _)| i)
             .collect()
     }
@@ -85,7 +104,7 @@ impl FoldCheck {
     /// The corners of the triangles `turned`, then the neighbours of those
     /// corners for which `include(pin)` holds, ascending in each part.
     pub fn corners_and(&self, turned: &[usize], include: impl Fn(usize) -> bool) -> Vec<usize> {
-        let mut corner = vec![false; self.neighbours.len()];
+        let mut corner = vec![false; self.pins()];
         for &t in turned {
             for &i in &self.triangles[t] {
                 corner[i] = true;
@@ -94,7 +113,7 @@ impl FoldCheck {
         let mut out: Vec<usize> = (0..corner.len()).filter(|&i| corner[i]).collect();
         let mut extra: Vec<usize> = out
             .iter()
-            .flat_map(|&i| self.neighbours[i].iter().copied())
+            .flat_map(|&i| self.around(i).iter().copied())
             .filter(|&j| !corner[j] && include(j))
             .collect();
         extra.sort_unstable();
@@ -106,7 +125,7 @@ impl FoldCheck {
     /// Per pin, whether it is a corner of one of the triangles `turned`
     /// or lies within `rings` neighbour steps of one.
     pub fn region(&self, turned: &[usize], rings: usize) -> Vec<bool> {
-        let mut inside = vec![false; self.neighbours.len()];
+        let mut inside = vec![false; self.pins()];
         for &t in turned {
             for &i in &self.triangles[t] {
                 inside[i] = true;
@@ -114,7 +133,7 @@ impl FoldCheck {
         }
         for _ in 0..rings {
             let grown: Vec<usize> = (0..inside.len())
-                .filter(|&i| !inside[i] && self.neighbours[i].iter().any(|&j| inside[j]))
+                .filter(|&i| !inside[i] && self.around(i).iter().any(|&j| inside[j]))
                 .collect();
             for i in grown {
                 inside[i] = true;
@@ -128,10 +147,13 @@ impl FoldCheck {
     /// between fold-free repairs go to the smoother one.
     pub fn roughness(&self, reference: &[[f64; 2]], pins: &[[f64; 2]]) -> f64 {
         let d = |i: usize| [pins[i][0] - reference[i][0], pins[i][1] - reference[i][1]];
-        self.neighbours
-            .iter()
-            .enumerate()
-            .flat_map(|(i, around)| around.iter().filter(move |&&j| j > i).map(move |&j| (i, j)))
+        (0..self.pins())
+            .flat_map(|i| {
+                self.around(i)
+                    .iter()
+                    .filter(move |&&j| j > i)
+                    .map(move |&j| (i, j))
+            })
             .map(|(i, j)| distance2(d(i), d(j)))
             .sum()
     }
@@ -203,8 +225,9 @@ pub fn reorder_region(
 }
 
 /// Twice the signed area of triangle `t` of `p`.
+#[inline]
 fn signed_area(p: &[[f64; 2]], t: [usize; 3]) -> f64 {
-    let [a, b, c] = t.map(|i| p[i]);
+    let (a, b, c) = (p[t[0]], p[t[1]], p[t[2]]);
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 

@@ -34,6 +34,8 @@ impl PinTracker {
     /// last stage's gate of its pin's prediction, no turned triangle,
     /// smallest residual) and the final field refitted. Returned when still
     /// fold-free, else `tracked` as it is.
+    #[cold]
+    #[inline(never)]
     pub(super) fn unfold(
         &self,
         points: &[[f64; 2]],
@@ -78,6 +80,8 @@ impl PinTracker {
     /// matched, then smoothest, [`crate::fold::FoldCheck::roughness`]) replaces `kept`
     /// when it has fewer turned triangles. `kept_points` are the points
     /// `kept` was ordered from, `keypoints` the detected ones.
+    #[cold]
+    #[inline(never)]
     pub(super) fn resplit(
         &self,
         kept: Tracked,

@@ -35,8 +35,8 @@ pub struct FoldCheck {
 }
 
 impl FoldCheck {
-    /// Triangles `i < j < k` of `reference` (px) whose three sides are all
-    /// shorter than 1.5 `spacing` (px).
+    /// Every triangle of three `reference` pins (px) whose sides are all
+    /// shorter than 1.5 `spacing` (px), listed once.
     pub fn new(reference: &[[f64; 2]], spacing: f64) -> Self {
         let reach2 = (NEIGHBOUR_REACH * spacing).powi(2);
         let near = |a: usize, b: usize| distance2(reference[a], reference[b]) < reach2;

@@ -76,9 +76,10 @@ impl PinTracker {
     /// the turned triangles that gave no keypoint, or hold other than one
     /// point, are split anew into 1..=3 pins each (a count of 1 for a
     /// cluster that gave keypoints keeps them), every combination ordered
-    /// again. The best result (fewest turned triangles, then most pins
-    /// matched, then smoothest, [`crate::fold::FoldCheck::roughness`]) replaces `kept`
-    /// when it has fewer turned triangles. `kept_points` are the points
+    /// again. The best result (fewest turned triangles, then fewest pins
+    /// missing, then fewest extra points, then smoothest,
+    /// [`crate::fold::FoldCheck::roughness`]) replaces `kept` when it has
+    /// fewer turned triangles. `kept_points` are the points
     /// `kept` was ordered from, `keypoints` the detected ones.
     #[cold]
     #[inline(never)]

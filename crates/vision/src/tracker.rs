@@ -117,8 +117,9 @@ impl PinTracker {
         self.spacing
     }
 
-    /// Number of turned-over neighbour triangles of `tracked` (see
-    /// [`crate::fold`]; 0 for a correct ordering).
+    /// Number of triangles of neighbouring reference pins that `tracked`
+    /// turns over (signed-area ratio below [`crate::TURNED_RATIO`]; 0 for a
+    /// correct ordering, a swap of two pins gives a few).
     pub fn turned_triangles(&self, tracked: &Tracked) -> usize {
         self.folds.turned(&tracked.pins).len()
     }
@@ -140,7 +141,7 @@ impl PinTracker {
     /// missing pins predicted on it is split into as many centres as pins
     /// it holds. The second pass is kept when it matches at least as many pins.
     /// If the kept result has a turned-over triangle, the clusters around it
-    /// are split anew ([`PinTracker::resplit`]).
+    /// are split anew (see `tracker/repair.rs`).
     pub fn order_with_clusters(&self, keypoints: &[KeyPoint], clusters: &[Cluster]) -> Tracked {
         let points = finite_centres(keypoints);
         let (first, sources) = self.order_points(&points);

@@ -4,13 +4,18 @@
 //! swaps them; instead the tracker works coarse to fine: predict every pin
 //! from a smooth displacement field, solve an optimal one-to-one assignment
 //! within a gate, refit the field from the matches with a narrower kernel,
-//! and repeat. Missing pins are filled from the final field.
+//! and repeat. Missing pins are filled from the final field. A result with
+//! a neighbour triangle turned over (a swap, see [`crate::fold`]) is
+//! repaired locally; fold-free results are returned as they are.
 
 use crate::assign::{assign_usable, Edge, EdgeRows};
 use crate::blob::KeyPoint;
 use crate::error::VisionError;
 use crate::field::{smooth_field, Kernel, Observations};
+use crate::fold::FoldCheck;
 use crate::merged::Cluster;
+
+mod repair;
 
 /// Fewest reference pins that define an affine field.
 const MIN_REFERENCE_PINS: usize = 3;
@@ -19,7 +24,6 @@ const PRIOR_WEIGHT: f64 = 0.2;
 /// A missing pin predicted within this many spacings of a cluster's pixels
 /// is taken to be inside it.
 const CLUSTER_REACH: f64 = 0.35;
-
 /// One coarse-to-fine pass: matching gate, then the kernel refitted after it
 /// (both in units of the reference pin spacing).
 struct Stage {
@@ -32,6 +36,7 @@ pub struct PinTracker {
     reference: Vec<[f64; 2]>,
     spacing: f64,
     stages: Vec<Stage>,
+    folds: FoldCheck,
 }
 
 /// Pins in reference order for one frame.
@@ -95,6 +100,7 @@ impl PinTracker {
             stage(0.6, 1.0),
         ];
         Ok(Self {
+            folds: FoldCheck::new(&reference, spacing),
             reference,
             spacing,
             stages,
@@ -111,6 +117,19 @@ impl PinTracker {
         self.spacing
     }
 
+    /// Number of triangles of neighbouring reference pins that `tracked`
+    /// turns over (signed-area ratio below [`crate::TURNED_RATIO`]; 0 for a
+    /// correct ordering, a swap of two pins gives a few).
+    pub fn turned_triangles(&self, tracked: &Tracked) -> usize {
+        self.folds.turned(&tracked.pins).len()
+    }
+
+    /// Number of neighbour triangles of the reference that the fold check
+    /// watches.
+    pub fn triangle_count(&self) -> usize {
+        self.folds.len()
+    }
+
     /// Assigns keypoints to reference pins (see the module docs). Never
     /// fails: with no keypoints every pin is missing and sits at rest.
     pub fn order(&self, keypoints: &[KeyPoint]) -> Tracked {
@@ -121,6 +140,8 @@ impl PinTracker {
     /// each cluster of touching pins (see [`crate::find_clusters`]) that has
     /// missing pins predicted on it is split into as many centres as pins
     /// it holds. The second pass is kept when it matches at least as many pins.
+    /// If the kept result has a turned-over triangle, the clusters around it
+    /// are split anew (see `tracker/repair.rs`).
     pub fn order_with_clusters(&self, keypoints: &[KeyPoint], clusters: &[Cluster]) -> Tracked {
         let points = finite_centres(keypoints);
         let (first, sources) = self.order_points(&points);
@@ -154,11 +175,15 @@ impl PinTracker {
             retry.extend(cluster.split(held + missing_in[c]));
         }
         let (second, _) = self.order_points(&retry);
-        if second.matched_count() >= first.matched_count() {
-            second
+        let (kept, kept_points) = if second.matched_count() >= first.matched_count() {
+            (second, retry)
         } else {
-            first
+            (first, points.clone())
+        };
+        if self.folds.any_turned(&kept.pins) {
+            return self.resplit(kept, &kept_points, &points, clusters);
         }
+        kept
     }
 
     /// For each cluster, how many missing pins are predicted on or next to
@@ -186,9 +211,19 @@ impl PinTracker {
         counts
     }
 
-    /// The coarse-to-fine matching on finite points; also returns, per pin,
-    /// the index of its point.
+    /// The coarse-to-fine matching on finite points, then, only if a
+    /// neighbour triangle has turned over, the local repair
+    /// ([`PinTracker::unfold`]); also returns, per pin, the index of its point.
     fn order_points(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
+        let (tracked, matches) = self.coarse_to_fine(points);
+        if self.folds.any_turned(&tracked.pins) {
+            return self.unfold(points, tracked, matches);
+        }
+        (tracked, matches)
+    }
+
+    /// The coarse-to-fine stages and the fill of missing pins.
+    fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
         let mut predicted = self.centroid_shift(points);
         let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
         let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
@@ -272,6 +307,7 @@ impl PinTracker {
         assign_usable(points.len(), &rows)
     }
 
+    /// Per pin, its point minus its reference position, px.
     fn displacements(
         &self,
         matches: &[Option<usize>],
@@ -284,6 +320,7 @@ impl PinTracker {
             .collect()
     }
 
+    /// Every pin's position under the field fitted to `observed`.
     fn predict(&self, observed: &Observations, kernel: &Kernel) -> Vec<[f64; 2]> {
         smooth_field(&self.reference, observed, kernel, PRIOR_WEIGHT)
             .iter()
@@ -292,6 +329,7 @@ impl PinTracker {
             .collect()
     }
 
+    /// Matched pins at their points, the others at `predicted`.
     fn finish(
         &self,
         matches: &[Option<usize>],

@@ -24,6 +24,7 @@ const PRIOR_WEIGHT: f64 = 0.2;
 /// A missing pin predicted within this many spacings of a cluster's pixels
 /// is taken to be inside it.
 const CLUSTER_REACH: f64 = 0.35;
+
 /// One coarse-to-fine pass: matching gate, then the kernel refitted after it
 /// (both in units of the reference pin spacing).
 struct Stage {

@@ -2,8 +2,9 @@
 //! 1, with ERRATA.md's corrections): free phase, nudge, weakly clamped phase,
 //! local weight update. Kept apart from the [`crate::DenNN`] type so the hot
 //! loop reads top to bottom.
+use crate::closed_form::{closed_form_outputs, step_one_output, step_two_outputs};
 use crate::dennn::{ClampedPhase, EpConfig, FreePhase, LrScaling, SampleStats};
-use crate::kernels::{dot, dot3, output_slope_gain, output_update, sigmoid, sum_squares_f64};
+use crate::kernels::{dot, dot3, sigmoid, sum_squares_f64};
 use crate::net::{Layers, States};
 
 /// One EP step, given the first-layer drive `W(1)^T x + b(1)` in `st.drive`;
@@ -17,15 +18,16 @@ pub(crate) fn step<const F: bool>(
     cfg: &EpConfig,
     next: Option<&[f32]>,
 ) -> SampleStats {
-    if single_output_fast_path(layers, cfg) {
-        return step_single_output::<F>(layers, st, x, t[0], cfg, next);
+    match closed_form_outputs(layers, cfg) {
+        Some(1) => step_one_output::<F>(layers, st, x, t[0], cfg, next),
+        Some(_) => step_two_outputs::<F>(layers, st, x, t, cfg, next),
+        None => step_general::<F>(layers, st, x, t, cfg, next),
     }
-    step_general::<F>(layers, st, x, t, cfg, next)
 }
 
 /// [`step`] for any depth, width and phase method.
 #[inline(always)]
-fn step_general<const F: bool>(
+pub(crate) fn step_general<const F: bool>(
     layers: &mut Layers,
     st: &mut States,
     x: &[f32],
@@ -71,87 +73,6 @@ fn step_general<const F: bool>(
     SampleStats { loss, energy }
 }
 
-/// Whether [`step_single_output`] applies: one hidden layer, one output
-/// (stored as a column), feed-forward free phase, closed-form clamped phase.
-#[inline(always)]
-fn single_output_fast_path(layers: &Layers, cfg: &EpConfig) -> bool {
-    layers.depth() == 2
-        && layers.sizes[2] == 1
-        && !layers.is_row_major(2)
-        && cfg.free_phase == FreePhase::FeedForward
-        && cfg.clamped_phase == ClampedPhase::Linearised
-}
-
-/// The general step's equations for a one-hidden-layer, one-output net
-/// (the PDenNN's nets) in three passes over the hidden layer plus the
-/// fused first-layer sweep, instead of a dozen: the exact free phase
-/// (`phi = sigmoid(drive)`, `y = w2 . phi + b2`), the nudge, the closed-form
-/// clamped phase of [`clamp_linearised`] (`a = sum (phi'_i w2_i)^2`,
-/// `e2 = beta (t - y) / (1 + a)`, `e1 = phi' w2 e2`), the energy (eq. 3.17)
-/// and the update (eqs. 3.21-3.22). Tested against the general path.
-#[inline(always)]
-fn step_single_output<const F: bool>(
-    layers: &mut Layers,
-    st: &mut States,
-    x: &[f32],
-    t: f32,
-    cfg: &EpConfig,
-    next: Option<&[f32]>,
-) -> SampleStats {
-    let beta = cfg.beta as f32;
-    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
-    let eta2 = rates.rate(layers, 2);
-    let eta1 = rates.rate(layers, 1);
-    let [x_scaled, d, _] = &mut st.tmp[..] else {
-        unreachable!("two layers")
-    };
-    // `gains` holds u = phi' w2; the hidden errors are e1 = e2 u.
-    let gains = &mut st.e[1];
-    sigmoid::<F>(&st.drive, &mut st.phi[1]);
-    let (wphi, a) = output_slope_gain::<F>(&st.phi[1], &layers.w[1], d, gains);
-    let y = wphi + layers.b[1][0];
-    let loss = 0.5 * ((y - t) as f64).powi(2);
-    let y_nudged = y + beta * (t - y);
-    let err2 = beta * (t - y) / (1.0 + a);
-    let c2 = eta2 * err2;
-    output_update::<F>(&st.phi[1], d, gains, &mut layers.w[1], [err2, c2]);
-    layers.b[1][0] += c2;
-    // sum e1_i^2 = e2^2 sum u_i^2 = e2^2 a.
-    let e2_sq = (err2 as f64).powi(2);
-    let energy =
-        0.5 * beta as f64 * ((y_nudged - t) as f64).powi(2) + 0.5 * e2_sq * (1.0 + a as f64);
-    // W1 += eta1 x e1^T = (eta1 e2 x) u^T and b1 += eta1 e1 = (eta1 e2) u.
-    let g = eta1 * err2;
-    x_scaled.iter_mut().zip(x).for_each(|(s, &x)| *s = g * x);
-    match next {
-        Some(next) => layers.rank1_then_drive::<F>(x_scaled, (gains, g), next, &mut st.drive),
-        None => {
-            layers.rank1::<F>(1, x_scaled, (gains, g));
-            keep_clamped_state(st, x, err2, y_nudged);
-        }
-    }
-    SampleStats { loss, energy }
-}
-
-/// Leaves the weakly clamped state of the last sample in `st` (what the
-/// general step leaves there): `s(0) = phi(0) = x`, `e1 = e2 u` (over the
-/// gains `u`), the clamped `phi(1) += phi' e1` and `s(1) = drive + e1`, the
-/// output error and the nudged output. [`step_single_output`] skips these
-/// stores for all but a sequence's last sample; nothing reads them between.
-fn keep_clamped_state(st: &mut States, x: &[f32], err2: f32, y_nudged: f32) {
-    st.s[0].copy_from_slice(x);
-    st.phi[0].copy_from_slice(x);
-    let hidden = st.e[1].iter_mut().zip(&st.tmp[1]).zip(&st.drive);
-    for (((e, &d), &drive), (phi, s)) in hidden.zip(st.phi[1].iter_mut().zip(&mut st.s[1])) {
-        *e *= err2;
-        *phi += d * *e;
-        *s = drive + *e;
-    }
-    st.e[2][0] = err2;
-    st.s[2][0] = y_nudged;
-    st.nudged[0] = y_nudged;
-}
-
 /// The learning rates `eta` of eq. 3.21 for each layer: `hidden` for the
 /// layers feeding hidden units, `output` for the output layer, both applied
 /// per layer as `scaling` says.
@@ -174,7 +95,7 @@ impl LayerRates {
 
     /// The rate of layer `l` (1-based) of `layers`.
     #[inline(always)]
-    fn rate(&self, layers: &Layers, l: usize) -> f32 {
+    pub(crate) fn rate(&self, layers: &Layers, l: usize) -> f32 {
         let eta = if l == layers.depth() {
             self.output
         } else {
@@ -364,92 +285,5 @@ fn euler_step<const F: bool>(layers: &Layers, st: &mut States, dt: f32, clamp_ou
     for l in 1..n {
         let (s, phi) = (&st.s[l], &mut st.phi[l]);
         sigmoid::<F>(s, phi);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use rand::{Rng, SeedableRng};
-
-    /// The three-pass single-output step gives the general step's weights,
-    /// drive, states, loss and energy (up to float rounding) over a run of
-    /// samples with the fused next-sample drive.
-    #[test]
-    fn single_output_step_matches_the_general_step() {
-        single_output_matches_general::<false>();
-        if crate::net::has_fma() {
-            single_output_matches_general::<true>();
-        } else {
-            eprintln!("fused variant skipped: no AVX2/FMA on this CPU");
-        }
-    }
-
-    /// The fast and the general step with the same `F` agree on 30 samples
-    /// (70 hidden units: two whole panels and a tail).
-    fn single_output_matches_general<const F: bool>() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
-        let sizes = [7, 70, 1];
-        let xs: Vec<Vec<f32>> = (0..30)
-            .map(|_| (0..7).map(|_| rng.random_range(-2.0..2.0)).collect())
-            .collect();
-        let ts: Vec<f32> = (0..30).map(|_| rng.random_range(-1.5..1.5)).collect();
-        let cfg = EpConfig {
-            learning_rate: 18.0,
-            output_learning_rate: Some(5.0),
-            lr_scaling: LrScaling::FanIn,
-            beta: 0.7,
-            ..EpConfig::default()
-        };
-        assert!(single_output_fast_path(
-            &Layers::new(&sizes, 1).unwrap(),
-            &cfg
-        ));
-        let run = |fast: bool| {
-            let mut layers = Layers::new(&sizes, 1).unwrap();
-            let mut st = States::new(&sizes);
-            layers.affine::<F>(1, &xs[0], &mut st.drive);
-            let mut stats = Vec::new();
-            for i in 0..xs.len() {
-                let next = xs.get(i + 1).map(|v| v.as_slice());
-                let t = [ts[i]];
-                stats.push(if fast {
-                    step_single_output::<F>(&mut layers, &mut st, &xs[i], t[0], &cfg, next)
-                } else {
-                    step_general::<F>(&mut layers, &mut st, &xs[i], &t, &cfg, next)
-                });
-            }
-            (layers, st, stats)
-        };
-        let (lf, sf, af) = run(true);
-        let (lg, sg, ag) = run(false);
-        let close = |a: &[f32], b: &[f32], what: &str| {
-            for (x, y) in a.iter().zip(b) {
-                assert!(
-                    (x - y).abs() <= 1e-4 * (1.0 + y.abs()),
-                    "{what}: {x} vs {y}"
-                );
-            }
-        };
-        for l in 0..2 {
-            close(&lf.w[l], &lg.w[l], "weights");
-            close(&lf.b[l], &lg.b[l], "biases");
-        }
-        close(&sf.drive, &sg.drive, "next drive");
-        for l in 1..3 {
-            close(&sf.e[l], &sg.e[l], "errors");
-            close(&sf.s[l], &sg.s[l], "potentials");
-        }
-        close(&sf.phi[1], &sg.phi[1], "clamped activity");
-        for (a, b) in af.iter().zip(&ag) {
-            assert!(
-                (a.loss - b.loss).abs() <= 1e-5 * (1.0 + b.loss),
-                "{a:?} {b:?}"
-            );
-            assert!(
-                (a.energy - b.energy).abs() <= 1e-5 * (1.0 + b.energy),
-                "{a:?} {b:?}"
-            );
-        }
     }
 }

@@ -25,7 +25,7 @@ pub fn axpy<const FMA: bool>(y: &mut [f32], a: f32, x: &[f32]) {
 
 /// Independent accumulators of the reductions: four ymm registers, enough
 /// to hide the add/FMA latency (one register would be one serial chain).
-const LANES: usize = 32;
+pub(crate) const LANES: usize = 32;
 
 /// Dot product with [`LANES`] independent accumulators (vectorisable).
 #[inline(always)]
@@ -70,62 +70,9 @@ pub fn dot3<const FMA: bool>(a: &[f32], b: &[f32], c: &[f32]) -> f32 {
     reduce(acc) + tail
 }
 
-/// The output and the first half of the single-output closed form in one
-/// pass over the hidden activity `phi`: slopes `d_i = phi_i (1 - phi_i)`,
-/// gains `u_i = d_i w_i`. Returns `(w . phi, sum u_i^2)`.
-#[inline(always)]
-pub fn output_slope_gain<const FMA: bool>(
-    phi: &[f32],
-    w: &[f32],
-    d: &mut [f32],
-    u: &mut [f32],
-) -> (f32, f32) {
-    let n = phi.len().min(w.len()).min(d.len()).min(u.len());
-    let body = n - n % LANES;
-    let (mut acc_y, mut acc_a) = ([0.0f32; LANES], [0.0f32; LANES]);
-    // Whole chunks of LANES keep the accumulators in registers.
-    for c in (0..body).step_by(LANES) {
-        let (p, ww) = (&phi[c..c + LANES], &w[c..c + LANES]);
-        let (dd, uu) = (&mut d[c..c + LANES], &mut u[c..c + LANES]);
-        for k in 0..LANES {
-            dd[k] = p[k] * (1.0 - p[k]);
-            uu[k] = dd[k] * ww[k];
-            acc_y[k] = madd::<FMA>(ww[k], p[k], acc_y[k]);
-            acc_a[k] = madd::<FMA>(uu[k], uu[k], acc_a[k]);
-        }
-    }
-    let (mut tail_y, mut tail_a) = (0.0f32, 0.0f32);
-    for i in body..n {
-        d[i] = phi[i] * (1.0 - phi[i]);
-        u[i] = d[i] * w[i];
-        tail_y = madd::<FMA>(w[i], phi[i], tail_y);
-        tail_a = madd::<FMA>(u[i], u[i], tail_a);
-    }
-    (reduce(acc_y) + tail_y, reduce(acc_a) + tail_a)
-}
-
-/// The output-layer update of the single-output closed form in one pass
-/// over the hidden layer, storing only `w2`: `w2 += c2 (phi + d u e2)`, where
-/// `phi + d (u e2)` is the clamped activity (`e1 = u e2` the hidden error of
-/// [`output_slope_gain`]'s gains). The hidden errors themselves are not
-/// stored: the first-layer update takes them as `e2 u`.
-#[inline(always)]
-pub fn output_update<const FMA: bool>(
-    phi: &[f32],
-    d: &[f32],
-    u: &[f32],
-    w2: &mut [f32],
-    [e2, c2]: [f32; 2],
-) {
-    for (((w, &p), &d), &u) in w2.iter_mut().zip(phi).zip(d).zip(u) {
-        let clamped = madd::<FMA>(d, u * e2, p);
-        *w = madd::<FMA>(clamped, c2, *w);
-    }
-}
-
 /// Sum of the accumulators, pairwise (vector adds, then one short chain).
 #[inline(always)]
-fn reduce(mut acc: [f32; LANES]) -> f32 {
+pub(crate) fn reduce(mut acc: [f32; LANES]) -> f32 {
     let mut half = LANES / 2;
     while half >= 8 {
         for k in 0..half {

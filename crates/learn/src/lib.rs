@@ -5,6 +5,7 @@
 //!
 //! Everything here is pure: no files, no printing. Models serialise to a JSON
 //! string plus safetensors bytes; the lab crate writes them.
+mod closed_form;
 mod config;
 mod dataset;
 mod dennn;

@@ -119,8 +119,35 @@ impl PinTracker {
             let rough = self.folds.roughness(&self.reference, &t.pins);
             (self.turned_triangles(t), t.missing, t.extra, rough)
         };
+        // Every combination, those with as many points as pins first: a
+        // combination with `m` points has at least `pins - m` missing or
+        // `m - pins` extra, so once one scores better than that bound it
+        // is skipped without its ordering pass (the best is the same as
+        // over all combinations in turn, short of an exact tie).
+        let slots = chosen.len() as u32;
+        let total = |combo: usize| {
+            let ks =
+                (0..slots).map(|slot| 1 + combo / RESPLIT_MAX_PINS.pow(slot) % RESPLIT_MAX_PINS);
+            base.len() + ks.sum::<usize>()
+        };
+        let pins = self.reference.len();
+        let mut combos: Vec<usize> = (0..RESPLIT_MAX_PINS.pow(slots)).collect();
+        combos.sort_by_key(|&c| total(c).abs_diff(pins));
         let mut best: Option<((usize, usize, usize, f64), Tracked)> = None;
-        for combo in 0..RESPLIT_MAX_PINS.pow(chosen.len() as u32) {
+        for combo in combos {
+            let m = total(combo);
+            let bound = (
+                0,
+                pins.saturating_sub(m),
+                m.saturating_sub(pins),
+                f64::NEG_INFINITY,
+            );
+            if best
+                .as_ref()
+                .is_some_and(|(b, _)| b.partial_cmp(&bound).is_some_and(|o| o.is_le()))
+            {
+                continue;
+            }
             let mut points = base.clone();
             for (slot, c) in chosen.iter().enumerate() {
                 let k = 1 + combo / RESPLIT_MAX_PINS.pow(slot as u32) % RESPLIT_MAX_PINS;

@@ -48,7 +48,7 @@ fn transfer_table(md: &mut String, rows: &[NetRow], real: &[NetRow]) {
             n.angle_mae_deg,
             n.position_mae_mm,
             opt(same.map(|r| r.angle_mae_deg)),
-            opt(same.map(|r| r.position_mae_mm)),
+            same.map_or("-".into(), |r| format!("{:.3}", r.position_mae_mm)),
             n.train_seconds
         );
     }

@@ -3,6 +3,7 @@ use crate::progress::bar;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
+use tactrace_lab::pin_order::check_pin_order;
 use tactrace_lab::{dataset, figures, fsutil, model_io, train as tr, LabError};
 use tactrace_learn::{ModelKind, Preset, SearchSpace};
 
@@ -107,7 +108,12 @@ pub fn train(a: TrainArgs) -> Result<()> {
     fsutil_check_out(&a.out, a.force)?;
     let data = dataset::read_dataset(&a.train)?;
     let (data, val) = match (a.val.as_deref(), a.val_fraction) {
-        (Some(dir), _) => (data, Some(dataset::read_dataset(dir)?)),
+        (Some(dir), _) => {
+            let val = dataset::read_dataset(dir)?;
+            let train_pins = Some(data.meta.reference_pins.as_slice());
+            check_pin_order(train_pins, &val.meta.reference_pins, dir)?;
+            (data, Some(val))
+        }
         (None, Some(f)) => {
             let (tr, va) = tr::holdout(&data, f, a.split_seed)?;
             eprintln!(
@@ -162,7 +168,8 @@ pub fn train(a: TrainArgs) -> Result<()> {
     pb.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     let extra: Vec<(&str, String)> = extra;
-    let dir = model_io::save_model_with(&a.out, &model, &history, a.force, &extra)?;
+    let pins = &data.meta.reference_pins;
+    let dir = model_io::save_model_with(&a.out, &model, pins, &history, a.force, &extra)?;
     eprintln!("trained in {secs:.1} s; saved model to {}", dir.display());
     if history.lr_halvings > 0 {
         eprintln!(
@@ -231,6 +238,8 @@ pub struct ValidateArgs {
 pub fn validate(a: ValidateArgs) -> Result<()> {
     let model = model_io::load_model(&a.model)?;
     let data = dataset::read_dataset(&a.data)?;
+    let model_pins = model_io::load_reference_pins(&a.model)?;
+    check_pin_order(model_pins.as_deref(), &data.meta.reference_pins, &a.data)?;
     let v = tr::validate(&model, &data)?;
     if let Some(dir) = &a.plots {
         std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
@@ -267,12 +276,14 @@ pub struct PredictArgs {
 
 pub fn predict(a: PredictArgs) -> Result<()> {
     let model = model_io::load_model(&a.model)?;
+    let model_pins = model_io::load_reference_pins(&a.model)?;
     match (a.image, a.reference, a.data) {
         (Some(image), Some(reference), None) => {
             let blob = crate::cmd_data::blob_params(a.params.as_deref(), "real256")?;
             let refr = tactrace_sensor::read_frame(&reference).map_err(LabError::from)?;
             let ex = tactrace_vision::PinExtractor::from_reference_frame(&refr, blob)
                 .map_err(LabError::from)?;
+            check_pin_order(model_pins.as_deref(), ex.tracker.reference(), &reference)?;
             let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
             let tracked = ex.extract(&frame).map_err(LabError::from)?;
             let [r, t] = model.predict(&tracked.displacement(ex.tracker.reference()))?;
@@ -280,6 +291,7 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         }
         (None, None, Some(dir)) => {
             let data = dataset::read_dataset(&dir)?;
+            check_pin_order(model_pins.as_deref(), &data.meta.reference_pins, &dir)?;
             let v = tr::validate(&model, &data)?;
             println!("r_mm,theta_deg,true_r_mm,true_theta_deg");
             for (p, t) in v.predictions.iter().zip(&v.truth) {

@@ -51,6 +51,50 @@ fn collect_writes_a_python_readable_dataset() {
     assert!(r.stderr.contains("already exists"), "{}", r.stderr);
 }
 
+/// A model refuses data whose pins follow another reference order.
+#[test]
+fn data_ordered_against_another_reference_is_refused() {
+    let t = TempDir::new("pinorder");
+    let r = tactrace(
+        &t.0,
+        &["collect", "--samples", "20", "--seed", "3", "--out", "ds"],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let args = [
+        "--model", "pdennn", "--train", "ds", "--epochs", "1", "--out", "m",
+    ];
+    let r = tactrace(&t.0, &[&["train"], &args[..]].concat());
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(t.join("m/pins.json").exists());
+    let r = tactrace(
+        &t.0,
+        &["validate", "--model", "m", "--data", "ds", "--json"],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    // The same data with two reference pins listed the other way round.
+    std::fs::create_dir_all(t.join("swapped")).unwrap();
+    for f in ["inputs.npy", "targets.npy"] {
+        std::fs::copy(t.join("ds").join(f), t.join("swapped").join(f)).unwrap();
+    }
+    let text = std::fs::read_to_string(t.join("ds/meta.json")).unwrap();
+    let mut meta: serde_json::Value = serde_json::from_str(&text).unwrap();
+    meta["reference_pins"].as_array_mut().unwrap().swap(0, 1);
+    std::fs::write(t.join("swapped/meta.json"), meta.to_string()).unwrap();
+    for cmd in [
+        &["validate", "--model", "m", "--data", "swapped"][..],
+        &["predict", "--model", "m", "--data", "swapped"][..],
+    ] {
+        let r = tactrace(&t.0, cmd);
+        assert_eq!(r.code, 2, "{cmd:?}: {}", r.stderr);
+        assert!(r.stderr.contains("another order"), "{}", r.stderr);
+    }
+    let r = tactrace(
+        &t.0,
+        &[&["train"], &args[..], &["--val", "swapped", "--force"]].concat(),
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+}
+
 #[test]
 fn unknown_shape_is_a_clear_error() {
     let t = TempDir::new("badshape");

@@ -21,6 +21,7 @@ pub mod images;
 pub mod import;
 pub mod metrics;
 pub mod model_io;
+pub mod pin_order;
 pub mod plot;
 pub mod report;
 pub mod report_doc;

@@ -1,6 +1,8 @@
 //! Model directories: `model.json` (architecture, hyper-parameters,
-//! standardisation, PCA), `weights.safetensors`, `history.csv` and the
-//! loss/energy figure (report Fig. 4.5).
+//! standardisation, PCA), `weights.safetensors`, `pins.json` (the reference
+//! pins of the training data, whose order the inputs follow; see
+//! [`crate::pin_order`]), `history.csv` and the loss/energy figure (report
+//! Fig. 4.5).
 use crate::error::{LabError, Result};
 use crate::fsutil::{read_text, StagedDir};
 use std::path::{Path, PathBuf};
@@ -8,15 +10,24 @@ use tactrace_learn::{PoseModel, TrainingHistory};
 
 const MODEL_JSON: &str = "model.json";
 const WEIGHTS: &str = "weights.safetensors";
+const PINS: &str = "pins.json";
 
-/// Save a trained model and its training history atomically into `dir`.
+/// `pins.json`: the training data's reference pins (px, their order).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PinsFile {
+    reference_pins: Vec<[f64; 2]>,
+}
+
+/// Save a trained model, the reference pins of its training data and its
+/// training history atomically into `dir`.
 pub fn save_model(
     dir: &Path,
     model: &PoseModel,
+    reference_pins: &[[f64; 2]],
     history: &TrainingHistory,
     force: bool,
 ) -> Result<PathBuf> {
-    save_model_with(dir, model, history, force, &[])
+    save_model_with(dir, model, reference_pins, history, force, &[])
 }
 
 /// As [`save_model`], with extra text files `(name, contents)` in the same
@@ -24,11 +35,17 @@ pub fn save_model(
 pub fn save_model_with(
     dir: &Path,
     model: &PoseModel,
+    reference_pins: &[[f64; 2]],
     history: &TrainingHistory,
     force: bool,
     extra: &[(&str, String)],
 ) -> Result<PathBuf> {
     let stage = StagedDir::new(dir, force)?;
+    let pins = PinsFile {
+        reference_pins: reference_pins.to_vec(),
+    };
+    let pins = serde_json::to_string(&pins).expect("pins serialise");
+    write(&stage.path().join(PINS), pins.as_bytes())?;
     for (name, text) in extra {
         write(&stage.path().join(name), text.as_bytes())?;
     }
@@ -61,6 +78,21 @@ pub fn load_model(dir: &Path) -> Result<PoseModel> {
         path: dir.into(),
         reason: e.to_string(),
     })
+}
+
+/// The reference pins saved with the model in `dir`, or `None` for a model
+/// saved before they were (its data cannot be checked).
+pub fn load_reference_pins(dir: &Path) -> Result<Option<Vec<[f64; 2]>>> {
+    let path = dir.join(PINS);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let file: PinsFile =
+        serde_json::from_str(&read_text(&path)?).map_err(|e| LabError::Format {
+            path: path.clone(),
+            reason: e.to_string(),
+        })?;
+    Ok(Some(file.reference_pins))
 }
 
 fn write(path: &Path, bytes: &[u8]) -> Result<()> {

@@ -123,7 +123,7 @@ fn train_and_score(
     let mdir = dir
         .join("models")
         .join(name.split(' ').next().unwrap_or(name).to_lowercase());
-    model_io::save_model(&mdir, &model, &history, true)?;
+    model_io::save_model(&mdir, &model, &tr.meta.reference_pins, &history, true)?;
     let v = validate(&model, va)?;
     figures::predicted_vs_true(
         &dir.join("figures").join(format!("fig4_4_{}", slug(name))),

@@ -54,9 +54,9 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     overrides(&a, &mut cfg.follow);
     let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
     let contour = shape_io::load_shape(&spec)?;
-    let model = start_run(&a, &toml::to_string(&cfg)?)?;
+    let (model, pins) = start_run(&a, &toml::to_string(&cfg)?)?;
     let pb = bar(a.steps.unwrap_or(cfg.follow.max_steps) as u64, "follow");
-    let res = run_follow(&cfg, model, &contour, &a.out, &mut |r| {
+    let res = run_follow(&cfg, (model, pins.as_deref()), &contour, &a.out, &mut |r| {
         pb.set_position(r.step as u64 + 1)
     })?;
     pb.finish_and_clear();
@@ -215,11 +215,15 @@ fn overrides(a: &FollowArgs, follow: &mut tactrace_lab::servo::FollowConfig) {
 
 /// Load the model, create the run directory and record the resolved
 /// configuration in it (before anything moves).
-fn start_run(a: &FollowArgs, config_toml: &str) -> Result<tactrace_learn::PoseModel> {
+/// The model and its training data's reference pins (if saved).
+type ModelAndPins = (tactrace_learn::PoseModel, Option<Vec<[f64; 2]>>);
+
+fn start_run(a: &FollowArgs, config_toml: &str) -> Result<ModelAndPins> {
     let model = model_io::load_model(&a.model)?;
+    let pins = model_io::load_reference_pins(&a.model)?;
     std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
     fsutil::write_atomic(&a.out.join("config.toml"), config_toml.as_bytes())?;
-    Ok(model)
+    Ok((model, pins))
 }
 
 /// `follow --hardware`: the same loop on the real rig.
@@ -235,11 +239,11 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
         }
         None => None,
     };
-    let model = start_run(&a, &toml::to_string(&cfg)?)?;
+    let (model, pins) = start_run(&a, &toml::to_string(&cfg)?)?;
     let pb = bar(a.steps.unwrap_or(cfg.follow.max_steps) as u64, "follow");
     let res = run_follow_hardware(
         &cfg,
-        model,
+        (model, pins.as_deref()),
         shape.as_ref().map(|s| &s.1),
         &a.out,
         &mut |r| pb.set_position(r.step as u64 + 1),

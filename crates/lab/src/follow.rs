@@ -5,6 +5,7 @@
 //! keeps what it did; `metrics.json` is written last and marks completion.
 use crate::error::{io_err, LabError, Result};
 use crate::metrics::{evaluate, l2_curve, FollowMetrics};
+use crate::pin_order::check_pin_order;
 use crate::rig::{RigConfig, SimRig, TapConfig};
 use crate::servo::{
     check_follow_config, follow, FollowConfig, FollowSummary, Perception, StepRecord, StepSink,
@@ -171,6 +172,10 @@ pub struct LoopSettings<'a> {
     pub tap: &'a TapConfig,
     /// Mean pin displacement (px) below which a tap counts as no contact.
     pub contact_threshold_px: f64,
+    /// The reference pins of the model's training data (`pins.json`); the
+    /// loop refuses a reference frame whose pins are ordered otherwise
+    /// (`None`: not checked).
+    pub model_pins: Option<&'a [[f64; 2]]>,
 }
 
 /// The servo loop on any arm and sensor, simulated or real: pins are
@@ -189,6 +194,12 @@ pub fn run_servo(
     check_follow_config(settings.follow)?;
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let extractor = PinExtractor::from_reference_frame(reference, settings.blob.clone())?;
+    let rig_reference = Path::new("the rig's reference frame");
+    check_pin_order(
+        settings.model_pins,
+        extractor.tracker.reference(),
+        rig_reference,
+    )?;
     if model.input_dim() != 2 * extractor.tracker.reference().len() {
         return Err(LabError::Config(format!(
             "the model expects {} inputs but the sensor gives {} (2 x pins)",
@@ -224,10 +235,11 @@ pub fn run_servo(
     Ok((summary, records))
 }
 
-/// Run the experiment on `shape` with `model`, writing into `out` (created).
+/// Run the experiment on `shape` with `model` (whose training data's
+/// reference pins are `model_pins`, if known), writing into `out` (created).
 pub fn run_follow(
     cfg: &FollowRunConfig,
-    model: PoseModel,
+    (model, model_pins): (PoseModel, Option<&[[f64; 2]]>),
     shape: &Contour,
     out: &Path,
     progress: &mut dyn FnMut(&StepRecord),
@@ -248,6 +260,7 @@ pub fn run_follow(
         follow: &cfg.follow,
         tap: &cfg.rig.tap,
         contact_threshold_px: cfg.contact_threshold_px,
+        model_pins,
     };
     let reference = rig.reference_frame();
     let (summary, records) = run_servo(

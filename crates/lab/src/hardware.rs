@@ -177,7 +177,7 @@ pub struct HardwareOutcome {
 /// work frame and is used only to score the finished run.
 pub fn run_follow_hardware(
     cfg: &HardwareConfig,
-    model: PoseModel,
+    (model, model_pins): (PoseModel, Option<&[[f64; 2]]>),
     shape: Option<&Contour>,
     out: &Path,
     progress: &mut dyn FnMut(&StepRecord),
@@ -190,6 +190,7 @@ pub fn run_follow_hardware(
         follow: &cfg.follow,
         tap: &cfg.tap,
         contact_threshold_px: cfg.contact_threshold_px,
+        model_pins,
     };
     let (summary, records) = run_servo(
         &mut arm,

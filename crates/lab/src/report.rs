@@ -198,6 +198,7 @@ pub fn reproduce(
         .par_iter()
         .map(|(shape, report_l2, steps)| {
             let model = model_io::load_model(&out.join("models/pdennn"))?;
+            let pins = model_io::load_reference_pins(&out.join("models/pdennn"))?;
             let mut fcfg = cfg.follow.clone();
             if cfg.report_steps {
                 fcfg.follow.steps = Some(*steps);
@@ -205,7 +206,7 @@ pub fn reproduce(
             fcfg.follow.seed = cfg.seed;
             let contour = builtin_shape(*shape);
             let run = out.join("follow").join(shape.name());
-            let res = run_follow(&fcfg, model, &contour, &run, &mut |_| {})?;
+            let res = run_follow(&fcfg, (model, pins.as_deref()), &contour, &run, &mut |_| {})?;
             let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
             let figs = out.join("figures");
             figures::trajectory(

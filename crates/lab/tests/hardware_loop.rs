@@ -127,6 +127,7 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
         follow: &follow,
         tap: &sim.rig.tap,
         contact_threshold_px: sim.contact_threshold_px,
+        model_pins: Some(&data.meta.reference_pins),
     };
     let frames = scratch("frames");
     let sim_out = scratch("sim");
@@ -158,7 +159,8 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
         ..rig_file(&fake, &frames, start.x, start.y, start.rz)
     };
     let hw_out = scratch("hw");
-    let res = run_follow_hardware(&hw, model, Some(&disk), &hw_out, &mut |_| {}).unwrap();
+    let trained = (model, Some(data.meta.reference_pins.as_slice()));
+    let res = run_follow_hardware(&hw, trained, Some(&disk), &hw_out, &mut |_| {}).unwrap();
     assert_eq!(res.summary.steps, STEPS, "{}", res.summary.message);
     assert_eq!(trajectory(&hw_out), trajectory(&sim_out));
     assert!(res.metrics.is_some() && hw_out.join("metrics.json").exists());

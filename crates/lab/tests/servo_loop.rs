@@ -33,10 +33,35 @@ fn run(model: PoseModel, shape: &Contour, tag: &str) -> FollowOutcome {
     let mut cfg = FollowRunConfig::simulated();
     cfg.follow.max_steps = 700;
     let dir = std::env::temp_dir().join(format!("tactrace-servo-{tag}-{}", std::process::id()));
-    let out = run_follow(&cfg, model, shape, &dir, &mut |_| {}).unwrap();
+    let pins = Some(training_data().meta.reference_pins.as_slice());
+    let out = run_follow(&cfg, (model, pins), shape, &dir, &mut |_| {}).unwrap();
     assert!(dir.join("trajectory.csv").exists() && dir.join("metrics.json").exists());
     std::fs::remove_dir_all(&dir).ok();
     out
+}
+
+#[test]
+fn a_model_trained_on_pins_in_another_order_is_refused_before_the_loop() {
+    let mut pins = training_data().meta.reference_pins.clone();
+    pins.swap(10, 11);
+    let cfg = FollowRunConfig::simulated();
+    let dir = std::env::temp_dir().join(format!("tactrace-servo-order-{}", std::process::id()));
+    let disk = builtin_shape(BuiltinShape::Disk);
+    let err = run_follow(
+        &cfg,
+        (model(None, 1), Some(&pins)),
+        &disk,
+        &dir,
+        &mut |_| {},
+    )
+    .err()
+    .expect("pins in another order");
+    assert!(
+        err.is_bad_input() && err.to_string().contains("another order"),
+        "{err}"
+    );
+    assert!(!dir.join("trajectory.csv").exists(), "no step was taken");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

@@ -46,6 +46,11 @@ impl Mlp {
         self
     }
 
+    /// As [`Mlp::with_output_learning_rate`], in place (an annealed rate).
+    pub(crate) fn set_output_learning_rate(&mut self, lr: Option<f64>) {
+        self.output_lr = lr;
+    }
+
     /// The parameters.
     pub fn layers(&self) -> &Layers {
         &self.layers

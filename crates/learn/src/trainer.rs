@@ -1,7 +1,7 @@
 //! The training loop of a pose model: per-epoch shuffling with a seeded RNG,
 //! one EP (or backprop) pass per net, the two PDenNN nets on two cores with
 //! `rayon::join`, and the per-epoch history of report Fig. 4.5.
-use crate::config::{ModelConfig, ModelKind, NetConfig};
+use crate::config::{anneal_factor, ModelConfig, ModelKind, NetConfig};
 use crate::dataset::Dataset;
 use crate::dennn::{DenNN, EpConfig};
 use crate::error::LearnError;
@@ -77,7 +77,8 @@ impl NetData {
 
 enum Engine {
     Ep(DenNN, EpConfig),
-    Backprop(Mlp, f64),
+    /// The net, its rate and its output layer's rate (before annealing).
+    Backprop(Mlp, f64, Option<f64>),
 }
 
 /// One net being trained.
@@ -88,6 +89,8 @@ pub(crate) struct Trainer {
     val: Option<NetData>,
     rng: ChaCha8Rng,
     order: Vec<usize>,
+    /// Epochs and the annealed fraction of them (`ModelConfig`).
+    schedule: (usize, f64),
 }
 
 impl Trainer {
@@ -106,6 +109,7 @@ impl Trainer {
                     .with_lr_scaling(cfg.lr_scaling)
                     .with_output_learning_rate(net.output_learning_rate),
                 net.learning_rate,
+                net.output_learning_rate,
             )
         } else {
             let ep = EpConfig {
@@ -130,22 +134,31 @@ impl Trainer {
             val,
             rng,
             order,
+            schedule: (cfg.epochs, cfg.anneal_fraction),
         }
     }
 
     /// One shuffled pass over the training data.
     pub fn epoch(&mut self, epoch: usize) -> Result<NetEpoch, LearnError> {
         self.order.shuffle(&mut self.rng);
+        let f = anneal_factor(epoch, self.schedule.0, self.schedule.1);
         let (loss, energy) = match &mut self.engine {
             Engine::Ep(net, cfg) => {
-                let s = net.train_sequence(&self.data.set, &self.order, cfg)?;
+                let cfg = EpConfig {
+                    learning_rate: cfg.learning_rate * f,
+                    output_learning_rate: cfg.output_learning_rate.map(|o| o * f),
+                    ..*cfg
+                };
+                let s = net.train_sequence(&self.data.set, &self.order, &cfg)?;
                 (s.loss, s.energy)
             }
-            Engine::Backprop(net, lr) => {
+            Engine::Backprop(net, lr, out_lr) => {
+                net.set_output_learning_rate(out_lr.map(|o| o * f));
+                let lr = *lr * f;
                 let mut total = 0.0;
                 for &i in &self.order {
                     total +=
-                        net.train_sample(self.data.set.x_row(i), self.data.set.y_row(i), *lr)?;
+                        net.train_sample(self.data.set.x_row(i), self.data.set.y_row(i), lr)?;
                 }
                 let mean = total / self.order.len() as f64;
                 (mean, mean)
@@ -170,14 +183,14 @@ impl Trainer {
     fn layers(&self) -> &Layers {
         match &self.engine {
             Engine::Ep(net, _) => net.layers(),
-            Engine::Backprop(net, _) => net.layers(),
+            Engine::Backprop(net, ..) => net.layers(),
         }
     }
 
     pub fn into_layers(self) -> Layers {
         match self.engine {
             Engine::Ep(net, _) => net.layers().clone(),
-            Engine::Backprop(net, _) => net.layers().clone(),
+            Engine::Backprop(net, ..) => net.layers().clone(),
         }
     }
 }

@@ -105,18 +105,8 @@ pub struct ImportArgs {
     /// Folder of frames.
     #[arg(long)]
     frames: PathBuf,
-    /// CSV of labels, one row per frame.
-    #[arg(long)]
-    targets: PathBuf,
-    /// The undeformed frame whose pins define the order.
-    #[arg(long)]
-    reference: PathBuf,
-    #[arg(long, default_value = "image_name")]
-    image_column: String,
-    #[arg(long, default_value = "pose_2")]
-    r_column: String,
-    #[arg(long, default_value = "pose_6")]
-    theta_column: String,
+    #[command(flatten)]
+    labels: LabelArgs,
     /// Blob detector parameters (TOML, OpenCV key names); default: the real256 preset.
     #[arg(long)]
     params: Option<PathBuf>,
@@ -127,6 +117,25 @@ pub struct ImportArgs {
     out: PathBuf,
     #[arg(long)]
     force: bool,
+}
+
+/// A labels CSV, its columns and the reference frame (`import`, `twin`;
+/// the Bristol layout's column names by default).
+#[derive(Args)]
+pub struct LabelArgs {
+    /// CSV of labels, one row per frame.
+    #[arg(long)]
+    pub targets: PathBuf,
+    /// The undeformed frame whose pins define the order (for `twin` also
+    /// the simulated sensor's rest layout).
+    #[arg(long)]
+    pub reference: PathBuf,
+    #[arg(long, default_value = "image_name")]
+    pub image_column: String,
+    #[arg(long, default_value = "pose_2")]
+    pub r_column: String,
+    #[arg(long, default_value = "pose_6")]
+    pub theta_column: String,
 }
 
 /// Blob parameters from a file, or a named preset.
@@ -146,11 +155,11 @@ pub fn import(a: ImportArgs) -> Result<()> {
     let blob = blob_params(a.params.as_deref(), "real256")?;
     let cfg = imp::ImportConfig {
         frames: a.frames,
-        targets: a.targets,
-        reference: a.reference,
-        image_column: a.image_column,
-        r_column: a.r_column,
-        theta_column: a.theta_column,
+        targets: a.labels.targets,
+        reference: a.labels.reference,
+        image_column: a.labels.image_column,
+        r_column: a.labels.r_column,
+        theta_column: a.labels.theta_column,
         limit: a.limit,
     };
     let pb = bar(0, "import");

@@ -1,6 +1,6 @@
 //! `twin`: a simulated twin of a real labelled data set (the simulator
 //! judged against real frames, docs/results.md "Simulated to real").
-use crate::cmd_data::{blob_params, rig_config};
+use crate::cmd_data::{blob_params, rig_config, LabelArgs};
 use crate::progress::bar;
 use anyhow::Result;
 use clap::Args;
@@ -10,18 +10,8 @@ use tactrace_lab::{dataset, fsutil, LabError};
 
 #[derive(Args)]
 pub struct TwinArgs {
-    /// CSV of labels, one row per real frame (the Bristol layout by default).
-    #[arg(long)]
-    targets: PathBuf,
-    /// The real undeformed frame: rest layout and pin order of the twin.
-    #[arg(long)]
-    reference: PathBuf,
-    #[arg(long, default_value = "image_name")]
-    image_column: String,
-    #[arg(long, default_value = "pose_2")]
-    r_column: String,
-    #[arg(long, default_value = "pose_6")]
-    theta_column: String,
+    #[command(flatten)]
+    labels: LabelArgs,
     /// Vertical offset of each tap, mm; `none`: all taps at the nominal depth.
     #[arg(long, default_value = "pose_3")]
     dz_column: String,
@@ -74,11 +64,11 @@ pub fn twin(a: TwinArgs) -> Result<()> {
         }
     };
     let cfg = TwinConfig {
-        targets: a.targets,
-        reference: a.reference,
-        image_column: a.image_column,
-        r_column: a.r_column,
-        theta_column: a.theta_column,
+        targets: a.labels.targets,
+        reference: a.labels.reference,
+        image_column: a.labels.image_column,
+        r_column: a.labels.r_column,
+        theta_column: a.labels.theta_column,
         dz_column: optional(&a.dz_column),
         shear_columns,
         limit: a.limit,

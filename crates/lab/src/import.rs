@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use tactrace_sensor::read_frame;
 use tactrace_vision::{BlobParams, PinExtractor};
 
-/// One frame's displacement and whether pins were missing, or the frame
-/// name with the reason it was rejected.
-type FrameOutcome = std::result::Result<(Vec<f32>, bool), (String, String)>;
+/// One frame's displacement and whether pins were missing, or why it was
+/// rejected.
+pub(crate) type FrameOutcome = std::result::Result<(Vec<f32>, bool), String>;
 
 /// Where the real frames and their labels are.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -22,6 +22,22 @@ pub struct ImportConfig {
     pub theta_column: String,
     /// Import at most this many rows (all when `None`).
     pub limit: Option<usize>,
+}
+
+impl ImportConfig {
+    /// The Bristol edge set's layout in `dir` (frames/, targets.csv,
+    /// frames/init_0.png; r = pose_2, theta = pose_6), every row.
+    pub fn bristol(dir: &Path) -> Self {
+        ImportConfig {
+            frames: dir.join("frames"),
+            targets: dir.join("targets.csv"),
+            reference: dir.join("frames/init_0.png"),
+            image_column: "image_name".into(),
+            r_column: "pose_2".into(),
+            theta_column: "pose_6".into(),
+            limit: None,
+        }
+    }
 }
 
 /// Result of an import: the dataset and a summary.
@@ -133,59 +149,82 @@ pub fn import(
 ) -> Result<Imported> {
     let rows = read_rows(&cfg.targets, &LabelColumns::of(cfg), cfg.limit)?;
     let extractor = reference_extractor(&cfg.reference, blob)?;
-    let pins = extractor.tracker.reference().len();
-    let results: Vec<FrameOutcome> = rows
+    let outcomes: Vec<FrameOutcome> = rows
         .par_iter()
         .map(|row| {
-            let path = cfg.frames.join(&row.image);
-            let out =
-                extract_one(&extractor, &path).map_err(|e| (row.image.clone(), e.to_string()));
+            let out = extract_one(&extractor, &cfg.frames.join(&row.image));
             progress();
-            out
+            out.map_err(|e| e.to_string())
         })
         .collect();
-    let mut inputs = Vec::with_capacity(rows.len() * 2 * pins);
-    let mut targets = Vec::with_capacity(rows.len() * 2);
-    let (mut missing, mut rejected) = (0, Vec::new());
-    for (row, res) in rows.iter().zip(results) {
-        match res {
-            Ok((disp, had_missing)) => {
-                inputs.extend(disp);
-                targets.extend([row.r, row.theta]);
-                missing += had_missing as usize;
-            }
-            Err(err) => rejected.push(err),
-        }
-    }
     // An unreadable file is an error of the whole import: nothing is lost silently.
-    if let Some((name, reason)) = rejected.iter().find(|(_, r)| !r.contains("pins")) {
+    let unreadable = rows.iter().zip(&outcomes).find_map(|(row, o)| match o {
+        Err(reason) if !reason.contains("pins") => Some((row, reason)),
+        _ => None,
+    });
+    if let Some((row, reason)) = unreadable {
         return Err(LabError::Format {
-            path: cfg.frames.join(name),
+            path: cfg.frames.join(&row.image),
             reason: reason.clone(),
-        });
-    }
-    let samples = targets.len() / 2;
-    if samples == 0 {
-        return Err(LabError::Format {
-            path: cfg.frames.clone(),
-            reason: "no frame gave enough pins".into(),
         });
     }
     let meta = DatasetMeta {
         source: "real".into(),
         origin: cfg.frames.display().to_string(),
         seed: None,
-        samples,
-        pins,
-        targets: [
-            format!("r_mm ({})", cfg.r_column),
-            format!("theta_deg ({})", cfg.theta_column),
-        ],
-        frames_with_missing_pins: missing,
+        samples: 0,
+        pins: extractor.tracker.reference().len(),
+        targets: target_names(&cfg.r_column, &cfg.theta_column),
+        frames_with_missing_pins: 0,
         reference_pins: extractor.tracker.reference().to_vec(),
-        settings: serde_json::json!({ "import": cfg, "blob": blob, "rejected": rejected.len() }),
+        settings: serde_json::json!({ "import": cfg, "blob": blob }),
         tactrace_version: crate::VERSION.into(),
     };
+    gather(&rows, outcomes, meta, &cfg.frames)
+}
+
+/// The dataset's target descriptions for the label columns used.
+pub(crate) fn target_names(r_column: &str, theta_column: &str) -> [String; 2] {
+    [
+        format!("r_mm ({r_column})"),
+        format!("theta_deg ({theta_column})"),
+    ]
+}
+
+/// The rows' outcomes (in row order) gathered into the dataset `meta`
+/// describes; the sample, missing-pin and rejected counts of `meta` are
+/// filled in here. Rejected rows keep their image name and reason. An error
+/// naming `origin` when no row gave a sample.
+pub(crate) fn gather(
+    rows: &[Row],
+    outcomes: Vec<FrameOutcome>,
+    mut meta: DatasetMeta,
+    origin: &Path,
+) -> Result<Imported> {
+    let mut inputs = Vec::with_capacity(rows.len() * 2 * meta.pins);
+    let mut targets = Vec::with_capacity(rows.len() * 2);
+    let (mut missing, mut rejected) = (0, Vec::new());
+    for (row, outcome) in rows.iter().zip(outcomes) {
+        match outcome {
+            Ok((disp, had_missing)) => {
+                inputs.extend(disp);
+                targets.extend([row.r, row.theta]);
+                missing += usize::from(had_missing);
+            }
+            Err(reason) => rejected.push((row.image.clone(), reason)),
+        }
+    }
+    meta.samples = targets.len() / 2;
+    if meta.samples == 0 {
+        return Err(LabError::Format {
+            path: origin.to_path_buf(),
+            reason: "no frame gave enough pins".into(),
+        });
+    }
+    meta.frames_with_missing_pins = missing;
+    if let Some(settings) = meta.settings.as_object_mut() {
+        settings.insert("rejected".into(), rejected.len().into());
+    }
     Ok(Imported {
         data: TapData {
             inputs,

@@ -253,15 +253,7 @@ pub fn reproduce(
 /// the 20 %; then train the PDenNN and the MLP on the simulated twin of the
 /// real set (its own 80 %) and validate them on the same real 20 %.
 fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<(Vec<NetRow>, Vec<NetRow>)> {
-    let icfg = crate::import::ImportConfig {
-        frames: dir.join("frames"),
-        targets: dir.join("targets.csv"),
-        reference: dir.join("frames/init_0.png"),
-        image_column: "image_name".into(),
-        r_column: "pose_2".into(),
-        theta_column: "pose_6".into(),
-        limit: None,
-    };
+    let icfg = crate::import::ImportConfig::bristol(dir);
     let blob = tactrace_vision::BlobParams::preset("real256")?;
     fig_4_1_real(dir, &blob, &out.join("figures/fig4_1_real"))?;
     let imported = crate::import::import(&icfg, &blob, &|| {})?;

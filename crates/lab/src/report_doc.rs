@@ -11,48 +11,51 @@ fn opt(v: Option<f64>) -> String {
     v.map(|x| format!("{x:.2}")).unwrap_or_else(|| "-".into())
 }
 
-fn networks_table(md: &mut String, rows: &[NetRow], reference: &str) {
+/// A networks table: each row's errors beside the two `reference` figures
+/// (angle, position, formatted) that `beside` gives for it.
+fn table(
+    md: &mut String,
+    rows: &[NetRow],
+    reference: &str,
+    beside: impl Fn(&NetRow) -> [String; 2],
+) {
     let _ = writeln!(
         md,
         "| network | angle MAE (deg) | position MAE (mm) | {reference} angle (deg) | {reference} position (mm) | train time (s) |\n|---|---|---|---|---|---|"
     );
     for n in rows {
-        let rep = REPORT_TABLE_4_1.iter().find(|(name, _, _)| *name == n.name);
-        let (angle, position) = match reference {
-            "report" => (rep.and_then(|x| x.1), rep.and_then(|x| x.2)),
-            _ => (Some(1.45), Some(0.15)),
-        };
+        let [angle, position] = beside(n);
         let _ = writeln!(
             md,
-            "| {} | {:.2} | {:.3} | {} | {} | {:.1} |",
-            n.name,
-            n.angle_mae_deg,
-            n.position_mae_mm,
-            opt(angle),
-            opt(position),
-            n.train_seconds
+            "| {} | {:.2} | {:.3} | {angle} | {position} | {:.1} |",
+            n.name, n.angle_mae_deg, n.position_mae_mm, n.train_seconds
         );
     }
     md.push('\n');
 }
 
+/// The rows beside the report's Table 4.1 (`reference` "report") or the
+/// literature CNN on the real frames.
+fn networks_table(md: &mut String, rows: &[NetRow], reference: &str) {
+    table(md, rows, reference, |n| {
+        let rep = REPORT_TABLE_4_1.iter().find(|(name, _, _)| *name == n.name);
+        let (angle, position) = match reference {
+            "report" => (rep.and_then(|x| x.1), rep.and_then(|x| x.2)),
+            _ => (Some(1.45), Some(0.15)),
+        };
+        [opt(angle), opt(position)]
+    });
+}
+
 /// The simulated-to-real rows beside the same network trained on real frames.
 fn transfer_table(md: &mut String, rows: &[NetRow], real: &[NetRow]) {
-    md.push_str("| network | angle MAE (deg) | position MAE (mm) | trained on real: angle (deg) | trained on real: position (mm) | train time (s) |\n|---|---|---|---|---|---|\n");
-    for n in rows {
+    table(md, rows, "trained on real:", |n| {
         let same = real.iter().find(|r| r.name == n.name);
-        let _ = writeln!(
-            md,
-            "| {} | {:.2} | {:.3} | {} | {} | {:.1} |",
-            n.name,
-            n.angle_mae_deg,
-            n.position_mae_mm,
+        [
             opt(same.map(|r| r.angle_mae_deg)),
             same.map_or("-".into(), |r| format!("{:.3}", r.position_mae_mm)),
-            n.train_seconds
-        );
-    }
-    md.push('\n');
+        ]
+    });
 }
 
 /// The Markdown text of the report.

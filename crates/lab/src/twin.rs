@@ -7,9 +7,11 @@
 //! labels, pin order and rest layout, so a model trained on one can be
 //! validated on the other: the simulator judged by what it predicts about
 //! real frames (docs/results.md, "Simulated to real").
-use crate::dataset::{DatasetMeta, TapData};
-use crate::error::{LabError, Result};
-use crate::import::{read_rows, reference_extractor, Imported, LabelColumns, Row};
+use crate::dataset::DatasetMeta;
+use crate::error::Result;
+use crate::import::{
+    gather, read_rows, reference_extractor, target_names, FrameOutcome, Imported, LabelColumns, Row,
+};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -86,7 +88,7 @@ pub fn simulate_twin(
     let extractor = reference_extractor(&cfg.reference, blob)?;
     let rest = extractor.tracker.reference().to_vec();
     let model = TacTipModel::with_rest_pins(sensor.clone(), rest.clone())?;
-    let outcomes: Vec<std::result::Result<(Vec<f32>, bool), String>> = rows
+    let outcomes: Vec<FrameOutcome> = rows
         .par_iter()
         .enumerate()
         .map(|(k, row)| {
@@ -95,53 +97,19 @@ pub fn simulate_twin(
             out
         })
         .collect();
-    let pins = rest.len();
-    let mut inputs = Vec::with_capacity(rows.len() * 2 * pins);
-    let mut targets = Vec::with_capacity(rows.len() * 2);
-    let (mut missing, mut rejected) = (0, Vec::new());
-    for (row, outcome) in rows.iter().zip(outcomes) {
-        match outcome {
-            Ok((disp, had_missing)) => {
-                inputs.extend(disp);
-                targets.extend([row.r, row.theta]);
-                missing += usize::from(had_missing);
-            }
-            Err(reason) => rejected.push((row.image.clone(), reason)),
-        }
-    }
-    let samples = targets.len() / 2;
-    if samples == 0 {
-        return Err(LabError::Format {
-            path: cfg.targets.clone(),
-            reason: "no simulated frame gave enough pins".into(),
-        });
-    }
     let meta = DatasetMeta {
         source: "simulated twin".into(),
         origin: cfg.targets.display().to_string(),
         seed: Some(cfg.seed),
-        samples,
-        pins,
-        targets: [
-            format!("r_mm ({})", cfg.r_column),
-            format!("theta_deg ({})", cfg.theta_column),
-        ],
-        frames_with_missing_pins: missing,
+        samples: 0,
+        pins: rest.len(),
+        targets: target_names(&cfg.r_column, &cfg.theta_column),
+        frames_with_missing_pins: 0,
         reference_pins: rest,
-        settings: serde_json::json!({
-            "twin": cfg, "sensor": sensor, "blob": blob, "rejected": rejected.len()
-        }),
+        settings: serde_json::json!({ "twin": cfg, "sensor": sensor, "blob": blob }),
         tactrace_version: crate::VERSION.into(),
     };
-    Ok(Imported {
-        data: TapData {
-            inputs,
-            targets,
-            meta,
-        },
-        frames_with_missing_pins: missing,
-        rejected,
-    })
+    gather(&rows, outcomes, meta, &cfg.targets)
 }
 
 /// The labelled tap of one row (extra values: dz, then the shear columns).
@@ -173,7 +141,7 @@ fn simulate_row(
     cfg: &TwinConfig,
     row: &Row,
     k: u64,
-) -> std::result::Result<(Vec<f32>, bool), String> {
+) -> FrameOutcome {
     let pins = model.edge_tap_pins(&edge_tap(cfg, row));
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     rng.set_stream(k);

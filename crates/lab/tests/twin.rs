@@ -103,13 +103,8 @@ fn the_twin_of_real_frames_shares_their_pin_order_and_agrees_with_them() {
     twin_cfg.limit = Some(80);
     let twin = simulate_twin(&twin_cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
     let real_cfg = ImportConfig {
-        frames: dir.join("frames"),
-        targets: dir.join("targets.csv"),
-        reference: dir.join("frames/init_0.png"),
-        image_column: "image_name".into(),
-        r_column: "pose_2".into(),
-        theta_column: "pose_6".into(),
         limit: Some(80),
+        ..ImportConfig::bristol(&dir)
     };
     let real = import(&real_cfg, &blob, &|| {}).unwrap();
     assert_eq!(twin.data.len(), real.data.len());

@@ -39,7 +39,7 @@ pub(crate) fn step_one_output<const F: bool>(
     next: Option<&[f32]>,
 ) -> SampleStats {
     let beta = cfg.beta as f32;
-    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
+    let rates = LayerRates::of(cfg);
     let (eta1, eta2) = (rates.rate(layers, 1), rates.rate(layers, 2));
     let [x_scaled, d, _] = &mut st.tmp[..] else {
         unreachable!("two layers")
@@ -87,7 +87,7 @@ pub(crate) fn step_two_outputs<const F: bool>(
     next: Option<&[f32]>,
 ) -> SampleStats {
     let beta = cfg.beta as f32;
-    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
+    let rates = LayerRates::of(cfg);
     let (eta1, eta2) = (rates.rate(layers, 1), rates.rate(layers, 2));
     let h = layers.sizes[1];
     let [x_scaled, d, _] = &mut st.tmp[..] else {

@@ -37,7 +37,7 @@ pub(crate) fn step_general<const F: bool>(
 ) -> SampleStats {
     let n = layers.depth();
     let beta = cfg.beta as f32;
-    let rates = LayerRates::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling);
+    let rates = LayerRates::of(cfg);
     match cfg.free_phase {
         FreePhase::FeedForward => {
             st.s[0].copy_from_slice(x);
@@ -91,6 +91,11 @@ impl LayerRates {
             output: output.unwrap_or(hidden) as f32,
             scaling,
         }
+    }
+
+    /// The rates of an EP configuration.
+    pub fn of(cfg: &EpConfig) -> Self {
+        Self::new(cfg.learning_rate, cfg.output_learning_rate, cfg.lr_scaling)
     }
 
     /// The rate of layer `l` (1-based) of `layers`.

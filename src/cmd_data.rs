@@ -4,10 +4,12 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use tactrace_geometry::ShapeSpec;
-use tactrace_lab::collect::{collect as run_collect, pose_at_edge, CollectConfig};
+use tactrace_lab::collect::{collect as run_collect, CollectConfig};
 use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareConfig};
-use tactrace_lab::rig::RigConfig;
-use tactrace_lab::{dataset, fsutil, images, import as imp, shape_io, LabError};
+use tactrace_lab::{import as imp, LabError};
+use tactrace_servo::{pose_at_edge, RigConfig};
+use tactrace_store::frame_file::png_bytes;
+use tactrace_store::{dataset, fsutil, load_config, load_shape};
 use tactrace_vision::BlobParams;
 
 #[derive(Args)]
@@ -38,13 +40,9 @@ pub struct CollectArgs {
     force: bool,
 }
 
-/// Read a rig configuration, or the simulated defaults.
+/// The simulated rig's configuration: the defaults, then the file.
 pub fn rig_config(path: Option<&Path>) -> Result<RigConfig> {
-    let Some(path) = path else {
-        return Ok(RigConfig::simulated());
-    };
-    let text = fsutil::read_text(path)?;
-    toml::from_str(&text).with_context(|| format!("{}: invalid rig configuration", path.display()))
+    Ok(load_config(path, "rig configuration")?)
 }
 
 pub fn collect(a: CollectArgs) -> Result<()> {
@@ -52,7 +50,7 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         return collect_hardware(&a, path);
     }
     let spec = ShapeSpec::parse(&a.shape);
-    let shape = shape_io::load_shape(&spec)?;
+    let shape = load_shape(&spec)?;
     let rig = rig_config(a.config.as_deref())?;
     let cfg = CollectConfig {
         samples: a.samples,
@@ -230,7 +228,7 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             config,
         } => {
             let spec = ShapeSpec::parse(&shape);
-            let contour = shape_io::load_shape(&spec)?;
+            let contour = load_shape(&spec)?;
             let rig = rig_config(config.as_deref())?;
             let model =
                 tactrace_sensor::TacTipModel::new(rig.sensor.clone()).map_err(LabError::from)?;
@@ -239,7 +237,7 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             let pose = pose_at_edge(edge, normal, r, theta, -depth);
             let pins = model.pins(&contour, pose, None);
             let frame = model.render(&pins, None);
-            fsutil::write_atomic(&out, &images::png_bytes(&frame)?)?;
+            fsutil::write_atomic(&out, &png_bytes(&frame, "frame")?)?;
             eprintln!("wrote {}", out.display());
             Ok(())
         }
@@ -251,11 +249,10 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             let blob = blob_params(params.as_deref(), &preset)?;
             let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
             let kps = tactrace_vision::detect_blobs(&frame, &blob);
-            let mut out = String::from("x,y,size\n");
+            crate::say!("x,y,size");
             for k in &kps {
-                out.push_str(&format!("{:.3},{:.3},{:.3}\n", k.x, k.y, k.size));
+                crate::say!("{:.3},{:.3},{:.3}", k.x, k.y, k.size);
             }
-            print!("{out}");
             eprintln!("{} pins", kps.len());
             Ok(())
         }

@@ -1,13 +1,15 @@
 //! Experiment commands: `follow` and `reproduce`.
 use crate::progress::bar;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
 use tactrace_geometry::ShapeSpec;
-use tactrace_lab::follow::{run_follow, FollowRunConfig};
-use tactrace_lab::hardware::{run_follow_hardware, HardwareConfig};
-use tactrace_lab::report::{reproduce as run_reproduce, ReproduceConfig};
-use tactrace_lab::{figures, fsutil, model_io, settings, shape_io, LabError};
+use tactrace_lab::follow::{follow_simulated, FollowOutcome, SimFollowConfig};
+use tactrace_lab::hardware::{follow_hardware as follow_on_hardware, HardwareConfig};
+use tactrace_lab::reproduce::{reproduce as run_reproduce, ReproduceConfig};
+use tactrace_lab::LabError;
+use tactrace_servo::LoopConfig;
+use tactrace_store::{fsutil, load_config, load_shape, StoredModel};
 
 #[derive(Args)]
 pub struct FollowArgs {
@@ -29,60 +31,76 @@ pub struct FollowArgs {
     /// Follow-run TOML (tables rig, controller, follow, start).
     #[arg(long)]
     config: Option<PathBuf>,
+    /// Seed of the tap-depth variation and the simulated world's noise
+    /// (default: the configuration's, 1).
     #[arg(long)]
     seed: Option<u64>,
-    /// Run directory.
+    /// Run directory: written as OUT.partial and renamed to OUT when
+    /// the run is over.
     #[arg(long)]
     out: PathBuf,
-}
-
-fn follow_config(path: Option<&std::path::Path>) -> Result<FollowRunConfig> {
-    let base = FollowRunConfig::simulated();
-    let Some(path) = path else {
-        return Ok(base);
-    };
-    let text = fsutil::read_text(path)?;
-    let what = format!("{}: follow configuration", path.display());
-    Ok(settings::overlay(&base, &text, &what)?)
+    /// Replace an existing run directory.
+    #[arg(long)]
+    force: bool,
 }
 
 pub fn follow(a: FollowArgs) -> Result<()> {
     if let Some(hw) = a.hardware.clone() {
         return follow_hardware(a, &hw);
     }
-    let mut cfg = follow_config(a.config.as_deref())?;
+    let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
     overrides(&a, &mut cfg.follow);
     let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
-    let contour = shape_io::load_shape(&spec)?;
-    let (model, pins) = start_run(&a, &toml::to_string(&cfg)?)?;
-    let pb = bar(a.steps.unwrap_or(cfg.follow.max_steps) as u64, "follow");
-    let res = run_follow(&cfg, (model, pins.as_deref()), &contour, &a.out, &mut |r| {
-        pb.set_position(r.step as u64 + 1)
-    })?;
-    pb.finish_and_clear();
-    let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
-    figures::trajectory(&a.out.join("trajectory"), &spec.name(), &contour, &traj)?;
-    figures::error_curve(&a.out.join("l2_error"), &spec.name(), &res.l2_curve)?;
-    let m = &res.metrics;
-    println!(
-        "{}: {} steps, {:?}; mean L2 {:.3} mm, track error mean {:.3} / max {:.3} mm, coverage {:.0}%",
-        spec.name(),
-        m.steps,
-        res.summary.ending,
-        m.mean_l2_mm,
-        m.mean_track_error_mm,
-        m.max_track_error_mm,
-        100.0 * m.coverage
+    let contour = load_shape(&spec)?;
+    let model = StoredModel::load(&a.model)?;
+    let pb = bar(cfg.follow.step_limit() as u64, "follow");
+    let res = follow_simulated(
+        &cfg,
+        &model,
+        (&spec.name(), &contour),
+        (&a.out, a.force),
+        &mut |r| pb.set_position(r.step as u64 + 1),
     );
-    eprintln!("{}", res.summary.message);
+    pb.finish_and_clear();
+    report_run(&spec.name(), &res?)
+}
+
+/// Print a finished run's summary; a run that did not do what was asked
+/// (lost contact, refused move, fault, step cap) is an error (exit code 1)
+/// after its outputs are kept.
+fn report_run(name: &str, res: &FollowOutcome) -> Result<()> {
+    match &res.metrics {
+        Some(m) => crate::say!(
+            "{name}: {} steps, {:?}; mean L2 {:.3} mm, track error mean {:.3} / max {:.3} mm, coverage {:.0}%",
+            m.steps,
+            res.summary.ending,
+            m.mean_l2_mm,
+            m.mean_track_error_mm,
+            m.max_track_error_mm,
+            100.0 * m.coverage
+        ),
+        None => crate::say!("{} steps, {:?}", res.summary.steps, res.summary.ending),
+    }
+    eprintln!("{} (run folder {})", res.summary.message, res.dir.display());
+    if !res.summary.ending.succeeded() {
+        return Err(LabError::RunFailed {
+            ending: res.summary.ending,
+            message: res.summary.message.clone(),
+        }
+        .into());
+    }
     Ok(())
 }
 
 #[derive(Args)]
 pub struct ReproduceArgs {
-    /// Output directory for data, models, runs, figures and the report.
+    /// Output directory for data, models, runs, figures and the report
+    /// (appears only when complete).
     #[arg(long, default_value = "runs/reproduce")]
     out: PathBuf,
+    /// Replace an existing output directory.
+    #[arg(long)]
+    force: bool,
     /// Seed of every random choice (default 1, or the config's).
     #[arg(long)]
     seed: Option<u64>,
@@ -103,20 +121,14 @@ pub struct ReproduceArgs {
 }
 
 pub fn reproduce(a: ReproduceArgs) -> Result<()> {
-    let mut cfg = match &a.config {
-        Some(path) => {
-            let text = fsutil::read_text(path)?;
-            let what = format!("{}: reproduce configuration", path.display());
-            settings::overlay(&ReproduceConfig::default(), &text, &what)?
-        }
-        None => ReproduceConfig::default(),
-    };
+    let mut cfg: ReproduceConfig = load_config(a.config.as_deref(), "reproduce configuration")?;
     cfg.seed = a.seed.unwrap_or(cfg.seed);
     cfg.epochs = a.epochs.or(cfg.epochs);
     cfg.report_steps |= a.report_steps;
     cfg.real = a.real.or(cfg.real);
     let log = |msg: &str| eprintln!("[reproduce] {msg}");
-    let r = run_reproduce(&cfg, &a.out, &log)?;
+    fsutil::check_output_dir(&a.out, a.force)?;
+    let r = run_reproduce(&cfg, (&a.out, a.force), &log)?;
     let runs = [
         ("simulated", &r.networks),
         ("real", &r.real_networks),
@@ -124,19 +136,24 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     ];
     for (data, rows) in runs {
         for n in rows.iter() {
-            println!(
+            crate::say!(
                 "{:<16} {data:<9} angle {:.2} deg, position {:.3} mm",
-                n.name, n.angle_mae_deg, n.position_mae_mm
+                n.name,
+                n.angle_mae_deg,
+                n.position_mae_mm
             );
         }
     }
     for s in &r.shapes {
-        println!(
+        crate::say!(
             "{:<16} mean L2 {:.2} mm (report {:.2}), closed {}",
-            s.shape, s.metrics.mean_l2_mm, s.report_l2_mm, s.metrics.closed
+            s.shape,
+            s.metrics.mean_l2_mm,
+            s.report_l2_mm,
+            s.metrics.closed
         );
     }
-    println!("report: {}", a.out.join("report.html").display());
+    crate::say!("report: {}", a.out.join("report.html").display());
     Ok(())
 }
 
@@ -158,8 +175,19 @@ pub struct BenchArgs {
 }
 
 pub fn bench(a: BenchArgs) -> Result<()> {
-    let model = a.model.as_deref().map(model_io::load_model).transpose()?;
-    let rig = tactrace_lab::rig::RigConfig::simulated();
+    if a.real_frames.is_some() && a.model.is_none() {
+        return Err(LabError::Config(
+            "--real-frames times the control loop on real frames, which needs --model".into(),
+        )
+        .into());
+    }
+    let stored = a.model.as_deref().map(StoredModel::load).transpose()?;
+    let model = stored.map(|m| {
+        let pins = m.reference_pins().to_vec();
+        m.into_model_for(&pins, std::path::Path::new("bench"))
+    });
+    let model = model.transpose().map_err(LabError::from)?;
+    let rig = tactrace_servo::RigConfig::default();
     let f = tactrace_lab::bench::bench(&rig, a.taps.max(1), model.as_ref())?;
     let real = match (&a.real_frames, &model) {
         (Some(dir), Some(m)) => {
@@ -177,25 +205,25 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             obj.insert("real_control_latency_median_us".into(), r.median_us.into());
             obj.insert("real_control_latency_p95_us".into(), r.p95_us.into());
         }
-        println!("{}", serde_json::to_string_pretty(&doc)?);
+        crate::say!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
     }
-    println!("simulate (pins + render): {:.1} us/tap", f.simulate_us);
-    println!("extract (detect + order): {:.1} us/frame", f.extract_us);
-    println!(
+    crate::say!("simulate (pins + render): {:.1} us/tap", f.simulate_us);
+    crate::say!("extract (detect + order): {:.1} us/frame", f.extract_us);
+    crate::say!(
         "simulated taps per second (one core): {:.0}",
         f.taps_per_second
     );
     if let Some(l) = f.control_latency_us {
         let stat = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
-        println!(
+        crate::say!(
             "control loop, frame -> command: mean {l:.1} us, median {} us, p95 {} us",
             stat(f.control_latency_median_us),
             stat(f.control_latency_p95_us)
         );
     }
     if let Some(r) = real {
-        println!(
+        crate::say!(
             "control loop on real frames, frame -> command: mean {:.1} us, median {:.1} us, p95 {:.1} us",
             r.mean_us, r.median_us, r.p95_us
         );
@@ -204,26 +232,13 @@ pub fn bench(a: BenchArgs) -> Result<()> {
 }
 
 /// `--steps` and `--seed` over the configuration's follow settings.
-fn overrides(a: &FollowArgs, follow: &mut tactrace_lab::servo::FollowConfig) {
+fn overrides(a: &FollowArgs, follow: &mut LoopConfig) {
     if a.steps.is_some() {
         follow.steps = a.steps;
     }
     if let Some(s) = a.seed {
         follow.seed = s;
     }
-}
-
-/// Load the model, create the run directory and record the resolved
-/// configuration in it (before anything moves).
-/// The model and its training data's reference pins (if saved).
-type ModelAndPins = (tactrace_learn::PoseModel, Option<Vec<[f64; 2]>>);
-
-fn start_run(a: &FollowArgs, config_toml: &str) -> Result<ModelAndPins> {
-    let model = model_io::load_model(&a.model)?;
-    let pins = model_io::load_reference_pins(&a.model)?;
-    std::fs::create_dir_all(&a.out).with_context(|| a.out.display().to_string())?;
-    fsutil::write_atomic(&a.out.join("config.toml"), config_toml.as_bytes())?;
-    Ok((model, pins))
 }
 
 /// `follow --hardware`: the same loop on the real rig.
@@ -235,31 +250,20 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
     let shape = match &a.shape {
         Some(s) => {
             let spec = ShapeSpec::parse(s);
-            Some((spec.name(), shape_io::load_shape(&spec)?))
+            Some((spec.name(), load_shape(&spec)?))
         }
         None => None,
     };
-    let (model, pins) = start_run(&a, &toml::to_string(&cfg)?)?;
-    let pb = bar(a.steps.unwrap_or(cfg.follow.max_steps) as u64, "follow");
-    let res = run_follow_hardware(
+    let model = StoredModel::load(&a.model)?;
+    let pb = bar(cfg.follow.step_limit() as u64, "follow");
+    let res = follow_on_hardware(
         &cfg,
-        (model, pins.as_deref()),
-        shape.as_ref().map(|s| &s.1),
-        &a.out,
+        &model,
+        shape.as_ref().map(|(n, c)| (n.as_str(), c)),
+        (&a.out, a.force),
         &mut |r| pb.set_position(r.step as u64 + 1),
-    )?;
+    );
     pb.finish_and_clear();
-    if let (Some((name, contour)), Some((m, curve))) = (&shape, &res.metrics) {
-        let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
-        figures::trajectory(&a.out.join("trajectory"), name, contour, &traj)?;
-        figures::error_curve(&a.out.join("l2_error"), name, curve)?;
-        println!(
-            "{name}: {} steps, {:?}; mean L2 {:.3} mm, track error mean {:.3} mm",
-            m.steps, res.summary.ending, m.mean_l2_mm, m.mean_track_error_mm
-        );
-    } else {
-        println!("{} steps, {:?}", res.summary.steps, res.summary.ending);
-    }
-    eprintln!("{}", res.summary.message);
-    Ok(())
+    let name = shape.as_ref().map_or("rig", |(n, _)| n.as_str());
+    report_run(name, &res?)
 }

@@ -3,9 +3,10 @@ use crate::progress::bar;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
-use tactrace_lab::pin_order::check_pin_order;
-use tactrace_lab::{dataset, figures, fsutil, model_io, train as tr, LabError};
+use tactrace_lab::{train as tr, LabError};
 use tactrace_learn::{ModelKind, Preset, SearchSpace};
+use tactrace_report::figures::{self, Predicted};
+use tactrace_store::{check_output_dir, fsutil, read_dataset, StoredModel};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ModelArg {
@@ -102,16 +103,21 @@ pub fn train(a: TrainArgs) -> Result<()> {
                 .unwrap_or_default()
         })?;
     if a.print_config {
-        print!("{}", toml::to_string(&cfg)?);
+        crate::say!("{}", toml::to_string(&cfg)?.trim_end());
         return Ok(());
     }
-    fsutil_check_out(&a.out, a.force)?;
-    let data = dataset::read_dataset(&a.train)?;
+    check_output_dir(&a.out, a.force)?;
+    let data = read_dataset(&a.train)?;
     let (data, val) = match (a.val.as_deref(), a.val_fraction) {
         (Some(dir), _) => {
-            let val = dataset::read_dataset(dir)?;
-            let train_pins = Some(data.meta.reference_pins.as_slice());
-            check_pin_order(train_pins, &val.meta.reference_pins, dir)?;
+            let val = read_dataset(dir)?;
+            tactrace_store::pin_order_mismatch(&data.meta.reference_pins, &val.meta.reference_pins)
+                .map_or(Ok(()), |source| {
+                    Err(tactrace_store::StoreError::PinOrder {
+                        path: dir.to_path_buf(),
+                        source,
+                    })
+                })?;
             (data, Some(val))
         }
         (None, Some(f)) => {
@@ -169,7 +175,7 @@ pub fn train(a: TrainArgs) -> Result<()> {
     let secs = t0.elapsed().as_secs_f64();
     let extra: Vec<(&str, String)> = extra;
     let pins = &data.meta.reference_pins;
-    let dir = model_io::save_model_with(&a.out, &model, pins, &history, a.force, &extra)?;
+    let dir = tr::save_model(&a.out, &model, pins, &history, a.force, &extra)?;
     eprintln!("trained in {secs:.1} s; saved model to {}", dir.display());
     if history.lr_halvings > 0 {
         eprintln!(
@@ -180,10 +186,12 @@ pub fn train(a: TrainArgs) -> Result<()> {
         );
     }
     if let Some(val) = val {
-        let v = tr::validate(&model, &val)?;
-        println!(
+        let v = tr::validate_net(&model, &val)?;
+        crate::say!(
             "validation: position {:.3} mm, angle {:.3} deg over {} samples",
-            v.position_mae_mm, v.angle_mae_deg, v.samples
+            v.position_mae_mm,
+            v.angle_mae_deg,
+            v.samples
         );
     }
     Ok(())
@@ -204,21 +212,6 @@ fn search_space(path: Option<&std::path::Path>, trials: Option<usize>) -> Result
     Ok(space)
 }
 
-/// Refuse an existing, non-empty output directory before any work (unless
-/// `force`), so a long run cannot end in "output exists".
-fn fsutil_check_out(out: &std::path::Path, force: bool) -> Result<()> {
-    let has_entries = std::fs::read_dir(out)
-        .map(|mut d| d.next().is_some())
-        .unwrap_or(false);
-    if has_entries && !force {
-        return Err(LabError::OutputExists {
-            path: out.to_path_buf(),
-        }
-        .into());
-    }
-    Ok(())
-}
-
 #[derive(Args)]
 pub struct ValidateArgs {
     /// Model directory.
@@ -236,21 +229,28 @@ pub struct ValidateArgs {
 }
 
 pub fn validate(a: ValidateArgs) -> Result<()> {
-    let model = model_io::load_model(&a.model)?;
-    let data = dataset::read_dataset(&a.data)?;
-    let model_pins = model_io::load_reference_pins(&a.model)?;
-    check_pin_order(model_pins.as_deref(), &data.meta.reference_pins, &a.data)?;
-    let v = tr::validate(&model, &data)?;
+    let model = StoredModel::load(&a.model)?;
+    let data = read_dataset(&a.data)?;
+    let v = tr::validate(&model, &data, &a.data)?;
     if let Some(dir) = &a.plots {
-        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
-        figures::predicted_vs_true(&dir.join("predicted_vs_true"), "model", &v)?;
+        std::fs::create_dir_all(dir)
+            .map_err(tactrace_store::write_err(dir))
+            .map_err(LabError::from)?;
+        let predicted = Predicted {
+            truth: &v.truth,
+            predictions: &v.predictions,
+        };
+        figures::predicted_vs_true(&dir.join("predicted_vs_true"), "model", &predicted)
+            .map_err(LabError::from)?;
     }
     if a.json {
-        println!("{}", serde_json::to_string(&v)?);
+        crate::say!("{}", serde_json::to_string(&v)?);
     } else {
-        println!(
+        crate::say!(
             "position MAE {:.3} mm, angle MAE {:.3} deg, {} samples",
-            v.position_mae_mm, v.angle_mae_deg, v.samples
+            v.position_mae_mm,
+            v.angle_mae_deg,
+            v.samples
         );
     }
     Ok(())
@@ -275,27 +275,29 @@ pub struct PredictArgs {
 }
 
 pub fn predict(a: PredictArgs) -> Result<()> {
-    let model = model_io::load_model(&a.model)?;
-    let model_pins = model_io::load_reference_pins(&a.model)?;
+    let model = StoredModel::load(&a.model)?;
     match (a.image, a.reference, a.data) {
         (Some(image), Some(reference), None) => {
             let blob = crate::cmd_data::blob_params(a.params.as_deref(), "real256")?;
             let refr = tactrace_sensor::read_frame(&reference).map_err(LabError::from)?;
             let ex = tactrace_vision::PinExtractor::from_reference_frame(&refr, blob)
                 .map_err(LabError::from)?;
-            check_pin_order(model_pins.as_deref(), ex.tracker.reference(), &reference)?;
+            let net = model
+                .for_pins(ex.tracker.reference(), &reference)
+                .map_err(LabError::from)?;
             let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
             let tracked = ex.extract(&frame).map_err(LabError::from)?;
-            let [r, t] = model.predict(&tracked.displacement(ex.tracker.reference()))?;
-            println!("r_mm,theta_deg\n{r:.4},{t:.4}");
+            let [r, t] = net
+                .predict(&tracked.displacement(ex.tracker.reference()))
+                .map_err(LabError::from)?;
+            crate::say!("r_mm,theta_deg\n{r:.4},{t:.4}");
         }
         (None, None, Some(dir)) => {
-            let data = dataset::read_dataset(&dir)?;
-            check_pin_order(model_pins.as_deref(), &data.meta.reference_pins, &dir)?;
-            let v = tr::validate(&model, &data)?;
-            println!("r_mm,theta_deg,true_r_mm,true_theta_deg");
+            let data = read_dataset(&dir)?;
+            let v = tr::validate(&model, &data, &dir)?;
+            crate::say!("r_mm,theta_deg,true_r_mm,true_theta_deg");
             for (p, t) in v.predictions.iter().zip(&v.truth) {
-                println!("{:.4},{:.4},{:.4},{:.4}", p[0], p[1], t[0], t[1]);
+                crate::say!("{:.4},{:.4},{:.4},{:.4}", p[0], p[1], t[0], t[1]);
             }
         }
         _ => {

@@ -6,7 +6,8 @@ use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
 use tactrace_lab::twin::{simulate_twin, TwinConfig};
-use tactrace_lab::{dataset, fsutil, LabError};
+use tactrace_lab::LabError;
+use tactrace_store::{dataset, fsutil};
 
 #[derive(Args)]
 pub struct TwinArgs {

@@ -1,13 +1,25 @@
 //! `tactrace`: the command-line front end. Arguments are parsed here (no
 //! I/O), turned into run configurations, and handed to `tactrace-lab`.
-//! Exit codes: 0 success, 1 a run failed, 2 bad input (arguments, files,
-//! configuration).
+//! Exit codes: 0 success, 1 a run failed (lost contact, unreachable
+//! contour, diverged, a fault, an output that could not be written), 2 bad
+//! input (arguments, files, configuration, data). A closed standard output
+//! (`tactrace predict ... | head`) ends the command quietly with 0.
 
 mod cmd_data;
 mod cmd_follow;
 mod cmd_learn;
 mod cmd_twin;
 mod progress;
+
+/// Print a line on standard output; a closed pipe becomes an error that
+/// `main` turns into a quiet exit, never a panic.
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)?
+    }};
+}
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -62,14 +74,37 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err:#}");
-            let input_error = err.chain().any(|e| {
-                e.downcast_ref::<tactrace_lab::LabError>()
-                    .is_some_and(tactrace_lab::LabError::is_bad_input)
-                    || e.downcast_ref::<toml::de::Error>().is_some()
-            });
-            ExitCode::from(if input_error { 2 } else { 1 })
+            ExitCode::from(exit_code(&err))
         }
     }
+}
+
+/// Standard output was closed by the reader.
+fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|e| {
+        e.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// 2 for bad input, 1 for a run that failed: decided by the first typed
+/// error in the chain.
+fn exit_code(err: &anyhow::Error) -> u8 {
+    for e in err.chain() {
+        if let Some(lab) = e.downcast_ref::<tactrace_lab::LabError>() {
+            return if lab.is_bad_input() { 2 } else { 1 };
+        }
+        if let Some(store) = e.downcast_ref::<tactrace_store::StoreError>() {
+            return if store.is_bad_input() { 2 } else { 1 };
+        }
+        if e.downcast_ref::<toml::de::Error>().is_some()
+            || e.downcast_ref::<toml::ser::Error>().is_some()
+        {
+            return 2;
+        }
+    }
+    1
 }

@@ -45,13 +45,8 @@ pub fn tactrace(dir: &Path, args: &[&str]) -> Run {
     }
 }
 
-/// The real TacTip data folder, or None (with a message) when absent.
+/// The real TacTip data folder; see `tactrace_testdata` for what happens
+/// when it is absent.
 pub fn real_data() -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/tactip127-edge2d");
-    if p.join("targets.csv").exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: real TacTip data not found at {}", p.display());
-        None
-    }
+    tactrace_testdata::real_edge_set()
 }

@@ -1,11 +1,18 @@
 //! Typed errors of the arm crate: what a move can be refused for.
 use tactrace_geometry::Pose;
 
+/// The error a real robot driver reported, kept typed as the source.
+pub type DriverError = std::sync::Arc<dyn std::error::Error + Send + Sync>;
+
 /// Why an arm refused or failed a move.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
+#[non_exhaustive]
 pub enum ArmError {
     /// The target position leaves the workspace box along one axis.
-    #[error("pose {pose:?} is outside the workspace: {axis} = {value_mm:.3} mm, allowed [{min_mm}, {max_mm}] mm")]
+    #[error(
+        "pose ({:.1}, {:.1}, {:.1}) mm is outside the workspace: {axis} = {value_mm:.3} mm, allowed [{min_mm}, {max_mm}] mm",
+        .pose.x, .pose.y, .pose.z
+    )]
     OutsideWorkspace {
         pose: Pose,
         axis: char,
@@ -20,7 +27,10 @@ pub enum ArmError {
     #[error("rotation step of {step_deg:.3} deg exceeds the maximum of {max_deg} deg")]
     RotationTooLarge { step_deg: f64, max_deg: f64 },
     /// A pose with a NaN or infinite component.
-    #[error("pose {pose:?} has a non-finite component")]
+    #[error(
+        "pose ({}, {}, {}) mm, ({}, {}, {}) deg has a non-finite component",
+        .pose.x, .pose.y, .pose.z, .pose.rx, .pose.ry, .pose.rz
+    )]
     NonFinitePose { pose: Pose },
     /// A configuration value that cannot be used.
     #[error("invalid arm configuration: {field} = {value} ({reason})")]
@@ -29,7 +39,7 @@ pub enum ArmError {
         value: f64,
         reason: &'static str,
     },
-    /// A failure reported by a real robot driver.
-    #[error("arm hardware error: {0}")]
-    Hardware(String),
+    /// A failure reported by a real robot driver (its error is the source).
+    #[error("the arm's driver failed")]
+    Hardware(#[source] DriverError),
 }

@@ -10,7 +10,7 @@ mod limiter;
 mod sim;
 mod traits;
 
-pub use error::ArmError;
+pub use error::{ArmError, DriverError};
 pub use limiter::{LimitMode, LimitedArm, Workspace};
 pub use sim::{PoseProbe, SimArm, SimArmConfig};
 pub use tactrace_geometry::Pose;

@@ -95,16 +95,16 @@ impl SimArm {
         }
     }
 
-    /// A handle that reads the physically reached pose.
-    pub fn probe(&self) -> PoseProbe {
-        PoseProbe {
-            actual: Arc::clone(&self.actual),
-        }
-    }
-
-    /// The physically reached pose (commanded + repeatability error).
-    pub fn actual(&self) -> Pose {
-        *self.actual.lock().unwrap_or_else(PoisonError::into_inner)
+    /// An arm as [`SimArm::new`] and the one handle on its physically
+    /// reached pose, for the simulated world (the sensor) only. The arm
+    /// itself shows only its commanded pose: the true pose cannot be read
+    /// from it, so code that holds the arm cannot leak it to a controller.
+    pub fn with_probe(config: SimArmConfig, start: Pose) -> (Self, PoseProbe) {
+        let arm = Self::new(config, start);
+        let probe = PoseProbe {
+            actual: Arc::clone(&arm.actual),
+        };
+        (arm, probe)
     }
 
     /// Number of completed moves (taps count as two).
@@ -160,8 +160,7 @@ mod tests {
             repeatability_deg: 0.1,
             seed: 9,
         };
-        let mut arm = SimArm::new(cfg, Pose::default());
-        let probe = arm.probe();
+        let (mut arm, probe) = SimArm::with_probe(cfg, Pose::default());
         assert_eq!(probe.actual(), Pose::default(), "start pose is exact");
         let n = 20_000;
         let (mut sum, mut sum2, mut sum_rz2) = ([0.0; 3], [0.0; 3], 0.0);
@@ -196,9 +195,9 @@ mod tests {
     #[test]
     fn same_seed_same_noise() {
         let run = || {
-            let mut arm = SimArm::new(SimArmConfig::default(), Pose::default());
+            let (mut arm, probe) = SimArm::with_probe(SimArmConfig::default(), Pose::default());
             arm.move_to(Pose::planar(1.0, 2.0, 3.0, 4.0)).unwrap();
-            arm.actual()
+            probe.actual()
         };
         assert_eq!(run(), run());
     }
@@ -206,7 +205,7 @@ mod tests {
     #[test]
     fn taps_move_straight_down_and_up() {
         let start = Pose::planar(3.0, 4.0, 2.0, 10.0);
-        let mut arm = SimArm::new(
+        let (mut arm, probe) = SimArm::with_probe(
             SimArmConfig {
                 repeatability_mm: 0.0,
                 repeatability_deg: 0.0,
@@ -215,7 +214,7 @@ mod tests {
             start,
         );
         arm.tap_down(5.0).unwrap();
-        assert_eq!(arm.probe().actual(), Pose { z: -3.0, ..start });
+        assert_eq!(probe.actual(), Pose { z: -3.0, ..start });
         arm.tap_up(5.0).unwrap();
         assert_eq!(arm.pose(), start);
         assert_eq!(arm.moves(), 2);

@@ -101,6 +101,6 @@ pub enum HwError {
 
 impl From<HwError> for tactrace_arm::ArmError {
     fn from(err: HwError) -> Self {
-        tactrace_arm::ArmError::Hardware(err.to_string())
+        tactrace_arm::ArmError::Hardware(std::sync::Arc::new(err))
     }
 }

@@ -12,12 +12,7 @@ fn toml_blocks(markdown: &str) -> Vec<String> {
 
 #[test]
 fn hardware_guide_examples_parse() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/hardware.md");
-    let Ok(text) = std::fs::read_to_string(path) else {
-        eprintln!("skipping: {path} not found");
-        return;
-    };
-    let blocks = toml_blocks(&text);
+    let blocks = toml_blocks(include_str!("../../../docs/hardware.md"));
     // The arm and the camera examples come first; the rig file of
     // `follow --hardware` after them is checked by the lab crate's tests.
     assert!(

@@ -3,15 +3,14 @@
 //! to command (detect, order, PCA, both nets, controller), as the mean and
 //! the per-frame median and 95th percentile. Timings are
 //! measured here, never asserted in tests.
-use crate::collect::pose_at_edge;
 use crate::error::Result;
-use crate::rig::RigConfig;
 use serde::Serialize;
 use std::time::Instant;
 use tactrace_control::{PbtsConfig, PbtsController, SensedPose};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_learn::PoseModel;
 use tactrace_sensor::TacTipModel;
+use tactrace_servo::{pose_at_edge, RigConfig};
 use tactrace_vision::PinExtractor;
 
 /// Figures from one benchmark run (single thread).
@@ -129,7 +128,7 @@ pub fn real_control_latency_stats(
     let reference = tactrace_sensor::read_frame(&frames.join("init_0.png"))?;
     let extractor = PinExtractor::from_reference_frame(&reference, blob.clone())?;
     let mut paths: Vec<_> = std::fs::read_dir(frames)
-        .map_err(crate::error::io_err(frames))?
+        .map_err(tactrace_store::read_err(frames))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "png") && !p.ends_with("init_0.png"))
         .collect();

@@ -6,15 +6,16 @@
 //!    over the run.
 //! 3. Tap and capture.
 //! 4. Extract the pins and their displacement from the undeformed frame.
-use crate::dataset::{DatasetMeta, TapData};
 use crate::error::{LabError, Result};
-use crate::rig::{tap, RigConfig, SimRig, TapConfig};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use tactrace_arm::{Arm, Pose};
+use tactrace_arm::Arm;
 use tactrace_geometry::{Contour, Vec2};
 use tactrace_sensor::{Frame, TactileSensor};
+use tactrace_servo::{pose_at_edge, tap, RigConfig, SimRig, TapConfig};
+use tactrace_store::frame_file::png_bytes;
+use tactrace_store::{DatasetMeta, TapData};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// What to collect.
@@ -53,14 +54,6 @@ pub struct Collected {
     pub frames: Vec<(String, Vec<u8>)>,
 }
 
-/// The sensor pose (tip, work frame) for edge position `r` and angle `theta`
-/// at edge point `edge` with outward normal `normal`; `height` above the top.
-pub fn pose_at_edge(edge: Vec2, normal: Vec2, r_mm: f64, theta_deg: f64, height_mm: f64) -> Pose {
-    let p = edge + normal * r_mm;
-    let yaw = normal.y.atan2(normal.x).to_degrees();
-    Pose::planar(p.x, p.y, height_mm, yaw + theta_deg)
-}
-
 /// Run the collection over `shape` with the simulated rig.
 pub fn collect(
     rig_cfg: &RigConfig,
@@ -79,9 +72,10 @@ pub fn collect(
     );
     let mut rig = SimRig::new(rig_cfg, shape.clone(), start, cfg.seed)?;
     let reference = rig.reference_frame();
+    let (arm, sensor) = rig.parts();
     let on = EdgeRig {
-        arm: &mut rig.arm,
-        sensor: &mut rig.sensor,
+        arm,
+        sensor,
         reference: &reference,
         blob: &rig_cfg.blob,
         tap: &rig_cfg.tap,
@@ -96,6 +90,16 @@ pub fn collect(
 pub fn check_samples(cfg: &CollectConfig) -> Result<()> {
     if cfg.samples == 0 {
         return Err(LabError::Config("--samples must be at least 1".into()));
+    }
+    let ranges_ok = cfg.r_range_mm.is_finite()
+        && cfg.r_range_mm >= 0.0
+        && cfg.theta_range_deg.is_finite()
+        && cfg.theta_range_deg >= 0.0
+        && cfg.edge_arc_mm.is_finite();
+    if !ranges_ok {
+        return Err(LabError::Config(
+            "r_range_mm and theta_range_deg must be finite and >= 0, edge_arc_mm finite".into(),
+        ));
     }
     Ok(())
 }
@@ -154,15 +158,12 @@ pub fn collect_on(
         inputs.extend(tracked.displacement(extractor.tracker.reference()));
         targets.extend([r as f32, theta as f32]);
         if cfg.save_frames {
-            frames.push((
-                format!("frame_{i:05}.png"),
-                crate::images::png_bytes(&frame)?,
-            ));
+            frames.push((format!("frame_{i:05}.png"), png_bytes(&frame, "frame")?));
         }
         progress(i + 1);
     }
     if cfg.save_frames {
-        frames.push(("reference.png".into(), crate::images::png_bytes(reference)?));
+        frames.push(("reference.png".into(), png_bytes(reference, "reference")?));
     }
     let meta = DatasetMeta {
         source: source.into(),
@@ -175,6 +176,8 @@ pub fn collect_on(
         reference_pins: extractor.tracker.reference().to_vec(),
         settings,
         tactrace_version: crate::VERSION.into(),
+        input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
+        images: Vec::new(),
     };
     Ok(Collected {
         data: TapData {

@@ -1,25 +1,29 @@
-//! Typed errors of the lab: every failure names the file or setting at fault.
+//! Typed errors of the experiments, each kind mapped to an exit code by
+//! [`LabError::is_bad_input`]: every failure names the file or setting at
+//! fault, and the source errors of the other crates stay typed inside.
 use std::path::PathBuf;
+use tactrace_servo::Ending;
 
-/// What can go wrong running an experiment or reading/writing its files.
+/// What can go wrong running an experiment.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LabError {
-    /// A file or folder could not be read or written.
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
     /// A file was read but its content is not what it should be.
     #[error("{path}: {reason}")]
     Format { path: PathBuf, reason: String },
     /// A configuration or argument value that cannot work.
     #[error("invalid configuration: {0}")]
     Config(String),
-    /// The output exists and would be overwritten.
-    #[error("{path} already exists and is not empty; choose another --out or pass --force")]
-    OutputExists { path: PathBuf },
+    /// A run that started but did not do what was asked (lost contact,
+    /// step cap, refused move, fault). Its outputs are kept.
+    #[error("the run failed ({ending:?}): {message}")]
+    RunFailed { ending: Ending, message: String },
+    #[error(transparent)]
+    Store(#[from] tactrace_store::StoreError),
+    #[error(transparent)]
+    Report(#[from] tactrace_report::ReportError),
+    #[error(transparent)]
+    Servo(#[from] tactrace_servo::ServoError),
     #[error(transparent)]
     Geometry(#[from] tactrace_geometry::GeometryError),
     #[error(transparent)]
@@ -30,39 +34,36 @@ pub enum LabError {
     Learn(#[from] tactrace_learn::LearnError),
     #[error(transparent)]
     Arm(#[from] tactrace_arm::ArmError),
-    /// The servo loop lost the object or could not start.
-    #[error("servo: {0}")]
-    Servo(String),
+    #[cfg(feature = "hardware")]
+    #[error(transparent)]
+    Hardware(#[from] tactrace_hw::HwError),
 }
 
 impl LabError {
     /// Whether the failure lies in what the user gave (files, arguments,
-    /// configuration, data) rather than in a run that went wrong. The binary
-    /// maps this to its exit code (2 for bad input, 1 for a failed run).
+    /// configuration, data: exit code 2) rather than in a run that went
+    /// wrong (exit code 1).
     pub fn is_bad_input(&self) -> bool {
         use tactrace_learn::LearnError as L;
         use tactrace_sensor::SensorError as S;
-        use tactrace_vision::VisionError as V;
+        use tactrace_servo::ServoError as V;
         match self {
-            LabError::Io { .. }
-            | LabError::Format { .. }
-            | LabError::Config(_)
-            | LabError::OutputExists { .. }
-            | LabError::Geometry(_) => true,
+            LabError::Format { .. } | LabError::Config(_) | LabError::Geometry(_) => true,
+            LabError::RunFailed { .. } | LabError::Report(_) => false,
+            LabError::Store(e) => e.is_bad_input(),
+            LabError::Servo(e) => matches!(
+                e,
+                V::Config(_) | V::Start(_) | V::InputSize { .. } | V::Geometry(_)
+            ),
             LabError::Sensor(e) => !matches!(e, S::ReplayExhausted { .. }),
-            LabError::Vision(e) => !matches!(e, V::TooFewPins { .. }),
+            LabError::Vision(_) => true,
             LabError::Learn(e) => !matches!(e, L::Diverged { .. }),
             LabError::Arm(e) => matches!(e, tactrace_arm::ArmError::InvalidConfig { .. }),
-            LabError::Servo(_) => false,
+            #[cfg(feature = "hardware")]
+            LabError::Hardware(_) => false,
         }
     }
 }
 
 /// Result with [`LabError`].
 pub type Result<T, E = LabError> = std::result::Result<T, E>;
-
-/// Attach a path to an I/O error.
-pub(crate) fn io_err(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> LabError {
-    let path = path.into();
-    move |source| LabError::Io { path, source }
-}

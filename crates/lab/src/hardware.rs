@@ -8,12 +8,11 @@
 //! configuration must name the workspace and the start pose explicitly:
 //! there is no safe default for a real robot. docs/hardware.md explains
 //! the set-up.
-use crate::collect::{check_samples, collect_on, pose_at_edge, CollectConfig, Collected, EdgeRig};
+use crate::collect::{check_samples, collect_on, CollectConfig, Collected, EdgeRig};
 use crate::error::{LabError, Result};
-use crate::follow::{run_servo, score_run, LoopSettings};
-use crate::metrics::FollowMetrics;
-use crate::rig::TapConfig;
-use crate::servo::{FollowConfig, FollowSummary, StepRecord};
+use crate::follow::{
+    follow_on_rig, perception_for, write_results, FollowOutcome, RunFolder, ServoSettings,
+};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
@@ -23,8 +22,9 @@ use tactrace_hw::{
     CameraSensor, CommandSource, CommandSourceConfig, FolderSource, FrameSource, PreprocessConfig,
     Ur5Arm, Ur5Config,
 };
-use tactrace_learn::PoseModel;
 use tactrace_sensor::{Frame, TactileSensor};
+use tactrace_servo::{pose_at_edge, LoopConfig, StepRecord, TapConfig};
+use tactrace_store::StoredModel;
 use tactrace_vision::BlobParams;
 
 /// Where the frames come from.
@@ -74,24 +74,49 @@ pub struct HardwareConfig {
     #[serde(default)]
     pub controller: PbtsConfig,
     #[serde(default)]
-    pub follow: FollowConfig,
-    /// Mean pin displacement (px) below which a tap counts as no contact.
-    #[serde(default = "default_contact")]
-    pub contact_threshold_px: f64,
+    pub follow: LoopConfig,
 }
 
 fn real_blob() -> BlobParams {
     BlobParams::preset("real256").expect("built-in preset")
 }
 
-fn default_contact() -> f64 {
-    0.5
-}
-
 impl HardwareConfig {
-    /// Parse a rig file (unknown keys are errors).
+    /// Parse a rig file named `what`: the optional tables (preprocess, tap,
+    /// blob, controller, follow) start from their defaults and the file
+    /// overlays them key by key, as every configuration does; `arm`,
+    /// `camera`, `workspace` and `start` must be given. Unknown keys are
+    /// errors.
     pub fn from_toml(text: &str, what: &str) -> Result<Self> {
-        toml::from_str(text).map_err(|e| LabError::Config(format!("{what}: {e}")))
+        #[derive(Serialize)]
+        struct Defaults {
+            preprocess: PreprocessConfig,
+            tap: TapConfig,
+            blob: BlobParams,
+            controller: PbtsConfig,
+            follow: LoopConfig,
+        }
+        let defaults = Defaults {
+            preprocess: PreprocessConfig::default(),
+            tap: TapConfig::default(),
+            blob: real_blob(),
+            controller: PbtsConfig::default(),
+            follow: LoopConfig::default(),
+        };
+        let base = toml::Value::try_from(&defaults).map_err(|e| LabError::Config(e.to_string()))?;
+        Ok(tactrace_store::config_file::overlay_value(
+            base, text, what,
+        )?)
+    }
+
+    /// The loop settings of this rig.
+    pub fn servo_settings(&self) -> ServoSettings {
+        ServoSettings {
+            blob: self.blob.clone(),
+            controller: self.controller.clone(),
+            follow: self.follow.clone(),
+            tap: self.tap,
+        }
     }
 
     /// The start pose at tap height.
@@ -107,14 +132,10 @@ impl HardwareConfig {
 
     /// Everything that can be checked without touching the hardware.
     pub fn validate(&self) -> Result<()> {
-        self.arm
-            .validate()
-            .map_err(|e| LabError::Config(format!("arm: {e}")))?;
-        self.preprocess
-            .validate()
-            .map_err(|e| LabError::Config(format!("preprocess: {e}")))?;
+        self.arm.validate()?;
+        self.preprocess.validate()?;
         self.workspace.validate()?;
-        crate::servo::check_follow_config(&self.follow)?;
+        self.follow.validate()?;
         let start = self.start_pose();
         self.workspace.check_inside(start).map_err(|e| {
             LabError::Config(format!(
@@ -136,22 +157,12 @@ impl HardwareConfig {
     }
 
     fn camera(&self) -> Result<Box<dyn TactileSensor>> {
-        let preprocess = self
-            .preprocess
-            .validate()
-            .map_err(|e| LabError::Config(format!("preprocess: {e}")))?;
-        let camera_err = |e: tactrace_hw::HwError| LabError::Config(format!("camera: {e}"));
+        let preprocess = self.preprocess.validate()?;
         Ok(match &self.camera {
-            CameraConfig::Command(c) => boxed(
-                CommandSource::from_config(c).map_err(camera_err)?,
-                preprocess,
-            ),
-            CameraConfig::Folder { path, looping } => boxed(
-                FolderSource::new(path)
-                    .map_err(camera_err)?
-                    .looping(*looping),
-                preprocess,
-            ),
+            CameraConfig::Command(c) => boxed(CommandSource::from_config(c)?, preprocess),
+            CameraConfig::Folder { path, looping } => {
+                boxed(FolderSource::new(path)?.looping(*looping), preprocess)
+            }
         })
     }
 }
@@ -163,61 +174,40 @@ fn boxed<S: FrameSource + 'static>(
     Box::new(CameraSensor::new(source, preprocess))
 }
 
-/// The outcome of a run on the rig; metrics only when the true contour
-/// was given.
-pub struct HardwareOutcome {
-    pub summary: FollowSummary,
-    pub records: Vec<StepRecord>,
-    pub metrics: Option<(FollowMetrics, Vec<f64>)>,
-}
-
 /// Follow an edge on the real rig: connect, move to the start at tap
-/// height, capture the undeformed reference frame there, then run the
-/// servo loop. `shape`, if given, is the object's true contour in the
-/// work frame and is used only to score the finished run.
-pub fn run_follow_hardware(
+/// height, capture the undeformed reference frame there, check it against
+/// the model's pins, then run the servo loop into the run folder `out`.
+/// `shape`, if given, is the object's true contour in the work frame (and
+/// its name) and is used only to score the finished run.
+pub fn follow_hardware(
     cfg: &HardwareConfig,
-    (model, model_pins): (PoseModel, Option<&[[f64; 2]]>),
-    shape: Option<&Contour>,
-    out: &Path,
+    model: &StoredModel,
+    shape: Option<(&str, &Contour)>,
+    (out, force): (&Path, bool),
     progress: &mut dyn FnMut(&StepRecord),
-) -> Result<HardwareOutcome> {
+) -> Result<FollowOutcome> {
     cfg.validate()?;
+    tactrace_store::check_output_dir(out, force)?;
     let (mut arm, mut sensor, reference) = connect_at(cfg, cfg.start_pose())?;
-    let settings = LoopSettings {
-        blob: &cfg.blob,
-        controller: &cfg.controller,
-        follow: &cfg.follow,
-        tap: &cfg.tap,
-        contact_threshold_px: cfg.contact_threshold_px,
-        model_pins,
-    };
-    let (summary, records) = run_servo(
+    let settings = cfg.servo_settings();
+    let perception = perception_for(&reference, model, &settings)?;
+    let run = RunFolder::start(out, force, cfg)?;
+    let (summary, records) = follow_on_rig(
         &mut arm,
         sensor.as_mut(),
-        &reference,
-        model,
+        &perception,
         &settings,
-        out,
+        run.path(),
         progress,
     )?;
-    let metrics = match shape {
-        Some(s) => Some(score_run(s, &records, &summary, &cfg.follow, out)?),
-        None => {
-            let doc = serde_json::json!({
-                "steps": summary.steps,
-                "ending": summary.ending,
-                "message": summary.message,
-            });
-            let json = serde_json::to_string_pretty(&doc).expect("metrics serialise");
-            crate::fsutil::write_atomic(&out.join("metrics.json"), json.as_bytes())?;
-            None
-        }
-    };
-    Ok(HardwareOutcome {
+    let (metrics, l2_curve) = write_results(shape, &records, &summary, &cfg.follow, run.path())?;
+    let dir = run.finish()?;
+    Ok(FollowOutcome {
         summary,
         records,
         metrics,
+        l2_curve,
+        dir,
     })
 }
 
@@ -229,11 +219,11 @@ fn connect_at(
     first: Pose,
 ) -> Result<(LimitedArm<Ur5Arm>, Box<dyn TactileSensor>, Frame)> {
     let mut sensor = cfg.camera()?;
-    let ur5 = Ur5Arm::connect(cfg.arm.clone()).map_err(|e| LabError::Servo(e.to_string()))?;
+    let ur5 = Ur5Arm::connect(cfg.arm.clone())?;
     let mut arm = LimitedArm::new(ur5, cfg.workspace.clone(), LimitMode::Refuse);
     arm.move_to(first).map_err(|e| {
-        LabError::Servo(format!(
-            "moving to the start (jog the arm to within the step limit of it first): {e}"
+        LabError::Config(format!(
+            "cannot move to the start (jog the arm to within the step limit of it first): {e}"
         ))
     })?;
     let reference = sensor.capture()?;

@@ -1,10 +1,10 @@
 //! Import real TacTip frames (Bristol layout) into the dataset format,
 //! through the same pin extraction as simulated taps.
-use crate::dataset::{DatasetMeta, TapData};
 use crate::error::{LabError, Result};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::read_frame;
+use tactrace_store::{DatasetMeta, TapData};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// One frame's displacement and whether pins were missing, or why it was
@@ -179,6 +179,8 @@ pub fn import(
         reference_pins: extractor.tracker.reference().to_vec(),
         settings: serde_json::json!({ "import": cfg, "blob": blob }),
         tactrace_version: crate::VERSION.into(),
+        input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
+        images: Vec::new(),
     };
     gather(&rows, outcomes, meta, &cfg.frames)
 }
@@ -204,11 +206,13 @@ pub(crate) fn gather(
     let mut inputs = Vec::with_capacity(rows.len() * 2 * meta.pins);
     let mut targets = Vec::with_capacity(rows.len() * 2);
     let (mut missing, mut rejected) = (0, Vec::new());
+    meta.images.clear();
     for (row, outcome) in rows.iter().zip(outcomes) {
         match outcome {
             Ok((disp, had_missing)) => {
                 inputs.extend(disp);
                 targets.extend([row.r, row.theta]);
+                meta.images.push(row.image.clone());
                 missing += usize::from(had_missing);
             }
             Err(reason) => rejected.push((row.image.clone(), reason)),

@@ -1,34 +1,23 @@
-//! The lab: tactrace's experiments and everything that touches files.
+//! The lab: tactrace's experiments, one module a stage of the research
+//! pipeline.
 //!
-//! The research pipeline, one module a stage: [`collect`] taps on an edge
-//! (simulated rig, [`rig`]), [`import`] turns real frames into the same
-//! [`dataset`] format, [`train`] fits pose models ([`model_io`] stores
-//! them), [`servo`] closes the loop round an object, [`metrics`] scores the
-//! trajectory, [`figures`] and [`report`] regenerate the report's tables and
-//! figures. Algorithms live in the `tactrace-*` core crates; this crate
-//! wires them to files, progress bars and plots.
+//! [`collect`] taps on an edge (the simulated rig of `tactrace-servo`),
+//! [`import`] turns real frames into the same dataset format, [`twin`]
+//! replays a real set's labels on the simulator, [`train`] fits and
+//! validates pose models, [`follow`] runs the servo loop round an object
+//! into a run folder, [`hardware`] does the same on a real rig,
+//! [`reproduce`] regenerates the report, [`mod@bench`] times it. Algorithms
+//! live in the core crates, files in `tactrace-store`, figures and
+//! documents in `tactrace-report`; this crate wires them together.
 
 pub mod bench;
 pub mod collect;
-pub mod dataset;
 pub mod error;
-pub mod figures;
 pub mod follow;
-pub mod fsutil;
+#[cfg(feature = "hardware")]
 pub mod hardware;
-pub mod html;
-pub mod images;
 pub mod import;
-pub mod metrics;
-pub mod model_io;
-pub mod pin_order;
-pub mod plot;
-pub mod report;
-pub mod report_doc;
-pub mod rig;
-pub mod servo;
-pub mod settings;
-pub mod shape_io;
+pub mod reproduce;
 pub mod train;
 pub mod twin;
 

@@ -1,11 +1,12 @@
 //! Training and validation of pose models (report ch. 4.2-4.3).
-use crate::dataset::TapData;
 use crate::error::{LabError, Result};
 use serde::Serialize;
+use std::path::{Path, PathBuf};
 use tactrace_learn::{
     hyperparameter_search, mean_absolute_error, ModelConfig, ModelKind, PoseModel, Preset,
     SearchSpace, TrainingHistory, Trial,
 };
+use tactrace_store::{stage_model, StoredModel, TapData};
 
 /// Resolve a model configuration: the preset for `kind`, then the keys of an
 /// optional TOML override (unknown keys are errors), then `epochs`.
@@ -17,7 +18,7 @@ pub fn resolve_config(
 ) -> Result<ModelConfig> {
     let mut cfg = ModelConfig::preset(kind, preset);
     if let Some(text) = toml_text {
-        cfg = crate::settings::overlay(&cfg, text, "model config")?;
+        cfg = tactrace_store::overlay(&cfg, text, "model config")?;
     }
     if let Some(e) = epochs {
         cfg.set_epochs(e);
@@ -164,8 +165,31 @@ pub struct Validation {
     pub truth: Vec<[f64; 2]>,
 }
 
-/// Validate `model` on `data`.
-pub fn validate(model: &PoseModel, data: &TapData) -> Result<Validation> {
+/// Save a trained model with the reference pins of its training data, its
+/// history, `extra` text files and the loss/energy figure (Fig. 4.5) into
+/// `dir`, which appears only when complete.
+pub fn save_model(
+    dir: &Path,
+    model: &PoseModel,
+    reference_pins: &[[f64; 2]],
+    history: &TrainingHistory,
+    force: bool,
+    extra: &[(&str, String)],
+) -> Result<PathBuf> {
+    let stage = stage_model(dir, model, reference_pins, history, force, extra)?;
+    tactrace_report::figures::training_curves(&stage.path().join("loss_energy"), history)?;
+    Ok(stage.commit()?)
+}
+
+/// Validate `model` on `data` (named `what`), refused when the data's pins
+/// are ordered otherwise than the model's training data.
+pub fn validate(model: &StoredModel, data: &TapData, what: &Path) -> Result<Validation> {
+    let model = model.for_data(data, what)?;
+    validate_net(model, data)
+}
+
+/// Validate a network just trained on data ordered like `data`.
+pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
     let ds = data.to_learn()?;
     check_dim(model.input_dim(), data.dim())?;
     let predictions = model.predict_batch(&ds)?;
@@ -187,7 +211,7 @@ pub fn validate(model: &PoseModel, data: &TapData) -> Result<Validation> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dataset::DatasetMeta;
+    use tactrace_store::DatasetMeta;
 
     fn data(n: usize) -> TapData {
         let meta: DatasetMeta = serde_json::from_value(serde_json::json!({

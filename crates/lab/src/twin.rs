@@ -7,7 +7,6 @@
 //! labels, pin order and rest layout, so a model trained on one can be
 //! validated on the other: the simulator judged by what it predicts about
 //! real frames (docs/results.md, "Simulated to real").
-use crate::dataset::DatasetMeta;
 use crate::error::Result;
 use crate::import::{
     gather, read_rows, reference_extractor, target_names, FrameOutcome, Imported, LabelColumns, Row,
@@ -17,6 +16,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::{EdgeTap, Shear, TacTipConfig, TacTipModel};
+use tactrace_store::DatasetMeta;
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// Which labels to replay, and the seed of the rendering noise.
@@ -108,6 +108,8 @@ pub fn simulate_twin(
         reference_pins: rest,
         settings: serde_json::json!({ "twin": cfg, "sensor": sensor, "blob": blob }),
         tactrace_version: crate::VERSION.into(),
+        input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
+        images: Vec::new(),
     };
     gather(&rows, outcomes, meta, &cfg.targets)
 }

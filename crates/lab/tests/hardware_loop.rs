@@ -7,14 +7,16 @@ use std::path::{Path, PathBuf};
 use tactrace_arm::{Pose, Workspace};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig};
-use tactrace_lab::collect::{collect, pose_at_edge, CollectConfig};
-use tactrace_lab::follow::{run_servo, start_pose, FollowRunConfig, LoopSettings};
+use tactrace_lab::collect::{collect, CollectConfig};
+use tactrace_lab::follow::{follow_on_rig, perception_for, SimFollowConfig};
 use tactrace_lab::hardware::{
-    collect_hardware, run_follow_hardware, CameraConfig, HardwareConfig, HardwareStart,
+    collect_hardware, follow_hardware, CameraConfig, HardwareConfig, HardwareStart,
 };
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_sensor::{Frame, SensorError, TactileSensor};
+use tactrace_servo::{pose_at_edge, start_pose, SimRig};
+use tactrace_store::StoredModel;
 
 /// A sensor that saves every frame it hands out as a numbered PNG.
 struct Recorder<'a> {
@@ -40,9 +42,9 @@ impl TactileSensor for Recorder<'_> {
     }
 }
 
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tactrace-hw-{tag}-{}", std::process::id()));
-    std::fs::remove_dir_all(&dir).ok();
+/// A fresh folder `tag` under `root`.
+fn scratch(root: &tempfile::TempDir, tag: &str) -> PathBuf {
+    let dir = root.path().join(tag);
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
@@ -70,7 +72,7 @@ fn fake_near(near: Pose) -> FakeUrController {
 /// A rig file: the fake arm, the camera replaying `frames`, the simulated
 /// rig's tap and blob settings, a workspace around the start.
 fn rig_file(fake: &FakeUrController, frames: &Path, x: f64, y: f64, angle: f64) -> HardwareConfig {
-    let sim = FollowRunConfig::simulated();
+    let sim = SimFollowConfig::default();
     HardwareConfig {
         arm: fake.config(),
         camera: CameraConfig::Folder {
@@ -92,14 +94,13 @@ fn rig_file(fake: &FakeUrController, frames: &Path, x: f64, y: f64, angle: f64) 
         blob: sim.rig.blob.clone(),
         controller: sim.controller.clone(),
         follow: sim.follow.clone(),
-        contact_threshold_px: sim.contact_threshold_px,
     }
 }
 
 #[test]
 fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     const STEPS: usize = 12;
-    let sim = FollowRunConfig::simulated();
+    let sim = SimFollowConfig::default();
     let disk = builtin_shape(BuiltinShape::Disk);
     let data = collect(
         &sim.rig,
@@ -115,36 +116,33 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     .unwrap()
     .data;
     let mcfg = resolve_config(ModelKind::PDenNN, Preset::Default, None, Some(15)).unwrap();
-    let model = train(&mcfg, &data, &mut |_| {}).unwrap().0;
+    let model = StoredModel::new(
+        train(&mcfg, &data, &mut |_| {}).unwrap().0,
+        data.meta.reference_pins.clone(),
+    );
+    let root = tempfile::tempdir().unwrap();
 
     // The simulated run, recording its frames (reference first).
     let start = start_pose(&disk, &sim.start, sim.rig.tap.height_mm).unwrap();
-    let mut follow = sim.follow.clone();
-    follow.steps = Some(STEPS);
-    let settings = LoopSettings {
-        blob: &sim.rig.blob,
-        controller: &sim.controller,
-        follow: &follow,
-        tap: &sim.rig.tap,
-        contact_threshold_px: sim.contact_threshold_px,
-        model_pins: Some(&data.meta.reference_pins),
-    };
-    let frames = scratch("frames");
-    let sim_out = scratch("sim");
-    let mut rig =
-        tactrace_lab::rig::SimRig::new(&sim.rig, disk.clone(), start, follow.seed).unwrap();
+    let mut settings = sim.servo_settings();
+    settings.follow.steps = Some(STEPS);
+    let follow = settings.follow.clone();
+    let frames = scratch(&root, "frames");
+    let sim_out = scratch(&root, "sim");
+    let mut rig = SimRig::new(&sim.rig, disk.clone(), start, follow.seed).unwrap();
     let reference = rig.reference_frame();
+    let perception = perception_for(&reference, &model, &settings).unwrap();
+    let (arm, sensor) = rig.parts();
     let mut recorder = Recorder {
-        inner: &mut rig.sensor,
+        inner: sensor,
         dir: frames.clone(),
         count: 0,
     };
     recorder.save(&reference);
-    let (sim_summary, _) = run_servo(
-        &mut rig.arm,
+    let (sim_summary, _) = follow_on_rig(
+        arm,
         &mut recorder,
-        &reference,
-        model.clone(),
+        &perception,
         &settings,
         &sim_out,
         &mut |_| {},
@@ -158,9 +156,15 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
         follow: follow.clone(),
         ..rig_file(&fake, &frames, start.x, start.y, start.rz)
     };
-    let hw_out = scratch("hw");
-    let trained = (model, Some(data.meta.reference_pins.as_slice()));
-    let res = run_follow_hardware(&hw, trained, Some(&disk), &hw_out, &mut |_| {}).unwrap();
+    let hw_out = root.path().join("hw");
+    let res = follow_hardware(
+        &hw,
+        &model,
+        Some(("disk", &disk)),
+        (&hw_out, false),
+        &mut |_| {},
+    )
+    .unwrap();
     assert_eq!(res.summary.steps, STEPS, "{}", res.summary.message);
     assert_eq!(trajectory(&hw_out), trajectory(&sim_out));
     assert!(res.metrics.is_some() && hw_out.join("metrics.json").exists());
@@ -171,14 +175,11 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
         .filter(|l| l.contains("movel"))
         .count();
     assert!(moves >= 3 * STEPS - 1, "{moves} movel commands");
-    for d in [frames, sim_out, hw_out] {
-        std::fs::remove_dir_all(d).ok();
-    }
 }
 
 #[test]
 fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
-    let sim = FollowRunConfig::simulated();
+    let sim = SimFollowConfig::default();
     let disk = builtin_shape(BuiltinShape::Disk);
     let cfg = CollectConfig {
         samples: 20,
@@ -188,7 +189,8 @@ fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
     };
     let simulated = collect(&sim.rig, &disk, &cfg, "disk", |_| {}).unwrap();
     // Replay order: the reference first, then the taps.
-    let frames = scratch("collect-frames");
+    let root = tempfile::tempdir().unwrap();
+    let frames = scratch(&root, "collect-frames");
     let mut files = simulated.frames.clone();
     files.sort_by_key(|(name, _)| (name != "reference.png", name.clone()));
     for (k, (_, png)) in files.iter().enumerate() {
@@ -222,7 +224,6 @@ fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
         .err()
         .unwrap();
     assert!(err.to_string().contains("outside the workspace"), "{err}");
-    std::fs::remove_dir_all(frames).ok();
 }
 
 #[test]
@@ -251,11 +252,7 @@ y_mm = 0.0
 
 #[test]
 fn the_rig_file_example_of_the_hardware_guide_is_valid() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/hardware.md");
-    let Ok(text) = std::fs::read_to_string(path) else {
-        eprintln!("skipping: {path} not found");
-        return;
-    };
+    let text = include_str!("../../../docs/hardware.md");
     let block = text
         .split("```toml\n")
         .skip(1)

@@ -4,73 +4,76 @@
 use std::sync::OnceLock;
 use tactrace_geometry::{builtin_shape, parse_contour_csv, BuiltinShape, Contour};
 use tactrace_lab::collect::{collect, CollectConfig};
-use tactrace_lab::follow::{run_follow, FollowOutcome, FollowRunConfig};
-use tactrace_lab::servo::Ending;
+use tactrace_lab::follow::{follow_simulated, FollowOutcome, SimFollowConfig};
 use tactrace_lab::train::{resolve_config, train};
-use tactrace_learn::{ModelKind, PoseModel, Preset};
+use tactrace_learn::{ModelKind, Preset};
+use tactrace_servo::{Ending, FollowMetrics};
+use tactrace_store::StoredModel;
 
 /// Training taps on the disk, collected once for every test here.
-fn training_data() -> &'static tactrace_lab::dataset::TapData {
-    static DATA: OnceLock<tactrace_lab::dataset::TapData> = OnceLock::new();
+fn training_data() -> &'static tactrace_store::TapData {
+    static DATA: OnceLock<tactrace_store::TapData> = OnceLock::new();
     DATA.get_or_init(|| {
         let cfg = CollectConfig {
             samples: 400,
             seed: 11,
             ..CollectConfig::default()
         };
-        let rig = FollowRunConfig::simulated().rig;
+        let rig = SimFollowConfig::default().rig;
         let disk = builtin_shape(BuiltinShape::Disk);
         collect(&rig, &disk, &cfg, "disk", |_| {}).unwrap().data
     })
 }
 
-fn model(toml: Option<&str>, epochs: usize) -> PoseModel {
+fn model(toml: Option<&str>, epochs: usize) -> StoredModel {
     let cfg = resolve_config(ModelKind::PDenNN, Preset::Default, toml, Some(epochs)).unwrap();
-    train(&cfg, training_data(), &mut |_| {}).unwrap().0
+    let net = train(&cfg, training_data(), &mut |_| {}).unwrap().0;
+    StoredModel::new(net, training_data().meta.reference_pins.clone())
 }
 
-fn run(model: PoseModel, shape: &Contour, tag: &str) -> FollowOutcome {
-    let mut cfg = FollowRunConfig::simulated();
+fn run(model: &StoredModel, shape: &Contour) -> (FollowOutcome, FollowMetrics) {
+    let mut cfg = SimFollowConfig::default();
     cfg.follow.max_steps = 700;
-    let dir = std::env::temp_dir().join(format!("tactrace-servo-{tag}-{}", std::process::id()));
-    let pins = Some(training_data().meta.reference_pins.as_slice());
-    let out = run_follow(&cfg, (model, pins), shape, &dir, &mut |_| {}).unwrap();
+    let root = tempfile::tempdir().unwrap();
+    let dir = root.path().join("run");
+    let out = follow_simulated(&cfg, model, ("shape", shape), (&dir, false), &mut |_| {}).unwrap();
     assert!(dir.join("trajectory.csv").exists() && dir.join("metrics.json").exists());
-    std::fs::remove_dir_all(&dir).ok();
-    out
+    let metrics = out.metrics.clone().expect("scored");
+    (out, metrics)
 }
 
 #[test]
 fn a_model_trained_on_pins_in_another_order_is_refused_before_the_loop() {
     let mut pins = training_data().meta.reference_pins.clone();
     pins.swap(10, 11);
-    let cfg = FollowRunConfig::simulated();
-    let dir = std::env::temp_dir().join(format!("tactrace-servo-order-{}", std::process::id()));
+    let net = model(None, 1).into_model_for(&training_data().meta.reference_pins, "x".as_ref());
+    let swapped = StoredModel::new(net.unwrap(), pins);
+    let cfg = SimFollowConfig::default();
+    let root = tempfile::tempdir().unwrap();
+    let dir = root.path().join("run");
     let disk = builtin_shape(BuiltinShape::Disk);
-    let err = run_follow(
-        &cfg,
-        (model(None, 1), Some(&pins)),
-        &disk,
-        &dir,
-        &mut |_| {},
-    )
-    .err()
-    .expect("pins in another order");
+    let err = follow_simulated(&cfg, &swapped, ("disk", &disk), (&dir, false), &mut |_| {})
+        .err()
+        .expect("pins in another order");
+    let chain = format!("{:?}", anyhow_chain(&err));
     assert!(
-        err.is_bad_input() && err.to_string().contains("another order"),
-        "{err}"
+        err.is_bad_input() && chain.contains("another order"),
+        "{chain}"
     );
-    assert!(!dir.join("trajectory.csv").exists(), "no step was taken");
-    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(
+        std::fs::read_dir(root.path()).unwrap().count(),
+        0,
+        "nothing written: no step was taken"
+    );
 }
 
 #[test]
 fn trained_model_follows_the_disk_and_an_unseen_csv_ellipse_to_closure() {
     let trained = model(None, 60);
-    let disk = run(trained.clone(), &builtin_shape(BuiltinShape::Disk), "disk");
+    let (disk, m) = run(&trained, &builtin_shape(BuiltinShape::Disk));
     assert!(disk.summary.closed, "{}", disk.summary.message);
-    assert!(disk.metrics.mean_l2_mm < 1.5, "{:?}", disk.metrics);
-    assert!(disk.metrics.coverage > 0.95, "{:?}", disk.metrics);
+    assert!(m.mean_l2_mm < 1.5, "{m:?}");
+    assert!(m.coverage > 0.95, "{m:?}");
     // An ellipse (70 x 45 mm semi-axes) the model was never trained on,
     // given as CSV text like a user's file.
     let csv: String = (0..360)
@@ -80,10 +83,10 @@ fn trained_model_follows_the_disk_and_an_unseen_csv_ellipse_to_closure() {
         })
         .collect();
     let ellipse = parse_contour_csv(&format!("x_mm,y_mm\n{csv}")).unwrap();
-    let res = run(trained, &ellipse, "ellipse");
+    let (res, m) = run(&trained, &ellipse);
     assert!(res.summary.closed, "{}", res.summary.message);
-    assert!(res.metrics.mean_l2_mm < 1.5, "{:?}", res.metrics);
-    assert!(res.metrics.coverage > 0.95, "{:?}", res.metrics);
+    assert!(m.mean_l2_mm < 1.5, "{m:?}");
+    assert!(m.coverage > 0.95, "{m:?}");
 }
 
 #[test]
@@ -93,13 +96,20 @@ fn randomly_initialised_model_fails_to_follow() {
     let rates = "learning_rate = 1e-12\noutput_learning_rate = 1e-12\n";
     let toml = format!("[position]\n{rates}[angle]\n{rates}");
     let untrained = model(Some(&toml), 1);
-    let res = run(untrained, &builtin_shape(BuiltinShape::Disk), "untrained");
+    let (res, m) = run(&untrained, &builtin_shape(BuiltinShape::Disk));
     assert!(!res.summary.closed, "{}", res.summary.message);
+    assert!(!res.summary.ending.succeeded(), "{:?}", res.summary);
     let lost = matches!(res.summary.ending, Ending::LostContact | Ending::Refused);
-    assert!(
-        lost || res.metrics.mean_l2_mm > 3.0,
-        "{:?} {:?}",
-        res.summary,
-        res.metrics
-    );
+    assert!(lost || m.mean_l2_mm > 3.0, "{:?} {m:?}", res.summary);
+}
+
+/// Every message in an error's source chain.
+fn anyhow_chain(err: &dyn std::error::Error) -> Vec<String> {
+    let mut out = vec![err.to_string()];
+    let mut next = err.source();
+    while let Some(e) = next {
+        out.push(e.to_string());
+        next = e.source();
+    }
+    out
 }

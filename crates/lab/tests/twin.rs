@@ -18,7 +18,11 @@ fn synthetic_set(dir: &Path, rows: &[[f32; 6]]) -> TwinConfig {
     let model = TacTipModel::new(TacTipConfig::default()).unwrap();
     let rest = model.render(model.rest_pins(), None);
     let reference = dir.join("init_0.png");
-    std::fs::write(&reference, tactrace_lab::images::png_bytes(&rest).unwrap()).unwrap();
+    std::fs::write(
+        &reference,
+        tactrace_store::frame_file::png_bytes(&rest, "rest").unwrap(),
+    )
+    .unwrap();
     let mut csv = String::from("image_name,pose_2,pose_6,pose_3,move_1,move_2,move_6\n");
     for (k, v) in rows.iter().enumerate() {
         let cells: Vec<String> = v.iter().map(|x| x.to_string()).collect();
@@ -75,13 +79,7 @@ fn a_missing_label_column_is_named_in_the_error() {
 }
 
 fn real_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/tactip127-edge2d");
-    if dir.join("targets.csv").exists() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: {} not found", dir.display());
-        None
-    }
+    tactrace_testdata::real_edge_set()
 }
 
 /// Cosine of two displacement vectors.

@@ -103,7 +103,7 @@ pub struct ModelConfig {
     #[serde(default)]
     pub divergence_retries: usize,
     /// Fraction (0..1) of the epochs, at the end, over which every rate
-    /// falls linearly to [`ANNEAL_FLOOR`] of its value, so the last epoch's
+    /// falls linearly to 1/20 of its value, so the last epoch's
     /// weights settle instead of landing wherever per-sample SGD leaves
     /// them. Default preset 0.25; report preset 0 (constant rates).
     #[serde(default)]

@@ -26,4 +26,4 @@ pub use extractor::PinExtractor;
 pub use fold::TURNED_RATIO;
 pub use merged::{find_clusters, Cluster};
 pub use params::{BlobParams, BLOB_PARAM_KEYS, PRESET_NAMES};
-pub use tracker::{PinTracker, Tracked};
+pub use tracker::{median_spacing, PinTracker, Tracked};

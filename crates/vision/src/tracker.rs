@@ -397,8 +397,12 @@ fn centroid(points: &[[f64; 2]]) -> Option<[f64; 2]> {
     Some([sx / n, sy / n])
 }
 
-/// Median over pins of the distance to the nearest other pin.
-fn median_spacing(points: &[[f64; 2]]) -> f64 {
+/// Median over pins of the distance to the nearest other pin, px (1 for
+/// fewer than two pins, so callers can scale tolerances by it safely).
+pub fn median_spacing(points: &[[f64; 2]]) -> f64 {
+    if points.len() < 2 {
+        return 1.0;
+    }
     let mut nearest: Vec<f64> = points
         .iter()
         .enumerate()

@@ -1,27 +1,15 @@
-//! Pin extraction on the real 127-pin TacTip frames in shared/data (skipped
-//! with a message when the data set is absent).
+//! Pin extraction on the real 127-pin TacTip frames in shared/data (when
+//! the data set is absent these fail, or are skipped with a message under
+//! TACTRACE_SKIP_REAL_DATA=1: see `tactrace_testdata`).
 
 use std::path::{Path, PathBuf};
 
 use tactrace_vision::{detect_blobs, BlobParams, Frame, PinExtractor, Tracked};
 
-const DATA: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/tactip127-edge2d"
-);
 const PINS: usize = 127;
 
 fn frames_dir() -> Option<PathBuf> {
-    let dir = Path::new(DATA).join("frames");
-    if dir.join("init_0.png").exists() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipping: real TacTip frames not found at {}",
-            dir.display()
-        );
-        None
-    }
+    tactrace_testdata::real_edge_set().map(|d| d.join("frames"))
 }
 
 fn load(path: &Path) -> Frame {

@@ -155,14 +155,10 @@ fn area_resize_averages_blocks() {
 
 #[test]
 fn collection_meta_reproduces_the_default() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/tactip127-edge2d/collection_meta.json"
-    );
-    let Ok(text) = std::fs::read_to_string(path) else {
-        eprintln!("skipping: {path} not found");
+    let Some(data) = tactrace_testdata::real_edge_set() else {
         return;
     };
+    let text = std::fs::read_to_string(data.join("collection_meta.json")).unwrap();
     let config = PreprocessConfig::from_collection_meta(&text).unwrap();
     assert_eq!(config, PreprocessConfig::default());
     assert!(PreprocessConfig::from_collection_meta(r#"{"crop": [1, 2]}"#).is_err());
@@ -306,14 +302,10 @@ fn camera_image_from_frame(frame: &GrayImage, seed: u64) -> GrayImage {
 
 #[test]
 fn real_frame_survives_the_camera_round_trip() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/tactip127-edge2d/frames/init_0.png"
-    );
-    let Ok(original) = image::open(path) else {
-        eprintln!("skipping: {path} not found");
+    let Some(data) = tactrace_testdata::real_edge_set() else {
         return;
     };
+    let original = image::open(data.join("frames/init_0.png")).unwrap();
     let original = original.to_luma8();
     let camera = DynamicImage::ImageLuma8(camera_image_from_frame(&original, 11));
     let preprocess = PreprocessConfig::default().validate().unwrap();

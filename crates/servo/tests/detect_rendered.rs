@@ -3,15 +3,14 @@
 //! the grey anti-aliased frame and on the binarised one the default camera
 //! gives (as the real frames are).
 use tactrace_geometry::{builtin_shape, BuiltinShape};
-use tactrace_lab::collect::pose_at_edge;
-use tactrace_lab::rig::RigConfig;
 use tactrace_sensor::TacTipModel;
+use tactrace_servo::{pose_at_edge, RigConfig};
 use tactrace_vision::detect_blobs;
 
 /// Largest distance from a rendered pin centre to its nearest keypoint, px,
 /// after checking that there is exactly one keypoint per pin.
 fn worst_detection_error(binarise: Option<u8>, r_mm: f64, theta_deg: f64) -> f64 {
-    let mut rig = RigConfig::simulated();
+    let mut rig = RigConfig::default();
     rig.sensor.camera.binarise_above = binarise;
     let model = TacTipModel::new(rig.sensor.clone()).unwrap();
     let disk = builtin_shape(BuiltinShape::Disk);

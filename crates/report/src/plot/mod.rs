@@ -30,7 +30,6 @@ use std::path::PathBuf;
 
 pub use chart::{chart, grid};
 pub use pins::{pins_figure, quiver_pair};
-pub(crate) use raster::base64;
 
 /// How a [`Series`] is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -3,9 +3,11 @@
 //! A dataset directory holds
 //! - `inputs.npy`: N x 2P float32 pin displacements in pixels (all x, then all y);
 //! - `targets.npy`: N x 2 float32, edge position r (mm) and angle theta (deg);
-//! - `meta.json`: how it was made ([`DatasetMeta`]);
+//! - `meta.json`: how it was made ([`DatasetMeta`]): the layout of the
+//!   inputs, the reference pins they are ordered by, and for imported or
+//!   twinned real sets the image name of every row;
 //! - optionally `frames/` with one PNG a sample and `reference.png`.
-use crate::error::{io_err, LabError, Result};
+use crate::error::{write_err, Result, StoreError};
 use crate::fsutil::StagedDir;
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
@@ -31,6 +33,21 @@ pub struct DatasetMeta {
     /// Sensor and detector settings as resolved for the run.
     pub settings: serde_json::Value,
     pub tactrace_version: String,
+    /// How `inputs.npy` is laid out (written for readers; not checked).
+    #[serde(default = "input_layout")]
+    pub input_layout: String,
+    /// The image name of every row (real and twinned sets), for joining
+    /// datasets of the same frames; empty for simulated collections.
+    #[serde(default)]
+    pub images: Vec<String>,
+}
+
+/// The layout of `inputs.npy`, as written into `meta.json`.
+pub const INPUT_LAYOUT: &str =
+    "N x 2P float32, pixels: the P pin x-displacements, then the P y-displacements, pins in reference_pins order";
+
+fn input_layout() -> String {
+    INPUT_LAYOUT.to_string()
 }
 
 /// A dataset in memory.
@@ -81,6 +98,9 @@ impl TapData {
         }
         let mut meta = self.meta.clone();
         meta.samples = rows.len();
+        if self.meta.images.len() == self.len() {
+            meta.images = rows.iter().map(|&r| self.meta.images[r].clone()).collect();
+        }
         TapData {
             inputs,
             targets,
@@ -89,14 +109,14 @@ impl TapData {
     }
 
     /// As the learning crate's dataset (checks finiteness and shapes).
-    pub fn to_learn(&self) -> Result<tactrace_learn::Dataset> {
-        Ok(tactrace_learn::Dataset::new(
+    pub fn to_learn(&self) -> Result<tactrace_learn::Dataset, tactrace_learn::LearnError> {
+        tactrace_learn::Dataset::new(
             self.inputs.clone(),
             self.targets.clone(),
             self.len(),
             self.dim(),
             2,
-        )?)
+        )
     }
 }
 
@@ -110,45 +130,51 @@ pub fn write_dataset(
     let n = data.len();
     let dim = data.dim();
     let stage = StagedDir::new(dir, force)?;
-    let inputs = Array2::from_shape_vec((n, dim), data.inputs.clone())
-        .map_err(|e| LabError::Config(format!("inputs shape: {e}")))?;
-    let targets = Array2::from_shape_vec((n, 2), data.targets.clone())
-        .map_err(|e| LabError::Config(format!("targets shape: {e}")))?;
+    let inputs =
+        Array2::from_shape_vec((n, dim), data.inputs.clone()).map_err(|e| StoreError::Format {
+            path: dir.join("inputs.npy"),
+            reason: format!("inputs shape: {e}"),
+        })?;
+    let targets =
+        Array2::from_shape_vec((n, 2), data.targets.clone()).map_err(|e| StoreError::Format {
+            path: dir.join("targets.npy"),
+            reason: format!("targets shape: {e}"),
+        })?;
     let p = stage.path().join("inputs.npy");
-    ndarray_npy::write_npy(&p, &inputs).map_err(|e| LabError::Format {
+    ndarray_npy::write_npy(&p, &inputs).map_err(|e| StoreError::Write {
         path: p.clone(),
-        reason: e.to_string(),
+        source: std::io::Error::other(e),
     })?;
     let p = stage.path().join("targets.npy");
-    ndarray_npy::write_npy(&p, &targets).map_err(|e| LabError::Format {
+    ndarray_npy::write_npy(&p, &targets).map_err(|e| StoreError::Write {
         path: p.clone(),
-        reason: e.to_string(),
+        source: std::io::Error::other(e),
     })?;
     if !frames.is_empty() {
         let fdir = stage.path().join("frames");
-        std::fs::create_dir_all(&fdir).map_err(io_err(&fdir))?;
+        std::fs::create_dir_all(&fdir).map_err(write_err(&fdir))?;
         for (name, bytes) in frames {
             let p = fdir.join(name);
-            std::fs::write(&p, bytes).map_err(io_err(&p))?;
+            std::fs::write(&p, bytes).map_err(write_err(&p))?;
         }
     }
     let meta = serde_json::to_string_pretty(&data.meta).expect("meta serialises");
     let p = stage.path().join("meta.json");
-    std::fs::write(&p, meta).map_err(io_err(&p))?;
+    std::fs::write(&p, meta).map_err(write_err(&p))?;
     stage.commit()
 }
 
 /// Read a dataset directory written by [`write_dataset`] (or by hand in Python).
 pub fn read_dataset(dir: &Path) -> Result<TapData> {
     if !dir.is_dir() {
-        return Err(LabError::Format {
+        return Err(StoreError::Format {
             path: dir.into(),
             reason: "not a dataset directory (expected inputs.npy, targets.npy, meta.json)".into(),
         });
     }
     let meta_path = dir.join("meta.json");
     let meta_text = crate::fsutil::read_text(&meta_path)?;
-    let meta: DatasetMeta = serde_json::from_str(&meta_text).map_err(|e| LabError::Format {
+    let meta: DatasetMeta = serde_json::from_str(&meta_text).map_err(|e| StoreError::Format {
         path: meta_path.clone(),
         reason: e.to_string(),
     })?;
@@ -156,7 +182,7 @@ pub fn read_dataset(dir: &Path) -> Result<TapData> {
     let targets: Array2<f32> = read_npy(&dir.join("targets.npy"))?;
     let (n, dim) = inputs.dim();
     if targets.dim() != (n, 2) {
-        return Err(LabError::Format {
+        return Err(StoreError::Format {
             path: dir.join("targets.npy"),
             reason: format!(
                 "expected {n} x 2 targets to match inputs.npy, found {:?}",
@@ -165,13 +191,19 @@ pub fn read_dataset(dir: &Path) -> Result<TapData> {
         });
     }
     if n == 0 || dim == 0 {
-        return Err(LabError::Format {
+        return Err(StoreError::Format {
             path: dir.join("inputs.npy"),
             reason: "empty dataset".into(),
         });
     }
+    if !meta.images.is_empty() && meta.images.len() != n {
+        return Err(StoreError::Format {
+            path: meta_path,
+            reason: format!("meta lists {} images for {n} samples", meta.images.len()),
+        });
+    }
     if meta.samples != n {
-        return Err(LabError::Format {
+        return Err(StoreError::Format {
             path: meta_path,
             reason: format!("meta says {} samples, inputs.npy has {n}", meta.samples),
         });
@@ -184,7 +216,7 @@ pub fn read_dataset(dir: &Path) -> Result<TapData> {
 }
 
 fn read_npy(path: &Path) -> Result<Array2<f32>> {
-    ndarray_npy::read_npy(path).map_err(|e| LabError::Format {
+    ndarray_npy::read_npy(path).map_err(|e| StoreError::Format {
         path: path.into(),
         reason: format!("not a 2-D float32 .npy file: {e}"),
     })

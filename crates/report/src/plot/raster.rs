@@ -7,6 +7,7 @@
 //! thus stays a true raster, at the position plotters chose.
 
 use super::render::draw_err;
+use base64::Engine as _;
 use image::codecs::png::PngEncoder;
 use image::imageops::{resize, FilterType};
 use image::{ExtendedColorType, GrayImage, ImageEncoder, ImageError};
@@ -71,7 +72,10 @@ pub(crate) fn embed_rasters(svg: &str, frame: &GrayImage) -> Result<String, Imag
         frame.height(),
         ExtendedColorType::L8,
     )?;
-    let href = format!("data:image/png;base64,{}", base64(&png));
+    let href = format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&png)
+    );
     let mut out = String::with_capacity(svg.len() + 2 * href.len());
     let mut rest = svg;
     while let Some((before, rect, after)) = split_sentinel(rest) {
@@ -110,40 +114,4 @@ fn attribute<'a>(element: &'a str, name: &str) -> Option<&'a str> {
     let start = element.find(&key)? + key.len();
     let len = element[start..].find('"')?;
     Some(&element[start..start + len])
-}
-
-/// Standard base64 with padding (RFC 4648), for the data URI.
-pub(crate) fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(char::from(ALPHABET[((n >> (18 - 6 * k)) & 63) as usize]));
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn base64_matches_rfc4648_vectors() {
-        assert_eq!(base64(b""), "");
-        assert_eq!(base64(b"f"), "Zg==");
-        assert_eq!(base64(b"fo"), "Zm8=");
-        assert_eq!(base64(b"foo"), "Zm9v");
-        assert_eq!(base64(b"foobar"), "Zm9vYmFy");
-    }
 }

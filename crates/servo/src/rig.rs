@@ -52,7 +52,7 @@ impl TapConfig {
 }
 
 /// Everything that defines the simulated rig; a TOML file with these tables.
-#[derive(Debug, Clone, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RigConfig {
     pub sensor: TacTipConfig,
@@ -62,21 +62,29 @@ pub struct RigConfig {
     pub blob: BlobParams,
 }
 
-impl RigConfig {
-    /// Defaults with the simulated-frame blob preset.
-    pub fn simulated() -> Self {
+/// The defaults of the simulated rig, with the blob preset for simulated
+/// frames (the one default: a partial file is overlaid on it).
+impl Default for RigConfig {
+    fn default() -> Self {
         Self {
+            sensor: TacTipConfig::default(),
+            arm: SimArmConfig::default(),
+            workspace: Workspace::default(),
+            tap: TapConfig::default(),
             blob: BlobParams::preset("sim").expect("built-in preset"),
-            ..Self::default()
         }
     }
 }
 
 /// A simulated arm and sensor over one object.
+///
+/// The fields are private: the arm's physically reached pose reaches the
+/// sensor through a probe made with the arm, and callers get the arm and
+/// the sensor only as trait objects ([`SimRig::parts`]), which show the
+/// commanded pose and frames, never the true one.
 pub struct SimRig {
-    pub arm: LimitedArm<SimArm>,
-    pub sensor: SimTacTip,
-    pub model: TacTipModel,
+    arm: LimitedArm<SimArm>,
+    sensor: SimTacTip,
 }
 
 impl SimRig {
@@ -88,8 +96,7 @@ impl SimRig {
             seed: seed ^ 0xA5A5_0001,
             ..cfg.arm.clone()
         };
-        let sim_arm = SimArm::new(arm_cfg, start);
-        let probe = sim_arm.probe();
+        let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
         let sensor = SimTacTip::new(
             model.clone(),
             shape,
@@ -97,12 +104,17 @@ impl SimRig {
             seed ^ 0x5E45_0002,
         );
         let arm = LimitedArm::new(sim_arm, cfg.workspace.clone(), LimitMode::Refuse);
-        Ok(Self { arm, sensor, model })
+        Ok(Self { arm, sensor })
     }
 
     /// The undeformed frame (sensor in the air).
     pub fn reference_frame(&self) -> Frame {
         self.sensor.reference_frame()
+    }
+
+    /// The arm (behind its limiter) and the sensor, as the loop sees them.
+    pub fn parts(&mut self) -> (&mut dyn Arm, &mut dyn TactileSensor) {
+        (&mut self.arm, &mut self.sensor)
     }
 }
 

@@ -1,13 +1,14 @@
 //! The report's figures, built from the generic [`crate::plot`] module.
-use crate::error::{LabError, Result};
+use crate::error::Result;
 use crate::plot::{chart, grid, pins_figure, Axes, Series, Style};
-use crate::train::Validation;
 use std::path::{Path, PathBuf};
 use tactrace_geometry::Contour;
 use tactrace_learn::TrainingHistory;
 
-fn plot_err(e: crate::plot::PlotError) -> LabError {
-    LabError::Config(format!("figure: {e}"))
+/// Predictions of a model beside the truth (r mm, theta deg), for Fig. 4.4.
+pub struct Predicted<'a> {
+    pub truth: &'a [[f64; 2]],
+    pub predictions: &'a [[f64; 2]],
 }
 
 fn axes(title: &str, x: &str, y: &str) -> Axes {
@@ -44,16 +45,16 @@ pub fn training_curves(stem: &Path, history: &TrainingHistory) -> Result<Vec<Pat
         (loss, series_of(&|n| n.loss)),
         (energy, series_of(&|n| n.energy)),
     ];
-    grid(stem, 2, &panels, (1200, 480)).map_err(plot_err)
+    grid(stem, 2, &panels, (1200, 480)).map_err(Into::into)
 }
 
 /// Fig. 4.4: predicted against true position and angle.
-pub fn predicted_vs_true(stem: &Path, name: &str, v: &Validation) -> Result<Vec<PathBuf>> {
+pub fn predicted_vs_true(stem: &Path, name: &str, v: &Predicted) -> Result<Vec<PathBuf>> {
     let panel = |k: usize, what: &str, unit: &str| {
         let pts: Vec<(f64, f64)> = v
             .truth
             .iter()
-            .zip(&v.predictions)
+            .zip(v.predictions)
             .map(|(t, p)| (t[k], p[k]))
             .collect();
         let lo = pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
@@ -85,7 +86,7 @@ pub fn predicted_vs_true(stem: &Path, name: &str, v: &Validation) -> Result<Vec<
         &[panel(0, "position r", "mm"), panel(1, "angle theta", "deg")],
         (1200, 480),
     )
-    .map_err(plot_err)
+    .map_err(Into::into)
 }
 
 /// Fig. 5.3: the trajectory, with the true contour dashed on top of it.
@@ -109,7 +110,7 @@ pub fn trajectory(
             contour_series(contour),
         ],
     )
-    .map_err(plot_err)
+    .map_err(Into::into)
 }
 
 /// The true contour as a closed dashed line.
@@ -153,7 +154,7 @@ pub fn error_curve(stem: &Path, title: &str, curve: &[f64]) -> Result<Vec<PathBu
             },
         ],
     )
-    .map_err(plot_err)
+    .map_err(Into::into)
 }
 
 /// Fig. 4.1: a camera frame, the pins extracted from it and their
@@ -166,5 +167,5 @@ pub fn frame_pins_displacements(
 ) -> Result<Vec<PathBuf>> {
     let tracked = extractor.extract(frame)?;
     let reference = extractor.tracker.reference();
-    pins_figure(stem, frame, reference, &tracked.pins, arrow_scale).map_err(plot_err)
+    pins_figure(stem, frame, reference, &tracked.pins, arrow_scale).map_err(Into::into)
 }

@@ -280,17 +280,11 @@ fn pins_figure_embeds_frame_in_svg() {
 
 #[test]
 fn pins_figure_on_real_frame() {
-    let path = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/tactip127-edge2d/frames/init_0.png"
-    ));
-    let Ok(frame) = image::open(path) else {
-        eprintln!(
-            "skipping: real TacTip frame not found at {}",
-            path.display()
-        );
+    let Some(data) = tactrace_testdata::real_edge_set() else {
         return;
     };
+    let path = data.join("frames/init_0.png");
+    let frame = image::open(&path).expect("the real reference frame reads");
     let dir = scratch_dir("real");
     let stem = dir.join("init_0");
     let reference = hex_pins();

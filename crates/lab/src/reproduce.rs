@@ -5,24 +5,20 @@
 //! with the PDenNN, and write report.md, report.html and metrics.json with
 //! the report's numbers side by side.
 use crate::collect::{collect, CollectConfig};
-use crate::dataset::TapData;
-use crate::error::{io_err, Result};
-use crate::follow::{run_follow, FollowRunConfig};
-use crate::train::{resolve_config, train, validate, Validation};
-use crate::{figures, fsutil, model_io};
+use crate::error::Result;
+use crate::follow::{follow_simulated, SimFollowConfig};
+use crate::train::{resolve_config, save_model, train, validate_net, Validation};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
 use tactrace_learn::{ModelKind, Preset};
+use tactrace_report::figures::{self, Predicted};
+use tactrace_report::results::slug;
+use tactrace_report::{NetRow, ReproduceResults, ShapeRow};
+use tactrace_servo::pose_at_edge;
+use tactrace_store::{write_atomic, write_dataset, StagedDir, StoredModel, TapData};
 use tactrace_vision::PinExtractor;
-
-/// The report's Table 4.1 errors (angle deg, position mm) and contour L2 (mm).
-pub const REPORT_TABLE_4_1: [(&str, Option<f64>, Option<f64>); 3] = [
-    ("DisDenNN", Some(6.55), Some(1.34)),
-    ("PCADenNN", Some(5.89), Some(0.53)),
-    ("PDenNN", Some(5.36), Some(0.38)),
-];
 /// The report's contour-following mean L2 errors, mm (ch. 5.3).
 pub const REPORT_L2: [(BuiltinShape, f64, usize); 4] = [
     (BuiltinShape::Disk, 0.75, 266),
@@ -43,7 +39,7 @@ pub struct ReproduceConfig {
     pub preset: Preset,
     /// Use the report's fixed step counts instead of running to closure.
     pub report_steps: bool,
-    pub follow: FollowRunConfig,
+    pub follow: SimFollowConfig,
     /// Folder of real frames (Bristol layout) to add the real-data results.
     pub real: Option<PathBuf>,
 }
@@ -57,47 +53,10 @@ impl Default for ReproduceConfig {
             epochs: None,
             preset: Preset::Default,
             report_steps: false,
-            follow: FollowRunConfig::simulated(),
+            follow: SimFollowConfig::default(),
             real: None,
         }
     }
-}
-
-/// One row of the networks table.
-#[derive(Debug, Clone, Serialize)]
-pub struct NetRow {
-    pub name: String,
-    pub data: String,
-    pub position_mae_mm: f64,
-    pub angle_mae_deg: f64,
-    pub train_seconds: f64,
-    /// Learning-rate halvings after divergence (`divergence_retries`).
-    pub lr_halvings: usize,
-}
-
-/// One row of the contour table.
-#[derive(Debug, Clone, Serialize)]
-pub struct ShapeRow {
-    pub shape: String,
-    pub metrics: crate::metrics::FollowMetrics,
-    pub ending: crate::servo::Ending,
-    pub report_l2_mm: f64,
-}
-
-/// Everything `reproduce` measured.
-#[derive(Debug, Clone, Serialize)]
-pub struct ReproduceResults {
-    pub networks: Vec<NetRow>,
-    /// The same networks trained and validated on real frames (`--real`).
-    pub real_networks: Vec<NetRow>,
-    /// The PDenNN and its backprop twin trained on the simulated twin of
-    /// the real set and validated on the same held-out real frames
-    /// (`--real`): the simulator judged by real data.
-    pub sim_to_real: Vec<NetRow>,
-    pub shapes: Vec<ShapeRow>,
-    pub seconds: f64,
-    pub seed: u64,
-    pub tactrace_version: String,
 }
 
 const NETS: [(ModelKind, &str); 4] = [
@@ -115,7 +74,8 @@ fn train_and_score(
     va: &TapData,
     dir: &Path,
 ) -> Result<(NetRow, Validation)> {
-    std::fs::create_dir_all(dir.join("figures")).map_err(io_err(dir))?;
+    let figs = dir.join("figures");
+    std::fs::create_dir_all(&figs).map_err(tactrace_store::write_err(&figs))?;
     let mcfg = resolve_config(kind, cfg.preset, None, cfg.epochs)?;
     let t0 = std::time::Instant::now();
     let (model, history) = train(&mcfg, tr, &mut |_| {})?;
@@ -123,12 +83,16 @@ fn train_and_score(
     let mdir = dir
         .join("models")
         .join(name.split(' ').next().unwrap_or(name).to_lowercase());
-    model_io::save_model(&mdir, &model, &tr.meta.reference_pins, &history, true)?;
-    let v = validate(&model, va)?;
+    save_model(&mdir, &model, &tr.meta.reference_pins, &history, true, &[])?;
+    let v = validate_net(&model, va)?;
+    let predicted = Predicted {
+        truth: &v.truth,
+        predictions: &v.predictions,
+    };
     figures::predicted_vs_true(
         &dir.join("figures").join(format!("fig4_4_{}", slug(name))),
         name,
-        &v,
+        &predicted,
     )?;
     let row = NetRow {
         name: name.into(),
@@ -141,28 +105,29 @@ fn train_and_score(
     Ok((row, v))
 }
 
-/// File-name form of a network name ("MLP (backprop)" -> "mlpbackprop").
-pub(crate) fn slug(s: &str) -> String {
-    s.chars()
-        .filter(|c| c.is_ascii_alphanumeric())
-        .collect::<String>()
-        .to_lowercase()
+/// Run everything into `out`, which appears only when complete; an
+/// existing `out` is refused unless `force` (then replaced at the end).
+pub fn reproduce(
+    cfg: &ReproduceConfig,
+    (out, force): (&Path, bool),
+    log: &(dyn Fn(&str) + Sync),
+) -> Result<ReproduceResults> {
+    let stage = StagedDir::new(out, force)?;
+    let results = reproduce_into(cfg, stage.path(), log)?;
+    stage.commit()?;
+    Ok(results)
 }
 
-/// Run everything into `out` (created; existing files are replaced).
-pub fn reproduce(
+fn reproduce_into(
     cfg: &ReproduceConfig,
     out: &Path,
     log: &(dyn Fn(&str) + Sync),
 ) -> Result<ReproduceResults> {
     let t0 = std::time::Instant::now();
-    std::fs::create_dir_all(out.join("figures")).map_err(io_err(out))?;
-    fsutil::write_atomic(
-        &out.join("config.toml"),
-        toml::to_string(cfg)
-            .map_err(|e| crate::LabError::Config(e.to_string()))?
-            .as_bytes(),
-    )?;
+    let figs = out.join("figures");
+    std::fs::create_dir_all(&figs).map_err(tactrace_store::write_err(&figs))?;
+    let text = tactrace_store::resolved_config_toml(crate::VERSION, cfg)?;
+    write_atomic(&out.join("config.toml"), text.as_bytes())?;
     let disk = builtin_shape(BuiltinShape::Disk);
     let rig = &cfg.follow.rig;
     log("collecting training and validation taps on the disk");
@@ -181,8 +146,8 @@ pub fn reproduce(
         || collect(rig, &disk, &vcfg, "disk", |_| {}),
     );
     let (tr, va) = (tr?.data, va?.data);
-    crate::dataset::write_dataset(&out.join("data/train"), &tr, &[], true)?;
-    crate::dataset::write_dataset(&out.join("data/val"), &va, &[], true)?;
+    write_dataset(&out.join("data/train"), &tr, &[], true)?;
+    write_dataset(&out.join("data/val"), &va, &[], true)?;
     fig_4_1_simulated(rig, &disk, &out.join("figures/fig4_1_simulated"))?;
     log("training DisDenNN, PCADenNN, PDenNN and the backprop twin");
     let trained: Vec<Result<(NetRow, Validation)>> = NETS
@@ -197,8 +162,7 @@ pub fn reproduce(
     let shapes: Vec<Result<ShapeRow>> = REPORT_L2
         .par_iter()
         .map(|(shape, report_l2, steps)| {
-            let model = model_io::load_model(&out.join("models/pdennn"))?;
-            let pins = model_io::load_reference_pins(&out.join("models/pdennn"))?;
+            let model = StoredModel::load(&out.join("models/pdennn"))?;
             let mut fcfg = cfg.follow.clone();
             if cfg.report_steps {
                 fcfg.follow.steps = Some(*steps);
@@ -206,7 +170,8 @@ pub fn reproduce(
             fcfg.follow.seed = cfg.seed;
             let contour = builtin_shape(*shape);
             let run = out.join("follow").join(shape.name());
-            let res = run_follow(&fcfg, (model, pins.as_deref()), &contour, &run, &mut |_| {})?;
+            let named = (shape.name(), &contour);
+            let res = follow_simulated(&fcfg, &model, named, (&run, true), &mut |_| {})?;
             let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
             let figs = out.join("figures");
             figures::trajectory(
@@ -220,9 +185,10 @@ pub fn reproduce(
                 shape.name(),
                 &res.l2_curve,
             )?;
+            let metrics = res.metrics.expect("scored against the known contour");
             Ok(ShapeRow {
                 shape: shape.name().into(),
-                metrics: res.metrics,
+                metrics,
                 ending: res.summary.ending,
                 report_l2_mm: *report_l2,
             })
@@ -245,7 +211,7 @@ pub fn reproduce(
         seed: cfg.seed,
         tactrace_version: crate::VERSION.into(),
     };
-    crate::report_doc::write_report(out, &results)?;
+    tactrace_report::document::write_report(out, &results)?;
     Ok(results)
 }
 
@@ -261,10 +227,27 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<(Vec<NetRo
     let real = train_rows(cfg, &NETS, "real", &tr, &va, &out.join("real"))?;
     let twin_cfg = crate::twin::TwinConfig::bristol(dir, cfg.seed);
     let twin = crate::twin::simulate_twin(&twin_cfg, &cfg.follow.rig.sensor, &blob, &|| {})?;
-    let (twin_tr, _) = twin.data.split(0.8, cfg.seed);
+    let twin_tr = rows_not_in(&twin.data, &va);
     let nets = [NETS[2], NETS[3]];
     let transfer = train_rows(cfg, &nets, "twin", &twin_tr, &va, &out.join("twin"))?;
     Ok((real, transfer))
+}
+
+/// The rows of `data` whose image is not among `held_out`'s: the twin's
+/// training part, joined with the real split on the image name (import and
+/// twin may each drop frames, so row indices need not correspond).
+fn rows_not_in(data: &TapData, held_out: &TapData) -> TapData {
+    let held: std::collections::HashSet<&str> =
+        held_out.meta.images.iter().map(String::as_str).collect();
+    let keep: Vec<usize> = (0..data.len())
+        .filter(|&i| {
+            data.meta
+                .images
+                .get(i)
+                .is_some_and(|name| !held.contains(name.as_str()))
+        })
+        .collect();
+    data.subset(&keep)
 }
 
 /// Train `nets` in parallel on `tr`, validate on `va`; rows named plainly,
@@ -289,13 +272,13 @@ fn train_rows(
 }
 
 /// Fig. 4.1 on a simulated tap: 2 mm onto the disk edge, 10 deg, nominal depth.
-fn fig_4_1_simulated(rig: &crate::rig::RigConfig, disk: &Contour, stem: &Path) -> Result<()> {
+fn fig_4_1_simulated(rig: &tactrace_servo::RigConfig, disk: &Contour, stem: &Path) -> Result<()> {
     let model = tactrace_sensor::TacTipModel::new(rig.sensor.clone())?;
     let reference = model.render(model.rest_pins(), None);
     let extractor = PinExtractor::from_reference_frame(&reference, rig.blob.clone())?;
     let (edge, normal) = disk.at_arc_length(0.0);
     let depth = rig.tap.nominal_indentation_mm();
-    let pose = crate::collect::pose_at_edge(edge, normal, 2.0, 10.0, -depth);
+    let pose = pose_at_edge(edge, normal, 2.0, 10.0, -depth);
     let frame = model.render(&model.pins(disk, pose, None), None);
     figures::frame_pins_displacements(stem, &frame, &extractor, 3.0)?;
     Ok(())

@@ -1,0 +1,16 @@
+//! tactrace's pictures and documents: the only user of plotters and fonts.
+//!
+//! [`plot`] is a small plotting vocabulary (charts, grids, pin pictures);
+//! [`figures`] draws the report's figures with it; [`document`] writes
+//! `reproduce`'s report.md, a self-contained report.html ([`html`]) and
+//! metrics.json from the measured [`results`].
+
+pub mod document;
+pub mod error;
+pub mod figures;
+pub mod html;
+pub mod plot;
+pub mod results;
+
+pub use error::{ReportError, Result};
+pub use results::{NetRow, ReproduceResults, ShapeRow};

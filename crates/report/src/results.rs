@@ -1,0 +1,59 @@
+//! What `reproduce` measured, as the documents show it.
+use serde::Serialize;
+use tactrace_servo::{Ending, FollowMetrics};
+
+/// The report's Table 4.1 errors (angle deg, position mm).
+pub const REPORT_TABLE_4_1: [(&str, Option<f64>, Option<f64>); 3] = [
+    ("DisDenNN", Some(6.55), Some(1.34)),
+    ("PCADenNN", Some(5.89), Some(0.53)),
+    ("PDenNN", Some(5.36), Some(0.38)),
+];
+
+/// The literature's figure on the real edge set (a CNN on the images, on
+/// another split): angle deg, position mm. Quoted, not measured here.
+pub const LITERATURE_CNN: (f64, f64) = (1.45, 0.15);
+
+/// One row of the networks table.
+#[derive(Debug, Clone, Serialize)]
+pub struct NetRow {
+    pub name: String,
+    pub data: String,
+    pub position_mae_mm: f64,
+    pub angle_mae_deg: f64,
+    pub train_seconds: f64,
+    /// Learning-rate halvings after divergence (`divergence_retries`).
+    pub lr_halvings: usize,
+}
+
+/// One row of the contour table.
+#[derive(Debug, Clone, Serialize)]
+pub struct ShapeRow {
+    pub shape: String,
+    pub metrics: FollowMetrics,
+    pub ending: Ending,
+    pub report_l2_mm: f64,
+}
+
+/// Everything `reproduce` measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReproduceResults {
+    pub networks: Vec<NetRow>,
+    /// The same networks trained and validated on real frames (`--real`).
+    pub real_networks: Vec<NetRow>,
+    /// The PDenNN and its backprop twin trained on the simulated twin of
+    /// the real set and validated on the same held-out real frames
+    /// (`--real`): the simulator judged by real data.
+    pub sim_to_real: Vec<NetRow>,
+    pub shapes: Vec<ShapeRow>,
+    pub seconds: f64,
+    pub seed: u64,
+    pub tactrace_version: String,
+}
+
+/// File-name form of a network name ("MLP (backprop)" -> "mlpbackprop").
+pub fn slug(s: &str) -> String {
+    s.chars()
+        .filter(|c| c.is_ascii_alphanumeric())
+        .collect::<String>()
+        .to_lowercase()
+}

@@ -1,0 +1,25 @@
+//! The servo loop of report ch. 5 and everything it needs that does no I/O.
+//!
+//! [`servo_loop()`] taps, perceives ([`Perception`]: pins then the pose
+//! model), asks the PBTS controller for a move and makes it, on any
+//! [`tactrace_arm::Arm`] and [`tactrace_sensor::TactileSensor`]: the
+//! simulated rig of this crate ([`SimRig`]) or a real UR5 and camera. Each
+//! step goes to [`StepSink`]s (files and progress bars are sinks the caller
+//! brings). [`metrics`] scores a finished trajectory against the true
+//! contour, which the loop itself never sees.
+//!
+//! This crate writes no files and prints nothing.
+
+pub mod error;
+pub mod metrics;
+pub mod perception;
+pub mod rig;
+pub mod servo_loop;
+pub mod start;
+
+pub use error::{Result, ServoError};
+pub use metrics::{evaluate, l2_curve, trajectory_closes, ClosureDetector, FollowMetrics};
+pub use perception::{Percept, Perception};
+pub use rig::{tap, RigConfig, SimRig, TapConfig};
+pub use servo_loop::{servo_loop, Ending, FnSink, LoopConfig, LoopSummary, StepRecord, StepSink};
+pub use start::{flattest_arc_mm, pose_at_edge, start_pose, StartConfig};

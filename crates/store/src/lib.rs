@@ -1,0 +1,28 @@
+//! tactrace's files, one format a module, and the one configuration loader.
+//!
+//! - [`dataset`]: `inputs.npy` / `targets.npy` / `meta.json` folders;
+//! - [`model_dir`]: a trained model with the reference pins of its training
+//!   data, loaded as one [`StoredModel`] so the pin-order check
+//!   ([`pin_order`]) runs whenever a model meets data or a rig;
+//! - [`frame_file`], [`shape_file`]: frames (PNG) and contours (CSV);
+//! - [`config_file`]: defaults, then the file, unknown keys rejected;
+//! - [`fsutil`]: outputs that appear only when complete.
+//!
+//! Every error names the file at fault ([`StoreError`]).
+
+pub mod config_file;
+pub mod dataset;
+pub mod error;
+pub mod frame_file;
+pub mod fsutil;
+pub mod model_dir;
+pub mod pin_order;
+pub mod shape_file;
+
+pub use config_file::{load_config, overlay, resolved_config_toml};
+pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData};
+pub use error::{read_err, write_err, Result, StoreError};
+pub use fsutil::{check_output_dir, read_text, write_atomic, StagedDir};
+pub use model_dir::{stage_model, StoredModel};
+pub use pin_order::{pin_order_mismatch, PinOrderError};
+pub use shape_file::load_shape;

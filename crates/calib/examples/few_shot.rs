@@ -89,11 +89,14 @@ fn main() -> Res<()> {
             .map(|i| &pool[i])
             .collect(),
     };
-    let params = CorrectionParams {
+    let mut params = CorrectionParams {
         standardise: o.args.contains_key("standardise"),
         rank: o.args.get("rank").map(|r| r.parse()).transpose()?,
         ..Default::default()
     };
+    if let Some(e) = o.args.get("log10-penalty") {
+        (params.log10_min, params.log10_max, params.steps) = (e.parse()?, e.parse()?, 1);
+    }
     let t0 = Instant::now();
     let fit = LinearCorrection::fit(
         &fields(&twin, &chosen, "twin")?,
@@ -111,7 +114,33 @@ fn main() -> Res<()> {
         before.mean_cosine, after.mean_cosine, before.median_cosine, after.median_cosine
     );
     if let Some(out) = o.args.get("out") {
-        write_corrected(&twin, &fit.correction, Path::new(out), &o)?;
+        let copies = match o.args.get("add-real").map(String::as_str) {
+            Some("auto") => (twin.inputs.nrows() as f64 / (2 * chosen.len()) as f64)
+                .round()
+                .max(1.0) as usize,
+            Some(k) => k.parse()?,
+            None => 0,
+        };
+        let extra: Vec<&String> = (0..copies).flat_map(|_| chosen.iter().copied()).collect();
+        let resid = match o.args.get("noise-aug") {
+            Some(_) => {
+                let (sim_c, real_c) = (
+                    fields(&twin, &chosen, "twin")?,
+                    fields(&real, &chosen, "real")?,
+                );
+                Some(real_c.matrix() - fit.correction.apply(&sim_c)?.matrix())
+            }
+            None => None,
+        };
+        write_corrected(
+            &twin,
+            &fit.correction,
+            Path::new(out),
+            &o,
+            (&real, &extra),
+            resid,
+            seed,
+        )?;
         println!("wrote {out}");
     }
     Ok(())
@@ -241,7 +270,17 @@ fn fields(d: &Aligned, names: &[&String], what: &str) -> Res<Fields> {
 }
 
 /// Every twin tap corrected, with the twin's targets and meta (marked).
-fn write_corrected(twin: &Aligned, corr: &LinearCorrection, out: &Path, o: &Opts) -> Res<()> {
+/// `extra`: real taps appended as they are (`--add-real K`: the calibration
+/// taps K times).
+fn write_corrected(
+    twin: &Aligned,
+    corr: &LinearCorrection,
+    out: &Path,
+    o: &Opts,
+    extra: (&Aligned, &[&String]),
+    resid: Option<nalgebra::DMatrix<f64>>,
+    seed: u64,
+) -> Res<()> {
     if out.exists() && out.read_dir()?.next().is_some() && !o.args.contains_key("force") {
         return Err(format!(
             "{} exists and is not empty (--force replaces it)",
@@ -255,12 +294,34 @@ fn write_corrected(twin: &Aligned, corr: &LinearCorrection, out: &Path, o: &Opts
         twin.inputs.ncols(),
         "twin",
     )?;
-    let fixed = corr.apply(&all)?;
-    let arr = Array2::from_shape_vec(twin.inputs.dim(), fixed.to_flat())?;
+    let mut inputs = corr.apply(&all)?.to_flat();
+    if let Some(e) = resid {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let d = all.dim();
+        for (i, row) in inputs.chunks_mut(d).enumerate() {
+            let j = rng.random_range(0..e.nrows());
+            let _ = i;
+            for (k, v) in row.iter_mut().enumerate() {
+                *v += e[(j, k)] as f32;
+            }
+        }
+    }
+    inputs.extend(fields(extra.0, extra.1, "real")?.to_flat());
+    let mut targets: Vec<f32> = twin.targets.iter().copied().collect();
+    for n in extra.1 {
+        targets.extend(extra.0.targets.row(extra.0.rows[n.as_str()]).iter());
+    }
+    let rows = twin.inputs.nrows() + extra.1.len();
+    let arr = Array2::from_shape_vec((rows, twin.inputs.ncols()), inputs)?;
     ndarray_npy::write_npy(out.join("inputs.npy"), &arr)?;
-    std::fs::copy(twin.dir.join("targets.npy"), out.join("targets.npy"))?;
+    ndarray_npy::write_npy(
+        out.join("targets.npy"),
+        &Array2::from_shape_vec((rows, 2), targets)?,
+    )?;
     let mut meta: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(twin.dir.join("meta.json"))?)?;
+    meta["samples"] = rows.into();
     meta["source"] = "simulated twin, linear correction (tactrace-calib few_shot)".into();
     let args: serde_json::Map<String, serde_json::Value> = o
         .args

@@ -45,3 +45,23 @@ pub fn distorted(
     }
     Fields::from_matrix(m, "real").unwrap()
 }
+
+/// `n` labelled taps (r in -5..5 mm, theta in -45..45 deg) and their
+/// fields: smooth functions of the labels on `dim` coordinates, like twin
+/// replays of a straight-edge tap set.
+pub fn labelled_fields(n: usize, dim: usize, seed: u64) -> (Vec<(f64, f64)>, Fields) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let patterns = DMatrix::from_fn(6, dim, |_, _| rng.random_range(-1.0..1.0));
+    let labels: Vec<(f64, f64)> = (0..n)
+        .map(|_| (rng.random_range(-5.0..5.0), rng.random_range(-45.0..45.0)))
+        .collect();
+    let feats = DMatrix::from_fn(n, 6, |i, k| {
+        let (r, t) = (labels[i].0 / 5.0, labels[i].1.to_radians());
+        [r, t.sin(), t.cos(), r * t.cos(), (r * 1.5).tanh(), r * r][k]
+    });
+    let noise = DMatrix::from_fn(n, dim, |_, _| rng.random_range(-0.05..0.05));
+    (
+        labels,
+        Fields::from_matrix(feats * patterns + noise, "sim").unwrap(),
+    )
+}

@@ -18,7 +18,12 @@
 //! Options: `--pool`/`--eval` take part names joined by `+` (fit, select,
 //! score), `--pool-where`/`--eval-where` an extra filter `theta<0`,
 //! `theta>0`, `r<0` or `r>0`; `--samples all`; `--standardise`; `--rank K`;
-//! `--no-out` to measure only.
+//! `--add-real K|auto` (append the calibration real taps K times; `auto`:
+//! `real_tap_repeats` of the first twin); `--noise-aug 1` (add a random
+//! calibration residual to each twin tap); `--more-twins DIR,DIR` (twins of
+//! the same labels with other render seeds, corrected and appended);
+//! `--log10-penalty E` (a fixed penalty); `--force`. Without `--out` it
+//! only measures.
 use ndarray::Array2;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -113,11 +118,12 @@ fn main() -> Res<()> {
         chosen.len(), pool.len(), fit.penalty, fit.loo_rms, before.taps, before.rms_px, after.rms_px,
         before.mean_cosine, after.mean_cosine, before.median_cosine, after.median_cosine
     );
+    if let Ok(n) = o.or("samples", "all").parse::<usize>() {
+        time_calibrate(&twin, &real, &pool, &labels, n, seed)?;
+    }
     if let Some(out) = o.args.get("out") {
         let copies = match o.args.get("add-real").map(String::as_str) {
-            Some("auto") => (twin.inputs.nrows() as f64 / (2 * chosen.len()) as f64)
-                .round()
-                .max(1.0) as usize,
+            Some("auto") => tactrace_calib::real_tap_repeats(twin.inputs.nrows(), chosen.len()),
             Some(k) => k.parse()?,
             None => 0,
         };
@@ -132,15 +138,19 @@ fn main() -> Res<()> {
             }
             None => None,
         };
-        write_corrected(
-            &twin,
-            &fit.correction,
-            Path::new(out),
-            &o,
-            (&real, &extra),
+        let mut twins = Vec::new();
+        if let Some(list) = o.args.get("more-twins") {
+            for dir in list.split(',') {
+                twins.push(align(Path::new(dir), Path::new(o.get("twin-csv")?))?);
+            }
+        }
+        let ex = Extras {
+            twins,
+            real: (&real, extra),
             resid,
             seed,
-        )?;
+        };
+        write_corrected(&twin, &fit.correction, Path::new(out), &o, &ex)?;
         println!("wrote {out}");
     }
     Ok(())
@@ -269,17 +279,24 @@ fn fields(d: &Aligned, names: &[&String], what: &str) -> Res<Fields> {
     Ok(Fields::from_flat(&flat, d.inputs.ncols(), what)?)
 }
 
-/// Every twin tap corrected, with the twin's targets and meta (marked).
-/// `extra`: real taps appended as they are (`--add-real K`: the calibration
-/// taps K times).
+/// What the written training set holds besides the corrected twin.
+struct Extras<'a> {
+    /// Further twins of the same labels (other render seeds), also corrected.
+    twins: Vec<Aligned>,
+    /// Real taps appended as they are (`--add-real`: the calibration taps K times).
+    real: (&'a Aligned, Vec<&'a String>),
+    /// Calibration residuals, one added at random to each twin tap (`--noise-aug`).
+    resid: Option<nalgebra::DMatrix<f64>>,
+    seed: u64,
+}
+
+/// Every twin tap corrected, then the extras, with the twin's meta (marked).
 fn write_corrected(
     twin: &Aligned,
     corr: &LinearCorrection,
     out: &Path,
     o: &Opts,
-    extra: (&Aligned, &[&String]),
-    resid: Option<nalgebra::DMatrix<f64>>,
-    seed: u64,
+    ex: &Extras,
 ) -> Res<()> {
     if out.exists() && out.read_dir()?.next().is_some() && !o.args.contains_key("force") {
         return Err(format!(
@@ -289,30 +306,27 @@ fn write_corrected(
         .into());
     }
     std::fs::create_dir_all(out)?;
-    let all = Fields::from_flat(
-        twin.inputs.as_slice().ok_or("inputs not contiguous")?,
-        twin.inputs.ncols(),
-        "twin",
-    )?;
-    let mut inputs = corr.apply(&all)?.to_flat();
-    if let Some(e) = resid {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let d = all.dim();
-        for (i, row) in inputs.chunks_mut(d).enumerate() {
-            let j = rng.random_range(0..e.nrows());
-            let _ = i;
-            for (k, v) in row.iter_mut().enumerate() {
-                *v += e[(j, k)] as f32;
-            }
+    let (mut inputs, mut targets) = (Vec::new(), Vec::new());
+    for t in std::iter::once(twin).chain(&ex.twins) {
+        let all = Fields::from_flat(
+            t.inputs.as_slice().ok_or("inputs not contiguous")?,
+            t.inputs.ncols(),
+            "twin",
+        )?;
+        let mut fixed = corr.apply(&all)?.to_flat();
+        if let Some(e) = &ex.resid {
+            add_residuals(&mut fixed, all.dim(), e, ex.seed);
         }
+        inputs.extend(fixed);
+        targets.extend(t.targets.iter().copied());
     }
-    inputs.extend(fields(extra.0, extra.1, "real")?.to_flat());
-    let mut targets: Vec<f32> = twin.targets.iter().copied().collect();
-    for n in extra.1 {
-        targets.extend(extra.0.targets.row(extra.0.rows[n.as_str()]).iter());
+    let (real, names) = (ex.real.0, &ex.real.1);
+    let refs: Vec<&String> = names.to_vec();
+    inputs.extend(fields(real, &refs, "real")?.to_flat());
+    for n in names {
+        targets.extend(real.targets.row(real.rows[n.as_str()]).iter());
     }
-    let rows = twin.inputs.nrows() + extra.1.len();
+    let rows = targets.len() / 2;
     let arr = Array2::from_shape_vec((rows, twin.inputs.ncols()), inputs)?;
     ndarray_npy::write_npy(out.join("inputs.npy"), &arr)?;
     ndarray_npy::write_npy(
@@ -330,5 +344,47 @@ fn write_corrected(
         .collect();
     meta["settings"]["calibration"] = serde_json::Value::Object(args);
     std::fs::write(out.join("meta.json"), serde_json::to_string_pretty(&meta)?)?;
+    Ok(())
+}
+
+/// Add to each field (rows of `d` values) one residual row of `e` drawn at random.
+fn add_residuals(flat: &mut [f32], d: usize, e: &nalgebra::DMatrix<f64>, seed: u64) {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    for row in flat.chunks_mut(d) {
+        let j = rng.random_range(0..e.nrows());
+        for (k, v) in row.iter_mut().enumerate() {
+            *v += e[(j, k)] as f32;
+        }
+    }
+}
+
+/// Time the library's whole `calibrate` on the pool (select, span check,
+/// fit, score on the pool's other taps), as `tactrace calibrate` will run it.
+fn time_calibrate(
+    twin: &Aligned,
+    real: &Aligned,
+    pool: &[String],
+    labels: &[(f64, f64)],
+    n: usize,
+    seed: u64,
+) -> Res<()> {
+    let names: Vec<&String> = pool.iter().collect();
+    let (sim, re) = (fields(twin, &names, "twin")?, fields(real, &names, "real")?);
+    let plan = tactrace_calib::CalibrationPlan {
+        samples: Some(n),
+        seed,
+        ..Default::default()
+    };
+    let t0 = Instant::now();
+    let cal = tactrace_calib::calibrate(&sim, &re, labels, &plan)?;
+    let (b, a) = (cal.record.held_out_before, cal.record.held_out_after);
+    println!(
+        "calibrate(): {n} of {} taps in {:.3} s; the pool's other taps: rms {:.3} -> {:.3} px",
+        pool.len(),
+        t0.elapsed().as_secs_f64(),
+        b.map_or(f64::NAN, |s| s.rms_px),
+        a.map_or(f64::NAN, |s| s.rms_px)
+    );
     Ok(())
 }

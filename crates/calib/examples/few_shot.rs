@@ -94,20 +94,10 @@ fn main() -> Res<()> {
             .map(|i| &pool[i])
             .collect(),
     };
-    let mut params = CorrectionParams {
-        standardise: o.args.contains_key("standardise"),
-        rank: o.args.get("rank").map(|r| r.parse()).transpose()?,
-        ..Default::default()
-    };
-    if let Some(e) = o.args.get("log10-penalty") {
-        (params.log10_min, params.log10_max, params.steps) = (e.parse()?, e.parse()?, 1);
-    }
     let t0 = Instant::now();
-    let fit = LinearCorrection::fit(
-        &fields(&twin, &chosen, "twin")?,
-        &fields(&real, &chosen, "real")?,
-        &params,
-    )?;
+    let sim_c = fields(&twin, &chosen, "twin")?;
+    let real_c = fields(&real, &chosen, "real")?;
+    let fit = LinearCorrection::fit(&sim_c, &real_c, &params(&o)?)?;
     let fit_s = t0.elapsed().as_secs_f64();
     let eval: Vec<&String> = eval.iter().collect();
     let (sim_e, real_e) = (fields(&twin, &eval, "twin")?, fields(&real, &eval, "real")?);
@@ -122,38 +112,61 @@ fn main() -> Res<()> {
         time_calibrate(&twin, &real, &pool, &labels, n, seed)?;
     }
     if let Some(out) = o.args.get("out") {
-        let copies = match o.args.get("add-real").map(String::as_str) {
-            Some("auto") => tactrace_calib::real_tap_repeats(twin.inputs.nrows(), chosen.len()),
-            Some(k) => k.parse()?,
-            None => 0,
-        };
-        let extra: Vec<&String> = (0..copies).flat_map(|_| chosen.iter().copied()).collect();
-        let resid = match o.args.get("noise-aug") {
-            Some(_) => {
-                let (sim_c, real_c) = (
-                    fields(&twin, &chosen, "twin")?,
-                    fields(&real, &chosen, "real")?,
-                );
-                Some(real_c.matrix() - fit.correction.apply(&sim_c)?.matrix())
-            }
-            None => None,
-        };
-        let mut twins = Vec::new();
-        if let Some(list) = o.args.get("more-twins") {
-            for dir in list.split(',') {
-                twins.push(align(Path::new(dir), Path::new(o.get("twin-csv")?))?);
-            }
-        }
-        let ex = Extras {
-            twins,
-            real: (&real, extra),
-            resid,
-            seed,
-        };
+        let resid = o
+            .args
+            .contains_key("noise-aug")
+            .then(|| fit.correction.apply(&sim_c))
+            .transpose()?;
+        let resid = resid.map(|c| real_c.matrix() - c.matrix());
+        let ex = extras(&o, &twin, &real, &chosen, resid, seed)?;
         write_corrected(&twin, &fit.correction, Path::new(out), &o, &ex)?;
         println!("wrote {out}");
     }
     Ok(())
+}
+
+/// The fit's settings from the options (default: the baseline ridge).
+fn params(o: &Opts) -> Res<CorrectionParams> {
+    let mut params = CorrectionParams {
+        standardise: o.args.contains_key("standardise"),
+        rank: o.args.get("rank").map(|r| r.parse()).transpose()?,
+        ..Default::default()
+    };
+    if let Some(e) = o.args.get("log10-penalty") {
+        (params.log10_min, params.log10_max, params.steps) = (e.parse()?, e.parse()?, 1);
+    }
+    Ok(params)
+}
+
+/// What the written training set holds besides the corrected twin.
+fn extras<'a>(
+    o: &Opts,
+    twin: &Aligned,
+    real: &'a Aligned,
+    chosen: &[&'a String],
+    resid: Option<nalgebra::DMatrix<f64>>,
+    seed: u64,
+) -> Res<Extras<'a>> {
+    let copies = match o.args.get("add-real").map(String::as_str) {
+        Some("auto") => tactrace_calib::real_tap_repeats(twin.inputs.nrows(), chosen.len()),
+        Some(k) => k.parse()?,
+        None => 0,
+    };
+    let mut twins = Vec::new();
+    if let Some(list) = o.args.get("more-twins") {
+        for dir in list.split(',') {
+            twins.push(align(Path::new(dir), Path::new(o.get("twin-csv")?))?);
+        }
+    }
+    Ok(Extras {
+        twins,
+        real: (
+            real,
+            (0..copies).flat_map(|_| chosen.iter().copied()).collect(),
+        ),
+        resid,
+        seed,
+    })
 }
 
 /// Read a dataset and align its rows with the CSV's image names. The

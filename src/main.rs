@@ -41,6 +41,8 @@ enum Command {
     Import(cmd_data::ImportArgs),
     /// Simulate a real labelled data set's taps (the simulator judged by real frames).
     Twin(cmd_twin::TwinArgs),
+    /// Fit the simulated TacTip to your own labelled taps on a straight edge.
+    Calibrate(cmd_twin::CalibrateArgs),
     /// Train a pose model (report ch. 4.2).
     Train(cmd_learn::TrainArgs),
     /// Mean absolute errors of a model on a dataset (report ch. 4.3).
@@ -64,6 +66,7 @@ fn main() -> ExitCode {
         Command::Collect(a) => cmd_data::collect(a),
         Command::Import(a) => cmd_data::import(a),
         Command::Twin(a) => cmd_twin::twin(a),
+        Command::Calibrate(a) => cmd_twin::calibrate(a),
         Command::Train(a) => cmd_learn::train(a),
         Command::Validate(a) => cmd_learn::validate(a),
         Command::Predict(a) => cmd_learn::predict(a),

@@ -5,7 +5,7 @@
 //! applied to simulated taps before training, carries a model trained in
 //! simulation over to the real sensor.
 //!
-//! Pure: no files, no printing. [`calibrate`] is the whole of
+//! Pure: no files, no printing. [`calibrate()`] is the whole of
 //! `tactrace calibrate` between reading the taps and writing the sensor
 //! file; the pieces:
 //! - [`Fields`]: N taps of 2P-dimensional displacement fields (all x, then all y);

@@ -20,6 +20,9 @@ pub enum LabError {
     RunFailed { ending: Ending, message: String },
     #[error(transparent)]
     Store(#[from] tactrace_store::StoreError),
+    /// The taps cannot calibrate the sensor (too few, not spanning, ...).
+    #[error("calibration: {0}")]
+    Calib(#[from] tactrace_calib::CalibError),
     #[error(transparent)]
     Report(#[from] tactrace_report::ReportError),
     #[error(transparent)]
@@ -48,7 +51,10 @@ impl LabError {
         use tactrace_sensor::SensorError as S;
         use tactrace_servo::ServoError as V;
         match self {
-            LabError::Format { .. } | LabError::Config(_) | LabError::Geometry(_) => true,
+            LabError::Format { .. }
+            | LabError::Config(_)
+            | LabError::Geometry(_)
+            | LabError::Calib(_) => true,
             LabError::RunFailed { .. } | LabError::Report(_) => false,
             LabError::Store(e) => e.is_bad_input(),
             LabError::Servo(e) => matches!(

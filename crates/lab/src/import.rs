@@ -51,6 +51,8 @@ pub struct Imported {
 
 /// One labelled row of the targets CSV.
 pub(crate) struct Row {
+    /// Index among the CSV's data rows (0 = the first after the header).
+    pub index: usize,
     pub image: String,
     pub r: f32,
     pub theta: f32,
@@ -126,6 +128,7 @@ pub(crate) fn read_rows(
             }
         };
         rows.push(Row {
+            index: k,
             image: rec.get(ci).unwrap_or("").trim().to_string(),
             r: num(cr)?,
             theta: num(ct)?,
@@ -147,7 +150,21 @@ pub fn import(
     blob: &BlobParams,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
-    let rows = read_rows(&cfg.targets, &LabelColumns::of(cfg), cfg.limit)?;
+    import_rows(cfg, blob, None, progress)
+}
+
+/// As [`import`], only the label rows at `keep` (indices of the CSV's data
+/// rows, in that order) when given.
+pub(crate) fn import_rows(
+    cfg: &ImportConfig,
+    blob: &BlobParams,
+    keep: Option<&[usize]>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Imported> {
+    let rows = keep_rows(
+        read_rows(&cfg.targets, &LabelColumns::of(cfg), cfg.limit)?,
+        keep,
+    );
     let extractor = reference_extractor(&cfg.reference, blob)?;
     let outcomes: Vec<FrameOutcome> = rows
         .par_iter()
@@ -183,6 +200,17 @@ pub fn import(
         images: Vec::new(),
     };
     gather(&rows, outcomes, meta, &cfg.frames)
+}
+
+/// The rows at `keep` (all when `None`; indices past the end are ignored).
+pub(crate) fn keep_rows(rows: Vec<Row>, keep: Option<&[usize]>) -> Vec<Row> {
+    let Some(keep) = keep else {
+        return rows;
+    };
+    let mut slots: Vec<Option<Row>> = rows.into_iter().map(Some).collect();
+    keep.iter()
+        .filter_map(|&i| slots.get_mut(i).and_then(Option::take))
+        .collect()
 }
 
 /// The dataset's target descriptions for the label columns used.

@@ -1,6 +1,7 @@
 //! The lab: tactrace's experiments, one module a stage of the research
 //! pipeline.
 //!
+//! [`calibrate`] fits the simulator to a user's real taps,
 //! [`collect`] taps on an edge (the simulated rig of `tactrace-servo`),
 //! [`import`] turns real frames into the same dataset format, [`twin`]
 //! replays a real set's labels on the simulator, [`train`] fits and
@@ -11,6 +12,7 @@
 //! documents in `tactrace-report`; this crate wires them together.
 
 pub mod bench;
+pub mod calibrate;
 pub mod collect;
 pub mod error;
 pub mod follow;

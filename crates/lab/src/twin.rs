@@ -9,14 +9,16 @@
 //! real frames (docs/results.md, "Simulated to real").
 use crate::error::Result;
 use crate::import::{
-    gather, read_rows, reference_extractor, target_names, FrameOutcome, Imported, LabelColumns, Row,
+    gather, keep_rows, read_rows, reference_extractor, target_names, FrameOutcome, Imported,
+    LabelColumns, Row,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
+use tactrace_calib::real_tap_repeats;
 use tactrace_sensor::{EdgeTap, Shear, TacTipConfig, TacTipModel};
-use tactrace_store::DatasetMeta;
+use tactrace_store::{pin_order_mismatch, DatasetMeta, SensorFolder, StoreError, TapData};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// Which labels to replay, and the seed of the rendering noise.
@@ -76,6 +78,83 @@ pub fn simulate_twin(
     blob: &BlobParams,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
+    simulate_twin_rows(cfg, sensor, blob, None, progress)
+}
+
+/// As [`simulate_twin`], only the label rows at `keep` when given.
+pub(crate) fn simulate_twin_rows(
+    cfg: &TwinConfig,
+    sensor: &TacTipConfig,
+    blob: &BlobParams,
+    keep: Option<&[usize]>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Imported> {
+    let rows = keep_rows(twin_rows(cfg)?, keep);
+    let extractor = reference_extractor(&cfg.reference, blob)?;
+    let rest = extractor.tracker.reference().to_vec();
+    let model = TacTipModel::with_rest_pins(sensor.clone(), rest.clone())?;
+    let outcomes = simulate_rows(&model, &extractor, cfg, &rows, cfg.seed, progress);
+    let settings = serde_json::json!({ "twin": cfg, "sensor": sensor, "blob": blob });
+    gather(
+        &rows,
+        outcomes,
+        twin_meta(cfg, rest, settings),
+        &cfg.targets,
+    )
+}
+
+/// As [`simulate_twin`] with a calibrated sensor (`tactrace calibrate`):
+/// its parameters, its field correction and its training recipe (several
+/// renders of every row, seeds `cfg.seed`, `cfg.seed + 1`, ..., and the
+/// real calibration taps repeated to about a third of the set, unless
+/// `real_taps` is false). The reference frame must list its pins like the
+/// sensor's.
+pub fn simulate_twin_calibrated(
+    cfg: &TwinConfig,
+    sensor: &SensorFolder,
+    real_taps: bool,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Imported> {
+    let spec = &sensor.spec;
+    let rows = twin_rows(cfg)?;
+    let extractor = reference_extractor(&cfg.reference, &spec.blob)?;
+    let rest = extractor.tracker.reference().to_vec();
+    if let Some(source) = pin_order_mismatch(&spec.reference_pins, &rest) {
+        return Err(StoreError::PinOrder {
+            path: cfg.reference.clone(),
+            source,
+        }
+        .into());
+    }
+    let model = TacTipModel::with_rest_pins(spec.sensor.clone(), rest.clone())?
+        .with_correction(sensor.field_correction()?)?;
+    let renders = spec.training.renders.max(1);
+    let repeats = if real_taps && spec.training.add_real_taps {
+        real_tap_repeats(rows.len(), sensor.real_labels.len())
+    } else {
+        0
+    };
+    let settings = serde_json::json!({
+        "twin": cfg, "sensor": sensor.source, "recipe": spec.training,
+        "renders": renders, "real_tap_repeats": repeats,
+    });
+    let mut all = Vec::new();
+    for r in 0..renders as u64 {
+        let outcomes = simulate_rows(&model, &extractor, cfg, &rows, cfg.seed + r, progress);
+        let meta = twin_meta(cfg, rest.clone(), settings.clone());
+        all.push(gather(&rows, outcomes, meta, &cfg.targets)?);
+    }
+    let mut out = concatenate(all);
+    out.data.meta.source = "simulated twin (calibrated sensor)".into();
+    for k in 0..repeats {
+        append_real_taps(&mut out.data, sensor, k);
+    }
+    out.data.meta.samples = out.data.targets.len() / 2;
+    Ok(out)
+}
+
+/// The labelled rows of `cfg.targets` with their depth and shear columns.
+pub(crate) fn twin_rows(cfg: &TwinConfig) -> Result<Vec<Row>> {
     let mut extra: Vec<&str> = cfg.dz_column.iter().map(String::as_str).collect();
     extra.extend(cfg.shear_columns.iter().flatten().map(String::as_str));
     let cols = LabelColumns {
@@ -84,20 +163,11 @@ pub fn simulate_twin(
         theta: &cfg.theta_column,
         extra: &extra,
     };
-    let rows = read_rows(&cfg.targets, &cols, cfg.limit)?;
-    let extractor = reference_extractor(&cfg.reference, blob)?;
-    let rest = extractor.tracker.reference().to_vec();
-    let model = TacTipModel::with_rest_pins(sensor.clone(), rest.clone())?;
-    let outcomes: Vec<FrameOutcome> = rows
-        .par_iter()
-        .enumerate()
-        .map(|(k, row)| {
-            let out = simulate_row(&model, &extractor, cfg, row, k as u64);
-            progress();
-            out
-        })
-        .collect();
-    let meta = DatasetMeta {
+    read_rows(&cfg.targets, &cols, cfg.limit)
+}
+
+fn twin_meta(cfg: &TwinConfig, rest: Vec<[f64; 2]>, settings: serde_json::Value) -> DatasetMeta {
+    DatasetMeta {
         source: "simulated twin".into(),
         origin: cfg.targets.display().to_string(),
         seed: Some(cfg.seed),
@@ -106,12 +176,55 @@ pub fn simulate_twin(
         targets: target_names(&cfg.r_column, &cfg.theta_column),
         frames_with_missing_pins: 0,
         reference_pins: rest,
-        settings: serde_json::json!({ "twin": cfg, "sensor": sensor, "blob": blob }),
+        settings,
         tactrace_version: crate::VERSION.into(),
         input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
         images: Vec::new(),
-    };
-    gather(&rows, outcomes, meta, &cfg.targets)
+    }
+}
+
+/// Render, detect and order every row with the rendering seed `seed`
+/// (row `k` of the labels file draws from stream `k`, whichever rows are
+/// simulated).
+fn simulate_rows(
+    model: &TacTipModel,
+    extractor: &PinExtractor,
+    cfg: &TwinConfig,
+    rows: &[Row],
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> Vec<FrameOutcome> {
+    rows.par_iter()
+        .map(|row| {
+            let out = simulate_row(model, extractor, cfg, row, (seed, row.index as u64));
+            progress();
+            out
+        })
+        .collect()
+}
+
+/// The imports of several renders as one set (rows in render order).
+fn concatenate(parts: Vec<Imported>) -> Imported {
+    let mut parts = parts.into_iter();
+    let mut first = parts.next().expect("at least one render");
+    for p in parts {
+        first.data.inputs.extend(p.data.inputs);
+        first.data.targets.extend(p.data.targets);
+        first.data.meta.images.extend(p.data.meta.images);
+        first.data.meta.frames_with_missing_pins += p.data.meta.frames_with_missing_pins;
+        first.frames_with_missing_pins += p.frames_with_missing_pins;
+        first.rejected.extend(p.rejected);
+    }
+    first
+}
+
+/// The sensor's real calibration taps, once more (round `k`).
+fn append_real_taps(data: &mut TapData, sensor: &SensorFolder, k: usize) {
+    data.inputs.extend_from_slice(&sensor.real_fields);
+    for (i, l) in sensor.real_labels.iter().enumerate() {
+        data.targets.extend(l);
+        data.meta.images.push(format!("calibration-tap-{i}#{k}"));
+    }
 }
 
 /// The labelled tap of one row (extra values: dz, then the shear columns).
@@ -142,10 +255,10 @@ fn simulate_row(
     extractor: &PinExtractor,
     cfg: &TwinConfig,
     row: &Row,
-    k: u64,
+    (seed, k): (u64, u64),
 ) -> FrameOutcome {
-    let pins = model.edge_tap_pins(&edge_tap(cfg, row));
-    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let pins = model.seen_pins(model.edge_tap_pins(&edge_tap(cfg, row)));
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(k);
     let frame = model.render(&pins, Some(&mut rng));
     let tracked = extractor.extract(&frame).map_err(|e| e.to_string())?;

@@ -5,6 +5,9 @@ use std::path::PathBuf;
 /// What can go wrong building a sensor model or capturing a frame.
 #[derive(Debug, thiserror::Error)]
 pub enum SensorError {
+    /// A field correction that does not fit the sensor.
+    #[error("invalid field correction: {reason}")]
+    Correction { reason: String },
     /// A configuration value outside its valid range.
     #[error("invalid sensor config `{field}` = {value}: {reason}")]
     InvalidConfig {

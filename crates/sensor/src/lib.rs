@@ -9,6 +9,7 @@
 
 mod config;
 mod contact;
+mod correction;
 mod edge_tap;
 mod error;
 mod layout;
@@ -20,6 +21,7 @@ mod sim;
 
 pub use config::{Calibration, CameraConfig, Mechanics, Nuisance, SkinGeometry, TacTipConfig};
 pub use contact::Shear;
+pub use correction::FieldCorrection;
 pub use edge_tap::EdgeTap;
 pub use error::SensorError;
 pub use layout::{hex_lattice, pin_count};

@@ -25,6 +25,9 @@ pub struct TacTipModel {
     radii_px: Vec<f64>,
     contact: ContactModel,
     lift_gain: f64,
+    /// A calibrated sensor's correction of the pin field (`None`: the
+    /// physics alone).
+    correction: Option<std::sync::Arc<crate::FieldCorrection>>,
 }
 
 impl TacTipModel {
@@ -81,6 +84,7 @@ impl TacTipModel {
             clamp,
             radii_px,
             contact,
+            correction: None,
         }
     }
 
@@ -92,6 +96,32 @@ impl TacTipModel {
     /// Rest pin centres, px, image coordinates.
     pub fn rest_pins(&self) -> &[[f64; 2]] {
         &self.rest_px
+    }
+
+    /// This model with a calibrated correction of its pin field (the pins
+    /// must be the measured rest pins the correction was fitted against,
+    /// in their order: [`Self::with_rest_pins`]).
+    pub fn with_correction(mut self, c: crate::FieldCorrection) -> Result<Self, SensorError> {
+        if c.pins() != self.rest_px.len() {
+            return Err(SensorError::Correction {
+                reason: format!(
+                    "fitted for {} pins, the sensor has {}",
+                    c.pins(),
+                    self.rest_px.len()
+                ),
+            });
+        }
+        self.correction = Some(std::sync::Arc::new(c));
+        Ok(self)
+    }
+
+    /// The pins a tap shows the camera: `pins` (from [`Self::pins`] or
+    /// [`Self::edge_tap_pins`]) moved by the calibrated correction, if any.
+    pub fn seen_pins(&self, pins: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+        match &self.correction {
+            Some(c) => c.apply(&self.rest_px, &pins),
+            None => pins,
+        }
     }
 
     /// Rendered pin radii, px (grow outwards with the camera's perspective).

@@ -51,7 +51,9 @@ impl TactileSensor for SimTacTip {
     /// Reads the tip pose, computes the pins and renders with nuisance.
     fn capture(&mut self) -> Result<Frame, SensorError> {
         let tip = (self.pose_source)();
-        let pins = self.model.pins(&self.shape, tip, self.shear);
+        let pins = self
+            .model
+            .seen_pins(self.model.pins(&self.shape, tip, self.shear));
         Ok(self.model.render(&pins, Some(&mut self.rng)))
     }
 }

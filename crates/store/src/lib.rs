@@ -5,6 +5,7 @@
 //!   data, loaded as one [`StoredModel`] so the pin-order check
 //!   ([`pin_order`]) runs whenever a model meets data or a rig;
 //! - [`frame_file`], [`shape_file`]: frames (PNG) and contours (CSV);
+//! - [`sensor_file`]: calibrated sensor folders (`tactrace calibrate`);
 //! - [`config_file`]: defaults, then the file, unknown keys rejected;
 //! - [`fsutil`]: outputs that appear only when complete.
 //!
@@ -17,6 +18,7 @@ pub mod frame_file;
 pub mod fsutil;
 pub mod model_dir;
 pub mod pin_order;
+pub mod sensor_file;
 pub mod shape_file;
 
 pub use config_file::{load_config, overlay, resolved_config_toml};
@@ -25,4 +27,5 @@ pub use error::{read_err, write_err, Result, StoreError};
 pub use fsutil::{check_output_dir, read_text, write_atomic, StagedDir};
 pub use model_dir::{stage_model, StoredModel};
 pub use pin_order::{pin_order_mismatch, PinOrderError};
+pub use sensor_file::SensorFolder;
 pub use shape_file::load_shape;

@@ -1,0 +1,238 @@
+//! `tactrace calibrate`: fit the simulated TacTip to a user's own labelled
+//! taps on a straight edge (docs/calibration.md).
+//!
+//! The real frames are imported, their labels replayed on the simulator
+//! ([`crate::twin`]: same pin order, the real reference's rest layout),
+//! the two joined on the image name, and `tactrace_calib::calibrate` picks
+//! the calibration taps by its seeded spanning rule, fits the field
+//! correction and scores it on the taps left out. The result is a
+//! [`SensorFolder`]: the simulated sensor that `--sensor` gives every
+//! command that simulates taps.
+use crate::error::{LabError, Result};
+use crate::import::{import_rows, ImportConfig, Imported};
+use crate::twin::{simulate_twin_rows, twin_rows, TwinConfig};
+use std::collections::{HashMap, HashSet};
+use std::path::PathBuf;
+use tactrace_calib::{
+    calibrate, check_labels, field_stats, select_taps, CalibrationPlan, Fields, Label, Selection,
+};
+use tactrace_sensor::TacTipConfig;
+use tactrace_store::sensor_file::{
+    LabelColumnNames, SensorSpec, TrainingRecipe, SENSOR_FORMAT, SENSOR_FORMAT_VERSION,
+};
+use tactrace_store::SensorFolder;
+use tactrace_vision::BlobParams;
+
+/// What to calibrate on.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CalibrateConfig {
+    /// Folder of the real frames named in the labels file.
+    pub frames: PathBuf,
+    /// The labels file, its columns, the reference frame, and the seed of
+    /// the replayed taps' rendering noise.
+    pub twin: TwinConfig,
+    /// Calibration taps to pick (`None`: all, nothing held out).
+    pub samples: Option<usize>,
+    /// Seed of the tap selection.
+    pub seed: u64,
+}
+
+/// A fitted sensor and what the calibration saw.
+pub struct Calibrated {
+    pub sensor: SensorFolder,
+    /// Labelled taps given.
+    pub taps: usize,
+    /// Real frames rejected by the import (too few pins).
+    pub rejected: usize,
+}
+
+/// Held-out taps (at most) that score the fit: the rest of the given taps
+/// are not imported, so calibration stays quick on large sets.
+pub const SCORE_TAPS: usize = 400;
+
+/// Calibrate `sensor` (the simulator's parameters) to the real taps of
+/// `cfg`, detecting pins with `blob`: the calibration taps are picked from
+/// the labels alone (seeded rule spanning r and theta), then only they and
+/// up to [`SCORE_TAPS`] other taps (seeded) are imported and replayed;
+/// `progress` ticks once per frame imported and once per tap replayed.
+pub fn calibrate_sensor(
+    cfg: &CalibrateConfig,
+    sensor: &TacTipConfig,
+    blob: &BlobParams,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Calibrated> {
+    let t = &cfg.twin;
+    let rows = twin_rows(t)?;
+    let labels: Vec<Label> = rows
+        .iter()
+        .map(|r| (f64::from(r.r), f64::from(r.theta)))
+        .collect();
+    check_labels(&labels)?;
+    let chosen = match cfg.samples {
+        Some(n) => select_taps(&labels, n, cfg.seed)?,
+        None => (0..labels.len()).collect(),
+    };
+    let held = held_out_rows(labels.len(), &chosen, cfg.seed);
+    let keep: Vec<usize> = chosen.iter().chain(&held).copied().collect();
+    let icfg = ImportConfig {
+        frames: cfg.frames.clone(),
+        targets: t.targets.clone(),
+        reference: t.reference.clone(),
+        image_column: t.image_column.clone(),
+        r_column: t.r_column.clone(),
+        theta_column: t.theta_column.clone(),
+        limit: t.limit,
+    };
+    let real = import_rows(&icfg, blob, Some(&keep), progress)?;
+    let twin = simulate_twin_rows(t, sensor, blob, Some(&keep), progress)?;
+    let chosen_names: HashSet<&str> = chosen.iter().map(|&i| rows[i].image.as_str()).collect();
+    let pairs = paired(&real, &twin)?;
+    let (fit_part, held_part) = pairs.split(|name| chosen_names.contains(name));
+    let (sim, real_fields, fit_labels) = fit_part.fields()?;
+    let plan = CalibrationPlan {
+        samples: None,
+        seed: cfg.seed,
+        ..CalibrationPlan::default()
+    };
+    let fitted = calibrate(&sim, &real_fields, &fit_labels, &plan)?;
+    let mut record = fitted.record;
+    record.selection = Selection {
+        seed: cfg.seed,
+        samples: cfg.samples.unwrap_or(labels.len()),
+        indices: chosen.clone(),
+    };
+    if !held_part.labels.is_empty() {
+        let (s, r, _) = held_part.fields()?;
+        record.held_out_before = Some(field_stats(&s, &r)?);
+        record.held_out_after = Some(field_stats(&fitted.correction.apply(&s)?, &r)?);
+    }
+    let reference = tactrace_sensor::read_frame(&t.reference)?;
+    let spec = SensorSpec {
+        format: SENSOR_FORMAT.into(),
+        format_version: SENSOR_FORMAT_VERSION,
+        tactrace_version: crate::VERSION.into(),
+        sensor: sensor.clone(),
+        blob: blob.clone(),
+        labels: LabelColumnNames {
+            image: t.image_column.clone(),
+            r: t.r_column.clone(),
+            theta: t.theta_column.clone(),
+            dz: t.dz_column.clone(),
+            shear: t.shear_columns.clone(),
+        },
+        training: TrainingRecipe::default(),
+        reference_pins: real.data.meta.reference_pins.clone(),
+        calibration: record,
+    };
+    let sensor = SensorFolder {
+        spec,
+        reference,
+        correction: fitted.correction,
+        real_fields: fitted.real_taps.to_flat(),
+        real_labels: fitted
+            .labels
+            .iter()
+            .map(|l| [l.0 as f32, l.1 as f32])
+            .collect(),
+        source: PathBuf::new(),
+    };
+    Ok(Calibrated {
+        sensor,
+        taps: labels.len(),
+        rejected: real.rejected.len(),
+    })
+}
+
+/// Up to [`SCORE_TAPS`] of the `n` rows not `chosen`, drawn with `seed`.
+fn held_out_rows(n: usize, chosen: &[usize], seed: u64) -> Vec<usize> {
+    use rand::seq::SliceRandom;
+    use rand::SeedableRng;
+    let taken: HashSet<usize> = chosen.iter().copied().collect();
+    let mut rest: Vec<usize> = (0..n).filter(|i| !taken.contains(i)).collect();
+    rest.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(
+        seed ^ 0x5C02_E5C0,
+    ));
+    rest.truncate(SCORE_TAPS);
+    rest.sort_unstable();
+    rest
+}
+
+/// Twin and real fields of the same frames, joined on the image name.
+struct Pairs {
+    dim: usize,
+    names: Vec<String>,
+    sim: Vec<f32>,
+    real: Vec<f32>,
+    labels: Vec<Label>,
+}
+
+impl Pairs {
+    /// (pairs whose image `first` accepts, the others).
+    fn split(self, first: impl Fn(&str) -> bool) -> (Pairs, Pairs) {
+        let d = self.dim;
+        let empty = || Pairs {
+            dim: d,
+            names: Vec::new(),
+            sim: Vec::new(),
+            real: Vec::new(),
+            labels: Vec::new(),
+        };
+        let (mut a, mut b) = (empty(), empty());
+        for (k, name) in self.names.into_iter().enumerate() {
+            let to = if first(&name) { &mut a } else { &mut b };
+            to.sim.extend_from_slice(&self.sim[k * d..(k + 1) * d]);
+            to.real.extend_from_slice(&self.real[k * d..(k + 1) * d]);
+            to.labels.push(self.labels[k]);
+            to.names.push(name);
+        }
+        (a, b)
+    }
+
+    fn fields(&self) -> Result<(Fields, Fields, Vec<Label>)> {
+        Ok((
+            Fields::from_flat(&self.sim, self.dim, "simulated taps")?,
+            Fields::from_flat(&self.real, self.dim, "real taps")?,
+            self.labels.clone(),
+        ))
+    }
+}
+
+/// The twin's and the real fields of the same frames (joined on the image
+/// name), with their labels.
+fn paired(real: &Imported, twin: &Imported) -> Result<Pairs> {
+    let (r, s) = (&real.data, &twin.data);
+    let row_of: HashMap<&str, usize> = s
+        .meta
+        .images
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (n.as_str(), i))
+        .collect();
+    let d = r.dim();
+    if d != s.dim() {
+        return Err(LabError::Config(format!(
+            "the real frames give {} pins a frame and the simulated taps {}",
+            d / 2,
+            s.dim() / 2
+        )));
+    }
+    let mut pairs = Pairs {
+        dim: d,
+        names: Vec::new(),
+        sim: Vec::new(),
+        real: Vec::new(),
+        labels: Vec::new(),
+    };
+    for (i, name) in r.meta.images.iter().enumerate() {
+        let Some(&j) = row_of.get(name.as_str()) else {
+            continue;
+        };
+        pairs.sim.extend_from_slice(&s.inputs[j * d..(j + 1) * d]);
+        pairs.real.extend_from_slice(&r.inputs[i * d..(i + 1) * d]);
+        pairs
+            .labels
+            .push((f64::from(r.targets[2 * i]), f64::from(r.targets[2 * i + 1])));
+        pairs.names.push(name.clone());
+    }
+    Ok(pairs)
+}

@@ -1,0 +1,140 @@
+//! `tactrace calibrate` end to end on a synthetic "real" sensor: frames
+//! rendered by the simulator with a known field distortion stand in for a
+//! real TacTip. Calibration must find the distortion (the held-out field
+//! misfit falls to the rendering noise), the sensor folder must round-trip
+//! exactly, and `twin --sensor` must give identical taps from the original
+//! and the reloaded folder, in the reference's pin order.
+use rand::{Rng, SeedableRng};
+use std::path::Path;
+use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
+use tactrace_lab::twin::{simulate_twin_calibrated, TwinConfig};
+use tactrace_sensor::{EdgeTap, FieldCorrection, TacTipConfig, TacTipModel};
+use tactrace_store::SensorFolder;
+use tactrace_vision::BlobParams;
+
+const PINS: usize = 127;
+
+/// A known distortion: every displacement 30 % larger, x and y mixed a
+/// little, a constant 0.4 px shift in x.
+fn distortion() -> FieldCorrection {
+    let d = 2 * PINS;
+    let mut w = vec![0.0f32; d * d];
+    for k in 0..d {
+        w[k * d + k] = 0.3;
+        w[k * d + (k + PINS) % d] = 0.1;
+    }
+    let b = (0..d).map(|k| if k < PINS { 0.4 } else { 0.0 }).collect();
+    FieldCorrection::new(PINS, w, b).unwrap()
+}
+
+/// `n` labelled taps of the distorted sensor in `dir` (frames/, targets.csv,
+/// frames/init_0.png), labels spread over r in [-5, 5] mm and theta in
+/// [-45, 45] deg.
+fn distorted_sensor_set(dir: &Path, n: usize) -> TwinConfig {
+    let sensor = TacTipConfig::default();
+    let plain = TacTipModel::new(sensor.clone()).unwrap();
+    let real = TacTipModel::with_rest_pins(sensor, plain.rest_pins().to_vec())
+        .unwrap()
+        .with_correction(distortion())
+        .unwrap();
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    let reference = frames.join("init_0.png");
+    real.render(real.rest_pins(), None)
+        .save(&reference)
+        .unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut csv = String::from("image_name,pose_2,pose_6\n");
+    for k in 0..n {
+        let tap = EdgeTap {
+            r_mm: rng.random_range(-5.0..5.0),
+            theta_deg: rng.random_range(-45.0..45.0),
+            dz_mm: 0.0,
+            shear: None,
+        };
+        let pins = real.seen_pins(real.edge_tap_pins(&tap));
+        let name = format!("frame_{k}_0.png");
+        real.render(&pins, Some(&mut rng))
+            .save(frames.join(&name))
+            .unwrap();
+        csv.push_str(&format!("{name},{},{}\n", tap.r_mm, tap.theta_deg));
+    }
+    let targets = dir.join("targets.csv");
+    std::fs::write(&targets, csv).unwrap();
+    TwinConfig {
+        dz_column: None,
+        shear_columns: None,
+        ..TwinConfig::bristol(dir, 1).with_paths(targets, reference)
+    }
+}
+
+#[test]
+fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
+    let root = tempfile::tempdir().unwrap();
+    let twin = distorted_sensor_set(root.path(), 160);
+    let cfg = CalibrateConfig {
+        frames: root.path().join("frames"),
+        twin: twin.clone(),
+        samples: Some(100),
+        seed: 3,
+    };
+    let blob = BlobParams::preset("sim").unwrap();
+    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let record = &got.sensor.spec.calibration;
+    let (before, after) = (
+        record.held_out_before.unwrap(),
+        record.held_out_after.unwrap(),
+    );
+    assert_eq!(after.taps, 60, "the 60 taps not chosen score the fit");
+    assert!(
+        after.rms_px < 0.5 * before.rms_px && after.rms_px < 0.5,
+        "held-out field RMS {} -> {} px",
+        before.rms_px,
+        after.rms_px
+    );
+    assert_eq!(record.selection.indices.len(), 100);
+    // The folder round-trips and gives identical taps.
+    let dir = root.path().join("sensor");
+    got.sensor.write(&dir, false).unwrap();
+    let back = SensorFolder::read(&dir).unwrap();
+    assert_eq!(
+        back.field_correction().unwrap(),
+        got.sensor.field_correction().unwrap()
+    );
+    assert_eq!(back.real_fields, got.sensor.real_fields);
+    let a = simulate_twin_calibrated(&twin, &got.sensor, true, &|| {}).unwrap();
+    let b = simulate_twin_calibrated(&twin, &back, true, &|| {}).unwrap();
+    assert_eq!(a.data.inputs, b.data.inputs);
+    assert_eq!(a.data.meta.reference_pins, got.sensor.spec.reference_pins);
+    // Three renders of the 160 labels plus the 100 real taps, repeated.
+    assert!(a.data.len() > 3 * 160, "{} taps", a.data.len());
+    // Nothing overwritten without --force; another version is refused.
+    assert!(got.sensor.write(&dir, false).is_err());
+    let toml = dir.join("sensor.toml");
+    let text = std::fs::read_to_string(&toml).unwrap();
+    std::fs::write(
+        &toml,
+        text.replace("format_version = 1", "format_version = 99"),
+    )
+    .unwrap();
+    let err = SensorFolder::read(&dir).unwrap_err().to_string();
+    assert!(err.contains("version 99"), "{err}");
+}
+
+#[test]
+fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
+    let root = tempfile::tempdir().unwrap();
+    let twin = distorted_sensor_set(root.path(), 8);
+    let cfg = CalibrateConfig {
+        frames: root.path().join("frames"),
+        twin,
+        samples: None,
+        seed: 1,
+    };
+    let blob = BlobParams::preset("sim").unwrap();
+    let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {})
+        .err()
+        .expect("8 taps are too few");
+    assert!(err.is_bad_input(), "{err}");
+    assert!(err.to_string().contains("10"), "{err}");
+}

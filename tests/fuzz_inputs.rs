@@ -99,6 +99,38 @@ fn mutated_inputs_never_panic_or_hang() {
     report(&shared, cases, start.elapsed().as_secs_f64());
 }
 
+/// The judge itself: a hang, a signal, a panic and a debug value in the
+/// message are failures; a plain `error:` line with exit code 2 is not.
+#[test]
+fn the_judge_fails_hangs_signals_panics_and_debug_text() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let sh = |script: &str, limit: u64| {
+        let args = ["-c".to_string(), script.to_string()];
+        let limit = std::time::Duration::from_secs(limit);
+        runner::run_program(Path::new("/bin/sh"), dir.path(), &args, limit)
+    };
+    let hang = sh("sleep 30", 1);
+    assert!(hang.timed_out && hang.elapsed.as_secs() < 10);
+    assert!(runner::verdict(&hang).is_some_and(|v| v.starts_with("hang")));
+    let abort = sh("kill -ABRT $$", 10);
+    assert_eq!(abort.signal, Some(6));
+    for bad in [
+        "echo \"thread 'main' panicked at src/x.rs:1:1:\" >&2; exit 101",
+        "echo 'error: panicked at src/x.rs:1:1' >&2; exit 1",
+        "echo 'error: bad pose Pose { x: 1.0, y: 2.0 }' >&2; exit 2",
+        "echo 'error: not a number: Some(3)' >&2; exit 2",
+        "echo 'nothing useful' >&2; exit 2",
+        "exit 3",
+    ] {
+        assert!(runner::verdict(&sh(bad, 10)).is_some(), "{bad}");
+    }
+    let fine = sh(
+        "echo 'error: x.csv: line 3: `nan` is not a number' >&2; exit 2",
+        10,
+    );
+    assert_eq!(runner::verdict(&fine), None, "{}", fine.stderr);
+}
+
 /// Take case numbers until the budget is spent.
 fn worker(shared: &Shared, cases: usize, root: &Path) {
     loop {

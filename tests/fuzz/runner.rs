@@ -21,12 +21,18 @@ pub struct Outcome {
 
 /// Run `tactrace args` in `dir`; stdout and stderr go to files there.
 pub fn run(dir: &Path, args: &[String]) -> Outcome {
+    let bin = Path::new(env!("CARGO_BIN_EXE_tactrace"));
+    run_program(bin, dir, args, TIME_LIMIT)
+}
+
+/// Run any `program` the way [`run`] runs tactrace, killed after `limit`.
+pub fn run_program(program: &Path, dir: &Path, args: &[String], limit: Duration) -> Outcome {
     let (out, err) = (dir.join("stdout.txt"), dir.join("stderr.txt"));
     let start = Instant::now();
     let mut child = Command::new("sh")
         .arg("-c")
         .arg(format!("ulimit -v {MEMORY_KIB}; exec \"$0\" \"$@\""))
-        .arg(env!("CARGO_BIN_EXE_tactrace"))
+        .arg(program)
         .args(args)
         .current_dir(dir)
         .env("RUST_BACKTRACE", "1")
@@ -35,7 +41,7 @@ pub fn run(dir: &Path, args: &[String]) -> Outcome {
         .stderr(std::fs::File::create(&err).expect("stderr file"))
         .spawn()
         .expect("spawn tactrace");
-    let (status, timed_out) = wait_limited(&mut child);
+    let (status, timed_out) = wait_limited(&mut child, limit);
     let stderr = String::from_utf8_lossy(&std::fs::read(&err).unwrap_or_default()).into_owned();
     Outcome {
         code: status.and_then(|s| s.code()),
@@ -47,13 +53,13 @@ pub fn run(dir: &Path, args: &[String]) -> Outcome {
 }
 
 /// Wait for the child, killing it at the time limit.
-fn wait_limited(child: &mut std::process::Child) -> (Option<ExitStatus>, bool) {
+fn wait_limited(child: &mut std::process::Child, limit: Duration) -> (Option<ExitStatus>, bool) {
     let start = Instant::now();
     loop {
         if let Some(s) = child.try_wait().expect("wait for tactrace") {
             return (Some(s), false);
         }
-        if start.elapsed() > TIME_LIMIT {
+        if start.elapsed() > limit {
             let _ = child.kill();
             let _ = child.wait();
             return (None, true);
@@ -75,7 +81,7 @@ fn signal_of(_: ExitStatus) -> Option<i32> {
 /// Why an outcome is a failure, or None when it is a clean exit.
 pub fn verdict(o: &Outcome) -> Option<String> {
     if o.timed_out {
-        return Some(format!("hang: still running after {TIME_LIMIT:?}"));
+        return Some(format!("hang: still running after {:?}", o.elapsed));
     }
     if let Some(sig) = o.signal {
         return Some(format!("killed by signal {sig}"));

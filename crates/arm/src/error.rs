@@ -9,10 +9,7 @@ pub type DriverError = std::sync::Arc<dyn std::error::Error + Send + Sync>;
 #[non_exhaustive]
 pub enum ArmError {
     /// The target position leaves the workspace box along one axis.
-    #[error(
-        "pose ({:.1}, {:.1}, {:.1}) mm is outside the workspace: {axis} = {value_mm:.3} mm, allowed [{min_mm}, {max_mm}] mm",
-        .pose.x, .pose.y, .pose.z
-    )]
+    #[error("pose {} is outside the workspace: {axis} = {value_mm:.3} mm, allowed [{min_mm}, {max_mm}] mm", plain(.pose))]
     OutsideWorkspace {
         pose: Pose,
         axis: char,
@@ -27,10 +24,7 @@ pub enum ArmError {
     #[error("rotation step of {step_deg:.3} deg exceeds the maximum of {max_deg} deg")]
     RotationTooLarge { step_deg: f64, max_deg: f64 },
     /// A pose with a NaN or infinite component.
-    #[error(
-        "pose ({}, {}, {}) mm, ({}, {}, {}) deg has a non-finite component",
-        .pose.x, .pose.y, .pose.z, .pose.rx, .pose.ry, .pose.rz
-    )]
+    #[error("pose {} has a non-finite component", plain(.pose))]
     NonFinitePose { pose: Pose },
     /// A configuration value that cannot be used.
     #[error("invalid arm configuration: {field} = {value} ({reason})")]
@@ -42,4 +36,13 @@ pub enum ArmError {
     /// A failure reported by a real robot driver (its error is the source).
     #[error("the arm's driver failed")]
     Hardware(#[source] DriverError),
+}
+
+/// A pose for people: position in mm and rotation in degrees (its debug form
+/// `Pose { x: .. }` once reached the CLI's error messages).
+fn plain(p: &Pose) -> String {
+    format!(
+        "(x {:.3}, y {:.3}, z {:.3} mm; rx {:.3}, ry {:.3}, rz {:.3} deg)",
+        p.x, p.y, p.z, p.rx, p.ry, p.rz
+    )
 }

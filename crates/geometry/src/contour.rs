@@ -55,9 +55,15 @@ impl std::fmt::Debug for Contour {
     }
 }
 
+/// Largest vertex coordinate [`Contour::new`] accepts, mm (1 km): keeps the
+/// perimeter and every arc length finite (a vertex at 1e308 made them
+/// infinite and a follow run sized a buffer by them).
+pub const MAX_COORDINATE_MM: f64 = 1e6;
+
 impl Contour {
     /// Build from vertices (either orientation; a repeated closing point is
-    /// dropped). Errors on fewer than 3 points, zero area or self-intersection.
+    /// dropped). Errors on fewer than 3 points, zero area, self-intersection, or a
+    /// coordinate beyond [`MAX_COORDINATE_MM`].
     ///
     /// Consecutive duplicate vertices are merged. A clockwise list is
     /// reversed, keeping its first vertex first.
@@ -67,6 +73,12 @@ impl Contour {
             .position(|v| !(v.x.is_finite() && v.y.is_finite()))
         {
             return Err(GeometryError::NonFinite { index });
+        }
+        if let Some(index) = vertices.iter().position(|v| v.amax() > MAX_COORDINATE_MM) {
+            return Err(GeometryError::OutOfRange {
+                index,
+                limit_mm: MAX_COORDINATE_MM,
+            });
         }
         let vertices = dedup_closed(vertices);
         let area2 = check_polygon(&vertices)?;

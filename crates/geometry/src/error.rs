@@ -21,6 +21,9 @@ pub enum GeometryError {
     /// A vertex with a NaN or infinite coordinate.
     #[error("vertex {index} is not finite")]
     NonFinite { index: usize },
+    /// A vertex farther from the origin than any rig reaches.
+    #[error("vertex {index} lies beyond +-{limit_mm} mm (coordinates are in mm)")]
+    OutOfRange { index: usize, limit_mm: f64 },
     /// The contour encloses no area.
     #[error("contour encloses no area")]
     Degenerate,

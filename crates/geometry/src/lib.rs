@@ -17,7 +17,7 @@ mod segtree;
 mod shapes;
 mod validate;
 
-pub use contour::{Contour, EdgePoint};
+pub use contour::{Contour, EdgePoint, MAX_COORDINATE_MM};
 pub use error::GeometryError;
 pub use pose::Pose;
 pub use shapes::{

@@ -198,11 +198,56 @@ impl ModelConfig {
             return Err(config_err("epochs", "must be at least 1".into()));
         }
         check_phases(self.free_phase, self.clamped_phase)?;
+        if self.divergence_retries > MAX_RETRIES {
+            let n = self.divergence_retries;
+            return Err(config_err(
+                "divergence_retries",
+                format!("{n} exceeds {MAX_RETRIES}"),
+            ));
+        }
         for (_, _, n) in self.nets() {
             check_net(n, self.kind)?;
+            check_sizes(n)?;
         }
         Ok(())
     }
+}
+
+/// Largest hidden layer and `n_components` accepted: a layer of 2^63 units
+/// once overflowed a buffer's capacity (a panic) and 2^32 aborted.
+pub const MAX_LAYER: usize = 1 << 16;
+/// Largest number of hidden layers accepted.
+pub const MAX_HIDDEN_LAYERS: usize = 16;
+/// Largest number of weights between consecutive hidden layers (2^26:
+/// 256 MiB of f32).
+pub const MAX_HIDDEN_WEIGHTS: usize = 1 << 26;
+/// Largest Euler iteration count per phase and per sample.
+pub const MAX_EULER_STEPS: usize = 10_000;
+/// Largest number of learning-rate halvings after a divergence.
+pub const MAX_RETRIES: usize = 64;
+
+/// Error when a net's sizes would take unbounded memory or time.
+fn check_sizes(n: &NetConfig) -> Result<(), LearnError> {
+    let sizes = n.hidden.iter().chain(&n.n_components);
+    if let Some(big) = sizes.filter(|&&s| s > MAX_LAYER).max() {
+        return Err(config_err(
+            "hidden",
+            format!("size {big} exceeds {MAX_LAYER}"),
+        ));
+    }
+    if n.hidden.len() > MAX_HIDDEN_LAYERS {
+        let k = n.hidden.len();
+        return Err(config_err(
+            "hidden",
+            format!("{k} layers exceed {MAX_HIDDEN_LAYERS}"),
+        ));
+    }
+    let weights: usize = n.hidden.windows(2).map(|w| w[0] * w[1]).sum();
+    if weights > MAX_HIDDEN_WEIGHTS {
+        let why = format!("{weights} weights between hidden layers exceed {MAX_HIDDEN_WEIGHTS}");
+        return Err(config_err("hidden", why));
+    }
+    Ok(())
 }
 
 fn config_err(field: &'static str, reason: String) -> LearnError {
@@ -267,10 +312,10 @@ fn check_phases(free: FreePhase, clamped: ClampedPhase) -> Result<(), LearnError
         },
     ];
     for (n_i, dt) in euler.into_iter().flatten() {
-        if n_i == 0 || !(dt.is_finite() && dt > 0.0) {
+        if n_i == 0 || n_i > MAX_EULER_STEPS || !(dt.is_finite() && dt > 0.0) {
             return Err(config_err(
                 "euler",
-                format!("n_i = {n_i}, dt = {dt}: need n_i >= 1 and dt > 0"),
+                format!("n_i = {n_i}, dt = {dt}: need 1 <= n_i <= {MAX_EULER_STEPS} and dt > 0"),
             ));
         }
     }

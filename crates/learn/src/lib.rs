@@ -29,6 +29,6 @@ pub use mlp::Mlp;
 pub use net::Layers;
 pub use pca::{Components, PcScaling, Pca};
 pub use pose_model::{EpochReport, NetEpoch, PoseModel, TrainingHistory};
-pub use search::{hyperparameter_search, SearchSpace, Trial};
+pub use search::{hyperparameter_search, SearchSpace, Trial, MAX_GRID_POINTS};
 pub use serialise::FORMAT_VERSION;
 pub use standardise::Standardiser;

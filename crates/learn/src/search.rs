@@ -66,6 +66,7 @@ pub fn hyperparameter_search(
     val: &Dataset,
     progress: &mut dyn FnMut(&Trial),
 ) -> Result<Vec<Trial>, LearnError> {
+    check_grid_size(space)?;
     let grid = grid(space);
     if grid.is_empty() {
         return Err(LearnError::Config {
@@ -102,6 +103,29 @@ pub fn hyperparameter_search(
     }
     trials.sort_by(|a, b| a.score.total_cmp(&b.score));
     Ok(trials)
+}
+
+/// Largest grid a search spans (the grid is listed before it is sampled).
+pub const MAX_GRID_POINTS: usize = 1_000_000;
+
+/// Error when the lists span more than [`MAX_GRID_POINTS`] (five lists of
+/// 100 values, a 3 kB file, would list 10^10 points).
+fn check_grid_size(space: &SearchSpace) -> Result<(), LearnError> {
+    let lens = [
+        space.learning_rates.len(),
+        space.output_learning_rates.len(),
+        space.betas.len(),
+        space.hidden.len(),
+        space.n_components.len(),
+    ];
+    let points = lens.iter().fold(1usize, |acc, &n| acc.saturating_mul(n));
+    if points <= MAX_GRID_POINTS {
+        return Ok(());
+    }
+    Err(LearnError::Config {
+        field: "search space",
+        reason: format!("the lists span {points} grid points; at most {MAX_GRID_POINTS}"),
+    })
 }
 
 /// One grid point: (learning rate, output learning rate, beta, hidden, PCs).

@@ -73,7 +73,24 @@ fn classify_decode_error(path: &Path, err: image::ImageError) -> SensorError {
         },
         other => SensorError::CorruptFrame {
             path,
-            reason: other.to_string(),
+            reason: plain_chunk_names(&other.to_string()),
         },
     }
+}
+
+/// The PNG decoder names chunks by their debug form (`ChunkType { type:
+/// IDAT, critical: true, .. }`); keep only the chunk's name (`IDAT`).
+fn plain_chunk_names(msg: &str) -> String {
+    const OPEN: &str = "ChunkType { type: ";
+    let mut out = String::with_capacity(msg.len());
+    let mut rest = msg;
+    while let Some(at) = rest.find(OPEN) {
+        out.push_str(&rest[..at]);
+        let tail = &rest[at + OPEN.len()..];
+        let name_end = tail.find([',', ' ', '}']).unwrap_or(tail.len());
+        out.push_str(&tail[..name_end]);
+        rest = tail.find('}').map_or("", |close| &tail[close + 1..]);
+    }
+    out.push_str(rest);
+    out
 }

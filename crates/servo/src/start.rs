@@ -72,7 +72,7 @@ pub fn start_pose(shape: &Contour, cfg: &StartConfig, height_mm: f64) -> Result<
 /// Arc length (mm) of the middle of the stretch of length `window_mm` over
 /// which the outward normal turns least: the place to set the sensor down.
 pub fn flattest_arc_mm(shape: &Contour, window_mm: f64) -> f64 {
-    let n = (shape.perimeter() / 0.5).ceil().clamp(8.0, 1.0e6) as usize;
+    let n = (shape.perimeter() / 0.5).ceil().clamp(8.0, 20_000.0) as usize;
     let step = shape.perimeter() / n as f64;
     let heading: Vec<f64> = (0..n)
         .map(|i| {

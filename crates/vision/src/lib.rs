@@ -25,5 +25,5 @@ pub use error::VisionError;
 pub use extractor::PinExtractor;
 pub use fold::TURNED_RATIO;
 pub use merged::{find_clusters, Cluster};
-pub use params::{BlobParams, BLOB_PARAM_KEYS, PRESET_NAMES};
+pub use params::{BlobParams, BLOB_PARAM_KEYS, MAX_THRESHOLDS, PRESET_NAMES};
 pub use tracker::{median_spacing, PinTracker, Tracked};

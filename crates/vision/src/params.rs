@@ -182,6 +182,7 @@ impl BlobParams {
     pub fn validate(&self) -> Result<(), VisionError> {
         positive("threshold_step", self.threshold_step)?;
         ordered("threshold", self.min_threshold, self.max_threshold, true)?;
+        threshold_count(self)?;
         positive("min_dist_between_blobs", self.min_dist_between_blobs)?;
         if self.min_repeatability == 0 {
             return Err(invalid("min_repeatability", "must be at least 1".into()));
@@ -213,7 +214,7 @@ impl BlobParams {
             return out;
         }
         let mut t = f64::from(self.min_threshold);
-        while t < f64::from(self.max_threshold) {
+        while t < f64::from(self.max_threshold) && out.len() < MAX_THRESHOLDS {
             out.push(t);
             let next = t + step;
             if next <= t {
@@ -223,6 +224,27 @@ impl BlobParams {
         }
         out
     }
+}
+
+/// At most this many thresholds per frame (an 8-bit frame has 256 grey
+/// levels; OpenCV's defaults visit 17). More would take unbounded time and
+/// memory: `max_threshold = 1e308` once tried to allocate terabytes.
+pub const MAX_THRESHOLDS: usize = 4096;
+
+/// Error when the threshold range and step visit more than [`MAX_THRESHOLDS`].
+fn threshold_count(p: &BlobParams) -> Result<(), VisionError> {
+    let span = f64::from(p.max_threshold) - f64::from(p.min_threshold);
+    let count = (span / f64::from(p.threshold_step)).ceil();
+    if count.is_finite() && count <= MAX_THRESHOLDS as f64 {
+        return Ok(());
+    }
+    Err(invalid(
+        "max_threshold",
+        format!(
+            "{} to {} by {} gives more than {MAX_THRESHOLDS} thresholds",
+            p.min_threshold, p.max_threshold, p.threshold_step
+        ),
+    ))
 }
 
 fn invalid(name: &'static str, reason: String) -> VisionError {

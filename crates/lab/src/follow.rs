@@ -6,7 +6,8 @@
 //! `metrics.json` and the trajectory and L2 figures. It is built in
 //! `OUT.partial` and renamed to `OUT` when the run is over, so a folder
 //! named `OUT` is always complete; a run stopped by an error (or killed)
-//! leaves its trajectory so far in `OUT.partial`.
+//! leaves its trajectory so far in `OUT.partial`, which the next run into
+//! `OUT` replaces.
 use crate::error::{LabError, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

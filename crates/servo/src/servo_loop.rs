@@ -178,6 +178,20 @@ impl LoopSummary {
     }
 }
 
+/// `e` and its sources, outermost first: a driver's reason (a timeout, a
+/// protective stop) is the source of the arm's error, and the person
+/// reading why a run stopped needs it.
+fn with_sources(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut next = e.source();
+    while let Some(source) = next {
+        text.push_str(": ");
+        text.push_str(&source.to_string());
+        next = source.source();
+    }
+    text
+}
+
 /// Follow the contour from the arm's current pose (above the object,
 /// roughly on an edge), tapping as `tap` says. Only the commanded pose and
 /// the frames are used.
@@ -196,8 +210,8 @@ pub fn servo_loop(
     let limit = cfg.step_limit();
     let mut closure = ClosureDetector::new(cfg.close_radius_mm, cfg.min_excursion_mm);
     let mut no_contact = 0usize;
-    let fault = |step: usize, what: &str, e: &dyn std::fmt::Display| {
-        let message = format!("stopped safely at step {step}: {what}: {e}");
+    let fault = |step: usize, what: &str, e: &dyn std::error::Error| {
+        let message = format!("stopped safely at step {step}: {what}: {}", with_sources(e));
         Ok(LoopSummary::new(step, Ending::Fault, message))
     };
     for step in 0..limit {

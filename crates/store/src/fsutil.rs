@@ -62,11 +62,14 @@ impl StagedDir {
     /// Start writing `target` in `<target>.partial`, which stays (with what
     /// was written so far) if the run stops before [`StagedDir::commit`]:
     /// for runs whose partial results are worth keeping (a follow run's
-    /// trajectory). An existing `<target>.partial` is refused unless `force`.
+    /// trajectory). A leftover `<target>.partial` (a run that stopped
+    /// early or was killed) is clearly partial and is replaced, with or
+    /// without `force`: re-running the same command after a crash must
+    /// work. Two runs into the same `target` at once are not supported.
     pub fn new_keeping_partial(target: &Path, force: bool) -> Result<Self> {
         check_output_dir(target, force)?;
         let staging = partial_path(target);
-        check_output_dir(&staging, force)?;
+        check_output_dir(&staging, true)?;
         if staging.exists() {
             fs::remove_dir_all(&staging).map_err(write_err(&staging))?;
         }
@@ -201,10 +204,14 @@ mod tests {
         }
         assert!(!target.exists());
         assert!(partial_path(&target).join("trajectory.csv").exists());
-        assert!(StagedDir::new_keeping_partial(&target, false).is_err());
-        let stage = StagedDir::new_keeping_partial(&target, true).unwrap();
+        // A stale partial does not block the next run; it is replaced.
+        let stage = StagedDir::new_keeping_partial(&target, false).unwrap();
+        assert!(!stage.path().join("trajectory.csv").exists());
+        fs::write(stage.path().join("metrics.json"), "{}").unwrap();
         stage.commit().unwrap();
         assert!(target.is_dir() && !partial_path(&target).exists());
+        // A complete run is refused without force.
+        assert!(StagedDir::new_keeping_partial(&target, false).is_err());
     }
 
     #[test]

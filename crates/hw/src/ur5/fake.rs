@@ -51,6 +51,9 @@ pub struct FakeUrOptions {
     pub lifetime: Duration,
     /// Reaction to `movel`.
     pub behaviour: FakeBehaviour,
+    /// This many `movel` are followed normally before `behaviour` takes
+    /// effect (0: from the first): a fault in the middle of a run.
+    pub normal_moves: usize,
 }
 
 impl Default for FakeUrOptions {
@@ -62,6 +65,7 @@ impl Default for FakeUrOptions {
             period: Duration::from_millis(8),
             lifetime: Duration::from_secs(20),
             behaviour: FakeBehaviour::Follow,
+            normal_moves: 0,
         }
     }
 }
@@ -116,6 +120,13 @@ impl FakeUrController {
     pub fn received_lines(&self) -> Vec<String> {
         self.lines.lock().map(|l| l.clone()).unwrap_or_default()
     }
+
+    /// Whether the server has stopped (its client left, its lifetime
+    /// passed, or a connection failed); once the client has left, every
+    /// line it sent is in [`FakeUrController::received_lines`].
+    pub fn finished(&self) -> bool {
+        self.thread.as_ref().is_none_or(|t| t.is_finished())
+    }
 }
 
 impl Drop for FakeUrController {
@@ -140,6 +151,8 @@ struct Motion {
     target: Option<Isometry3<f64>>,
     safety_mode: i32,
     malformed: bool,
+    /// `movel` received so far.
+    moves: usize,
 }
 
 impl Server {
@@ -160,6 +173,7 @@ impl Server {
             target: None,
             safety_mode: SAFETY_MODE_NORMAL,
             malformed: false,
+            moves: 0,
         };
         let mut pending = String::new();
         let start = Instant::now();
@@ -201,19 +215,20 @@ impl Server {
         motion: &mut Motion,
     ) -> bool {
         let mut chunk = [0u8; 4096];
-        loop {
+        let open = loop {
             match stream.read(&mut chunk) {
-                Ok(0) => return false,
+                Ok(0) => break false,
                 Ok(n) => pending.push_str(&String::from_utf8_lossy(&chunk[..n])),
-                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
-                Err(_) => return false,
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break true,
+                Err(_) => break false,
             }
-        }
+        };
+        // Lines that came just before the client left count too.
         while let Some(end) = pending.find('\n') {
             let line: String = pending.drain(..=end).collect();
             self.handle_line(line.trim_end(), motion);
         }
-        true
+        open
     }
 
     fn handle_line(&self, line: &str, motion: &mut Motion) {
@@ -226,7 +241,13 @@ impl Server {
         let Some(target) = find_movel_target(line) else {
             return;
         };
-        match self.options.behaviour {
+        motion.moves += 1;
+        let behaviour = if motion.moves <= self.options.normal_moves {
+            FakeBehaviour::Follow
+        } else {
+            self.options.behaviour
+        };
+        match behaviour {
             FakeBehaviour::Follow => motion.target = Some(tool_vector_to_isometry(target)),
             FakeBehaviour::IgnoreMoves => {}
             FakeBehaviour::MalformedOnMove => motion.malformed = true,

@@ -164,7 +164,9 @@ pub fn follow_on_rig(
 struct MetricsDocument<'a> {
     #[serde(flatten)]
     metrics: Option<&'a FollowMetrics>,
-    steps: usize,
+    /// Steps taken, when there are no metrics (which hold it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    steps: Option<usize>,
     ending: tactrace_servo::Ending,
     succeeded: bool,
     message: &'a str,
@@ -195,7 +197,7 @@ pub fn write_results(
     });
     let document = MetricsDocument {
         metrics: scored.as_ref().map(|s| &s.2),
-        steps: summary.steps,
+        steps: scored.is_none().then_some(summary.steps),
         ending: summary.ending,
         succeeded: summary.ending.succeeded(),
         message: &summary.message,

@@ -106,8 +106,22 @@ pub struct Mechanics {
     pub distance_grid_mm: f64,
     /// Deepest indentation the model resolves, mm (deeper is clipped).
     pub max_depth_mm: f64,
-    /// Slide (mm) at which the skin's stick-slip drag saturates.
+    /// Slip limit L_ref, mm: the largest lag of the skin behind a slide
+    /// before it slips, at the reference contact load of 1000 mm^3
+    /// (eq. S7a).
     pub shear_limit_mm: f64,
+    /// Exponent beta of the slip limit's growth with the contact load
+    /// P (indented volume): L = L_ref (P / 1000 mm^3)^beta (eq. S7a).
+    pub slip_load_exponent: f64,
+    /// Stick gain kappa: lag of the skin per mm of slide while it sticks
+    /// (eq. S7b).
+    pub stick_gain: f64,
+    /// Reach S_T of the skin lag along the skin from the pole, mm: a pin
+    /// carries the share max(0, 1 - (s / S_T)^2) of it (eq. S7c).
+    pub slip_profile_mm: f64,
+    /// Share alpha of the skin lag that follows the contact pressure
+    /// (D_i / max D) instead of the radial profile (eq. S7e).
+    pub stick_share: f64,
     /// Twist (deg) at which the skin's rotational drag saturates.
     pub shear_limit_deg: f64,
     /// Smoothed indentation (mm) at which a pin counts as half in contact.
@@ -131,8 +145,12 @@ impl Default for Mechanics {
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 1.897,
-            shear_limit_deg: 0.248,
+            shear_limit_mm: 1.3523,
+            slip_load_exponent: 1.1005,
+            stick_gain: 1.8687,
+            slip_profile_mm: 30.31,
+            stick_share: 0.4945,
+            shear_limit_deg: 0.2029,
             contact_scale_mm: 0.0374,
             rim_clamp_mm: 29.81,
         }
@@ -177,6 +195,10 @@ pub struct Calibration {
     /// (move_1, move_2, move_6); -1 when the label is where the tap began
     /// relative to the final pose.
     pub shear_sign: f64,
+    /// Angle (deg) by which the slide, turned into the sensor frame, is
+    /// turned further: the arm's tool axes against the pin lattice's
+    /// (eq. S7d).
+    pub shear_angle_offset_deg: f64,
 }
 
 impl Default for Calibration {
@@ -190,6 +212,7 @@ impl Default for Calibration {
             depth_per_offset: -1.0,
             object_side: -1.0,
             shear_sign: 1.0,
+            shear_angle_offset_deg: 10.76,
         }
     }
 }
@@ -295,6 +318,10 @@ impl TacTipConfig {
             });
         }
         positive("mechanics.shear_limit_mm", m.shear_limit_mm)?;
+        finite("mechanics.slip_load_exponent", m.slip_load_exponent)?;
+        non_negative("mechanics.stick_gain", m.stick_gain)?;
+        positive("mechanics.slip_profile_mm", m.slip_profile_mm)?;
+        finite("mechanics.stick_share", m.stick_share)?;
         positive("mechanics.shear_limit_deg", m.shear_limit_deg)?;
         positive("mechanics.contact_scale_mm", m.contact_scale_mm)?;
         positive("mechanics.rim_clamp_mm", m.rim_clamp_mm)?;
@@ -306,6 +333,10 @@ impl TacTipConfig {
         finite("calibration.depth_per_offset", k.depth_per_offset)?;
         finite("calibration.object_side", k.object_side)?;
         finite("calibration.shear_sign", k.shear_sign)?;
+        finite(
+            "calibration.shear_angle_offset_deg",
+            k.shear_angle_offset_deg,
+        )?;
         Ok(())
     }
 }

@@ -122,6 +122,15 @@ pub struct Mechanics {
     /// Share alpha of the skin lag that follows the contact pressure
     /// (D_i / max D) instead of the radial profile (eq. S7e).
     pub stick_share: f64,
+    /// Gain rho_in on the slide's component along the edge normal when it
+    /// goes into the object (eq. S7f; 1 = isotropic).
+    pub edge_gain_in: f64,
+    /// Gain rho_out on that component when the slide leaves the object
+    /// (eq. S7f).
+    pub edge_gain_out: f64,
+    /// Unsaturated lag gamma of the pressed skin along the edge normal
+    /// per mm of normal slide (eq. S7g).
+    pub edge_bite: f64,
     /// Twist (deg) at which the skin's rotational drag saturates.
     pub shear_limit_deg: f64,
     /// Smoothed indentation (mm) at which a pin counts as half in contact.
@@ -145,12 +154,15 @@ impl Default for Mechanics {
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 1.3523,
-            slip_load_exponent: 1.1005,
-            stick_gain: 1.8687,
-            slip_profile_mm: 30.31,
-            stick_share: 0.4945,
-            shear_limit_deg: 0.2029,
+            shear_limit_mm: 1.4054,
+            slip_load_exponent: 1.1152,
+            stick_gain: 1.3476,
+            slip_profile_mm: 30.57,
+            stick_share: 0.5165,
+            edge_gain_in: 1.5993,
+            edge_gain_out: 1.7359,
+            edge_bite: 0.0,
+            shear_limit_deg: 0.1982,
             contact_scale_mm: 0.0374,
             rim_clamp_mm: 29.81,
         }
@@ -212,7 +224,7 @@ impl Default for Calibration {
             depth_per_offset: -1.0,
             object_side: -1.0,
             shear_sign: 1.0,
-            shear_angle_offset_deg: 10.76,
+            shear_angle_offset_deg: 10.85,
         }
     }
 }
@@ -322,6 +334,9 @@ impl TacTipConfig {
         non_negative("mechanics.stick_gain", m.stick_gain)?;
         positive("mechanics.slip_profile_mm", m.slip_profile_mm)?;
         finite("mechanics.stick_share", m.stick_share)?;
+        non_negative("mechanics.edge_gain_in", m.edge_gain_in)?;
+        non_negative("mechanics.edge_gain_out", m.edge_gain_out)?;
+        finite("mechanics.edge_bite", m.edge_bite)?;
         positive("mechanics.shear_limit_deg", m.shear_limit_deg)?;
         positive("mechanics.contact_scale_mm", m.contact_scale_mm)?;
         positive("mechanics.rim_clamp_mm", m.rim_clamp_mm)?;

@@ -42,6 +42,21 @@ pub(crate) struct ContactField {
     pub smoothed: Vec<f64>,
     /// Contact load P = sum_j p_j dA, the indented volume, mm^3 (eq. S7a).
     pub load_mm3: f64,
+    /// Unit normal of the nearest edge into the object (sensor frame)
+    /// times the edge's proximity e = clamp(1 - |sd(axis)| / reach, 0, 1)
+    /// (eq. S7f); zero when no edge crosses the contact.
+    pub edge_normal: [f64; 2],
+}
+
+impl ContactField {
+    /// The part of the state the slip law reads (eq. S7).
+    pub fn state(&self) -> crate::slip::ContactState<'_> {
+        crate::slip::ContactState {
+            smoothed: &self.smoothed,
+            load_mm3: self.load_mm3,
+            edge_normal: self.edge_normal,
+        }
+    }
 }
 
 /// Precomputed elastic response of every pin to every patch point.
@@ -117,6 +132,7 @@ impl ContactModel {
             disp: vec![[0.0; 2]; n],
             smoothed: vec![0.0; n],
             load_mm3: 0.0,
+            edge_normal: [0.0; 2],
         };
         let depth = (-tip.z).min(self.mech.max_depth_mm);
         if depth.is_nan() || depth <= 0.0 {
@@ -143,6 +159,9 @@ impl ContactModel {
         for ((d, x), y) in field.disp.iter_mut().zip(&ux).zip(&uy) {
             *d = [*x, *y];
         }
+        if field.load_mm3 > 0.0 {
+            field.edge_normal = edge_normal(&mut grid, sd, reach);
+        }
         field
     }
 
@@ -161,6 +180,21 @@ impl ContactModel {
             *u += pen * *k as f64;
         }
     }
+}
+
+/// Normal into the object of the edge nearest the sensor's axis (minus the
+/// signed distance's gradient there, sensor frame), scaled by the edge's
+/// proximity clamp(1 - |sd| / reach, 0, 1) (eq. S7f).
+fn edge_normal(grid: &mut DistanceGrid, sd: &dyn Fn(Vec2) -> f64, reach: f64) -> [f64; 2] {
+    let at = |g: &mut DistanceGrid, x: f64, y: f64| g.interpolate(sd, [x, y]);
+    let gx = 0.5 * (at(grid, 1.0, 0.0) - at(grid, -1.0, 0.0));
+    let gy = 0.5 * (at(grid, 0.0, 1.0) - at(grid, 0.0, -1.0));
+    let size = gx.hypot(gy);
+    let proximity = (1.0 - at(grid, 0.0, 0.0).abs() / reach.max(1e-9)).clamp(0.0, 1.0);
+    if size < 0.5 || !size.is_finite() {
+        return [0.0; 2];
+    }
+    [-gx / size * proximity, -gy / size * proximity]
 }
 
 /// Eq. S5/S6 weights of a patch point at `gj` on a pin at `gi`.

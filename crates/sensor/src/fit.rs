@@ -36,6 +36,12 @@ pub struct SlipParams {
     pub shear_limit_deg: f64,
     /// `mechanics.stick_share` alpha (eq. S7e).
     pub stick_share: f64,
+    /// `mechanics.edge_gain_in` rho_in (eq. S7f).
+    pub edge_gain_in: f64,
+    /// `mechanics.edge_gain_out` rho_out (eq. S7f).
+    pub edge_gain_out: f64,
+    /// `mechanics.edge_bite` gamma (eq. S7g).
+    pub edge_bite: f64,
 }
 
 impl SlipParams {
@@ -50,6 +56,9 @@ impl SlipParams {
             slip_profile_mm: m.slip_profile_mm,
             shear_limit_deg: m.shear_limit_deg,
             stick_share: m.stick_share,
+            edge_gain_in: m.edge_gain_in,
+            edge_gain_out: m.edge_gain_out,
+            edge_bite: m.edge_bite,
         }
     }
 
@@ -63,6 +72,9 @@ impl SlipParams {
         m.slip_profile_mm = self.slip_profile_mm;
         m.shear_limit_deg = self.shear_limit_deg;
         m.stick_share = self.stick_share;
+        m.edge_gain_in = self.edge_gain_in;
+        m.edge_gain_out = self.edge_gain_out;
+        m.edge_bite = self.edge_bite;
     }
 
     fn to_vec(self) -> Vec<f64> {
@@ -74,6 +86,9 @@ impl SlipParams {
             self.slip_profile_mm,
             self.shear_limit_deg,
             self.stick_share,
+            self.edge_gain_in,
+            self.edge_gain_out,
+            self.edge_bite,
         ]
     }
 
@@ -85,7 +100,10 @@ impl SlipParams {
             && (-1.0..3.0).contains(&x[3])
             && (5.0..300.0).contains(&x[4])
             && (0.01..45.0).contains(&x[5])
-            && (-1.0..2.0).contains(&x[6]);
+            && (-1.0..2.0).contains(&x[6])
+            && (0.0..5.0).contains(&x[7])
+            && (0.0..5.0).contains(&x[8])
+            && (-3.0..3.0).contains(&x[9]);
         ok.then_some(Self {
             shear_angle_offset_deg: x[0],
             stick_gain: x[1],
@@ -94,6 +112,9 @@ impl SlipParams {
             slip_profile_mm: x[4],
             shear_limit_deg: x[5],
             stick_share: x[6],
+            edge_gain_in: x[7],
+            edge_gain_out: x[8],
+            edge_bite: x[9],
         })
     }
 }
@@ -133,7 +154,7 @@ pub(crate) fn misfit_sums(model: &TacTipModel, samples: &[FitSample]) -> [f64; 3
     a
 }
 
-/// Fit psi, kappa, L_ref, beta, S_T and Theta (eq. S7) to the samples,
+/// Fit psi, kappa, L_ref, beta, S_T, Theta, alpha, rho_in, rho_out and gamma (eq. S7) to the samples,
 /// starting from `cfg`, with the rest of `cfg` held; `rest_px` are the
 /// rest pins the displacements are measured from. `rounds` restarts of
 /// `iterations` Nelder-Mead steps each, with halving first steps.
@@ -161,7 +182,7 @@ pub fn fit_slip(
     let rms = |sse: f64| (sse / (2 * count.max(1)) as f64).sqrt();
     let mut x = SlipParams::of(cfg).to_vec();
     let start = objective(&x);
-    let step = [5.0, 0.3, 0.5, 0.3, 10.0, 2.0, 0.3];
+    let step = [5.0, 0.3, 0.5, 0.3, 10.0, 2.0, 0.3, 0.3, 0.3, 0.3];
     for round in 0..rounds {
         let s: Vec<f64> = step.iter().map(|v| v * 0.5f64.powi(round as i32)).collect();
         x = minimise(&objective, &x, &s, iterations).0;

@@ -33,4 +33,7 @@ pub use model::TacTipModel;
 pub use replay::{read_frame, ReplaySensor};
 pub use sensor::{Frame, TactileSensor};
 pub use sim::{PoseSource, SimTacTip};
-pub use slip::{lag_profile, skin_lag, slip_field, slip_limit, REFERENCE_LOAD_MM3};
+pub use slip::{
+    edge_bite, edge_slide, lag_profile, skin_lag, slip_field, slip_limit, ContactState,
+    REFERENCE_LOAD_MM3,
+};

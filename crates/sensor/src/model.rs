@@ -144,8 +144,7 @@ impl TacTipModel {
         mech: &Mechanics,
         shear: Option<Shear>,
     ) -> Vec<[f64; 2]> {
-        let slip =
-            shear.map(|s| slip_field(mech, &self.pins_g, &field.smoothed, field.load_mm3, s));
+        let slip = shear.map(|s| slip_field(mech, &self.pins_g, field.state(), s));
         let slip_of = |i: usize| slip.as_ref().map_or([0.0; 2], |v| v[i]);
         self.rest_px
             .iter()

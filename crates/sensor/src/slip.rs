@@ -51,15 +51,21 @@ pub fn lag_profile(mech: &Mechanics, s: f64) -> f64 {
 pub fn slip_field(
     mech: &Mechanics,
     pins_g: &[[f64; 2]],
-    smoothed: &[f64],
-    load_mm3: f64,
+    contact: ContactState,
     shear: Shear,
 ) -> Vec<[f64; 2]> {
+    let ContactState {
+        smoothed,
+        load_mm3,
+        edge_normal,
+    } = contact;
     let mut out = vec![[0.0; 2]; pins_g.len()];
     if load_mm3 <= 0.0 {
         return out;
     }
-    let lag = skin_lag(mech, load_mm3, [shear.dx_mm, shear.dy_mm]);
+    let slide = edge_slide(mech, edge_normal, [shear.dx_mm, shear.dy_mm]);
+    let lag = skin_lag(mech, load_mm3, slide);
+    let bite = edge_bite(mech, edge_normal, [shear.dx_mm, shear.dy_mm]);
     let weights: Vec<f64> = smoothed
         .iter()
         .map(|d| d / (d + mech.contact_scale_mm))
@@ -76,12 +82,53 @@ pub fn slip_field(
         let share = (1.0 - alpha) * phi + alpha * d / peak;
         let r = [g[0] - centre[0], g[1] - centre[1]];
         let turn = [c * r[0] - s * r[1] - r[0], s * r[0] + c * r[1] - r[1]];
+        let pressed = d / peak;
         *o = [
-            share * lag[0] + phi * w * turn[0],
-            share * lag[1] + phi * w * turn[1],
+            share * lag[0] + pressed * bite[0] + phi * w * turn[0],
+            share * lag[1] + pressed * bite[1] + phi * w * turn[1],
         ];
     }
     out
+}
+
+/// What [`slip_field`] needs of the contact (eqs. S5, S7a, S7f).
+#[derive(Debug, Clone, Copy)]
+pub struct ContactState<'a> {
+    /// Smoothed indentation D_i under each pin, mm (eq. S5).
+    pub smoothed: &'a [f64],
+    /// Contact load P (indented volume), mm^3 (eq. S7a).
+    pub load_mm3: f64,
+    /// Edge normal into the object times the edge's proximity (eq. S7f).
+    pub edge_normal: [f64; 2],
+}
+
+/// The slide as the skin feels it at an edge (eq. S7f): its component
+/// along the edge normal n (proximity e = |n|) scaled by
+/// 1 + e (rho - 1), rho = `edge_gain_in` when the slide goes into the
+/// object, `edge_gain_out` when it leaves it; the tangential part kept.
+pub fn edge_slide(mech: &Mechanics, edge_normal: [f64; 2], slide: [f64; 2]) -> [f64; 2] {
+    let e = edge_normal[0].hypot(edge_normal[1]);
+    if e < 1e-12 {
+        return slide;
+    }
+    let n = [edge_normal[0] / e, edge_normal[1] / e];
+    let along = slide[0] * n[0] + slide[1] * n[1];
+    let rho = if along > 0.0 {
+        mech.edge_gain_in
+    } else {
+        mech.edge_gain_out
+    };
+    let extra = e * (rho - 1.0) * along;
+    [slide[0] + extra * n[0], slide[1] + extra * n[1]]
+}
+
+/// The edge's bite (eq. S7g): the skin caught by the edge's corner is
+/// pushed back along the normal without slipping, -gamma e (m . n) n
+/// (mm), carried by the pressed pins (share D_i / max D).
+pub fn edge_bite(mech: &Mechanics, edge_normal: [f64; 2], slide: [f64; 2]) -> [f64; 2] {
+    let along = slide[0] * edge_normal[0] + slide[1] * edge_normal[1];
+    let g = mech.edge_bite;
+    [-g * along * edge_normal[0], -g * along * edge_normal[1]]
 }
 
 /// Centroid of the pins weighted by `weights` (the pole when all are zero).
@@ -103,6 +150,32 @@ mod tests {
         Mechanics::default()
     }
 
+    fn state(smoothed: &[f64], load_mm3: f64) -> ContactState<'_> {
+        ContactState {
+            smoothed,
+            load_mm3,
+            edge_normal: [0.0; 2],
+        }
+    }
+
+    #[test]
+    fn an_edge_scales_only_the_normal_part_of_the_slide_by_its_side() {
+        let mut m = mech();
+        m.edge_gain_in = 1.5;
+        m.edge_gain_out = 0.5;
+        // No edge, or an edge with unit gains: the slide is unchanged.
+        assert_eq!(edge_slide(&m, [0.0; 2], [2.0, -1.0]), [2.0, -1.0]);
+        let mut iso = m.clone();
+        (iso.edge_gain_in, iso.edge_gain_out) = (1.0, 1.0);
+        assert_eq!(edge_slide(&iso, [0.0, 1.0], [2.0, -1.0]), [2.0, -1.0]);
+        // Normal +y: into the object the normal part grows, out of it shrinks;
+        // the tangential part stays.
+        assert_eq!(edge_slide(&m, [0.0, 1.0], [2.0, 1.0]), [2.0, 1.5]);
+        assert_eq!(edge_slide(&m, [0.0, 1.0], [2.0, -1.0]), [2.0, -0.5]);
+        // Half proximity: half the change.
+        assert_eq!(edge_slide(&m, [0.0, 0.5], [0.0, 1.0]), [0.0, 1.25]);
+    }
+
     #[test]
     fn zero_slide_or_zero_load_gives_no_lag() {
         let m = mech();
@@ -111,7 +184,7 @@ mod tests {
         let pins = [[0.0, 0.0], [4.0, 1.0]];
         let none = Shear::default();
         assert_eq!(
-            slip_field(&m, &pins, &[0.5, 0.2], 900.0, none),
+            slip_field(&m, &pins, state(&[0.5, 0.2], 900.0), none),
             vec![[0.0; 2]; 2]
         );
     }
@@ -167,7 +240,7 @@ mod tests {
             drz_deg: 0.0,
         };
         let pressure = [1.0, 0.5, 0.0];
-        let f = slip_field(&m, &pins, &pressure, 1000.0, shear);
+        let f = slip_field(&m, &pins, state(&pressure, 1000.0), shear);
         let lag = skin_lag(&m, 1000.0, [2.0, 0.0]);
         for ((g, u), d) in pins.iter().zip(&f).zip(pressure) {
             let phi = lag_profile(&m, g[0].hypot(g[1]));

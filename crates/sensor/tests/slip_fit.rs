@@ -108,6 +108,9 @@ fn the_slip_fit_recovers_known_parameters_from_simulated_fields() {
         slip_profile_mm: 30.0,
         shear_limit_deg: 2.0,
         stick_share: 0.4,
+        edge_gain_in: 1.4,
+        edge_gain_out: 0.7,
+        edge_bite: 0.3,
     };
     known.apply(&mut truth);
     let model = TacTipModel::new(truth.clone()).expect("valid");
@@ -130,6 +133,9 @@ fn the_slip_fit_recovers_known_parameters_from_simulated_fields() {
         slip_profile_mm: 40.0,
         shear_limit_deg: 1.0,
         stick_share: 0.1,
+        edge_gain_in: 1.0,
+        edge_gain_out: 1.0,
+        edge_bite: 0.0,
     }
     .apply(&mut start);
     let rest = model.rest_pins().to_vec();
@@ -143,4 +149,7 @@ fn the_slip_fit_recovers_known_parameters_from_simulated_fields() {
     assert!((p.slip_load_exponent - 0.7).abs() < 0.1, "{p:?}");
     assert!((p.slip_profile_mm - 30.0).abs() < 1.5, "{p:?}");
     assert!((p.stick_share - 0.4).abs() < 0.05, "{p:?}");
+    assert!((p.edge_gain_in - 1.4).abs() < 0.05, "{p:?}");
+    assert!((p.edge_gain_out - 0.7).abs() < 0.05, "{p:?}");
+    assert!((p.edge_bite - 0.3).abs() < 0.05, "{p:?}");
 }

@@ -197,6 +197,10 @@ pub struct Calibration {
     pub angle_offset_deg: f64,
     /// Added to the labelled edge position (pose_2), mm.
     pub edge_offset_mm: f64,
+    /// Model angle per degree of labelled angle (1 = the label's scale).
+    pub angle_scale: f64,
+    /// Model edge position per mm of labelled edge position.
+    pub edge_scale: f64,
     /// Indentation depth at zero vertical offset (pose_3 = 0), mm.
     pub tap_depth_mm: f64,
     /// Depth change per mm of labelled vertical offset (sign included).
@@ -220,6 +224,8 @@ impl Default for Calibration {
         Self {
             angle_offset_deg: -15.67,
             edge_offset_mm: 2.317,
+            angle_scale: 1.0,
+            edge_scale: 1.0,
             tap_depth_mm: 6.249,
             depth_per_offset: -1.0,
             object_side: -1.0,
@@ -344,6 +350,8 @@ impl TacTipConfig {
         non_negative("nuisance.image_noise_std", n.image_noise_std)?;
         finite("calibration.angle_offset_deg", k.angle_offset_deg)?;
         finite("calibration.edge_offset_mm", k.edge_offset_mm)?;
+        finite("calibration.angle_scale", k.angle_scale)?;
+        finite("calibration.edge_scale", k.edge_scale)?;
         finite("calibration.tap_depth_mm", k.tap_depth_mm)?;
         finite("calibration.depth_per_offset", k.depth_per_offset)?;
         finite("calibration.object_side", k.object_side)?;

@@ -45,9 +45,9 @@ impl EdgeTap {
         let depth = cal.tap_depth_mm + cal.depth_per_offset * self.dz_mm;
         Pose::planar(
             0.0,
-            self.r_mm + cal.edge_offset_mm,
+            cal.edge_scale * self.r_mm + cal.edge_offset_mm,
             -depth,
-            self.theta_deg + cal.angle_offset_deg,
+            cal.angle_scale * self.theta_deg + cal.angle_offset_deg,
         )
     }
 }

@@ -16,7 +16,9 @@ type Param = (
 );
 
 /// The parameters [`fit_joint`] moves, with their first steps and ranges.
-pub const JOINT_PARAMS: [&str; 15] = [
+pub const JOINT_PARAMS: [&str; 17] = [
+    "calibration.angle_scale",
+    "calibration.edge_scale",
     "calibration.angle_offset_deg",
     "calibration.edge_offset_mm",
     "calibration.tap_depth_mm",
@@ -34,8 +36,22 @@ pub const JOINT_PARAMS: [&str; 15] = [
     "mechanics.shear_limit_deg",
 ];
 
-fn params() -> [Param; 15] {
+fn params() -> [Param; 17] {
     [
+        (
+            "angle_scale",
+            |c| c.calibration.angle_scale,
+            |c, v| c.calibration.angle_scale = v,
+            0.1,
+            [0.3, 2.0],
+        ),
+        (
+            "edge_scale",
+            |c| c.calibration.edge_scale,
+            |c, v| c.calibration.edge_scale = v,
+            0.1,
+            [0.3, 3.0],
+        ),
         (
             "angle",
             |c| c.calibration.angle_offset_deg,
@@ -154,7 +170,7 @@ pub struct JointFit {
     pub frames: usize,
 }
 
-/// Fit the fifteen [`JOINT_PARAMS`] from `cfg` to the samples (each with
+/// Fit the seventeen [`JOINT_PARAMS`] from `cfg` to the samples (each with
 /// its labelled slide), `rounds` Nelder-Mead restarts of `iterations`
 /// steps with halving first steps. Simulation runs on `threads` threads.
 pub fn fit_joint(

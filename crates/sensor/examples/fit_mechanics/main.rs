@@ -7,9 +7,12 @@
 //!
 //! Run: cargo run --release -p tactrace-sensor --example real_fields -- /tmp/real_fields.txt
 //!      cargo run --release -p tactrace-sensor --example fit_mechanics
-//! Env: REAL_FIELDS (cache path), FIT=1 (refit; else score the defaults;
-//! FIT=frames: one joint per-frame fit of all eleven parameters with shear),
-//! FIGURE=path.png (draw matched cases).
+//! Env: REAL_FIELDS (cache path), FIT=1 (refit on binned means; else score
+//! the defaults; FIT=frames: the old joint per-frame fit of eleven
+//! parameters; FIT=slip: the stick-slip law, eq. S7, on the fit part;
+//! FIT=joint: 17 calibration, mechanics and slip parameters on the fit
+//! part, STRIDE/ROUNDS/ITERS/THREADS), FIGURE=path.png (draw matched
+//! cases), DUMP=path (write the simulated fields, with and without shear).
 use tactrace_sensor::{EdgeTap, TacTipConfig, TacTipModel};
 
 mod slip;

@@ -106,8 +106,31 @@ pub struct Mechanics {
     pub distance_grid_mm: f64,
     /// Deepest indentation the model resolves, mm (deeper is clipped).
     pub max_depth_mm: f64,
-    /// Slide (mm) at which the skin's stick-slip drag saturates.
+    /// Slip limit L_ref, mm: the largest lag of the skin behind a slide
+    /// before it slips, at the reference contact load of 1000 mm^3
+    /// (eq. S7a).
     pub shear_limit_mm: f64,
+    /// Exponent beta of the slip limit's growth with the contact load
+    /// P (indented volume): L = L_ref (P / 1000 mm^3)^beta (eq. S7a).
+    pub slip_load_exponent: f64,
+    /// Stick gain kappa: lag of the skin per mm of slide while it sticks
+    /// (eq. S7b).
+    pub stick_gain: f64,
+    /// Reach S_T of the skin lag along the skin from the pole, mm: a pin
+    /// carries the share max(0, 1 - (s / S_T)^2) of it (eq. S7c).
+    pub slip_profile_mm: f64,
+    /// Share alpha of the skin lag that follows the contact pressure
+    /// (D_i / max D) instead of the radial profile (eq. S7e).
+    pub stick_share: f64,
+    /// Gain rho_in on the slide's component along the edge normal when it
+    /// goes into the object (eq. S7f; 1 = isotropic).
+    pub edge_gain_in: f64,
+    /// Gain rho_out on that component when the slide leaves the object
+    /// (eq. S7f).
+    pub edge_gain_out: f64,
+    /// Unsaturated lag gamma of the pressed skin along the edge normal
+    /// per mm of normal slide (eq. S7g).
+    pub edge_bite: f64,
     /// Twist (deg) at which the skin's rotational drag saturates.
     pub shear_limit_deg: f64,
     /// Smoothed indentation (mm) at which a pin counts as half in contact.
@@ -131,8 +154,15 @@ impl Default for Mechanics {
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 1.897,
-            shear_limit_deg: 0.248,
+            shear_limit_mm: 1.4054,
+            slip_load_exponent: 1.1152,
+            stick_gain: 1.3476,
+            slip_profile_mm: 30.57,
+            stick_share: 0.5165,
+            edge_gain_in: 1.5993,
+            edge_gain_out: 1.7359,
+            edge_bite: 0.0,
+            shear_limit_deg: 0.1982,
             contact_scale_mm: 0.0374,
             rim_clamp_mm: 29.81,
         }
@@ -167,6 +197,10 @@ pub struct Calibration {
     pub angle_offset_deg: f64,
     /// Added to the labelled edge position (pose_2), mm.
     pub edge_offset_mm: f64,
+    /// Model angle per degree of labelled angle (1 = the label's scale).
+    pub angle_scale: f64,
+    /// Model edge position per mm of labelled edge position.
+    pub edge_scale: f64,
     /// Indentation depth at zero vertical offset (pose_3 = 0), mm.
     pub tap_depth_mm: f64,
     /// Depth change per mm of labelled vertical offset (sign included).
@@ -177,6 +211,10 @@ pub struct Calibration {
     /// (move_1, move_2, move_6); -1 when the label is where the tap began
     /// relative to the final pose.
     pub shear_sign: f64,
+    /// Angle (deg) by which the slide, turned into the sensor frame, is
+    /// turned further: the arm's tool axes against the pin lattice's
+    /// (eq. S7d).
+    pub shear_angle_offset_deg: f64,
 }
 
 impl Default for Calibration {
@@ -186,10 +224,13 @@ impl Default for Calibration {
         Self {
             angle_offset_deg: -15.67,
             edge_offset_mm: 2.317,
+            angle_scale: 1.0,
+            edge_scale: 1.0,
             tap_depth_mm: 6.249,
             depth_per_offset: -1.0,
             object_side: -1.0,
             shear_sign: 1.0,
+            shear_angle_offset_deg: 10.85,
         }
     }
 }
@@ -295,6 +336,13 @@ impl TacTipConfig {
             });
         }
         positive("mechanics.shear_limit_mm", m.shear_limit_mm)?;
+        finite("mechanics.slip_load_exponent", m.slip_load_exponent)?;
+        non_negative("mechanics.stick_gain", m.stick_gain)?;
+        positive("mechanics.slip_profile_mm", m.slip_profile_mm)?;
+        finite("mechanics.stick_share", m.stick_share)?;
+        non_negative("mechanics.edge_gain_in", m.edge_gain_in)?;
+        non_negative("mechanics.edge_gain_out", m.edge_gain_out)?;
+        finite("mechanics.edge_bite", m.edge_bite)?;
         positive("mechanics.shear_limit_deg", m.shear_limit_deg)?;
         positive("mechanics.contact_scale_mm", m.contact_scale_mm)?;
         positive("mechanics.rim_clamp_mm", m.rim_clamp_mm)?;
@@ -302,10 +350,16 @@ impl TacTipConfig {
         non_negative("nuisance.image_noise_std", n.image_noise_std)?;
         finite("calibration.angle_offset_deg", k.angle_offset_deg)?;
         finite("calibration.edge_offset_mm", k.edge_offset_mm)?;
+        finite("calibration.angle_scale", k.angle_scale)?;
+        finite("calibration.edge_scale", k.edge_scale)?;
         finite("calibration.tap_depth_mm", k.tap_depth_mm)?;
         finite("calibration.depth_per_offset", k.depth_per_offset)?;
         finite("calibration.object_side", k.object_side)?;
         finite("calibration.shear_sign", k.shear_sign)?;
+        finite(
+            "calibration.shear_angle_offset_deg",
+            k.shear_angle_offset_deg,
+        )?;
         Ok(())
     }
 }

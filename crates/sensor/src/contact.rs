@@ -40,6 +40,23 @@ pub(crate) struct ContactField {
     pub disp: Vec<[f64; 2]>,
     /// Smoothed indentation D at each pin, mm (eq. S5).
     pub smoothed: Vec<f64>,
+    /// Contact load P = sum_j p_j dA, the indented volume, mm^3 (eq. S7a).
+    pub load_mm3: f64,
+    /// Unit normal of the nearest edge into the object (sensor frame)
+    /// times the edge's proximity e = clamp(1 - |sd(axis)| / reach, 0, 1)
+    /// (eq. S7f); zero when no edge crosses the contact.
+    pub edge_normal: [f64; 2],
+}
+
+impl ContactField {
+    /// The part of the state the slip law reads (eq. S7).
+    pub fn state(&self) -> crate::slip::ContactState<'_> {
+        crate::slip::ContactState {
+            smoothed: &self.smoothed,
+            load_mm3: self.load_mm3,
+            edge_normal: self.edge_normal,
+        }
+    }
 }
 
 /// Precomputed elastic response of every pin to every patch point.
@@ -108,11 +125,14 @@ impl ContactModel {
 
     /// Pin displacements for the tip pose `tip` over the object whose top
     /// face is the region `sd(p) < 0` of the plane z = 0 (world frame, mm).
-    pub fn field(&self, sd: &dyn Fn(Vec2) -> f64, tip: Pose, shear: Option<Shear>) -> ContactField {
+    /// The slide's stick-slip (eq. S7) is added by the caller.
+    pub fn field(&self, sd: &dyn Fn(Vec2) -> f64, tip: Pose) -> ContactField {
         let n = self.pins_g.len();
         let mut field = ContactField {
             disp: vec![[0.0; 2]; n],
             smoothed: vec![0.0; n],
+            load_mm3: 0.0,
+            edge_normal: [0.0; 2],
         };
         let depth = (-tip.z).min(self.mech.max_depth_mm);
         if depth.is_nan() || depth <= 0.0 {
@@ -125,20 +145,22 @@ impl ContactModel {
             .fold(0.0, f64::max);
         let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, tip);
         let h = self.mech.patch_grid_mm;
+        let area = 3f64.sqrt() / 2.0 * h * h;
         let (mut ux, mut uy) = (vec![0.0; n], vec![0.0; n]);
         for (j, point) in self.patch[..active].iter().enumerate() {
             let dist = grid.interpolate(sd, point.horiz);
             let inside = (0.5 - dist / h).clamp(0.0, 1.0);
             let pen = inside * (depth - point.height);
             if pen > 0.0 {
+                field.load_mm3 += pen * area;
                 self.accumulate(j, pen, [&mut ux, &mut uy, &mut field.smoothed]);
             }
         }
         for ((d, x), y) in field.disp.iter_mut().zip(&ux).zip(&uy) {
             *d = [*x, *y];
         }
-        if let Some(shear) = shear {
-            self.apply_shear(shear, &mut field);
+        if field.load_mm3 > 0.0 {
+            field.edge_normal = edge_normal(&mut grid, sd, reach);
         }
         field
     }
@@ -158,40 +180,21 @@ impl ContactModel {
             *u += pen * *k as f64;
         }
     }
+}
 
-    /// Stick-slip drag of the skin in contact (eq. S7): pins lag the slide
-    /// by a tanh-saturated amount, weighted by how much they are in contact.
-    fn apply_shear(&self, shear: Shear, field: &mut ContactField) {
-        let weights: Vec<f64> = field
-            .smoothed
-            .iter()
-            .map(|d| d / (d + self.mech.contact_scale_mm))
-            .collect();
-        let total: f64 = weights.iter().sum();
-        if total <= 1e-12 {
-            return;
-        }
-        let mut centre = [0.0; 2];
-        for (g, w) in self.pins_g.iter().zip(&weights) {
-            centre[0] += w * g[0] / total;
-            centre[1] += w * g[1] / total;
-        }
-        let slide = shear.dx_mm.hypot(shear.dy_mm);
-        let lim = self.mech.shear_limit_mm;
-        let lag = if slide > 1e-12 {
-            lim * (slide / lim).tanh() / slide
-        } else {
-            0.0
-        };
-        let lim_deg = self.mech.shear_limit_deg;
-        let twist = -(lim_deg * (shear.drz_deg / lim_deg).tanh()).to_radians();
-        let (c, s) = (twist.cos(), twist.sin());
-        for ((g, w), d) in self.pins_g.iter().zip(&weights).zip(field.disp.iter_mut()) {
-            let r = [g[0] - centre[0], g[1] - centre[1]];
-            d[0] += w * (-lag * shear.dx_mm + (c * r[0] - s * r[1] - r[0]));
-            d[1] += w * (-lag * shear.dy_mm + (s * r[0] + c * r[1] - r[1]));
-        }
+/// Normal into the object of the edge nearest the sensor's axis (minus the
+/// signed distance's gradient there, sensor frame), scaled by the edge's
+/// proximity clamp(1 - |sd| / reach, 0, 1) (eq. S7f).
+fn edge_normal(grid: &mut DistanceGrid, sd: &dyn Fn(Vec2) -> f64, reach: f64) -> [f64; 2] {
+    let at = |g: &mut DistanceGrid, x: f64, y: f64| g.interpolate(sd, [x, y]);
+    let gx = 0.5 * (at(grid, 1.0, 0.0) - at(grid, -1.0, 0.0));
+    let gy = 0.5 * (at(grid, 0.0, 1.0) - at(grid, 0.0, -1.0));
+    let size = gx.hypot(gy);
+    let proximity = (1.0 - at(grid, 0.0, 0.0).abs() / reach.max(1e-9)).clamp(0.0, 1.0);
+    if size < 0.5 || !size.is_finite() {
+        return [0.0; 2];
     }
+    [-gx / size * proximity, -gy / size * proximity]
 }
 
 /// Eq. S5/S6 weights of a patch point at `gj` on a pin at `gi`.

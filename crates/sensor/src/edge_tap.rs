@@ -2,7 +2,7 @@
 //! theta = pose_6, vertical offset pose_3, shear move_1/2/6) mapped onto the
 //! model through [`Calibration`](crate::Calibration), so simulated taps can
 //! be compared with, or stand in for, the real frames.
-use crate::{Shear, TacTipModel};
+use crate::{Calibration, Shear, TacTipModel};
 use tactrace_geometry::{Pose, Vec2};
 
 /// One labelled tap on the straight edge of a large square object.
@@ -21,10 +21,17 @@ pub struct EdgeTap {
 
 impl EdgeTap {
     /// The slide in the sensor frame: the labelled work-frame move times
-    /// the calibrated sign, turned by -theta into the sensor's axes.
+    /// the calibrated sign, turned by -theta into the sensor's axes and by
+    /// the calibrated shear angle offset (eq. S7d).
     pub fn sensor_shear(&self, model: &TacTipModel) -> Option<Shear> {
-        let sign = model.config().calibration.shear_sign;
-        let (s, c) = (-self.theta_deg.to_radians()).sin_cos();
+        self.sensor_shear_with(&model.config().calibration)
+    }
+
+    /// As [`Self::sensor_shear`] with the calibration `cal`.
+    pub(crate) fn sensor_shear_with(&self, cal: &Calibration) -> Option<Shear> {
+        let sign = cal.shear_sign;
+        let turn = cal.shear_angle_offset_deg - self.theta_deg;
+        let (s, c) = turn.to_radians().sin_cos();
         self.shear.map(|m| Shear {
             dx_mm: sign * (c * m.dx_mm - s * m.dy_mm),
             dy_mm: sign * (s * m.dx_mm + c * m.dy_mm),
@@ -38,9 +45,9 @@ impl EdgeTap {
         let depth = cal.tap_depth_mm + cal.depth_per_offset * self.dz_mm;
         Pose::planar(
             0.0,
-            self.r_mm + cal.edge_offset_mm,
+            cal.edge_scale * self.r_mm + cal.edge_offset_mm,
             -depth,
-            self.theta_deg + cal.angle_offset_deg,
+            cal.angle_scale * self.theta_deg + cal.angle_offset_deg,
         )
     }
 }
@@ -52,5 +59,12 @@ impl TacTipModel {
         let side = self.config().calibration.object_side;
         let sd = move |p: Vec2| side * p.y;
         self.pins_sdf(&sd, tap.tip_pose(self), tap.sensor_shear(self))
+    }
+
+    /// Contact state of a labelled tap without its slide (eqs. S4-S6).
+    pub(crate) fn edge_contact(&self, tap: &EdgeTap) -> crate::contact::ContactField {
+        let side = self.config().calibration.object_side;
+        let sd = move |p: Vec2| side * p.y;
+        self.contact_field(&sd, tap.tip_pose(self))
     }
 }

@@ -12,20 +12,30 @@ mod contact;
 mod correction;
 mod edge_tap;
 mod error;
+mod fit;
+mod fit_joint;
 mod layout;
 mod model;
+mod nelder_mead;
 mod render;
 mod replay;
 mod sensor;
 mod sim;
+mod slip;
 
 pub use config::{Calibration, CameraConfig, Mechanics, Nuisance, SkinGeometry, TacTipConfig};
 pub use contact::Shear;
 pub use correction::FieldCorrection;
 pub use edge_tap::EdgeTap;
 pub use error::SensorError;
+pub use fit::{field_misfit, fit_slip, FitSample, SlipFit, SlipParams};
+pub use fit_joint::{fit_joint, JointFit, JOINT_PARAMS};
 pub use layout::{hex_lattice, pin_count};
 pub use model::TacTipModel;
 pub use replay::{read_frame, ReplaySensor};
 pub use sensor::{Frame, TactileSensor};
 pub use sim::{PoseSource, SimTacTip};
+pub use slip::{
+    edge_bite, edge_slide, lag_profile, skin_lag, slip_field, slip_limit, ContactState,
+    REFERENCE_LOAD_MM3,
+};

@@ -1,10 +1,11 @@
 //! The simulated TacTip: pin layout, contact response and rendering in one
 //! checked model, shared by simulated taps and (through measured rest pins)
 //! the real sensor's geometry.
-use crate::config::TacTipConfig;
-use crate::contact::{ContactModel, Shear};
+use crate::config::{Mechanics, TacTipConfig};
+use crate::contact::{ContactField, ContactModel, Shear};
 use crate::layout::{hex_lattice, pin_count, Projection};
 use crate::render::{add_noise, draw_disc, jitter};
+use crate::slip::slip_field;
 use crate::{Frame, SensorError};
 use rand_chacha::ChaCha8Rng;
 use tactrace_geometry::{Contour, Pose, Vec2};
@@ -154,21 +155,40 @@ impl TacTipModel {
         tip: Pose,
         shear: Option<Shear>,
     ) -> Vec<[f64; 2]> {
-        let field = self.contact.field(sd, tip, shear);
+        let field = self.contact.field(sd, tip);
+        self.compose(&field, &self.cfg.mechanics, shear)
+    }
+
+    /// Contact state of a tap without slip (eqs. S4-S6), for fits that
+    /// vary only the slip law.
+    pub(crate) fn contact_field(&self, sd: &dyn Fn(Vec2) -> f64, tip: Pose) -> ContactField {
+        self.contact.field(sd, tip)
+    }
+
+    /// Pin centres (px) from a contact state and the slide: the gel flow
+    /// and lift held by the rim clamp (eqs. S6, S8, S8a) plus the skin's
+    /// stick-slip (eq. S7, with the slip parameters of `mech`).
+    pub(crate) fn compose(
+        &self,
+        field: &ContactField,
+        mech: &Mechanics,
+        shear: Option<Shear>,
+    ) -> Vec<[f64; 2]> {
+        let slip = shear.map(|s| slip_field(mech, &self.pins_g, field.state(), s));
+        let slip_of = |i: usize| slip.as_ref().map_or([0.0; 2], |v| v[i]);
         self.rest_px
             .iter()
             .zip(self.pins_g.iter().zip(&self.base_px))
             .zip(field.disp.iter().zip(&field.smoothed))
             .zip(&self.clamp)
-            .map(|(((rest, (g, base)), (u, lift)), k)| {
-                if u[0] == 0.0 && u[1] == 0.0 && *lift == 0.0 {
+            .enumerate()
+            .map(|(i, (((rest, (g, base)), (u, lift)), k))| {
+                let w = slip_of(i);
+                if u[0] == 0.0 && u[1] == 0.0 && *lift == 0.0 && w == [0.0; 2] {
                     return *rest;
                 }
-                let (u, lift) = if *k < 1.0 {
-                    ([k * u[0], k * u[1]], k * self.lift_gain * lift)
-                } else {
-                    (*u, self.lift_gain * lift)
-                };
+                let u = [k * u[0] + w[0], k * u[1] + w[1]];
+                let lift = k * self.lift_gain * lift;
                 let moved = self.proj.project_lifted([g[0] + u[0], g[1] + u[1]], lift);
                 [rest[0] + moved[0] - base[0], rest[1] + moved[1] - base[1]]
             })

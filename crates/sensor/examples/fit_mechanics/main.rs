@@ -7,11 +7,15 @@
 //!
 //! Run: cargo run --release -p tactrace-sensor --example real_fields -- /tmp/real_fields.txt
 //!      cargo run --release -p tactrace-sensor --example fit_mechanics
-//! Env: REAL_FIELDS (cache path), FIT=1 (refit; else score the defaults;
-//! FIT=frames: one joint per-frame fit of all eleven parameters with shear),
-//! FIGURE=path.png (draw matched cases).
+//! Env: REAL_FIELDS (cache path), FIT=1 (refit on binned means; else score
+//! the defaults; FIT=frames: the old joint per-frame fit of eleven
+//! parameters; FIT=slip: the stick-slip law, eq. S7, on the fit part;
+//! FIT=joint: 17 calibration, mechanics and slip parameters on the fit
+//! part, STRIDE/ROUNDS/ITERS/THREADS), FIGURE=path.png (draw matched
+//! cases), DUMP=path (write the simulated fields, with and without shear).
 use tactrace_sensor::{EdgeTap, TacTipConfig, TacTipModel};
 
+mod slip;
 mod support;
 use support::{draw_figure, nelder_mead, Bin, FieldSums, Pair, RealTap};
 
@@ -162,6 +166,16 @@ fn main() {
         support::MIN_BIN
     );
     let mut cfg = TacTipConfig::default();
+    if let Ok(out) = std::env::var("DUMP") {
+        dump(&cfg, &rest, &taps, &out);
+        return;
+    }
+    if std::env::var("FIT").is_ok_and(|v| v == "slip") {
+        cfg = slip::run(&cfg, &rest, &taps);
+    }
+    if std::env::var("FIT").is_ok_and(|v| v == "joint") {
+        cfg = slip::run_joint(&cfg, &rest, &taps);
+    }
     let build = |c: &TacTipConfig| TacTipModel::with_rest_pins(c.clone(), rest.clone()).ok();
     if std::env::var("FIT").is_ok_and(|v| v == "frames") {
         // Joint fit of calibration, mechanics and shear on every tenth
@@ -200,7 +214,7 @@ fn main() {
         cfg.mechanics.shear_limit_mm = x[8];
         cfg.mechanics.shear_limit_deg = x[9];
         cfg.mechanics.contact_scale_mm = x[10];
-    } else if std::env::var("FIT").is_ok() {
+    } else if std::env::var("FIT").is_ok_and(|v| v != "slip" && v != "joint") {
         let objective = |x: &[f64]| -> f64 {
             let Some(c) = with_params(&cfg, x) else {
                 return 1e12;
@@ -287,4 +301,26 @@ fn main() {
             Err(e) => eprintln!("figure failed: {e}"),
         }
     }
+}
+
+/// Write the simulated fields (with, then without the label shear) of every
+/// cached frame, one line each, for outside analysis.
+fn dump(cfg: &TacTipConfig, rest: &[[f64; 2]], taps: &[RealTap], out: &str) {
+    let model = TacTipModel::with_rest_pins(cfg.clone(), rest.to_vec()).expect("model");
+    let mut text = String::new();
+    for t in taps {
+        for shear in [true, false] {
+            let mut tap = t.tap;
+            if !shear {
+                tap.shear = None;
+            }
+            let v: Vec<String> = sim_disp(&model, &tap)
+                .iter()
+                .flat_map(|p| [format!("{:.4}", p[0]), format!("{:.4}", p[1])])
+                .collect();
+            text.push_str(&v.join(" "));
+            text.push('\n');
+        }
+    }
+    std::fs::write(out, text).expect("write dump");
 }

@@ -11,6 +11,9 @@ pub const MIN_BIN: usize = 10;
 
 /// One real frame: labels and tracked displacement (px) per model pin.
 pub struct RealTap {
+    /// N of `frame_N_0.png`: N % 5 picks the part (0 score, 1 select,
+    /// 2-4 fit; docs/sensor-model.md).
+    pub number: usize,
     pub tap: EdgeTap,
     pub disp: Vec<Option<[f64; 2]>>,
 }
@@ -38,7 +41,12 @@ pub fn load(path: &str) -> Option<(Vec<[f64; 2]>, Vec<RealTap>)> {
     let rest: Vec<[f64; 2]> = r.chunks(2).map(|c| [c[0], c[1]]).collect();
     let mut taps = Vec::new();
     for line in lines {
-        let (_, tail) = line.split_once(' ')?;
+        let (name, tail) = line.split_once(' ')?;
+        let number = name
+            .split('_')
+            .nth(1)
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(usize::MAX);
         let v = nums(tail);
         if v.len() != 7 + 2 * rest.len() {
             continue;
@@ -57,7 +65,7 @@ pub fn load(path: &str) -> Option<(Vec<[f64; 2]>, Vec<RealTap>)> {
                 drz_deg: v[5],
             }),
         };
-        taps.push(RealTap { tap, disp });
+        taps.push(RealTap { number, tap, disp });
     }
     Some((rest, taps))
 }

@@ -84,7 +84,10 @@ fn report_run(name: &str, res: &FollowOutcome) -> Result<()> {
     if res.summary.ending.succeeded() {
         eprintln!("{} (run folder {})", res.summary.message, res.dir.display());
     } else {
-        eprintln!("the run and its trajectory so far are in {}", res.dir.display());
+        eprintln!(
+            "the run and its trajectory so far are in {}",
+            res.dir.display()
+        );
         return Err(LabError::RunFailed {
             ending: res.summary.ending,
             message: res.summary.message.clone(),

@@ -7,7 +7,7 @@ use crate::progress::bar;
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
-use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
+use tactrace_lab::calibrate::{calibrate_sensor, write_calibrated, CalibrateConfig};
 use tactrace_lab::import::Imported;
 use tactrace_lab::twin::{simulate_twin, simulate_twin_calibrated, TwinConfig};
 use tactrace_lab::LabError;
@@ -188,7 +188,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
     let got = calibrate_sensor(&cfg, &rig.sensor, &blob, &tick);
     pb.finish_and_clear();
     let got = got?;
-    let dir = got.sensor.write(&a.out, a.force)?;
+    let dir = write_calibrated(&got, &a.out, a.force)?;
     let c = &got.sensor.spec.calibration;
     eprintln!(
         "calibrated on {} of {} labelled taps ({} frames rejected) in {:.1} s into {}",

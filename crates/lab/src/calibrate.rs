@@ -44,6 +44,17 @@ pub struct Calibrated {
     pub taps: usize,
     /// Real frames rejected by the import (too few pins).
     pub rejected: usize,
+    /// One held-out tap, to look at: its image name and its real,
+    /// simulated and corrected fields (2P values, all x then all y).
+    pub example: Option<ExampleTap>,
+}
+
+/// A held-out tap's fields before and after calibration.
+pub struct ExampleTap {
+    pub image: String,
+    pub real: Vec<f32>,
+    pub simulated: Vec<f32>,
+    pub corrected: Vec<f32>,
 }
 
 /// Held-out taps (at most) that score the fit: the rest of the given taps
@@ -101,10 +112,18 @@ pub fn calibrate_sensor(
         samples: cfg.samples.unwrap_or(labels.len()),
         indices: chosen.clone(),
     };
+    let mut example = None;
     if !held_part.labels.is_empty() {
         let (s, r, _) = held_part.fields()?;
+        let corrected = fitted.correction.apply(&s)?;
         record.held_out_before = Some(field_stats(&s, &r)?);
-        record.held_out_after = Some(field_stats(&fitted.correction.apply(&s)?, &r)?);
+        record.held_out_after = Some(field_stats(&corrected, &r)?);
+        example = Some(ExampleTap {
+            image: held_part.names[0].clone(),
+            real: r.row(0),
+            simulated: s.row(0),
+            corrected: corrected.row(0),
+        });
     }
     let reference = tactrace_sensor::read_frame(&t.reference)?;
     let spec = SensorSpec {
@@ -140,7 +159,43 @@ pub fn calibrate_sensor(
         sensor,
         taps: labels.len(),
         rejected: real.rejected.len(),
+        example,
     })
+}
+
+/// Write the calibration into the sensor folder `dir` (refused when it
+/// exists unless `force`), with a figure of the example tap's real field
+/// beside the simulated one before and after calibration
+/// (`figures/field_before.svg|png`, `figures/field_after.svg|png`).
+pub fn write_calibrated(got: &Calibrated, dir: &std::path::Path, force: bool) -> Result<PathBuf> {
+    let stage = got.sensor.stage(dir, force)?;
+    if let Some(ex) = &got.example {
+        let figs = stage.path().join("figures");
+        std::fs::create_dir_all(&figs).map_err(tactrace_store::write_err(&figs))?;
+        let pins = &got.sensor.spec.reference_pins;
+        let vectors = |f: &[f32]| -> Vec<[f64; 2]> {
+            let p = f.len() / 2;
+            (0..p)
+                .map(|i| [f64::from(f[i]), f64::from(f[p + i])])
+                .collect()
+        };
+        let real = vectors(&ex.real);
+        for (stem, field, what) in [
+            ("field_before", &ex.simulated, "simulated, uncorrected"),
+            ("field_after", &ex.corrected, "simulated, calibrated"),
+        ] {
+            let titles = [format!("real {}", ex.image), what.to_string()];
+            tactrace_report::plot::quiver_pair(
+                &figs.join(stem),
+                [&titles[0], &titles[1]],
+                pins,
+                [&real, &vectors(field)],
+                3.0,
+            )
+            .map_err(tactrace_report::ReportError::from)?;
+        }
+    }
+    Ok(stage.commit()?)
 }
 
 /// Up to [`SCORE_TAPS`] of the `n` rows not `chosen`, drawn with `seed`.

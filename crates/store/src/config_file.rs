@@ -23,19 +23,16 @@ where
     }
 }
 
-/// The `config.toml` every run writes: the tactrace `version` and the
-/// resolved configuration `config` (defaults, file and flags applied).
+/// The `config.toml` every run writes: the resolved configuration
+/// (defaults, file and flags applied, seeds included) under a comment
+/// naming the tactrace `version`, so the file can be given back to
+/// `--config` to run the same again.
 pub fn resolved_config_toml<T: Serialize>(version: &str, config: &T) -> Result<String> {
-    #[derive(Serialize)]
-    struct Resolved<'a, T> {
-        tactrace_version: &'a str,
-        config: &'a T,
-    }
-    toml::to_string(&Resolved {
-        tactrace_version: version,
-        config,
-    })
-    .map_err(|e| config_err("resolved configuration", e))
+    let body = toml::to_string(config).map_err(|e| config_err("resolved configuration", e))?;
+    Ok(format!(
+        "# The resolved configuration of this run (tactrace {version}); give it to\n\
+         # --config to run the same again.\n{body}"
+    ))
 }
 
 /// `base` with the keys of the TOML `text` laid over it, table by table.

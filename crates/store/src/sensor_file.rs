@@ -107,6 +107,12 @@ impl SensorFolder {
 
     /// Write the folder `dir` (refused when it exists unless `force`).
     pub fn write(&self, dir: &Path, force: bool) -> Result<PathBuf> {
+        self.stage(dir, force)?.commit()
+    }
+
+    /// Write the folder into a staging folder for `dir`; the caller may add
+    /// files (figures) before it commits.
+    pub fn stage(&self, dir: &Path, force: bool) -> Result<StagedDir> {
         let stage = StagedDir::new(dir, force)?;
         let text = toml::to_string(&self.spec).map_err(|e| StoreError::Format {
             path: dir.join(TOML_NAME),
@@ -130,7 +136,7 @@ impl SensorFolder {
         tensors.push((REAL_LABELS.into(), vec![n, 2], labels));
         let p = stage.path().join(TENSORS_NAME);
         std::fs::write(&p, serialise(&tensors, &p)?).map_err(write_err(&p))?;
-        stage.commit()
+        Ok(stage)
     }
 
     /// Read a folder written by [`Self::write`]; another format version, a

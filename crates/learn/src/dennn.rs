@@ -36,9 +36,12 @@ pub enum ClampedPhase {
     /// Closed-form equilibrium for one hidden layer, linearising the sigmoid
     /// about the free state (exact to first order in beta): with
     /// `D = diag(phi'(h))`, `A = W2^T D^2 W2`, the output error is
-    /// `e(2) = (I + A)^-1 beta (t - y)` and `e(1) = D W2 e(2)`. The update is
-    /// then exactly `-eta beta (I + A)^-1` times the backprop gradient. Nets
-    /// with other depths fall back to `Euler { n_i: 20, dt: 0.5 }`.
+    /// `e(2) = (I + A)^-1 beta (t - y)` and `e(1) = D W2 e(2)`. The updates
+    /// of W1, b1 and b2 are then exactly `-eta beta (I + A)^-1` times the
+    /// backprop gradient; W2's gets a second-order term `eta2 c^2 delta^2 D u`
+    /// (c = beta / (1 + a), one output) from the clamped activity
+    /// `phi + D e(1)` (docs/learning.md; `tests/ep_beta.rs`). Nets with other
+    /// depths fall back to `Euler { n_i: 20, dt: 0.5 }`.
     Linearised,
     /// `n_i` Euler steps of eq. 3.12 for the hidden layers, output held.
     Euler { n_i: usize, dt: f64 },

@@ -49,7 +49,8 @@ pub struct Calibrated {
     pub example: Option<ExampleTap>,
 }
 
-/// A held-out tap's fields before and after calibration.
+/// A held-out tap's fields before and after calibration (the tap of
+/// median misfit after calibration).
 pub struct ExampleTap {
     pub image: String,
     pub real: Vec<f32>,
@@ -118,11 +119,12 @@ pub fn calibrate_sensor(
         let corrected = fitted.correction.apply(&s)?;
         record.held_out_before = Some(field_stats(&s, &r)?);
         record.held_out_after = Some(field_stats(&corrected, &r)?);
+        let k = median_tap(&corrected, &r);
         example = Some(ExampleTap {
-            image: held_part.names[0].clone(),
-            real: r.row(0),
-            simulated: s.row(0),
-            corrected: corrected.row(0),
+            image: held_part.names[k].clone(),
+            real: r.row(k),
+            simulated: s.row(k),
+            corrected: corrected.row(k),
         });
     }
     let reference = tactrace_sensor::read_frame(&t.reference)?;
@@ -184,7 +186,11 @@ pub fn write_calibrated(got: &Calibrated, dir: &std::path::Path, force: bool) ->
             ("field_before", &ex.simulated, "simulated, uncorrected"),
             ("field_after", &ex.corrected, "simulated, calibrated"),
         ] {
-            let titles = [format!("real {}", ex.image), what.to_string()];
+            let rms = field_rms(field, &ex.real);
+            let titles = [
+                format!("real {} (held out)", ex.image),
+                format!("{what}: RMS {rms:.2} px from real"),
+            ];
             tactrace_report::plot::quiver_pair(
                 &figs.join(stem),
                 [&titles[0], &titles[1]],
@@ -196,6 +202,22 @@ pub fn write_calibrated(got: &Calibrated, dir: &std::path::Path, force: bool) ->
         }
     }
     Ok(stage.commit()?)
+}
+
+/// The tap whose corrected field misfits the real one by the median RMS:
+/// a typical tap to look at.
+fn median_tap(corrected: &Fields, real: &Fields) -> usize {
+    let mut by_rms: Vec<(f64, usize)> = (0..real.len())
+        .map(|k| (field_rms(&corrected.row(k), &real.row(k)), k))
+        .collect();
+    by_rms.sort_by(|a, b| a.0.total_cmp(&b.0));
+    by_rms[by_rms.len() / 2].1
+}
+
+/// Per-coordinate RMS difference of two fields, px.
+fn field_rms(a: &[f32], b: &[f32]) -> f64 {
+    let sum: f64 = a.iter().zip(b).map(|(x, y)| f64::from(x - y).powi(2)).sum();
+    (sum / a.len().max(1) as f64).sqrt()
 }
 
 /// Up to [`SCORE_TAPS`] of the `n` rows not `chosen`, drawn with `seed`.

@@ -47,6 +47,7 @@ impl From<PresetArg> for Preset {
 
 #[derive(Args)]
 pub struct TrainArgs {
+    /// Kind of pose model.
     #[arg(long, value_enum, default_value = "pdennn")]
     model: ModelArg,
     /// Training dataset directory.
@@ -65,8 +66,10 @@ pub struct TrainArgs {
     /// Output model directory.
     #[arg(long)]
     out: PathBuf,
+    /// Training epochs (default: the preset's).
     #[arg(long)]
     epochs: Option<usize>,
+    /// Hyper-parameter preset the --config file is laid over.
     #[arg(long, value_enum, default_value = "default")]
     preset: PresetArg,
     /// TOML overriding any hyper-parameter of the preset.
@@ -89,6 +92,7 @@ pub struct TrainArgs {
     /// Print the resolved configuration as TOML and exit.
     #[arg(long)]
     print_config: bool,
+    /// Replace an existing model directory.
     #[arg(long)]
     force: bool,
 }
@@ -258,6 +262,7 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
 
 #[derive(Args)]
 pub struct PredictArgs {
+    /// Model directory (from `tactrace train`).
     #[arg(long)]
     model: PathBuf,
     /// One frame (needs --reference).
@@ -286,7 +291,17 @@ pub fn predict(a: PredictArgs) -> Result<()> {
                 .for_pins(ex.tracker.reference(), &reference)
                 .map_err(LabError::from)?;
             let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
-            let tracked = ex.extract(&frame).map_err(LabError::from)?;
+            let tracked = ex
+                .extract(&frame)
+                .map_err(LabError::from)
+                .with_context(|| {
+                    format!(
+                        "{}: not a frame of the sensor whose undeformed frame is {} \
+                     (or other blob parameters are needed: --params)",
+                        image.display(),
+                        reference.display()
+                    )
+                })?;
             let [r, t] = net
                 .predict(&tracked.displacement(ex.tracker.reference()))
                 .map_err(LabError::from)?;

@@ -10,8 +10,11 @@ use tactrace_store::{check_output_dir, fsutil, read_dataset, StoredModel};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ModelArg {
+    /// Two dendritic networks (position, angle), each on its own principal components.
     Pdennn,
+    /// One dendritic network on principal components, both targets.
     Pcadennn,
+    /// One dendritic network on the standardised pin displacements, both targets.
     Disdennn,
     /// Backprop twin of the PDenNN (same architecture, SGD backprop).
     Mlp,

@@ -122,6 +122,13 @@ mod tests {
             if !builtin && arg.get_help().is_none() && arg.get_long_help().is_none() {
                 out.push(format!("{path} --{}", arg.get_id()));
             }
+            // Values listed with help, some without: clap shows them blank.
+            let values = arg.get_possible_values();
+            if values.iter().any(|v| v.get_help().is_some()) {
+                for v in values.iter().filter(|v| v.get_help().is_none()) {
+                    out.push(format!("{path} --{} {}", arg.get_id(), v.get_name()));
+                }
+            }
         }
         for sub in cmd.get_subcommands() {
             if sub.get_about().is_none() && sub.get_name() != "help" {

@@ -19,7 +19,8 @@ pub struct FollowMetrics {
     /// Fraction of the contour traced: of 1000 contour points evenly spaced
     /// by arc length, those passed by the trajectory while it stayed within
     /// `coverage_radius_mm` of the contour (see [`traced_fraction`]). A
-    /// trajectory standing still covers nothing, however small the contour.
+    /// trajectory standing still covers nothing, however small the contour;
+    /// a closed one includes the step back to its start.
     pub coverage: f64,
     pub coverage_radius_mm: f64,
     /// The trajectory came back to its start after leaving it.
@@ -161,6 +162,12 @@ pub fn evaluate(
             v.iter().sum::<f64>() / v.len() as f64
         }
     };
+    let closed = trajectory_closes(trajectory, close_radius, min_excursion);
+    // A closed loop's last step leads back to its start.
+    let traced: Vec<Vec2> = match (closed, trajectory.first()) {
+        (true, Some(first)) => trajectory.iter().chain([first]).copied().collect(),
+        _ => trajectory.to_vec(),
+    };
     let p95 = track
         .get(((track.len() as f64 * 0.95).ceil() as usize).saturating_sub(1))
         .copied()
@@ -171,9 +178,9 @@ pub fn evaluate(
         mean_track_error_mm: mean(&track),
         p95_track_error_mm: p95,
         max_track_error_mm: track.last().copied().unwrap_or(f64::NAN),
-        coverage: traced_fraction(contour, trajectory, coverage_radius_mm, 1000),
+        coverage: traced_fraction(contour, &traced, coverage_radius_mm, 1000),
         coverage_radius_mm,
-        closed: trajectory_closes(trajectory, close_radius, min_excursion),
+        closed,
         steps: trajectory.len(),
         path_length_mm: trajectory.windows(2).map(|w| (w[1] - w[0]).norm()).sum(),
     }
@@ -238,6 +245,16 @@ mod tests {
         let m = evaluate(&contour, &traj, 3.0, 20.0);
         assert!(m.coverage <= 0.002, "{}", m.coverage);
         assert!(!m.closed);
+    }
+
+    #[test]
+    fn a_closed_loop_covers_the_contour_up_to_its_last_step_home() {
+        // 100 taps 3.1 mm apart: the loop closes on its last tap, and the
+        // step from it back to the start completes the coverage.
+        let contour = Contour::new(circle(50.0, 2000)).unwrap();
+        let m = evaluate(&contour, &circle(50.0, 100), 3.5, 20.0);
+        assert!(m.closed);
+        assert!((m.coverage - 1.0).abs() < 1e-9, "{}", m.coverage);
     }
 
     #[test]

@@ -407,6 +407,30 @@ fn issue10_import_with_a_bad_reference_fails_fast_naming_it() {
     );
     assert!(r.stderr.contains("--reference"), "{}", r.stderr);
     assert!(!t.join("bad").exists());
+    // `twin` orders its simulated frames against the reference: the same.
+    let r = tactrace(
+        &t.0,
+        &[
+            "twin",
+            "--targets",
+            "targets.csv",
+            "--reference",
+            "noise.png",
+            "--dz-column",
+            "none",
+            "--shear-columns",
+            "none",
+            "--out",
+            "twin",
+        ],
+    );
+    expect_code(&r, 2, "twin with noise as the reference");
+    assert!(
+        r.stderr.contains("noise.png: not an undeformed frame"),
+        "{}",
+        r.stderr
+    );
+    assert!(!t.join("twin").exists());
 }
 
 /// Item 9: a JSON file given as `--targets` was dumped as its "columns".

@@ -196,17 +196,18 @@ pub(crate) fn check_reference(
         }
     }
     match last {
-        Some((path, e)) => Err(LabError::Format {
+        Some((path, e)) => Err(LabError::Reference {
             path: reference.to_path_buf(),
             reason: format!(
                 "not an undeformed frame of the sensor that took the frames: it gives {} pins, \
-                 and the first {} frames (up to {}) match too few of them ({e}); give the \
+                 and the first {} frames (up to {}) match too few of them; give the \
                  sensor's frame taken without contact as --reference, or blob parameters \
                  that suit both (--params)",
                 extractor.tracker.reference().len(),
                 first_frames.len().min(REFERENCE_PROBE_ROWS),
                 path.display()
             ),
+            source: Box::new(e),
         }),
         None => Ok(()),
     }

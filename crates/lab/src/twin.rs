@@ -7,7 +7,7 @@
 //! labels, pin order and rest layout, so a model trained on one can be
 //! validated on the other: the simulator judged by what it predicts about
 //! real frames (docs/results.md, "Simulated to real").
-use crate::error::Result;
+use crate::error::{LabError, Result};
 use crate::import::{
     gather, read_rows, reference_extractor, target_names, FrameOutcome, Imported, LabelColumns, Row,
 };
@@ -87,7 +87,16 @@ pub fn simulate_twin(
     let rows = read_rows(&cfg.targets, &cols, cfg.limit)?;
     let extractor = reference_extractor(&cfg.reference, blob)?;
     let rest = extractor.tracker.reference().to_vec();
-    let model = TacTipModel::with_rest_pins(sensor.clone(), rest.clone())?;
+    let model = TacTipModel::with_rest_pins(sensor.clone(), rest.clone()).map_err(|e| {
+        LabError::Reference {
+            path: cfg.reference.clone(),
+            reason: "not an undeformed frame of the simulated sensor's layout; give the \
+                     sensor's frame taken without contact as --reference, or blob parameters \
+                     that find its pins (--params)"
+                .into(),
+            source: Box::new(e),
+        }
+    })?;
     let outcomes: Vec<FrameOutcome> = rows
         .par_iter()
         .enumerate()

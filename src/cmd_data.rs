@@ -17,8 +17,10 @@ pub struct CollectArgs {
     /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points (mm).
     #[arg(long, default_value = "disk")]
     shape: String,
+    /// Number of taps to collect.
     #[arg(long, default_value_t = 1000)]
     samples: usize,
+    /// Seed of the random tap poses and the simulated noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Output dataset directory.
@@ -111,8 +113,10 @@ pub struct ImportArgs {
     /// Import only the first N rows.
     #[arg(long)]
     limit: Option<usize>,
+    /// Output dataset directory.
     #[arg(long)]
     out: PathBuf,
+    /// Replace an existing output directory.
     #[arg(long)]
     force: bool,
 }
@@ -128,10 +132,13 @@ pub struct LabelArgs {
     /// the simulated sensor's rest layout).
     #[arg(long)]
     pub reference: PathBuf,
+    /// Column of --targets naming each row's frame file.
     #[arg(long, default_value = "image_name")]
     pub image_column: String,
+    /// Column of --targets with the edge position r, mm.
     #[arg(long, default_value = "pose_2")]
     pub r_column: String,
+    /// Column of --targets with the edge angle theta, degrees.
     #[arg(long, default_value = "pose_6")]
     pub theta_column: String,
 }
@@ -184,6 +191,7 @@ pub fn import(a: ImportArgs) -> Result<()> {
 pub enum SensorCommand {
     /// Render one simulated tap as a PNG (r, theta relative to the edge).
     Render {
+        /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points (mm).
         #[arg(long, default_value = "disk")]
         shape: String,
         /// Edge position, mm (positive: sensor centre outside the object).
@@ -192,20 +200,25 @@ pub enum SensorCommand {
         /// Sensor angle relative to the edge, degrees.
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
         theta: f64,
-        /// Indentation depth, mm (default: the rig's nominal tap, 6.25 mm
-        /// in the calibrated model; see docs/sensor-model.md).
-        #[arg(long)]
+        /// Indentation depth, mm, from 0 to the contact model's deepest
+        /// (`mechanics.max_depth_mm`, 8 mm by default); default: the rig's
+        /// nominal tap, 6.25 mm (docs/sensor-model.md).
+        #[arg(long, allow_hyphen_values = true)]
         depth: Option<f64>,
         /// Arc length of the edge point, mm.
         #[arg(long, default_value_t = 0.0)]
         arc: f64,
+        /// Output PNG file.
         #[arg(long)]
         out: PathBuf,
+        /// Rig configuration TOML (its `sensor` table is the TacTip rendered).
         #[arg(long)]
         config: Option<PathBuf>,
     },
-    /// Detect the pins of a frame; prints CSV `x,y,size` (px, size = diameter).
+    /// Detect the pins of a frame; prints CSV `x,y,size` (px, size = diameter)
+    /// and warns on standard error when the count is not the one expected.
     Pins {
+        /// The frame (PNG or any 8-bit image).
         image: PathBuf,
         /// Blob parameters TOML (OpenCV key names).
         #[arg(long)]
@@ -213,6 +226,12 @@ pub enum SensorCommand {
         /// Preset when no --params: opencv, report, real256, sim.
         #[arg(long, default_value = "real256")]
         preset: String,
+        /// Number of pins the sensor has (0: no check).
+        #[arg(long, default_value_t = 127)]
+        expect: usize,
+        /// A count other than --expect is an error (exit code 2), not a warning.
+        #[arg(long)]
+        strict: bool,
     },
 }
 
@@ -230,10 +249,11 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             let spec = ShapeSpec::parse(&shape);
             let contour = load_shape(&spec)?;
             let rig = rig_config(config.as_deref())?;
+            let depth = depth.unwrap_or(rig.tap.nominal_indentation_mm());
+            check_render_pose(r, theta, depth, arc, rig.sensor.mechanics.max_depth_mm)?;
             let model =
                 tactrace_sensor::TacTipModel::new(rig.sensor.clone()).map_err(LabError::from)?;
             let (edge, normal) = contour.at_arc_length(arc);
-            let depth = depth.unwrap_or(rig.tap.nominal_indentation_mm());
             let pose = pose_at_edge(edge, normal, r, theta, -depth);
             let pins = model.pins(&contour, pose, None);
             let frame = model.render(&pins, None);
@@ -245,6 +265,8 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             image,
             params,
             preset,
+            expect,
+            strict,
         } => {
             let blob = blob_params(params.as_deref(), &preset)?;
             let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
@@ -254,7 +276,50 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
                 crate::say!("{:.3},{:.3},{:.3}", k.x, k.y, k.size);
             }
             eprintln!("{} pins", kps.len());
+            if expect == 0 || kps.len() == expect {
+                return Ok(());
+            }
+            let why = format!(
+                "found {} blobs where the sensor has {expect} pins: is it a frame of this \
+                 sensor, seen with the right blob parameters (--preset, --params)? \
+                 (--expect N sets the count, 0 skips the check)",
+                kps.len()
+            );
+            if strict {
+                return Err(LabError::Format {
+                    path: image,
+                    reason: why,
+                }
+                .into());
+            }
+            eprintln!("warning: {}: {why}", image.display());
             Ok(())
         }
     }
+}
+
+/// A rendered tap must lie within the contact model's range: deeper taps
+/// would all be clipped to the same image.
+fn check_render_pose(r: f64, theta: f64, depth: f64, arc: f64, max_depth: f64) -> Result<()> {
+    for (name, v) in [
+        ("--r", r),
+        ("--theta", theta),
+        ("--arc", arc),
+        ("--depth", depth),
+    ] {
+        if !v.is_finite() {
+            return Err(
+                LabError::Config(format!("{name} must be a finite number, got {v}")).into(),
+            );
+        }
+    }
+    if !(0.0..=max_depth).contains(&depth) {
+        return Err(LabError::Config(format!(
+            "--depth {depth} mm is outside the contact model's range, 0 to {max_depth} mm \
+             (mechanics.max_depth_mm of the rig configuration): deeper taps would all render \
+             as the {max_depth} mm one"
+        ))
+        .into());
+    }
+    Ok(())
 }

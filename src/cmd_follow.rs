@@ -4,7 +4,7 @@ use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
 use tactrace_geometry::ShapeSpec;
-use tactrace_lab::follow::{follow_simulated, FollowOutcome, SimFollowConfig};
+use tactrace_lab::follow::{follow_simulated, size_warning, FollowOutcome, SimFollowConfig};
 use tactrace_lab::hardware::{follow_hardware as follow_on_hardware, HardwareConfig};
 use tactrace_lab::reproduce::{reproduce as run_reproduce, ReproduceConfig};
 use tactrace_lab::LabError;
@@ -52,6 +52,10 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     overrides(&a, &mut cfg.follow);
     let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
     let contour = load_shape(&spec)?;
+    let diameter = 2.0 * cfg.rig.sensor.geometry.dome_radius_mm;
+    if let Some(w) = size_warning(&spec.name(), &contour, diameter) {
+        eprintln!("warning: {w}");
+    }
     let model = StoredModel::load(&a.model)?;
     let pb = bar(cfg.follow.step_limit() as u64, "follow");
     let res = follow_simulated(

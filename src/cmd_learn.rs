@@ -10,8 +10,11 @@ use tactrace_store::{check_output_dir, fsutil, read_dataset, StoredModel};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ModelArg {
+    /// Two dendritic networks (position, angle), each on its own principal components.
     Pdennn,
+    /// One dendritic network on principal components, both targets.
     Pcadennn,
+    /// One dendritic network on the standardised pin displacements, both targets.
     Disdennn,
     /// Backprop twin of the PDenNN (same architecture, SGD backprop).
     Mlp,
@@ -47,6 +50,7 @@ impl From<PresetArg> for Preset {
 
 #[derive(Args)]
 pub struct TrainArgs {
+    /// Kind of pose model.
     #[arg(long, value_enum, default_value = "pdennn")]
     model: ModelArg,
     /// Training dataset directory.
@@ -65,8 +69,10 @@ pub struct TrainArgs {
     /// Output model directory.
     #[arg(long)]
     out: PathBuf,
+    /// Training epochs (default: the preset's).
     #[arg(long)]
     epochs: Option<usize>,
+    /// Hyper-parameter preset the --config file is laid over.
     #[arg(long, value_enum, default_value = "default")]
     preset: PresetArg,
     /// TOML overriding any hyper-parameter of the preset.
@@ -89,6 +95,7 @@ pub struct TrainArgs {
     /// Print the resolved configuration as TOML and exit.
     #[arg(long)]
     print_config: bool,
+    /// Replace an existing model directory.
     #[arg(long)]
     force: bool,
 }
@@ -258,6 +265,7 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
 
 #[derive(Args)]
 pub struct PredictArgs {
+    /// Model directory (from `tactrace train`).
     #[arg(long)]
     model: PathBuf,
     /// One frame (needs --reference).
@@ -286,7 +294,17 @@ pub fn predict(a: PredictArgs) -> Result<()> {
                 .for_pins(ex.tracker.reference(), &reference)
                 .map_err(LabError::from)?;
             let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
-            let tracked = ex.extract(&frame).map_err(LabError::from)?;
+            let tracked = ex
+                .extract(&frame)
+                .map_err(LabError::from)
+                .with_context(|| {
+                    format!(
+                        "{}: not a frame of the sensor whose undeformed frame is {} \
+                     (or other blob parameters are needed: --params)",
+                        image.display(),
+                        reference.display()
+                    )
+                })?;
             let [r, t] = net
                 .predict(&tracked.displacement(ex.tracker.reference()))
                 .map_err(LabError::from)?;

@@ -111,3 +111,47 @@ fn exit_code(err: &anyhow::Error) -> u8 {
     }
     1
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Cli;
+    use clap::CommandFactory;
+
+    /// Every argument of every (sub)command, with the path to it, that has
+    /// no help line.
+    fn undocumented(cmd: &clap::Command, path: &str, out: &mut Vec<String>) {
+        for arg in cmd.get_arguments() {
+            let builtin = matches!(arg.get_id().as_str(), "help" | "version");
+            if !builtin && arg.get_help().is_none() && arg.get_long_help().is_none() {
+                out.push(format!("{path} --{}", arg.get_id()));
+            }
+            // Values listed with help, some without: clap shows them blank.
+            let values = arg.get_possible_values();
+            if values.iter().any(|v| v.get_help().is_some()) {
+                for v in values.iter().filter(|v| v.get_help().is_none()) {
+                    out.push(format!("{path} --{} {}", arg.get_id(), v.get_name()));
+                }
+            }
+        }
+        for sub in cmd.get_subcommands() {
+            if sub.get_about().is_none() && sub.get_name() != "help" {
+                out.push(format!("{path} {} (no about)", sub.get_name()));
+            }
+            undocumented(sub, &format!("{path} {}", sub.get_name()), out);
+        }
+    }
+
+    /// Issue 10: options such as `collect --samples`, `import --out` and the
+    /// `sensor render` options had no help line.
+    #[test]
+    fn every_option_of_every_subcommand_has_a_help_line() {
+        let mut missing = Vec::new();
+        undocumented(&Cli::command(), "tactrace", &mut missing);
+        assert!(missing.is_empty(), "no help line: {missing:#?}");
+    }
+
+    #[test]
+    fn the_cli_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
+}

@@ -11,6 +11,15 @@ pub enum LabError {
     /// A file was read but its content is not what it should be.
     #[error("{path}: {reason}")]
     Format { path: PathBuf, reason: String },
+    /// A reference frame (`--reference`) that is no undeformed frame of the
+    /// sensor: `source` says what did not fit.
+    #[error("{path}: {reason}")]
+    Reference {
+        path: PathBuf,
+        reason: String,
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// A configuration or argument value that cannot work.
     #[error("invalid configuration: {0}")]
     Config(String),
@@ -52,6 +61,7 @@ impl LabError {
         use tactrace_servo::ServoError as V;
         match self {
             LabError::Format { .. }
+            | LabError::Reference { .. }
             | LabError::Config(_)
             | LabError::Geometry(_)
             | LabError::Calib(_) => true,

@@ -164,22 +164,49 @@ pub fn follow_on_rig(
 struct MetricsDocument<'a> {
     #[serde(flatten)]
     metrics: Option<&'a FollowMetrics>,
-    /// Steps taken, when there are no metrics (which hold it).
+    /// The loop's step count when there are no metrics (which have their
+    /// own `steps`: one key, not two).
     #[serde(skip_serializing_if = "Option::is_none")]
     steps: Option<usize>,
     ending: tactrace_servo::Ending,
     succeeded: bool,
     message: &'a str,
+    /// Why the metrics may say little (a contour smaller than the sensor).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    warning: Option<String>,
+}
+
+/// The diameter of the real TacTip's dome, mm (the simulated one's is in
+/// its configuration).
+pub fn tactip_diameter_mm() -> f64 {
+    2.0 * tactrace_sensor::SkinGeometry::default().dome_radius_mm
+}
+
+/// A contour smaller than the sensor (`sensor_diameter_mm` across) cannot
+/// be followed, and its metrics say little: often a contour in metres
+/// where millimetres are meant. The warning, if so.
+pub fn size_warning(name: &str, contour: &Contour, sensor_diameter_mm: f64) -> Option<String> {
+    let (min, max) = contour.bounds();
+    let across = (max - min).max();
+    (across < sensor_diameter_mm).then(|| {
+        format!(
+            "the contour {name} is {across:.3} mm across, smaller than the sensor \
+             ({sensor_diameter_mm:.0} mm): it cannot be followed and its metrics say \
+             little (contours are in millimetres)"
+        )
+    })
 }
 
 /// Score a finished run against the true contour `shape` (named `name`),
 /// if known (report ch. 5.3 and beyond), write `metrics.json` and the
-/// figures into `dir`.
+/// figures into `dir`. `sensor_diameter_mm` flags contours smaller than
+/// the sensor ([`size_warning`]).
 pub fn write_results(
     shape: Option<(&str, &Contour)>,
     records: &[StepRecord],
     summary: &LoopSummary,
     follow: &LoopConfig,
+    sensor_diameter_mm: f64,
     dir: &Path,
 ) -> Result<(Option<FollowMetrics>, Vec<f64>)> {
     let traj: Vec<Vec2> = records
@@ -201,6 +228,7 @@ pub fn write_results(
         ending: summary.ending,
         succeeded: summary.ending.succeeded(),
         message: &summary.message,
+        warning: shape.and_then(|(name, c)| size_warning(name, c, sensor_diameter_mm)),
     };
     let json = serde_json::to_string_pretty(&document).expect("metrics serialise");
     write_atomic(&dir.join("metrics.json"), json.as_bytes())?;
@@ -269,6 +297,7 @@ pub fn follow_simulated(
         &records,
         &summary,
         &cfg.follow,
+        2.0 * cfg.rig.sensor.geometry.dome_radius_mm,
         run.path(),
     )?;
     let dir = run.finish()?;

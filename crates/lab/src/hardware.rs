@@ -27,10 +27,11 @@ use tactrace_servo::{pose_at_edge, LoopConfig, StepRecord, TapConfig};
 use tactrace_store::StoredModel;
 use tactrace_vision::BlobParams;
 
-/// Where the frames come from.
+/// Where the real rig's frames come from: the `[camera]` table of a rig
+/// file (not the simulated camera of `tactrace_sensor::CameraConfig`).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
-pub enum CameraConfig {
+pub enum FrameSourceConfig {
     /// An external capture program per frame (`[camera.command]`).
     Command(CommandSourceConfig),
     /// Replay the images of a folder in natural order (`[camera.folder]`):
@@ -60,7 +61,7 @@ pub struct HardwareStart {
 #[serde(deny_unknown_fields)]
 pub struct HardwareConfig {
     pub arm: Ur5Config,
-    pub camera: CameraConfig,
+    pub camera: FrameSourceConfig,
     #[serde(default)]
     pub preprocess: PreprocessConfig,
     pub workspace: Workspace,
@@ -159,8 +160,8 @@ impl HardwareConfig {
     fn camera(&self) -> Result<Box<dyn TactileSensor>> {
         let preprocess = self.preprocess.validate()?;
         Ok(match &self.camera {
-            CameraConfig::Command(c) => boxed(CommandSource::from_config(c)?, preprocess),
-            CameraConfig::Folder { path, looping } => {
+            FrameSourceConfig::Command(c) => boxed(CommandSource::from_config(c)?, preprocess),
+            FrameSourceConfig::Folder { path, looping } => {
                 boxed(FolderSource::new(path)?.looping(*looping), preprocess)
             }
         })
@@ -200,7 +201,14 @@ pub fn follow_hardware(
         run.path(),
         progress,
     )?;
-    let (metrics, l2_curve) = write_results(shape, &records, &summary, &cfg.follow, run.path())?;
+    let (metrics, l2_curve) = write_results(
+        shape,
+        &records,
+        &summary,
+        &cfg.follow,
+        crate::follow::tactip_diameter_mm(),
+        run.path(),
+    )?;
     let dir = run.finish()?;
     Ok(FollowOutcome {
         summary,

@@ -91,16 +91,25 @@ pub(crate) fn read_rows(
         path: path.clone(),
         reason,
     };
-    let mut rdr = csv::Reader::from_path(path).map_err(|e| fmt(e.to_string()))?;
+    let file = std::fs::File::open(path).map_err(tactrace_store::read_err(path))?;
+    let mut rdr = csv::Reader::from_reader(std::io::BufReader::new(file));
     let headers = rdr.headers().map_err(|e| fmt(e.to_string()))?.clone();
+    let needed = [cols.image, cols.r, cols.theta]
+        .iter()
+        .chain(cols.extra)
+        .map(|c| format!("`{c}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
     let col = |name: &str| {
         headers
             .iter()
             .position(|h| h.trim() == name)
             .ok_or_else(|| {
                 fmt(format!(
-                    "no column `{name}` (columns: {})",
-                    headers.iter().collect::<Vec<_>>().join(", ")
+                    "not a CSV with the label columns {needed}: no column `{name}` \
+                     (its header: {}); name the columns with --image-column, \
+                     --r-column, --theta-column",
+                    header_summary(&headers)
                 ))
             })
     };
@@ -144,6 +153,69 @@ pub(crate) fn read_rows(
     Ok(rows)
 }
 
+/// A header line for an error message: at most 5 fields of at most 24
+/// characters each (a JSON or binary file given as a CSV has one huge
+/// "column").
+fn header_summary(headers: &csv::StringRecord) -> String {
+    const FIELDS: usize = 5;
+    const CHARS: usize = 24;
+    let mut fields: Vec<String> = headers
+        .iter()
+        .take(FIELDS)
+        .map(|h| {
+            let h = h.trim();
+            match h.char_indices().nth(CHARS) {
+                Some((end, _)) => format!("`{}...`", &h[..end]),
+                None => format!("`{h}`"),
+            }
+        })
+        .collect();
+    if headers.len() > FIELDS {
+        fields.push(format!("... ({} fields in all)", headers.len()));
+    }
+    fields.join(", ")
+}
+
+/// How many of the first rows must all fail for too few pins before the
+/// reference frame, not the frames, is blamed.
+const REFERENCE_PROBE_ROWS: usize = 5;
+
+/// Fail fast on a reference that is no undeformed frame of the sensor that
+/// took the frames (noise, another sensor, other blob parameters): when the
+/// first few frames all match too few of its pins, the reference is named
+/// before the whole set is read.
+pub(crate) fn check_reference(
+    extractor: &PinExtractor,
+    reference: &Path,
+    first_frames: &[PathBuf],
+) -> Result<()> {
+    let mut last = None;
+    for path in first_frames.iter().take(REFERENCE_PROBE_ROWS) {
+        let frame = read_frame(path)?;
+        match extractor.extract(&frame) {
+            Ok(_) => return Ok(()),
+            Err(e @ tactrace_vision::VisionError::TooFewPins { .. }) => last = Some((path, e)),
+            Err(e) => return Err(e.into()),
+        }
+    }
+    match last {
+        Some((path, e)) => Err(LabError::Reference {
+            path: reference.to_path_buf(),
+            reason: format!(
+                "not an undeformed frame of the sensor that took the frames: it gives {} pins, \
+                 and the first {} frames (up to {}) match too few of them; give the \
+                 sensor's frame taken without contact as --reference, or blob parameters \
+                 that suit both (--params)",
+                extractor.tracker.reference().len(),
+                first_frames.len().min(REFERENCE_PROBE_ROWS),
+                path.display()
+            ),
+            source: Box::new(e),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Import real frames. `progress` is called once per frame processed.
 pub fn import(
     cfg: &ImportConfig,
@@ -166,6 +238,12 @@ pub(crate) fn import_rows(
         keep,
     );
     let extractor = reference_extractor(&cfg.reference, blob)?;
+    let first: Vec<PathBuf> = rows
+        .iter()
+        .take(REFERENCE_PROBE_ROWS)
+        .map(|r| cfg.frames.join(&r.image))
+        .collect();
+    check_reference(&extractor, &cfg.reference, &first)?;
     let outcomes: Vec<FrameOutcome> = rows
         .par_iter()
         .map(|row| {

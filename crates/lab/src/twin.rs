@@ -7,7 +7,7 @@
 //! labels, pin order and rest layout, so a model trained on one can be
 //! validated on the other: the simulator judged by what it predicts about
 //! real frames (docs/results.md, "Simulated to real").
-use crate::error::Result;
+use crate::error::{LabError, Result};
 use crate::import::{
     gather, keep_rows, read_rows, reference_extractor, target_names, FrameOutcome, Imported,
     LabelColumns, Row,
@@ -92,7 +92,7 @@ pub(crate) fn simulate_twin_rows(
     let rows = keep_rows(twin_rows(cfg)?, keep);
     let extractor = reference_extractor(&cfg.reference, blob)?;
     let rest = extractor.tracker.reference().to_vec();
-    let model = TacTipModel::with_rest_pins(sensor.clone(), rest.clone())?;
+    let model = twin_model(cfg, sensor, &rest)?;
     let outcomes = simulate_rows(&model, &extractor, cfg, &rows, cfg.seed, progress);
     let settings = serde_json::json!({ "twin": cfg, "sensor": sensor, "blob": blob });
     gather(
@@ -126,8 +126,8 @@ pub fn simulate_twin_calibrated(
         }
         .into());
     }
-    let model = TacTipModel::with_rest_pins(spec.sensor.clone(), rest.clone())?
-        .with_correction(sensor.field_correction()?)?;
+    let model =
+        twin_model(cfg, &spec.sensor, &rest)?.with_correction(sensor.field_correction()?)?;
     let renders = spec.training.renders.max(1);
     let repeats = if real_taps && spec.training.add_real_taps {
         real_tap_repeats(rows.len(), sensor.real_labels.len())
@@ -151,6 +151,19 @@ pub fn simulate_twin_calibrated(
     }
     out.data.meta.samples = out.data.targets.len() / 2;
     Ok(out)
+}
+
+/// The simulated sensor `sensor` with the reference frame's pins `rest` as
+/// its rest layout; a reference that does not fit the layout is named.
+fn twin_model(cfg: &TwinConfig, sensor: &TacTipConfig, rest: &[[f64; 2]]) -> Result<TacTipModel> {
+    TacTipModel::with_rest_pins(sensor.clone(), rest.to_vec()).map_err(|e| LabError::Reference {
+        path: cfg.reference.clone(),
+        reason: "not an undeformed frame of the simulated sensor's layout; give the \
+                 sensor's frame taken without contact as --reference, or blob parameters \
+                 that find its pins (--params)"
+            .into(),
+        source: Box::new(e),
+    })
 }
 
 /// The labelled rows of `cfg.targets` with their depth and shear columns.

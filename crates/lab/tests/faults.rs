@@ -16,7 +16,7 @@ use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{
     follow_on_rig, perception_for, write_results, RunFolder, SimFollowConfig,
 };
-use tactrace_lab::hardware::{follow_hardware, CameraConfig, HardwareConfig, HardwareStart};
+use tactrace_lab::hardware::{follow_hardware, FrameSourceConfig, HardwareConfig, HardwareStart};
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_sensor::{Frame, SensorError, TactileSensor};
@@ -217,6 +217,7 @@ fn sim_run(model: &StoredModel, injection: Injection, at: usize) -> (LoopSummary
         &records,
         &summary,
         &sim.follow,
+        tactrace_lab::follow::tactip_diameter_mm(),
         folder.path(),
     )
     .unwrap();
@@ -322,7 +323,7 @@ fn rig_file(fake: &FakeUrController, frames: &Path) -> HardwareConfig {
     follow.steps = Some(8);
     HardwareConfig {
         arm,
-        camera: CameraConfig::Folder {
+        camera: FrameSourceConfig::Folder {
             path: frames.to_path_buf(),
             looping: false,
         },

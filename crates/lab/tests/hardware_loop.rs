@@ -10,7 +10,7 @@ use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig};
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{follow_on_rig, perception_for, SimFollowConfig};
 use tactrace_lab::hardware::{
-    collect_hardware, follow_hardware, CameraConfig, HardwareConfig, HardwareStart,
+    collect_hardware, follow_hardware, FrameSourceConfig, HardwareConfig, HardwareStart,
 };
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
@@ -75,7 +75,7 @@ fn rig_file(fake: &FakeUrController, frames: &Path, x: f64, y: f64, angle: f64) 
     let sim = SimFollowConfig::default();
     HardwareConfig {
         arm: fake.config(),
-        camera: CameraConfig::Folder {
+        camera: FrameSourceConfig::Folder {
             path: frames.to_path_buf(),
             looping: false,
         },

@@ -18,7 +18,9 @@ pub mod servo_loop;
 pub mod start;
 
 pub use error::{Result, ServoError};
-pub use metrics::{evaluate, l2_curve, trajectory_closes, ClosureDetector, FollowMetrics};
+pub use metrics::{
+    evaluate, l2_curve, traced_fraction, trajectory_closes, ClosureDetector, FollowMetrics,
+};
 pub use perception::{Percept, Perception};
 pub use rig::{tap, RigConfig, SimRig, TapConfig};
 pub use servo_loop::{servo_loop, Ending, FnSink, LoopConfig, LoopSummary, StepRecord, StepSink};

@@ -16,7 +16,11 @@ pub struct FollowMetrics {
     /// 95th percentile of that distance, mm.
     pub p95_track_error_mm: f64,
     pub max_track_error_mm: f64,
-    /// Fraction of the contour points within `coverage_radius_mm` of the trajectory.
+    /// Fraction of the contour traced: of 1000 contour points evenly spaced
+    /// by arc length, those passed by the trajectory while it stayed within
+    /// `coverage_radius_mm` of the contour (see [`traced_fraction`]). A
+    /// trajectory standing still covers nothing, however small the contour;
+    /// a closed one includes the step back to its start.
     pub coverage: f64,
     pub coverage_radius_mm: f64,
     /// The trajectory came back to its start after leaving it.
@@ -98,6 +102,45 @@ fn point_segment_distance(p: Vec2, a: Vec2, b: Vec2) -> f64 {
     (a + ab * t - p).norm()
 }
 
+/// The fraction of `contour` traced by `trajectory`: each trajectory point
+/// within `radius` mm of the contour marks the nearest of `n` contour points
+/// evenly spaced by arc length, and each step between two such points marks
+/// the contour points between their nearest ones (the shorter way round)
+/// when that arc is no longer than the step plus `2 radius` (so a step
+/// cannot claim an arc it did not pass along).
+pub fn traced_fraction(contour: &Contour, trajectory: &[Vec2], radius: f64, n: usize) -> f64 {
+    let n = n.max(1);
+    let spacing = contour.perimeter() / n as f64;
+    let mut covered = vec![false; n];
+    let mut prev: Option<(Vec2, usize)> = None;
+    for &p in trajectory {
+        let hit = contour.nearest(p);
+        // A NaN distance (a non-finite point) is not near either.
+        let near = hit.signed_distance.abs() <= radius;
+        if !near {
+            prev = None;
+            continue;
+        }
+        let k = (hit.arc_length / spacing).round() as usize % n;
+        covered[k] = true;
+        if let Some((q, j)) = prev {
+            let forward = (k + n - j) % n;
+            let (from, len) = if forward <= n - forward {
+                (j, forward)
+            } else {
+                (k, n - forward)
+            };
+            if len as f64 * spacing <= (p - q).norm() + 2.0 * radius {
+                for i in 0..=len {
+                    covered[(from + i) % n] = true;
+                }
+            }
+        }
+        prev = Some((p, k));
+    }
+    covered.iter().filter(|c| **c).count() as f64 / n as f64
+}
+
 /// Compute all metrics for a trajectory (sensor tip x, y per step, mm).
 pub fn evaluate(
     contour: &Contour,
@@ -119,6 +162,12 @@ pub fn evaluate(
             v.iter().sum::<f64>() / v.len() as f64
         }
     };
+    let closed = trajectory_closes(trajectory, close_radius, min_excursion);
+    // A closed loop's last step leads back to its start.
+    let traced: Vec<Vec2> = match (closed, trajectory.first()) {
+        (true, Some(first)) => trajectory.iter().chain([first]).copied().collect(),
+        _ => trajectory.to_vec(),
+    };
     let p95 = track
         .get(((track.len() as f64 * 0.95).ceil() as usize).saturating_sub(1))
         .copied()
@@ -129,10 +178,9 @@ pub fn evaluate(
         mean_track_error_mm: mean(&track),
         p95_track_error_mm: p95,
         max_track_error_mm: track.last().copied().unwrap_or(f64::NAN),
-        coverage: curve.iter().filter(|d| **d <= coverage_radius_mm).count() as f64
-            / curve.len().max(1) as f64,
+        coverage: traced_fraction(contour, &traced, coverage_radius_mm, 1000),
         coverage_radius_mm,
-        closed: trajectory_closes(trajectory, close_radius, min_excursion),
+        closed,
         steps: trajectory.len(),
         path_length_mm: trajectory.windows(2).map(|w| (w[1] - w[0]).norm()).sum(),
     }
@@ -186,6 +234,27 @@ mod tests {
         assert!(!trajectory_closes(&traj, 1.5, 20.0));
         // Without the excursion the same path is not a loop.
         assert!(!trajectory_closes(&traj, 2.5, 40.0));
+    }
+
+    /// Issue 10: a contour given in metres (0.05 mm radius) and a run that
+    /// stood still for 3 taps was scored as fully covered.
+    #[test]
+    fn a_trajectory_standing_still_covers_nothing_of_a_tiny_contour() {
+        let contour = Contour::new(circle(0.05, 100)).unwrap();
+        let traj = vec![Vec2::new(0.02, 0.0); 3];
+        let m = evaluate(&contour, &traj, 3.0, 20.0);
+        assert!(m.coverage <= 0.002, "{}", m.coverage);
+        assert!(!m.closed);
+    }
+
+    #[test]
+    fn a_closed_loop_covers_the_contour_up_to_its_last_step_home() {
+        // 100 taps 3.1 mm apart: the loop closes on its last tap, and the
+        // step from it back to the start completes the coverage.
+        let contour = Contour::new(circle(50.0, 2000)).unwrap();
+        let m = evaluate(&contour, &circle(50.0, 100), 3.5, 20.0);
+        assert!(m.closed);
+        assert!((m.coverage - 1.0).abs() < 1e-9, "{}", m.coverage);
     }
 
     #[test]

@@ -129,10 +129,14 @@ pub fn partial_path(target: &Path) -> PathBuf {
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let parent = parent_of(path);
     fs::create_dir_all(&parent).map_err(write_err(&parent))?;
-    let mut tmp = tempfile::Builder::new()
-        .prefix(&format!(".{}.", file_name(path)))
-        .tempfile_in(&parent)
-        .map_err(write_err(path))?;
+    let prefix = format!(".{}.", file_name(path));
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix);
+    // As any file the user writes (0666 less the umask), not tempfile's
+    // owner-only 0600: the output is for the lab to read.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(&parent).map_err(write_err(path))?;
     tmp.write_all(bytes).map_err(write_err(path))?;
     tmp.as_file().sync_all().map_err(write_err(path))?;
     tmp.persist(path).map_err(|e| StoreError::Write {
@@ -222,5 +226,20 @@ mod tests {
         write_atomic(&p, b"2").unwrap();
         assert_eq!(fs::read(&p).unwrap(), b"2");
         assert_eq!(fs::read_dir(root.path()).unwrap().count(), 1);
+    }
+
+    /// Files written atomically were left owner-only (0600, tempfile's
+    /// default) where any other output of the same run was group- and
+    /// world-readable under the usual umask.
+    #[cfg(unix)]
+    #[test]
+    fn write_atomic_gives_the_permissions_of_a_plain_file() {
+        use std::os::unix::fs::PermissionsExt;
+        let root = tempfile::tempdir().unwrap();
+        let (atomic, plain) = (root.path().join("a"), root.path().join("p"));
+        write_atomic(&atomic, b"1").unwrap();
+        fs::write(&plain, b"1").unwrap();
+        let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&atomic), mode(&plain));
     }
 }

@@ -35,6 +35,9 @@ pub struct CalibrateConfig {
     pub samples: Option<usize>,
     /// Seed of the tap selection.
     pub seed: u64,
+    /// The label rows (indices of the CSV's data rows) that may be used,
+    /// for calibration and for scoring it (`None`: all).
+    pub allowed_rows: Option<Vec<usize>>,
 }
 
 /// A fitted sensor and what the calibration saw.
@@ -80,11 +83,19 @@ pub fn calibrate_sensor(
         .map(|r| (f64::from(r.r), f64::from(r.theta)))
         .collect();
     check_labels(&labels)?;
-    let chosen = match cfg.samples {
-        Some(n) => select_taps(&labels, n, cfg.seed)?,
+    let pool: Vec<usize> = match &cfg.allowed_rows {
+        Some(rows) => rows.iter().copied().filter(|&i| i < labels.len()).collect(),
         None => (0..labels.len()).collect(),
     };
-    let held = held_out_rows(labels.len(), &chosen, cfg.seed);
+    let pool_labels: Vec<Label> = pool.iter().map(|&i| labels[i]).collect();
+    let chosen: Vec<usize> = match cfg.samples {
+        Some(n) => select_taps(&pool_labels, n, cfg.seed)?
+            .into_iter()
+            .map(|k| pool[k])
+            .collect(),
+        None => pool.clone(),
+    };
+    let held = held_out_rows(&pool, &chosen, cfg.seed);
     let keep: Vec<usize> = chosen.iter().chain(&held).copied().collect();
     let icfg = ImportConfig {
         frames: cfg.frames.clone(),
@@ -220,12 +231,16 @@ fn field_rms(a: &[f32], b: &[f32]) -> f64 {
     (sum / a.len().max(1) as f64).sqrt()
 }
 
-/// Up to [`SCORE_TAPS`] of the `n` rows not `chosen`, drawn with `seed`.
-fn held_out_rows(n: usize, chosen: &[usize], seed: u64) -> Vec<usize> {
+/// Up to [`SCORE_TAPS`] of the `pool` rows not `chosen`, drawn with `seed`.
+fn held_out_rows(pool: &[usize], chosen: &[usize], seed: u64) -> Vec<usize> {
     use rand::seq::SliceRandom;
     use rand::SeedableRng;
     let taken: HashSet<usize> = chosen.iter().copied().collect();
-    let mut rest: Vec<usize> = (0..n).filter(|i| !taken.contains(i)).collect();
+    let mut rest: Vec<usize> = pool
+        .iter()
+        .copied()
+        .filter(|i| !taken.contains(i))
+        .collect();
     rest.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(
         seed ^ 0x5C02_E5C0,
     ));

@@ -229,8 +229,50 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<(Vec<NetRo
     let twin = crate::twin::simulate_twin(&twin_cfg, &cfg.follow.rig.sensor, &blob, &|| {})?;
     let twin_tr = rows_not_in(&twin.data, &va);
     let nets = [NETS[2], NETS[3]];
-    let transfer = train_rows(cfg, &nets, "twin", &twin_tr, &va, &out.join("twin"))?;
+    let mut transfer = train_rows(cfg, &nets, "twin", &twin_tr, &va, &out.join("twin"))?;
+    transfer.push(calibrated_row(cfg, dir, (&tr, &va), &twin_cfg, out)?);
     Ok((real, transfer))
+}
+
+/// The PDenNN trained on the twin of a sensor calibrated with 100 taps of
+/// the real training part (`tactrace calibrate`, `twin --sensor`),
+/// validated on the same held-out real frames. The sensor folder is kept
+/// under `sensor/`.
+fn calibrated_row(
+    cfg: &ReproduceConfig,
+    dir: &Path,
+    (tr, va): (&TapData, &TapData),
+    twin_cfg: &crate::twin::TwinConfig,
+    out: &Path,
+) -> Result<NetRow> {
+    let training: std::collections::HashSet<&str> =
+        tr.meta.images.iter().map(String::as_str).collect();
+    let rows = crate::twin::twin_rows(twin_cfg)?;
+    let allowed = (0..rows.len())
+        .filter(|&i| training.contains(rows[i].image.as_str()))
+        .collect();
+    let ccfg = crate::calibrate::CalibrateConfig {
+        frames: dir.join("frames"),
+        twin: twin_cfg.clone(),
+        samples: Some(100),
+        seed: cfg.seed,
+        allowed_rows: Some(allowed),
+    };
+    let blob = tactrace_vision::BlobParams::preset("real256")?;
+    let got = crate::calibrate::calibrate_sensor(&ccfg, &cfg.follow.rig.sensor, &blob, &|| {})?;
+    crate::calibrate::write_calibrated(&got, &out.join("sensor"), true)?;
+    let twin = crate::twin::simulate_twin_calibrated(twin_cfg, &got.sensor, true, &|| {})?;
+    let twin_tr = rows_not_in(&twin.data, va);
+    let name = "PDenNN (calibrated sensor, 100 taps)";
+    let (row, _) = train_and_score(
+        ModelKind::PDenNN,
+        name,
+        cfg,
+        &twin_tr,
+        va,
+        &out.join("calibrated"),
+    )?;
+    Ok(row)
 }
 
 /// The rows of `data` whose image is not among `held_out`'s: the twin's

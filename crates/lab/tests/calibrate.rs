@@ -77,6 +77,7 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
         twin: twin.clone(),
         samples: Some(100),
         seed: 3,
+        allowed_rows: None,
     };
     let blob = BlobParams::preset("sim").unwrap();
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
@@ -130,6 +131,7 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
         twin,
         samples: None,
         seed: 1,
+        allowed_rows: None,
     };
     let blob = BlobParams::preset("sim").unwrap();
     let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {})

@@ -14,7 +14,8 @@ use crate::twin::{simulate_twin_rows, twin_rows, TwinConfig};
 use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 use tactrace_calib::{
-    calibrate, check_labels, field_stats, select_taps, CalibrationPlan, Fields, Label, Selection,
+    calibrate, check_labels, field_stats, select_taps, CalibError, CalibrationPlan, Fields, Label,
+    Selection, MIN_TAPS, RECOMMENDED_TAPS,
 };
 use tactrace_sensor::TacTipConfig;
 use tactrace_store::sensor_file::{
@@ -77,6 +78,14 @@ pub fn calibrate_sensor(
     progress: &(dyn Fn() + Sync),
 ) -> Result<Calibrated> {
     let t = &cfg.twin;
+    if let Some(got) = cfg.samples.filter(|&n| n < MIN_TAPS) {
+        return Err(CalibError::TooFewTaps {
+            got,
+            needed: MIN_TAPS,
+            recommended: RECOMMENDED_TAPS,
+        }
+        .into());
+    }
     let rows = twin_rows(t)?;
     let labels: Vec<Label> = rows
         .iter()

@@ -139,4 +139,17 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
         .expect("8 taps are too few");
     assert!(err.is_bad_input(), "{err}");
     assert!(err.to_string().contains("10"), "{err}");
+    // Asking for fewer taps than needed is refused before any frame is read.
+    let cfg = CalibrateConfig {
+        frames: root.path().join("no-such-folder"),
+        samples: Some(5),
+        ..cfg
+    };
+    let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {})
+        .err()
+        .expect("5 taps are too few");
+    assert!(
+        err.is_bad_input() && err.to_string().contains("10"),
+        "{err}"
+    );
 }

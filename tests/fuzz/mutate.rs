@@ -69,13 +69,19 @@ fn raw_values() -> Vec<Vec<u8>> {
     v
 }
 
+/// The largest input a mutation may make (stacked mutations that grow a
+/// file, such as a line repeated thousands of times, are cut here so the
+/// fuzzer itself stays within memory).
+const MAX_INPUT_BYTES: usize = 4 << 20;
+
 /// One to three stacked random mutations of `data`, chosen to suit
-/// `format`; named by the last one.
+/// `format`; named by the last one. Never longer than `MAX_INPUT_BYTES`.
 pub fn mutate(data: &[u8], format: Format, rng: &mut ChaCha8Rng) -> (Vec<u8>, &'static str) {
     let rounds = [1, 1, 1, 2, 3][rng.random_range(0..5)];
     let mut out = (data.to_vec(), "unchanged");
     for _ in 0..rounds {
         out = mutate_once(&out.0, format, rng);
+        out.0.truncate(MAX_INPUT_BYTES);
     }
     out
 }
@@ -218,7 +224,10 @@ fn text_mutation(data: &[u8], rng: &mut ChaCha8Rng, csv: bool) -> Option<(Vec<u8
             "delete line"
         }
         3 => {
-            lines[i] = lines[i].repeat(rng.random_range(200..3000));
+            let times = rng
+                .random_range(200..3000)
+                .min(MAX_INPUT_BYTES / lines[i].len().max(1));
+            lines[i] = lines[i].repeat(times.max(1));
             "very long line"
         }
         4 => {

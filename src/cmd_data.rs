@@ -187,6 +187,42 @@ pub fn import(a: ImportArgs) -> Result<()> {
     Ok(())
 }
 
+/// `sensor render --sensor`: one tap of a calibrated sensor on a straight
+/// edge at the labels `(r, theta, dz)` of its own convention.
+fn render_calibrated(dir: &Path, (r, theta, dz): (f64, f64, f64), out: &Path) -> Result<()> {
+    if !(r.is_finite() && theta.is_finite() && dz.is_finite()) {
+        return Err(LabError::Config("--r, --theta and --depth must be numbers".into()).into());
+    }
+    let sensor = tactrace_store::SensorFolder::read(dir)?;
+    let spec = &sensor.spec;
+    let cal = &spec.sensor.calibration;
+    let depth = cal.tap_depth_mm + cal.depth_per_offset * dz;
+    let deepest = spec.sensor.mechanics.max_depth_mm;
+    if !(depth > 0.0 && depth <= deepest) {
+        return Err(LabError::Config(format!(
+            "--depth {dz} (the vertical offset label) makes the tap {depth:.2} mm deep; the \
+             contact model covers 0 to {deepest} mm"
+        ))
+        .into());
+    }
+    let model = tactrace_sensor::TacTipModel::with_rest_pins(
+        spec.sensor.clone(),
+        spec.reference_pins.clone(),
+    )
+    .and_then(|m| m.with_correction(sensor.field_correction()?))
+    .map_err(LabError::from)?;
+    let tap = tactrace_sensor::EdgeTap {
+        r_mm: r,
+        theta_deg: theta,
+        dz_mm: dz,
+        shear: None,
+    };
+    let frame = model.render(&model.seen_pins(model.edge_tap_pins(&tap)), None);
+    fsutil::write_atomic(out, &png_bytes(&frame, "frame")?)?;
+    eprintln!("wrote {}", out.display());
+    Ok(())
+}
+
 #[derive(Subcommand)]
 pub enum SensorCommand {
     /// Render one simulated tap as a PNG (r, theta relative to the edge).
@@ -214,6 +250,12 @@ pub enum SensorCommand {
         /// Rig configuration TOML (its `sensor` table is the TacTip rendered).
         #[arg(long)]
         config: Option<PathBuf>,
+        /// A calibrated sensor folder (`tactrace calibrate`): render its tap
+        /// on a straight edge, --r and --theta in its own label convention
+        /// (the labels it was calibrated with), --depth as its vertical
+        /// offset label (default 0), in its reference frame's layout.
+        #[arg(long, conflicts_with_all = ["config", "shape", "arc"])]
+        sensor: Option<PathBuf>,
     },
     /// Detect the pins of a frame; prints CSV `x,y,size` (px, size = diameter)
     /// and warns on standard error when the count is not the one expected.
@@ -245,7 +287,11 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             arc,
             out,
             config,
+            sensor,
         } => {
+            if let Some(dir) = sensor {
+                return render_calibrated(&dir, (r, theta, depth.unwrap_or(0.0)), &out);
+            }
             let spec = ShapeSpec::parse(&shape);
             let contour = load_shape(&spec)?;
             let rig = rig_config(config.as_deref())?;

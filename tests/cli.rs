@@ -298,3 +298,86 @@ fn reproduce_writes_the_report_with_every_table_and_figure() {
     let config = std::fs::read_to_string(rep.join("config.toml")).unwrap();
     assert!(config.contains("seed = 4") && config.contains("train_samples = 60"));
 }
+
+#[test]
+fn calibrate_then_render_and_twin_with_the_sensor() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("calibrate");
+    let frames = data.join("frames");
+    let (targets, init) = (data.join("targets.csv"), frames.join("init_0.png"));
+    let (frames, targets, init) = (
+        frames.to_str().unwrap(),
+        targets.to_str().unwrap(),
+        init.to_str().unwrap(),
+    );
+    let cal = [
+        "calibrate",
+        "--frames",
+        frames,
+        "--targets",
+        targets,
+        "--reference",
+        init,
+        "--samples",
+        "100",
+        "--seed",
+        "1",
+        "--out",
+        "sensor",
+    ];
+    let r = tactrace(&t.0, &cal);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stdout.contains("held-out taps"), "{}", r.stdout);
+    for part in [
+        "sensor.toml",
+        "reference.png",
+        "correction.safetensors",
+        "figures/field_after.png",
+    ] {
+        assert!(t.join("sensor").join(part).exists(), "{part}");
+    }
+    // Nothing overwritten without --force; too few taps is bad input.
+    assert_eq!(tactrace(&t.0, &cal).code, 2);
+    let few = [&cal[..7], &["--samples", "5", "--out", "s2"]].concat();
+    let r = tactrace(&t.0, &few);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("10"), "{}", r.stderr);
+    // Taps that do not span theta are refused, the message printed once.
+    let narrow = [&cal[..7], &["--limit", "600", "--out", "s3"]].concat();
+    let r = tactrace(&t.0, &narrow);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert_eq!(r.stderr.matches("do not span").count(), 1, "{}", r.stderr);
+    // The calibrated sensor renders taps whose pins are all found...
+    let r = tactrace(
+        &t.0,
+        &[
+            "sensor", "render", "--sensor", "sensor", "--r", "2", "--theta", "10", "--out",
+            "tap.png",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let pins = tactrace(&t.0, &["sensor", "pins", "tap.png", "--strict"]);
+    assert_eq!(pins.code, 0, "{}", pins.stderr);
+    let bad = [
+        "sensor", "render", "--sensor", "sensor", "--depth", "50", "--out", "b.png",
+    ];
+    assert_eq!(tactrace(&t.0, &bad).code, 2);
+    // ...and makes training sets in the real reference's pin order.
+    let twin = [
+        "twin",
+        "--sensor",
+        "sensor",
+        "--targets",
+        targets,
+        "--reference",
+        init,
+        "--limit",
+        "50",
+        "--out",
+        "tw",
+    ];
+    let r = tactrace(&t.0, &twin);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let meta = std::fs::read_to_string(t.join("tw/meta.json")).unwrap();
+    assert!(meta.contains("calibrated sensor"), "{meta}");
+}

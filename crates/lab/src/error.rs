@@ -30,7 +30,7 @@ pub enum LabError {
     #[error(transparent)]
     Store(#[from] tactrace_store::StoreError),
     /// The taps cannot calibrate the sensor (too few, not spanning, ...).
-    #[error("calibration: {0}")]
+    #[error(transparent)]
     Calib(#[from] tactrace_calib::CalibError),
     #[error(transparent)]
     Report(#[from] tactrace_report::ReportError),

@@ -94,6 +94,37 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
         after.rms_px
     );
     assert_eq!(record.selection.indices.len(), 100);
+    // The simulator's correction is the fitted one: moving the rest pins by
+    // a field and correcting them gives the fitted map's field.
+    let rest = &got.sensor.spec.reference_pins;
+    let field: Vec<f32> = (0..2 * PINS)
+        .map(|k| ((k * 7) % 11) as f32 * 0.3 - 1.5)
+        .collect();
+    let moved: Vec<[f64; 2]> = (0..PINS)
+        .map(|i| {
+            [
+                rest[i][0] + f64::from(field[i]),
+                rest[i][1] + f64::from(field[PINS + i]),
+            ]
+        })
+        .collect();
+    let seen = got.sensor.field_correction().unwrap().apply(rest, &moved);
+    let fitted = got
+        .sensor
+        .correction
+        .apply(&tactrace_calib::Fields::from_flat(&field, 2 * PINS, "field").unwrap())
+        .unwrap()
+        .row(0);
+    for i in 0..PINS {
+        for (axis, k) in [(0, i), (1, PINS + i)] {
+            let d = seen[i][axis] - rest[i][axis];
+            assert!(
+                (d - f64::from(fitted[k])).abs() < 1e-3,
+                "pin {i}: {d} vs {}",
+                fitted[k]
+            );
+        }
+    }
     // The folder round-trips and gives identical taps.
     let dir = root.path().join("sensor");
     got.sensor.write(&dir, false).unwrap();

@@ -12,7 +12,8 @@ use tactrace_sensor::{read_frame, EdgeTap, Frame, Shear, TacTipConfig, TacTipMod
 #[allow(dead_code)]
 #[path = "fit_mechanics/support.rs"]
 mod support;
-use support::{nelder_mead, FieldSums};
+use support::FieldSums;
+use tactrace_sensor::minimise as nelder_mead;
 
 fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/tactip127-edge2d")

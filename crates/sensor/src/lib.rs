@@ -32,6 +32,7 @@ pub use fit::{field_misfit, fit_slip, FitSample, SlipFit, SlipParams};
 pub use fit_joint::{fit_joint, JointFit, JOINT_PARAMS};
 pub use layout::{hex_lattice, pin_count};
 pub use model::TacTipModel;
+pub use nelder_mead::minimise;
 pub use replay::{read_frame, ReplaySensor};
 pub use sensor::{Frame, TactileSensor};
 pub use sim::{PoseSource, SimTacTip};

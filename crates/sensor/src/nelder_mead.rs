@@ -4,7 +4,7 @@
 /// Minimise `f` from `x0` with first steps `step`, for `iters`
 /// iterations; returns the best point and its value. Points where `f` is
 /// not finite count as infinitely bad.
-pub(crate) fn minimise(
+pub fn minimise(
     f: &dyn Fn(&[f64]) -> f64,
     x0: &[f64],
     step: &[f64],

@@ -17,7 +17,8 @@ use tactrace_sensor::{EdgeTap, TacTipConfig, TacTipModel};
 
 mod slip;
 mod support;
-use support::{draw_figure, nelder_mead, Bin, FieldSums, Pair, RealTap};
+use support::{draw_figure, Bin, FieldSums, Pair, RealTap};
+use tactrace_sensor::minimise as nelder_mead;
 
 /// Per-field comparison: mean cosine, median cosine, RMS (px), ratio.
 #[derive(Debug, Default, Clone, Copy)]

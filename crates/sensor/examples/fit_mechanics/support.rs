@@ -171,58 +171,6 @@ pub fn ring_profile(rest: &[[f64; 2]], pairs: &[Pair]) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// Minimise `f` from `x0` with initial steps `step` (Nelder-Mead).
-pub fn nelder_mead(
-    f: &dyn Fn(&[f64]) -> f64,
-    x0: &[f64],
-    step: &[f64],
-    iters: usize,
-) -> (Vec<f64>, f64) {
-    let n = x0.len();
-    let mut simplex: Vec<(Vec<f64>, f64)> = vec![(x0.to_vec(), f(x0))];
-    for i in 0..n {
-        let mut x = x0.to_vec();
-        x[i] += step[i];
-        let v = f(&x);
-        simplex.push((x, v));
-    }
-    for _ in 0..iters {
-        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-        let centroid: Vec<f64> = (0..n)
-            .map(|k| simplex[..n].iter().map(|s| s.0[k]).sum::<f64>() / n as f64)
-            .collect();
-        let worst = simplex[n].clone();
-        let along = |t: f64| -> Vec<f64> {
-            (0..n)
-                .map(|k| centroid[k] + t * (worst.0[k] - centroid[k]))
-                .collect()
-        };
-        let xr = along(-1.0);
-        let fr = f(&xr);
-        if fr < simplex[0].1 {
-            let xe = along(-2.0);
-            let fe = f(&xe);
-            simplex[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
-        } else if fr < simplex[n - 1].1 {
-            simplex[n] = (xr, fr);
-        } else {
-            let xc = along(0.5);
-            let fc = f(&xc);
-            if fc < worst.1 {
-                simplex[n] = (xc, fc);
-            } else {
-                let best = simplex[0].0.clone();
-                for s in simplex.iter_mut().skip(1) {
-                    s.0 = (0..n).map(|k| best[k] + 0.5 * (s.0[k] - best[k])).collect();
-                    s.1 = f(&s.0);
-                }
-            }
-        }
-    }
-    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-    (simplex[0].0.clone(), simplex[0].1)
-}
-
 const SCALE: f64 = 2.0;
 const ARROW_GAIN: f64 = 2.0;
 

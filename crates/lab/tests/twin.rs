@@ -8,9 +8,11 @@ use tactrace_sensor::{TacTipConfig, TacTipModel};
 use tactrace_vision::BlobParams;
 
 fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tactrace-twin-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    tempfile::Builder::new()
+        .prefix(&format!("tactrace-twin-{tag}-"))
+        .tempdir()
+        .unwrap()
+        .keep()
 }
 
 /// A rendered rest frame and a labels CSV (r, theta, dz, shear x, y, rz).

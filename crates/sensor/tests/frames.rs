@@ -117,9 +117,11 @@ fn sim_tactip_in_contact_differs_from_reference() {
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tactrace-sensor-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    tempfile::Builder::new()
+        .prefix(&format!("tactrace-sensor-{name}-"))
+        .tempdir()
+        .expect("temp dir")
+        .keep()
 }
 
 #[test]

@@ -5,8 +5,11 @@ use std::path::PathBuf;
 use tactrace_sensor::read_frame;
 
 fn temp_file(name: &str, bytes: &[u8]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("tactrace-sensor-fuzz-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = tempfile::Builder::new()
+        .prefix("tactrace-sensor-fuzz-")
+        .tempdir()
+        .expect("temp dir")
+        .keep();
     let path = dir.join(name);
     std::fs::write(&path, bytes).expect("write");
     path

@@ -25,9 +25,11 @@ impl Drop for ScratchDir {
 }
 
 fn scratch_dir(test: &str) -> ScratchDir {
-    let dir = std::env::temp_dir().join(format!("tactrace-plot-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir is writable");
+    let dir = tempfile::Builder::new()
+        .prefix(&format!("tactrace-plot-{test}-"))
+        .tempdir()
+        .expect("temp dir is writable")
+        .keep();
     ScratchDir(dir)
 }
 

@@ -153,6 +153,16 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
             );
         }
     }
+    for c in &r.calibration {
+        crate::say!(
+            "calibrated, {} taps from the {}: angle {:.2} deg, position {:.3} mm on the {}",
+            c.taps.map_or("all".into(), |n| n.to_string()),
+            c.pool,
+            c.angle_mae_deg,
+            c.position_mae_mm,
+            c.scored_on
+        );
+    }
     for s in &r.shapes {
         crate::say!(
             "{:<16} mean L2 {:.2} mm (report {:.2}), closed {}",

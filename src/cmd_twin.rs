@@ -179,6 +179,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
         samples: (a.samples > 0).then_some(a.samples),
         seed: a.seed,
         allowed_rows: None,
+        score_rows: None,
     };
     let rig = rig_config(a.config.as_deref())?;
     let blob = blob_params(a.params.as_deref(), "real256")?;

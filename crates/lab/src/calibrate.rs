@@ -39,6 +39,10 @@ pub struct CalibrateConfig {
     /// The label rows (indices of the CSV's data rows) that may be used,
     /// for calibration and for scoring it (`None`: all).
     pub allowed_rows: Option<Vec<usize>>,
+    /// The label rows that score the fit (`None`: up to [`SCORE_TAPS`]
+    /// allowed rows not chosen, drawn with the seed). Chosen rows are
+    /// never scored.
+    pub score_rows: Option<Vec<usize>>,
 }
 
 /// A fitted sensor and what the calibration saw.
@@ -104,7 +108,20 @@ pub fn calibrate_sensor(
             .collect(),
         None => pool.clone(),
     };
-    let held = held_out_rows(&pool, &chosen, cfg.seed);
+    let held = match &cfg.score_rows {
+        Some(rows) => {
+            let taken: HashSet<usize> = chosen.iter().copied().collect();
+            let mut rows: Vec<usize> = rows
+                .iter()
+                .copied()
+                .filter(|i| *i < labels.len() && !taken.contains(i))
+                .collect();
+            rows.sort_unstable();
+            rows.dedup();
+            rows
+        }
+        None => held_out_rows(&pool, &chosen, cfg.seed),
+    };
     let keep: Vec<usize> = chosen.iter().chain(&held).copied().collect();
     let icfg = ImportConfig {
         frames: cfg.frames.clone(),

@@ -13,6 +13,7 @@
 
 pub mod bench;
 pub mod calibrate;
+mod calibration_sweep;
 pub mod collect;
 pub mod error;
 pub mod follow;

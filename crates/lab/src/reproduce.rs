@@ -66,7 +66,7 @@ const NETS: [(ModelKind, &str); 4] = [
     (ModelKind::Mlp, "MLP (backprop)"),
 ];
 
-fn train_and_score(
+pub(crate) fn train_and_score(
     kind: ModelKind,
     name: &str,
     cfg: &ReproduceConfig,
@@ -195,17 +195,18 @@ fn reproduce_into(
         })
         .collect();
     let shapes = shapes.into_iter().collect::<Result<Vec<_>>>()?;
-    let (real_networks, sim_to_real) = match &cfg.real {
+    let real_rows = match &cfg.real {
         Some(real) => {
-            log("importing real frames and training on them, and on their simulated twin");
+            log("importing real frames and training on them, on their simulated twin, and on the calibrated twin");
             real_rows(cfg, real, out)?
         }
-        None => (Vec::new(), Vec::new()),
+        None => RealRows::default(),
     };
     let results = ReproduceResults {
         networks,
-        real_networks,
-        sim_to_real,
+        real_networks: real_rows.real,
+        sim_to_real: real_rows.sim_to_real,
+        calibration: real_rows.calibration,
         shapes,
         seconds: t0.elapsed().as_secs_f64(),
         seed: cfg.seed,
@@ -215,10 +216,19 @@ fn reproduce_into(
     Ok(results)
 }
 
+/// What `--real` adds to the report.
+#[derive(Default)]
+struct RealRows {
+    real: Vec<NetRow>,
+    sim_to_real: Vec<NetRow>,
+    calibration: Vec<tactrace_report::CalibrationRow>,
+}
+
 /// Train every network on real frames (seeded 80/20 split) and validate on
 /// the 20 %; then train the PDenNN and the MLP on the simulated twin of the
-/// real set (its own 80 %) and validate them on the same real 20 %.
-fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<(Vec<NetRow>, Vec<NetRow>)> {
+/// real set (its own 80 %) and validate them on the same real 20 %; then
+/// the calibrated simulator's rows ([`crate::calibration_sweep`]).
+fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<RealRows> {
     let icfg = crate::import::ImportConfig::bristol(dir);
     let blob = tactrace_vision::BlobParams::preset("real256")?;
     fig_4_1_real(dir, &blob, &out.join("figures/fig4_1_real"))?;
@@ -230,55 +240,25 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<(Vec<NetRo
     let twin_tr = rows_not_in(&twin.data, &va);
     let nets = [NETS[2], NETS[3]];
     let mut transfer = train_rows(cfg, &nets, "twin", &twin_tr, &va, &out.join("twin"))?;
-    transfer.push(calibrated_row(cfg, dir, (&tr, &va), &twin_cfg, out)?);
-    Ok((real, transfer))
-}
-
-/// The PDenNN trained on the twin of a sensor calibrated with 100 taps of
-/// the real training part (`tactrace calibrate`, `twin --sensor`),
-/// validated on the same held-out real frames. The sensor folder is kept
-/// under `sensor/`.
-fn calibrated_row(
-    cfg: &ReproduceConfig,
-    dir: &Path,
-    (tr, va): (&TapData, &TapData),
-    twin_cfg: &crate::twin::TwinConfig,
-    out: &Path,
-) -> Result<NetRow> {
-    let training: std::collections::HashSet<&str> =
-        tr.meta.images.iter().map(String::as_str).collect();
-    let rows = crate::twin::twin_rows(twin_cfg)?;
-    let allowed = (0..rows.len())
-        .filter(|&i| training.contains(rows[i].image.as_str()))
-        .collect();
-    let ccfg = crate::calibrate::CalibrateConfig {
-        frames: dir.join("frames"),
-        twin: twin_cfg.clone(),
-        samples: Some(100),
-        seed: cfg.seed,
-        allowed_rows: Some(allowed),
+    let split = crate::calibration_sweep::Split {
+        frames: &dir.join("frames"),
+        training: &tr,
+        validation: &va,
+        twin: &twin_cfg,
     };
-    let blob = tactrace_vision::BlobParams::preset("real256")?;
-    let got = crate::calibrate::calibrate_sensor(&ccfg, &cfg.follow.rig.sensor, &blob, &|| {})?;
-    crate::calibrate::write_calibrated(&got, &out.join("sensor"), true)?;
-    let twin = crate::twin::simulate_twin_calibrated(twin_cfg, &got.sensor, true, &|| {})?;
-    let twin_tr = rows_not_in(&twin.data, va);
-    let name = "PDenNN (calibrated sensor, 100 taps)";
-    let (row, _) = train_and_score(
-        ModelKind::PDenNN,
-        name,
-        cfg,
-        &twin_tr,
-        va,
-        &out.join("calibrated"),
-    )?;
-    Ok(row)
+    let (calibration, headline) = crate::calibration_sweep::calibration_rows(cfg, &split, out)?;
+    transfer.push(headline);
+    Ok(RealRows {
+        real,
+        sim_to_real: transfer,
+        calibration,
+    })
 }
 
 /// The rows of `data` whose image is not among `held_out`'s: the twin's
 /// training part, joined with the real split on the image name (import and
 /// twin may each drop frames, so row indices need not correspond).
-fn rows_not_in(data: &TapData, held_out: &TapData) -> TapData {
+pub(crate) fn rows_not_in(data: &TapData, held_out: &TapData) -> TapData {
     let held: std::collections::HashSet<&str> =
         held_out.meta.images.iter().map(String::as_str).collect();
     let keep: Vec<usize> = (0..data.len())

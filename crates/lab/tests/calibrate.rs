@@ -78,6 +78,7 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
         samples: Some(100),
         seed: 3,
         allowed_rows: None,
+        score_rows: None,
     };
     let blob = BlobParams::preset("sim").unwrap();
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
@@ -163,6 +164,7 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
         samples: None,
         seed: 1,
         allowed_rows: None,
+        score_rows: None,
     };
     let blob = BlobParams::preset("sim").unwrap();
     let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {})

@@ -13,4 +13,4 @@ pub mod plot;
 pub mod results;
 
 pub use error::{ReportError, Result};
-pub use results::{NetRow, ReproduceResults, ShapeRow};
+pub use results::{CalibrationRow, NetRow, ReproduceResults, ShapeRow};

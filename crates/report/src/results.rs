@@ -25,6 +25,29 @@ pub struct NetRow {
     pub lr_halvings: usize,
 }
 
+/// One row of the calibration table: the simulator calibrated on some
+/// real taps (`tactrace calibrate`), a PDenNN trained on its twin
+/// (`twin --sensor`), scored on held-out real frames.
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrationRow {
+    /// Calibration taps asked for (`None`: every tap of the pool).
+    pub taps: Option<usize>,
+    /// Taps actually used.
+    pub taps_used: usize,
+    /// Which real taps could be chosen ("training part", "r < 0", ...).
+    pub pool: String,
+    /// Which held-out real frames score it ("validation part", "r > 0", ...).
+    pub scored_on: String,
+    pub position_mae_mm: f64,
+    pub angle_mae_deg: f64,
+    /// Twin against real fields on the scoring frames, before and after
+    /// the correction (per-coordinate RMS, px; mean cosine).
+    pub field_rms_before_px: Option<f64>,
+    pub field_rms_after_px: Option<f64>,
+    pub cosine_before: Option<f64>,
+    pub cosine_after: Option<f64>,
+}
+
 /// One row of the contour table.
 #[derive(Debug, Clone, Serialize)]
 pub struct ShapeRow {
@@ -44,6 +67,9 @@ pub struct ReproduceResults {
     /// the real set and validated on the same held-out real frames
     /// (`--real`): the simulator judged by real data.
     pub sim_to_real: Vec<NetRow>,
+    /// The simulator calibrated with few real taps (`--real`): the PDenNN
+    /// trained on the calibrated twin, per number of taps and split.
+    pub calibration: Vec<CalibrationRow>,
     pub shapes: Vec<ShapeRow>,
     pub seconds: f64,
     pub seed: u64,

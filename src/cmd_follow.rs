@@ -31,6 +31,12 @@ pub struct FollowArgs {
     /// Follow-run TOML (tables rig, controller, follow, start).
     #[arg(long)]
     config: Option<PathBuf>,
+    /// A calibrated sensor folder (`tactrace calibrate`): the simulated
+    /// world is that sensor, and the model predicts labels in its
+    /// convention (a model trained on its real frames, or on `twin
+    /// --sensor` / `collect --sensor` data of it).
+    #[arg(long, conflicts_with = "hardware")]
+    sensor: Option<PathBuf>,
     /// Seed of the tap-depth variation and the simulated world's noise
     /// (default: the configuration's, 1).
     #[arg(long)]
@@ -50,9 +56,17 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     }
     let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
     overrides(&a, &mut cfg.follow);
+    if a.sensor.is_some() {
+        cfg.calibrated_sensor = a.sensor.clone();
+    }
+    let calibrated = tactrace_lab::follow::read_calibrated(&cfg)?;
     let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
     let contour = load_shape(&spec)?;
-    let diameter = 2.0 * cfg.rig.sensor.geometry.dome_radius_mm;
+    let geometry = match &calibrated {
+        Some(s) => &s.spec.sensor.geometry,
+        None => &cfg.rig.sensor.geometry,
+    };
+    let diameter = 2.0 * geometry.dome_radius_mm;
     if let Some(w) = size_warning(&spec.name(), &contour, diameter) {
         eprintln!("warning: {w}");
     }

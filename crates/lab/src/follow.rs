@@ -20,7 +20,7 @@ use tactrace_servo::{
     evaluate, l2_curve, servo_loop, start_pose, FnSink, FollowMetrics, LoopConfig, LoopSummary,
     Perception, RigConfig, SimRig, StartConfig, StepRecord, StepSink, TapConfig,
 };
-use tactrace_store::{write_atomic, write_err, StagedDir, StoredModel};
+use tactrace_store::{write_atomic, write_err, SensorFolder, StagedDir, StoredModel};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// A follow run in the simulated world: one TOML file with these tables,
@@ -28,6 +28,10 @@ use tactrace_vision::{BlobParams, PinExtractor};
 #[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
 pub struct SimFollowConfig {
+    /// A calibrated sensor folder (`tactrace calibrate`, `--sensor`): it
+    /// replaces `rig.sensor`, and the model is taken to predict labels in
+    /// its convention (mapped to the loop's edge pose by eq. L1).
+    pub calibrated_sensor: Option<PathBuf>,
     pub rig: RigConfig,
     pub controller: PbtsConfig,
     pub follow: LoopConfig,
@@ -267,8 +271,17 @@ impl RunFolder {
     }
 }
 
+/// The calibrated sensor of `cfg`, if it names one.
+pub fn read_calibrated(cfg: &SimFollowConfig) -> Result<Option<SensorFolder>> {
+    match &cfg.calibrated_sensor {
+        Some(dir) => Ok(Some(SensorFolder::read(dir)?)),
+        None => Ok(None),
+    }
+}
+
 /// Run the experiment on `shape` (named `name`) in the simulated world with
-/// `model`, into the run folder `out`.
+/// `model`, into the run folder `out`. With `cfg.calibrated_sensor` the
+/// world is that sensor and the model predicts in its label convention.
 pub fn follow_simulated(
     cfg: &SimFollowConfig,
     model: &StoredModel,
@@ -277,7 +290,12 @@ pub fn follow_simulated(
     progress: &mut dyn FnMut(&StepRecord),
 ) -> Result<FollowOutcome> {
     cfg.follow.validate()?;
-    let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
+    let calibrated = read_calibrated(cfg)?;
+    let mut start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
+    if let Some(s) = &calibrated {
+        // The start angle is in the servo frame (eq. L2).
+        start.rz += s.spec.sensor.calibration.loop_pose(0.0, 0.0).theta_deg;
+    }
     cfg.rig.workspace.validate()?;
     cfg.rig.workspace.check_inside(start).map_err(|e| {
         LabError::Config(format!(
@@ -285,9 +303,26 @@ pub fn follow_simulated(
             start.x, start.y
         ))
     })?;
-    let mut rig = SimRig::new(&cfg.rig, shape.clone(), start, cfg.follow.seed)?;
-    let settings = cfg.servo_settings();
-    let perception = perception_for(&rig.reference_frame(), model, &settings)?;
+    let seed = cfg.follow.seed;
+    let mut rig = match &calibrated {
+        Some(s) => SimRig::with_model(&cfg.rig, s.model()?, shape.clone(), start, seed),
+        None => SimRig::new(&cfg.rig, shape.clone(), start, seed)?,
+    };
+    let mut settings = cfg.servo_settings();
+    let perception = match &calibrated {
+        // The sensor's real reference frame and blob detector order its
+        // taps' pins, as for its real frames.
+        Some(s) => {
+            settings.blob = s.spec.blob.clone();
+            perception_for(&s.reference, model, &settings)?
+                .with_sensor_labels(s.spec.sensor.calibration.clone())
+        }
+        None => perception_for(&rig.reference_frame(), model, &settings)?,
+    };
+    let dome_mm = match &calibrated {
+        Some(s) => s.spec.sensor.geometry.dome_radius_mm,
+        None => cfg.rig.sensor.geometry.dome_radius_mm,
+    };
     let run = RunFolder::start(out, force, cfg)?;
     let (arm, sensor) = rig.parts();
     let (summary, records) =
@@ -297,7 +332,7 @@ pub fn follow_simulated(
         &records,
         &summary,
         &cfg.follow,
-        2.0 * cfg.rig.sensor.geometry.dome_radius_mm,
+        2.0 * dome_mm,
         run.path(),
     )?;
     let dir = run.finish()?;

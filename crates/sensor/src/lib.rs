@@ -26,7 +26,7 @@ mod slip;
 pub use config::{Calibration, CameraConfig, Mechanics, Nuisance, SkinGeometry, TacTipConfig};
 pub use contact::Shear;
 pub use correction::FieldCorrection;
-pub use edge_tap::EdgeTap;
+pub use edge_tap::{EdgeTap, LoopEdgePose};
 pub use error::SensorError;
 pub use fit::{field_misfit, fit_slip, FitSample, SlipFit, SlipParams};
 pub use fit_joint::{fit_joint, JointFit, JOINT_PARAMS};

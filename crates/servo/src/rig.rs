@@ -92,19 +92,31 @@ impl SimRig {
     /// the arm's repeatability noise and the sensor's nuisance.
     pub fn new(cfg: &RigConfig, shape: Contour, start: Pose, seed: u64) -> Result<Self> {
         let model = TacTipModel::new(cfg.sensor.clone())?;
+        Ok(Self::with_model(cfg, model, shape, start, seed))
+    }
+
+    /// As [`SimRig::new`] with the TacTip `model` instead of `cfg.sensor`
+    /// (e.g. a calibrated sensor: `SensorFolder::model` in tactrace-store).
+    pub fn with_model(
+        cfg: &RigConfig,
+        model: TacTipModel,
+        shape: Contour,
+        start: Pose,
+        seed: u64,
+    ) -> Self {
         let arm_cfg = SimArmConfig {
             seed: seed ^ 0xA5A5_0001,
             ..cfg.arm.clone()
         };
         let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
         let sensor = SimTacTip::new(
-            model.clone(),
+            model,
             shape,
             Box::new(move || probe.actual()),
             seed ^ 0x5E45_0002,
         );
         let arm = LimitedArm::new(sim_arm, cfg.workspace.clone(), LimitMode::Refuse);
-        Ok(Self { arm, sensor })
+        Self { arm, sensor }
     }
 
     /// The undeformed frame (sensor in the air).

@@ -18,7 +18,7 @@ use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_calib::{CalibrationRecord, LinearCorrection, Tensor};
-use tactrace_sensor::{FieldCorrection, Frame, TacTipConfig};
+use tactrace_sensor::{FieldCorrection, Frame, TacTipConfig, TacTipModel};
 use tactrace_vision::BlobParams;
 
 /// The `format` key of every sensor file.
@@ -103,6 +103,14 @@ impl SensorFolder {
             .collect();
         let b = self.correction.b.iter().map(|v| *v as f32).collect();
         FieldCorrection::new(d / 2, w, b)
+    }
+
+    /// The calibrated simulated sensor: its parameters, the real
+    /// reference's pins as the rest layout (so its taps list their pins in
+    /// the real reference's order) and its field correction.
+    pub fn model(&self) -> std::result::Result<TacTipModel, tactrace_sensor::SensorError> {
+        TacTipModel::with_rest_pins(self.spec.sensor.clone(), self.spec.reference_pins.clone())?
+            .with_correction(self.field_correction()?)
     }
 
     /// Write the folder `dir` (refused when it exists unless `force`).

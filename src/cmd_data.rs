@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use tactrace_geometry::ShapeSpec;
-use tactrace_lab::collect::{collect as run_collect, CollectConfig};
+use tactrace_lab::collect::{collect as run_collect, collect_calibrated, CollectConfig};
 use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareConfig};
 use tactrace_lab::{import as imp, LabError};
 use tactrace_servo::{pose_at_edge, RigConfig};
@@ -37,6 +37,12 @@ pub struct CollectArgs {
     /// `angle_deg` the direction of the edge's outward normal.
     #[arg(long, conflicts_with_all = ["config", "shape"])]
     hardware: Option<PathBuf>,
+    /// A calibrated sensor folder (`tactrace calibrate`): collect its
+    /// simulated taps, pins in its real reference's order and labels in
+    /// its convention (r and theta spread over +-5 mm and +-45 deg of its
+    /// labels), so a model trained on them runs on its real frames.
+    #[arg(long, conflicts_with = "hardware")]
+    sensor: Option<PathBuf>,
     /// Replace an existing output directory.
     #[arg(long)]
     force: bool,
@@ -60,10 +66,16 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         save_frames: a.save_frames,
         ..CollectConfig::default()
     };
+    let sensor = match &a.sensor {
+        Some(dir) => Some(tactrace_store::SensorFolder::read(dir)?),
+        None => None,
+    };
     let pb = bar(a.samples as u64, "collect");
-    let got = run_collect(&rig, &shape, &cfg, &spec.name(), |i| {
-        pb.set_position(i as u64)
-    })?;
+    let tick = |i: usize| pb.set_position(i as u64);
+    let got = match &sensor {
+        Some(s) => collect_calibrated(&rig, s, &shape, &cfg, &spec.name(), tick)?,
+        None => run_collect(&rig, &shape, &cfg, &spec.name(), tick)?,
+    };
     pb.finish_and_clear();
     let dir = dataset::write_dataset(&a.out, &got.data, &got.frames, a.force)?;
     eprintln!(

@@ -136,6 +136,11 @@ pub struct ReproduceArgs {
     /// Add results on real frames from this folder (Bristol layout).
     #[arg(long)]
     real: Option<PathBuf>,
+    /// A calibrated sensor folder (`tactrace calibrate`): the whole report
+    /// in that sensor's simulated world (collection in its label
+    /// convention, training, following).
+    #[arg(long)]
+    sensor: Option<PathBuf>,
     /// Reproduce TOML overlaying the defaults (keys: seed, train_samples,
     /// val_samples, epochs, preset, report_steps, real, and the follow
     /// tables rig, controller, follow, start).
@@ -149,6 +154,9 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     cfg.epochs = a.epochs.or(cfg.epochs);
     cfg.report_steps |= a.report_steps;
     cfg.real = a.real.or(cfg.real);
+    if a.sensor.is_some() {
+        cfg.follow.calibrated_sensor = a.sensor.clone();
+    }
     let log = |msg: &str| eprintln!("[reproduce] {msg}");
     fsutil::check_output_dir(&a.out, a.force)?;
     let r = run_reproduce(&cfg, (&a.out, a.force), &log)?;
@@ -186,6 +194,15 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
             s.metrics.closed
         );
     }
+    for s in &r.real_model_shapes {
+        crate::say!(
+            "{:<16} mean L2 {:.2} mm (report {:.2}), closed {}: the PDenNN trained on real frames, in the calibrated simulator",
+            s.shape,
+            s.metrics.mean_l2_mm,
+            s.report_l2_mm,
+            s.metrics.closed
+        );
+    }
     crate::say!("report: {}", a.out.join("report.html").display());
     Ok(())
 }
@@ -202,6 +219,10 @@ pub struct BenchArgs {
     /// the control loop on them (needs --model).
     #[arg(long)]
     real_frames: Option<PathBuf>,
+    /// A calibrated sensor folder (`tactrace calibrate`): time its taps
+    /// (with its field correction) instead of the default sensor's.
+    #[arg(long)]
+    sensor: Option<PathBuf>,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -221,7 +242,14 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     });
     let model = model.transpose().map_err(LabError::from)?;
     let rig = tactrace_servo::RigConfig::default();
-    let f = tactrace_lab::bench::bench(&rig, a.taps.max(1), model.as_ref())?;
+    let taps = a.taps.max(1);
+    let f = match &a.sensor {
+        Some(dir) => {
+            let folder = tactrace_store::SensorFolder::read(dir)?;
+            tactrace_lab::bench::bench_calibrated(&folder, &rig, taps, model.as_ref())?
+        }
+        None => tactrace_lab::bench::bench(&rig, taps, model.as_ref())?,
+    };
     let real = match (&a.real_frames, &model) {
         (Some(dir), Some(m)) => {
             let blob = tactrace_vision::BlobParams::preset("real256").map_err(LabError::from)?;

@@ -9,8 +9,9 @@ use std::time::Instant;
 use tactrace_control::{PbtsConfig, PbtsController, SensedPose};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_learn::PoseModel;
-use tactrace_sensor::TacTipModel;
+use tactrace_sensor::{Calibration, LoopEdgePose, TacTipModel};
 use tactrace_servo::{pose_at_edge, RigConfig};
+use tactrace_store::SensorFolder;
 use tactrace_vision::PinExtractor;
 
 /// Figures from one benchmark run (single thread).
@@ -69,19 +70,53 @@ impl Latency {
 /// Time `taps` simulated taps on the disk edge, and the control loop when a
 /// model is given.
 pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<BenchFigures> {
-    let disk = builtin_shape(BuiltinShape::Disk);
     let sensor = TacTipModel::new(rig.sensor.clone())?;
     let reference = sensor.render(sensor.rest_pins(), None);
     let extractor = PinExtractor::from_reference_frame(&reference, rig.blob.clone())?;
+    bench_with(&sensor, &extractor, None, rig, taps, model)
+}
+
+/// As [`bench`] with a calibrated sensor (`--sensor`): its taps, seen
+/// against its real reference frame with its blob detector, over its own
+/// label range.
+pub fn bench_calibrated(
+    folder: &SensorFolder,
+    rig: &RigConfig,
+    taps: usize,
+    model: Option<&PoseModel>,
+) -> Result<BenchFigures> {
+    let spec = &folder.spec;
+    let extractor = PinExtractor::from_reference_frame(&folder.reference, spec.blob.clone())?;
+    let cal = &spec.sensor.calibration;
+    bench_with(&folder.model()?, &extractor, Some(cal), rig, taps, model)
+}
+
+fn bench_with(
+    sensor: &TacTipModel,
+    extractor: &PinExtractor,
+    labels: Option<&Calibration>,
+    rig: &RigConfig,
+    taps: usize,
+    model: Option<&PoseModel>,
+) -> Result<BenchFigures> {
+    let disk = builtin_shape(BuiltinShape::Disk);
     let (edge, normal) = disk.at_arc_length(0.0);
     let poses: Vec<_> = (0..taps)
         .map(|i| {
             let u = i as f64 / taps.max(1) as f64;
+            let (r, theta) = (-5.0 + 10.0 * u, -45.0 + 90.0 * ((u * 7.0) % 1.0));
+            let at = match labels {
+                Some(cal) => cal.loop_pose(r, theta),
+                None => LoopEdgePose {
+                    r_mm: r,
+                    theta_deg: theta,
+                },
+            };
             pose_at_edge(
                 edge,
                 normal,
-                -5.0 + 10.0 * u,
-                -45.0 + 90.0 * ((u * 7.0) % 1.0),
+                at.r_mm,
+                at.theta_deg,
                 -rig.tap.nominal_indentation_mm(),
             )
         })
@@ -100,7 +135,7 @@ pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<
     }
     let extract = t1.elapsed().as_secs_f64();
     let latency = model
-        .map(|m| control_loop(&extractor, m, &frames))
+        .map(|m| control_loop(extractor, m, &frames))
         .transpose()?;
     let n = taps.max(1) as f64;
     Ok(BenchFigures {

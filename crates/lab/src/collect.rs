@@ -12,10 +12,10 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use tactrace_arm::Arm;
 use tactrace_geometry::{Contour, Vec2};
-use tactrace_sensor::{Frame, TactileSensor};
+use tactrace_sensor::{Calibration, Frame, LoopEdgePose, TactileSensor};
 use tactrace_servo::{pose_at_edge, tap, RigConfig, SimRig, TapConfig};
 use tactrace_store::frame_file::png_bytes;
-use tactrace_store::{DatasetMeta, TapData};
+use tactrace_store::{DatasetMeta, SensorFolder, TapData};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// What to collect.
@@ -81,9 +81,63 @@ pub fn collect(
         tap: &rig_cfg.tap,
         edge,
         normal,
+        labels: None,
     };
     let settings = serde_json::json!({ "rig": rig_cfg, "collect": cfg });
     collect_on(on, cfg, "simulated", origin, settings, progress)
+}
+
+/// As [`collect`] with a calibrated sensor (`--sensor`): its taps, pins
+/// ordered by its real reference frame, labels drawn in its own convention
+/// (r in +-`r_range_mm`, theta swept over +-`theta_range_deg` of its
+/// labels) and placed at their loop pose (eq. L1), so the set looks like
+/// the sensor's real collection. `rig_cfg.sensor` is not used.
+pub fn collect_calibrated(
+    rig_cfg: &RigConfig,
+    sensor: &SensorFolder,
+    shape: &Contour,
+    cfg: &CollectConfig,
+    origin: &str,
+    progress: impl FnMut(usize),
+) -> Result<Collected> {
+    let (edge, normal) = shape.at_arc_length(cfg.edge_arc_mm);
+    let spec = &sensor.spec;
+    let cal = &spec.sensor.calibration;
+    let first = cal.loop_pose(0.0, -cfg.theta_range_deg);
+    let start = pose_at_edge(
+        edge,
+        normal,
+        first.r_mm,
+        first.theta_deg,
+        rig_cfg.tap.height_mm,
+    );
+    let mut rig = SimRig::with_model(rig_cfg, sensor.model()?, shape.clone(), start, cfg.seed);
+    let (arm, sensor_part) = rig.parts();
+    let names = [
+        format!("r_mm ({})", spec.labels.r),
+        format!("theta_deg ({})", spec.labels.theta),
+    ];
+    let on = EdgeRig {
+        arm,
+        sensor: sensor_part,
+        reference: &sensor.reference,
+        blob: &spec.blob,
+        tap: &rig_cfg.tap,
+        edge,
+        normal,
+        labels: Some((cal, names)),
+    };
+    let settings = serde_json::json!({
+        "rig": rig_cfg, "collect": cfg, "calibrated_sensor": sensor.source,
+    });
+    collect_on(
+        on,
+        cfg,
+        "simulated (calibrated sensor)",
+        origin,
+        settings,
+        progress,
+    )
 }
 
 /// `--samples` must be positive.
@@ -115,6 +169,10 @@ pub struct EdgeRig<'a> {
     pub tap: &'a TapConfig,
     pub edge: Vec2,
     pub normal: Vec2,
+    /// A sensor's label convention and its target names: labels are drawn
+    /// in it and placed at their loop pose (eq. L1). `None`: the labels
+    /// are the loop's edge pose.
+    pub labels: Option<(&'a Calibration, [String; 2])>,
 }
 
 /// The collection of report ch. 4.1 on any rig: the labels are the poses
@@ -137,6 +195,7 @@ pub fn collect_on(
         tap: tap_cfg,
         edge,
         normal,
+        labels,
     } = on;
     let extractor = PinExtractor::from_reference_frame(reference, blob.clone())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
@@ -149,7 +208,20 @@ pub fn collect_on(
         let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
         let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
         let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
-        arm.move_to(pose_at_edge(edge, normal, r, theta, tap_cfg.height_mm))?;
+        let at = match &labels {
+            Some((cal, _)) => cal.loop_pose(r, theta),
+            None => LoopEdgePose {
+                r_mm: r,
+                theta_deg: theta,
+            },
+        };
+        arm.move_to(pose_at_edge(
+            edge,
+            normal,
+            at.r_mm,
+            at.theta_deg,
+            tap_cfg.height_mm,
+        ))?;
         let frame = tap(arm, sensor, depth)?;
         let tracked = extractor.extract(&frame)?;
         if tracked.missing > 0 {
@@ -171,7 +243,7 @@ pub fn collect_on(
         seed: Some(cfg.seed),
         samples: cfg.samples,
         pins: dim / 2,
-        targets: ["r_mm".into(), "theta_deg".into()],
+        targets: labels.map_or(["r_mm".into(), "theta_deg".into()], |(_, n)| n),
         frames_with_missing_pins: with_missing,
         reference_pins: extractor.tracker.reference().to_vec(),
         settings,

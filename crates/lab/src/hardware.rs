@@ -285,6 +285,7 @@ pub fn collect_hardware(
         tap: &cfg.tap,
         edge,
         normal,
+        labels: None,
     };
     let settings = serde_json::json!({ "hardware": cfg, "collect": collect });
     collect_on(on, collect, "real", origin, settings, progress)

@@ -141,10 +141,12 @@ fn reproduce_into(
         seed: cfg.seed + 1000,
         ..CollectConfig::default()
     };
-    let (tr, va) = rayon::join(
-        || collect(rig, &disk, &tcfg, "disk", |_| {}),
-        || collect(rig, &disk, &vcfg, "disk", |_| {}),
-    );
+    let calibrated = crate::follow::read_calibrated(&cfg.follow)?;
+    let collect_on_disk = |c: &CollectConfig| match &calibrated {
+        Some(s) => crate::collect::collect_calibrated(rig, s, &disk, c, "disk", |_| {}),
+        None => collect(rig, &disk, c, "disk", |_| {}),
+    };
+    let (tr, va) = rayon::join(|| collect_on_disk(&tcfg), || collect_on_disk(&vcfg));
     let (tr, va) = (tr?.data, va?.data);
     write_dataset(&out.join("data/train"), &tr, &[], true)?;
     write_dataset(&out.join("data/val"), &va, &[], true)?;
@@ -159,42 +161,12 @@ fn reproduce_into(
         networks.push(r?.0);
     }
     log("following the four shapes with the PDenNN");
-    let shapes: Vec<Result<ShapeRow>> = REPORT_L2
-        .par_iter()
-        .map(|(shape, report_l2, steps)| {
-            let model = StoredModel::load(&out.join("models/pdennn"))?;
-            let mut fcfg = cfg.follow.clone();
-            if cfg.report_steps {
-                fcfg.follow.steps = Some(*steps);
-            }
-            fcfg.follow.seed = cfg.seed;
-            let contour = builtin_shape(*shape);
-            let run = out.join("follow").join(shape.name());
-            let named = (shape.name(), &contour);
-            let res = follow_simulated(&fcfg, &model, named, (&run, true), &mut |_| {})?;
-            let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
-            let figs = out.join("figures");
-            figures::trajectory(
-                &figs.join(format!("fig5_3_{}", shape.name())),
-                shape.name(),
-                &contour,
-                &traj,
-            )?;
-            figures::error_curve(
-                &figs.join(format!("fig5_4_{}", shape.name())),
-                shape.name(),
-                &res.l2_curve,
-            )?;
-            let metrics = res.metrics.expect("scored against the known contour");
-            Ok(ShapeRow {
-                shape: shape.name().into(),
-                metrics,
-                ending: res.summary.ending,
-                report_l2_mm: *report_l2,
-            })
-        })
-        .collect();
-    let shapes = shapes.into_iter().collect::<Result<Vec<_>>>()?;
+    let shapes = follow_report_shapes(
+        cfg,
+        &cfg.follow,
+        &out.join("models/pdennn"),
+        (&out.join("follow"), &out.join("figures"), ""),
+    )?;
     let real_rows = match &cfg.real {
         Some(real) => {
             log("importing real frames and training on them, on their simulated twin, and on the calibrated twin");
@@ -207,6 +179,12 @@ fn reproduce_into(
         real_networks: real_rows.real,
         sim_to_real: real_rows.sim_to_real,
         calibration: real_rows.calibration,
+        real_model_shapes: real_rows.real_model_shapes,
+        calibrated_sensor: cfg
+            .follow
+            .calibrated_sensor
+            .as_ref()
+            .map(|p| p.display().to_string()),
         shapes,
         seconds: t0.elapsed().as_secs_f64(),
         seed: cfg.seed,
@@ -216,12 +194,62 @@ fn reproduce_into(
     Ok(results)
 }
 
+/// The report's four shapes followed with the model in `model_dir` in the
+/// simulated world of `fcfg`: run folders under `runs`, figures
+/// `fig5_3_{tag}{shape}` and `fig5_4_{tag}{shape}` under `figs`.
+fn follow_report_shapes(
+    cfg: &ReproduceConfig,
+    fcfg: &SimFollowConfig,
+    model_dir: &Path,
+    (runs, figs, tag): (&Path, &Path, &str),
+) -> Result<Vec<ShapeRow>> {
+    let shapes: Vec<Result<ShapeRow>> = REPORT_L2
+        .par_iter()
+        .map(|(shape, report_l2, steps)| {
+            let model = StoredModel::load(model_dir)?;
+            let mut fcfg = fcfg.clone();
+            if cfg.report_steps {
+                fcfg.follow.steps = Some(*steps);
+            }
+            fcfg.follow.seed = cfg.seed;
+            let contour = builtin_shape(*shape);
+            let run = runs.join(shape.name());
+            let named = (shape.name(), &contour);
+            let res = follow_simulated(&fcfg, &model, named, (&run, true), &mut |_| {})?;
+            let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
+            let name = shape.name();
+            figures::trajectory(
+                &figs.join(format!("fig5_3_{tag}{name}")),
+                name,
+                &contour,
+                &traj,
+            )?;
+            figures::error_curve(
+                &figs.join(format!("fig5_4_{tag}{name}")),
+                name,
+                &res.l2_curve,
+            )?;
+            let metrics = res.metrics.expect("scored against the known contour");
+            Ok(ShapeRow {
+                shape: name.into(),
+                metrics,
+                ending: res.summary.ending,
+                report_l2_mm: *report_l2,
+            })
+        })
+        .collect();
+    shapes.into_iter().collect()
+}
+
 /// What `--real` adds to the report.
 #[derive(Default)]
 struct RealRows {
     real: Vec<NetRow>,
     sim_to_real: Vec<NetRow>,
     calibration: Vec<tactrace_report::CalibrationRow>,
+    /// The PDenNN trained on real frames following the four shapes in the
+    /// simulator calibrated with 100 of its training taps.
+    real_model_shapes: Vec<ShapeRow>,
 }
 
 /// Train every network on real frames (seeded 80/20 split) and validate on
@@ -248,10 +276,25 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<RealRows> 
     };
     let (calibration, headline) = crate::calibration_sweep::calibration_rows(cfg, &split, out)?;
     transfer.push(headline);
+    let fcfg = SimFollowConfig {
+        calibrated_sensor: Some(out.join("sensor")),
+        ..cfg.follow.clone()
+    };
+    let real_model_shapes = follow_report_shapes(
+        cfg,
+        &fcfg,
+        &out.join("real/models/pdennn"),
+        (
+            &out.join("follow-calibrated"),
+            &out.join("figures"),
+            "calibrated_",
+        ),
+    )?;
     Ok(RealRows {
         real,
         sim_to_real: transfer,
         calibration,
+        real_model_shapes,
     })
 }
 

@@ -114,6 +114,12 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
         "tactrace {}, seed {}, {:.1} s in all. Simulated TacTip on a simulated arm (the report used a real UR5 and TacTip); the resolved configuration is in config.toml.\n",
         r.tactrace_version, r.seed, r.seconds
     );
+    if let Some(dir) = &r.calibrated_sensor {
+        let _ = writeln!(
+            md,
+            "The simulated TacTip is the calibrated sensor `{dir}` (`--sensor`): its taps, pin order and label convention.\n"
+        );
+    }
     md.push_str("## Fig. 4.1: frame, extracted pins, displacements\n\n");
     md.push_str("![Fig. 4.1 simulated tap (r = 2 mm, theta = 10 deg, nominal depth)](figures/fig4_1_simulated.svg)\n\n");
     if !r.real_networks.is_empty() {
@@ -145,8 +151,19 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
     if !r.calibration.is_empty() {
         calibration_table(&mut md, &r.calibration);
     }
-    md.push_str("## Contour following with the PDenNN (Fig. 5.3, 5.4)\n\n| shape | mean L2 (mm) | report L2 (mm) | mean track error (mm) | p95 (mm) | max (mm) | coverage | closed | steps | ending |\n|---|---|---|---|---|---|---|---|---|---|\n");
-    for s in &r.shapes {
+    md.push_str("## Contour following with the PDenNN (Fig. 5.3, 5.4)\n\n");
+    shapes_table(&mut md, &r.shapes, "");
+    if !r.real_model_shapes.is_empty() {
+        md.push_str("## Contour following in the calibrated simulator by the PDenNN trained on real frames\n\nThe simulated world is the sensor calibrated with 100 real taps (`sensor/`); the model was trained on the real training part only and predicts the real labels, mapped to the loop's edge pose by the sensor's label convention (docs/calibration.md).\n\n");
+        shapes_table(&mut md, &r.real_model_shapes, "calibrated_");
+    }
+    md
+}
+
+/// The contour table and its figures (`fig5_3_{tag}{shape}`, `fig5_4_...`).
+fn shapes_table(md: &mut String, shapes: &[crate::ShapeRow], tag: &str) {
+    md.push_str("| shape | mean L2 (mm) | report L2 (mm) | mean track error (mm) | p95 (mm) | max (mm) | coverage | closed | steps | ending |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    for s in shapes {
         let m = &s.metrics;
         let _ = writeln!(
             md,
@@ -164,14 +181,13 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
         );
     }
     md.push('\n');
-    for s in &r.shapes {
+    for s in shapes {
         let _ = writeln!(
             md,
-            "![Fig. 5.3 {0}: trajectory over the true contour](figures/fig5_3_{0}.svg) ![Fig. 5.4 {0}: L2 error along the contour](figures/fig5_4_{0}.svg)\n",
-            s.shape
+            "![Fig. 5.3 {0}: trajectory over the true contour](figures/fig5_3_{1}{0}.svg) ![Fig. 5.4 {0}: L2 error along the contour](figures/fig5_4_{1}{0}.svg)\n",
+            s.shape, tag
         );
     }
-    md
 }
 
 /// A data URI for the image file `src` (relative to `dir`), if readable.

@@ -70,6 +70,11 @@ pub struct ReproduceResults {
     /// The simulator calibrated with few real taps (`--real`): the PDenNN
     /// trained on the calibrated twin, per number of taps and split.
     pub calibration: Vec<CalibrationRow>,
+    /// The PDenNN trained on real frames following the four shapes in the
+    /// simulator calibrated with 100 of its training taps (`--real`).
+    pub real_model_shapes: Vec<ShapeRow>,
+    /// The calibrated sensor folder the simulated world is (`--sensor`).
+    pub calibrated_sensor: Option<String>,
     pub shapes: Vec<ShapeRow>,
     pub seconds: f64,
     pub seed: u64,

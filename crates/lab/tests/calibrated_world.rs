@@ -1,0 +1,90 @@
+//! The simulated world of a calibrated sensor (`--sensor`): taps collected
+//! in it carry the sensor's own labels and pin order, and a model trained
+//! on them closes the loop round the disk through the label convention
+//! (eq. L1) and the servo frame (eq. L2). The sensor is the synthetic
+//! "real" TacTip of `common`, calibrated like a user's.
+mod common;
+
+use common::distorted_sensor_set;
+use tactrace_geometry::{builtin_shape, BuiltinShape};
+use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
+use tactrace_lab::collect::{collect_calibrated, CollectConfig};
+use tactrace_lab::follow::{follow_simulated, SimFollowConfig};
+use tactrace_lab::train::{resolve_config, train};
+use tactrace_learn::{ModelKind, Preset};
+use tactrace_sensor::TacTipConfig;
+use tactrace_servo::{Ending, RigConfig};
+use tactrace_store::{SensorFolder, StoredModel};
+use tactrace_vision::BlobParams;
+
+/// A synthetic sensor labelled in the real edge set's convention (its
+/// label angle zero is 74 deg from the loop's, its r offset 2.3 mm),
+/// calibrated on 100 of its taps and written to `dir/sensor`.
+fn calibrated_sensor(dir: &std::path::Path) -> SensorFolder {
+    let twin = distorted_sensor_set(dir, 140);
+    let cfg = CalibrateConfig {
+        frames: dir.join("frames"),
+        twin,
+        samples: Some(100),
+        seed: 2,
+        allowed_rows: None,
+        score_rows: None,
+    };
+    let blob = BlobParams::preset("sim").unwrap();
+    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    got.sensor.write(&dir.join("sensor"), false).unwrap();
+    SensorFolder::read(&dir.join("sensor")).unwrap()
+}
+
+#[test]
+fn a_model_of_the_calibrated_sensor_follows_the_disk_in_its_world() {
+    let root = tempfile::tempdir().unwrap();
+    let sensor = calibrated_sensor(root.path());
+    let disk = builtin_shape(BuiltinShape::Disk);
+    let rig = RigConfig::default();
+    let ccfg = CollectConfig {
+        samples: 600,
+        seed: 4,
+        ..CollectConfig::default()
+    };
+    let got = collect_calibrated(&rig, &sensor, &disk, &ccfg, "disk", |_| {}).unwrap();
+    let data = got.data;
+    // The sensor's labels, names and pin order.
+    assert!(
+        data.meta.targets[0].contains("pose_2"),
+        "{:?}",
+        data.meta.targets
+    );
+    let (rs, ts): (Vec<f32>, Vec<f32>) = data.targets.chunks(2).map(|t| (t[0], t[1])).unzip();
+    assert!(rs.iter().all(|r| r.abs() <= 5.0) && ts.iter().all(|t| t.abs() <= 45.0));
+    let worst = data
+        .meta
+        .reference_pins
+        .iter()
+        .zip(&sensor.spec.reference_pins)
+        .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-9,
+        "pins listed off the sensor's reference by {worst} px"
+    );
+    // A model of these taps closes the loop in the sensor's world.
+    let mcfg = resolve_config(ModelKind::PDenNN, Preset::Default, None, Some(60)).unwrap();
+    let (model, _) = train(&mcfg, &data, &mut |_| {}).unwrap();
+    let stored = StoredModel::new(model, data.meta.reference_pins.clone());
+    let fcfg = SimFollowConfig {
+        calibrated_sensor: Some(root.path().join("sensor")),
+        ..SimFollowConfig::default()
+    };
+    let out = root.path().join("run");
+    let res =
+        follow_simulated(&fcfg, &stored, ("disk", &disk), (&out, false), &mut |_| {}).unwrap();
+    let m = res.metrics.unwrap();
+    assert_eq!(
+        res.summary.ending,
+        Ending::Closed,
+        "{}",
+        res.summary.message
+    );
+    assert!(m.mean_l2_mm < 1.0 && m.coverage > 0.95, "{m:?}");
+}

@@ -1,0 +1,64 @@
+//! Test fixtures shared by the lab's integration tests: a synthetic "real"
+//! TacTip (the simulator with a known field distortion) and its labelled
+//! taps on a straight edge, in the Bristol layout.
+#![allow(dead_code)]
+use rand::{Rng, SeedableRng};
+use std::path::Path;
+use tactrace_lab::twin::TwinConfig;
+use tactrace_sensor::{EdgeTap, FieldCorrection, TacTipConfig, TacTipModel};
+
+pub const PINS: usize = 127;
+
+/// A known distortion: every displacement 30 % larger, x and y mixed a
+/// little, a constant 0.4 px shift in x.
+pub fn distortion() -> FieldCorrection {
+    let d = 2 * PINS;
+    let mut w = vec![0.0f32; d * d];
+    for k in 0..d {
+        w[k * d + k] = 0.3;
+        w[k * d + (k + PINS) % d] = 0.1;
+    }
+    let b = (0..d).map(|k| if k < PINS { 0.4 } else { 0.0 }).collect();
+    FieldCorrection::new(PINS, w, b).unwrap()
+}
+
+/// `n` labelled taps of the distorted sensor in `dir` (frames/, targets.csv,
+/// frames/init_0.png), labels spread over r in [-5, 5] mm and theta in
+/// [-45, 45] deg.
+pub fn distorted_sensor_set(dir: &Path, n: usize) -> TwinConfig {
+    let sensor = TacTipConfig::default();
+    let plain = TacTipModel::new(sensor.clone()).unwrap();
+    let real = TacTipModel::with_rest_pins(sensor, plain.rest_pins().to_vec())
+        .unwrap()
+        .with_correction(distortion())
+        .unwrap();
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    let reference = frames.join("init_0.png");
+    real.render(real.rest_pins(), None)
+        .save(&reference)
+        .unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut csv = String::from("image_name,pose_2,pose_6\n");
+    for k in 0..n {
+        let tap = EdgeTap {
+            r_mm: rng.random_range(-5.0..5.0),
+            theta_deg: rng.random_range(-45.0..45.0),
+            dz_mm: 0.0,
+            shear: None,
+        };
+        let pins = real.seen_pins(real.edge_tap_pins(&tap));
+        let name = format!("frame_{k}_0.png");
+        real.render(&pins, Some(&mut rng))
+            .save(frames.join(&name))
+            .unwrap();
+        csv.push_str(&format!("{name},{},{}\n", tap.r_mm, tap.theta_deg));
+    }
+    let targets = dir.join("targets.csv");
+    std::fs::write(&targets, csv).unwrap();
+    TwinConfig {
+        dz_column: None,
+        shear_columns: None,
+        ..TwinConfig::bristol(dir, 1).with_paths(targets, reference)
+    }
+}

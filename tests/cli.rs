@@ -380,4 +380,36 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
     assert_eq!(r.code, 0, "{}", r.stderr);
     let meta = std::fs::read_to_string(t.join("tw/meta.json")).unwrap();
     assert!(meta.contains("calibrated sensor"), "{meta}");
+    // Its simulated world: collect in its labels, train, follow, bench.
+    let r = tactrace(
+        &t.0,
+        &["collect", "--sensor", "sensor", "--samples", "400", "--out", "cs"],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let meta = std::fs::read_to_string(t.join("cs/meta.json")).unwrap();
+    assert!(meta.contains("pose_6"), "{meta}");
+    let train = [
+        "train", "--model", "pdennn", "--train", "cs", "--epochs", "60", "--out", "m",
+    ];
+    assert_eq!(tactrace(&t.0, &train).code, 0);
+    let follow = |extra: &[&str], out: &str| {
+        let args = [
+            &["follow", "--model", "m", "--shape", "disk", "--out", out][..],
+            extra,
+        ]
+        .concat();
+        tactrace(&t.0, &args)
+    };
+    let r = follow(&["--sensor", "sensor"], "run");
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stdout.contains("Closed"), "{}", r.stdout);
+    let config = std::fs::read_to_string(t.join("run/config.toml")).unwrap();
+    assert!(config.contains("calibrated_sensor"), "{config}");
+    // The default world lists its pins otherwise: refused before moving.
+    let r = follow(&[], "run2");
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("order"), "{}", r.stderr);
+    assert_eq!(follow(&["--sensor", "no-such-sensor"], "run3").code, 2);
+    let bench = ["bench", "--taps", "20", "--sensor", "sensor"];
+    assert_eq!(tactrace(&t.0, &bench).code, 0);
 }

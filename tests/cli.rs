@@ -383,7 +383,15 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
     // Its simulated world: collect in its labels, train, follow, bench.
     let r = tactrace(
         &t.0,
-        &["collect", "--sensor", "sensor", "--samples", "400", "--out", "cs"],
+        &[
+            "collect",
+            "--sensor",
+            "sensor",
+            "--samples",
+            "400",
+            "--out",
+            "cs",
+        ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
     let meta = std::fs::read_to_string(t.join("cs/meta.json")).unwrap();

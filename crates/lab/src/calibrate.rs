@@ -90,6 +90,8 @@ pub fn calibrate_sensor(
         }
         .into());
     }
+    let fitted_layout = layout_for(sensor, &t.reference, blob)?;
+    let sensor = &fitted_layout;
     let rows = twin_rows(t)?;
     let labels: Vec<Label> = rows
         .iter()
@@ -199,6 +201,26 @@ pub fn calibrate_sensor(
         taps: labels.len(),
         rejected: real.rejected.len(),
         example,
+    })
+}
+
+/// `sensor` with the layout of the reference frame at `path`
+/// (`tactrace_sensor::fit_layout`): any hexagonal pin count and frame size.
+fn layout_for(
+    sensor: &TacTipConfig,
+    path: &std::path::Path,
+    blob: &BlobParams,
+) -> Result<TacTipConfig> {
+    let frame = tactrace_sensor::read_frame(path)?;
+    let extractor = tactrace_vision::PinExtractor::from_reference_frame(&frame, blob.clone())?;
+    let pins = extractor.tracker.reference();
+    tactrace_sensor::fit_layout(sensor, pins, frame.dimensions()).map_err(|e| LabError::Reference {
+        path: path.to_path_buf(),
+        reason: format!(
+            "its {} pins cannot be laid out as the simulated TacTip's lattice",
+            pins.len()
+        ),
+        source: Box::new(e),
     })
 }
 

@@ -5,7 +5,7 @@
 //! "real" TacTip of `common`, calibrated like a user's.
 mod common;
 
-use common::distorted_sensor_set;
+use common::{distorted_sensor_set, sensor_set};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
 use tactrace_lab::collect::{collect_calibrated, CollectConfig};
@@ -87,4 +87,58 @@ fn a_model_of_the_calibrated_sensor_follows_the_disk_in_its_world() {
         res.summary.message
     );
     assert!(m.mean_l2_mm < 1.0 && m.coverage > 0.95, "{m:?}");
+}
+
+/// A TacTip with 61 pins seen in a 320 x 240 frame by another camera:
+/// calibrate lays the simulator out like it, and its world works.
+#[test]
+fn a_sensor_with_another_pin_count_and_frame_size_is_calibrated() {
+    let root = tempfile::tempdir().unwrap();
+    let mut other = TacTipConfig::default();
+    other.geometry.rings = 4;
+    other.geometry.pin_spacing_mm *= 1.5;
+    other.geometry.pin_radius_mm *= 1.2;
+    other.camera.width = 320;
+    other.camera.height = 240;
+    other.camera.centre_px = [161.0, 117.0];
+    other.camera.focal_px = 72.0;
+    other.camera.rotation_deg = 165.0;
+    let twin = sensor_set(root.path(), 120, other.clone());
+    let cfg = CalibrateConfig {
+        frames: root.path().join("frames"),
+        twin,
+        samples: Some(80),
+        seed: 1,
+        allowed_rows: None,
+        score_rows: None,
+    };
+    let blob = BlobParams::preset("sim").unwrap();
+    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let spec = &got.sensor.spec;
+    assert_eq!(spec.reference_pins.len(), 61);
+    assert_eq!(spec.sensor.geometry.rings, 4);
+    assert_eq!(
+        (spec.sensor.camera.width, spec.sensor.camera.height),
+        (320, 240)
+    );
+    let after = spec.calibration.held_out_after.unwrap();
+    assert!(after.rms_px < 0.5, "held-out field RMS {} px", after.rms_px);
+    // Its simulated taps come out in its reference's pin order.
+    let disk = builtin_shape(BuiltinShape::Disk);
+    let ccfg = CollectConfig {
+        samples: 50,
+        ..CollectConfig::default()
+    };
+    let data = collect_calibrated(
+        &RigConfig::default(),
+        &got.sensor,
+        &disk,
+        &ccfg,
+        "disk",
+        |_| {},
+    )
+    .unwrap()
+    .data;
+    assert_eq!(data.dim(), 2 * 61);
+    assert_eq!(data.meta.frames_with_missing_pins, 0);
 }

@@ -12,25 +12,35 @@ pub const PINS: usize = 127;
 /// A known distortion: every displacement 30 % larger, x and y mixed a
 /// little, a constant 0.4 px shift in x.
 pub fn distortion() -> FieldCorrection {
-    let d = 2 * PINS;
+    distortion_of(PINS)
+}
+
+/// [`distortion`] for a sensor of `pins` pins.
+pub fn distortion_of(pins: usize) -> FieldCorrection {
+    let d = 2 * pins;
     let mut w = vec![0.0f32; d * d];
     for k in 0..d {
         w[k * d + k] = 0.3;
-        w[k * d + (k + PINS) % d] = 0.1;
+        w[k * d + (k + pins) % d] = 0.1;
     }
-    let b = (0..d).map(|k| if k < PINS { 0.4 } else { 0.0 }).collect();
-    FieldCorrection::new(PINS, w, b).unwrap()
+    let b = (0..d).map(|k| if k < pins { 0.4 } else { 0.0 }).collect();
+    FieldCorrection::new(pins, w, b).unwrap()
 }
 
 /// `n` labelled taps of the distorted sensor in `dir` (frames/, targets.csv,
 /// frames/init_0.png), labels spread over r in [-5, 5] mm and theta in
 /// [-45, 45] deg.
 pub fn distorted_sensor_set(dir: &Path, n: usize) -> TwinConfig {
-    let sensor = TacTipConfig::default();
+    sensor_set(dir, n, TacTipConfig::default())
+}
+
+/// As [`distorted_sensor_set`] for the sensor `sensor` (any layout).
+pub fn sensor_set(dir: &Path, n: usize, sensor: TacTipConfig) -> TwinConfig {
     let plain = TacTipModel::new(sensor.clone()).unwrap();
+    let pins = plain.rest_pins().len();
     let real = TacTipModel::with_rest_pins(sensor, plain.rest_pins().to_vec())
         .unwrap()
-        .with_correction(distortion())
+        .with_correction(distortion_of(pins))
         .unwrap();
     let frames = dir.join("frames");
     std::fs::create_dir_all(&frames).unwrap();

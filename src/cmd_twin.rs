@@ -163,6 +163,12 @@ pub struct CalibrateArgs {
     /// Use only the first N rows of --targets.
     #[arg(long)]
     limit: Option<usize>,
+    /// Also fit the simulator's label convention (angle and edge offsets
+    /// and scales, tap depth) and mechanics to the calibration taps before
+    /// the field correction: for a sensor unlike the shared one (a few
+    /// seconds more).
+    #[arg(long)]
+    fit_physics: bool,
     /// The sensor folder to write.
     #[arg(long)]
     out: PathBuf,
@@ -180,6 +186,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
         seed: a.seed,
         allowed_rows: None,
         score_rows: None,
+        fit_physics: a.fit_physics,
     };
     let rig = rig_config(a.config.as_deref())?;
     let blob = blob_params(a.params.as_deref(), "real256")?;

@@ -43,6 +43,10 @@ pub struct CalibrateConfig {
     /// allowed rows not chosen, drawn with the seed). Chosen rows are
     /// never scored.
     pub score_rows: Option<Vec<usize>>,
+    /// Fit the simulator's label convention and mechanics to the chosen
+    /// taps (`tactrace_sensor::fit_joint`) before the field correction:
+    /// for a sensor unlike the shared one (`--fit-physics`).
+    pub fit_physics: bool,
 }
 
 /// A fitted sensor and what the calibration saw.
@@ -135,6 +139,12 @@ pub fn calibrate_sensor(
         limit: t.limit,
     };
     let real = import_rows(&icfg, blob, Some(&keep), progress)?;
+    let physics = if cfg.fit_physics {
+        fit_physics(sensor, &real, &rows, &chosen, t)?
+    } else {
+        sensor.clone()
+    };
+    let sensor = &physics;
     let twin = simulate_twin_rows(t, sensor, blob, Some(&keep), progress)?;
     let chosen_names: HashSet<&str> = chosen.iter().map(|&i| rows[i].image.as_str()).collect();
     let pairs = paired(&real, &twin)?;
@@ -202,6 +212,48 @@ pub fn calibrate_sensor(
         rejected: real.rejected.len(),
         example,
     })
+}
+
+/// Nelder-Mead rounds and steps of the physics fit (`--fit-physics`).
+const PHYSICS_FIT: (usize, usize) = (2, 150);
+
+/// `sensor` with its label convention and mechanics fitted to the real
+/// fields of the `chosen` rows (`tactrace_sensor::fit_joint`).
+fn fit_physics(
+    sensor: &TacTipConfig,
+    real: &Imported,
+    rows: &[crate::import::Row],
+    chosen: &[usize],
+    t: &TwinConfig,
+) -> Result<TacTipConfig> {
+    let data = &real.data;
+    let p = data.dim() / 2;
+    let of_image: HashMap<&str, usize> = data
+        .meta
+        .images
+        .iter()
+        .enumerate()
+        .map(|(k, n)| (n.as_str(), k))
+        .collect();
+    let samples: Vec<tactrace_sensor::FitSample> = chosen
+        .iter()
+        .filter_map(|&i| {
+            let k = *of_image.get(rows[i].image.as_str())?;
+            let x = &data.inputs[k * 2 * p..(k + 1) * 2 * p];
+            let disp = (0..p)
+                .map(|j| Some([f64::from(x[j]), f64::from(x[p + j])]))
+                .collect();
+            Some(tactrace_sensor::FitSample {
+                tap: crate::twin::edge_tap(t, &rows[i]),
+                disp,
+            })
+        })
+        .collect();
+    let rest = &data.meta.reference_pins;
+    let (rounds, iterations) = PHYSICS_FIT;
+    let threads = rayon::current_num_threads();
+    let fit = tactrace_sensor::fit_joint(sensor, rest, &samples, (rounds, iterations, threads))?;
+    Ok(fit.config)
 }
 
 /// `sensor` with the layout of the reference frame at `path`

@@ -137,6 +137,7 @@ fn run_case(
         seed: cfg.seed,
         allowed_rows: Some(rows_in(split, split.training, case.pool.1)?),
         score_rows: Some(rows_in(split, split.validation, case.scored.1)?),
+        fit_physics: false,
     };
     let blob = tactrace_vision::BlobParams::preset("real256")?;
     let got = calibrate_sensor(&ccfg, &cfg.follow.rig.sensor, &blob, &|| {})?;

@@ -241,7 +241,7 @@ fn append_real_taps(data: &mut TapData, sensor: &SensorFolder, k: usize) {
 }
 
 /// The labelled tap of one row (extra values: dz, then the shear columns).
-fn edge_tap(cfg: &TwinConfig, row: &Row) -> EdgeTap {
+pub(crate) fn edge_tap(cfg: &TwinConfig, row: &Row) -> EdgeTap {
     let mut extra = row.extra.iter().map(|&v| v as f64);
     let dz_mm = if cfg.dz_column.is_some() {
         extra.next().unwrap_or(0.0)

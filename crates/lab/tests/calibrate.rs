@@ -24,6 +24,7 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
         seed: 3,
         allowed_rows: None,
         score_rows: None,
+        fit_physics: false,
     };
     let blob = BlobParams::preset("sim").unwrap();
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
@@ -110,6 +111,7 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
         seed: 1,
         allowed_rows: None,
         score_rows: None,
+        fit_physics: false,
     };
     let blob = BlobParams::preset("sim").unwrap();
     let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {})

@@ -29,6 +29,7 @@ fn calibrated_sensor(dir: &std::path::Path) -> SensorFolder {
         seed: 2,
         allowed_rows: None,
         score_rows: None,
+        fit_physics: false,
     };
     let blob = BlobParams::preset("sim").unwrap();
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
@@ -111,6 +112,7 @@ fn a_sensor_with_another_pin_count_and_frame_size_is_calibrated() {
         seed: 1,
         allowed_rows: None,
         score_rows: None,
+        fit_physics: false,
     };
     let blob = BlobParams::preset("sim").unwrap();
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
@@ -141,4 +143,43 @@ fn a_sensor_with_another_pin_count_and_frame_size_is_calibrated() {
     .data;
     assert_eq!(data.dim(), 2 * 61);
     assert_eq!(data.meta.frames_with_missing_pins, 0);
+}
+
+/// A sensor whose labels follow another convention (angle and edge
+/// offsets, edge scale): `--fit-physics` finds it.
+#[test]
+fn the_physics_fit_finds_another_label_convention() {
+    let root = tempfile::tempdir().unwrap();
+    let mut other = TacTipConfig::default();
+    other.calibration.angle_offset_deg = -6.0;
+    other.calibration.edge_offset_mm = 1.2;
+    other.calibration.edge_scale = 1.25;
+    let twin = sensor_set(root.path(), 120, other.clone());
+    let blob = BlobParams::preset("sim").unwrap();
+    let run = |fit_physics| {
+        let cfg = CalibrateConfig {
+            frames: root.path().join("frames"),
+            twin: twin.clone(),
+            samples: Some(80),
+            seed: 1,
+            allowed_rows: None,
+            score_rows: None,
+            fit_physics,
+        };
+        calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap()
+    };
+    let (plain, fitted) = (run(false), run(true));
+    let cal = &fitted.sensor.spec.sensor.calibration;
+    assert!((cal.angle_offset_deg + 6.0).abs() < 2.0, "{cal:?}");
+    assert!((cal.edge_offset_mm - 1.2).abs() < 0.4, "{cal:?}");
+    assert!((cal.edge_scale - 1.25).abs() < 0.15, "{cal:?}");
+    let before = |c: &tactrace_lab::calibrate::Calibrated| {
+        c.sensor.spec.calibration.held_out_before.unwrap().rms_px
+    };
+    assert!(
+        before(&fitted) < 0.6 * before(&plain),
+        "uncorrected held-out misfit {} px with the physics fit, {} px without",
+        before(&fitted),
+        before(&plain)
+    );
 }

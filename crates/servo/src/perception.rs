@@ -3,7 +3,7 @@
 use crate::error::{Result, ServoError};
 use serde::Serialize;
 use tactrace_learn::PoseModel;
-use tactrace_sensor::Frame;
+use tactrace_sensor::{EdgeLabels, Frame, LabelConvention};
 use tactrace_vision::PinExtractor;
 
 /// Pin extraction and the pose model, with the contact rule.
@@ -12,6 +12,9 @@ pub struct Perception {
     model: PoseModel,
     /// Below this mean pin displacement (px) a tap counts as no contact.
     contact_threshold_px: f64,
+    /// The model predicts in this collection's labels; the percept is in
+    /// the controller's frame (`None`: the model's are the controller's).
+    labels: Option<LabelConvention>,
 }
 
 /// What one tap told the controller.
@@ -44,12 +47,30 @@ impl Perception {
             extractor,
             model,
             contact_threshold_px,
+            labels: None,
         })
+    }
+
+    /// The model predicts in the labels of a real collection whose
+    /// convention is `labels`: its predictions are mapped into the
+    /// controller's frame ([`LabelConvention::to_pose`]).
+    pub fn with_label_convention(self, labels: LabelConvention) -> Self {
+        Self {
+            labels: Some(labels),
+            ..self
+        }
     }
 
     /// The reference pins (px) the displacement vectors are ordered by.
     pub fn reference_pins(&self) -> &[[f64; 2]] {
         self.extractor.tracker.reference()
+    }
+
+    /// The displacement vector of one frame (x of every pin, then y, px,
+    /// in the reference frame's pin order), as the model sees it.
+    pub fn displacement(&self, frame: &Frame) -> Result<Vec<f32>> {
+        let tracked = self.extractor.extract(frame)?;
+        Ok(tracked.displacement(self.extractor.tracker.reference()))
     }
 
     /// Extract pins and predict the edge pose from one frame.
@@ -62,6 +83,17 @@ impl Perception {
             .sum::<f64>()
             / p.max(1) as f64;
         let [r, theta] = self.model.predict(&disp)?;
+        let (r, theta) = match &self.labels {
+            None => (r, theta),
+            Some(c) => {
+                let pose = c.to_pose(EdgeLabels {
+                    r_mm: r,
+                    theta_deg: theta,
+                    dz_mm: 0.0,
+                });
+                (pose.r_mm, pose.theta_deg)
+            }
+        };
         Ok(Percept {
             r_mm: r,
             theta_deg: theta,

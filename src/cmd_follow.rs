@@ -7,8 +7,8 @@ use tactrace_geometry::ShapeSpec;
 use tactrace_lab::follow::{
     follow_simulated, size_warning, tactip_diameter_mm, FollowOutcome, SimFollowConfig,
 };
-use tactrace_lab::replay_world::{follow_replay, KeepRule, ReplayWorld};
 use tactrace_lab::hardware::{follow_hardware as follow_on_hardware, HardwareConfig};
+use tactrace_lab::replay_world::{follow_replay, KeepRule, ReplayWorld};
 use tactrace_lab::reproduce::{reproduce as run_reproduce, ReproduceConfig};
 use tactrace_lab::LabError;
 use tactrace_servo::LoopConfig;
@@ -104,7 +104,11 @@ impl ReplayArgs {
         w.theta_column = self.theta_column.clone();
         let dz = self.dz_column.trim();
         w.dz_column = (!dz.is_empty() && !dz.eq_ignore_ascii_case("none")).then(|| dz.to_string());
-        w.keep = self.replay_keep.as_deref().map(KeepRule::parse).transpose()?;
+        w.keep = self
+            .replay_keep
+            .as_deref()
+            .map(KeepRule::parse)
+            .transpose()?;
         w.blob = crate::cmd_data::blob_params(self.params.as_deref(), "real256")?;
         if !w.frames.is_dir() || !w.targets.is_file() {
             return Err(LabError::Config(format!(

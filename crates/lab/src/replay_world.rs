@@ -317,7 +317,8 @@ pub fn follow_replay(
     };
     let run = RunFolder::start(out, force, &config)?;
     let (arm, sensor) = rig.parts();
-    let recorded = follow_on_rig_recorded(arm, sensor, &perception, &settings, run.path(), progress)?;
+    let recorded =
+        follow_on_rig_recorded(arm, sensor, &perception, &settings, run.path(), progress)?;
     let stats = ReplayStats::of(rig.answers(), rig.bank(), world.far_distance);
     let extras = RunExtras {
         replay: Some(&stats),

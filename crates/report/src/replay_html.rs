@@ -118,22 +118,23 @@ h1{font-size:1.3em;margin:0 0 .3em}#notes{color:#555;font-size:.9em;margin:0 0 .
 #notes p{margin:.15em 0}.panes{display:flex;gap:1em;flex-wrap:wrap}\
 canvas{background:#fff;border:1px solid #ccc;border-radius:4px}\
 .controls{display:flex;align-items:center;gap:.8em;margin:.8em 0}\
-#slider{width:520px}button{font-size:1em;padding:.3em 1em}\
+#slider{flex:0 0 820px}.cap{font-size:.85em;color:#555;max-width:400px}button{font-size:1em;padding:.3em 1em}\
 #status{font-family:monospace;font-size:.95em;white-space:pre}\
 .key span{display:inline-block;margin-right:1.2em;font-size:.85em}\
 .sw{display:inline-block;width:1.6em;height:.35em;vertical-align:middle;margin-right:.3em}";
 
 const BODY: &str = "<h1 id=\"title\"></h1><div id=\"notes\"></div>\n\
-<div class=\"panes\"><canvas id=\"world\" width=\"620\" height=\"620\"></canvas>\
-<canvas id=\"pins\" width=\"420\" height=\"420\"></canvas></div>\n\
+<div class=\"panes\"><canvas id=\"world\" width=\"560\" height=\"560\"></canvas>\
+<div><canvas id=\"pins\" width=\"400\" height=\"400\"></canvas>\
+<div class=\"cap\">the tap&#39;s pins at rest (grey) and their displacement x3 (green)</div></div></div>\n\
 <div class=\"key\"><span><i class=\"sw\" style=\"background:#999\"></i>contour</span>\
 <span><i class=\"sw\" style=\"background:#1f77b4\"></i>path (commanded)</span>\
 <span><i class=\"sw\" style=\"background:#d62728\"></i>sensor and its x axis</span>\
 <span><i class=\"sw\" style=\"background:#ff7f0e\"></i>edge as predicted</span>\
 <span><i class=\"sw\" style=\"background:#2ca02c\"></i>pin displacement (x3)</span></div>\n\
 <div class=\"controls\"><button id=\"play\">Play</button>\
-<input id=\"slider\" type=\"range\" min=\"0\" value=\"0\" step=\"1\">\
-<span id=\"status\" data-step=\"\"></span></div>\n";
+<input id=\"slider\" type=\"range\" min=\"0\" value=\"0\" step=\"1\"></div>\
+<div id=\"status\" data-step=\"\"></div>\n";
 
 const SCRIPT: &str = r#"
 const D = JSON.parse(document.getElementById('data').textContent);
@@ -241,10 +242,16 @@ mod tests {
             notes: &notes,
         });
         assert!(html.contains("<title>square &lt;replay&gt;</title>"));
-        assert!(html.contains("[3.0,6.0,10.0,0.75,-1.5,4.0,1.0]"), "steps inline");
+        assert!(
+            html.contains("[3.0,6.0,10.0,0.75,-1.5,4.0,1.0]"),
+            "steps inline"
+        );
         assert!(html.contains("[1.0,2.0,3.0,4.0]"), "fields inline");
         assert!(html.contains("[40.0,0.0]"), "contour inline");
-        assert!(html.contains("mean L2 0.5 mm <\\/script>"), "no early end of script");
+        assert!(
+            html.contains("mean L2 0.5 mm <\\/script>"),
+            "no early end of script"
+        );
         assert_eq!(html.matches("</script>").count(), 2);
         for external in ["http:", "https:", "src=", "href=", "@import", "url("] {
             assert!(!html.contains(external), "loads {external}");

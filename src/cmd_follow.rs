@@ -274,6 +274,17 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
             s.metrics.closed
         );
     }
+    for s in &r.real_shapes {
+        crate::say!(
+            "{:<16} real-frame world: mean L2 {:.2} mm (report {:.2}), closed {}, label distance mean {:.2} / p95 {:.2}",
+            s.shape,
+            s.metrics.mean_l2_mm,
+            s.report_l2_mm,
+            s.metrics.closed,
+            s.label_distance_mean,
+            s.label_distance_p95
+        );
+    }
     crate::say!("report: {}", a.out.join("report.html").display());
     Ok(())
 }

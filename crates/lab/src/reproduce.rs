@@ -3,10 +3,14 @@
 //! Collect on the disk (train and validation runs), train the three
 //! networks and the backprop twin, validate them, follow the four shapes
 //! with the PDenNN, and write report.md, report.html and metrics.json with
-//! the report's numbers side by side.
+//! the report's numbers side by side. With real frames (`--real`), the
+//! networks on real frames and the simulator's twin, and the four shapes
+//! in the real-frame world ([`crate::replay_world`]): the PDenNN trained on
+//! the real 80 %, every tap answered by the held-out 20 %.
 use crate::collect::{collect, CollectConfig};
-use crate::error::Result;
+use crate::error::{LabError, Result};
 use crate::follow::{follow_simulated, SimFollowConfig};
+use crate::replay_world::{follow_replay, ReplayWorld};
 use crate::train::{resolve_config, save_model, train, validate_net, Validation};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -15,7 +19,7 @@ use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_report::figures::{self, Predicted};
 use tactrace_report::results::slug;
-use tactrace_report::{NetRow, ReproduceResults, ShapeRow};
+use tactrace_report::{NetRow, ReplayShapeRow, ReproduceResults, ShapeRow};
 use tactrace_servo::pose_at_edge;
 use tactrace_store::{write_atomic, write_dataset, StagedDir, StoredModel, TapData};
 use tactrace_vision::PinExtractor;
@@ -195,18 +199,22 @@ fn reproduce_into(
         })
         .collect();
     let shapes = shapes.into_iter().collect::<Result<Vec<_>>>()?;
-    let (real_networks, sim_to_real) = match &cfg.real {
+    let (real_networks, sim_to_real, real_shapes) = match &cfg.real {
         Some(real) => {
             log("importing real frames and training on them, and on their simulated twin");
-            real_rows(cfg, real, out)?
+            let (nets, transfer, held_out) = real_rows(cfg, real, out)?;
+            log("following the four shapes in the real-frame world");
+            let shapes = real_world_shapes(cfg, real, &held_out, &out.join("real"))?;
+            (nets, transfer, shapes)
         }
-        None => (Vec::new(), Vec::new()),
+        None => (Vec::new(), Vec::new(), Vec::new()),
     };
     let results = ReproduceResults {
         networks,
         real_networks,
         sim_to_real,
         shapes,
+        real_shapes,
         seconds: t0.elapsed().as_secs_f64(),
         seed: cfg.seed,
         tactrace_version: crate::VERSION.into(),
@@ -217,8 +225,13 @@ fn reproduce_into(
 
 /// Train every network on real frames (seeded 80/20 split) and validate on
 /// the 20 %; then train the PDenNN and the MLP on the simulated twin of the
-/// real set (its own 80 %) and validate them on the same real 20 %.
-fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<(Vec<NetRow>, Vec<NetRow>)> {
+/// real set (its own 80 %) and validate them on the same real 20 %. The
+/// held-out 20 % is returned too.
+fn real_rows(
+    cfg: &ReproduceConfig,
+    dir: &Path,
+    out: &Path,
+) -> Result<(Vec<NetRow>, Vec<NetRow>, TapData)> {
     let icfg = crate::import::ImportConfig::bristol(dir);
     let blob = tactrace_vision::BlobParams::preset("real256")?;
     fig_4_1_real(dir, &blob, &out.join("figures/fig4_1_real"))?;
@@ -231,7 +244,89 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<(Vec<NetRo
     let nets = [NETS[2], NETS[3]];
     let mut transfer = train_rows(cfg, &nets, "twin", &twin_tr, &va, &out.join("twin"))?;
     transfer.push(calibrated_row(cfg, dir, (&tr, &va), &twin_cfg, out)?);
-    Ok((real, transfer))
+    Ok((real, transfer, va))
+}
+
+/// The report's four shapes in the real-frame world (`follow --replay`):
+/// the PDenNN trained on the real 80 % (`dir/models/pdennn`), every tap
+/// answered by a frame of the held-out 20 % (`held_out`, written as
+/// `dir/bank.csv`), runs in `dir/follow/SHAPE`.
+fn real_world_shapes(
+    cfg: &ReproduceConfig,
+    real: &Path,
+    held_out: &TapData,
+    dir: &Path,
+) -> Result<Vec<ReplayShapeRow>> {
+    let mut world = ReplayWorld::bristol(real)?;
+    let bank = dir.join("bank.csv");
+    write_rows_of(
+        &world.targets,
+        &world.image_column,
+        &held_out.meta.images,
+        &bank,
+    )?;
+    world.targets = bank;
+    let rows: Vec<Result<ReplayShapeRow>> = REPORT_L2
+        .par_iter()
+        .map(|(shape, report_l2, steps)| {
+            let model = StoredModel::load(&dir.join("models/pdennn"))?;
+            let mut fcfg = cfg.follow.clone();
+            if cfg.report_steps {
+                fcfg.follow.steps = Some(*steps);
+            }
+            fcfg.follow.seed = cfg.seed;
+            let contour = builtin_shape(*shape);
+            let run = dir.join("follow").join(shape.name());
+            let named = (shape.name(), &contour);
+            let res = follow_replay(&fcfg, &world, &model, named, (&run, true), &mut |_| {})?;
+            let metrics = res.run.metrics.expect("scored against the known contour");
+            Ok(ReplayShapeRow {
+                shape: shape.name().into(),
+                metrics,
+                ending: res.run.summary.ending,
+                report_l2_mm: *report_l2,
+                bank_frames: res.stats.bank_frames,
+                label_distance_mean: res.stats.distance_mean,
+                label_distance_p95: res.stats.distance_p95,
+                label_distance_max: res.stats.distance_max,
+            })
+        })
+        .collect();
+    rows.into_iter().collect()
+}
+
+/// Copy the rows of the labels CSV `targets` whose `image_column` names one
+/// of `images` into `out`.
+fn write_rows_of(targets: &Path, image_column: &str, images: &[String], out: &Path) -> Result<()> {
+    let keep: std::collections::HashSet<&str> = images.iter().map(String::as_str).collect();
+    let fmt = |e: csv::Error| LabError::Format {
+        path: targets.to_path_buf(),
+        reason: e.to_string(),
+    };
+    let mut rdr = csv::Reader::from_path(targets).map_err(fmt)?;
+    let headers = rdr.headers().map_err(fmt)?.clone();
+    let col = headers
+        .iter()
+        .position(|h| h.trim() == image_column)
+        .ok_or_else(|| LabError::Format {
+            path: targets.to_path_buf(),
+            reason: format!("no column `{image_column}`"),
+        })?;
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let werr = |e: csv::Error| tactrace_store::StoreError::Write {
+        path: out.to_path_buf(),
+        source: std::io::Error::other(e),
+    };
+    w.write_record(&headers).map_err(werr)?;
+    for rec in rdr.records() {
+        let rec = rec.map_err(fmt)?;
+        if rec.get(col).is_some_and(|v| keep.contains(v.trim())) {
+            w.write_record(&rec).map_err(werr)?;
+        }
+    }
+    let bytes = w.into_inner().map_err(|e| werr(e.into_error().into()))?;
+    write_atomic(out, &bytes)?;
+    Ok(())
 }
 
 /// The PDenNN trained on the twin of a sensor calibrated with 100 taps of

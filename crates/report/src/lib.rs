@@ -15,4 +15,4 @@ pub mod replay_html;
 pub mod results;
 
 pub use error::{ReportError, Result};
-pub use results::{NetRow, ReproduceResults, ShapeRow};
+pub use results::{NetRow, ReplayShapeRow, ReproduceResults, ShapeRow};

@@ -55,8 +55,9 @@ pub struct ReplayArgs {
     /// Follow in the real-frame world: a simulated arm whose every tap is
     /// answered by the frame of this real labelled collection on a straight
     /// edge (Bristol layout: targets.csv, frames/ with init_0.png) whose
-    /// labels are nearest the sensor's true pose (docs/control.md, "The
-    /// real-frame world"). The model must be trained on this collection.
+    /// labels are nearest the sensor's true pose
+    /// (docs/real-frame-world.md). The model must be trained on this
+    /// collection.
     #[arg(long, conflicts_with = "hardware")]
     replay: Option<PathBuf>,
     /// Answer only with the frames whose number N (frame_N_0.png) has

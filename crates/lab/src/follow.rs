@@ -19,7 +19,7 @@ use tactrace_arm::Arm;
 use tactrace_control::{PbtsConfig, PbtsController};
 use tactrace_geometry::{Contour, Vec2};
 use tactrace_report::figures;
-use tactrace_report::replay_html::{replay_html, ReplayPage};
+use tactrace_report::replay_html::{replay_html, PinFields, ReplayPage};
 use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_servo::{
     evaluate, l2_curve, servo_loop, start_pose, FnSink, FollowMetrics, LoopConfig, LoopSummary,
@@ -243,7 +243,7 @@ struct MetricsDocument<'a> {
 #[derive(Default)]
 pub struct RunExtras<'a> {
     pub replay: Option<&'a ReplayStats>,
-    pub fields: Option<(&'a [[f64; 2]], &'a [Vec<f32>])>,
+    pub fields: Option<PinFields<'a>>,
 }
 
 /// The diameter of the real TacTip's dome, mm (the simulated one's is in
@@ -437,7 +437,10 @@ pub fn follow_simulated(
     } = follow_on_rig_recorded(arm, sensor, &perception, &settings, run.path(), progress)?;
     let extras = RunExtras {
         replay: None,
-        fields: Some((perception.reference_pins(), &fields)),
+        fields: Some(PinFields {
+            reference_pins: perception.reference_pins(),
+            fields: &fields,
+        }),
     };
     let (metrics, l2_curve) = write_results_with(
         Some((name, shape)),

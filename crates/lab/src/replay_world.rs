@@ -322,7 +322,10 @@ pub fn follow_replay(
     let stats = ReplayStats::of(rig.answers(), rig.bank(), world.far_distance);
     let extras = RunExtras {
         replay: Some(&stats),
-        fields: Some((perception.reference_pins(), &recorded.fields)),
+        fields: Some(tactrace_report::replay_html::PinFields {
+            reference_pins: perception.reference_pins(),
+            fields: &recorded.fields,
+        }),
     };
     let (metrics, l2_curve) = write_results_with(
         Some((name, shape)),

@@ -11,6 +11,14 @@ use serde::Serialize;
 use tactrace_geometry::Contour;
 use tactrace_servo::StepRecord;
 
+/// The taps' pin displacements: the reference pins (px) and every tap's
+/// displacement vector (x of every pin, then y, px), in that pin order.
+#[derive(Clone, Copy)]
+pub struct PinFields<'a> {
+    pub reference_pins: &'a [[f64; 2]],
+    pub fields: &'a [Vec<f32>],
+}
+
 /// What the page shows of one run.
 pub struct ReplayPage<'a> {
     /// The title (shape and world).
@@ -21,9 +29,8 @@ pub struct ReplayPage<'a> {
     pub steps: &'a [StepRecord],
     /// The sensor's dome radius, mm (drawn round the pose).
     pub sensor_radius_mm: f64,
-    /// The reference pins (px) and every tap's displacement vector (x of
-    /// every pin, then y, px), when the run kept them.
-    pub fields: Option<(&'a [[f64; 2]], &'a [Vec<f32>])>,
+    /// The taps' pin displacements, when the run kept them.
+    pub fields: Option<PinFields<'a>>,
     /// Summary lines shown under the title (metrics, warnings).
     pub notes: &'a [String],
 }
@@ -76,7 +83,8 @@ pub fn replay_html(page: &ReplayPage) -> String {
             .map(round2)
         })
         .collect();
-    let (pins, fields) = page.fields.map_or((Vec::new(), Vec::new()), |(pins, f)| {
+    let (pins, fields) = page.fields.map_or((Vec::new(), Vec::new()), |pf| {
+        let (pins, f) = (pf.reference_pins, pf.fields);
         let pins = pins.iter().map(|p| [round2(p[0]), round2(p[1])]).collect();
         let f = f
             .iter()
@@ -238,7 +246,10 @@ mod tests {
             contour: Some(&square),
             steps: &steps,
             sensor_radius_mm: 20.0,
-            fields: Some((&pins, &fields)),
+            fields: Some(PinFields {
+                reference_pins: &pins,
+                fields: &fields,
+            }),
             notes: &notes,
         });
         assert!(html.contains("<title>square &lt;replay&gt;</title>"));

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::process::Command;
 use tactrace_geometry::{Contour, Pose, Vec2};
-use tactrace_report::replay_html::{replay_html, ReplayPage};
+use tactrace_report::replay_html::{replay_html, PinFields, ReplayPage};
 use tactrace_servo::{Percept, StepRecord};
 
 fn chromium() -> Option<PathBuf> {
@@ -63,7 +63,10 @@ fn the_page_opened_at_a_step_shows_that_steps_values() {
         contour: Some(&disk),
         steps: &steps,
         sensor_radius_mm: 20.0,
-        fields: Some((&pins, &fields)),
+        fields: Some(PinFields {
+            reference_pins: &pins,
+            fields: &fields,
+        }),
         notes: &["a note".to_string()],
     });
     let dir = tempfile::tempdir().unwrap();

@@ -177,5 +177,11 @@ fn a_model_in_another_pin_order_is_refused() {
         ],
     );
     assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("not ordered like the model's training data"),
+        "{}",
+        r.stderr
+    );
     assert!(!t.join("run").exists());
 }

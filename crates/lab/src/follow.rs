@@ -19,7 +19,7 @@ use tactrace_arm::Arm;
 use tactrace_control::{PbtsConfig, PbtsController};
 use tactrace_geometry::{Contour, Vec2};
 use tactrace_report::figures;
-use tactrace_report::replay_html::{replay_html, PinFields, ReplayPage};
+use tactrace_report::replay_html::{replay_html, PinFields, ReplayPage, StepFrames};
 use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_servo::{
     evaluate, l2_curve, servo_loop, start_pose, FnSink, FollowMetrics, LoopConfig, LoopSummary,
@@ -244,6 +244,8 @@ struct MetricsDocument<'a> {
 pub struct RunExtras<'a> {
     pub replay: Option<&'a ReplayStats>,
     pub fields: Option<PinFields<'a>>,
+    /// The frames the taps saw (the real-frame world's answers).
+    pub frames: Option<StepFrames<'a>>,
 }
 
 /// The diameter of the real TacTip's dome, mm (the simulated one's is in
@@ -334,6 +336,7 @@ pub fn write_results_with(
         steps: records,
         sensor_radius_mm: sensor_diameter_mm / 2.0,
         fields: extras.fields,
+        frames: extras.frames,
         notes: &page_notes(&document, extras),
     };
     write_atomic(&dir.join("replay.html"), replay_html(&page).as_bytes())?;
@@ -441,6 +444,7 @@ pub fn follow_simulated(
             reference_pins: perception.reference_pins(),
             fields: &fields,
         }),
+        frames: None,
     };
     let (metrics, l2_curve) = write_results_with(
         Some((name, shape)),

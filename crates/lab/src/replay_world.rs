@@ -258,6 +258,24 @@ impl ReplayStats {
     }
 }
 
+/// The files of the distinct frames that answered (PNG bytes, in order of
+/// first use) and each tap's index among them, for the run's replay page.
+fn answered_frames(answers: &[Answer], bank: &FrameBank) -> Result<(Vec<Vec<u8>>, Vec<usize>)> {
+    let mut slot = std::collections::HashMap::new();
+    let mut images = Vec::new();
+    let mut per_step = Vec::with_capacity(answers.len());
+    for a in answers {
+        let next = slot.len();
+        let k = *slot.entry(a.frame).or_insert(next);
+        if k == images.len() {
+            let path = &bank.frames()[a.frame].path;
+            images.push(std::fs::read(path).map_err(tactrace_store::read_err(path))?);
+        }
+        per_step.push(k);
+    }
+    Ok((images, per_step))
+}
+
 /// The outcome of a run in the real-frame world.
 pub struct ReplayOutcome {
     pub run: FollowOutcome,
@@ -320,7 +338,12 @@ pub fn follow_replay(
     let recorded =
         follow_on_rig_recorded(arm, sensor, &perception, &settings, run.path(), progress)?;
     let stats = ReplayStats::of(rig.answers(), rig.bank(), world.far_distance);
+    let (images, per_step) = answered_frames(rig.answers(), rig.bank())?;
     let extras = RunExtras {
+        frames: Some(tactrace_report::replay_html::StepFrames {
+            images: &images,
+            per_step: &per_step,
+        }),
         replay: Some(&stats),
         fields: Some(tactrace_report::replay_html::PinFields {
             reference_pins: perception.reference_pins(),

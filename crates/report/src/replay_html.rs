@@ -7,6 +7,8 @@
 //! The page opens at step K when its address ends in `#step=K`; the
 //! element `#status` then says that step's values (what the browser test
 //! reads).
+use base64::engine::general_purpose::STANDARD as BASE64;
+use base64::Engine as _;
 use serde::Serialize;
 use tactrace_geometry::Contour;
 use tactrace_servo::StepRecord;
@@ -17,6 +19,14 @@ use tactrace_servo::StepRecord;
 pub struct PinFields<'a> {
     pub reference_pins: &'a [[f64; 2]],
     pub fields: &'a [Vec<f32>],
+}
+
+/// The frames the taps saw, as image files (PNG bytes): each distinct
+/// frame once, and for every step the index of its frame.
+#[derive(Clone, Copy)]
+pub struct StepFrames<'a> {
+    pub images: &'a [Vec<u8>],
+    pub per_step: &'a [usize],
 }
 
 /// What the page shows of one run.
@@ -31,6 +41,9 @@ pub struct ReplayPage<'a> {
     pub sensor_radius_mm: f64,
     /// The taps' pin displacements, when the run kept them.
     pub fields: Option<PinFields<'a>>,
+    /// The frames of the taps, when the run kept them (drawn under the
+    /// pins, in the frame's pixels).
+    pub frames: Option<StepFrames<'a>>,
     /// Summary lines shown under the title (metrics, warnings).
     pub notes: &'a [String],
 }
@@ -47,6 +60,9 @@ struct PageData<'a> {
     pins: Vec<[f64; 2]>,
     /// Per step: dx of every pin, then dy (empty when not kept).
     fields: Vec<Vec<f64>>,
+    /// The distinct frames as data URIs, and each step's index into them.
+    images: Vec<String>,
+    step_image: Vec<usize>,
 }
 
 fn round2(v: f64) -> f64 {
@@ -92,6 +108,10 @@ pub fn replay_html(page: &ReplayPage) -> String {
             .collect();
         (pins, f)
     });
+    let (images, step_image) = page.frames.map_or((Vec::new(), Vec::new()), |f| {
+        let uri = |png: &Vec<u8>| format!("data:image/png;base64,{}", BASE64.encode(png));
+        (f.images.iter().map(uri).collect(), f.per_step.to_vec())
+    });
     let data = PageData {
         title: page.title,
         notes: page.notes,
@@ -100,6 +120,8 @@ pub fn replay_html(page: &ReplayPage) -> String {
         steps,
         pins,
         fields,
+        images,
+        step_image,
     };
     // Inside a script element nothing may close it: `</` is written `<\/`.
     let json = serde_json::to_string(&data)
@@ -134,7 +156,7 @@ canvas{background:#fff;border:1px solid #ccc;border-radius:4px}\
 const BODY: &str = "<h1 id=\"title\"></h1><div id=\"notes\"></div>\n\
 <div class=\"panes\"><canvas id=\"world\" width=\"560\" height=\"560\"></canvas>\
 <div><canvas id=\"pins\" width=\"400\" height=\"400\"></canvas>\
-<div class=\"cap\">the tap&#39;s pins at rest (grey) and their displacement x3 (green)</div></div></div>\n\
+<div class=\"cap\">the tapthe tap&#39;s pins at rest (grey) and their displacement x3 (green)#39;s frame (when the run kept it, faded), its pins at rest (grey) and their displacement x3 (green)</div></div></div>\n\
 <div class=\"key\"><span><i class=\"sw\" style=\"background:#999\"></i>contour</span>\
 <span><i class=\"sw\" style=\"background:#1f77b4\"></i>path (commanded)</span>\
 <span><i class=\"sw\" style=\"background:#d62728\"></i>sensor and its x axis</span>\
@@ -175,15 +197,21 @@ function drawWorld(i) {
   line(wc, tx([e[0] - h * t[0], e[1] - h * t[1]]), tx([e[0] + h * t[0], e[1] + h * t[1]]), '#ff7f0e', 3);
 }
 const P = document.getElementById('pins'), pc = P.getContext('2d');
+const imgs = D.images.map(u => { const im = new Image(); im.onload = () => show(+slider.value); im.src = u; return im; });
 function drawPins(i) {
   pc.clearRect(0, 0, P.width, P.height);
-  const f = D.fields[i];
+  const f = D.fields[i], im = imgs[D.step_image[i]];
+  let q, ox = 20, oy = 20, px0 = 0, py0 = 0;
+  if (im && im.complete && im.naturalWidth) {
+    q = Math.min(P.width / im.naturalWidth, P.height / im.naturalHeight); ox = 0; oy = 0;
+    pc.globalAlpha = 0.45; pc.drawImage(im, 0, 0, im.naturalWidth * q, im.naturalHeight * q); pc.globalAlpha = 1;
+  }
   if (!D.pins.length || !f || !f.length) { pc.fillStyle = '#888'; pc.font = '14px sans-serif'; pc.fillText('no pin displacements kept for this run', 20, 30); return; }
   const xs = D.pins.map(p => p[0]), ys = D.pins.map(p => p[1]);
-  const px0 = Math.min(...xs), py0 = Math.min(...ys), span = Math.max(Math.max(...xs) - px0, Math.max(...ys) - py0);
-  const q = (P.width - 40) / span, m = D.pins.length;
+  if (!q) { px0 = Math.min(...xs); py0 = Math.min(...ys); q = (P.width - 40) / Math.max(Math.max(...xs) - px0, Math.max(...ys) - py0); }
+  const m = D.pins.length;
   for (let j = 0; j < m; j++) {
-    const p = [20 + (D.pins[j][0] - px0) * q, 20 + (D.pins[j][1] - py0) * q];
+    const p = [ox + (D.pins[j][0] - px0) * q, oy + (D.pins[j][1] - py0) * q];
     pc.fillStyle = '#bbb'; pc.beginPath(); pc.arc(p[0], p[1], 2.5, 0, 2 * Math.PI); pc.fill();
     line(pc, p, [p[0] + 3 * q * f[j], p[1] + 3 * q * f[m + j]], '#2ca02c', 1.5);
   }
@@ -250,6 +278,10 @@ mod tests {
                 reference_pins: &pins,
                 fields: &fields,
             }),
+            frames: Some(StepFrames {
+                images: &[vec![1, 2, 3]],
+                per_step: &[0, 0, 0, 0],
+            }),
             notes: &notes,
         });
         assert!(html.contains("<title>square &lt;replay&gt;</title>"));
@@ -259,6 +291,8 @@ mod tests {
         );
         assert!(html.contains("[1.0,2.0,3.0,4.0]"), "fields inline");
         assert!(html.contains("[40.0,0.0]"), "contour inline");
+        assert!(html.contains("\"images\":[\"data:image/png;base64,AQID\"]"));
+        assert!(html.contains("\"step_image\":[0,0,0,0]"));
         assert!(
             html.contains("mean L2 0.5 mm <\\/script>"),
             "no early end of script"

@@ -67,6 +67,7 @@ fn the_page_opened_at_a_step_shows_that_steps_values() {
             reference_pins: &pins,
             fields: &fields,
         }),
+        frames: None,
         notes: &["a note".to_string()],
     });
     let dir = tempfile::tempdir().unwrap();

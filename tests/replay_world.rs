@@ -106,6 +106,8 @@ fn a_model_trained_on_real_frames_follows_a_disk_answered_by_held_out_frames() {
     // loop stays on the edge (the first steps are a quarter of the disk).
     let track = metrics["mean_track_error_mm"].as_f64().unwrap();
     assert!(track < 1.5, "{metrics}");
+    let answers = std::fs::read_to_string(t.join("run/answers.csv")).unwrap();
+    assert_eq!(answers.lines().count(), 61, "a header and a line a tap");
     let page = std::fs::read_to_string(t.join("run/replay.html")).unwrap();
     assert!(page.contains("real-frame world") && !page.contains("https:"));
     let config = std::fs::read_to_string(t.join("run/config.toml")).unwrap();

@@ -258,6 +258,28 @@ impl ReplayStats {
     }
 }
 
+/// `answers.csv`: every tap's labels (of the pose reached), the frame that
+/// answered, its labels and the label distance.
+fn write_answers(path: &Path, answers: &[Answer], bank: &FrameBank) -> Result<()> {
+    let mut text = String::from(
+        "step,r_label_mm,theta_label_deg,dz_label_mm,frame,frame_r_mm,frame_theta_deg,frame_dz_mm,distance\n",
+    );
+    for (step, a) in answers.iter().enumerate() {
+        let f = &bank.frames()[a.frame];
+        let name = f
+            .path
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        let (w, g) = (a.wanted, f.labels);
+        text.push_str(&format!(
+            "{step},{:.4},{:.3},{:.4},{name},{:.4},{:.3},{:.4},{:.4}\n",
+            w.r_mm, w.theta_deg, w.dz_mm, g.r_mm, g.theta_deg, g.dz_mm, a.distance
+        ));
+    }
+    tactrace_store::write_atomic(path, text.as_bytes())?;
+    Ok(())
+}
+
 /// The files of the distinct frames that answered (PNG bytes, in order of
 /// first use) and each tap's index among them, for the run's replay page.
 fn answered_frames(answers: &[Answer], bank: &FrameBank) -> Result<(Vec<Vec<u8>>, Vec<usize>)> {
@@ -338,6 +360,7 @@ pub fn follow_replay(
     let recorded =
         follow_on_rig_recorded(arm, sensor, &perception, &settings, run.path(), progress)?;
     let stats = ReplayStats::of(rig.answers(), rig.bank(), world.far_distance);
+    write_answers(&run.path().join("answers.csv"), rig.answers(), rig.bank())?;
     let (images, per_step) = answered_frames(rig.answers(), rig.bank())?;
     let extras = RunExtras {
         frames: Some(tactrace_report::replay_html::StepFrames {

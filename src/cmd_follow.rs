@@ -129,11 +129,14 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     if let Some(hw) = a.hardware.clone() {
         return follow_hardware(a, &hw);
     }
-    if let Some(dir) = a.replay.replay.clone() {
-        return follow_replay_world(a, &dir);
-    }
     let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
     overrides(&a, &mut cfg.follow);
+    if let Some(dir) = &a.replay.replay {
+        cfg.replay = Some(a.replay.world(dir)?);
+    }
+    if let Some(world) = cfg.replay.take() {
+        return follow_replay_world(a, cfg, &world);
+    }
     let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
     let contour = load_shape(&spec)?;
     let diameter = 2.0 * cfg.rig.sensor.geometry.dome_radius_mm;
@@ -153,11 +156,9 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     report_run(&spec.name(), &res?)
 }
 
-/// `follow --replay`: the loop in the real-frame world.
-fn follow_replay_world(a: FollowArgs, dir: &std::path::Path) -> Result<()> {
-    let world = a.replay.world(dir)?;
-    let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
-    overrides(&a, &mut cfg.follow);
+/// `follow --replay` (or a configuration with a `[replay]` table): the
+/// loop in the real-frame world.
+fn follow_replay_world(a: FollowArgs, cfg: SimFollowConfig, world: &ReplayWorld) -> Result<()> {
     let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
     let contour = load_shape(&spec)?;
     if let Some(w) = size_warning(&spec.name(), &contour, tactip_diameter_mm()) {
@@ -167,7 +168,7 @@ fn follow_replay_world(a: FollowArgs, dir: &std::path::Path) -> Result<()> {
     let pb = bar(cfg.follow.step_limit() as u64, "follow");
     let res = follow_replay(
         &cfg,
-        &world,
+        world,
         &model,
         (&spec.name(), &contour),
         (&a.out, a.force),

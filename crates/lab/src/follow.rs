@@ -12,7 +12,7 @@
 //! leaves its trajectory so far in `OUT.partial`, which the next run into
 //! `OUT` replaces.
 use crate::error::{LabError, Result};
-use crate::replay_world::ReplayStats;
+use crate::replay_world::{ReplayStats, ReplayWorld};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_arm::Arm;
@@ -29,7 +29,8 @@ use tactrace_store::{write_atomic, write_err, StagedDir, StoredModel};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// A follow run in the simulated world: one TOML file with these tables,
-/// laid over [`SimFollowConfig::default`].
+/// laid over [`SimFollowConfig::default`]; with a `[replay]` table, in the
+/// real-frame world ([`crate::replay_world`]).
 #[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
 pub struct SimFollowConfig {
@@ -37,6 +38,9 @@ pub struct SimFollowConfig {
     pub controller: PbtsConfig,
     pub follow: LoopConfig,
     pub start: StartConfig,
+    /// The real-frame world (`follow --replay`), if the run is in it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replay: Option<ReplayWorld>,
 }
 
 /// What the servo loop needs besides the arm, the sensor and the model:

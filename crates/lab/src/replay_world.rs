@@ -18,7 +18,7 @@ use crate::follow::{
     RunFolder, SimFollowConfig,
 };
 use crate::import::{read_rows, LabelColumns, Row};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_geometry::Contour;
 use tactrace_sensor::{
@@ -28,8 +28,10 @@ use tactrace_servo::{start_pose, ReplayRig, StepRecord};
 use tactrace_store::StoredModel;
 use tactrace_vision::BlobParams;
 
-/// Where the real collection is and which of its frames make the bank.
-#[derive(Debug, Clone, Serialize)]
+/// Where the real collection is and which of its frames make the bank
+/// (the `[replay]` table of a follow configuration).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ReplayWorld {
     /// Folder of the frames.
     pub frames: PathBuf,
@@ -73,7 +75,8 @@ impl ReplayWorld {
 }
 
 /// `N % modulus == remainder` on a frame's number.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct KeepRule {
     pub modulus: u64,
     pub remainder: u64,
@@ -304,17 +307,10 @@ pub struct ReplayOutcome {
     pub stats: ReplayStats,
 }
 
-/// The resolved configuration of a replay run (`config.toml`).
-#[derive(Serialize)]
-struct ReplayRunConfig<'a> {
-    #[serde(flatten)]
-    follow: &'a SimFollowConfig,
-    replay: &'a ReplayWorld,
-}
-
 /// Follow `shape` (named `name`) in the real-frame world `world` with
 /// `model` (trained on the collection's frames, in its pin order and label
-/// convention), into the run folder `out`. The arm, workspace, tap and
+/// convention), into the run folder `out` (whose `config.toml` is `cfg`
+/// with `world` as its `[replay]` table). The arm, workspace, tap and
 /// loop settings are `cfg`'s; the label convention is that of
 /// `cfg.rig.sensor.calibration`, centred ([`LabelConvention::centred`]).
 pub fn follow_replay(
@@ -351,9 +347,9 @@ pub fn follow_replay(
         start,
         cfg.follow.seed,
     )?;
-    let config = ReplayRunConfig {
-        follow: cfg,
-        replay: world,
+    let config = SimFollowConfig {
+        replay: Some(world.clone()),
+        ..cfg.clone()
     };
     let run = RunFolder::start(out, force, &config)?;
     let (arm, sensor) = rig.parts();

@@ -116,6 +116,13 @@ pub fn reproduce(
     (out, force): (&Path, bool),
     log: &(dyn Fn(&str) + Sync),
 ) -> Result<ReproduceResults> {
+    if cfg.follow.replay.is_some() {
+        return Err(LabError::Config(
+            "reproduce runs the simulated world, and with --real the real-frame world on its \
+             own held-out frames: leave [follow.replay] out"
+                .into(),
+        ));
+    }
     let stage = StagedDir::new(out, force)?;
     let results = reproduce_into(cfg, stage.path(), log)?;
     stage.commit()?;

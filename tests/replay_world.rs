@@ -115,6 +115,25 @@ fn a_model_trained_on_real_frames_follows_a_disk_answered_by_held_out_frames() {
         config.contains("[replay]") && config.contains("remainder = 0"),
         "{config}"
     );
+    // The run's config.toml runs the same again, in the same world.
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow",
+            "--model",
+            "m",
+            "--shape",
+            "disk",
+            "--config",
+            "run/config.toml",
+            "--out",
+            "again",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let trajectory =
+        |run: &str| std::fs::read_to_string(t.join(run).join("trajectory.csv")).unwrap();
+    assert_eq!(trajectory("run"), trajectory("again"));
 
     // Bad input, each exit code 2 with a message saying what is wrong.
     let r = follow(&["--r-column", "nope"], "bad1");

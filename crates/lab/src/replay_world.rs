@@ -405,4 +405,48 @@ mod tests {
         }
         assert_eq!(frame_number("frame_3762_0.png"), Some(3762));
     }
+
+    fn labels(r: f64, t: f64) -> EdgeLabels {
+        EdgeLabels {
+            r_mm: r,
+            theta_deg: t,
+            dz_mm: 0.0,
+        }
+    }
+
+    /// Twenty answers at distances 0.05, 0.10, ..., 1.00 from two frames.
+    #[test]
+    fn the_statistics_are_those_of_the_answers() {
+        let frames = [labels(-1.0, 0.0), labels(1.0, 10.0)]
+            .map(|labels| LabelledFrame {
+                path: "f.png".into(),
+                labels,
+            })
+            .to_vec();
+        let bank = FrameBank::new(frames, false).unwrap();
+        let answers: Vec<Answer> = (1..=20)
+            .map(|k| Answer {
+                wanted: labels(-1.0 + 0.1 * k as f64, 0.0),
+                frame: k % 2,
+                distance: 0.05 * k as f64,
+            })
+            .collect();
+        let s = ReplayStats::of(&answers, &bank, 0.5);
+        assert!((s.distance_mean - 0.525).abs() < 1e-12, "{s:?}");
+        assert!((s.distance_p95 - 0.95).abs() < 1e-12, "{s:?}");
+        assert!((s.distance_max - 1.0).abs() < 1e-12, "{s:?}");
+        assert_eq!((s.taps, s.distinct_frames, s.bank_frames), (20, 2, 2));
+        assert_eq!(s.far_taps, 10, "0.55 .. 1.00");
+        assert!(s.warning().is_some_and(|w| w.contains("10 of 20 taps")));
+        // |dr|: wanted -1 + 0.1 k against -1 (k even) or +1 (k odd).
+        let dr: f64 = (1..=20)
+            .map(|k| {
+                let got = if k % 2 == 0 { -1.0 } else { 1.0 };
+                (-1.0 + 0.1 * k as f64 - got).abs()
+            })
+            .sum::<f64>()
+            / 20.0;
+        assert!((s.mean_abs_dr_mm - dr).abs() < 1e-12);
+        assert!((s.mean_abs_dtheta_deg - 5.0).abs() < 1e-12);
+    }
 }

@@ -87,7 +87,8 @@ impl KeepRule {
     pub fn parse(text: &str) -> Result<Self> {
         let bad = || {
             LabError::Config(format!(
-                "--replay-keep `{text}`: expected `N%M==K` (frame number N, e.g. N%5==0)"
+                "--replay-keep `{text}`: expected `N%M==K` with 0 <= K < M (frame number N, \
+                 e.g. N%5==0)"
             ))
         };
         let plain: String = text.chars().filter(|c| !c.is_whitespace()).collect();

@@ -4,8 +4,11 @@ use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
 use tactrace_geometry::ShapeSpec;
-use tactrace_lab::follow::{follow_simulated, size_warning, FollowOutcome, SimFollowConfig};
+use tactrace_lab::follow::{
+    follow_simulated, size_warning, tactip_diameter_mm, FollowOutcome, SimFollowConfig,
+};
 use tactrace_lab::hardware::{follow_hardware as follow_on_hardware, HardwareConfig};
+use tactrace_lab::replay_world::{follow_replay, KeepRule, ReplayWorld};
 use tactrace_lab::reproduce::{reproduce as run_reproduce, ReproduceConfig};
 use tactrace_lab::LabError;
 use tactrace_servo::LoopConfig;
@@ -48,6 +51,84 @@ pub struct FollowArgs {
     /// Replace an existing run directory.
     #[arg(long)]
     force: bool,
+    #[command(flatten)]
+    replay: ReplayArgs,
+}
+
+/// The real-frame world (`follow --replay`).
+#[derive(Args)]
+pub struct ReplayArgs {
+    /// Follow in the real-frame world: a simulated arm whose every tap is
+    /// answered by the frame of this real labelled collection on a straight
+    /// edge (Bristol layout: targets.csv, frames/ with init_0.png) whose
+    /// labels are nearest the sensor's true pose
+    /// (docs/real-frame-world.md). The model must be trained on this
+    /// collection.
+    #[arg(long, conflicts_with = "hardware")]
+    replay: Option<PathBuf>,
+    /// Answer only with the frames whose number N (frame_N_0.png) has
+    /// N % M == K, e.g. `N%5==0`: frames the model never trained on.
+    #[arg(long, requires = "replay")]
+    replay_keep: Option<String>,
+    /// The collection's labels CSV (default: DIR/targets.csv), e.g. one
+    /// part of a split.
+    #[arg(long, requires = "replay")]
+    targets: Option<PathBuf>,
+    /// The collection's undeformed frame (default: DIR/frames/init_0.png).
+    #[arg(long, requires = "replay")]
+    reference: Option<PathBuf>,
+    /// Column of the labels naming each row's frame file.
+    #[arg(long, requires = "replay", default_value = "image_name")]
+    image_column: String,
+    /// Column of the labels with the edge position r, mm.
+    #[arg(long, requires = "replay", default_value = "pose_2")]
+    r_column: String,
+    /// Column of the labels with the edge angle theta, degrees.
+    #[arg(long, requires = "replay", default_value = "pose_6")]
+    theta_column: String,
+    /// Column of the labels with the tap's vertical offset, mm; `none`:
+    /// depth does not count in choosing a frame.
+    #[arg(long, requires = "replay", default_value = "pose_3")]
+    dz_column: String,
+    /// Blob detector parameters (TOML) for the real frames; default: the
+    /// real256 preset, as `import`.
+    #[arg(long, requires = "replay")]
+    params: Option<PathBuf>,
+}
+
+impl ReplayArgs {
+    /// The world these flags describe.
+    fn world(&self, dir: &std::path::Path) -> Result<ReplayWorld> {
+        let mut w = ReplayWorld::bristol(dir)?;
+        if let Some(t) = &self.targets {
+            w.targets = t.clone();
+        }
+        if let Some(r) = &self.reference {
+            w.reference = r.clone();
+        }
+        w.image_column = self.image_column.clone();
+        w.r_column = self.r_column.clone();
+        w.theta_column = self.theta_column.clone();
+        let dz = self.dz_column.trim();
+        w.dz_column = (!dz.is_empty() && !dz.eq_ignore_ascii_case("none")).then(|| dz.to_string());
+        w.keep = self
+            .replay_keep
+            .as_deref()
+            .map(KeepRule::parse)
+            .transpose()?;
+        w.blob = crate::cmd_data::blob_params(self.params.as_deref(), "real256")?;
+        if !w.frames.is_dir() || !w.targets.is_file() {
+            return Err(LabError::Config(format!(
+                "--replay {}: not a labelled collection: it needs frames/ and targets.csv \
+                 (or --targets); found frames/: {}, labels: {}",
+                dir.display(),
+                w.frames.is_dir(),
+                w.targets.is_file()
+            ))
+            .into());
+        }
+        Ok(w)
+    }
 }
 
 pub fn follow(a: FollowArgs) -> Result<()> {
@@ -56,6 +137,12 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     }
     let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
     overrides(&a, &mut cfg.follow);
+    if let Some(dir) = &a.replay.replay {
+        cfg.replay = Some(a.replay.world(dir)?);
+    }
+    if let Some(world) = cfg.replay.take() {
+        return follow_replay_world(a, cfg, &world);
+    }
     if a.sensor.is_some() {
         cfg.calibrated_sensor = a.sensor.clone();
     }
@@ -81,6 +168,33 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     );
     pb.finish_and_clear();
     report_run(&spec.name(), &res?)
+}
+
+/// `follow --replay` (or a configuration with a `[replay]` table): the
+/// loop in the real-frame world.
+fn follow_replay_world(a: FollowArgs, cfg: SimFollowConfig, world: &ReplayWorld) -> Result<()> {
+    let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
+    let contour = load_shape(&spec)?;
+    if let Some(w) = size_warning(&spec.name(), &contour, tactip_diameter_mm()) {
+        eprintln!("warning: {w}");
+    }
+    let model = StoredModel::load(&a.model)?;
+    let pb = bar(cfg.follow.step_limit() as u64, "follow");
+    let res = follow_replay(
+        &cfg,
+        world,
+        &model,
+        (&spec.name(), &contour),
+        (&a.out, a.force),
+        &mut |r| pb.set_position(r.step as u64 + 1),
+    );
+    pb.finish_and_clear();
+    let res = res?;
+    crate::say!("{}", res.stats.summary());
+    if let Some(w) = res.stats.warning() {
+        eprintln!("warning: {w}");
+    }
+    report_run(&spec.name(), &res.run)
 }
 
 /// Print a finished run's summary; a run that did not do what was asked
@@ -201,6 +315,17 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
             s.metrics.mean_l2_mm,
             s.report_l2_mm,
             s.metrics.closed
+        );
+    }
+    for s in &r.real_shapes {
+        crate::say!(
+            "{:<16} real-frame world: mean L2 {:.2} mm (report {:.2}), closed {}, label distance mean {:.2} / p95 {:.2}",
+            s.shape,
+            s.metrics.mean_l2_mm,
+            s.report_l2_mm,
+            s.metrics.closed,
+            s.label_distance_mean,
+            s.label_distance_p95
         );
     }
     crate::say!("report: {}", a.out.join("report.html").display());

@@ -49,7 +49,7 @@ enum Command {
     Validate(cmd_learn::ValidateArgs),
     /// Predict edge position and angle for one frame or a dataset.
     Predict(cmd_learn::PredictArgs),
-    /// Follow a contour with the simulated rig (report ch. 5).
+    /// Follow a contour with the simulated rig, on real frames (--replay) or a real rig (report ch. 5).
     Follow(cmd_follow::FollowArgs),
     /// Regenerate the report's tables and figures end to end.
     Reproduce(cmd_follow::ReproduceArgs),

@@ -295,6 +295,16 @@ fn reproduce_writes_the_report_with_every_table_and_figure() {
     // Self-contained: every figure is embedded, none is a broken link.
     assert!(!html.contains("src=\"figures/") && !html.contains("src=\"models/"));
     assert!(html.matches("data:image/svg+xml;base64,").count() >= 14);
+    // Each shape's run has its step-by-step page, linked from the report.
+    for shape in ["disk", "flower", "trine", "teardrop"] {
+        let page = format!("follow/{shape}/replay.html");
+        assert!(
+            html.contains(&format!("href=\"{page}\"")),
+            "no link to {page}"
+        );
+        let text = std::fs::read_to_string(rep.join(&page)).unwrap();
+        assert!(text.contains("\"steps\":[["), "{page} holds no steps");
+    }
     let config = std::fs::read_to_string(rep.join("config.toml")).unwrap();
     assert!(config.contains("seed = 4") && config.contains("train_samples = 60"));
 }

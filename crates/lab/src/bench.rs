@@ -9,7 +9,7 @@ use std::time::Instant;
 use tactrace_control::{PbtsConfig, PbtsController, SensedPose};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_learn::PoseModel;
-use tactrace_sensor::{Calibration, LoopEdgePose, TacTipModel};
+use tactrace_sensor::{EdgeLabels, LabelConvention, TacTipModel};
 use tactrace_servo::{pose_at_edge, RigConfig};
 use tactrace_store::SensorFolder;
 use tactrace_vision::PinExtractor;
@@ -87,14 +87,25 @@ pub fn bench_calibrated(
 ) -> Result<BenchFigures> {
     let spec = &folder.spec;
     let extractor = PinExtractor::from_reference_frame(&folder.reference, spec.blob.clone())?;
-    let cal = &spec.sensor.calibration;
-    bench_with(&folder.model()?, &extractor, Some(cal), rig, taps, model)
+    // The sensor's own pose (no mount): the labels' tip pose.
+    let convention = LabelConvention {
+        mount_yaw_deg: 0.0,
+        ..folder.label_convention()
+    };
+    bench_with(
+        &folder.model()?,
+        &extractor,
+        Some(&convention),
+        rig,
+        taps,
+        model,
+    )
 }
 
 fn bench_with(
     sensor: &TacTipModel,
     extractor: &PinExtractor,
-    labels: Option<&Calibration>,
+    labels: Option<&LabelConvention>,
     rig: &RigConfig,
     taps: usize,
     model: Option<&PoseModel>,
@@ -106,19 +117,17 @@ fn bench_with(
             let u = i as f64 / taps.max(1) as f64;
             let (r, theta) = (-5.0 + 10.0 * u, -45.0 + 90.0 * ((u * 7.0) % 1.0));
             let at = match labels {
-                Some(cal) => cal.loop_pose(r, theta),
-                None => LoopEdgePose {
-                    r_mm: r,
-                    theta_deg: theta,
-                },
+                Some(c) => {
+                    let p = c.to_pose(EdgeLabels {
+                        r_mm: r,
+                        theta_deg: theta,
+                        dz_mm: 0.0,
+                    });
+                    (p.r_mm, p.theta_deg)
+                }
+                None => (r, theta),
             };
-            pose_at_edge(
-                edge,
-                normal,
-                at.r_mm,
-                at.theta_deg,
-                -rig.tap.nominal_indentation_mm(),
-            )
+            pose_at_edge(edge, normal, at.0, at.1, -rig.tap.nominal_indentation_mm())
         })
         .collect();
     let t0 = Instant::now();

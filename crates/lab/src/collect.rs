@@ -12,7 +12,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use tactrace_arm::Arm;
 use tactrace_geometry::{Contour, Vec2};
-use tactrace_sensor::{Calibration, Frame, LoopEdgePose, TactileSensor};
+use tactrace_sensor::{EdgeLabels, Frame, LabelConvention, TactileSensor};
 use tactrace_servo::{pose_at_edge, tap, RigConfig, SimRig, TapConfig};
 use tactrace_store::frame_file::png_bytes;
 use tactrace_store::{DatasetMeta, SensorFolder, TapData};
@@ -102,8 +102,11 @@ pub fn collect_calibrated(
 ) -> Result<Collected> {
     let (edge, normal) = shape.at_arc_length(cfg.edge_arc_mm);
     let spec = &sensor.spec;
-    let cal = &spec.sensor.calibration;
-    let first = cal.loop_pose(0.0, -cfg.theta_range_deg);
+    let convention = sensor.label_convention();
+    let first = convention.to_pose(EdgeLabels {
+        theta_deg: -cfg.theta_range_deg,
+        ..EdgeLabels::default()
+    });
     let start = pose_at_edge(
         edge,
         normal,
@@ -111,7 +114,9 @@ pub fn collect_calibrated(
         first.theta_deg,
         rig_cfg.tap.height_mm,
     );
-    let mut rig = SimRig::with_model(rig_cfg, sensor.model()?, shape.clone(), start, cfg.seed);
+    let mount = convention.mount_yaw_deg;
+    let model = sensor.model()?;
+    let mut rig = SimRig::with_model(rig_cfg, model, mount, shape.clone(), start, cfg.seed);
     let (arm, sensor_part) = rig.parts();
     let names = [
         format!("r_mm ({})", spec.labels.r),
@@ -125,7 +130,7 @@ pub fn collect_calibrated(
         tap: &rig_cfg.tap,
         edge,
         normal,
-        labels: Some((cal, names)),
+        labels: Some((convention, names)),
     };
     let settings = serde_json::json!({
         "rig": rig_cfg, "collect": cfg, "calibrated_sensor": sensor.source,
@@ -172,7 +177,7 @@ pub struct EdgeRig<'a> {
     /// A sensor's label convention and its target names: labels are drawn
     /// in it and placed at their loop pose (eq. L1). `None`: the labels
     /// are the loop's edge pose.
-    pub labels: Option<(&'a Calibration, [String; 2])>,
+    pub labels: Option<(LabelConvention, [String; 2])>,
 }
 
 /// The collection of report ch. 4.1 on any rig: the labels are the poses
@@ -209,19 +214,17 @@ pub fn collect_on(
         let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
         let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
         let at = match &labels {
-            Some((cal, _)) => cal.loop_pose(r, theta),
-            None => LoopEdgePose {
-                r_mm: r,
-                theta_deg: theta,
-            },
+            Some((convention, _)) => {
+                let p = convention.to_pose(EdgeLabels {
+                    r_mm: r,
+                    theta_deg: theta,
+                    dz_mm: 0.0,
+                });
+                (p.r_mm, p.theta_deg)
+            }
+            None => (r, theta),
         };
-        arm.move_to(pose_at_edge(
-            edge,
-            normal,
-            at.r_mm,
-            at.theta_deg,
-            tap_cfg.height_mm,
-        ))?;
+        arm.move_to(pose_at_edge(edge, normal, at.0, at.1, tap_cfg.height_mm))?;
         let frame = tap(arm, sensor, depth)?;
         let tracked = extractor.extract(&frame)?;
         if tracked.missing > 0 {

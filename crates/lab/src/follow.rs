@@ -3,18 +3,23 @@
 //!
 //! A run folder holds `config.toml` (the resolved configuration, seed and
 //! version), `trajectory.csv` (written and flushed step by step),
-//! `metrics.json` and the trajectory and L2 figures. It is built in
+//! `replay.html` (the run step by step, self-contained), `metrics.json`
+//! (with, in the real-frame world, the label distances of
+//! the answered frames: [`crate::replay_world`]) and the trajectory and L2
+//! figures. It is built in
 //! `OUT.partial` and renamed to `OUT` when the run is over, so a folder
 //! named `OUT` is always complete; a run stopped by an error (or killed)
 //! leaves its trajectory so far in `OUT.partial`, which the next run into
 //! `OUT` replaces.
 use crate::error::{LabError, Result};
+use crate::replay_world::{ReplayStats, ReplayWorld};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_arm::Arm;
 use tactrace_control::{PbtsConfig, PbtsController};
 use tactrace_geometry::{Contour, Vec2};
 use tactrace_report::figures;
+use tactrace_report::replay_html::{replay_html, PinFields, ReplayPage, StepFrames};
 use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_servo::{
     evaluate, l2_curve, servo_loop, start_pose, FnSink, FollowMetrics, LoopConfig, LoopSummary,
@@ -24,7 +29,8 @@ use tactrace_store::{write_atomic, write_err, SensorFolder, StagedDir, StoredMod
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// A follow run in the simulated world: one TOML file with these tables,
-/// laid over [`SimFollowConfig::default`].
+/// laid over [`SimFollowConfig::default`]; with a `[replay]` table, in the
+/// real-frame world ([`crate::replay_world`]).
 #[derive(Debug, Clone, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
 pub struct SimFollowConfig {
@@ -36,6 +42,9 @@ pub struct SimFollowConfig {
     pub controller: PbtsConfig,
     pub follow: LoopConfig,
     pub start: StartConfig,
+    /// The real-frame world (`follow --replay`), if the run is in it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replay: Option<ReplayWorld>,
 }
 
 /// What the servo loop needs besides the arm, the sensor and the model:
@@ -127,6 +136,47 @@ pub fn follow_on_rig(
     dir: &Path,
     progress: &mut dyn FnMut(&StepRecord),
 ) -> Result<(LoopSummary, Vec<StepRecord>)> {
+    let r = follow_on_rig_recorded(arm, sensor, perception, settings, dir, progress)?;
+    Ok((r.summary, r.records))
+}
+
+/// A finished loop: how it ended, every step, and every tap's pin
+/// displacement vector as the model saw it.
+pub struct Recorded {
+    pub summary: LoopSummary,
+    pub records: Vec<StepRecord>,
+    /// One displacement vector a tap (x of every pin, then y, px), in the
+    /// perception's reference pin order; empty for a tap whose pins could
+    /// not be extracted.
+    pub fields: Vec<Vec<f32>>,
+}
+
+/// A sensor that keeps the displacement vector of every frame it passes on.
+struct FieldRecorder<'a> {
+    inner: &'a mut dyn TactileSensor,
+    perception: &'a Perception,
+    fields: Vec<Vec<f32>>,
+}
+
+impl TactileSensor for FieldRecorder<'_> {
+    fn capture(&mut self) -> std::result::Result<Frame, tactrace_sensor::SensorError> {
+        let frame = self.inner.capture()?;
+        let field = self.perception.displacement(&frame).unwrap_or_default();
+        self.fields.push(field);
+        Ok(frame)
+    }
+}
+
+/// As [`follow_on_rig`], keeping every tap's displacement vector (for the
+/// run's replay page).
+pub fn follow_on_rig_recorded(
+    arm: &mut dyn Arm,
+    sensor: &mut dyn TactileSensor,
+    perception: &Perception,
+    settings: &ServoSettings,
+    dir: &Path,
+    progress: &mut dyn FnMut(&StepRecord),
+) -> Result<Recorded> {
     let mut controller = PbtsController::new(settings.controller.clone());
     let path = dir.join("trajectory.csv");
     let file = std::fs::File::create(&path).map_err(write_err(&path))?;
@@ -150,16 +200,27 @@ pub fn follow_on_rig(
     let mut csv = TrajectoryCsv(writer);
     let mut records: Vec<StepRecord> = Vec::new();
     let mut bar = FnSink(|r: &StepRecord| progress(r));
+    let mut recorder = FieldRecorder {
+        inner: sensor,
+        perception,
+        fields: Vec::new(),
+    };
     let summary = servo_loop(
         arm,
-        sensor,
+        &mut recorder,
         perception,
         &mut controller,
         &settings.follow,
         &settings.tap,
         &mut [&mut csv, &mut records, &mut bar],
     )?;
-    Ok((summary, records))
+    let mut fields = recorder.fields;
+    fields.truncate(records.len());
+    Ok(Recorded {
+        summary,
+        records,
+        fields,
+    })
 }
 
 /// metrics.json of a follow run: every metric at the top level (the keys
@@ -175,9 +236,24 @@ struct MetricsDocument<'a> {
     ending: tactrace_servo::Ending,
     succeeded: bool,
     message: &'a str,
-    /// Why the metrics may say little (a contour smaller than the sensor).
+    /// Why the metrics may say little (a contour smaller than the sensor,
+    /// real frames far from the poses reached).
     #[serde(skip_serializing_if = "Option::is_none")]
     warning: Option<String>,
+    /// The real-frame world: how near the answered frames' labels were.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    replay: Option<&'a ReplayStats>,
+}
+
+/// What a run knows besides its trajectory: the real-frame world's label
+/// distances, and the taps' displacement vectors with the reference pins
+/// (px) they are ordered by.
+#[derive(Default)]
+pub struct RunExtras<'a> {
+    pub replay: Option<&'a ReplayStats>,
+    pub fields: Option<PinFields<'a>>,
+    /// The frames the taps saw (the real-frame world's answers).
+    pub frames: Option<StepFrames<'a>>,
 }
 
 /// The diameter of the real TacTip's dome, mm (the simulated one's is in
@@ -213,6 +289,28 @@ pub fn write_results(
     sensor_diameter_mm: f64,
     dir: &Path,
 ) -> Result<(Option<FollowMetrics>, Vec<f64>)> {
+    let extras = RunExtras::default();
+    write_results_with(
+        shape,
+        records,
+        summary,
+        follow,
+        sensor_diameter_mm,
+        dir,
+        &extras,
+    )
+}
+
+/// As [`write_results`], with what else the run knows (`extras`).
+pub fn write_results_with(
+    shape: Option<(&str, &Contour)>,
+    records: &[StepRecord],
+    summary: &LoopSummary,
+    follow: &LoopConfig,
+    sensor_diameter_mm: f64,
+    dir: &Path,
+    extras: &RunExtras,
+) -> Result<(Option<FollowMetrics>, Vec<f64>)> {
     let traj: Vec<Vec2> = records
         .iter()
         .map(|r| Vec2::new(r.pose.x, r.pose.y))
@@ -232,10 +330,24 @@ pub fn write_results(
         ending: summary.ending,
         succeeded: summary.ending.succeeded(),
         message: &summary.message,
-        warning: shape.and_then(|(name, c)| size_warning(name, c, sensor_diameter_mm)),
+        warning: join_warnings([
+            shape.and_then(|(name, c)| size_warning(name, c, sensor_diameter_mm)),
+            extras.replay.and_then(ReplayStats::warning),
+        ]),
+        replay: extras.replay,
     };
     let json = serde_json::to_string_pretty(&document).expect("metrics serialise");
     write_atomic(&dir.join("metrics.json"), json.as_bytes())?;
+    let page = ReplayPage {
+        title: &format!("{} ({})", shape.map_or("run", |s| s.0), world_name(extras)),
+        contour: shape.map(|s| s.1),
+        steps: records,
+        sensor_radius_mm: sensor_diameter_mm / 2.0,
+        fields: extras.fields,
+        frames: extras.frames,
+        notes: &page_notes(&document, extras),
+    };
+    write_atomic(&dir.join("replay.html"), replay_html(&page).as_bytes())?;
     let Some((name, contour, metrics, curve)) = scored else {
         return Ok((None, Vec::new()));
     };
@@ -245,6 +357,41 @@ pub fn write_results(
         figures::error_curve(&dir.join("l2_error"), name, &curve)?;
     }
     Ok((Some(metrics), curve))
+}
+
+/// Which world the run was in, for the replay page's title.
+fn world_name(extras: &RunExtras) -> &'static str {
+    if extras.replay.is_some() {
+        "real-frame world"
+    } else {
+        "follow run"
+    }
+}
+
+/// The replay page's summary lines: how the run ended, its metrics, its
+/// label distances and warnings.
+fn page_notes(doc: &MetricsDocument, extras: &RunExtras) -> Vec<String> {
+    let mut notes = vec![format!("{:?}: {}", doc.ending, doc.message)];
+    if let Some(m) = doc.metrics {
+        notes.push(format!(
+            "{} steps; mean L2 {:.3} mm, track error mean {:.3} / max {:.3} mm, coverage {:.0}%, closed: {}",
+            m.steps,
+            m.mean_l2_mm,
+            m.mean_track_error_mm,
+            m.max_track_error_mm,
+            100.0 * m.coverage,
+            m.closed
+        ));
+    }
+    notes.extend(extras.replay.map(ReplayStats::summary));
+    notes.extend(doc.warning.iter().map(|w| format!("warning: {w}")));
+    notes
+}
+
+/// The warnings given, as one (`None` when there are none).
+fn join_warnings<const N: usize>(warnings: [Option<String>; N]) -> Option<String> {
+    let all: Vec<String> = warnings.into_iter().flatten().collect();
+    (!all.is_empty()).then(|| all.join("; "))
 }
 
 /// A run folder being written: `OUT.partial` until [`RunFolder::finish`].
@@ -291,11 +438,7 @@ pub fn follow_simulated(
 ) -> Result<FollowOutcome> {
     cfg.follow.validate()?;
     let calibrated = read_calibrated(cfg)?;
-    let mut start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
-    if let Some(s) = &calibrated {
-        // The start angle is in the servo frame (eq. L2).
-        start.rz += s.spec.sensor.calibration.loop_pose(0.0, 0.0).theta_deg;
-    }
+    let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
     cfg.rig.workspace.validate()?;
     cfg.rig.workspace.check_inside(start).map_err(|e| {
         LabError::Config(format!(
@@ -305,17 +448,21 @@ pub fn follow_simulated(
     })?;
     let seed = cfg.follow.seed;
     let mut rig = match &calibrated {
-        Some(s) => SimRig::with_model(&cfg.rig, s.model()?, shape.clone(), start, seed),
+        Some(s) => {
+            let mount = s.label_convention().mount_yaw_deg;
+            SimRig::with_model(&cfg.rig, s.model()?, mount, shape.clone(), start, seed)
+        }
         None => SimRig::new(&cfg.rig, shape.clone(), start, seed)?,
     };
     let mut settings = cfg.servo_settings();
     let perception = match &calibrated {
         // The sensor's real reference frame and blob detector order its
-        // taps' pins, as for its real frames.
+        // taps' pins, as for its real frames; it is mounted so that the
+        // controller's aligned pose is its own label angle zero.
         Some(s) => {
             settings.blob = s.spec.blob.clone();
             perception_for(&s.reference, model, &settings)?
-                .with_sensor_labels(s.spec.sensor.calibration.clone())
+                .with_label_convention(s.label_convention())
         }
         None => perception_for(&rig.reference_frame(), model, &settings)?,
     };
@@ -325,15 +472,27 @@ pub fn follow_simulated(
     };
     let run = RunFolder::start(out, force, cfg)?;
     let (arm, sensor) = rig.parts();
-    let (summary, records) =
-        follow_on_rig(arm, sensor, &perception, &settings, run.path(), progress)?;
-    let (metrics, l2_curve) = write_results(
+    let Recorded {
+        summary,
+        records,
+        fields,
+    } = follow_on_rig_recorded(arm, sensor, &perception, &settings, run.path(), progress)?;
+    let extras = RunExtras {
+        replay: None,
+        fields: Some(PinFields {
+            reference_pins: perception.reference_pins(),
+            fields: &fields,
+        }),
+        frames: None,
+    };
+    let (metrics, l2_curve) = write_results_with(
         Some((name, shape)),
         &records,
         &summary,
         &cfg.follow,
         2.0 * dome_mm,
         run.path(),
+        &extras,
     )?;
     let dir = run.finish()?;
     Ok(FollowOutcome {

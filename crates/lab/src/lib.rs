@@ -6,7 +6,9 @@
 //! [`import`] turns real frames into the same dataset format, [`twin`]
 //! replays a real set's labels on the simulator, [`train`] fits and
 //! validates pose models, [`follow`] runs the servo loop round an object
-//! into a run folder, [`hardware`] does the same on a real rig,
+//! into a run folder, [`replay_world`] in the real-frame world (a simulated
+//! arm whose taps are answered by real frames), [`hardware`] does the same
+//! on a real rig,
 //! [`reproduce`] regenerates the report, [`mod@bench`] times it. Algorithms
 //! live in the core crates, files in `tactrace-store`, figures and
 //! documents in `tactrace-report`; this crate wires them together.
@@ -20,6 +22,7 @@ pub mod follow;
 #[cfg(feature = "hardware")]
 pub mod hardware;
 pub mod import;
+pub mod replay_world;
 pub mod reproduce;
 pub mod train;
 pub mod twin;

@@ -3,10 +3,14 @@
 //! Collect on the disk (train and validation runs), train the three
 //! networks and the backprop twin, validate them, follow the four shapes
 //! with the PDenNN, and write report.md, report.html and metrics.json with
-//! the report's numbers side by side.
+//! the report's numbers side by side. With real frames (`--real`), the
+//! networks on real frames and the simulator's twin, and the four shapes
+//! in the real-frame world ([`crate::replay_world`]): the PDenNN trained on
+//! the real 80 %, every tap answered by the held-out 20 %.
 use crate::collect::{collect, CollectConfig};
-use crate::error::Result;
+use crate::error::{LabError, Result};
 use crate::follow::{follow_simulated, SimFollowConfig};
+use crate::replay_world::{follow_replay, ReplayWorld};
 use crate::train::{resolve_config, save_model, train, validate_net, Validation};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -15,7 +19,7 @@ use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_report::figures::{self, Predicted};
 use tactrace_report::results::slug;
-use tactrace_report::{NetRow, ReproduceResults, ShapeRow};
+use tactrace_report::{NetRow, ReplayShapeRow, ReproduceResults, ShapeRow};
 use tactrace_servo::pose_at_edge;
 use tactrace_store::{write_atomic, write_dataset, StagedDir, StoredModel, TapData};
 use tactrace_vision::PinExtractor;
@@ -112,6 +116,13 @@ pub fn reproduce(
     (out, force): (&Path, bool),
     log: &(dyn Fn(&str) + Sync),
 ) -> Result<ReproduceResults> {
+    if cfg.follow.replay.is_some() {
+        return Err(LabError::Config(
+            "reproduce runs the simulated world, and with --real the real-frame world on its \
+             own held-out frames: leave [follow.replay] out"
+                .into(),
+        ));
+    }
     let stage = StagedDir::new(out, force)?;
     let results = reproduce_into(cfg, stage.path(), log)?;
     stage.commit()?;
@@ -167,12 +178,18 @@ fn reproduce_into(
         &out.join("models/pdennn"),
         (&out.join("follow"), &out.join("figures"), ""),
     )?;
-    let real_rows = match &cfg.real {
+    let (real_rows, real_shapes) = match &cfg.real {
         Some(real) => {
             log("importing real frames and training on them, on their simulated twin, and on the calibrated twin");
-            real_rows(cfg, real, out)?
+            let rows = real_rows(cfg, real, out)?;
+            log("following the four shapes in the real-frame world");
+            let shapes = match &rows.held_out {
+                Some(va) => real_world_shapes(cfg, real, va, &out.join("real"))?,
+                None => Vec::new(),
+            };
+            (rows, shapes)
         }
-        None => RealRows::default(),
+        None => (RealRows::default(), Vec::new()),
     };
     let results = ReproduceResults {
         networks,
@@ -186,6 +203,7 @@ fn reproduce_into(
             .as_ref()
             .map(|p| p.display().to_string()),
         shapes,
+        real_shapes,
         seconds: t0.elapsed().as_secs_f64(),
         seed: cfg.seed,
         tactrace_version: crate::VERSION.into(),
@@ -250,6 +268,8 @@ struct RealRows {
     /// The PDenNN trained on real frames following the four shapes in the
     /// simulator calibrated with 100 of its training taps.
     real_model_shapes: Vec<ShapeRow>,
+    /// The real frames held out of training (the real-frame world's bank).
+    held_out: Option<TapData>,
 }
 
 /// Train every network on real frames (seeded 80/20 split) and validate on
@@ -295,6 +315,7 @@ fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<RealRows> 
         sim_to_real: transfer,
         calibration,
         real_model_shapes,
+        held_out: Some(va),
     })
 }
 
@@ -355,5 +376,87 @@ fn fig_4_1_real(dir: &Path, blob: &tactrace_vision::BlobParams, stem: &Path) -> 
     let frame = tactrace_sensor::read_frame(&dir.join("frames/frame_0_0.png"))?;
     let extractor = PinExtractor::from_reference_frame(&reference, blob.clone())?;
     figures::frame_pins_displacements(stem, &frame, &extractor, 3.0)?;
+    Ok(())
+}
+
+/// The report's four shapes in the real-frame world (`follow --replay`):
+/// the PDenNN trained on the real 80 % (`dir/models/pdennn`), every tap
+/// answered by a frame of the held-out 20 % (`held_out`, written as
+/// `dir/bank.csv`), runs in `dir/follow/SHAPE`.
+fn real_world_shapes(
+    cfg: &ReproduceConfig,
+    real: &Path,
+    held_out: &TapData,
+    dir: &Path,
+) -> Result<Vec<ReplayShapeRow>> {
+    let mut world = ReplayWorld::bristol(real)?;
+    let bank = dir.join("bank.csv");
+    write_rows_of(
+        &world.targets,
+        &world.image_column,
+        &held_out.meta.images,
+        &bank,
+    )?;
+    world.targets = bank;
+    let rows: Vec<Result<ReplayShapeRow>> = REPORT_L2
+        .par_iter()
+        .map(|(shape, report_l2, steps)| {
+            let model = StoredModel::load(&dir.join("models/pdennn"))?;
+            let mut fcfg = cfg.follow.clone();
+            if cfg.report_steps {
+                fcfg.follow.steps = Some(*steps);
+            }
+            fcfg.follow.seed = cfg.seed;
+            let contour = builtin_shape(*shape);
+            let run = dir.join("follow").join(shape.name());
+            let named = (shape.name(), &contour);
+            let res = follow_replay(&fcfg, &world, &model, named, (&run, true), &mut |_| {})?;
+            let metrics = res.run.metrics.expect("scored against the known contour");
+            Ok(ReplayShapeRow {
+                shape: shape.name().into(),
+                metrics,
+                ending: res.run.summary.ending,
+                report_l2_mm: *report_l2,
+                bank_frames: res.stats.bank_frames,
+                label_distance_mean: res.stats.distance_mean,
+                label_distance_p95: res.stats.distance_p95,
+                label_distance_max: res.stats.distance_max,
+            })
+        })
+        .collect();
+    rows.into_iter().collect()
+}
+
+/// Copy the rows of the labels CSV `targets` whose `image_column` names one
+/// of `images` into `out`.
+fn write_rows_of(targets: &Path, image_column: &str, images: &[String], out: &Path) -> Result<()> {
+    let keep: std::collections::HashSet<&str> = images.iter().map(String::as_str).collect();
+    let fmt = |e: csv::Error| LabError::Format {
+        path: targets.to_path_buf(),
+        reason: e.to_string(),
+    };
+    let mut rdr = csv::Reader::from_path(targets).map_err(fmt)?;
+    let headers = rdr.headers().map_err(fmt)?.clone();
+    let col = headers
+        .iter()
+        .position(|h| h.trim() == image_column)
+        .ok_or_else(|| LabError::Format {
+            path: targets.to_path_buf(),
+            reason: format!("no column `{image_column}`"),
+        })?;
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let werr = |e: csv::Error| tactrace_store::StoreError::Write {
+        path: out.to_path_buf(),
+        source: std::io::Error::other(e),
+    };
+    w.write_record(&headers).map_err(werr)?;
+    for rec in rdr.records() {
+        let rec = rec.map_err(fmt)?;
+        if rec.get(col).is_some_and(|v| keep.contains(v.trim())) {
+            w.write_record(&rec).map_err(werr)?;
+        }
+    }
+    let bytes = w.into_inner().map_err(|e| werr(e.into_error().into()))?;
+    write_atomic(out, &bytes)?;
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! The simulated world of a calibrated sensor (`--sensor`): taps collected
 //! in it carry the sensor's own labels and pin order, and a model trained
 //! on them closes the loop round the disk through the label convention
-//! (eq. L1) and the servo frame (eq. L2). The sensor is the synthetic
+//! (eq. L1) and the sensor's mount (eq. L2). The sensor is the synthetic
 //! "real" TacTip of `common`, calibrated like a user's.
 mod common;
 

@@ -153,9 +153,15 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
     }
     md.push_str("## Contour following with the PDenNN (Fig. 5.3, 5.4)\n\n");
     shapes_table(&mut md, &r.shapes, "");
+    replay_links(&mut md, r.shapes.iter().map(|s| s.shape.as_str()), "follow");
+    if !r.real_shapes.is_empty() {
+        real_shapes_table(&mut md, r);
+    }
     if !r.real_model_shapes.is_empty() {
         md.push_str("## Contour following in the calibrated simulator by the PDenNN trained on real frames\n\nThe simulated world is the sensor calibrated with 100 real taps (`sensor/`); the model was trained on the real training part only and predicts the real labels, mapped to the loop's edge pose by the sensor's label convention (docs/calibration.md).\n\n");
         shapes_table(&mut md, &r.real_model_shapes, "calibrated_");
+        let shapes = r.real_model_shapes.iter().map(|s| s.shape.as_str());
+        replay_links(&mut md, shapes, "follow-calibrated");
     }
     md
 }
@@ -188,6 +194,47 @@ fn shapes_table(md: &mut String, shapes: &[crate::ShapeRow], tag: &str) {
             s.shape, tag
         );
     }
+}
+
+/// A line linking each run's step-by-step replay page (`DIR/SHAPE/replay.html`).
+fn replay_links<'a>(md: &mut String, shapes: impl Iterator<Item = &'a str>, dir: &str) {
+    let links: Vec<String> = shapes
+        .map(|s| format!("[{s}]({dir}/{s}/replay.html)"))
+        .collect();
+    let _ = writeln!(
+        md,
+        "Step-by-step replays (open beside this report): {}.\n",
+        links.join(", ")
+    );
+}
+
+/// The four shapes in the real-frame world (`--real`).
+fn real_shapes_table(md: &mut String, r: &ReproduceResults) {
+    md.push_str("## Contour following in the real-frame world (the PDenNN trained on the real 80 %; every tap answered by the held-out real frame whose labels are nearest the pose reached; docs/results.md)\n\n| shape | mean L2 (mm) | report L2 (mm) | mean track error (mm) | max (mm) | closed | steps | bank frames | label distance mean / p95 / max |\n|---|---|---|---|---|---|---|---|---|\n");
+    for s in &r.real_shapes {
+        let m = &s.metrics;
+        let _ = writeln!(
+            md,
+            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {:.2} / {:.2} / {:.2} |",
+            s.shape,
+            m.mean_l2_mm,
+            s.report_l2_mm,
+            m.mean_track_error_mm,
+            m.max_track_error_mm,
+            m.closed,
+            m.steps,
+            s.bank_frames,
+            s.label_distance_mean,
+            s.label_distance_p95,
+            s.label_distance_max
+        );
+    }
+    md.push_str("\nThe frames are of a straight edge: this world cannot show curvature or corners (the sensor never feels a bend, only the change of edge pose between taps).\n\n");
+    replay_links(
+        md,
+        r.real_shapes.iter().map(|s| s.shape.as_str()),
+        "real/follow",
+    );
 }
 
 /// A data URI for the image file `src` (relative to `dir`), if readable.

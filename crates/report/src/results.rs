@@ -57,6 +57,23 @@ pub struct ShapeRow {
     pub report_l2_mm: f64,
 }
 
+/// One row of the real-frame world's contour table: the shape followed by
+/// a model trained on real frames, every tap answered by held-out real
+/// frames, with how near their labels were to the poses reached.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReplayShapeRow {
+    pub shape: String,
+    pub metrics: FollowMetrics,
+    pub ending: Ending,
+    pub report_l2_mm: f64,
+    /// Frames in the bank (the held-out part).
+    pub bank_frames: usize,
+    /// Scaled label distance of the answered frames: mean, p95, max.
+    pub label_distance_mean: f64,
+    pub label_distance_p95: f64,
+    pub label_distance_max: f64,
+}
+
 /// Everything `reproduce` measured.
 #[derive(Debug, Clone, Serialize)]
 pub struct ReproduceResults {
@@ -76,6 +93,8 @@ pub struct ReproduceResults {
     /// The calibrated sensor folder the simulated world is (`--sensor`).
     pub calibrated_sensor: Option<String>,
     pub shapes: Vec<ShapeRow>,
+    /// The four shapes in the real-frame world (`--real`).
+    pub real_shapes: Vec<ReplayShapeRow>,
     pub seconds: f64,
     pub seed: u64,
     pub tactrace_version: String,

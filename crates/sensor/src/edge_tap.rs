@@ -69,61 +69,11 @@ impl TacTipModel {
     }
 }
 
-/// An edge pose in the servo loop's convention (report ch. 5, the
-/// simulated rig's collection): `r_mm` along the contour's outward normal
-/// (positive: the sensor centre outside the object), `theta_deg` the
-/// sensor's yaw from that normal, in (-180, 180].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LoopEdgePose {
-    pub r_mm: f64,
-    pub theta_deg: f64,
-}
-
-/// `deg` wrapped into (-180, 180].
-fn wrap_deg(deg: f64) -> f64 {
-    let w = deg.rem_euclid(360.0);
-    if w > 180.0 {
-        w - 360.0
-    } else {
-        w
-    }
-}
-
-impl Calibration {
-    /// The loop's edge pose of a tap labelled (`r_mm`, `theta_deg`) in this
-    /// sensor's label convention (docs/calibration.md, eq. L1): the tip
-    /// sits at y0 = edge_scale r + edge_offset from the edge, whose outward
-    /// normal is `object_side` times the edge frame's y axis, so
-    /// r_loop = side y0 and theta_loop = angle_scale theta + angle_offset
-    /// - side 90 deg.
-    pub fn loop_pose(&self, r_mm: f64, theta_deg: f64) -> LoopEdgePose {
-        let side = self.object_side;
-        let y0 = self.edge_scale * r_mm + self.edge_offset_mm;
-        let yaw = self.angle_scale * theta_deg + self.angle_offset_deg;
-        LoopEdgePose {
-            r_mm: side * y0,
-            theta_deg: wrap_deg(yaw - side * 90.0),
-        }
-    }
-
-    /// The labels (r mm, theta deg) this sensor's convention gives the
-    /// loop's edge pose `pose`: the inverse of [`Self::loop_pose`] (eq. L1).
-    pub fn labels_of(&self, pose: LoopEdgePose) -> (f64, f64) {
-        let side = self.object_side;
-        let y0 = pose.r_mm / side;
-        let yaw = wrap_deg(pose.theta_deg + side * 90.0 - self.angle_offset_deg);
-        (
-            (y0 - self.edge_offset_mm) / self.edge_scale,
-            wrap_deg(yaw) / self.angle_scale,
-        )
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::TacTipConfig;
-    use tactrace_geometry::Contour;
+    use crate::{EdgeLabels, LabelConvention, TacTipConfig};
+    use tactrace_geometry::{Contour, Vec2};
 
     fn calibrations() -> Vec<Calibration> {
         let mut other = Calibration {
@@ -139,24 +89,12 @@ mod tests {
         vec![default, other]
     }
 
+    /// The theory of the label convention (eq. L1): a labelled tap on the
+    /// straight edge and a tap of the sensor at the mapped pose (mounted on
+    /// the tool turned by the convention's mount) against a large object's
+    /// straight side deform the skin identically.
     #[test]
-    fn labels_and_loop_poses_round_trip() {
-        for cal in calibrations() {
-            for (r, t) in [(0.0, 0.0), (-4.9, 44.0), (3.2, -45.0), (5.0, 12.5)] {
-                let (r2, t2) = cal.labels_of(cal.loop_pose(r, t));
-                assert!(
-                    (r2 - r).abs() < 1e-9 && (t2 - t).abs() < 1e-9,
-                    "{r},{t} -> {r2},{t2}"
-                );
-            }
-        }
-    }
-
-    /// The theory: a labelled tap on the straight edge and a tap at the
-    /// mapped loop pose against a large object's straight side deform the
-    /// skin identically.
-    #[test]
-    fn a_labelled_tap_is_the_loop_tap_at_its_mapped_pose() {
+    fn a_labelled_tap_is_the_tool_tap_at_its_mapped_pose() {
         // A 400 mm square: its bottom side, y = -200, has outward normal -y.
         let h = 200.0;
         let square = Contour::new(vec![
@@ -172,6 +110,7 @@ mod tests {
                 ..TacTipConfig::default()
             };
             let model = TacTipModel::new(cfg).unwrap();
+            let convention = LabelConvention::centred(cal.clone());
             for (r, t) in [(0.0, 0.0), (-3.0, 30.0), (2.0, -40.0)] {
                 let tap = EdgeTap {
                     r_mm: r,
@@ -179,12 +118,15 @@ mod tests {
                     ..EdgeTap::default()
                 };
                 let want = model.edge_tap_pins(&tap);
-                let p = cal.loop_pose(r, t);
-                let normal_yaw = -90.0_f64;
+                let p = convention.to_pose(EdgeLabels {
+                    r_mm: r,
+                    theta_deg: t,
+                    dz_mm: 0.0,
+                });
+                let sensor_yaw = -90.0 + p.theta_deg + convention.mount_yaw_deg;
                 let n = Vec2::new(0.0, -1.0);
                 let at = Vec2::new(0.0, -h) + n * p.r_mm;
-                let depth = cal.tap_depth_mm;
-                let tip = Pose::planar(at.x, at.y, -depth, normal_yaw + p.theta_deg);
+                let tip = Pose::planar(at.x, at.y, -p.depth_mm, sensor_yaw);
                 let got = model.pins(&square, tip, None);
                 let worst = want
                     .iter()

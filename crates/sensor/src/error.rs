@@ -34,6 +34,9 @@ pub enum SensorError {
     /// An image file whose contents are damaged.
     #[error("frame file `{path}` is corrupt: {reason}")]
     CorruptFrame { path: PathBuf, reason: String },
+    /// A bank of labelled frames that cannot answer (nearest-frame sensor).
+    #[error("unusable bank of labelled frames: {0}")]
+    Bank(String),
     /// The replay sensor has handed out every frame it was given.
     #[error("replay sensor exhausted: all {count} frames were already captured")]
     ReplayExhausted { count: usize },

@@ -4,8 +4,10 @@
 //! and its projection, a contact-mechanics model of the dome pressed onto
 //! an extruded object (docs/sensor-model.md), fast anti-aliased rendering,
 //! the [`TactileSensor`] trait with a simulated implementation
-//! ([`SimTacTip`]) and a replay implementation ([`ReplaySensor`]).
-//! Only the replay sensor and [`read_frame`] touch files.
+//! ([`SimTacTip`]), a replay implementation ([`ReplaySensor`]) and the
+//! real-frame world's [`NearestFrameSensor`] (the saved real frame whose
+//! labels, through a [`LabelConvention`], are nearest the tip's true pose).
+//! Only the replay and nearest-frame sensors and [`read_frame`] touch files.
 
 mod config;
 mod contact;
@@ -15,8 +17,10 @@ mod error;
 mod fit;
 mod fit_joint;
 mod fit_layout;
+mod label_convention;
 mod layout;
 mod model;
+mod nearest;
 mod nelder_mead;
 mod render;
 mod replay;
@@ -27,13 +31,15 @@ mod slip;
 pub use config::{Calibration, CameraConfig, Mechanics, Nuisance, SkinGeometry, TacTipConfig};
 pub use contact::Shear;
 pub use correction::FieldCorrection;
-pub use edge_tap::{EdgeTap, LoopEdgePose};
+pub use edge_tap::EdgeTap;
 pub use error::SensorError;
 pub use fit::{field_misfit, fit_slip, FitSample, SlipFit, SlipParams};
 pub use fit_joint::{fit_joint, JointFit, JOINT_PARAMS};
 pub use fit_layout::fit_layout;
+pub use label_convention::{wrap_deg, EdgeLabels, LabelConvention, ToolEdgePose};
 pub use layout::{hex_lattice, pin_count};
 pub use model::TacTipModel;
+pub use nearest::{edge_pose, Answer, FrameBank, LabelScales, LabelledFrame, NearestFrameSensor};
 pub use nelder_mead::minimise;
 pub use replay::{read_frame, ReplaySensor};
 pub use sensor::{Frame, TactileSensor};

@@ -3,7 +3,9 @@
 //! [`servo_loop()`] taps, perceives ([`Perception`]: pins then the pose
 //! model), asks the PBTS controller for a move and makes it, on any
 //! [`tactrace_arm::Arm`] and [`tactrace_sensor::TactileSensor`]: the
-//! simulated rig of this crate ([`SimRig`]) or a real UR5 and camera. Each
+//! simulated rig of this crate ([`SimRig`]), the real-frame world
+//! ([`ReplayRig`]: a simulated arm, taps answered by saved real frames) or a
+//! real UR5 and camera. Each
 //! step goes to [`StepSink`]s (files and progress bars are sinks the caller
 //! brings). [`metrics`] scores a finished trajectory against the true
 //! contour, which the loop itself never sees.
@@ -13,6 +15,7 @@
 pub mod error;
 pub mod metrics;
 pub mod perception;
+pub mod replay_rig;
 pub mod rig;
 pub mod servo_loop;
 pub mod start;
@@ -22,6 +25,7 @@ pub use metrics::{
     evaluate, l2_curve, traced_fraction, trajectory_closes, ClosureDetector, FollowMetrics,
 };
 pub use perception::{Percept, Perception};
+pub use replay_rig::ReplayRig;
 pub use rig::{tap, RigConfig, SimRig, TapConfig};
 pub use servo_loop::{servo_loop, Ending, FnSink, LoopConfig, LoopSummary, StepRecord, StepSink};
 pub use start::{flattest_arc_mm, pose_at_edge, start_pose, StartConfig};

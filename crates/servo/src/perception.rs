@@ -2,9 +2,8 @@
 //! the pose model (report ch. 4: the displacement vector, then the network).
 use crate::error::{Result, ServoError};
 use serde::Serialize;
-use tactrace_geometry::Pose;
 use tactrace_learn::PoseModel;
-use tactrace_sensor::{Calibration, Frame};
+use tactrace_sensor::{EdgeLabels, Frame, LabelConvention};
 use tactrace_vision::PinExtractor;
 
 /// Pin extraction and the pose model, with the contact rule.
@@ -13,11 +12,9 @@ pub struct Perception {
     model: PoseModel,
     /// Below this mean pin displacement (px) a tap counts as no contact.
     contact_threshold_px: f64,
-    /// When the model predicts a sensor's own labels (a calibrated sensor,
-    /// real frames), the sensor's label convention: predictions are mapped
-    /// to the loop's edge pose by it (eq. L1). `None`: the model predicts
-    /// the loop's edge pose (taps collected in the simulated rig).
-    labels: Option<Calibration>,
+    /// The model predicts in this collection's labels; the percept is in
+    /// the controller's frame (`None`: the model's are the controller's).
+    labels: Option<LabelConvention>,
 }
 
 /// What one tap told the controller.
@@ -54,46 +51,26 @@ impl Perception {
         })
     }
 
-    /// The same perception for a model that predicts labels in the
-    /// convention `labels` (a sensor's `calibration` table): each
-    /// prediction is mapped to the loop's edge pose (eq. L1) and given in
-    /// the servo frame ([`Self::servo_frame_yaw_deg`]).
-    pub fn with_sensor_labels(mut self, labels: Calibration) -> Self {
-        self.labels = Some(labels);
-        self
-    }
-
-    /// The yaw (deg) of the servo frame in the sensor's tool frame: the
-    /// frame whose x axis is the edge's outward normal and y its tangent
-    /// when the sensor sits at its own label angle zero (eq. L2). Zero for
-    /// a model of the simulated rig's taps; for a sensor's own labels,
-    /// `angle_offset - object_side 90 deg`, so the loop keeps the sensor
-    /// at the angles it was trained on. Percepts are in this frame, and
-    /// the controller's moves are turned from it into the tool frame.
-    pub fn servo_frame_yaw_deg(&self) -> f64 {
-        match &self.labels {
-            Some(cal) => cal.loop_pose(0.0, 0.0).theta_deg,
-            None => 0.0,
-        }
-    }
-
-    /// A move computed in the servo frame, in the tool frame (eq. L2).
-    pub fn to_tool_frame(&self, delta: Pose) -> Pose {
-        let phi = self.servo_frame_yaw_deg();
-        if phi == 0.0 {
-            return delta;
-        }
-        let (s, c) = (-phi).to_radians().sin_cos();
-        Pose {
-            x: c * delta.x - s * delta.y,
-            y: s * delta.x + c * delta.y,
-            ..delta
+    /// The model predicts in the labels of a real collection whose
+    /// convention is `labels`: its predictions are mapped into the
+    /// controller's frame ([`LabelConvention::to_pose`]).
+    pub fn with_label_convention(self, labels: LabelConvention) -> Self {
+        Self {
+            labels: Some(labels),
+            ..self
         }
     }
 
     /// The reference pins (px) the displacement vectors are ordered by.
     pub fn reference_pins(&self) -> &[[f64; 2]] {
         self.extractor.tracker.reference()
+    }
+
+    /// The displacement vector of one frame (x of every pin, then y, px,
+    /// in the reference frame's pin order), as the model sees it.
+    pub fn displacement(&self, frame: &Frame) -> Result<Vec<f32>> {
+        let tracked = self.extractor.extract(frame)?;
+        Ok(tracked.displacement(self.extractor.tracker.reference()))
     }
 
     /// Extract pins and predict the edge pose from one frame.
@@ -107,11 +84,15 @@ impl Perception {
             / p.max(1) as f64;
         let [r, theta] = self.model.predict(&disp)?;
         let (r, theta) = match &self.labels {
-            Some(cal) => {
-                let p = cal.loop_pose(r, theta);
-                (p.r_mm, wrap_deg(p.theta_deg - self.servo_frame_yaw_deg()))
-            }
             None => (r, theta),
+            Some(c) => {
+                let pose = c.to_pose(EdgeLabels {
+                    r_mm: r,
+                    theta_deg: theta,
+                    dz_mm: 0.0,
+                });
+                (pose.r_mm, pose.theta_deg)
+            }
         };
         Ok(Percept {
             r_mm: r,
@@ -120,15 +101,5 @@ impl Perception {
             contact: mean >= self.contact_threshold_px,
             missing_pins: tracked.missing,
         })
-    }
-}
-
-/// `deg` wrapped into (-180, 180].
-fn wrap_deg(deg: f64) -> f64 {
-    let w = deg.rem_euclid(360.0);
-    if w > 180.0 {
-        w - 360.0
-    } else {
-        w
     }
 }

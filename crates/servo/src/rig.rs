@@ -92,14 +92,17 @@ impl SimRig {
     /// the arm's repeatability noise and the sensor's nuisance.
     pub fn new(cfg: &RigConfig, shape: Contour, start: Pose, seed: u64) -> Result<Self> {
         let model = TacTipModel::new(cfg.sensor.clone())?;
-        Ok(Self::with_model(cfg, model, shape, start, seed))
+        Ok(Self::with_model(cfg, model, 0.0, shape, start, seed))
     }
 
     /// As [`SimRig::new`] with the TacTip `model` instead of `cfg.sensor`
-    /// (e.g. a calibrated sensor: `SensorFolder::model` in tactrace-store).
+    /// (e.g. a calibrated sensor: `SensorFolder::model` in tactrace-store),
+    /// mounted on the tool turned by `mount_yaw_deg` (a sensor whose labels
+    /// follow its own convention: `LabelConvention::centred`).
     pub fn with_model(
         cfg: &RigConfig,
         model: TacTipModel,
+        mount_yaw_deg: f64,
         shape: Contour,
         start: Pose,
         seed: u64,
@@ -112,7 +115,11 @@ impl SimRig {
         let sensor = SimTacTip::new(
             model,
             shape,
-            Box::new(move || probe.actual()),
+            Box::new(move || {
+                let mut tip = probe.actual();
+                tip.rz += mount_yaw_deg;
+                tip
+            }),
             seed ^ 0x5E45_0002,
         );
         let arm = LimitedArm::new(sim_arm, cfg.workspace.clone(), LimitMode::Refuse);

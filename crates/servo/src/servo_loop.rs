@@ -235,10 +235,10 @@ pub fn servo_loop(
         }
         no_contact = if percept.contact { 0 } else { no_contact + 1 };
         let delta = if percept.contact {
-            perception.to_tool_frame(controller.step(SensedPose {
+            controller.step(SensedPose {
                 r_mm: percept.r_mm,
                 theta_deg: percept.theta_deg,
-            }))
+            })
         } else {
             Pose::default()
         };

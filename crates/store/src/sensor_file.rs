@@ -18,7 +18,7 @@ use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_calib::{CalibrationRecord, LinearCorrection, Tensor};
-use tactrace_sensor::{FieldCorrection, Frame, TacTipConfig, TacTipModel};
+use tactrace_sensor::{FieldCorrection, Frame, LabelConvention, TacTipConfig, TacTipModel};
 use tactrace_vision::BlobParams;
 
 /// The `format` key of every sensor file.
@@ -111,6 +111,12 @@ impl SensorFolder {
     pub fn model(&self) -> std::result::Result<TacTipModel, tactrace_sensor::SensorError> {
         TacTipModel::with_rest_pins(self.spec.sensor.clone(), self.spec.reference_pins.clone())?
             .with_correction(self.field_correction()?)
+    }
+
+    /// Its label convention, mounted on the tool so that the controller's
+    /// aligned pose is the label angle zero (`LabelConvention::centred`).
+    pub fn label_convention(&self) -> LabelConvention {
+        LabelConvention::centred(self.spec.sensor.calibration.clone())
     }
 
     /// Write the folder `dir` (refused when it exists unless `force`).

@@ -11,6 +11,7 @@ use thiserror::Error;
 
 /// Errors of the UR5 driver, the camera sources and the preprocessing.
 #[derive(Debug, Error)]
+#[non_exhaustive]
 pub enum HwError {
     /// A TCP connection could not be opened.
     #[error("cannot connect to {addr}: {source}")]
@@ -94,6 +95,13 @@ pub enum HwError {
     /// A folder source has handed out all its frames.
     #[error("folder source exhausted after {count} frames")]
     Exhausted { count: usize },
+    /// The RTDE interface (port 30004) broke its protocol or refused a
+    /// request (a field it does not know, a version it does not speak).
+    #[error("RTDE: {reason}")]
+    Rtde { reason: String },
+    /// The dashboard server (port 29999) answered a command with an error.
+    #[error("dashboard `{command}`: {reply}")]
+    Dashboard { command: String, reply: String },
     /// The collection metadata (collection_meta.json) could not be used.
     #[error("collection metadata: {reason}")]
     Meta { reason: String },

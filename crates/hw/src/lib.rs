@@ -21,4 +21,6 @@ pub use camera::{
     FrameSource, Preprocess, PreprocessConfig, ThresholdMethod,
 };
 pub use error::HwError;
-pub use ur5::{FakeBehaviour, FakeUrController, FakeUrOptions, RobotState, Ur5Arm, Ur5Config};
+pub use ur5::{
+    FakeBehaviour, FakeUrController, FakeUrOptions, RobotState, StateInterface, Ur5Arm, Ur5Config,
+};

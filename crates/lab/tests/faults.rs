@@ -11,7 +11,9 @@ use std::sync::OnceLock;
 use std::time::Duration;
 use tactrace_arm::{Pose, Workspace};
 use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
-use tactrace_hw::{FakeBehaviour, FakeUrController, FakeUrOptions, PreprocessConfig};
+use tactrace_hw::{
+    FakeBehaviour, FakeUrController, FakeUrOptions, PreprocessConfig, StateInterface,
+};
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{
     follow_on_rig, perception_for, write_results, RunFolder, SimFollowConfig,
@@ -294,7 +296,12 @@ fn a_nan_prediction_stops_the_run_safely() {
 
 /// The loopback fake UR5 with the tool 5 mm above `near`, following
 /// `normal_moves` moves before `behaviour`.
-fn fake_near(near: Pose, behaviour: FakeBehaviour, normal_moves: usize) -> FakeUrController {
+fn fake_near(
+    near: Pose,
+    behaviour: FakeBehaviour,
+    normal_moves: usize,
+    state: StateInterface,
+) -> FakeUrController {
     FakeUrController::start(FakeUrOptions {
         start: [
             near.x / 1000.0,
@@ -306,6 +313,7 @@ fn fake_near(near: Pose, behaviour: FakeBehaviour, normal_moves: usize) -> FakeU
         ],
         behaviour,
         normal_moves,
+        state,
         lifetime: Duration::from_secs(20),
         ..FakeUrOptions::default()
     })
@@ -346,15 +354,26 @@ fn rig_file(fake: &FakeUrController, frames: &Path) -> HardwareConfig {
 }
 
 /// Follow on the fake UR5 (after `normal_moves` moves it behaves as
-/// `behaviour`) with the camera replaying `frames`; the run, and the
-/// URScript lines the fake received.
+/// `behaviour`) with the camera replaying `frames`, the state read over
+/// the real-time interface; the run, and the URScript lines the fake
+/// received.
 fn hardware_run(
     behaviour: FakeBehaviour,
     normal_moves: usize,
     frames: &Path,
 ) -> (LoopSummary, Run, Vec<String>) {
+    hardware_run_on(behaviour, normal_moves, frames, StateInterface::Realtime)
+}
+
+/// [`hardware_run`] with the state read over `state`.
+fn hardware_run_on(
+    behaviour: FakeBehaviour,
+    normal_moves: usize,
+    frames: &Path,
+    state: StateInterface,
+) -> (LoopSummary, Run, Vec<String>) {
     let f = fixture();
-    let fake = fake_near(f.start, behaviour, normal_moves);
+    let fake = fake_near(f.start, behaviour, normal_moves, state);
     let run = Run::new();
     let res = follow_hardware(
         &rig_file(&fake, frames),
@@ -413,6 +432,34 @@ fn a_protective_stop_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
     assert_safe_stop(&summary, &run.out, K + 1, "protective stop");
     assert!(summary.message.contains("the arm failed"), "{summary:?}");
     assert_eq!(moves(&lines).0, normal + 1, "{lines:#?}");
+}
+
+#[test]
+fn a_protective_stop_read_over_rtde_stops_safely_and_sends_no_further_move() {
+    let normal = 1 + 3 * K + 2;
+    let (summary, run, lines) = hardware_run_on(
+        FakeBehaviour::ProtectiveStopOnMove,
+        normal,
+        &fixture().frames,
+        StateInterface::Rtde,
+    );
+    assert_safe_stop(&summary, &run.out, K + 1, "protective stop");
+    assert!(summary.message.contains("the arm failed"), "{summary:?}");
+    assert_eq!(moves(&lines).0, normal + 1, "{lines:#?}");
+}
+
+#[test]
+fn a_lost_rtde_connection_mid_run_stops_safely_and_keeps_the_steps_before() {
+    // The controller hangs up on the move after step K's tap.
+    let normal = 1 + 3 * K + 2;
+    let (summary, run, _) = hardware_run_on(
+        FakeBehaviour::DisconnectOnMove,
+        normal,
+        &fixture().frames,
+        StateInterface::Rtde,
+    );
+    assert_safe_stop(&summary, &run.out, K + 1, "state stream failed");
+    assert!(summary.message.contains("the arm failed"), "{summary:?}");
 }
 
 #[test]

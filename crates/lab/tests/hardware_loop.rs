@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use tactrace_arm::{Pose, Workspace};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
-use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig};
+use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig, StateInterface};
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{follow_on_rig, perception_for, SimFollowConfig};
 use tactrace_lab::hardware::{
@@ -53,8 +53,9 @@ fn trajectory(dir: &Path) -> String {
     std::fs::read_to_string(dir.join("trajectory.csv")).unwrap()
 }
 
-/// The loopback fake controller with the tool 5 mm above `near`.
-fn fake_near(near: Pose) -> FakeUrController {
+/// The loopback fake controller with the tool 5 mm above `near`, serving
+/// its state on `state`.
+fn fake_near(near: Pose, state: StateInterface) -> FakeUrController {
     FakeUrController::start(FakeUrOptions {
         start: [
             near.x / 1000.0,
@@ -64,6 +65,7 @@ fn fake_near(near: Pose) -> FakeUrController {
             0.0,
             near.rz.to_radians(),
         ],
+        state,
         ..FakeUrOptions::default()
     })
     .unwrap()
@@ -150,31 +152,39 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     .unwrap();
     assert_eq!(sim_summary.steps, STEPS, "{}", sim_summary.message);
 
-    // The same frames through the UR5 driver and the camera sensor.
-    let fake = fake_near(start);
-    let hw = HardwareConfig {
-        follow: follow.clone(),
-        ..rig_file(&fake, &frames, start.x, start.y, start.rz)
-    };
-    let hw_out = root.path().join("hw");
-    let res = follow_hardware(
-        &hw,
-        &model,
-        Some(("disk", &disk)),
-        (&hw_out, false),
-        &mut |_| {},
-    )
-    .unwrap();
-    assert_eq!(res.summary.steps, STEPS, "{}", res.summary.message);
-    assert_eq!(trajectory(&hw_out), trajectory(&sim_out));
-    assert!(res.metrics.is_some() && hw_out.join("metrics.json").exists());
-    // Every move went to the controller as URScript.
-    let moves = fake
-        .received_lines()
-        .iter()
-        .filter(|l| l.contains("movel"))
-        .count();
-    assert!(moves >= 3 * STEPS - 1, "{moves} movel commands");
+    // The same frames through the UR5 driver and the camera sensor, with
+    // the arm's state read over RTDE and over the real-time fallback.
+    for state in [StateInterface::Rtde, StateInterface::Realtime] {
+        let fake = fake_near(start, state);
+        let hw = HardwareConfig {
+            follow: follow.clone(),
+            ..rig_file(&fake, &frames, start.x, start.y, start.rz)
+        };
+        assert_eq!(hw.arm.state, state);
+        let hw_out = root.path().join(format!("hw-{state:?}"));
+        let res = follow_hardware(
+            &hw,
+            &model,
+            Some(("disk", &disk)),
+            (&hw_out, false),
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(
+            res.summary.steps, STEPS,
+            "{state:?}: {}",
+            res.summary.message
+        );
+        assert_eq!(trajectory(&hw_out), trajectory(&sim_out), "{state:?}");
+        assert!(res.metrics.is_some() && hw_out.join("metrics.json").exists());
+        // Every move went to the controller as URScript.
+        let moves = fake
+            .received_lines()
+            .iter()
+            .filter(|l| l.contains("movel"))
+            .count();
+        assert!(moves >= 3 * STEPS - 1, "{state:?}: {moves} movel commands");
+    }
 }
 
 #[test]
@@ -205,7 +215,7 @@ fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
         -cfg.theta_range_deg,
         sim.rig.tap.height_mm,
     );
-    let fake = fake_near(first);
+    let fake = fake_near(first, StateInterface::Rtde);
     let hw = rig_file(&fake, &frames, edge.x, edge.y, angle);
     let real = collect_hardware(&hw, &cfg, "rig", |_| {}).unwrap();
     assert_eq!(real.data.targets, simulated.data.targets);

@@ -445,3 +445,17 @@ fn serve(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_trailing_comma_is_not_a_field_and_unknown_names_refuse_the_recipe() {
+        let (fields, reply) = recipe_reply(b"timestamp,actual_TCP_pose,", output_field_type);
+        assert_eq!(reply, "DOUBLE,VECTOR6D");
+        assert_eq!(fields.unwrap().len(), 2);
+        let (fields, reply) = recipe_reply(b"timestamp,tcp", output_field_type);
+        assert_eq!((fields, reply.as_str()), (None, "DOUBLE,NOT_FOUND"));
+    }
+}

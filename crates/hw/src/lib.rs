@@ -1,9 +1,14 @@
 //! Real hardware behind tactrace's traits: a UR5 arm and the TacTip camera.
 //!
 //! - [`Ur5Arm`] implements `tactrace_arm::Arm` over plain TCP (std::net):
-//!   URScript `movel` to the secondary interface, pose feedback from the
-//!   real-time interface. [`FakeUrController`] is a loopback stand-in for
-//!   tests. Always wrap the real arm in `tactrace_arm::LimitedArm`.
+//!   URScript `movel` to the secondary interface, the arm's state
+//!   over RTDE (`ur5::rtde`, port 30004) or the real-time interface
+//!   (port 30003). [`FakeUrController`] is a loopback stand-in for tests.
+//!   Always wrap the real arm in `tactrace_arm::LimitedArm`.
+//! - [`Dashboard`] talks to the dashboard server (port 29999) for the
+//!   set-up steps (robot mode, safety status, unlock, load and play);
+//!   [`FakeDashboard`] stands in for it; [`probe_state`] reads the arm's
+//!   state once without commanding anything.
 //! - [`CameraSensor`] implements `tactrace_sensor::TactileSensor` over any
 //!   [`FrameSource`] ([`CommandSource`] runs an external capture program,
 //!   [`FolderSource`] replays a folder), with the Bristol TacTip
@@ -22,5 +27,6 @@ pub use camera::{
 };
 pub use error::HwError;
 pub use ur5::{
-    FakeBehaviour, FakeUrController, FakeUrOptions, RobotState, StateInterface, Ur5Arm, Ur5Config,
+    probe_state, Dashboard, FakeBehaviour, FakeDashboard, FakeDashboardState, FakeUrController,
+    FakeUrOptions, PolyscopeVersion, RobotState, StateInterface, StateProbe, Ur5Arm, Ur5Config,
 };

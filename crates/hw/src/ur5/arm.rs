@@ -50,6 +50,9 @@ pub struct Ur5Config {
     /// RTDE port, 30004 (used when `state = "rtde"`).
     #[serde(default = "default_rtde_port")]
     pub rtde_port: u16,
+    /// Dashboard server port, 29999 (`tactrace rig check`).
+    #[serde(default = "default_dashboard_port")]
+    pub dashboard_port: u16,
     /// Base -> work frame transform, mm and degrees.
     #[serde(default)]
     pub work_frame: Pose,
@@ -81,6 +84,9 @@ fn default_state_port() -> u16 {
 }
 fn default_rtde_port() -> u16 {
     30004
+}
+fn default_dashboard_port() -> u16 {
+    super::dashboard::DASHBOARD_PORT
 }
 
 /// The controller interface the arm's state is read from.
@@ -117,6 +123,7 @@ impl Ur5Config {
             state: StateInterface::default(),
             state_port: default_state_port(),
             rtde_port: default_rtde_port(),
+            dashboard_port: default_dashboard_port(),
             work_frame: Pose::default(),
             tcp: Pose::default(),
             linear_speed_mm_s: default_speed(),

@@ -176,13 +176,17 @@ impl Server {
         self.stop.load(Ordering::Relaxed) || Instant::now() >= self.deadline
     }
 
-    fn run(self, command: TcpListener, state: TcpListener) {
-        let Some(mut command) = self.accept(&command) else {
-            return;
-        };
+    /// Serves the state connection once it comes, and the command
+    /// connection whenever it comes (a state-only client such as
+    /// `probe_state` never opens one).
+    fn run(self, commands: TcpListener, state: TcpListener) {
         let Some(state) = self.accept(&state) else {
             return;
         };
+        if commands.set_nonblocking(true).is_err() {
+            return;
+        }
+        let mut command: Option<TcpStream> = None;
         let mut out = match self.options.state {
             StateInterface::Realtime => StateOut::Realtime(state),
             StateInterface::Rtde => {
@@ -193,7 +197,6 @@ impl Server {
                 }
             }
         };
-        let _ = command.set_nonblocking(true);
         let mut motion = Motion {
             current: tool_vector_to_isometry(self.options.start),
             target: None,
@@ -205,7 +208,18 @@ impl Server {
         let mut pending = String::new();
         let start = Instant::now();
         while !self.should_stop() {
-            if !self.read_commands(&mut command, &mut pending, &mut motion) || motion.disconnected {
+            if command.is_none() {
+                command = commands
+                    .accept()
+                    .ok()
+                    .and_then(|(c, _)| c.set_nonblocking(true).ok().map(|()| c));
+            }
+            if let Some(stream) = command.as_mut() {
+                if !self.read_commands(stream, &mut pending, &mut motion) {
+                    return;
+                }
+            }
+            if motion.disconnected {
                 return;
             }
             let moving = self.step(&mut motion);

@@ -7,12 +7,18 @@
 //! Metres and rotation vectors exist only on the wire (module `script`).
 
 mod arm;
+mod dashboard;
+mod dashboard_fake;
 mod fake;
 mod link;
+mod probe;
 pub mod realtime;
 pub mod rtde;
 pub mod script;
 
 pub use arm::{StateInterface, Ur5Arm, Ur5Config, MAX_LINEAR_ACCEL_MM_S2, MAX_LINEAR_SPEED_MM_S};
+pub use dashboard::{Dashboard, PolyscopeVersion, DASHBOARD_PORT};
+pub use dashboard_fake::{FakeDashboard, FakeDashboardState};
 pub use fake::{FakeBehaviour, FakeUrController, FakeUrOptions};
+pub use probe::{probe_state, StateProbe};
 pub use realtime::RobotState;

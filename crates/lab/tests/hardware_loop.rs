@@ -4,13 +4,17 @@
 //! command exactly the trajectory the simulated path commanded: the same
 //! pipeline runs on both rigs.
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 use tactrace_arm::{Pose, Workspace};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
-use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig, StateInterface};
+use tactrace_hw::{
+    FakeDashboard, FakeDashboardState, FakeUrController, FakeUrOptions, PreprocessConfig,
+    StateInterface,
+};
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{follow_on_rig, perception_for, SimFollowConfig};
 use tactrace_lab::hardware::{
-    collect_hardware, follow_hardware, FrameSourceConfig, HardwareConfig, HardwareStart,
+    collect_hardware, follow_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart,
 };
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
@@ -118,10 +122,8 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     .unwrap()
     .data;
     let mcfg = resolve_config(ModelKind::PDenNN, Preset::Default, None, Some(15)).unwrap();
-    let model = StoredModel::new(
-        train(&mcfg, &data, &mut |_| {}).unwrap().0,
-        data.meta.reference_pins.clone(),
-    );
+    let net = train(&mcfg, &data, &mut |_| {}).unwrap().0;
+    let model = StoredModel::new(net.clone(), data.meta.reference_pins.clone());
     let root = tempfile::tempdir().unwrap();
 
     // The simulated run, recording its frames (reference first).
@@ -185,6 +187,40 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
             .count();
         assert!(moves >= 3 * STEPS - 1, "{state:?}: {moves} movel commands");
     }
+
+    // `rig check` on the same rig: the reference frame's pins are the
+    // model's; a model trained on pins in another order is refused.
+    let fake = fake_near(start, StateInterface::Rtde);
+    let dashboard =
+        FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();
+    let mut hw = rig_file(&fake, &frames, start.x, start.y, start.rz);
+    hw.arm.dashboard_port = dashboard.port();
+    let check = rig_check(&hw, Some(&model)).unwrap();
+    assert!(check.ready(), "{check:#?}");
+    let reference = check.items.iter().find(|i| i.name == "reference").unwrap();
+    assert!(
+        reference
+            .detail
+            .contains("in the order the model was trained on"),
+        "{reference:?}"
+    );
+    let mut reversed = data.meta.reference_pins.clone();
+    reversed.reverse();
+    let other = StoredModel::new(net, reversed);
+    let fake = fake_near(start, StateInterface::Rtde);
+    hw.arm = fake.config();
+    hw.arm.dashboard_port = dashboard.port();
+    let check = rig_check(&hw, Some(&other)).unwrap();
+    assert!(!check.ready(), "{check:#?}");
+    let reference = check.items.iter().find(|i| i.name == "reference").unwrap();
+    assert!(
+        !reference.ready && reference.detail.contains("the model has"),
+        "{reference:?}"
+    );
+    assert!(
+        check.items.iter().filter(|i| !i.ready).count() == 1,
+        "{check:#?}"
+    );
 }
 
 #[test]

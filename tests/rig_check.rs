@@ -113,7 +113,6 @@ fn real_reference_frame(dir: &TempDir) -> Option<std::path::PathBuf> {
 /// Which camera the rig replays.
 enum Camera {
     Real,
-    Simulated,
     Missing,
 }
 
@@ -123,7 +122,6 @@ fn check_with(dashboard: FakeDashboardState, camera: Camera) -> Option<Run> {
     let dir = TempDir::new("rig-check");
     let frames = match camera {
         Camera::Real => real_reference_frame(&dir)?,
-        Camera::Simulated => reference_frame(&dir),
         Camera::Missing => dir.join("no-camera-here"),
     };
     let ur = fake_ur();

@@ -71,7 +71,7 @@ impl Dashboard {
         let stream = connect(host, port, timeout)?;
         stream
             .set_read_timeout(Some(Duration::from_millis(50)))
-            .map_err(|source| io_err(source))?;
+            .map_err(io_err)?;
         let mut dashboard = Self {
             stream,
             pending: Vec::new(),

@@ -182,6 +182,17 @@ fn a_ready_rig_passes_every_check_and_exits_0() {
         .unwrap_or_else(|| panic!("no pin count in `{reference}`"));
     assert!((122..=132).contains(&count), "{reference}");
     assert!(run.stdout.trim_end().ends_with("all ready"));
+    // docs/hardware.md shows this very screen.
+    let docs = include_str!("../docs/hardware.md");
+    let shown = docs
+        .split("```text\n")
+        .nth(1)
+        .and_then(|b| b.split("```").next())
+        .expect("docs/hardware.md shows a rig check screen");
+    assert_eq!(
+        shown, run.stdout,
+        "docs/hardware.md's rig check output is stale"
+    );
 }
 
 #[test]

@@ -415,8 +415,8 @@ fn check_dashboard(arm: &Ur5Config, check: &mut RigCheck) -> Option<String> {
             let ready = matches!(status.as_str(), "NORMAL" | "REDUCED");
             let detail = match status.as_str() {
                 "PROTECTIVE_STOP" => format!(
-                    "{status}: remove its cause, then unlock it on the pendant (or send \
-                     `unlock protective stop` to the dashboard)"
+                    "{status}: remove its cause, then unlock it on the pendant (or, in \
+                     remote control, send `unlock protective stop` to the dashboard)"
                 ),
                 s if !ready => format!("{s}: clear it on the pendant"),
                 s => s.to_string(),

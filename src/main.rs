@@ -62,6 +62,9 @@ enum Command {
     /// Set up a real rig: check the arm, safety, camera and reference before a run.
     #[command(subcommand)]
     Rig(cmd_rig::RigCommand),
+    /// Set up the TacTip camera: list V4L2 devices, grab a frame.
+    #[command(subcommand)]
+    Camera(cmd_rig::CameraCommand),
 }
 
 fn main() -> ExitCode {
@@ -79,6 +82,7 @@ fn main() -> ExitCode {
         Command::Sensor(c) => cmd_data::sensor(c),
         Command::Bench(a) => cmd_follow::bench(a),
         Command::Rig(c) => cmd_rig::rig(c),
+        Command::Camera(c) => cmd_rig::camera(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

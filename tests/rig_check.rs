@@ -247,10 +247,53 @@ fn an_unreachable_arm_is_not_ready_and_a_bad_rig_file_exits_2() {
     assert!(line(&run, "state").contains("NOT READY"), "{}", run.stdout);
     assert!(line(&run, "camera").contains(" ready "), "{}", run.stdout);
 
+    // A V4L2 camera that is not there: a clear camera line.
+    let mut v4l2 = HardwareConfig::from_toml(&text, "rig.toml").unwrap();
+    v4l2.camera = FrameSourceConfig::V4l2(tactrace_hw::V4l2Config::new("/dev/video-tactrace-none"));
+    std::fs::write(dir.join("v4l2.toml"), toml::to_string(&v4l2).unwrap()).unwrap();
+    let run = tactrace(&dir.0, &["rig", "check", "v4l2.toml"]);
+    assert_eq!(run.code, 1, "{}\n{}", run.stdout, run.stderr);
+    assert!(
+        line(&run, "camera").contains("no camera at /dev/video-tactrace-none"),
+        "{}",
+        run.stdout
+    );
+
     std::fs::write(dir.join("bad.toml"), format!("{text}\nspeed = 3\n")).unwrap();
     let run = tactrace(&dir.0, &["rig", "check", "bad.toml"]);
     assert_eq!(run.code, 2, "{}\n{}", run.stdout, run.stderr);
     assert!(run.stdout.is_empty(), "{}", run.stdout);
     let run = tactrace(&dir.0, &["rig", "check", "missing.toml"]);
     assert_eq!(run.code, 2, "{}", run.stderr);
+}
+
+#[test]
+fn camera_list_and_grab_say_clearly_when_there_is_no_camera() {
+    let dir = TempDir::new("camera");
+    let run = tactrace(&dir.0, &["camera", "list"]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(
+        run.stdout.contains("/dev/video") || run.stdout.contains("no video capture device"),
+        "{}",
+        run.stdout
+    );
+    let missing = "/dev/video-tactrace-none";
+    let run = tactrace(
+        &dir.0,
+        &["camera", "grab", "--device", missing, "--out", "f.png"],
+    );
+    assert_eq!(run.code, 2, "{}\n{}", run.stdout, run.stderr);
+    assert!(
+        run.stderr.contains("no camera at /dev/video-tactrace-none"),
+        "{}",
+        run.stderr
+    );
+    assert!(!dir.join("f.png").exists());
+    std::fs::write(dir.join("f.png"), b"keep").unwrap();
+    let run = tactrace(
+        &dir.0,
+        &["camera", "grab", "--device", missing, "--out", "f.png"],
+    );
+    assert_eq!(run.code, 2, "{}", run.stderr);
+    assert_eq!(std::fs::read(dir.join("f.png")).unwrap(), b"keep");
 }

@@ -21,7 +21,7 @@ pub mod camera;
 mod error;
 pub mod ur5;
 
-pub use camera::v4l2::{open_v4l2, V4l2Config};
+pub use camera::v4l2::{list_cameras, open_v4l2, CameraInfo, V4l2Config};
 pub use camera::{
     adaptive_threshold, CameraSensor, CommandSource, CommandSourceConfig, FolderSource,
     FrameSource, Preprocess, PreprocessConfig, ThresholdMethod,

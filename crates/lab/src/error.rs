@@ -78,7 +78,9 @@ impl LabError {
             #[cfg(feature = "hardware")]
             LabError::Hardware(e) => matches!(
                 e,
-                tactrace_hw::HwError::Config { .. } | tactrace_hw::HwError::Crop { .. }
+                tactrace_hw::HwError::Config { .. }
+                    | tactrace_hw::HwError::Crop { .. }
+                    | tactrace_hw::HwError::CameraMissing { .. }
             ),
         }
     }

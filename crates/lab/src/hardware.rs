@@ -20,8 +20,8 @@ use tactrace_control::PbtsConfig;
 use tactrace_geometry::{Contour, Vec2};
 use tactrace_hw::ur5::realtime::{check_can_move, safety_mode_name};
 use tactrace_hw::{
-    probe_state, CameraSensor, CommandSource, CommandSourceConfig, Dashboard, FolderSource,
-    FrameSource, PreprocessConfig, StateInterface, Ur5Arm, Ur5Config,
+    open_v4l2, probe_state, CameraSensor, CommandSource, CommandSourceConfig, Dashboard,
+    FolderSource, FrameSource, PreprocessConfig, StateInterface, Ur5Arm, Ur5Config, V4l2Config,
 };
 use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_servo::{pose_at_edge, LoopConfig, StepRecord, TapConfig};
@@ -33,6 +33,8 @@ use tactrace_vision::BlobParams;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum FrameSourceConfig {
+    /// A V4L2 camera kept open for the whole run (`[camera.v4l2]`).
+    V4l2(V4l2Config),
     /// An external capture program per frame (`[camera.command]`).
     Command(CommandSourceConfig),
     /// Replay the images of a folder in natural order (`[camera.folder]`):
@@ -135,6 +137,9 @@ impl HardwareConfig {
     /// Everything that can be checked without touching the hardware.
     pub fn validate(&self) -> Result<()> {
         self.arm.validate()?;
+        if let FrameSourceConfig::V4l2(c) = &self.camera {
+            c.validate()?;
+        }
         self.preprocess.validate()?;
         self.workspace.validate()?;
         self.follow.validate()?;
@@ -161,6 +166,7 @@ impl HardwareConfig {
     fn camera(&self) -> Result<Box<dyn TactileSensor>> {
         let preprocess = self.preprocess.validate()?;
         Ok(match &self.camera {
+            FrameSourceConfig::V4l2(c) => boxed(open_v4l2(c)?, preprocess),
             FrameSourceConfig::Command(c) => boxed(CommandSource::from_config(c)?, preprocess),
             FrameSourceConfig::Folder { path, looping } => {
                 boxed(FolderSource::new(path)?.looping(*looping), preprocess)
@@ -289,6 +295,24 @@ pub fn collect_hardware(
     };
     let settings = serde_json::json!({ "hardware": cfg, "collect": collect });
     collect_on(on, collect, "real", origin, settings, progress)
+}
+
+/// The V4L2 capture devices of this machine (`tactrace camera list`).
+pub fn list_cameras() -> Result<Vec<tactrace_hw::CameraInfo>> {
+    Ok(tactrace_hw::list_cameras()?)
+}
+
+/// One raw grey frame from a V4L2 camera (`tactrace camera grab`): the
+/// rig file's `[camera.v4l2]` settings when given, with `device`
+/// replacing its device; no preprocessing.
+pub fn grab_camera_frame(device: &str, rig: Option<&HardwareConfig>) -> Result<image::GrayImage> {
+    let mut config = match rig.map(|r| &r.camera) {
+        Some(FrameSourceConfig::V4l2(c)) => c.clone(),
+        _ => V4l2Config::new(device),
+    };
+    config.device = device.to_string();
+    let mut source = open_v4l2(&config)?;
+    Ok(source.grab()?.to_luma8())
 }
 
 /// One line of `tactrace rig check`: a part of the rig, whether it is

@@ -27,6 +27,13 @@ pub trait FrameSource {
     fn grab(&mut self) -> Result<DynamicImage, HwError>;
 }
 
+impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
+    /// The boxed source's frame.
+    fn grab(&mut self) -> Result<DynamicImage, HwError> {
+        (**self).grab()
+    }
+}
+
 /// The placeholder in [`CommandSource`] arguments replaced by the output path.
 pub const OUTPUT_PLACEHOLDER: &str = "{output}";
 

@@ -8,7 +8,7 @@ use linuxvideo::format::{PixFormat, PixelFormat};
 use linuxvideo::stream::ReadStream;
 use linuxvideo::{BufType, CapabilityFlags, Device};
 
-use super::{choose_format, CameraFormat, CaptureDevice, StreamFormat, V4l2Config};
+use super::{choose_format, CameraFormat, CameraInfo, CaptureDevice, StreamFormat, V4l2Config};
 use crate::HwError;
 
 /// V4L2's `V4L2_EXPOSURE_MANUAL` value of the `exposure_auto` menu.
@@ -113,17 +113,6 @@ impl CaptureDevice for LinuxDevice {
             })
             .map_err(|e| open_error(&self.name, e))
     }
-}
-
-/// A capture device found by [`list_cameras`].
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct CameraInfo {
-    /// `/dev/videoN`.
-    pub path: String,
-    /// The driver's name for the card.
-    pub card: String,
-    /// Pixel formats offered (fourcc text).
-    pub formats: Vec<String>,
 }
 
 /// The video capture devices of this machine (`/dev/video*` that can

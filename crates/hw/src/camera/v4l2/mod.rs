@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 pub use convert::{choose_format, to_gray, CameraFormat, StreamFormat};
 pub use fake::FakeDevice;
 #[cfg(all(feature = "v4l2", target_os = "linux"))]
-pub use linux::{list_cameras, open_error, CameraInfo, LinuxDevice};
+pub use linux::{list_cameras, open_error, LinuxDevice};
 
 use super::FrameSource;
 use crate::HwError;
@@ -38,6 +38,24 @@ pub trait CaptureDevice {
     fn ready(&mut self) -> Result<bool, HwError>;
     /// The next filled buffer's bytes; call after `ready` said true.
     fn dequeue(&mut self) -> Result<Vec<u8>, HwError>;
+}
+
+/// A capture device found by `list_cameras`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CameraInfo {
+    /// `/dev/videoN`.
+    pub path: String,
+    /// The driver's name for the card.
+    pub card: String,
+    /// Pixel formats offered (fourcc text).
+    pub formats: Vec<String>,
+}
+
+/// The video capture devices of this machine: none where V4L2 capture
+/// is not built in.
+#[cfg(not(all(feature = "v4l2", target_os = "linux")))]
+pub fn list_cameras() -> Result<Vec<CameraInfo>, HwError> {
+    Ok(Vec::new())
 }
 
 /// The `[camera.v4l2]` table of a rig file.

@@ -10,7 +10,8 @@
 //!   [`FakeDashboard`] stands in for it; [`probe_state`] reads the arm's
 //!   state once without commanding anything.
 //! - [`CameraSensor`] implements `tactrace_sensor::TactileSensor` over any
-//!   [`FrameSource`] ([`CommandSource`] runs an external capture program,
+//!   [`FrameSource`] (`camera::v4l2::V4l2Source` keeps a V4L2 camera
+//!   open, [`CommandSource`] runs an external capture program,
 //!   [`FolderSource`] replays a folder), with the Bristol TacTip
 //!   preprocessing (grayscale, crop, median blur, adaptive threshold,
 //!   resize) in [`Preprocess`].

@@ -303,9 +303,10 @@ fn the_rig_file_example_of_the_hardware_guide_is_valid() {
         .split("```toml\n")
         .skip(1)
         .filter_map(|rest| rest.split("```").next())
-        .find(|b| b.contains("[camera.command]"))
+        .find(|b| b.contains("[camera.v4l2]") && b.contains("[workspace]"))
         .expect("docs/hardware.md has a rig file example");
     let cfg = HardwareConfig::from_toml(block, "docs/hardware.md").unwrap();
     cfg.validate().unwrap();
     assert_eq!(cfg.arm.tcp.rx, 180.0);
+    assert!(matches!(&cfg.camera, FrameSourceConfig::V4l2(c) if c.device == "/dev/video0"));
 }

@@ -25,6 +25,10 @@ pub struct CheckArgs {
     /// in its order.
     #[arg(long)]
     model: Option<PathBuf>,
+    /// Without --model: the number of pins the sensor has (127 on the
+    /// Bristol TacTip); the reference frame must show exactly that many.
+    #[arg(long, conflicts_with = "model")]
+    pins: Option<usize>,
 }
 
 pub fn rig(command: RigCommand) -> Result<()> {
@@ -37,7 +41,7 @@ fn check(a: CheckArgs) -> Result<()> {
     let text = fsutil::read_text(&a.rig)?;
     let cfg = HardwareConfig::from_toml(&text, &a.rig.display().to_string())?;
     let model = a.model.as_deref().map(StoredModel::load).transpose()?;
-    let report = rig_check(&cfg, model.as_ref())?;
+    let report = rig_check(&cfg, model.as_ref(), a.pins)?;
     print_check(&a.rig.display().to_string(), &report)?;
     if !report.ready() {
         let failed = report.items.iter().filter(|i| !i.ready).count();

@@ -193,6 +193,35 @@ fn a_ready_rig_passes_every_check_and_exits_0() {
         shown, run.stdout,
         "docs/hardware.md's rig check output is stale"
     );
+    // --pins makes the count a condition.
+    let dir = TempDir::new("rig-check-pins");
+    let frames = real_reference_frame(&dir).unwrap();
+    let (ur, dash) = (
+        fake_ur(),
+        FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap(),
+    );
+    write_rig(&dir, &ur, &dash, &frames);
+    let exact = count.to_string();
+    let run = tactrace(&dir.0, &["rig", "check", "rig.toml", "--pins", &exact]);
+    assert_eq!(run.code, 0, "{}\n{}", run.stdout, run.stderr);
+    assert!(
+        line(&run, "reference").contains("as expected"),
+        "{}",
+        run.stdout
+    );
+    let (ur, dash) = (
+        fake_ur(),
+        FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap(),
+    );
+    write_rig(&dir, &ur, &dash, &frames);
+    let other = (count + 1).to_string();
+    let run = tactrace(&dir.0, &["rig", "check", "rig.toml", "--pins", &other]);
+    assert_eq!(run.code, 1, "{}\n{}", run.stdout, run.stderr);
+    assert!(
+        line(&run, "reference").contains("NOT READY"),
+        "{}",
+        run.stdout
+    );
 }
 
 #[test]

@@ -360,8 +360,13 @@ const CHECK_TIMEOUT_S: f64 = 5.0;
 /// safety state, the state interface (RTDE or real-time: one state read,
 /// no command sent), the camera (one frame grabbed and preprocessed) and
 /// the sensor reference (pins found in that frame; with `model`, the
-/// model's pins in the same order). Only a bad rig file is an error.
-pub fn rig_check(cfg: &HardwareConfig, model: Option<&StoredModel>) -> Result<RigCheck> {
+/// model's pins in the same order; else with `pins`, that many). Only a
+/// bad rig file is an error.
+pub fn rig_check(
+    cfg: &HardwareConfig,
+    model: Option<&StoredModel>,
+    pins: Option<usize>,
+) -> Result<RigCheck> {
     cfg.validate()?;
     let mut arm = cfg.arm.clone();
     arm.timeout_s = arm.timeout_s.min(CHECK_TIMEOUT_S);
@@ -384,7 +389,7 @@ pub fn rig_check(cfg: &HardwareConfig, model: Option<&StoredModel>) -> Result<Ri
         }
     };
     match frame {
-        Some(frame) => check_reference(cfg, &frame, model, &mut check),
+        Some(frame) => check_reference(cfg, &frame, (model, pins), &mut check),
         None => check.push("reference", false, "not checked: no camera frame"),
     }
     Ok(check)
@@ -511,7 +516,7 @@ fn check_state(
 fn check_reference(
     cfg: &HardwareConfig,
     frame: &Frame,
-    model: Option<&StoredModel>,
+    (model, expected): (Option<&StoredModel>, Option<usize>),
     check: &mut RigCheck,
 ) {
     let pins = match tactrace_vision::PinExtractor::from_reference_frame(frame, cfg.blob.clone()) {
@@ -524,17 +529,28 @@ fn check_reference(
         }
     };
     let Some(model) = model else {
-        check.push(
-            "reference",
-            !pins.is_empty(),
-            format!(
-                "{} pins found (give --model to compare with a model)",
-                pins.len()
+        let (ready, detail) = match expected {
+            Some(n) if pins.len() == n => (true, format!("{n} pins found, as expected")),
+            Some(n) => (
+                false,
+                format!(
+                    "{} pins found, {n} expected: check the crop, the exposure and the \
+                     blob settings",
+                    pins.len()
+                ),
             ),
-        );
+            None => (
+                !pins.is_empty(),
+                format!(
+                    "{} pins found (give --pins or --model to check the count)",
+                    pins.len()
+                ),
+            ),
+        };
+        check.push("reference", ready, detail);
         return;
     };
-    let expected = model.reference_pins().len();
+    let model_pins = model.reference_pins().len();
     match model.for_pins(&pins, Path::new("the rig's reference frame")) {
         Ok(_) => check.push(
             "reference",
@@ -544,7 +560,7 @@ fn check_reference(
         Err(e) => check.push(
             "reference",
             false,
-            format!("{} pins found, the model has {expected}: {e}", pins.len()),
+            format!("{} pins found, the model has {model_pins}: {e}", pins.len()),
         ),
     }
 }

@@ -195,7 +195,7 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
         FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();
     let mut hw = rig_file(&fake, &frames, start.x, start.y, start.rz);
     hw.arm.dashboard_port = dashboard.port();
-    let check = rig_check(&hw, Some(&model)).unwrap();
+    let check = rig_check(&hw, Some(&model), None).unwrap();
     assert!(check.ready(), "{check:#?}");
     let reference = check.items.iter().find(|i| i.name == "reference").unwrap();
     assert!(
@@ -210,7 +210,7 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     let fake = fake_near(start, StateInterface::Rtde);
     hw.arm = fake.config();
     hw.arm.dashboard_port = dashboard.port();
-    let check = rig_check(&hw, Some(&other)).unwrap();
+    let check = rig_check(&hw, Some(&other), None).unwrap();
     assert!(!check.ready(), "{check:#?}");
     let reference = check.items.iter().find(|i| i.name == "reference").unwrap();
     assert!(

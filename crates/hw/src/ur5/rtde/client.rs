@@ -396,3 +396,43 @@ pub fn state_values(state: &RobotState) -> Vec<Value> {
         Value::Uint32(state.program_state.unwrap_or(0).max(0) as u32),
     ]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ur5::rtde::resting_state;
+
+    #[test]
+    fn a_setup_reply_names_the_refused_fields() {
+        let mut reply = vec![1];
+        reply.extend_from_slice(b"INT32,IN_USE");
+        let err = parse_recipe(
+            &reply,
+            &["input_int_register_24", "speed_slider_mask"],
+            "input",
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string().contains("speed_slider_mask (IN_USE)"),
+            "{err}"
+        );
+        let mut short = vec![1];
+        short.extend_from_slice(b"INT32");
+        assert!(parse_recipe(&short, &["a", "b"], "input").is_err());
+        let ok = parse_recipe(&[2, b'B', b'O', b'O', b'L'], &["x"], "input").unwrap();
+        assert_eq!((ok.id, ok.types.as_slice()), (2, &[FieldType::Bool][..]));
+    }
+
+    #[test]
+    fn state_values_round_trip_and_non_finite_poses_are_refused() {
+        let state = resting_state();
+        assert_eq!(state_from_values(&state_values(&state)).unwrap(), state);
+        let mut values = state_values(&state);
+        values[2] = Value::Vector6d([f64::NAN; 6]);
+        assert!(matches!(
+            state_from_values(&values),
+            Err(HwError::PacketNotFinite { .. })
+        ));
+        assert!(state_from_values(&values[..3]).is_err());
+    }
+}

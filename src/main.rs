@@ -8,6 +8,7 @@
 mod cmd_data;
 mod cmd_follow;
 mod cmd_learn;
+mod cmd_rig;
 mod cmd_twin;
 mod progress;
 
@@ -58,6 +59,12 @@ enum Command {
     /// Inspect the sensor: render a simulated tap, detect pins in a frame.
     #[command(subcommand)]
     Sensor(cmd_data::SensorCommand),
+    /// Set up a real rig: check the arm, safety, camera and reference before a run.
+    #[command(subcommand)]
+    Rig(cmd_rig::RigCommand),
+    /// Set up the TacTip camera: list V4L2 devices, grab a frame.
+    #[command(subcommand)]
+    Camera(cmd_rig::CameraCommand),
 }
 
 fn main() -> ExitCode {
@@ -74,6 +81,8 @@ fn main() -> ExitCode {
         Command::Reproduce(a) => cmd_follow::reproduce(a),
         Command::Sensor(c) => cmd_data::sensor(c),
         Command::Bench(a) => cmd_follow::bench(a),
+        Command::Rig(c) => cmd_rig::rig(c),
+        Command::Camera(c) => cmd_rig::camera(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

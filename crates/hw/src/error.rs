@@ -11,6 +11,7 @@ use thiserror::Error;
 
 /// Errors of the UR5 driver, the camera sources and the preprocessing.
 #[derive(Debug, Error)]
+#[non_exhaustive]
 pub enum HwError {
     /// A TCP connection could not be opened.
     #[error("cannot connect to {addr}: {source}")]
@@ -94,6 +95,38 @@ pub enum HwError {
     /// A folder source has handed out all its frames.
     #[error("folder source exhausted after {count} frames")]
     Exhausted { count: usize },
+    /// The RTDE interface (port 30004) broke its protocol or refused a
+    /// request (a field it does not know, a version it does not speak).
+    #[error("RTDE: {reason}")]
+    Rtde { reason: String },
+    /// The dashboard server (port 29999) answered a command with an error.
+    #[error("dashboard `{command}`: {reply}")]
+    Dashboard { command: String, reply: String },
+    /// No camera device at this path.
+    #[error("no camera at {device}: check the cable and `tactrace camera list`")]
+    CameraMissing { device: String },
+    /// Another program holds the camera.
+    #[error("camera {device} is busy: another program (a browser, ffmpeg, guvcview) holds it")]
+    CameraBusy { device: String },
+    /// The camera offers none of the usable pixel formats.
+    #[error("camera {device} offers no usable format (GREY, YUYV or MJPG); it offers {offered}")]
+    CameraFormat { device: String, offered: String },
+    /// No frame arrived in time.
+    #[error("timeout: camera {device} gave no frame within {seconds} s")]
+    CameraTimeout { device: String, seconds: f64 },
+    /// The camera went away while open.
+    #[error("camera {device} was unplugged")]
+    CameraUnplugged { device: String },
+    /// Another failure talking to the camera.
+    #[error("camera {device}: {source}")]
+    CameraIo {
+        device: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A camera buffer that cannot be a frame of the negotiated format.
+    #[error("bad camera frame: {reason}")]
+    FrameData { reason: String },
     /// The collection metadata (collection_meta.json) could not be used.
     #[error("collection metadata: {reason}")]
     Meta { reason: String },

@@ -1,11 +1,17 @@
 //! Real hardware behind tactrace's traits: a UR5 arm and the TacTip camera.
 //!
 //! - [`Ur5Arm`] implements `tactrace_arm::Arm` over plain TCP (std::net):
-//!   URScript `movel` to the secondary interface, pose feedback from the
-//!   real-time interface. [`FakeUrController`] is a loopback stand-in for
-//!   tests. Always wrap the real arm in `tactrace_arm::LimitedArm`.
+//!   URScript `movel` to the secondary interface, the arm's state
+//!   over RTDE (`ur5::rtde`, port 30004) or the real-time interface
+//!   (port 30003). [`FakeUrController`] is a loopback stand-in for tests.
+//!   Always wrap the real arm in `tactrace_arm::LimitedArm`.
+//! - [`Dashboard`] talks to the dashboard server (port 29999) for the
+//!   set-up steps (robot mode, safety status, unlock, load and play);
+//!   [`FakeDashboard`] stands in for it; [`probe_state`] reads the arm's
+//!   state once without commanding anything.
 //! - [`CameraSensor`] implements `tactrace_sensor::TactileSensor` over any
-//!   [`FrameSource`] ([`CommandSource`] runs an external capture program,
+//!   [`FrameSource`] (`camera::v4l2::V4l2Source` keeps a V4L2 camera
+//!   open, [`CommandSource`] runs an external capture program,
 //!   [`FolderSource`] replays a folder), with the Bristol TacTip
 //!   preprocessing (grayscale, crop, median blur, adaptive threshold,
 //!   resize) in [`Preprocess`].
@@ -16,9 +22,13 @@ pub mod camera;
 mod error;
 pub mod ur5;
 
+pub use camera::v4l2::{list_cameras, open_v4l2, CameraInfo, V4l2Config};
 pub use camera::{
     adaptive_threshold, CameraSensor, CommandSource, CommandSourceConfig, FolderSource,
     FrameSource, Preprocess, PreprocessConfig, ThresholdMethod,
 };
 pub use error::HwError;
-pub use ur5::{FakeBehaviour, FakeUrController, FakeUrOptions, RobotState, Ur5Arm, Ur5Config};
+pub use ur5::{
+    probe_state, Dashboard, FakeBehaviour, FakeDashboard, FakeDashboardState, FakeUrController,
+    FakeUrOptions, PolyscopeVersion, RobotState, StateInterface, StateProbe, Ur5Arm, Ur5Config,
+};

@@ -76,7 +76,12 @@ impl LabError {
             LabError::Learn(e) => !matches!(e, L::Diverged { .. }),
             LabError::Arm(e) => matches!(e, tactrace_arm::ArmError::InvalidConfig { .. }),
             #[cfg(feature = "hardware")]
-            LabError::Hardware(_) => false,
+            LabError::Hardware(e) => matches!(
+                e,
+                tactrace_hw::HwError::Config { .. }
+                    | tactrace_hw::HwError::Crop { .. }
+                    | tactrace_hw::HwError::CameraMissing { .. }
+            ),
         }
     }
 }

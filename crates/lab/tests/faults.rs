@@ -1,7 +1,9 @@
 //! Fault injection in the servo loop (issue 10, item 5): a frame missing,
 //! blank, noise or with too few pins, a model that predicts NaN, and on
-//! the real-rig path a UR5 that times out or makes a protective stop, or a
-//! camera that runs out of frames. Each must end the run safely (`Fault`,
+//! the real-rig path a UR5 that times out or makes a protective stop (its
+//! state read over the real-time interface or RTDE), an RTDE connection
+//! lost mid-run, a camera that runs out of frames, or a V4L2 camera
+//! unplugged mid-run. Each must end the run safely (`Fault`,
 //! with a message naming the reason), keep the steps before the fault in
 //! `trajectory.csv`, record `succeeded: false` in `metrics.json`, and on
 //! the UR5 send no move after the fault (only the retraction of the tap
@@ -9,9 +11,13 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::Duration;
-use tactrace_arm::{Pose, Workspace};
+use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
 use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
-use tactrace_hw::{FakeBehaviour, FakeUrController, FakeUrOptions, PreprocessConfig};
+use tactrace_hw::camera::v4l2::{CameraFormat, FakeDevice, StreamFormat, V4l2Source};
+use tactrace_hw::{
+    CameraSensor, FakeBehaviour, FakeUrController, FakeUrOptions, PreprocessConfig, StateInterface,
+    Ur5Arm,
+};
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{
     follow_on_rig, perception_for, write_results, RunFolder, SimFollowConfig,
@@ -294,7 +300,12 @@ fn a_nan_prediction_stops_the_run_safely() {
 
 /// The loopback fake UR5 with the tool 5 mm above `near`, following
 /// `normal_moves` moves before `behaviour`.
-fn fake_near(near: Pose, behaviour: FakeBehaviour, normal_moves: usize) -> FakeUrController {
+fn fake_near(
+    near: Pose,
+    behaviour: FakeBehaviour,
+    normal_moves: usize,
+    state: StateInterface,
+) -> FakeUrController {
     FakeUrController::start(FakeUrOptions {
         start: [
             near.x / 1000.0,
@@ -306,6 +317,7 @@ fn fake_near(near: Pose, behaviour: FakeBehaviour, normal_moves: usize) -> FakeU
         ],
         behaviour,
         normal_moves,
+        state,
         lifetime: Duration::from_secs(20),
         ..FakeUrOptions::default()
     })
@@ -346,15 +358,26 @@ fn rig_file(fake: &FakeUrController, frames: &Path) -> HardwareConfig {
 }
 
 /// Follow on the fake UR5 (after `normal_moves` moves it behaves as
-/// `behaviour`) with the camera replaying `frames`; the run, and the
-/// URScript lines the fake received.
+/// `behaviour`) with the camera replaying `frames`, the state read over
+/// the real-time interface; the run, and the URScript lines the fake
+/// received.
 fn hardware_run(
     behaviour: FakeBehaviour,
     normal_moves: usize,
     frames: &Path,
 ) -> (LoopSummary, Run, Vec<String>) {
+    hardware_run_on(behaviour, normal_moves, frames, StateInterface::Realtime)
+}
+
+/// [`hardware_run`] with the state read over `state`.
+fn hardware_run_on(
+    behaviour: FakeBehaviour,
+    normal_moves: usize,
+    frames: &Path,
+    state: StateInterface,
+) -> (LoopSummary, Run, Vec<String>) {
     let f = fixture();
-    let fake = fake_near(f.start, behaviour, normal_moves);
+    let fake = fake_near(f.start, behaviour, normal_moves, state);
     let run = Run::new();
     let res = follow_hardware(
         &rig_file(&fake, frames),
@@ -416,6 +439,34 @@ fn a_protective_stop_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
 }
 
 #[test]
+fn a_protective_stop_read_over_rtde_stops_safely_and_sends_no_further_move() {
+    let normal = 1 + 3 * K + 2;
+    let (summary, run, lines) = hardware_run_on(
+        FakeBehaviour::ProtectiveStopOnMove,
+        normal,
+        &fixture().frames,
+        StateInterface::Rtde,
+    );
+    assert_safe_stop(&summary, &run.out, K + 1, "protective stop");
+    assert!(summary.message.contains("the arm failed"), "{summary:?}");
+    assert_eq!(moves(&lines).0, normal + 1, "{lines:#?}");
+}
+
+#[test]
+fn a_lost_rtde_connection_mid_run_stops_safely_and_keeps_the_steps_before() {
+    // The controller hangs up on the move after step K's tap.
+    let normal = 1 + 3 * K + 2;
+    let (summary, run, _) = hardware_run_on(
+        FakeBehaviour::DisconnectOnMove,
+        normal,
+        &fixture().frames,
+        StateInterface::Rtde,
+    );
+    assert_safe_stop(&summary, &run.out, K + 1, "state stream failed");
+    assert!(summary.message.contains("the arm failed"), "{summary:?}");
+}
+
+#[test]
 fn a_camera_out_of_frames_on_the_real_rig_path_stops_after_retracting() {
     // The reference and K taps only: capture K fails.
     let dir = tempfile::tempdir().unwrap();
@@ -427,4 +478,65 @@ fn a_camera_out_of_frames_on_the_real_rig_path_stops_after_retracting() {
     assert_safe_stop(&summary, &run.out, K, "exhausted");
     // Step K's tap went down and came back up; nothing after.
     assert_eq!(moves(&lines).0, 1 + 3 * K + 2, "{lines:#?}");
+}
+
+/// The simulated run's frames (reference first) as the 8-bit grey
+/// buffers a GREY V4L2 camera would fill, and their format.
+fn grey_buffers(count: usize) -> (StreamFormat, Vec<Vec<u8>>) {
+    let frames: Vec<image::GrayImage> = (0..count)
+        .map(|k| {
+            image::open(fixture().frames.join(format!("{k:05}.png")))
+                .unwrap()
+                .to_luma8()
+        })
+        .collect();
+    let (w, h) = frames[0].dimensions();
+    let format = StreamFormat {
+        format: CameraFormat::Grey,
+        width: w,
+        height: h,
+        bytes_per_line: w,
+    };
+    (format, frames.into_iter().map(|f| f.into_raw()).collect())
+}
+
+#[test]
+fn a_v4l2_camera_unplugged_mid_run_stops_safely_and_keeps_the_steps_before() {
+    // The camera (a fake device replaying the simulated frames, arm state
+    // over RTDE) goes away after the reference and K taps.
+    let f = fixture();
+    let fake = fake_near(f.start, FakeBehaviour::Follow, 0, StateInterface::Rtde);
+    let cfg = rig_file(&fake, &f.frames);
+    let ur5 = Ur5Arm::connect(cfg.arm.clone()).unwrap();
+    let mut arm = LimitedArm::new(ur5, cfg.workspace.clone(), LimitMode::Refuse);
+    arm.move_to(cfg.start_pose()).unwrap();
+    let (format, buffers) = grey_buffers(K + 3);
+    let device = FakeDevice::new(format, vec![], buffers).unplug_after(1 + K);
+    let source = V4l2Source::new(device, 0, Duration::from_secs(1)).unwrap();
+    let mut sensor = CameraSensor::new(source, cfg.preprocess.validate().unwrap());
+    let reference = sensor.capture().unwrap();
+    let settings = cfg.servo_settings();
+    let perception = perception_for(&reference, &f.model, &settings).unwrap();
+    let run = Run::new();
+    let folder = RunFolder::start(&run.out, false, &cfg).unwrap();
+    let (summary, records) = follow_on_rig(
+        &mut arm,
+        &mut sensor,
+        &perception,
+        &settings,
+        folder.path(),
+        &mut |_| {},
+    )
+    .unwrap();
+    write_results(
+        None,
+        &records,
+        &summary,
+        &cfg.follow,
+        tactrace_lab::follow::tactip_diameter_mm(),
+        folder.path(),
+    )
+    .unwrap();
+    folder.finish().unwrap();
+    assert_safe_stop(&summary, &run.out, K, "unplugged");
 }

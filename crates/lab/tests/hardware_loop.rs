@@ -4,13 +4,17 @@
 //! command exactly the trajectory the simulated path commanded: the same
 //! pipeline runs on both rigs.
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 use tactrace_arm::{Pose, Workspace};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
-use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig};
+use tactrace_hw::{
+    FakeDashboard, FakeDashboardState, FakeUrController, FakeUrOptions, PreprocessConfig,
+    StateInterface,
+};
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{follow_on_rig, perception_for, SimFollowConfig};
 use tactrace_lab::hardware::{
-    collect_hardware, follow_hardware, FrameSourceConfig, HardwareConfig, HardwareStart,
+    collect_hardware, follow_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart,
 };
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
@@ -53,8 +57,9 @@ fn trajectory(dir: &Path) -> String {
     std::fs::read_to_string(dir.join("trajectory.csv")).unwrap()
 }
 
-/// The loopback fake controller with the tool 5 mm above `near`.
-fn fake_near(near: Pose) -> FakeUrController {
+/// The loopback fake controller with the tool 5 mm above `near`, serving
+/// its state on `state`.
+fn fake_near(near: Pose, state: StateInterface) -> FakeUrController {
     FakeUrController::start(FakeUrOptions {
         start: [
             near.x / 1000.0,
@@ -64,6 +69,7 @@ fn fake_near(near: Pose) -> FakeUrController {
             0.0,
             near.rz.to_radians(),
         ],
+        state,
         ..FakeUrOptions::default()
     })
     .unwrap()
@@ -116,10 +122,8 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     .unwrap()
     .data;
     let mcfg = resolve_config(ModelKind::PDenNN, Preset::Default, None, Some(15)).unwrap();
-    let model = StoredModel::new(
-        train(&mcfg, &data, &mut |_| {}).unwrap().0,
-        data.meta.reference_pins.clone(),
-    );
+    let net = train(&mcfg, &data, &mut |_| {}).unwrap().0;
+    let model = StoredModel::new(net.clone(), data.meta.reference_pins.clone());
     let root = tempfile::tempdir().unwrap();
 
     // The simulated run, recording its frames (reference first).
@@ -150,31 +154,73 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     .unwrap();
     assert_eq!(sim_summary.steps, STEPS, "{}", sim_summary.message);
 
-    // The same frames through the UR5 driver and the camera sensor.
-    let fake = fake_near(start);
-    let hw = HardwareConfig {
-        follow: follow.clone(),
-        ..rig_file(&fake, &frames, start.x, start.y, start.rz)
-    };
-    let hw_out = root.path().join("hw");
-    let res = follow_hardware(
-        &hw,
-        &model,
-        Some(("disk", &disk)),
-        (&hw_out, false),
-        &mut |_| {},
-    )
-    .unwrap();
-    assert_eq!(res.summary.steps, STEPS, "{}", res.summary.message);
-    assert_eq!(trajectory(&hw_out), trajectory(&sim_out));
-    assert!(res.metrics.is_some() && hw_out.join("metrics.json").exists());
-    // Every move went to the controller as URScript.
-    let moves = fake
-        .received_lines()
-        .iter()
-        .filter(|l| l.contains("movel"))
-        .count();
-    assert!(moves >= 3 * STEPS - 1, "{moves} movel commands");
+    // The same frames through the UR5 driver and the camera sensor, with
+    // the arm's state read over RTDE and over the real-time fallback.
+    for state in [StateInterface::Rtde, StateInterface::Realtime] {
+        let fake = fake_near(start, state);
+        let hw = HardwareConfig {
+            follow: follow.clone(),
+            ..rig_file(&fake, &frames, start.x, start.y, start.rz)
+        };
+        assert_eq!(hw.arm.state, state);
+        let hw_out = root.path().join(format!("hw-{state:?}"));
+        let res = follow_hardware(
+            &hw,
+            &model,
+            Some(("disk", &disk)),
+            (&hw_out, false),
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(
+            res.summary.steps, STEPS,
+            "{state:?}: {}",
+            res.summary.message
+        );
+        assert_eq!(trajectory(&hw_out), trajectory(&sim_out), "{state:?}");
+        assert!(res.metrics.is_some() && hw_out.join("metrics.json").exists());
+        // Every move went to the controller as URScript.
+        let moves = fake
+            .received_lines()
+            .iter()
+            .filter(|l| l.contains("movel"))
+            .count();
+        assert!(moves >= 3 * STEPS - 1, "{state:?}: {moves} movel commands");
+    }
+
+    // `rig check` on the same rig: the reference frame's pins are the
+    // model's; a model trained on pins in another order is refused.
+    let fake = fake_near(start, StateInterface::Rtde);
+    let dashboard =
+        FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();
+    let mut hw = rig_file(&fake, &frames, start.x, start.y, start.rz);
+    hw.arm.dashboard_port = dashboard.port();
+    let check = rig_check(&hw, Some(&model), None).unwrap();
+    assert!(check.ready(), "{check:#?}");
+    let reference = check.items.iter().find(|i| i.name == "reference").unwrap();
+    assert!(
+        reference
+            .detail
+            .contains("in the order the model was trained on"),
+        "{reference:?}"
+    );
+    let mut reversed = data.meta.reference_pins.clone();
+    reversed.reverse();
+    let other = StoredModel::new(net, reversed);
+    let fake = fake_near(start, StateInterface::Rtde);
+    hw.arm = fake.config();
+    hw.arm.dashboard_port = dashboard.port();
+    let check = rig_check(&hw, Some(&other), None).unwrap();
+    assert!(!check.ready(), "{check:#?}");
+    let reference = check.items.iter().find(|i| i.name == "reference").unwrap();
+    assert!(
+        !reference.ready && reference.detail.contains("the model has"),
+        "{reference:?}"
+    );
+    assert!(
+        check.items.iter().filter(|i| !i.ready).count() == 1,
+        "{check:#?}"
+    );
 }
 
 #[test]
@@ -205,7 +251,7 @@ fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
         -cfg.theta_range_deg,
         sim.rig.tap.height_mm,
     );
-    let fake = fake_near(first);
+    let fake = fake_near(first, StateInterface::Rtde);
     let hw = rig_file(&fake, &frames, edge.x, edge.y, angle);
     let real = collect_hardware(&hw, &cfg, "rig", |_| {}).unwrap();
     assert_eq!(real.data.targets, simulated.data.targets);
@@ -257,9 +303,10 @@ fn the_rig_file_example_of_the_hardware_guide_is_valid() {
         .split("```toml\n")
         .skip(1)
         .filter_map(|rest| rest.split("```").next())
-        .find(|b| b.contains("[camera.command]"))
+        .find(|b| b.contains("[camera.v4l2]") && b.contains("[workspace]"))
         .expect("docs/hardware.md has a rig file example");
     let cfg = HardwareConfig::from_toml(block, "docs/hardware.md").unwrap();
     cfg.validate().unwrap();
     assert_eq!(cfg.arm.tcp.rx, 180.0);
+    assert!(matches!(&cfg.camera, FrameSourceConfig::V4l2(c) if c.device == "/dev/video0"));
 }

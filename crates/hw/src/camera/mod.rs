@@ -8,6 +8,7 @@
 mod preprocess;
 mod sources;
 mod threshold;
+pub mod v4l2;
 
 #[cfg(test)]
 mod tests;

@@ -5,11 +5,8 @@
 //! [`FolderSource`] hands out the images of a folder in natural name order
 //! (frame_2 before frame_10), for tests and replays.
 //!
-//! A native V4L2 path is deliberately absent: the `v4l` crate's default
-//! backend depends on `v4l2-sys-mit`, whose build script runs bindgen over
-//! the kernel's `videodev2.h`, which needs libclang and kernel headers at
-//! build time; its other backend links the system libv4l. Both break the
-//! "no system libraries" rule of this workspace.
+//! A camera kept open over V4L2 is the `v4l2` module's
+//! `V4l2Source`.
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -25,6 +22,13 @@ pub trait FrameSource {
     /// The next image (any pixel format). Blocking behaviour is the
     /// source's: see each implementation.
     fn grab(&mut self) -> Result<DynamicImage, HwError>;
+}
+
+impl<S: FrameSource + ?Sized> FrameSource for Box<S> {
+    /// The boxed source's frame.
+    fn grab(&mut self) -> Result<DynamicImage, HwError> {
+        (**self).grab()
+    }
 }
 
 /// The placeholder in [`CommandSource`] arguments replaced by the output path.

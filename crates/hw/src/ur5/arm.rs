@@ -40,9 +40,19 @@ pub struct Ur5Config {
     /// URScript port (secondary interface), 30002.
     #[serde(default = "default_command_port")]
     pub command_port: u16,
-    /// Real-time state port, 30003.
+    /// Where the arm's state is read: RTDE (default) or the real-time
+    /// interface (the fallback for controllers without RTDE).
+    #[serde(default)]
+    pub state: StateInterface,
+    /// Real-time state port, 30003 (used when `state = "realtime"`).
     #[serde(default = "default_state_port")]
     pub state_port: u16,
+    /// RTDE port, 30004 (used when `state = "rtde"`).
+    #[serde(default = "default_rtde_port")]
+    pub rtde_port: u16,
+    /// Dashboard server port, 29999 (`tactrace rig check`).
+    #[serde(default = "default_dashboard_port")]
+    pub dashboard_port: u16,
     /// Base -> work frame transform, mm and degrees.
     #[serde(default)]
     pub work_frame: Pose,
@@ -72,6 +82,25 @@ fn default_command_port() -> u16 {
 fn default_state_port() -> u16 {
     30003
 }
+fn default_rtde_port() -> u16 {
+    30004
+}
+fn default_dashboard_port() -> u16 {
+    super::dashboard::DASHBOARD_PORT
+}
+
+/// The controller interface the arm's state is read from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StateInterface {
+    /// RTDE, port 30004: named fields, protocol version 2 (CB3 3.4 and
+    /// later, every e-series).
+    #[default]
+    Rtde,
+    /// The real-time interface, port 30003: a fixed byte layout UR have
+    /// deprecated since 3.5; kept as a fallback.
+    Realtime,
+}
 fn default_speed() -> f64 {
     10.0
 }
@@ -91,7 +120,10 @@ impl Ur5Config {
         Self {
             host: host.into(),
             command_port: default_command_port(),
+            state: StateInterface::default(),
             state_port: default_state_port(),
+            rtde_port: default_rtde_port(),
+            dashboard_port: default_dashboard_port(),
             work_frame: Pose::default(),
             tcp: Pose::default(),
             linear_speed_mm_s: default_speed(),
@@ -160,9 +192,15 @@ impl Ur5Arm {
         config.validate()?;
         let timeout = config.timeout();
         let command_stream = connect(&config.host, config.command_port, timeout)?;
-        let state_stream = connect(&config.host, config.state_port, timeout)?;
+        let states = match config.state {
+            StateInterface::Rtde => {
+                StateStream::start_rtde(connect(&config.host, config.rtde_port, timeout)?, timeout)?
+            }
+            StateInterface::Realtime => {
+                StateStream::start(connect(&config.host, config.state_port, timeout)?)?
+            }
+        };
         let mut commands = CommandChannel::start(command_stream)?;
-        let states = StateStream::start(state_stream)?;
         commands.send(&set_tcp_program(pose_to_tool_vector(config.tcp)))?;
         let (_, state) = states.wait_newer(0, timeout)?;
         let commanded = base_to_work(
@@ -287,6 +325,14 @@ mod tests {
         let config: Ur5Config = serde_json::from_str(r#"{"host": "192.168.1.10"}"#).unwrap();
         assert_eq!(config, Ur5Config::new("192.168.1.10"));
         assert_eq!((config.command_port, config.state_port), (30002, 30003));
+        assert_eq!(
+            (config.state, config.rtde_port),
+            (StateInterface::Rtde, 30004)
+        );
+        let fallback: Ur5Config =
+            serde_json::from_str(r#"{"host": "h", "state": "realtime"}"#).unwrap();
+        assert_eq!(fallback.state, StateInterface::Realtime);
+        assert!(serde_json::from_str::<Ur5Config>(r#"{"host": "h", "state": "rt"}"#).is_err());
         assert_eq!(config.linear_speed_mm_s, 10.0);
         assert!(config.validate().is_ok());
     }

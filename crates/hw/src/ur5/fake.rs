@@ -2,8 +2,11 @@
 //!
 //! It listens on two ephemeral ports of 127.0.0.1 (command and state),
 //! accepts one client on each, reads URScript lines, takes the target of
-//! each `movel(p[...]` and streams real-time packets (CB3 3.5 layout) whose
-//! "tool vector actual" moves towards that target at a fixed speed. Every
+//! each `movel(p[...]` and streams the state, whose actual TCP pose moves
+//! towards that target at a fixed speed: as real-time packets (CB3 3.5
+//! layout) or, with [`StateInterface::Rtde`], as RTDE data packages of
+//! the recipe the client sets up (the same [`RtdeSession`] the standalone
+//! fake RTDE server uses). Every
 //! loop is bounded: the server stops by itself after `lifetime`, when a
 //! client leaves, or when dropped. Behaviours cover the failure paths a
 //! driver must survive (a frozen arm, a malformed packet, a protective stop).
@@ -16,8 +19,9 @@ use std::time::{Duration, Instant};
 
 use nalgebra::Isometry3;
 
-use super::arm::Ur5Config;
-use super::realtime::{encode_packet, RobotState, ROBOT_MODE_RUNNING, SAFETY_MODE_NORMAL};
+use super::arm::{StateInterface, Ur5Config};
+use super::realtime::{encode_packet, RobotState, SAFETY_MODE_NORMAL};
+use super::rtde::{resting_state, FakeRtdeOptions, RtdeSession};
 use super::script::{
     find_movel_target, isometry_to_tool_vector, pose_error, tool_vector_to_isometry,
 };
@@ -34,6 +38,8 @@ pub enum FakeBehaviour {
     MalformedOnMove,
     /// Switch to safety mode 3 (protective stop) without moving.
     ProtectiveStopOnMove,
+    /// Close both connections (a cable pulled, a controller reboot).
+    DisconnectOnMove,
 }
 
 /// Settings of the fake controller.
@@ -54,6 +60,8 @@ pub struct FakeUrOptions {
     /// This many `movel` are followed normally before `behaviour` takes
     /// effect (0: from the first): a fault in the middle of a run.
     pub normal_moves: usize,
+    /// The state interface served (default: the real-time one).
+    pub state: StateInterface,
 }
 
 impl Default for FakeUrOptions {
@@ -66,6 +74,7 @@ impl Default for FakeUrOptions {
             lifetime: Duration::from_secs(20),
             behaviour: FakeBehaviour::Follow,
             normal_moves: 0,
+            state: StateInterface::Realtime,
         }
     }
 }
@@ -74,6 +83,7 @@ impl Default for FakeUrOptions {
 pub struct FakeUrController {
     command_port: u16,
     state_port: u16,
+    state: StateInterface,
     lines: Arc<Mutex<Vec<String>>>,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
@@ -102,6 +112,7 @@ impl FakeUrController {
         Ok(Self {
             command_port,
             state_port,
+            state: options.state,
             lines,
             stop,
             thread: Some(thread),
@@ -112,7 +123,11 @@ impl FakeUrController {
     pub fn config(&self) -> Ur5Config {
         let mut config = Ur5Config::new("127.0.0.1");
         config.command_port = self.command_port;
-        config.state_port = self.state_port;
+        config.state = self.state;
+        match self.state {
+            StateInterface::Rtde => config.rtde_port = self.state_port,
+            StateInterface::Realtime => config.state_port = self.state_port,
+        }
         config
     }
 
@@ -151,6 +166,7 @@ struct Motion {
     target: Option<Isometry3<f64>>,
     safety_mode: i32,
     malformed: bool,
+    disconnected: bool,
     /// `movel` received so far.
     moves: usize,
 }
@@ -160,30 +176,55 @@ impl Server {
         self.stop.load(Ordering::Relaxed) || Instant::now() >= self.deadline
     }
 
-    fn run(self, command: TcpListener, state: TcpListener) {
-        let Some(mut command) = self.accept(&command) else {
+    /// Serves the state connection once it comes, and the command
+    /// connection whenever it comes (a state-only client such as
+    /// `probe_state` never opens one).
+    fn run(self, commands: TcpListener, state: TcpListener) {
+        let Some(state) = self.accept(&state) else {
             return;
         };
-        let Some(mut state) = self.accept(&state) else {
+        if commands.set_nonblocking(true).is_err() {
             return;
+        }
+        let mut command: Option<TcpStream> = None;
+        let mut out = match self.options.state {
+            StateInterface::Realtime => StateOut::Realtime(state),
+            StateInterface::Rtde => {
+                let version = FakeRtdeOptions::default().version;
+                match RtdeSession::new(state, version, None) {
+                    Ok(session) => StateOut::Rtde(Box::new(session)),
+                    Err(_) => return,
+                }
+            }
         };
-        let _ = command.set_nonblocking(true);
         let mut motion = Motion {
             current: tool_vector_to_isometry(self.options.start),
             target: None,
             safety_mode: SAFETY_MODE_NORMAL,
             malformed: false,
+            disconnected: false,
             moves: 0,
         };
         let mut pending = String::new();
         let start = Instant::now();
         while !self.should_stop() {
-            if !self.read_commands(&mut command, &mut pending, &mut motion) {
+            if command.is_none() {
+                command = commands
+                    .accept()
+                    .ok()
+                    .and_then(|(c, _)| c.set_nonblocking(true).ok().map(|()| c));
+            }
+            if let Some(stream) = command.as_mut() {
+                if !self.read_commands(stream, &mut pending, &mut motion) {
+                    return;
+                }
+            }
+            if motion.disconnected {
                 return;
             }
             let moving = self.step(&mut motion);
-            let packet = self.packet(&motion, moving, start.elapsed().as_secs_f64());
-            if state.write_all(&packet).is_err() {
+            let state = self.state(&motion, moving, start.elapsed().as_secs_f64());
+            if !out.send(&state, motion.malformed) {
                 return;
             }
             std::thread::sleep(self.options.period);
@@ -252,6 +293,7 @@ impl Server {
             FakeBehaviour::IgnoreMoves => {}
             FakeBehaviour::MalformedOnMove => motion.malformed = true,
             FakeBehaviour::ProtectiveStopOnMove => motion.safety_mode = 3,
+            FakeBehaviour::DisconnectOnMove => motion.disconnected = true,
         }
     }
 
@@ -283,13 +325,7 @@ impl Server {
         true
     }
 
-    fn packet(&self, motion: &Motion, moving: bool, time_s: f64) -> Vec<u8> {
-        if motion.malformed {
-            // Declares 12 bytes: far below any real packet.
-            let mut bad = 12i32.to_be_bytes().to_vec();
-            bad.extend_from_slice(&[0u8; 8]);
-            return bad;
-        }
+    fn state(&self, motion: &Motion, moving: bool, time_s: f64) -> RobotState {
         let speed = if moving {
             self.options.speed_mm_s / 1000.0
         } else {
@@ -297,15 +333,50 @@ impl Server {
         };
         let tool = isometry_to_tool_vector(&motion.current);
         let target = motion.target.map_or(tool, |t| isometry_to_tool_vector(&t));
-        encode_packet(&RobotState {
+        RobotState {
             time_s,
-            joints_rad: [0.0; 6],
             tool_actual: tool,
             tcp_speed: [speed, 0.0, 0.0, 0.0, 0.0, 0.0],
             tool_target: target,
-            robot_mode: ROBOT_MODE_RUNNING,
             safety_mode: motion.safety_mode,
             program_state: Some(if moving { 2 } else { 1 }),
-        })
+            ..resting_state()
+        }
+    }
+}
+
+/// Where the fake's state goes.
+enum StateOut {
+    Realtime(TcpStream),
+    Rtde(Box<RtdeSession>),
+}
+
+impl StateOut {
+    /// Sends one state (or a malformed packet); false once the client has
+    /// gone.
+    fn send(&mut self, state: &RobotState, malformed: bool) -> bool {
+        match self {
+            Self::Realtime(stream) => {
+                let packet = if malformed {
+                    // Declares 12 bytes: far below any real packet.
+                    let mut bad = 12i32.to_be_bytes().to_vec();
+                    bad.extend_from_slice(&[0u8; 8]);
+                    bad
+                } else {
+                    encode_packet(state)
+                };
+                stream.write_all(&packet).is_ok()
+            }
+            Self::Rtde(session) => {
+                if !session.poll() {
+                    return false;
+                }
+                if malformed && session.streaming() {
+                    // A data package of recipe 1 holding 2 bytes.
+                    return session.send_raw(&[0, 6, b'U', 1, 0, 0]).is_ok();
+                }
+                session.send_state(state).is_ok()
+            }
+        }
     }
 }

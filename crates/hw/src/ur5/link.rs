@@ -15,6 +15,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use super::realtime::{declared_length, parse_packet, RobotState};
+use super::rtde::{start_state_stream, state_from_values, RtdeClient};
 use crate::HwError;
 
 /// How often the reader threads look at their stop flag.
@@ -64,7 +65,8 @@ pub struct StateStream {
 }
 
 impl StateStream {
-    /// Starts reading `stream` in a background thread.
+    /// Starts reading real-time packets (port 30003) from `stream` in a
+    /// background thread.
     pub fn start(stream: TcpStream) -> Result<Self, HwError> {
         stream
             .set_read_timeout(Some(READ_POLL))
@@ -72,15 +74,54 @@ impl StateStream {
                 what: "state socket".into(),
                 source,
             })?;
+        let mut reader = RealtimeReader {
+            stream,
+            buffer: Vec::with_capacity(8192),
+        };
+        Ok(Self::spawn(move || reader.next_state()))
+    }
+
+    /// Negotiates RTDE on `stream` (port 30004), sets up the state recipe,
+    /// starts it and reads data packages in a background thread. Blocks
+    /// up to `timeout` for each handshake reply.
+    pub fn start_rtde(stream: TcpStream, timeout: Duration) -> Result<Self, HwError> {
+        let mut client = RtdeClient::handshake(stream, timeout)?;
+        start_state_stream(&mut client)?;
+        Ok(Self::spawn(move || match client.poll_data()? {
+            Some(values) => state_from_values(&values).map(Some),
+            None => Ok(None),
+        }))
+    }
+
+    /// Runs `next` (one read, at most [`READ_POLL`]) in a thread until it
+    /// fails or the stream is dropped, publishing every state.
+    fn spawn<F>(mut next: F) -> Self
+    where
+        F: FnMut() -> Result<Option<RobotState>, HwError> + Send + 'static,
+    {
         let shared: Shared = Arc::default();
         let stop = Arc::new(AtomicBool::new(false));
         let (s, f) = (shared.clone(), stop.clone());
-        let thread = std::thread::spawn(move || read_states(stream, &s, &f));
-        Ok(Self {
+        let thread = std::thread::spawn(move || {
+            let failure = loop {
+                if f.load(Ordering::Relaxed) {
+                    return;
+                }
+                match next() {
+                    Ok(Some(state)) => publish(&s, state),
+                    Ok(None) => {}
+                    Err(HwError::StateStream { reason }) => break reason,
+                    Err(e) => break e.to_string(),
+                }
+            };
+            lock(&s).failure = Some(failure);
+            s.1.notify_all();
+        });
+        Self {
             shared,
             stop,
             thread: Some(thread),
-        })
+        }
     }
 
     /// The newest state and its sequence number; blocks until one arrives
@@ -127,27 +168,32 @@ impl Drop for StateStream {
     }
 }
 
-fn read_states(mut stream: TcpStream, shared: &Shared, stop: &AtomicBool) {
-    let mut buffer = Vec::with_capacity(8192);
-    let mut chunk = [0u8; 4096];
-    let failure = loop {
-        if stop.load(Ordering::Relaxed) {
-            return;
+/// The real-time interface's byte stream and its unparsed rest.
+struct RealtimeReader {
+    stream: TcpStream,
+    buffer: Vec<u8>,
+}
+
+impl RealtimeReader {
+    /// One read; the newest complete packet's state, if any.
+    fn next_state(&mut self) -> Result<Option<RobotState>, HwError> {
+        let mut chunk = [0u8; 4096];
+        match self.stream.read(&mut chunk) {
+            Ok(0) => Err(stream_failed("connection closed by the controller")),
+            Ok(n) => {
+                self.buffer.extend_from_slice(&chunk[..n]);
+                take_packets(&mut self.buffer)
+            }
+            Err(e) if is_poll_timeout(&e) => Ok(None),
+            Err(e) => Err(stream_failed(&format!("read failed: {e}"))),
         }
-        match stream.read(&mut chunk) {
-            Ok(0) => break "connection closed by the controller".to_string(),
-            Ok(n) => buffer.extend_from_slice(&chunk[..n]),
-            Err(e) if is_poll_timeout(&e) => continue,
-            Err(e) => break format!("read failed: {e}"),
-        }
-        match take_packets(&mut buffer) {
-            Ok(Some(state)) => publish(shared, state),
-            Ok(None) => {}
-            Err(e) => break e.to_string(),
-        }
-    };
-    lock(shared).failure = Some(failure);
-    shared.1.notify_all();
+    }
+}
+
+fn stream_failed(reason: &str) -> HwError {
+    HwError::StateStream {
+        reason: reason.to_string(),
+    }
 }
 
 /// Removes every complete packet from the front of `buffer`; returns the

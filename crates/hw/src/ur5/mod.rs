@@ -1,16 +1,24 @@
-//! The UR5 arm over TCP: URScript out (port 30002), real-time state in
-//! (port 30003), with pure conversions and a loopback fake controller.
+//! The UR5 arm over TCP: URScript out (port 30002), state in over RTDE
+//! (port 30004) or the real-time interface (port 30003), with pure
+//! conversions and a loopback fake controller.
 //!
 //! Units and frames at the public boundary are those of the `Arm` trait:
 //! the sensor tip in the work frame, mm and degrees (extrinsic x-y-z).
 //! Metres and rotation vectors exist only on the wire (module `script`).
 
 mod arm;
+mod dashboard;
+mod dashboard_fake;
 mod fake;
 mod link;
+mod probe;
 pub mod realtime;
+pub mod rtde;
 pub mod script;
 
-pub use arm::{Ur5Arm, Ur5Config, MAX_LINEAR_ACCEL_MM_S2, MAX_LINEAR_SPEED_MM_S};
+pub use arm::{StateInterface, Ur5Arm, Ur5Config, MAX_LINEAR_ACCEL_MM_S2, MAX_LINEAR_SPEED_MM_S};
+pub use dashboard::{Dashboard, PolyscopeVersion, DASHBOARD_PORT};
+pub use dashboard_fake::{FakeDashboard, FakeDashboardState};
 pub use fake::{FakeBehaviour, FakeUrController, FakeUrOptions};
+pub use probe::{probe_state, StateProbe};
 pub use realtime::RobotState;

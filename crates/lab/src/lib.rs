@@ -7,7 +7,8 @@
 //! replays a real set's labels on the simulator, [`train`] fits and
 //! validates pose models, [`follow`] runs the servo loop round an object
 //! into a run folder, [`hardware`] does the same on a real rig,
-//! [`reproduce`] regenerates the report, [`mod@bench`] times it. Algorithms
+//! [`reproduce`] regenerates the report, [`mod@bench`] times it, [`render`]
+//! draws one simulated tap. Algorithms
 //! live in the core crates, files in `tactrace-store`, figures and
 //! documents in `tactrace-report`; this crate wires them together.
 
@@ -19,6 +20,7 @@ pub mod follow;
 #[cfg(feature = "hardware")]
 pub mod hardware;
 pub mod import;
+pub mod render;
 pub mod reproduce;
 pub mod train;
 pub mod twin;

@@ -55,9 +55,8 @@ impl TapRenderer {
     /// its reference frame's pin layout with its field correction.
     pub fn calibrated(sensor: &SensorFolder) -> Result<Self> {
         let spec = &sensor.spec;
-        let model =
-            TacTipModel::with_rest_pins(spec.sensor.clone(), spec.reference_pins.clone())?
-                .with_correction(sensor.field_correction()?)?;
+        let model = TacTipModel::with_rest_pins(spec.sensor.clone(), spec.reference_pins.clone())?
+            .with_correction(sensor.field_correction()?)?;
         Ok(Self {
             model,
             target: Target::CalibratedEdge,

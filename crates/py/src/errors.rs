@@ -33,8 +33,7 @@ impl InputError {
     }
 }
 
-static INPUT_ERROR: pyo3::sync::PyOnceLock<Py<pyo3::types::PyType>> =
-    pyo3::sync::PyOnceLock::new();
+static INPUT_ERROR: pyo3::sync::PyOnceLock<Py<pyo3::types::PyType>> = pyo3::sync::PyOnceLock::new();
 
 /// The `InputError` class (created once, with both bases, by calling
 /// `type` as Python's `class` statement does).
@@ -43,7 +42,10 @@ pub fn input_error_type(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyTyp
     let t = INPUT_ERROR.get_or_try_init(py, || -> PyResult<_> {
         let bases = PyTuple::new(
             py,
-            [py.get_type::<TactraceError>(), py.get_type::<PyValueError>()],
+            [
+                py.get_type::<TactraceError>(),
+                py.get_type::<PyValueError>(),
+            ],
         )?;
         let body = PyDict::new(py);
         body.set_item("__module__", "tactrace")?;

@@ -130,13 +130,9 @@ pub fn follow<'py>(
     let keep = out.is_some();
     let (dir, _tmp) = run_dir(out)?;
     let res = run_detached(py, || {
-        follow_simulated(
-            &cfg,
-            &model,
-            (&name, &contour),
-            (&dir, force),
-            &mut |_| checkpoint(),
-        )
+        follow_simulated(&cfg, &model, (&name, &contour), (&dir, force), &mut |_| {
+            checkpoint()
+        })
     })?
     .map_err(lab)?;
     outcome_dict(py, &res, keep, check)
@@ -145,7 +141,12 @@ pub fn follow<'py>(
 /// Issue a Python `UserWarning`.
 pub fn warn(py: Python<'_>, msg: &str) -> PyResult<()> {
     let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
-    PyErr::warn(py, &category, &std::ffi::CString::new(msg).unwrap_or_default(), 1)
+    PyErr::warn(
+        py,
+        &category,
+        &std::ffi::CString::new(msg).unwrap_or_default(),
+        1,
+    )
 }
 
 /// The result dict of a run (see `follow`); raises `RunFailedError` for a
@@ -158,7 +159,10 @@ pub fn outcome_dict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     if check && !res.summary.ending.succeeded() {
         let where_ = if keep {
-            format!("; the run and its trajectory so far are in {}", res.dir.display())
+            format!(
+                "; the run and its trajectory so far are in {}",
+                res.dir.display()
+            )
         } else {
             String::new()
         };
@@ -177,7 +181,10 @@ pub fn outcome_dict<'py>(
     d.set_item("x_mm", PyArray1::from_vec(py, col(&|r| r.pose.x)))?;
     d.set_item("y_mm", PyArray1::from_vec(py, col(&|r| r.pose.y)))?;
     d.set_item("angle_deg", PyArray1::from_vec(py, col(&|r| r.pose.rz)))?;
-    d.set_item("r_pred_mm", PyArray1::from_vec(py, col(&|r| r.percept.r_mm)))?;
+    d.set_item(
+        "r_pred_mm",
+        PyArray1::from_vec(py, col(&|r| r.percept.r_mm)),
+    )?;
     d.set_item(
         "theta_pred_deg",
         PyArray1::from_vec(py, col(&|r| r.percept.theta_deg)),
@@ -192,4 +199,3 @@ pub fn outcome_dict<'py>(
     d.set_item("dir", keep.then(|| res.dir.clone()))?;
     Ok(d)
 }
-

@@ -82,7 +82,10 @@ impl Model {
         let net = self.net(reference_pins)?;
         let data = tap_data(inputs, targets, self.stored.reference_pins())?;
         let v = run_detached(py, || tactrace_lab::train::validate_net(net, &data))?.map_err(lab)?;
-        json_to_py(py, &serde_json::to_value(&v).map_err(|e| input(e.to_string()))?)
+        json_to_py(
+            py,
+            &serde_json::to_value(&v).map_err(|e| input(e.to_string()))?,
+        )
     }
 
     /// The training data's reference pins, P x 2 float64 (px): the order
@@ -127,7 +130,12 @@ impl Model {
     fn validation<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
         self.validation
             .as_ref()
-            .map(|v| json_to_py(py, &serde_json::to_value(v).map_err(|e| input(e.to_string()))?))
+            .map(|v| {
+                json_to_py(
+                    py,
+                    &serde_json::to_value(v).map_err(|e| input(e.to_string()))?,
+                )
+            })
             .transpose()
     }
 
@@ -139,10 +147,8 @@ impl Model {
     fn save(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<PathBuf> {
         let net = self.net(None)?;
         let pins = self.stored.reference_pins();
-        py.detach(|| {
-            tactrace_lab::train::save_model(&dir, net, pins, &self.history, force, &[])
-        })
-        .map_err(lab)
+        py.detach(|| tactrace_lab::train::save_model(&dir, net, pins, &self.history, force, &[]))
+            .map_err(lab)
     }
 
     fn __repr__(&self) -> PyResult<String> {

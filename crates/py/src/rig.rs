@@ -20,7 +20,9 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use tactrace_arm::{Arm, ArmError, LimitMode, LimitedArm};
 use tactrace_geometry::Pose;
-use tactrace_lab::follow::{follow_on_rig, perception_for, write_results, FollowOutcome, RunFolder};
+use tactrace_lab::follow::{
+    follow_on_rig, perception_for, write_results, FollowOutcome, RunFolder,
+};
 use tactrace_sensor::{Frame, SensorError, TactileSensor};
 
 /// The first `Exception` a Python object raised during the run.
@@ -204,7 +206,10 @@ pub fn follow_rig<'py>(
             warn(py, &w)?;
         }
     }
-    let reference = to_frame(&sensor.bind(py).call_method0("capture")?, "sensor.capture()")?;
+    let reference = to_frame(
+        &sensor.bind(py).call_method0("capture")?,
+        "sensor.capture()",
+    )?;
     let perception = perception_for(&reference, &model, &settings).map_err(lab)?;
     let faults: Fault = Arc::default();
     let py_arm = PyArm {
@@ -256,4 +261,3 @@ pub fn follow_rig<'py>(
         }
     })
 }
-

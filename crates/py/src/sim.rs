@@ -156,7 +156,9 @@ impl SimTacTip {
         pose: [f64; 6],
     ) -> PyResult<Bound<'py, PyArrayDyn<u8>>> {
         let contour = self.contour.as_ref().ok_or_else(|| {
-            input("render_at needs a contour; a calibrated sensor taps a straight edge (use render)")
+            input(
+                "render_at needs a contour; a calibrated sensor taps a straight edge (use render)",
+            )
         })?;
         if pose.iter().any(|v| !v.is_finite()) {
             return Err(input(format!("pose {pose:?} has a non-finite component")));
@@ -186,4 +188,3 @@ impl SimTacTip {
         self.calibrated
     }
 }
-

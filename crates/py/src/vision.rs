@@ -48,8 +48,13 @@ pub fn blob_params(params: Option<PathBuf>, preset: &str) -> PyResult<BlobParams
     match params {
         Some(p) => {
             let text = tactrace_store::read_text(&p).map_err(crate::errors::store)?;
-            BlobParams::from_toml(&text)
-                .map_err(|e| input(format!("{}: invalid blob parameters: {}", p.display(), crate::errors::chain_message(&e))))
+            BlobParams::from_toml(&text).map_err(|e| {
+                input(format!(
+                    "{}: invalid blob parameters: {}",
+                    p.display(),
+                    crate::errors::chain_message(&e)
+                ))
+            })
         }
         None => BlobParams::preset(preset).map_err(core),
     }
@@ -78,8 +83,8 @@ impl PinExtractor {
     ) -> PyResult<Self> {
         let frame = to_frame(reference_frame, "reference_frame")?;
         let blob = blob_params(params, preset)?;
-        let inner = tactrace_vision::PinExtractor::from_reference_frame(&frame, blob)
-            .map_err(core)?;
+        let inner =
+            tactrace_vision::PinExtractor::from_reference_frame(&frame, blob).map_err(core)?;
         Ok(Self { inner })
     }
 

@@ -106,6 +106,7 @@ impl SimTacTip {
     /// contour. ``noise=True`` adds the configured pin jitter and image
     /// noise from the seeded generator.
     #[pyo3(signature = (r_mm, theta_deg, depth_mm = None, shear = None, *, arc_mm = 0.0, noise = false))]
+    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &mut self,
         py: Python<'py>,

@@ -3,8 +3,8 @@
 //! Thin wrappers only: every function calls the same crates the CLI calls
 //! (store, learn, vision, sensor, servo, lab), takes numpy arrays of any
 //! dtype, millimetres and degrees, and turns the crates' typed errors into
-//! Python exceptions carrying the CLI's messages ([`errors`]). Long calls
-//! run with the GIL released and stop on Ctrl-C ([`interrupt`]).
+//! Python exceptions carrying the CLI's messages (`errors.rs`). Long calls
+//! run with the GIL released and stop on Ctrl-C (`interrupt.rs`).
 //! The Python package `tactrace` (crates/py/python) re-exports it.
 
 mod arrays;

@@ -34,7 +34,7 @@ pip install --quiet --disable-pip-version-check --no-build-isolation \
 echo "python package built and installed in $(($(date +%s) - start)) s"
 
 status=0
-python -m pytest -q crates/py/tests || status=$?
+python -m pytest -q -rs crates/py/tests || status=$?
 if [ "$status" -eq 5 ]; then
     echo "pytest collected no test: failing" >&2
     exit 1

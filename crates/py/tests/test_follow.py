@@ -2,8 +2,11 @@
 trajectory and run folder on the same seeds), and a user's own arm and
 camera written in Python drive the Rust loop round the flower."""
 
+import _thread
 import csv
 import json
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -126,3 +129,15 @@ def test_a_python_arm_that_fails_stops_the_run_with_its_error(sim_model):
     with pytest.raises(tactrace.RunFailedError, match="servo power lost") as info:
         tactrace.follow_rig(model, arm, SimCamera(arm, "flower"))
     assert isinstance(info.value.__cause__, Fault)
+
+
+def test_ctrl_c_stops_a_run_and_keeps_its_partial_folder(sim_model, tmp_path):
+    timer = threading.Timer(0.5, _thread.interrupt_main)
+    t0 = time.monotonic()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        tactrace.follow(sim_model, "disk", out=tmp_path / "run", steps=200000)
+    assert time.monotonic() - t0 < 30
+    partial = tmp_path / "run.partial"
+    assert not (tmp_path / "run").exists() and (partial / "trajectory.csv").is_file()
+    assert len(trajectory_csv(partial)) > 0

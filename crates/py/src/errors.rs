@@ -20,7 +20,6 @@ pyo3::create_exception!(
 
 /// `InputError(TactraceError, ValueError)`: made at import time, as a
 /// Rust-declared exception has one base.
-#[allow(non_camel_case_types)]
 pub struct InputError;
 
 impl InputError {

@@ -120,3 +120,16 @@ def test_the_gil_is_released_while_training(sim_set):
         counter.join()
     gaps = np.diff(ticks)
     assert len(ticks) > 5 and gaps.max() < 0.5, f"Python thread starved: {gaps.max():.2f} s"
+
+
+def test_errors_carry_the_cli_messages(sim_set, tmp_path):
+    got = run_cli("validate", "--model", sim_set, "--data", sim_set, check=False)
+    assert got.returncode == 2, "bad input"
+    with pytest.raises(tactrace.InputError) as err:
+        tactrace.load_model(sim_set)
+    assert got.stderr.strip() == f"error: {err.value}"
+    got = run_cli("sensor", "render", "--depth", 11, "--out", tmp_path / "x.png", check=False)
+    assert got.returncode == 2
+    with pytest.raises(tactrace.InputError) as err:
+        tactrace.SimTacTip().render(0.0, 0.0, 11.0)
+    assert got.stderr.strip() == f"error: {err.value}"

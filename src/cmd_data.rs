@@ -6,8 +6,9 @@ use std::path::{Path, PathBuf};
 use tactrace_geometry::ShapeSpec;
 use tactrace_lab::collect::{collect as run_collect, collect_calibrated, CollectConfig};
 use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareConfig};
+use tactrace_lab::render::{TapPose, TapRenderer};
 use tactrace_lab::{import as imp, LabError};
-use tactrace_servo::{pose_at_edge, RigConfig};
+use tactrace_servo::RigConfig;
 use tactrace_store::frame_file::png_bytes;
 use tactrace_store::{dataset, fsutil, load_config, load_shape};
 use tactrace_vision::BlobParams;
@@ -202,34 +203,14 @@ pub fn import(a: ImportArgs) -> Result<()> {
 /// `sensor render --sensor`: one tap of a calibrated sensor on a straight
 /// edge at the labels `(r, theta, dz)` of its own convention.
 fn render_calibrated(dir: &Path, (r, theta, dz): (f64, f64, f64), out: &Path) -> Result<()> {
-    if !(r.is_finite() && theta.is_finite() && dz.is_finite()) {
-        return Err(LabError::Config("--r, --theta and --depth must be numbers".into()).into());
-    }
     let sensor = tactrace_store::SensorFolder::read(dir)?;
-    let spec = &sensor.spec;
-    let cal = &spec.sensor.calibration;
-    let depth = cal.tap_depth_mm + cal.depth_per_offset * dz;
-    let deepest = spec.sensor.mechanics.max_depth_mm;
-    if !(depth > 0.0 && depth <= deepest) {
-        return Err(LabError::Config(format!(
-            "--depth {dz} (the vertical offset label) makes the tap {depth:.2} mm deep; the \
-             contact model covers 0 to {deepest} mm"
-        ))
-        .into());
-    }
-    let model = tactrace_sensor::TacTipModel::with_rest_pins(
-        spec.sensor.clone(),
-        spec.reference_pins.clone(),
-    )
-    .and_then(|m| m.with_correction(sensor.field_correction()?))
-    .map_err(LabError::from)?;
-    let tap = tactrace_sensor::EdgeTap {
+    let renderer = TapRenderer::calibrated(&sensor)?;
+    let frame = renderer.render(&TapPose {
         r_mm: r,
         theta_deg: theta,
-        dz_mm: dz,
-        shear: None,
-    };
-    let frame = model.render(&model.seen_pins(model.edge_tap_pins(&tap)), None);
+        depth: Some(dz),
+        ..TapPose::default()
+    })?;
     fsutil::write_atomic(out, &png_bytes(&frame, "frame")?)?;
     eprintln!("wrote {}", out.display());
     Ok(())
@@ -304,17 +285,15 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             if let Some(dir) = sensor {
                 return render_calibrated(&dir, (r, theta, depth.unwrap_or(0.0)), &out);
             }
-            let spec = ShapeSpec::parse(&shape);
-            let contour = load_shape(&spec)?;
+            let contour = load_shape(&ShapeSpec::parse(&shape))?;
             let rig = rig_config(config.as_deref())?;
-            let depth = depth.unwrap_or(rig.tap.nominal_indentation_mm());
-            check_render_pose(r, theta, depth, arc, rig.sensor.mechanics.max_depth_mm)?;
-            let model =
-                tactrace_sensor::TacTipModel::new(rig.sensor.clone()).map_err(LabError::from)?;
-            let (edge, normal) = contour.at_arc_length(arc);
-            let pose = pose_at_edge(edge, normal, r, theta, -depth);
-            let pins = model.pins(&contour, pose, None);
-            let frame = model.render(&pins, None);
+            let frame = TapRenderer::simulated(&rig, contour)?.render(&TapPose {
+                r_mm: r,
+                theta_deg: theta,
+                depth,
+                arc_mm: arc,
+                shear: None,
+            })?;
             fsutil::write_atomic(&out, &png_bytes(&frame, "frame")?)?;
             eprintln!("wrote {}", out.display());
             Ok(())
@@ -354,30 +333,4 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             Ok(())
         }
     }
-}
-
-/// A rendered tap must lie within the contact model's range: deeper taps
-/// would all be clipped to the same image.
-fn check_render_pose(r: f64, theta: f64, depth: f64, arc: f64, max_depth: f64) -> Result<()> {
-    for (name, v) in [
-        ("--r", r),
-        ("--theta", theta),
-        ("--arc", arc),
-        ("--depth", depth),
-    ] {
-        if !v.is_finite() {
-            return Err(
-                LabError::Config(format!("{name} must be a finite number, got {v}")).into(),
-            );
-        }
-    }
-    if !(0.0..=max_depth).contains(&depth) {
-        return Err(LabError::Config(format!(
-            "--depth {depth} mm is outside the contact model's range, 0 to {max_depth} mm \
-             (mechanics.max_depth_mm of the rig configuration): deeper taps would all render \
-             as the {max_depth} mm one"
-        ))
-        .into());
-    }
-    Ok(())
 }

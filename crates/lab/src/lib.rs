@@ -9,7 +9,8 @@
 //! into a run folder, [`replay_world`] in the real-frame world (a simulated
 //! arm whose taps are answered by real frames), [`hardware`] does the same
 //! on a real rig,
-//! [`reproduce`] regenerates the report, [`mod@bench`] times it. Algorithms
+//! [`reproduce`] regenerates the report, [`mod@bench`] times it, [`render`]
+//! draws one simulated tap. Algorithms
 //! live in the core crates, files in `tactrace-store`, figures and
 //! documents in `tactrace-report`; this crate wires them together.
 
@@ -22,6 +23,7 @@ pub mod follow;
 #[cfg(feature = "hardware")]
 pub mod hardware;
 pub mod import;
+pub mod render;
 pub mod replay_world;
 pub mod reproduce;
 pub mod train;

@@ -1,0 +1,148 @@
+"""Type stubs of the extension module (see the docstrings for units)."""
+
+from os import PathLike
+from typing import Any, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+StrPath = Union[str, PathLike]
+ArrayLike = npt.ArrayLike
+Shape = Union[str, PathLike, npt.ArrayLike]
+Config = Union[StrPath, dict]
+
+__version__: str
+
+class TactraceError(Exception): ...
+class RunFailedError(TactraceError): ...
+class InputError(TactraceError, ValueError): ...
+
+def load_dataset(
+    dir: StrPath,
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32], dict]: ...
+def save_dataset(
+    dir: StrPath,
+    inputs: ArrayLike,
+    targets: ArrayLike,
+    meta: dict,
+    *,
+    force: bool = False,
+) -> str: ...
+
+class Model:
+    @property
+    def reference_pins(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def config(self) -> dict: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def input_dim(self) -> int: ...
+    @property
+    def history(self) -> list: ...
+    @property
+    def validation(self) -> Optional[dict]: ...
+    def predict(
+        self, inputs: ArrayLike, *, reference_pins: Optional[ArrayLike] = None
+    ) -> npt.NDArray[np.float64]: ...
+    def validate(
+        self,
+        inputs: ArrayLike,
+        targets: ArrayLike,
+        *,
+        reference_pins: Optional[ArrayLike] = None,
+    ) -> dict: ...
+    def save(self, dir: StrPath, *, force: bool = False) -> str: ...
+
+def load_model(dir: StrPath) -> Model: ...
+def train(
+    kind: str,
+    inputs: ArrayLike,
+    targets: ArrayLike,
+    reference_pins: ArrayLike,
+    *,
+    epochs: Optional[int] = None,
+    seed: Optional[int] = None,
+    preset: str = "default",
+    config: Optional[Config] = None,
+    val_fraction: Optional[float] = None,
+    split_seed: int = 1,
+) -> Model: ...
+def read_frame(path: StrPath) -> npt.NDArray[np.uint8]: ...
+
+class PinExtractor:
+    def __init__(
+        self,
+        reference_frame: Union[ArrayLike, StrPath],
+        *,
+        preset: str = "real256",
+        params: Optional[StrPath] = None,
+    ) -> None: ...
+    @property
+    def reference_pins(self) -> npt.NDArray[np.float64]: ...
+    def extract(self, frame: Union[ArrayLike, StrPath]) -> npt.NDArray[np.float64]: ...
+    def displacement(
+        self, frame: Union[ArrayLike, StrPath]
+    ) -> npt.NDArray[np.float32]: ...
+
+class SimTacTip:
+    def __init__(
+        self,
+        sensor: Optional[StrPath] = None,
+        seed: int = 0,
+        *,
+        shape: Optional[Shape] = None,
+        config: Optional[StrPath] = None,
+    ) -> None: ...
+    def render(
+        self,
+        r_mm: float,
+        theta_deg: float,
+        depth_mm: Optional[float] = None,
+        shear: Optional[Tuple[float, float, float]] = None,
+        *,
+        arc_mm: float = 0.0,
+        noise: bool = False,
+    ) -> npt.NDArray[np.uint8]: ...
+    def render_rest(self) -> npt.NDArray[np.uint8]: ...
+    def true_pins(
+        self,
+        r_mm: float,
+        theta_deg: float,
+        depth_mm: Optional[float] = None,
+        shear: Optional[Tuple[float, float, float]] = None,
+        *,
+        arc_mm: float = 0.0,
+    ) -> npt.NDArray[np.float64]: ...
+    def render_at(self, pose: Sequence[float]) -> npt.NDArray[np.uint8]: ...
+    @property
+    def rest_pins(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def shape(self) -> Tuple[int, int]: ...
+    @property
+    def calibrated(self) -> bool: ...
+
+def follow(
+    model: Union[Model, StrPath],
+    shape: Shape,
+    out: Optional[StrPath] = None,
+    steps: Optional[int] = None,
+    config: Optional[Config] = None,
+    seed: Optional[int] = None,
+    *,
+    force: bool = False,
+    check: bool = True,
+) -> dict[str, Any]: ...
+def follow_rig(
+    model: Union[Model, StrPath],
+    arm: Any,
+    sensor: Any,
+    *,
+    config: Optional[Config] = None,
+    shape: Optional[Shape] = None,
+    out: Optional[StrPath] = None,
+    steps: Optional[int] = None,
+    seed: Optional[int] = None,
+    force: bool = False,
+    check: bool = True,
+) -> dict[str, Any]: ...

@@ -1,0 +1,105 @@
+//! Datasets: `load_dataset` / `save_dataset` over `tactrace_store::dataset`
+//! (the folders `tactrace collect`, `import` and `twin` write).
+use crate::arrays::{json_to_py, matrix, py_to_json, to_matrix};
+use crate::errors::{input, store};
+use numpy::{PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+use tactrace_store::{DatasetMeta, TapData};
+
+/// Read a dataset folder (`inputs.npy`, `targets.npy`, `meta.json`).
+///
+/// Returns ``(inputs, targets, meta)``: inputs an N x 2P float32 array of
+/// pin displacements in pixels (the P x-displacements, then the P
+/// y-displacements, pins in ``meta["reference_pins"]`` order), targets N x 2
+/// float32 (edge position r in mm, angle theta in degrees), meta the
+/// ``meta.json`` dict. Raises ``InputError`` naming the file at fault.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn load_dataset<'py>(
+    py: Python<'py>,
+    dir: PathBuf,
+) -> PyResult<(
+    Bound<'py, PyArrayDyn<f32>>,
+    Bound<'py, PyArrayDyn<f32>>,
+    Bound<'py, PyAny>,
+)> {
+    let data = py
+        .detach(|| tactrace_store::read_dataset(&dir))
+        .map_err(store)?;
+    let (n, d) = (data.len(), data.dim());
+    let meta = serde_json::to_value(&data.meta).map_err(|e| input(e.to_string()))?;
+    Ok((
+        to_matrix(py, data.inputs, n, d)?,
+        to_matrix(py, data.targets, n, 2)?,
+        json_to_py(py, &meta)?,
+    ))
+}
+
+/// Write a dataset folder that tactrace (and ``load_dataset``) reads.
+///
+/// ``inputs`` is N x 2P (pixels; the x-displacements, then the
+/// y-displacements), ``targets`` N x 2 (r mm, theta deg), any dtype (stored
+/// as float32). ``meta`` must hold ``reference_pins`` (P x 2, px: the order
+/// of the inputs); missing keys get defaults (source "python"), and
+/// ``samples`` / ``pins`` are set from the arrays. The folder appears only
+/// when complete; an existing non-empty folder is refused unless
+/// ``force=True``. Returns the folder's path.
+#[pyfunction]
+#[pyo3(signature = (dir, inputs, targets, meta, *, force = false))]
+pub fn save_dataset(
+    py: Python<'_>,
+    dir: PathBuf,
+    inputs: &Bound<'_, PyAny>,
+    targets: &Bound<'_, PyAny>,
+    meta: &Bound<'_, PyDict>,
+    force: bool,
+) -> PyResult<PathBuf> {
+    let (x, n, d) = matrix::<f32>(inputs, "float32", "inputs", None, false)?;
+    let (y, m, _) = matrix::<f32>(targets, "float32", "targets", Some(2), false)?;
+    if n != m {
+        return Err(input(format!(
+            "inputs has {n} rows but targets has {m}: one target row per sample"
+        )));
+    }
+    let meta = dataset_meta(meta, n, d)?;
+    let data = TapData {
+        inputs: x.readonly().as_slice()?.to_vec(),
+        targets: y.readonly().as_slice()?.to_vec(),
+        meta,
+    };
+    py.detach(|| tactrace_store::write_dataset(&dir, &data, &[], force))
+        .map_err(store)
+}
+
+/// `meta` over the defaults, with the counts of an `n x d` input array.
+fn dataset_meta(meta: &Bound<'_, PyDict>, n: usize, d: usize) -> PyResult<DatasetMeta> {
+    let given = py_to_json(meta.as_any(), "meta")?;
+    let mut doc = serde_json::json!({
+        "source": "python",
+        "origin": "",
+        "seed": null,
+        "targets": ["r_mm", "theta_deg"],
+        "frames_with_missing_pins": 0,
+        "settings": null,
+        "tactrace_version": tactrace_lab::VERSION,
+    });
+    let (Some(doc_map), Some(given_map)) = (doc.as_object_mut(), given.as_object()) else {
+        return Err(input("meta must be a dict"));
+    };
+    for (k, v) in given_map {
+        doc_map.insert(k.clone(), v.clone());
+    }
+    doc_map.insert("samples".into(), n.into());
+    doc_map.insert("pins".into(), (d / 2).into());
+    let meta: DatasetMeta = serde_json::from_value(doc)
+        .map_err(|e| input(format!("meta: {e} (reference_pins, P x 2 px, is required)")))?;
+    if 2 * meta.reference_pins.len() != d {
+        return Err(input(format!(
+            "meta has {} reference pins, but inputs has {d} columns (2 x pins)",
+            meta.reference_pins.len()
+        )));
+    }
+    Ok(meta)
+}

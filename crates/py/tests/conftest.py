@@ -1,0 +1,76 @@
+"""Shared fixtures: the `tactrace` binary the Python results are compared
+with, and the data and models it makes (once per session)."""
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[3]
+SKIP_VAR = "TACTRACE_SKIP_REAL_DATA"
+
+
+def cli_path() -> Path:
+    """The release binary (built by `cargo test --workspace --release`)."""
+    path = Path(os.environ.get("TACTRACE_BIN", ROOT / "target" / "release" / "tactrace"))
+    if not path.is_file():
+        pytest.fail(f"the tactrace binary is not at {path}: run `cargo build --release` first "
+                    "(or set TACTRACE_BIN)")
+    return path
+
+
+def run_cli(*args, cwd=None, check=True) -> subprocess.CompletedProcess:
+    """Run `tactrace ARGS` and return its completed process."""
+    got = subprocess.run([str(cli_path()), *map(str, args)], cwd=cwd,
+                         capture_output=True, text=True)
+    if check and got.returncode != 0:
+        raise AssertionError(f"tactrace {' '.join(map(str, args))} exited "
+                             f"{got.returncode}: {got.stderr}")
+    return got
+
+
+@pytest.fixture(scope="session")
+def work(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("cli")
+
+
+@pytest.fixture(scope="session")
+def sim_set(work) -> Path:
+    """400 simulated taps on the flower (seed 11), made by the CLI."""
+    out = work / "ds"
+    run_cli("collect", "--shape", "flower", "--samples", 400, "--seed", 11, "--out", out)
+    return out
+
+
+@pytest.fixture(scope="session")
+def sim_model(work, sim_set) -> Path:
+    """A PDenNN trained by the CLI on `sim_set` (60 epochs)."""
+    out = work / "model"
+    run_cli("train", "--train", sim_set, "--epochs", 60, "--out", out)
+    return out
+
+
+def real_edge_set() -> Path:
+    """The real TacTip edge set, as the Rust tests find it: a missing set
+    fails the test unless TACTRACE_SKIP_REAL_DATA=1 (then it is skipped,
+    saying why)."""
+    default = ROOT.parent / "shared" / "data" / "tactip127-edge2d"
+    path = Path(os.environ.get("TACTRACE_REAL_DATA", default))
+    if (path / "targets.csv").is_file() and (path / "frames" / "init_0.png").is_file():
+        return path
+    if os.environ.get(SKIP_VAR) == "1":
+        pytest.skip(f"SKIPPED ({SKIP_VAR}=1): real TacTip data not found at {path}")
+    pytest.fail(f"real TacTip data not found at {path}: this test needs it (the README says "
+                f"where ../shared comes from). Set TACTRACE_REAL_DATA=DIR to point at it, or "
+                f"{SKIP_VAR}=1 to skip the tests that need it.")
+
+
+@pytest.fixture(scope="session")
+def real_set(work) -> Path:
+    """The first 300 real frames imported by the CLI."""
+    data = real_edge_set()
+    out = work / "real"
+    run_cli("import", "--frames", data / "frames", "--targets", data / "targets.csv",
+            "--reference", data / "frames" / "init_0.png", "--limit", 300, "--out", out)
+    return out

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# The project's test command: the Rust workspace, then the Python package.
+#
+# 1. a virtual environment in target/py-venv (reused when present) with
+#    maturin, numpy, pytest and ur_rtde from the package registry;
+# 2. `cargo test --workspace --release` (builds target/release/tactrace,
+#    which the Python tests compare with; the RTDE conformance test runs
+#    ur_rtde from the venv);
+# 3. `pip install ./crates/py` (maturin through pip, sharing cargo's target
+#    folder so the crates are not compiled twice);
+# 4. pytest on crates/py/tests.
+#
+# Exits non-zero on any failure, including a pytest run that collected no
+# test. TACTRACE_PYTHON picks the interpreter (default python3).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+
+python=${TACTRACE_PYTHON:-python3}
+venv=$root/target/py-venv
+if [ ! -x "$venv/bin/python" ]; then
+    "$python" -m venv "$venv"
+fi
+export PATH=$venv/bin:$PATH
+# The venv's interpreter, with ur_rtde, checks the fake RTDE controller
+# (crates/hw/tests/rtde_conformance.rs; required here, not skipped).
+pip install --quiet --disable-pip-version-check \
+    "maturin==1.16.0" "numpy==2.4.6" "pytest==9.2.0" "ur_rtde==1.6.5"
+export TACTRACE_PYTHON=$venv/bin/python TACTRACE_REQUIRE_UR_RTDE=1
+
+cargo test --workspace --release
+
+export CARGO_TARGET_DIR=$root/target
+start=$(date +%s)
+# The build requirements are installed above: no isolated build
+# environment to download them into again.
+pip install --quiet --disable-pip-version-check --no-build-isolation \
+    --force-reinstall --no-deps ./crates/py
+echo "python package built and installed in $(($(date +%s) - start)) s"
+
+status=0
+python -m pytest -q -rs crates/py/tests || status=$?
+if [ "$status" -eq 5 ]; then
+    echo "pytest collected no test: failing" >&2
+    exit 1
+fi
+exit "$status"

@@ -25,6 +25,7 @@
 //! it is zero on the first step after a reset (no derivative kick).
 //! The move delta_s is applied in the sensor frame by [`next_pose`]
 //! (eq. 5.7-5.8).
+use crate::policy::{CurvatureEstimate, PolicyConfig};
 use crate::ControlError;
 use serde::{Deserialize, Serialize};
 use tactrace_arm::Pose;
@@ -61,6 +62,8 @@ pub struct PbtsConfig {
     pub kd: [f64; 6],
     /// Anti-windup F: each integral component is clipped to +-this.
     pub integral_clip: [f64; 6],
+    /// Curvature compensation and adaptive step (issue 12; off by default).
+    pub policy: PolicyConfig,
 }
 
 impl Default for PbtsConfig {
@@ -71,6 +74,7 @@ impl Default for PbtsConfig {
             ki: [0.3, 0.0, 0.0, 0.0, 0.0, 0.1],
             kd: [0.0; 6],
             integral_clip: [5.0, 5.0, 5.0, 45.0, 45.0, 45.0],
+            policy: PolicyConfig::default(),
         }
     }
 }
@@ -105,7 +109,10 @@ impl PbtsConfig {
                 value: self.integral_clip[index],
             });
         }
-        Ok(())
+        match self.policy.problem() {
+            Some(reason) => Err(ControlError::Policy { reason }),
+            None => Ok(()),
+        }
     }
 }
 
@@ -116,6 +123,7 @@ pub struct PbtsController {
     config: PbtsConfig,
     integral: [f64; 6],
     previous_error: Option<[f64; 6]>,
+    curvature: CurvatureEstimate,
 }
 
 impl PbtsController {
@@ -128,6 +136,7 @@ impl PbtsController {
             config,
             integral: [0.0; 6],
             previous_error: None,
+            curvature: CurvatureEstimate::default(),
         }
     }
 
@@ -148,10 +157,17 @@ impl PbtsController {
         self.integral
     }
 
-    /// Forget the integral and the previous error.
+    /// The smoothed edge curvature estimated from the moves and
+    /// predictions so far, 1/mm (0 while the policy is off).
+    pub fn curvature_per_mm(&self) -> f64 {
+        self.curvature.kappa_per_mm
+    }
+
+    /// Forget the integral, the previous error and the curvature estimate.
     pub fn reset(&mut self) {
         self.integral = [0.0; 6];
         self.previous_error = None;
+        self.curvature = CurvatureEstimate::default();
     }
 
     /// One control step: the sensor-frame move delta_s (x, y, z mm; rx, ry,
@@ -172,9 +188,16 @@ impl PbtsController {
                 theta_deg: sensed.theta_deg,
             });
         }
-        let error = self.error(sensed);
-        let previous = self.previous_error.unwrap_or(error);
         let c = &self.config;
+        let mut error = self.error(sensed);
+        if !c.policy.is_off() {
+            self.curvature
+                .observe(sensed.theta_deg, c.policy.curvature_smoothing);
+            let kappa = self.curvature.kappa_per_mm;
+            error[0] += c.policy.r_reference_mm(kappa);
+            error[1] *= c.policy.step_fraction(kappa, sensed.theta_deg);
+        }
+        let previous = self.previous_error.unwrap_or(error);
         let mut delta = [0.0; 6];
         for k in 0..6 {
             if c.ki[k] != 0.0 {
@@ -185,10 +208,12 @@ impl PbtsController {
                 + c.kd[k] * (error[k] - previous[k]);
         }
         self.previous_error = Some(error);
+        self.curvature.moved(delta[0], delta[1], delta[5]);
         Ok(Pose::from_array(delta))
     }
 
-    /// e = s* - s(m), eq. 5.2 with eq. 5.3.
+    /// e = s* - s(m), eq. 5.2 with eq. 5.3 (before the policy's reference
+    /// shift and step scaling).
     pub fn error(&self, sensed: SensedPose) -> [f64; 6] {
         let s = sensed.as_vector();
         std::array::from_fn(|k| self.config.reference[k] - s[k])

@@ -8,6 +8,7 @@
 mod cmd_data;
 mod cmd_follow;
 mod cmd_learn;
+mod cmd_tune;
 mod cmd_twin;
 mod progress;
 
@@ -51,6 +52,8 @@ enum Command {
     Predict(cmd_learn::PredictArgs),
     /// Follow a contour with the simulated rig (report ch. 5).
     Follow(cmd_follow::FollowArgs),
+    /// Tune the controller by CMA-ES over simulated runs; judge it on held-out contours.
+    Tune(cmd_tune::TuneArgs),
     /// Regenerate the report's tables and figures end to end.
     Reproduce(cmd_follow::ReproduceArgs),
     /// Time simulated taps and the control loop (figures in docs/results.md, "Speed").
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
         Command::Predict(a) => cmd_learn::predict(a),
         Command::Follow(a) => cmd_follow::follow(a),
         Command::Reproduce(a) => cmd_follow::reproduce(a),
+        Command::Tune(a) => cmd_tune::tune(a),
         Command::Sensor(c) => cmd_data::sensor(c),
         Command::Bench(a) => cmd_follow::bench(a),
     };

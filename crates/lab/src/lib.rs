@@ -7,7 +7,8 @@
 //! replays a real set's labels on the simulator, [`train`] fits and
 //! validates pose models, [`follow`] runs the servo loop round an object
 //! into a run folder, [`hardware`] does the same on a real rig,
-//! [`reproduce`] regenerates the report, [`mod@bench`] times it. Algorithms
+//! [`reproduce`] regenerates the report, [`mod@bench`] times it,
+//! [`mod@tune`] tunes the controller in simulation (CMA-ES). Algorithms
 //! live in the core crates, files in `tactrace-store`, figures and
 //! documents in `tactrace-report`; this crate wires them together.
 
@@ -21,6 +22,7 @@ pub mod hardware;
 pub mod import;
 pub mod reproduce;
 pub mod train;
+pub mod tune;
 pub mod twin;
 
 pub use error::{LabError, Result};

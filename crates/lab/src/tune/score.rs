@@ -88,7 +88,7 @@ impl Default for Objective {
     fn default() -> Self {
         Self {
             mean_l2: 1.0,
-            max_track: 0.3,
+            max_track: 0.5,
             coverage: 5.0,
             taps_per_mm: 0.1,
             failed: 5.0,

@@ -51,8 +51,8 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     }
     let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
     overrides(&a, &mut cfg.follow);
-    let spec = ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default())
-        .map_err(LabError::from)?;
+    let spec =
+        ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default()).map_err(LabError::from)?;
     let contour = load_shape(&spec)?;
     let diameter = 2.0 * cfg.rig.sensor.geometry.dome_radius_mm;
     if let Some(w) = size_warning(&spec.name(), &contour, diameter) {

@@ -91,3 +91,92 @@ pub fn tune(a: TuneArgs) -> Result<()> {
     );
     Ok(())
 }
+
+#[derive(Args)]
+pub struct EvaluateArgs {
+    /// Model directory (as for follow).
+    #[arg(long)]
+    model: PathBuf,
+    /// Contours, as for tune --shapes (set names, shapes, specs, CSV files).
+    #[arg(long, num_args = 1.., required = true)]
+    shapes: Vec<String>,
+    /// Follow configuration (e.g. a tuning's tuned.toml; default: follow's defaults).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Runs per contour, seeds S, S+1, ... (S: --seed or the configuration's).
+    #[arg(long, default_value_t = 1)]
+    seeds: usize,
+    /// First seed of the simulated world's noise.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Print JSON (every run, its metrics and seconds) instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `tactrace evaluate`: simulated follow runs on a set of contours, in
+/// parallel and in memory, with their metrics and the sweep's throughput.
+pub fn evaluate(a: EvaluateArgs) -> Result<()> {
+    use tactrace_lab::tune::{evaluate_set, load_set};
+    let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
+    cfg.follow.seed = a.seed.unwrap_or(cfg.follow.seed);
+    if a.seeds == 0 {
+        return Err(tactrace_lab::LabError::Config("--seeds must be at least 1".into()).into());
+    }
+    let shapes = load_set(&a.shapes, "evaluated")?;
+    let model = StoredModel::load(&a.model)?;
+    let pb = bar((shapes.len() * a.seeds) as u64, "evaluate");
+    let res = evaluate_set(&cfg, &model, &shapes, a.seeds, &|| pb.inc(1));
+    pb.finish_and_clear();
+    let (runs, wall) = res?;
+    let taps: usize = runs.iter().map(|r| r.score.metrics.steps).sum();
+    let threads = tactrace_lab::tune::worker_threads();
+    if a.json {
+        let doc = serde_json::json!({
+            "runs": runs,
+            "wall_seconds": wall,
+            "threads": threads,
+            "runs_per_second": runs.len() as f64 / wall,
+            "taps_per_second": taps as f64 / wall,
+        });
+        crate::say!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
+    }
+    crate::say!("| contour | perimeter (mm) | seed | mean L2 (mm) | max track error (mm) | coverage | closed | taps | s |");
+    crate::say!("|---|---|---|---|---|---|---|---|---|");
+    for r in &runs {
+        let (s, m) = (&r.score, &r.score.metrics);
+        crate::say!(
+            "| {} | {:.0} | {} | {:.2} | {:.2} | {:.1} % | {} | {} | {:.2} |",
+            s.shape,
+            s.perimeter_mm,
+            s.seed,
+            m.mean_l2_mm,
+            m.max_track_error_mm,
+            100.0 * m.coverage,
+            m.closed,
+            m.steps,
+            r.seconds
+        );
+    }
+    let n = runs.len() as f64;
+    let mean = |f: &dyn Fn(&tactrace_servo::FollowMetrics) -> f64| {
+        runs.iter().map(|r| f(&r.score.metrics)).sum::<f64>() / n
+    };
+    crate::say!(
+        "| **mean** | | | {:.2} | {:.2} | {:.1} % | {}/{} | {:.0} | |",
+        mean(&|m| m.mean_l2_mm),
+        mean(&|m| m.max_track_error_mm),
+        100.0 * mean(&|m| m.coverage),
+        runs.iter().filter(|r| r.score.metrics.closed).count(),
+        runs.len(),
+        mean(&|m| m.steps as f64)
+    );
+    crate::say!(
+        "{} runs, {taps} taps in {wall:.1} s on {threads} threads: {:.2} runs/s, {:.0} taps/s",
+        runs.len(),
+        n / wall,
+        taps as f64 / wall
+    );
+    Ok(())
+}

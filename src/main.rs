@@ -54,6 +54,8 @@ enum Command {
     Follow(cmd_follow::FollowArgs),
     /// Tune the controller by CMA-ES over simulated runs; judge it on held-out contours.
     Tune(cmd_tune::TuneArgs),
+    /// Score simulated follow runs on a set of contours (in memory, in parallel), with throughput.
+    Evaluate(cmd_tune::EvaluateArgs),
     /// Regenerate the report's tables and figures end to end.
     Reproduce(cmd_follow::ReproduceArgs),
     /// Time simulated taps and the control loop (figures in docs/results.md, "Speed").
@@ -76,6 +78,7 @@ fn main() -> ExitCode {
         Command::Follow(a) => cmd_follow::follow(a),
         Command::Reproduce(a) => cmd_follow::reproduce(a),
         Command::Tune(a) => cmd_tune::tune(a),
+        Command::Evaluate(a) => cmd_tune::evaluate(a),
         Command::Sensor(c) => cmd_data::sensor(c),
         Command::Bench(a) => cmd_follow::bench(a),
     };

@@ -27,8 +27,23 @@ fn set_up(t: &TempDir) {
 
 fn tune_args<'a>(out: &'a str, trials: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
     let mut args = vec![
-        "tune", "--model", "m", "--base", "base.toml", "--config", "tiny.toml", "--shapes",
-        "square:50", "--held-out", "star:36,4,6", "--trials", trials, "--seed", "5", "--out", out,
+        "tune",
+        "--model",
+        "m",
+        "--base",
+        "base.toml",
+        "--config",
+        "tiny.toml",
+        "--shapes",
+        "square:50",
+        "--held-out",
+        "star:36,4,6",
+        "--trials",
+        trials,
+        "--seed",
+        "5",
+        "--out",
+        out,
     ];
     args.extend_from_slice(extra);
     args
@@ -40,7 +55,11 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
     set_up(&t);
     let r = tactrace(&t.0, &tune_args("tuned", "4", &[]));
     assert_eq!(r.code, 0, "{}", r.stderr);
-    assert!(r.stdout.contains("star-36-4-6") && r.stdout.contains("seed 5"), "{}", r.stdout);
+    assert!(
+        r.stdout.contains("star-36-4-6") && r.stdout.contains("seed 5"),
+        "{}",
+        r.stdout
+    );
     for f in [
         "tuned.toml",
         "history.csv",
@@ -53,16 +72,30 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
     ] {
         assert!(t.join("tuned").join(f).exists(), "missing {f}");
     }
-    // 1 start point + 2 generations of 2.
+    // The start point + 2 generations of 2, one run each on the one
+    // training contour.
     let history = std::fs::read_to_string(t.join("tuned/history.csv")).unwrap();
     assert_eq!(history.lines().count(), 4, "{history}");
+    assert!(
+        history.lines().last().unwrap().starts_with("2,5,"),
+        "{history}"
+    );
     let config = std::fs::read_to_string(t.join("tuned/config.toml")).unwrap();
     assert!(config.contains("seed = 5"), "{config}");
     let r = tactrace(
         &t.0,
         &[
-            "follow", "--model", "m", "--shape", "square:50", "--config",
-            "tuned/tuned.toml", "--steps", "3", "--out", "run",
+            "follow",
+            "--model",
+            "m",
+            "--shape",
+            "square:50",
+            "--config",
+            "tuned/tuned.toml",
+            "--steps",
+            "3",
+            "--out",
+            "run",
         ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
@@ -71,12 +104,22 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
     assert_eq!(r.code, 2, "{}", r.stderr);
     // Unknown keys in a tuned configuration are refused by name.
     let text = std::fs::read_to_string(t.join("tuned/tuned.toml")).unwrap();
-    let bad = text.replace("[controller.policy]\n", "[controller.policy]\nstep_boost = 2.0\n");
+    let bad = text.replace(
+        "[controller.policy]\n",
+        "[controller.policy]\nstep_boost = 2.0\n",
+    );
     std::fs::write(t.join("bad.toml"), bad).unwrap();
     let r = tactrace(
         &t.0,
         &[
-            "follow", "--model", "m", "--shape", "square:50", "--config", "bad.toml", "--out",
+            "follow",
+            "--model",
+            "m",
+            "--shape",
+            "square:50",
+            "--config",
+            "bad.toml",
+            "--out",
             "run2",
         ],
     );
@@ -88,11 +131,23 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
     args[i] = "square:50";
     let r = tactrace(&t.0, &args);
     assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("both a training and a held-out"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("both a training and a held-out"),
+        "{}",
+        r.stderr
+    );
     // A malformed parametric shape says what is wrong.
     let r = tactrace(
         &t.0,
-        &["follow", "--model", "m", "--shape", "star:35,7", "--out", "run3"],
+        &[
+            "follow",
+            "--model",
+            "m",
+            "--shape",
+            "star:35,7",
+            "--out",
+            "run3",
+        ],
     );
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("star:R,A,K"), "{}", r.stderr);
@@ -127,7 +182,10 @@ fn an_interrupted_tuning_keeps_its_best_so_far() {
     }
     let _ = child.kill();
     child.wait().unwrap();
-    assert!(!t.join("out").exists(), "an interrupted tuning is not complete");
+    assert!(
+        !t.join("out").exists(),
+        "an interrupted tuning is not complete"
+    );
     let kept = std::fs::read_to_string(t.join("out.partial/tuned.toml")).unwrap();
     // The best so far is refused to be replaced without --force...
     let r = tactrace(&t.0, &tune_args("out", "2", &[]));
@@ -141,8 +199,17 @@ fn an_interrupted_tuning_keeps_its_best_so_far() {
     let r = tactrace(
         &t.0,
         &[
-            "follow", "--model", "m", "--shape", "square:50", "--config",
-            "out.partial/tuned.toml", "--steps", "3", "--out", "run",
+            "follow",
+            "--model",
+            "m",
+            "--shape",
+            "square:50",
+            "--config",
+            "out.partial/tuned.toml",
+            "--steps",
+            "3",
+            "--out",
+            "run",
         ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);

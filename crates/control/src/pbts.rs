@@ -80,6 +80,35 @@ impl Default for PbtsConfig {
 }
 
 impl PbtsConfig {
+    /// The report's controller (ch. 5.1 with the ERRATA; the policy off):
+    /// the [`Default`], what `reproduce` and a real rig run.
+    pub fn report() -> Self {
+        Self::default()
+    }
+
+    /// The controller tuned in simulation (issue 12, docs/control.md
+    /// "Tuned defaults"): `tactrace tune --trials 300 --seed 1` from the
+    /// report's controller on the training contours, with a PDenNN
+    /// trained on the disk; it beats the report's on every held-out
+    /// contour (docs/results.md). The simulated world's default.
+    pub fn tuned() -> Self {
+        Self {
+            reference: [0.0, TUNED[0], 0.0, 0.0, 0.0, 0.0],
+            kp: [TUNED[1], 1.0, 0.0, 0.0, 0.0, TUNED[4]],
+            ki: [TUNED[2], 0.0, 0.0, 0.0, 0.0, TUNED[5]],
+            kd: [TUNED[3], 0.0, 0.0, 0.0, 0.0, TUNED[6]],
+            integral_clip: [5.0, 5.0, 5.0, 45.0, 45.0, 45.0],
+            policy: PolicyConfig {
+                curvature_offset_mm2: TUNED[7],
+                max_offset_mm: TUNED[8],
+                curvature_smoothing: TUNED[9],
+                step_curvature_mm: TUNED[10],
+                step_angle_deg: TUNED[11],
+                min_step_fraction: TUNED[12],
+            },
+        }
+    }
+
     /// The report's eq. 5.6 as printed (K_i y = 1); see the ERRATA for why
     /// it is not the default.
     pub fn as_printed() -> Self {
@@ -115,6 +144,15 @@ impl PbtsConfig {
         }
     }
 }
+
+/// [`PbtsConfig::tuned`]'s values, rounded to 4 significant digits: step
+/// (mm), Kp x, Ki x, Kd x, Kp rz, Ki rz, Kd rz, then the policy's
+/// curvature_offset_mm2, max_offset_mm, curvature_smoothing,
+/// step_curvature_mm, step_angle_deg, min_step_fraction.
+const TUNED: [f64; 13] = [
+    1.698, 0.2070, 0.1211, 0.03575, 0.6287, 0.004070, 0.03707, 16.18, 2.780, 0.5832, 7.811, 6.289,
+    0.6054,
+];
 
 /// The discrete PI(D) controller of eq. 5.5; keeps only the running
 /// integral and the previous error.

@@ -66,7 +66,9 @@ impl Default for PolicyConfig {
 impl PolicyConfig {
     /// Whether every part is off (the report's controller).
     pub fn is_off(&self) -> bool {
-        self.curvature_offset_mm2 == 0.0 && self.step_curvature_mm == 0.0 && self.step_angle_deg == 0.0
+        self.curvature_offset_mm2 == 0.0
+            && self.step_curvature_mm == 0.0
+            && self.step_angle_deg == 0.0
     }
 
     /// The settings as (name, value) for validation.
@@ -176,7 +178,11 @@ mod tests {
             est.observe(0.0, 0.3);
             est.moved(0.0, 1.0, turn);
         }
-        assert!((est.kappa_per_mm - 0.1).abs() < 1e-6, "{}", est.kappa_per_mm);
+        assert!(
+            (est.kappa_per_mm - 0.1).abs() < 1e-6,
+            "{}",
+            est.kappa_per_mm
+        );
         // The same turn seen as theta growing instead (the sensor not
         // turning) is a turn of the edge too, the other way.
         let mut est = CurvatureEstimate::default();
@@ -184,7 +190,11 @@ mod tests {
             est.observe(-(k as f64) * turn, 0.3);
             est.moved(0.0, 1.0, 0.0);
         }
-        assert!((est.kappa_per_mm - 0.1).abs() < 1e-6, "{}", est.kappa_per_mm);
+        assert!(
+            (est.kappa_per_mm - 0.1).abs() < 1e-6,
+            "{}",
+            est.kappa_per_mm
+        );
     }
 
     #[test]

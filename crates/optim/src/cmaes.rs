@@ -93,7 +93,9 @@ impl Cmaes {
     pub fn new(cfg: &CmaesConfig) -> Result<Self, OptimError> {
         let n = cfg.start.len();
         if n == 0 {
-            return Err(OptimError::Config("nothing to optimise (no parameters)".into()));
+            return Err(OptimError::Config(
+                "nothing to optimise (no parameters)".into(),
+            ));
         }
         if cfg.start.iter().any(|v| !v.is_finite()) {
             return Err(OptimError::Config("the start point is not finite".into()));
@@ -183,7 +185,11 @@ impl Cmaes {
         let mut order: Vec<usize> = (0..costs.len()).collect();
         order.sort_by(|&a, &b| key(costs[a]).total_cmp(&key(costs[b])));
         let best = order[0];
-        if self.best.as_ref().is_none_or(|(_, f)| key(costs[best]) < *f) {
+        if self
+            .best
+            .as_ref()
+            .is_none_or(|(_, f)| key(costs[best]) < *f)
+        {
             let x = self.asked[best].0.iter().copied().collect();
             self.best = Some((x, key(costs[best])));
         }
@@ -202,7 +208,8 @@ impl Cmaes {
         let norm = self.p_sigma.norm() / (1.0 - (1.0 - k.c_sigma).powf(2.0 * g)).sqrt();
         let h_sigma = norm < (1.4 + 2.0 / (n as f64 + 1.0)) * k.chi_n;
         let h = if h_sigma { 1.0 } else { 0.0 };
-        self.p_c = &self.p_c * (1.0 - k.c_c) + &y_w * (h * (k.c_c * (2.0 - k.c_c) * k.mu_eff).sqrt());
+        self.p_c =
+            &self.p_c * (1.0 - k.c_c) + &y_w * (h * (k.c_c * (2.0 - k.c_c) * k.mu_eff).sqrt());
         let mut rank_mu = DMatrix::zeros(n, n);
         for (w, &i) in k.weights.iter().zip(&order) {
             let y = &self.asked[i].1;

@@ -15,7 +15,7 @@ mod score;
 mod space;
 
 pub use outputs::{held_out_table, HeldOutRow, TuneOutcome};
-pub use score::{simulate, Objective, RunScore};
+pub use score::{evaluate_set, simulate, Objective, RunScore, TimedRun};
 pub use space::{from_unit, to_unit, Knob, KNOBS};
 
 use crate::error::{LabError, Result};
@@ -87,7 +87,9 @@ pub enum TuneEvent {
 /// A named contour ready to run.
 type Named = (String, Contour);
 
-fn load_set(specs: &[String], what: &str) -> Result<Vec<Named>> {
+/// Load the contours `specs` name (set names expanded), refusing an empty
+/// list and a contour named twice; `what` names the list in errors.
+pub fn load_set(specs: &[String], what: &str) -> Result<Vec<(String, Contour)>> {
     if specs.is_empty() {
         return Err(LabError::Config(format!("no {what} contours given")));
     }
@@ -132,7 +134,10 @@ impl TuneConfig {
         self.objective.validate()?;
         let training = load_set(&self.training, "training")?;
         let held_out = load_set(&self.held_out, "held-out")?;
-        if let Some((name, _)) = held_out.iter().find(|(n, _)| training.iter().any(|(t, _)| t == n)) {
+        if let Some((name, _)) = held_out
+            .iter()
+            .find(|(n, _)| training.iter().any(|(t, _)| t == n))
+        {
             return Err(LabError::Config(format!(
                 "{name} is both a training and a held-out contour: the result must be \
                  judged on contours not used in tuning"
@@ -201,12 +206,12 @@ pub fn tune(
         score_candidate(base, &base.controller, model, &training, objective, &done)?;
     let mut best = (base.controller.clone(), start_cost);
     let mut history = vec![GenerationCost {
-        evaluations: 1,
+        evaluations: training.len(),
         generation_best: start_cost,
         best_so_far: start_cost,
     }];
     outputs.generation(&best, &history)?;
-    let evaluated = AtomicUsize::new(1);
+    let evaluated = AtomicUsize::new(training.len());
     for generation in 1..=generations {
         let points = es.ask();
         let scored: Vec<(PbtsConfig, f64)> = points
@@ -215,7 +220,7 @@ pub fn tune(
                 let (controller, outside) = from_unit(&base.controller, u);
                 let (cost, _) =
                     score_candidate(base, &controller, model, &training, objective, &done)?;
-                evaluated.fetch_add(1, Ordering::Relaxed);
+                evaluated.fetch_add(training.len(), Ordering::Relaxed);
                 Ok((controller, cost + 10.0 * outside))
             })
             .collect::<Result<_>>()?;
@@ -278,4 +283,10 @@ fn judge(
             })
         })
         .collect()
+}
+
+/// The threads the runs are spread over (rayon's pool: one per core
+/// unless `RAYON_NUM_THREADS` says otherwise).
+pub fn worker_threads() -> usize {
+    rayon::current_num_threads()
 }

@@ -92,7 +92,7 @@ impl Outputs {
             self.seed
         );
         write_atomic(&dir.join("tuned.toml"), text.as_bytes())?;
-        let mut csv = String::from("generation,evaluations,generation_best,best_so_far\n");
+        let mut csv = String::from("generation,runs,generation_best,best_so_far\n");
         for (g, h) in history.iter().enumerate() {
             csv.push_str(&format!(
                 "{g},{},{:.6},{:.6}\n",
@@ -115,7 +115,10 @@ impl Outputs {
         let dir = self.stage.path();
         let json = serde_json::to_string_pretty(&held_out).expect("rows serialise");
         write_atomic(&dir.join("held_out.json"), json.as_bytes())?;
-        write_atomic(&dir.join("held_out.md"), held_out_table(&held_out).as_bytes())?;
+        write_atomic(
+            &dir.join("held_out.md"),
+            held_out_table(&held_out).as_bytes(),
+        )?;
         let dir = self.stage.commit()?;
         Ok(TuneOutcome {
             dir,

@@ -90,7 +90,7 @@ impl Default for Objective {
             mean_l2: 1.0,
             max_track: 0.5,
             coverage: 5.0,
-            taps_per_mm: 0.1,
+            taps_per_mm: 0.02,
             failed: 5.0,
         }
     }
@@ -129,4 +129,44 @@ impl Objective {
         }
         Ok(())
     }
+}
+
+/// One run of [`evaluate_set`]: its score and how long it took.
+#[derive(Debug, Clone, Serialize)]
+pub struct TimedRun {
+    pub score: RunScore,
+    /// Wall time of this run on its thread, s.
+    pub seconds: f64,
+}
+
+/// Every contour of `shapes` with `seeds` seeds (the follow seed, +1, ...),
+/// in parallel: the runs and the wall time of the whole sweep, s.
+pub fn evaluate_set(
+    cfg: &SimFollowConfig,
+    model: &StoredModel,
+    shapes: &[(String, Contour)],
+    seeds: usize,
+    done: &(dyn Fn() + Sync),
+) -> Result<(Vec<TimedRun>, f64)> {
+    use rayon::prelude::*;
+    let jobs: Vec<(&(String, Contour), u64)> = shapes
+        .iter()
+        .flat_map(|s| (0..seeds as u64).map(move |k| (s, k)))
+        .collect();
+    let t0 = std::time::Instant::now();
+    let runs = jobs
+        .par_iter()
+        .map(|((name, contour), k)| {
+            let mut c = cfg.clone();
+            c.follow.seed = cfg.follow.seed + k;
+            let t = std::time::Instant::now();
+            let score = simulate(&c, model, (name, contour));
+            done();
+            Ok(TimedRun {
+                score: score?,
+                seconds: t.elapsed().as_secs_f64(),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok((runs, t0.elapsed().as_secs_f64()))
 }

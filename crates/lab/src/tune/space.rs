@@ -125,7 +125,11 @@ mod tests {
         let (back, outside) = from_unit(&report, &to_unit(&report));
         assert_eq!(outside, 0.0);
         for i in 0..KNOBS.len() {
-            assert!((get(&back, i) - get(&report, i)).abs() < 1e-12, "{}", KNOBS[i].name);
+            assert!(
+                (get(&back, i) - get(&report, i)).abs() < 1e-12,
+                "{}",
+                KNOBS[i].name
+            );
         }
         assert_eq!(back.policy.step_angle_deg, 0.0);
     }

@@ -150,8 +150,8 @@ impl PbtsConfig {
 /// curvature_offset_mm2, max_offset_mm, curvature_smoothing,
 /// step_curvature_mm, step_angle_deg, min_step_fraction.
 const TUNED: [f64; 13] = [
-    1.698, 0.2070, 0.1211, 0.03575, 0.6287, 0.004070, 0.03707, 16.18, 2.780, 0.5832, 7.811, 6.289,
-    0.6054,
+    1.180, 0.1000, 0.05567, 0.07323, 0.6912, 0.04738, 0.5810, 16.57, 1.672, 0.6617, 4.624, 52.31,
+    0.1000,
 ];
 
 /// The discrete PI(D) controller of eq. 5.5; keeps only the running

@@ -88,9 +88,10 @@ impl PbtsConfig {
 
     /// The controller tuned in simulation (issue 12, docs/control.md
     /// "Tuned defaults"): `tactrace tune --trials 300 --seed 1` from the
-    /// report's controller on the training contours, with a PDenNN
-    /// trained on the disk; it beats the report's on every held-out
-    /// contour (docs/results.md). The simulated world's default.
+    /// report's controller on the training contours, then a refining
+    /// `--config configs/tune-refine.toml --trials 150 --seed 2` from that,
+    /// with a PDenNN trained on the disk (docs/results.md). The simulated
+    /// world's default.
     pub fn tuned() -> Self {
         Self {
             reference: [0.0, TUNED[0], 0.0, 0.0, 0.0, 0.0],
@@ -150,8 +151,8 @@ impl PbtsConfig {
 /// curvature_offset_mm2, max_offset_mm, curvature_smoothing,
 /// step_curvature_mm, step_angle_deg, min_step_fraction.
 const TUNED: [f64; 13] = [
-    1.180, 0.1000, 0.05567, 0.07323, 0.6912, 0.04738, 0.5810, 16.57, 1.672, 0.6617, 4.624, 52.31,
-    0.1000,
+    1.095, 0.1368, 0.04422, 0.0, 0.5867, 0.05672, 0.5810, 14.33, 2.197, 0.7079, 7.202, 115.0,
+    0.2128,
 ];
 
 /// The discrete PI(D) controller of eq. 5.5; keeps only the running

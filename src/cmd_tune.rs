@@ -32,7 +32,7 @@ pub struct TuneArgs {
     #[arg(long)]
     seed: Option<u64>,
     /// Tune TOML (keys seed, trials, population, sigma, training, held_out,
-    /// held_out_seeds and the [objective] weights).
+    /// held_out_seeds and the `[objective]` weights).
     #[arg(long)]
     config: Option<PathBuf>,
     /// Follow configuration to start the search from and compare with

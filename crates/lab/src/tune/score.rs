@@ -65,10 +65,11 @@ pub fn simulate(
     })
 }
 
-/// The weights of the cost of one run (the `[objective]` table):
-/// `mean_l2 + max_track * max track error + coverage * (1 - coverage)
-/// + taps_per_mm * steps / perimeter`, plus `failed` when the run did not
-/// close its loop. Millimetres throughout.
+/// The weights of the cost of one run (the `[objective]` table): the
+/// cost is `mean_l2` x mean L2 error, plus `max_track` x max track error,
+/// plus `coverage` x (1 - coverage), plus `taps_per_mm` x steps /
+/// perimeter, plus `failed` when the run did not close its loop.
+/// Millimetres throughout.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Objective {

@@ -124,11 +124,11 @@ mod tests {
         let report = PbtsConfig::default();
         let (back, outside) = from_unit(&report, &to_unit(&report));
         assert_eq!(outside, 0.0);
-        for i in 0..KNOBS.len() {
+        for (i, knob) in KNOBS.iter().enumerate() {
             assert!(
                 (get(&back, i) - get(&report, i)).abs() < 1e-12,
                 "{}",
-                KNOBS[i].name
+                knob.name
             );
         }
         assert_eq!(back.policy.step_angle_deg, 0.0);

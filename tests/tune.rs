@@ -125,6 +125,29 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
     );
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("step_boost"), "{}", r.stderr);
+    // A policy value that cannot work is refused before anything is written.
+    std::fs::write(
+        t.join("zero.toml"),
+        "[controller.policy]\nmin_step_fraction = 0.0\n",
+    )
+    .unwrap();
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow",
+            "--model",
+            "m",
+            "--shape",
+            "square:50",
+            "--config",
+            "zero.toml",
+            "--out",
+            "run4",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("min_step_fraction"), "{}", r.stderr);
+    assert!(!t.join("run4").exists() && !t.join("run4.partial").exists());
     // A held-out contour that is also a training one is refused.
     let mut args = tune_args("t2", "2", &[]);
     let i = args.iter().position(|a| *a == "star:36,4,6").unwrap();

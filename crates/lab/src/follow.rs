@@ -125,6 +125,10 @@ pub fn perception_for(
     settings: &ServoSettings,
 ) -> Result<Perception> {
     settings.follow.validate()?;
+    settings
+        .controller
+        .validate()
+        .map_err(|e| LabError::Config(e.to_string()))?;
     let extractor = PinExtractor::from_reference_frame(reference, settings.blob.clone())?;
     let net = model.for_pins(
         extractor.tracker.reference(),

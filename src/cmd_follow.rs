@@ -19,8 +19,9 @@ pub struct FollowArgs {
     /// Model directory (from `tactrace train`).
     #[arg(long)]
     model: PathBuf,
-    /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points
-    /// (mm). With --hardware: optional, the object's true contour in the
+    /// Built-in shape (disk, flower, trine, teardrop), a parametric one
+    /// (square:S, rect:W,H, star:R,A,K for r = R + A cos(K phi), each with an
+    /// optional last value: rotation, deg) or a CSV of x,y points (mm). With --hardware: optional, the object's true contour in the
     /// work frame, used only to score the run.
     #[arg(long, required_unless_present = "hardware")]
     shape: Option<String>,
@@ -147,7 +148,8 @@ pub fn follow(a: FollowArgs) -> Result<()> {
         cfg.calibrated_sensor = a.sensor.clone();
     }
     let calibrated = tactrace_lab::follow::read_calibrated(&cfg)?;
-    let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
+    let spec =
+        ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default()).map_err(LabError::from)?;
     let contour = load_shape(&spec)?;
     let geometry = match &calibrated {
         Some(s) => &s.spec.sensor.geometry,

@@ -9,6 +9,7 @@ mod cmd_data;
 mod cmd_follow;
 mod cmd_learn;
 mod cmd_rig;
+mod cmd_tune;
 mod cmd_twin;
 mod progress;
 
@@ -52,6 +53,10 @@ enum Command {
     Predict(cmd_learn::PredictArgs),
     /// Follow a contour with the simulated rig, on real frames (--replay) or a real rig (report ch. 5).
     Follow(cmd_follow::FollowArgs),
+    /// Tune the controller by CMA-ES over simulated runs; judge it on held-out contours.
+    Tune(cmd_tune::TuneArgs),
+    /// Score simulated follow runs on a set of contours (in memory, in parallel), with throughput.
+    Evaluate(cmd_tune::EvaluateArgs),
     /// Regenerate the report's tables and figures end to end.
     Reproduce(cmd_follow::ReproduceArgs),
     /// Time simulated taps and the control loop (figures in docs/results.md, "Speed").
@@ -79,6 +84,8 @@ fn main() -> ExitCode {
         Command::Predict(a) => cmd_learn::predict(a),
         Command::Follow(a) => cmd_follow::follow(a),
         Command::Reproduce(a) => cmd_follow::reproduce(a),
+        Command::Tune(a) => cmd_tune::tune(a),
+        Command::Evaluate(a) => cmd_tune::evaluate(a),
         Command::Sensor(c) => cmd_data::sensor(c),
         Command::Bench(a) => cmd_follow::bench(a),
         Command::Rig(c) => cmd_rig::rig(c),

@@ -9,6 +9,9 @@ pub enum ControlError {
     /// A negative anti-windup bound.
     #[error("integral_clip[{index}] = {value} must be >= 0")]
     NegativeClip { index: usize, value: f64 },
+    /// Policy settings that cannot work (see `PolicyConfig`).
+    #[error("controller {reason}")]
+    Policy { reason: String },
     /// A pose prediction that is NaN or infinite.
     #[error("sensed pose r = {r_mm} mm, theta = {theta_deg} deg is not finite")]
     NonFiniteInput { r_mm: f64, theta_deg: f64 },

@@ -8,7 +8,9 @@
 
 mod error;
 pub mod pbts;
+pub mod policy;
 
 pub use error::ControlError;
 
 pub use pbts::{next_pose, PbtsConfig, PbtsController, SensedPose};
+pub use policy::{CurvatureEstimate, PolicyConfig};

@@ -25,6 +25,7 @@
 //! it is zero on the first step after a reset (no derivative kick).
 //! The move delta_s is applied in the sensor frame by [`next_pose`]
 //! (eq. 5.7-5.8).
+use crate::policy::{CurvatureEstimate, PolicyConfig};
 use crate::ControlError;
 use serde::{Deserialize, Serialize};
 use tactrace_arm::Pose;
@@ -61,6 +62,8 @@ pub struct PbtsConfig {
     pub kd: [f64; 6],
     /// Anti-windup F: each integral component is clipped to +-this.
     pub integral_clip: [f64; 6],
+    /// Curvature compensation and adaptive step (issue 12; off by default).
+    pub policy: PolicyConfig,
 }
 
 impl Default for PbtsConfig {
@@ -71,11 +74,42 @@ impl Default for PbtsConfig {
             ki: [0.3, 0.0, 0.0, 0.0, 0.0, 0.1],
             kd: [0.0; 6],
             integral_clip: [5.0, 5.0, 5.0, 45.0, 45.0, 45.0],
+            policy: PolicyConfig::default(),
         }
     }
 }
 
 impl PbtsConfig {
+    /// The report's controller (ch. 5.1 with the ERRATA; the policy off):
+    /// the [`Default`], what `reproduce` and a real rig run.
+    pub fn report() -> Self {
+        Self::default()
+    }
+
+    /// The controller tuned in simulation (issue 12, docs/control.md
+    /// "Tuned defaults"): `tactrace tune --trials 300 --seed 1` from the
+    /// report's controller on the training contours, then a refining
+    /// `--config configs/tune-refine.toml --trials 150 --seed 2` from that,
+    /// with a PDenNN trained on the disk (docs/results.md). The simulated
+    /// world's default.
+    pub fn tuned() -> Self {
+        Self {
+            reference: [0.0, TUNED[0], 0.0, 0.0, 0.0, 0.0],
+            kp: [TUNED[1], 1.0, 0.0, 0.0, 0.0, TUNED[4]],
+            ki: [TUNED[2], 0.0, 0.0, 0.0, 0.0, TUNED[5]],
+            kd: [TUNED[3], 0.0, 0.0, 0.0, 0.0, TUNED[6]],
+            integral_clip: [5.0, 5.0, 5.0, 45.0, 45.0, 45.0],
+            policy: PolicyConfig {
+                curvature_offset_mm2: TUNED[7],
+                max_offset_mm: TUNED[8],
+                curvature_smoothing: TUNED[9],
+                step_curvature_mm: TUNED[10],
+                step_angle_deg: TUNED[11],
+                min_step_fraction: TUNED[12],
+            },
+        }
+    }
+
     /// The report's eq. 5.6 as printed (K_i y = 1); see the ERRATA for why
     /// it is not the default.
     pub fn as_printed() -> Self {
@@ -105,9 +139,21 @@ impl PbtsConfig {
                 value: self.integral_clip[index],
             });
         }
-        Ok(())
+        match self.policy.problem() {
+            Some(reason) => Err(ControlError::Policy { reason }),
+            None => Ok(()),
+        }
     }
 }
+
+/// [`PbtsConfig::tuned`]'s values, rounded to 4 significant digits: step
+/// (mm), Kp x, Ki x, Kd x, Kp rz, Ki rz, Kd rz, then the policy's
+/// curvature_offset_mm2, max_offset_mm, curvature_smoothing,
+/// step_curvature_mm, step_angle_deg, min_step_fraction.
+const TUNED: [f64; 13] = [
+    1.095, 0.1368, 0.04422, 0.0, 0.5867, 0.05672, 0.5810, 14.33, 2.197, 0.7079, 7.202, 115.0,
+    0.2128,
+];
 
 /// The discrete PI(D) controller of eq. 5.5; keeps only the running
 /// integral and the previous error.
@@ -116,6 +162,7 @@ pub struct PbtsController {
     config: PbtsConfig,
     integral: [f64; 6],
     previous_error: Option<[f64; 6]>,
+    curvature: CurvatureEstimate,
 }
 
 impl PbtsController {
@@ -128,6 +175,7 @@ impl PbtsController {
             config,
             integral: [0.0; 6],
             previous_error: None,
+            curvature: CurvatureEstimate::default(),
         }
     }
 
@@ -148,10 +196,17 @@ impl PbtsController {
         self.integral
     }
 
-    /// Forget the integral and the previous error.
+    /// The smoothed edge curvature estimated from the moves and
+    /// predictions so far, 1/mm (0 while the policy is off).
+    pub fn curvature_per_mm(&self) -> f64 {
+        self.curvature.kappa_per_mm
+    }
+
+    /// Forget the integral, the previous error and the curvature estimate.
     pub fn reset(&mut self) {
         self.integral = [0.0; 6];
         self.previous_error = None;
+        self.curvature = CurvatureEstimate::default();
     }
 
     /// One control step: the sensor-frame move delta_s (x, y, z mm; rx, ry,
@@ -172,9 +227,16 @@ impl PbtsController {
                 theta_deg: sensed.theta_deg,
             });
         }
-        let error = self.error(sensed);
-        let previous = self.previous_error.unwrap_or(error);
         let c = &self.config;
+        let mut error = self.error(sensed);
+        if !c.policy.is_off() {
+            self.curvature
+                .observe(sensed.theta_deg, c.policy.curvature_smoothing);
+            let kappa = self.curvature.kappa_per_mm;
+            error[0] += c.policy.r_reference_mm(kappa);
+            error[1] *= c.policy.step_fraction(kappa, sensed.theta_deg);
+        }
+        let previous = self.previous_error.unwrap_or(error);
         let mut delta = [0.0; 6];
         for k in 0..6 {
             if c.ki[k] != 0.0 {
@@ -185,10 +247,12 @@ impl PbtsController {
                 + c.kd[k] * (error[k] - previous[k]);
         }
         self.previous_error = Some(error);
+        self.curvature.moved(delta[0], delta[1], delta[5]);
         Ok(Pose::from_array(delta))
     }
 
-    /// e = s* - s(m), eq. 5.2 with eq. 5.3.
+    /// e = s* - s(m), eq. 5.2 with eq. 5.3 (before the policy's reference
+    /// shift and step scaling).
     pub fn error(&self, sensed: SensedPose) -> [f64; 6] {
         let s = sensed.as_vector();
         std::array::from_fn(|k| self.config.reference[k] - s[k])

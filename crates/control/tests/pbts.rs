@@ -1,5 +1,6 @@
 //! The PBTS controller: signs, anti-windup, derivative term, and the
-//! closed loop with perfect sensing on a straight edge and on the disk.
+//! closed loop with perfect sensing on a straight edge and on the disk, and
+//! the curvature policy against a curvature-biased model (issue 12).
 use tactrace_arm::Pose;
 use tactrace_control::{next_pose, ControlError, PbtsConfig, PbtsController, SensedPose};
 use tactrace_geometry::{builtin_shape, BuiltinShape, Contour, Vec2};
@@ -211,4 +212,47 @@ fn closed_loop_goes_round_the_disk() {
     assert!(worst_late < 0.05, "tracks the edge: {worst_late}");
     // 1 mm steps along the edge: one lap of 346.8 mm in about 347 steps.
     assert!((340..=355).contains(&steps), "{steps} steps");
+}
+
+/// Issue 12's failure and its cure, in theory: on a circle of radius R a
+/// pose model trained on gentle curves reads r = d + c / R (the measured
+/// bias on tight turns, c in mm^2). The report's controller drives that
+/// reading to 0 and so settles c / R inside the edge; the curvature policy
+/// estimates kappa = 1 / R from its own moves and aims at r = c kappa,
+/// back on the edge.
+#[test]
+fn the_curvature_policy_undoes_a_curvature_bias() {
+    let (radius, c) = (12.0, 14.0);
+    let points: Vec<Vec2> = (0..720)
+        .map(|i| {
+            let t = (i as f64 / 720.0) * std::f64::consts::TAU;
+            Vec2::new(radius * t.cos(), radius * t.sin())
+        })
+        .collect();
+    let circle = Contour::new(points).unwrap();
+    let settle = |cfg: PbtsConfig| {
+        let mut ctl = PbtsController::new(cfg);
+        let mut pose = Pose::planar(radius, 0.0, 2.0, 0.0);
+        let mut late = Vec::new();
+        for step in 0..300 {
+            let truth = perfect_sensing(&circle, pose);
+            if step >= 200 {
+                late.push(truth.r_mm);
+            }
+            let biased = sensed(truth.r_mm + c / radius, truth.theta_deg);
+            pose = next_pose(pose, ctl.step(biased));
+        }
+        let mean = late.iter().sum::<f64>() / late.len() as f64;
+        (mean, ctl.curvature_per_mm())
+    };
+    let (report, _) = settle(PbtsConfig::report());
+    assert!(
+        (report + c / radius).abs() < 0.05,
+        "report settles at {report}"
+    );
+    let mut cfg = PbtsConfig::report();
+    cfg.policy.curvature_offset_mm2 = c;
+    let (policy, kappa) = settle(cfg);
+    assert!((kappa - 1.0 / radius).abs() < 0.01, "kappa {kappa}");
+    assert!(policy.abs() < 0.15, "policy settles at {policy}");
 }

@@ -6,6 +6,9 @@ pub enum GeometryError {
     /// A name that is neither a built-in shape nor an existing file.
     #[error("unknown shape `{name}`: expected one of disk, flower, trine, teardrop, or a path to a CSV of x,y points in mm")]
     UnknownShape { name: String },
+    /// A parametric shape spec (`star:R,A,K`) that cannot be built.
+    #[error("bad shape `{spec}`: {reason}")]
+    BadShapeSpec { spec: String, reason: String },
     /// A contour with fewer distinct points than a polygon needs.
     #[error("contour has {points} points; at least {min} are needed")]
     TooFewPoints { points: usize, min: usize },

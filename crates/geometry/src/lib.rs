@@ -12,6 +12,7 @@
 mod contour;
 mod csv;
 mod error;
+mod parametric;
 mod pose;
 mod segtree;
 mod shapes;
@@ -19,6 +20,7 @@ mod validate;
 
 pub use contour::{Contour, EdgePoint, MAX_COORDINATE_MM};
 pub use error::GeometryError;
+pub use parametric::{shape_set, ParametricShape, HELD_OUT_SET, TRAINING_SET};
 pub use pose::Pose;
 pub use shapes::{
     builtin_shape, parse_contour_csv, BuiltinShape, ShapeSpec, MAX_CHORD_MM, MAX_SAGITTA_MM,

@@ -6,7 +6,7 @@
 //! most [`MAX_CHORD_MM`] long and its midpoint sagitta at most
 //! [`MAX_SAGITTA_MM`], so the polygon stays within about 0.001 mm of the
 //! formula everywhere, including the teardrop's sharp point at t = 0.
-use crate::{Contour, Vec2};
+use crate::{Contour, GeometryError, ParametricShape, Vec2};
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::path::PathBuf;
 
@@ -83,26 +83,40 @@ impl BuiltinShape {
     }
 }
 
-/// What a `--shape` argument names: a built-in object or a CSV file.
+/// What a `--shape` argument names: a built-in object, a parametric
+/// contour (`square:70`, `star:35,7,5`) or a CSV file.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(untagged)]
 pub enum ShapeSpec {
     Builtin(BuiltinShape),
+    Parametric(ParametricShape),
     File(PathBuf),
 }
 
 impl ShapeSpec {
-    /// Parse a built-in name (case-insensitive) or else treat as a path.
+    /// Parse a built-in name (case-insensitive), else a parametric spec,
+    /// else treat as a path. A malformed parametric spec becomes a path
+    /// (that does not exist); [`ShapeSpec::parse_checked`] reports it.
     pub fn parse(s: &str) -> ShapeSpec {
-        match BuiltinShape::from_name(s) {
-            Some(shape) => ShapeSpec::Builtin(shape),
-            None => ShapeSpec::File(PathBuf::from(s)),
+        Self::parse_checked(s).unwrap_or_else(|_| ShapeSpec::File(PathBuf::from(s)))
+    }
+    /// [`ShapeSpec::parse`] that refuses a malformed parametric spec
+    /// (`star:35,7`) with what is wrong.
+    pub fn parse_checked(s: &str) -> Result<ShapeSpec, GeometryError> {
+        if let Some(shape) = BuiltinShape::from_name(s) {
+            return Ok(ShapeSpec::Builtin(shape));
+        }
+        match ParametricShape::parse(s) {
+            Some(shape) => Ok(ShapeSpec::Parametric(shape?)),
+            None => Ok(ShapeSpec::File(PathBuf::from(s))),
         }
     }
-    /// Display name: the built-in name or the file stem.
+    /// Display name: the built-in name, the parametric shape's name or the
+    /// file stem.
     pub fn name(&self) -> String {
         match self {
             ShapeSpec::Builtin(shape) => shape.name().to_string(),
+            ShapeSpec::Parametric(shape) => shape.name(),
             ShapeSpec::File(path) => match path.file_stem() {
                 Some(stem) => stem.to_string_lossy().into_owned(),
                 None => path.display().to_string(),
@@ -131,7 +145,7 @@ pub fn builtin_shape(shape: BuiltinShape) -> Contour {
 
 /// Push points of `f` on [t0, t1) (t0 included, t1 not), refined until
 /// chords and sagittas are within bounds.
-fn sample_curve(f: &impl Fn(f64) -> Vec2, t0: f64, t1: f64, out: &mut Vec<Vec2>) {
+pub(crate) fn sample_curve(f: &impl Fn(f64) -> Vec2, t0: f64, t1: f64, out: &mut Vec<Vec2>) {
     const PIECES: usize = 256;
     let dt = (t1 - t0) / PIECES as f64;
     for k in 0..PIECES {

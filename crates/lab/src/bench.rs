@@ -76,7 +76,7 @@ pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<
     bench_with(&sensor, &extractor, None, rig, taps, model)
 }
 
-/// As [`bench`] with a calibrated sensor (`--sensor`): its taps, seen
+/// As [`bench()`] with a calibrated sensor (`--sensor`): its taps, seen
 /// against its real reference frame with its blob detector, over its own
 /// label range.
 pub fn bench_calibrated(

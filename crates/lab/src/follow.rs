@@ -31,7 +31,7 @@ use tactrace_vision::{BlobParams, PinExtractor};
 /// A follow run in the simulated world: one TOML file with these tables,
 /// laid over [`SimFollowConfig::default`]; with a `[replay]` table, in the
 /// real-frame world ([`crate::replay_world`]).
-#[derive(Debug, Clone, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SimFollowConfig {
     /// A calibrated sensor folder (`tactrace calibrate`, `--sensor`): it
@@ -45,6 +45,33 @@ pub struct SimFollowConfig {
     /// The real-frame world (`follow --replay`), if the run is in it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replay: Option<ReplayWorld>,
+}
+
+/// The simulated world's defaults, with the controller tuned in simulation
+/// ([`PbtsConfig::tuned`], issue 12), which beats the report's on the
+/// held-out contours (docs/results.md).
+impl Default for SimFollowConfig {
+    fn default() -> Self {
+        Self {
+            controller: PbtsConfig::tuned(),
+            ..Self::report()
+        }
+    }
+}
+
+impl SimFollowConfig {
+    /// The report's settings: its PI controller ([`PbtsConfig::report`]),
+    /// as `reproduce` runs them.
+    pub fn report() -> Self {
+        Self {
+            calibrated_sensor: None,
+            rig: RigConfig::default(),
+            controller: PbtsConfig::report(),
+            follow: LoopConfig::default(),
+            start: StartConfig::default(),
+            replay: None,
+        }
+    }
 }
 
 /// What the servo loop needs besides the arm, the sensor and the model:
@@ -113,6 +140,10 @@ pub fn perception_for(
     settings: &ServoSettings,
 ) -> Result<Perception> {
     settings.follow.validate()?;
+    settings
+        .controller
+        .validate()
+        .map_err(|e| LabError::Config(e.to_string()))?;
     let extractor = PinExtractor::from_reference_frame(reference, settings.blob.clone())?;
     let net = model.for_pins(
         extractor.tracker.reference(),
@@ -177,7 +208,8 @@ pub fn follow_on_rig_recorded(
     dir: &Path,
     progress: &mut dyn FnMut(&StepRecord),
 ) -> Result<Recorded> {
-    let mut controller = PbtsController::new(settings.controller.clone());
+    let mut controller = PbtsController::try_new(settings.controller.clone())
+        .map_err(|e| LabError::Config(e.to_string()))?;
     let path = dir.join("trajectory.csv");
     let file = std::fs::File::create(&path).map_err(write_err(&path))?;
     let mut writer = csv::Writer::from_writer(file);

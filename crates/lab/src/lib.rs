@@ -10,7 +10,8 @@
 //! arm whose taps are answered by real frames), [`hardware`] does the same
 //! on a real rig,
 //! [`reproduce`] regenerates the report, [`mod@bench`] times it, [`render`]
-//! draws one simulated tap. Algorithms
+//! draws one simulated tap, [`mod@tune`] tunes the controller in simulation
+//! (CMA-ES). Algorithms
 //! live in the core crates, files in `tactrace-store`, figures and
 //! documents in `tactrace-report`; this crate wires them together.
 
@@ -27,6 +28,7 @@ pub mod render;
 pub mod replay_world;
 pub mod reproduce;
 pub mod train;
+pub mod tune;
 pub mod twin;
 
 pub use error::{LabError, Result};

@@ -43,6 +43,7 @@ pub struct ReproduceConfig {
     pub preset: Preset,
     /// Use the report's fixed step counts instead of running to closure.
     pub report_steps: bool,
+    /// The follow settings: the report's ([`SimFollowConfig::report`]).
     pub follow: SimFollowConfig,
     /// Folder of real frames (Bristol layout) to add the real-data results.
     pub real: Option<PathBuf>,
@@ -57,7 +58,7 @@ impl Default for ReproduceConfig {
             epochs: None,
             preset: Preset::Default,
             report_steps: false,
-            follow: SimFollowConfig::default(),
+            follow: SimFollowConfig::report(),
             real: None,
         }
     }

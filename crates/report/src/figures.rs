@@ -169,3 +169,39 @@ pub fn frame_pins_displacements(
     let reference = extractor.tracker.reference();
     pins_figure(stem, frame, reference, &tracked.pins, arrow_scale).map_err(Into::into)
 }
+
+/// One generation of a tuning run, as the convergence figure shows it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GenerationCost {
+    /// Simulated runs evaluated so far.
+    pub evaluations: usize,
+    /// Best cost of this generation.
+    pub generation_best: f64,
+    /// Best cost so far.
+    pub best_so_far: f64,
+}
+
+/// The tuning's convergence: each generation's best and the best so far
+/// against the number of simulated runs, log y.
+pub fn convergence(stem: &Path, title: &str, history: &[GenerationCost]) -> Result<Vec<PathBuf>> {
+    let series = |name: &str, style: Style, f: fn(&GenerationCost) -> f64| Series {
+        name: name.into(),
+        points: history
+            .iter()
+            .map(|g| (g.evaluations as f64, f(g)))
+            .collect(),
+        style,
+    };
+    chart(
+        stem,
+        &Axes {
+            log_y: true,
+            ..axes(title, "simulated runs", "cost")
+        },
+        &[
+            series("generation best", Style::Points, |g| g.generation_best),
+            series("best so far", Style::Line, |g| g.best_so_far),
+        ],
+    )
+    .map_err(Into::into)
+}

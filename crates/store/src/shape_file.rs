@@ -6,6 +6,10 @@ use tactrace_geometry::{builtin_shape, parse_contour_csv, Contour, ShapeSpec};
 pub fn load_shape(spec: &ShapeSpec) -> Result<Contour> {
     match spec {
         ShapeSpec::Builtin(b) => Ok(builtin_shape(*b)),
+        ShapeSpec::Parametric(p) => p.contour().map_err(|e| StoreError::Format {
+            path: p.to_string().into(),
+            reason: e.to_string(),
+        }),
         ShapeSpec::File(path) => {
             let looks_like_a_name = path.extension().is_none() && path.components().count() == 1;
             if looks_like_a_name && !path.exists() {
@@ -13,7 +17,8 @@ pub fn load_shape(spec: &ShapeSpec) -> Result<Contour> {
                     path: path.clone(),
                     reason: format!(
                         "unknown shape `{}`: not a built-in shape (disk, flower, trine, \
-                         teardrop) nor an existing contour file",
+                         teardrop), a parametric one (square:S, rect:W,H, star:R,A,K, each \
+                         with an optional rotation in degrees) nor an existing contour file",
                         path.display()
                     ),
                 });

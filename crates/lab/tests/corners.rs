@@ -1,0 +1,47 @@
+//! Issue 12 in the closed loop: on a held-out square and a star whose
+//! valleys have a 5.3 mm concave radius, the tuned controller (the
+//! simulated world's default) traces corners and valleys the report's
+//! controller cuts and bridges, with a PDenNN trained on the disk.
+use tactrace_geometry::{builtin_shape, BuiltinShape, ShapeSpec};
+use tactrace_lab::collect::{collect, CollectConfig};
+use tactrace_lab::follow::SimFollowConfig;
+use tactrace_lab::train::{resolve_config, train};
+use tactrace_lab::tune::simulate;
+use tactrace_learn::{ModelKind, Preset};
+use tactrace_store::{load_shape, StoredModel};
+
+fn disk_model() -> StoredModel {
+    let cfg = CollectConfig {
+        samples: 400,
+        seed: 11,
+        ..CollectConfig::default()
+    };
+    let rig = SimFollowConfig::default().rig;
+    let disk = builtin_shape(BuiltinShape::Disk);
+    let data = collect(&rig, &disk, &cfg, "disk", |_| {}).unwrap().data;
+    let mcfg = resolve_config(ModelKind::PDenNN, Preset::Default, None, Some(60)).unwrap();
+    let net = train(&mcfg, &data, &mut |_| {}).unwrap().0;
+    StoredModel::new(net, data.meta.reference_pins.clone())
+}
+
+#[test]
+fn the_tuned_controller_traces_corners_and_valleys_the_reports_cuts() {
+    let model = disk_model();
+    for spec in ["square:70", "star:35,7,5"] {
+        let contour = load_shape(&ShapeSpec::parse_checked(spec).unwrap()).unwrap();
+        let report = simulate(&SimFollowConfig::report(), &model, (spec, &contour)).unwrap();
+        let tuned = simulate(&SimFollowConfig::default(), &model, (spec, &contour)).unwrap();
+        let (r, t) = (&report.metrics, &tuned.metrics);
+        assert!(r.closed && t.closed, "{spec}: {r:?} {t:?}");
+        assert!(
+            t.max_track_error_mm < r.max_track_error_mm - 0.5,
+            "{spec}: max track error {} -> {}",
+            r.max_track_error_mm,
+            t.max_track_error_mm
+        );
+        assert!(
+            t.coverage > r.coverage && t.mean_l2_mm < r.mean_l2_mm,
+            "{spec}: {r:?} {t:?}"
+        );
+    }
+}

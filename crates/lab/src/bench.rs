@@ -9,7 +9,7 @@ use std::time::Instant;
 use tactrace_control::{PbtsConfig, PbtsController, SensedPose};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_learn::PoseModel;
-use tactrace_sensor::{EdgeLabels, LabelConvention, TacTipModel};
+use tactrace_sensor::{LabelConvention, TacTipModel};
 use tactrace_servo::{pose_at_edge, RigConfig};
 use tactrace_store::SensorFolder;
 use tactrace_vision::PinExtractor;
@@ -116,17 +116,7 @@ fn bench_with(
         .map(|i| {
             let u = i as f64 / taps.max(1) as f64;
             let (r, theta) = (-5.0 + 10.0 * u, -45.0 + 90.0 * ((u * 7.0) % 1.0));
-            let at = match labels {
-                Some(c) => {
-                    let p = c.to_pose(EdgeLabels {
-                        r_mm: r,
-                        theta_deg: theta,
-                        dz_mm: 0.0,
-                    });
-                    (p.r_mm, p.theta_deg)
-                }
-                None => (r, theta),
-            };
+            let at = LabelConvention::edge_pose_of(labels, r, theta);
             pose_at_edge(edge, normal, at.0, at.1, -rig.tap.nominal_indentation_mm())
         })
         .collect();

@@ -213,17 +213,7 @@ pub fn collect_on(
         let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
         let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
         let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
-        let at = match &labels {
-            Some((convention, _)) => {
-                let p = convention.to_pose(EdgeLabels {
-                    r_mm: r,
-                    theta_deg: theta,
-                    dz_mm: 0.0,
-                });
-                (p.r_mm, p.theta_deg)
-            }
-            None => (r, theta),
-        };
+        let at = LabelConvention::edge_pose_of(labels.as_ref().map(|(c, _)| c), r, theta);
         arm.move_to(pose_at_edge(edge, normal, at.0, at.1, tap_cfg.height_mm))?;
         let frame = tap(arm, sensor, depth)?;
         let tracked = extractor.extract(&frame)?;

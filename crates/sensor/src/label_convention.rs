@@ -81,6 +81,23 @@ impl LabelConvention {
         }
     }
 
+    /// The controller's (r mm, theta deg) of the labels (r, theta) at the
+    /// nominal depth; `None` (no convention: the labels are the
+    /// controller's) gives them back.
+    pub fn edge_pose_of(convention: Option<&Self>, r_mm: f64, theta_deg: f64) -> (f64, f64) {
+        match convention {
+            None => (r_mm, theta_deg),
+            Some(c) => {
+                let p = c.to_pose(EdgeLabels {
+                    r_mm,
+                    theta_deg,
+                    dz_mm: 0.0,
+                });
+                (p.r_mm, p.theta_deg)
+            }
+        }
+    }
+
     /// The pose of a tap labelled `labels` (the inverse of
     /// [`Self::to_labels`]).
     pub fn to_pose(&self, labels: EdgeLabels) -> ToolEdgePose {

@@ -3,7 +3,7 @@
 use crate::error::{Result, ServoError};
 use serde::Serialize;
 use tactrace_learn::PoseModel;
-use tactrace_sensor::{EdgeLabels, Frame, LabelConvention};
+use tactrace_sensor::{Frame, LabelConvention};
 use tactrace_vision::PinExtractor;
 
 /// Pin extraction and the pose model, with the contact rule.
@@ -83,17 +83,7 @@ impl Perception {
             .sum::<f64>()
             / p.max(1) as f64;
         let [r, theta] = self.model.predict(&disp)?;
-        let (r, theta) = match &self.labels {
-            None => (r, theta),
-            Some(c) => {
-                let pose = c.to_pose(EdgeLabels {
-                    r_mm: r,
-                    theta_deg: theta,
-                    dz_mm: 0.0,
-                });
-                (pose.r_mm, pose.theta_deg)
-            }
-        };
+        let (r, theta) = LabelConvention::edge_pose_of(self.labels.as_ref(), r, theta);
         Ok(Percept {
             r_mm: r,
             theta_deg: theta,

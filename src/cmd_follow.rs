@@ -138,14 +138,14 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     }
     let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
     overrides(&a, &mut cfg.follow);
+    if a.sensor.is_some() {
+        cfg.calibrated_sensor = a.sensor.clone();
+    }
     if let Some(dir) = &a.replay.replay {
         cfg.replay = Some(a.replay.world(dir)?);
     }
     if let Some(world) = cfg.replay.take() {
         return follow_replay_world(a, cfg, &world);
-    }
-    if a.sensor.is_some() {
-        cfg.calibrated_sensor = a.sensor.clone();
     }
     let calibrated = tactrace_lab::follow::read_calibrated(&cfg)?;
     let spec =
@@ -175,7 +175,8 @@ pub fn follow(a: FollowArgs) -> Result<()> {
 /// `follow --replay` (or a configuration with a `[replay]` table): the
 /// loop in the real-frame world.
 fn follow_replay_world(a: FollowArgs, cfg: SimFollowConfig, world: &ReplayWorld) -> Result<()> {
-    let spec = ShapeSpec::parse(a.shape.as_deref().unwrap_or_default());
+    let spec =
+        ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default()).map_err(LabError::from)?;
     let contour = load_shape(&spec)?;
     if let Some(w) = size_warning(&spec.name(), &contour, tactip_diameter_mm()) {
         eprintln!("warning: {w}");

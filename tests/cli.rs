@@ -428,6 +428,22 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("order"), "{}", r.stderr);
     assert_eq!(follow(&["--sensor", "no-such-sensor"], "run3").code, 2);
+    // The real-frame world reads the sensor's label convention too.
+    let data_dir = data.to_str().unwrap();
+    let replay = [
+        "--sensor",
+        "sensor",
+        "--replay",
+        data_dir,
+        "--replay-keep",
+        "N%5==0",
+        "--steps",
+        "5",
+    ];
+    let r = follow(&replay, "run4");
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let config = std::fs::read_to_string(t.join("run4/config.toml")).unwrap();
+    assert!(config.contains("calibrated_sensor"), "{config}");
     let bench = ["bench", "--taps", "20", "--sensor", "sensor"];
     assert_eq!(tactrace(&t.0, &bench).code, 0);
 }

@@ -312,8 +312,9 @@ pub struct ReplayOutcome {
 /// `model` (trained on the collection's frames, in its pin order and label
 /// convention), into the run folder `out` (whose `config.toml` is `cfg`
 /// with `world` as its `[replay]` table). The arm, workspace, tap and
-/// loop settings are `cfg`'s; the label convention is that of
-/// `cfg.rig.sensor.calibration`, centred ([`LabelConvention::centred`]).
+/// loop settings are `cfg`'s; the label convention is that of the
+/// calibrated sensor `cfg.calibrated_sensor` when given (`--sensor`), else
+/// of `cfg.rig.sensor.calibration`, centred ([`LabelConvention::centred`]).
 pub fn follow_replay(
     cfg: &SimFollowConfig,
     world: &ReplayWorld,
@@ -330,7 +331,11 @@ pub fn follow_replay(
     let reference = read_frame(&world.reference)?;
     let mut settings = cfg.servo_settings();
     settings.blob = world.blob.clone();
-    let convention = LabelConvention::centred(cfg.rig.sensor.calibration.clone());
+    let calibration = match crate::follow::read_calibrated(cfg)? {
+        Some(sensor) => sensor.spec.sensor.calibration,
+        None => cfg.rig.sensor.calibration.clone(),
+    };
+    let convention = LabelConvention::centred(calibration);
     let perception =
         perception_for(&reference, model, &settings)?.with_label_convention(convention.clone());
     let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;

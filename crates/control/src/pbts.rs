@@ -25,7 +25,7 @@
 //! it is zero on the first step after a reset (no derivative kick).
 //! The move delta_s is applied in the sensor frame by [`next_pose`]
 //! (eq. 5.7-5.8).
-use crate::policy::{CurvatureEstimate, PolicyConfig};
+use crate::policy::{ContactTypicality, CurvatureEstimate, PolicyConfig};
 use crate::ControlError;
 use serde::{Deserialize, Serialize};
 use tactrace_arm::Pose;
@@ -106,6 +106,7 @@ impl PbtsConfig {
                 step_curvature_mm: TUNED[10],
                 step_angle_deg: TUNED[11],
                 min_step_fraction: TUNED[12],
+                step_contact: 0.0,
             },
         }
     }
@@ -163,6 +164,9 @@ pub struct PbtsController {
     integral: [f64; 6],
     previous_error: Option<[f64; 6]>,
     curvature: CurvatureEstimate,
+    contact: ContactTypicality,
+    /// Novelty of the latest contact ([`PbtsController::observe_contact`]).
+    contact_novelty: f64,
 }
 
 impl PbtsController {
@@ -176,6 +180,8 @@ impl PbtsController {
             integral: [0.0; 6],
             previous_error: None,
             curvature: CurvatureEstimate::default(),
+            contact: ContactTypicality::default(),
+            contact_novelty: 0.0,
         }
     }
 
@@ -207,6 +213,15 @@ impl PbtsController {
         self.integral = [0.0; 6];
         self.previous_error = None;
         self.curvature = CurvatureEstimate::default();
+        self.contact = ContactTypicality::default();
+        self.contact_novelty = 0.0;
+    }
+
+    /// Take the mean pin displacement (px) of the tap the next step
+    /// answers: the policy's step shortens for contacts unlike the run's
+    /// usual ones (`policy.step_contact`). Without it the novelty is 0.
+    pub fn observe_contact(&mut self, mean_displacement_px: f64) {
+        self.contact_novelty = self.contact.novelty(mean_displacement_px);
     }
 
     /// One control step: the sensor-frame move delta_s (x, y, z mm; rx, ry,
@@ -234,7 +249,9 @@ impl PbtsController {
                 .observe(sensed.theta_deg, c.policy.curvature_smoothing);
             let kappa = self.curvature.kappa_per_mm;
             error[0] += c.policy.r_reference_mm(kappa);
-            error[1] *= c.policy.step_fraction(kappa, sensed.theta_deg);
+            error[1] *= c
+                .policy
+                .step_fraction(kappa, sensed.theta_deg, self.contact_novelty);
         }
         let previous = self.previous_error.unwrap_or(error);
         let mut delta = [0.0; 6];

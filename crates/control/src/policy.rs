@@ -48,6 +48,11 @@ pub struct PolicyConfig {
     pub step_angle_deg: f64,
     /// The step never falls below this fraction of s*_y, in (0, 1].
     pub min_step_fraction: f64,
+    /// k_c: the step is divided by 1 + k_c |ln(d / d_typ)| too, d the
+    /// tap's mean pin displacement and d_typ its running geometric mean
+    /// over the run: a contact unlike the usual ones (a corner, a lift-off)
+    /// takes a short step (0: off).
+    pub step_contact: f64,
 }
 
 impl Default for PolicyConfig {
@@ -59,6 +64,7 @@ impl Default for PolicyConfig {
             step_curvature_mm: 0.0,
             step_angle_deg: 0.0,
             min_step_fraction: 0.2,
+            step_contact: 0.0,
         }
     }
 }
@@ -69,10 +75,11 @@ impl PolicyConfig {
         self.curvature_offset_mm2 == 0.0
             && self.step_curvature_mm == 0.0
             && self.step_angle_deg == 0.0
+            && self.step_contact == 0.0
     }
 
     /// The settings as (name, value) for validation.
-    pub(crate) fn values(&self) -> [(&'static str, f64); 6] {
+    pub(crate) fn values(&self) -> [(&'static str, f64); 7] {
         [
             ("policy.curvature_offset_mm2", self.curvature_offset_mm2),
             ("policy.max_offset_mm", self.max_offset_mm),
@@ -80,6 +87,7 @@ impl PolicyConfig {
             ("policy.step_curvature_mm", self.step_curvature_mm),
             ("policy.step_angle_deg", self.step_angle_deg),
             ("policy.min_step_fraction", self.min_step_fraction),
+            ("policy.step_contact", self.step_contact),
         ]
     }
 
@@ -98,6 +106,7 @@ impl PolicyConfig {
             ("policy.max_offset_mm", self.max_offset_mm),
             ("policy.step_curvature_mm", self.step_curvature_mm),
             ("policy.step_angle_deg", self.step_angle_deg),
+            ("policy.step_contact", self.step_contact),
         ];
         negative
             .into_iter()
@@ -145,6 +154,31 @@ impl CurvatureEstimate {
     }
 }
 
+/// Weight of the newest tap in the running mean of ln d.
+const CONTACT_SMOOTHING: f64 = 0.1;
+
+/// How unlike the run's usual contacts a tap is, from its mean pin
+/// displacement d (px) alone: the controller keeps one.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactTypicality {
+    /// Running mean of ln d over the contacts so far.
+    log_mean: Option<f64>,
+}
+
+impl ContactTypicality {
+    /// |ln(d / d_typ)| for this tap (0 for the first, or a non-positive
+    /// d), then d joins the running mean.
+    pub fn novelty(&mut self, d_px: f64) -> f64 {
+        if !(d_px.is_finite() && d_px > 0.0) {
+            return 0.0;
+        }
+        let ln = d_px.ln();
+        let mean = self.log_mean.unwrap_or(ln);
+        self.log_mean = Some(mean + CONTACT_SMOOTHING * (ln - mean));
+        (ln - mean).abs()
+    }
+}
+
 impl PolicyConfig {
     /// The r reference for the estimated curvature, mm.
     pub fn r_reference_mm(&self, kappa_per_mm: f64) -> f64 {
@@ -152,14 +186,17 @@ impl PolicyConfig {
     }
 
     /// The fraction of the tangential step to take, in
-    /// [`min_step_fraction`](PolicyConfig::min_step_fraction), 1].
-    pub fn step_fraction(&self, kappa_per_mm: f64, theta_deg: f64) -> f64 {
+    /// [`min_step_fraction`](PolicyConfig::min_step_fraction), 1], for the
+    /// curvature, the misalignment and the contact's novelty
+    /// ([`ContactTypicality::novelty`]).
+    pub fn step_fraction(&self, kappa_per_mm: f64, theta_deg: f64, novelty: f64) -> f64 {
         let angle = if self.step_angle_deg > 0.0 {
             theta_deg.abs() / self.step_angle_deg
         } else {
             0.0
         };
-        let slow = 1.0 + self.step_curvature_mm * kappa_per_mm.abs() + angle;
+        let slow =
+            1.0 + self.step_curvature_mm * kappa_per_mm.abs() + angle + self.step_contact * novelty;
         (1.0 / slow).clamp(self.min_step_fraction, 1.0)
     }
 }
@@ -205,11 +242,29 @@ mod tests {
             min_step_fraction: 0.2,
             ..PolicyConfig::default()
         };
-        assert_eq!(p.step_fraction(0.0, 0.0), 1.0);
-        assert!((p.step_fraction(0.1, 0.0) - 0.5).abs() < 1e-12);
-        assert!((p.step_fraction(-0.1, 10.0) - 1.0 / 3.0).abs() < 1e-12);
-        assert_eq!(p.step_fraction(5.0, 90.0), 0.2);
-        assert_eq!(PolicyConfig::default().step_fraction(1.0, 45.0), 1.0);
+        assert_eq!(p.step_fraction(0.0, 0.0, 0.0), 1.0);
+        assert!((p.step_fraction(0.1, 0.0, 0.0) - 0.5).abs() < 1e-12);
+        assert!((p.step_fraction(-0.1, 10.0, 0.0) - 1.0 / 3.0).abs() < 1e-12);
+        assert_eq!(p.step_fraction(5.0, 90.0, 0.0), 0.2);
+        assert_eq!(PolicyConfig::default().step_fraction(1.0, 45.0, 0.0), 1.0);
+        let contact = PolicyConfig {
+            step_contact: 2.0,
+            ..PolicyConfig::default()
+        };
+        assert!((contact.step_fraction(0.0, 0.0, 0.5) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_contact_unlike_the_usual_ones_is_novel() {
+        let mut c = ContactTypicality::default();
+        assert_eq!(c.novelty(5.0), 0.0);
+        for _ in 0..50 {
+            c.novelty(5.0);
+        }
+        assert!(c.novelty(5.0) < 1e-9, "the usual contact is not novel");
+        let weak = c.novelty(2.5);
+        assert!((weak - 2f64.ln()).abs() < 1e-9, "{weak}");
+        assert_eq!(c.novelty(0.0), 0.0);
         assert!(PolicyConfig::default().is_off());
     }
 

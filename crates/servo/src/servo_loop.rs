@@ -235,6 +235,7 @@ pub fn servo_loop(
         }
         no_contact = if percept.contact { 0 } else { no_contact + 1 };
         let delta = if percept.contact {
+            controller.observe_contact(percept.mean_displacement_px);
             controller.step(SensedPose {
                 r_mm: percept.r_mm,
                 theta_deg: percept.theta_deg,

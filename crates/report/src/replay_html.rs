@@ -156,7 +156,7 @@ canvas{background:#fff;border:1px solid #ccc;border-radius:4px}\
 const BODY: &str = "<h1 id=\"title\"></h1><div id=\"notes\"></div>\n\
 <div class=\"panes\"><canvas id=\"world\" width=\"560\" height=\"560\"></canvas>\
 <div><canvas id=\"pins\" width=\"400\" height=\"400\"></canvas>\
-<div class=\"cap\">the tapthe tap&#39;s pins at rest (grey) and their displacement x3 (green)#39;s frame (when the run kept it, faded), its pins at rest (grey) and their displacement x3 (green)</div></div></div>\n\
+<div class=\"cap\">the tap&#39;s frame (when the run kept it, faded), its pins at rest (grey) and their displacement x3 (green)</div></div></div>\n\
 <div class=\"key\"><span><i class=\"sw\" style=\"background:#999\"></i>contour</span>\
 <span><i class=\"sw\" style=\"background:#1f77b4\"></i>path (commanded)</span>\
 <span><i class=\"sw\" style=\"background:#d62728\"></i>sensor and its x axis</span>\

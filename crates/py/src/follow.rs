@@ -2,7 +2,7 @@
 //! `tactrace_lab::follow::follow_simulated`, as `tactrace follow` runs it,
 //! and what `follow_rig` shares with it (model, shape and configuration
 //! arguments, the result dict).
-use crate::arrays::{json_to_py, matrix, py_to_json};
+use crate::arrays::{matrix, py_to_json};
 use crate::errors::{input, lab, store};
 use crate::interrupt::{checkpoint, run_detached};
 use crate::model::Model;
@@ -172,9 +172,12 @@ pub fn outcome_dict<'py>(
         )));
     }
     let text = tactrace_store::read_text(&res.dir.join("metrics.json")).map_err(store)?;
-    let metrics: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| input(e.to_string()))?;
-    let d = json_to_py(py, &metrics)?.cast_into::<PyDict>()?;
+    // Python's json reads the file's shortest round-trip floats exactly
+    // (serde_json here, built without float_roundtrip, may be 1 ulp off).
+    let d = py
+        .import("json")?
+        .call_method1("loads", (text,))?
+        .cast_into::<PyDict>()?;
     let col = |f: &dyn Fn(&tactrace_servo::StepRecord) -> f64| -> Vec<f64> {
         res.records.iter().map(f).collect()
     };

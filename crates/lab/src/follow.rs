@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_arm::Arm;
 use tactrace_control::{PbtsConfig, PbtsController};
-use tactrace_geometry::{Contour, Vec2};
+use tactrace_geometry::{Contour, Pose, Vec2};
 use tactrace_report::figures;
 use tactrace_report::replay_html::{replay_html, PinFields, ReplayPage, StepFrames};
 use tactrace_sensor::{Frame, TactileSensor};
@@ -450,6 +450,20 @@ impl RunFolder {
     }
 }
 
+/// The start pose of `cfg` on `shape`, refused when the arm's workspace
+/// does not hold it.
+pub(crate) fn reachable_start(cfg: &SimFollowConfig, shape: &Contour) -> Result<Pose> {
+    let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
+    cfg.rig.workspace.validate()?;
+    cfg.rig.workspace.check_inside(start).map_err(|e| {
+        LabError::Config(format!(
+            "the arm cannot reach the start on this contour ({:.1}, {:.1}) mm: {e}",
+            start.x, start.y
+        ))
+    })?;
+    Ok(start)
+}
+
 /// The calibrated sensor of `cfg`, if it names one.
 pub fn read_calibrated(cfg: &SimFollowConfig) -> Result<Option<SensorFolder>> {
     match &cfg.calibrated_sensor {
@@ -470,14 +484,7 @@ pub fn follow_simulated(
 ) -> Result<FollowOutcome> {
     cfg.follow.validate()?;
     let calibrated = read_calibrated(cfg)?;
-    let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
-    cfg.rig.workspace.validate()?;
-    cfg.rig.workspace.check_inside(start).map_err(|e| {
-        LabError::Config(format!(
-            "the arm cannot reach the start on this contour ({:.1}, {:.1}) mm: {e}",
-            start.x, start.y
-        ))
-    })?;
+    let start = reachable_start(cfg, shape)?;
     let seed = cfg.follow.seed;
     let mut rig = match &calibrated {
         Some(s) => {

@@ -24,7 +24,7 @@ use tactrace_geometry::Contour;
 use tactrace_sensor::{
     read_frame, Answer, EdgeLabels, FrameBank, LabelConvention, LabelScales, LabelledFrame,
 };
-use tactrace_servo::{start_pose, ReplayRig, StepRecord};
+use tactrace_servo::{ReplayRig, StepRecord};
 use tactrace_store::StoredModel;
 use tactrace_vision::BlobParams;
 
@@ -338,14 +338,7 @@ pub fn follow_replay(
     let convention = LabelConvention::centred(calibration);
     let perception =
         perception_for(&reference, model, &settings)?.with_label_convention(convention.clone());
-    let start = start_pose(shape, &cfg.start, cfg.rig.tap.height_mm)?;
-    cfg.rig.workspace.validate()?;
-    cfg.rig.workspace.check_inside(start).map_err(|e| {
-        LabError::Config(format!(
-            "the arm cannot reach the start on this contour ({:.1}, {:.1}) mm: {e}",
-            start.x, start.y
-        ))
-    })?;
+    let start = crate::follow::reachable_start(cfg, shape)?;
     let mut rig = ReplayRig::new(
         &cfg.rig,
         (bank, convention),

@@ -136,8 +136,10 @@ fn summary(verb: &str, what: &str, got: &Imported, dir: &std::path::Path) {
     }
 }
 
+/// Real labelled taps and the simulator to fit to them (`calibrate`,
+/// `sim-fit`).
 #[derive(Args)]
-pub struct CalibrateArgs {
+pub struct RealTapArgs {
     /// Folder of the real frames named in --targets.
     #[arg(long)]
     frames: PathBuf,
@@ -145,16 +147,8 @@ pub struct CalibrateArgs {
     labels: LabelArgs,
     #[command(flatten)]
     columns: TapColumnArgs,
-    /// Calibration taps to pick (by a seeded rule that spans r and theta,
-    /// docs/calibration.md); the other given taps score the fit. 0: use
-    /// every tap (nothing held out).
-    #[arg(long, default_value_t = 100)]
-    samples: usize,
-    /// Seed of the tap selection and of the replayed taps' rendering noise.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
     /// Rig configuration TOML whose `sensor` table is the simulator to
-    /// calibrate (default: the built-in model).
+    /// start from (default: the built-in model).
     #[arg(long)]
     config: Option<PathBuf>,
     /// Blob detector parameters (TOML); default: the real256 preset.
@@ -163,6 +157,39 @@ pub struct CalibrateArgs {
     /// Use only the first N rows of --targets.
     #[arg(long)]
     limit: Option<usize>,
+}
+
+impl RealTapArgs {
+    /// The frames folder, the twin configuration (rendering seed `seed`),
+    /// the starting simulator and the blob detector.
+    fn resolve(
+        self,
+        seed: u64,
+    ) -> Result<(
+        PathBuf,
+        TwinConfig,
+        tactrace_sensor::TacTipConfig,
+        tactrace_vision::BlobParams,
+    )> {
+        let twin = twin_config(self.labels, &self.columns, self.limit, seed)?;
+        let rig = rig_config(self.config.as_deref())?;
+        let blob = blob_params(self.params.as_deref(), "real256")?;
+        Ok((self.frames, twin, rig.sensor, blob))
+    }
+}
+
+#[derive(Args)]
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    taps: RealTapArgs,
+    /// Calibration taps to pick (by a seeded rule that spans r and theta,
+    /// docs/calibration.md); the other given taps score the fit. 0: use
+    /// every tap (nothing held out).
+    #[arg(long, default_value_t = 100)]
+    samples: usize,
+    /// Seed of the tap selection and of the replayed taps' rendering noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
     /// Also fit the simulator's label convention (angle and edge offsets
     /// and scales, tap depth) and mechanics to the calibration taps before
     /// the field correction: for a sensor unlike the shared one (a few
@@ -178,9 +205,9 @@ pub struct CalibrateArgs {
 }
 
 pub fn calibrate(a: CalibrateArgs) -> Result<()> {
-    let twin = twin_config(a.labels, &a.columns, a.limit, a.seed)?;
+    let (frames, twin, sensor, blob) = a.taps.resolve(a.seed)?;
     let cfg = CalibrateConfig {
-        frames: a.frames,
+        frames,
         twin,
         samples: (a.samples > 0).then_some(a.samples),
         seed: a.seed,
@@ -188,13 +215,11 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
         score_rows: None,
         fit_physics: a.fit_physics,
     };
-    let rig = rig_config(a.config.as_deref())?;
-    let blob = blob_params(a.params.as_deref(), "real256")?;
     fsutil::check_output_dir(&a.out, a.force)?;
     let t0 = std::time::Instant::now();
     let pb = bar(0, "calibrate");
     let tick = || pb.inc(1);
-    let got = calibrate_sensor(&cfg, &rig.sensor, &blob, &tick);
+    let got = calibrate_sensor(&cfg, &sensor, &blob, &tick);
     pb.finish_and_clear();
     let got = got?;
     let dir = write_calibrated(&got, &a.out, a.force)?;
@@ -217,5 +242,112 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
             f.mean_cosine
         );
     }
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct SimFitArgs {
+    #[command(flatten)]
+    taps: RealTapArgs,
+    /// CMA-ES generations (each candidate trains one PDenNN per render,
+    /// about 2 s per 2000 taps on two cores).
+    #[arg(long, default_value_t = 14)]
+    generations: usize,
+    /// Candidates per generation (default: CMA-ES's 4 + 3 ln n = 12).
+    #[arg(long)]
+    population: Option<usize>,
+    /// First step of the search, in units of each parameter's scale.
+    #[arg(long, default_value_t = 0.5)]
+    sigma: f64,
+    /// Seed of the search.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Degrees of angle error that cost as much as 1 mm of position error.
+    #[arg(long, default_value_t = 5.0)]
+    deg_per_mm: f64,
+    /// Twins per candidate (rendering seeds 1, 2, ...); the cost is their
+    /// mean.
+    #[arg(long, default_value_t = 2)]
+    renders: usize,
+    /// Output folder: sensor.toml (a rig file for --config), search.csv,
+    /// summary.json.
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing output folder.
+    #[arg(long)]
+    force: bool,
+}
+
+/// `sim-fit`: the simulator's physical parameters fitted by what a PDenNN
+/// trained on its twin makes of the real frames (docs/sensor-model.md,
+/// "Transfer fit").
+pub fn sim_fit(a: SimFitArgs) -> Result<()> {
+    use tactrace_lab::transfer_fit::{fit_transfer, write_transfer_fit, TransferFitConfig};
+    if a.generations == 0 {
+        return Err(LabError::Config("--generations must be at least 1".into()).into());
+    }
+    if !(a.sigma.is_finite() && a.sigma > 0.0) {
+        return Err(LabError::Config(format!("--sigma {} must be positive", a.sigma)).into());
+    }
+    if !(a.deg_per_mm.is_finite() && a.deg_per_mm > 0.0) {
+        return Err(
+            LabError::Config(format!("--deg-per-mm {} must be positive", a.deg_per_mm)).into(),
+        );
+    }
+    if a.renders == 0 {
+        return Err(LabError::Config("--renders must be at least 1".into()).into());
+    }
+    let (frames, twin, sensor, blob) = a.taps.resolve(1)?;
+    let cfg = TransferFitConfig {
+        renders: a.renders,
+        deg_per_mm: a.deg_per_mm,
+        frames,
+        twin,
+        generations: a.generations,
+        population: a.population,
+        sigma: a.sigma,
+        seed: a.seed,
+        val_fraction: 0.15,
+    };
+    fsutil::check_output_dir(&a.out, a.force)?;
+    let t0 = std::time::Instant::now();
+    let pb = bar(0, "sim-fit");
+    let mut report = |c: &tactrace_lab::transfer_fit::Candidate,
+                      best: &tactrace_lab::transfer_fit::Candidate| {
+        pb.inc(1);
+        let show = |c: &tactrace_lab::transfer_fit::Candidate| {
+            c.mae.map_or("invalid sensor".into(), |m| {
+                format!("{:.3} mm / {:.2} deg", m[0], m[1])
+            })
+        };
+        let line = format!(
+            "generation {:>3}: {}   best {}",
+            c.generation,
+            show(c),
+            show(best)
+        );
+        if pb.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            pb.println(line);
+        }
+    };
+    let fit = fit_transfer(&cfg, &sensor, &blob, &mut report);
+    pb.finish_and_clear();
+    let fit = fit?;
+    let dir = write_transfer_fit(&fit, &cfg, &a.out, a.force)?;
+    let show = |c: &tactrace_lab::transfer_fit::Candidate| {
+        c.mae
+            .map_or("-".into(), |m| format!("{:.3} mm / {:.2} deg", m[0], m[1]))
+    };
+    eprintln!(
+        "{} candidates in {:.0} s; on the {} real frames: start {}, best {} -> {}",
+        fit.candidates.len(),
+        t0.elapsed().as_secs_f64(),
+        fit.real_frames,
+        show(&fit.start),
+        show(&fit.best),
+        dir.join("sensor.toml").display()
+    );
     Ok(())
 }

@@ -45,6 +45,8 @@ enum Command {
     Twin(cmd_twin::TwinArgs),
     /// Fit the simulated TacTip to your own labelled taps on a straight edge.
     Calibrate(cmd_twin::CalibrateArgs),
+    /// Fit the simulator's physics by what a model trained on it makes of your real frames.
+    SimFit(cmd_twin::SimFitArgs),
     /// Train a pose model (report ch. 4.2).
     Train(cmd_learn::TrainArgs),
     /// Mean absolute errors of a model on a dataset (report ch. 4.3).
@@ -79,6 +81,7 @@ fn main() -> ExitCode {
         Command::Import(a) => cmd_data::import(a),
         Command::Twin(a) => cmd_twin::twin(a),
         Command::Calibrate(a) => cmd_twin::calibrate(a),
+        Command::SimFit(a) => cmd_twin::sim_fit(a),
         Command::Train(a) => cmd_learn::train(a),
         Command::Validate(a) => cmd_learn::validate(a),
         Command::Predict(a) => cmd_learn::predict(a),

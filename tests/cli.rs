@@ -1,6 +1,6 @@
 //! End-to-end tests of the `tactrace` binary.
 mod util;
-use util::{real_data, tactrace, TempDir};
+use util::{real_data, real_paths, tactrace, TempDir};
 
 #[test]
 fn collect_writes_a_python_readable_dataset() {
@@ -313,13 +313,8 @@ fn reproduce_writes_the_report_with_every_table_and_figure() {
 fn calibrate_then_render_and_twin_with_the_sensor() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("calibrate");
-    let frames = data.join("frames");
-    let (targets, init) = (data.join("targets.csv"), frames.join("init_0.png"));
-    let (frames, targets, init) = (
-        frames.to_str().unwrap(),
-        targets.to_str().unwrap(),
-        init.to_str().unwrap(),
-    );
+    let [frames, targets, init] = real_paths(&data);
+    let (frames, targets, init) = (frames.as_str(), targets.as_str(), init.as_str());
     let cal = [
         "calibrate",
         "--frames",
@@ -382,7 +377,7 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
         "--reference",
         init,
         "--limit",
-        "50",
+        "800",
         "--out",
         "tw",
     ];
@@ -390,6 +385,10 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
     assert_eq!(r.code, 0, "{}", r.stderr);
     let meta = std::fs::read_to_string(t.join("tw/meta.json")).unwrap();
     assert!(meta.contains("calibrated sensor"), "{meta}");
+    let train_twin = [
+        "train", "--model", "pdennn", "--train", "tw", "--epochs", "60", "--out", "mt",
+    ];
+    assert_eq!(tactrace(&t.0, &train_twin).code, 0);
     // Its simulated world: collect in its labels, train, follow, bench.
     let r = tactrace(
         &t.0,
@@ -411,8 +410,14 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
     ];
     assert_eq!(tactrace(&t.0, &train).code, 0);
     let follow = |extra: &[&str], out: &str| {
+        let model = if extra.contains(&"--model") {
+            &[][..]
+        } else {
+            &["--model", "m"][..]
+        };
         let args = [
-            &["follow", "--model", "m", "--shape", "disk", "--out", out][..],
+            &["follow", "--shape", "disk", "--out", out][..],
+            model,
             extra,
         ]
         .concat();
@@ -428,9 +433,13 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("order"), "{}", r.stderr);
     assert_eq!(follow(&["--sensor", "no-such-sensor"], "run3").code, 2);
-    // The real-frame world reads the sensor's label convention too.
+    // The real-frame world reads the sensor's label convention too; its
+    // taps are real frames, so the model is the one trained on the twin
+    // (the `collect` taps carry no shear, the real frames do).
     let data_dir = data.to_str().unwrap();
     let replay = [
+        "--model",
+        "mt",
         "--sensor",
         "sensor",
         "--replay",

@@ -47,6 +47,17 @@ pub fn real_data() -> Option<PathBuf> {
     tactrace_testdata::real_edge_set()
 }
 
+/// The real set's frames folder, labels file and reference frame, as
+/// arguments.
+pub fn real_paths(data: &Path) -> [String; 3] {
+    let frames = data.join("frames");
+    [
+        frames.display().to_string(),
+        data.join("targets.csv").display().to_string(),
+        frames.join("init_0.png").display().to_string(),
+    ]
+}
+
 /// Run `tactrace args...` in `dir`, read the first `lines` lines of its
 /// standard output, then close the pipe (`tactrace ... | head -n LINES`).
 pub fn tactrace_head(dir: &Path, args: &[&str], lines: usize) -> Run {

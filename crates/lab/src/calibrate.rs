@@ -9,7 +9,7 @@
 //! [`SensorFolder`]: the simulated sensor that `--sensor` gives every
 //! command that simulates taps.
 use crate::error::{LabError, Result};
-use crate::import::{import_rows, ImportConfig, Imported};
+use crate::import::{import_rows, Imported};
 use crate::twin::{simulate_twin_rows, twin_rows, TwinConfig};
 use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
@@ -129,15 +129,7 @@ pub fn calibrate_sensor(
         None => held_out_rows(&pool, &chosen, cfg.seed),
     };
     let keep: Vec<usize> = chosen.iter().chain(&held).copied().collect();
-    let icfg = ImportConfig {
-        frames: cfg.frames.clone(),
-        targets: t.targets.clone(),
-        reference: t.reference.clone(),
-        image_column: t.image_column.clone(),
-        r_column: t.r_column.clone(),
-        theta_column: t.theta_column.clone(),
-        limit: t.limit,
-    };
+    let icfg = t.import_config(cfg.frames.clone());
     let real = import_rows(&icfg, blob, Some(&keep), progress)?;
     let physics = if cfg.fit_physics {
         fit_physics(sensor, &real, &rows, &chosen, t)?

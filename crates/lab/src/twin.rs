@@ -60,6 +60,20 @@ impl TwinConfig {
         }
     }
 
+    /// How to import the real frames of these labels from `frames` (the
+    /// same labels file, reference, columns and row limit).
+    pub fn import_config(&self, frames: PathBuf) -> crate::import::ImportConfig {
+        crate::import::ImportConfig {
+            frames,
+            targets: self.targets.clone(),
+            reference: self.reference.clone(),
+            image_column: self.image_column.clone(),
+            r_column: self.r_column.clone(),
+            theta_column: self.theta_column.clone(),
+            limit: self.limit,
+        }
+    }
+
     /// The same columns with another labels file and reference frame.
     pub fn with_paths(self, targets: PathBuf, reference: PathBuf) -> Self {
         TwinConfig {

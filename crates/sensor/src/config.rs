@@ -139,6 +139,53 @@ pub struct Mechanics {
     /// holds the skin still: pin motion is scaled by 1 - (s / S)^2, zero
     /// beyond S (eq. S8a). A very large value switches the clamp off.
     pub rim_clamp_mm: f64,
+    /// Which law turns a slide made in contact into skin slip: the lumped
+    /// lag of eq. S7 or the bristles along the slide's path (eqs. B1-B3).
+    pub slip_law: SlipLaw,
+    /// Brush slip ratio zeta: the largest stuck displacement of the skin
+    /// per mm of local indentation before it slips, mm/mm (eq. B2).
+    pub brush_slip_ratio: f64,
+    /// Brush local gain g_l: the share of the spread bristle field a pin
+    /// shows (eq. B3).
+    pub brush_local_gain: f64,
+    /// Brush skin gain g_w: whole-membrane drag (mm) per mm of bristle
+    /// displacement over 100 mm^2 of contact (eq. B3; profile of eq. S7c).
+    pub brush_skin_gain: f64,
+    /// Steps the slide's path is replayed in (eq. B1; numerical).
+    pub brush_steps: usize,
+    /// How the pressed skin spreads its share of the lag to the pins
+    /// (eq. S7e): the smoothed pressure D_i / max D, or the tangential
+    /// point-load response of an elastic half-space (Cerruti, eq. S7h).
+    pub slip_spread: SlipSpread,
+    /// Poisson's ratio nu of the Cerruti spread (eq. S7h): 0 isotropic,
+    /// 0.5 (incompressible) twice the response along the load as across.
+    pub slip_poisson: f64,
+    /// Core radius of the Cerruti spread, mm (eq. S7h; regularises 1/r).
+    pub slip_core_mm: f64,
+}
+
+/// How the pressed skin's share of the lag reaches the pins (eq. S7e/h).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SlipSpread {
+    /// In proportion to the smoothed pressure D_i / max D (eq. S7e).
+    #[default]
+    Pressure,
+    /// The tangential-load response of an elastic half-space summed over
+    /// the pressed patch (eq. S7h).
+    Cerruti,
+}
+
+/// The slip law of a slide made in contact (docs/sensor-model.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SlipLaw {
+    /// The lumped stick-slip lag of the whole skin (eq. S7).
+    #[default]
+    Lag,
+    /// Bristles carried along the slide's path and capped by friction
+    /// (eqs. B1-B3).
+    Brush,
 }
 
 impl Default for Mechanics {
@@ -147,24 +194,32 @@ impl Default for Mechanics {
     /// numerical settings, not fitted.
     fn default() -> Self {
         Self {
-            kernel_width_mm: 5.567,
-            lift_gain: 0.2457,
-            flow_core_mm: 0.676,
-            layer_thickness_mm: 9.94,
+            kernel_width_mm: 5.3414,
+            lift_gain: 0.3173,
+            flow_core_mm: 0.7136,
+            layer_thickness_mm: 9.834,
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 1.4054,
-            slip_load_exponent: 1.1152,
-            stick_gain: 1.3476,
-            slip_profile_mm: 30.57,
-            stick_share: 0.5165,
-            edge_gain_in: 1.5993,
-            edge_gain_out: 1.7359,
+            shear_limit_mm: 0.8708,
+            slip_load_exponent: 1.3893,
+            stick_gain: 1.5641,
+            slip_profile_mm: 39.3966,
+            stick_share: 0.783,
+            edge_gain_in: 1.7471,
+            edge_gain_out: 2.0611,
             edge_bite: 0.0,
             shear_limit_deg: 0.1982,
             contact_scale_mm: 0.0374,
-            rim_clamp_mm: 29.81,
+            rim_clamp_mm: 31.8824,
+            slip_law: SlipLaw::Lag,
+            brush_slip_ratio: 0.3,
+            brush_local_gain: 0.5,
+            brush_skin_gain: 0.5,
+            brush_steps: 8,
+            slip_spread: SlipSpread::Pressure,
+            slip_poisson: 0.5,
+            slip_core_mm: 2.0,
         }
     }
 }
@@ -182,7 +237,7 @@ pub struct Nuisance {
 impl Default for Nuisance {
     fn default() -> Self {
         Self {
-            pin_jitter_px: 0.2,
+            pin_jitter_px: 0.0743,
             image_noise_std: 0.0,
         }
     }
@@ -222,15 +277,15 @@ impl Default for Calibration {
     /// depth fitted with the mechanics (docs/sensor-model.md).
     fn default() -> Self {
         Self {
-            angle_offset_deg: -15.67,
-            edge_offset_mm: 2.317,
+            angle_offset_deg: -19.3381,
+            edge_offset_mm: 2.1885,
             angle_scale: 1.0,
             edge_scale: 1.0,
-            tap_depth_mm: 6.249,
-            depth_per_offset: -1.0,
+            tap_depth_mm: 6.7885,
+            depth_per_offset: -1.1954,
             object_side: -1.0,
             shear_sign: 1.0,
-            shear_angle_offset_deg: 10.85,
+            shear_angle_offset_deg: 14.9077,
         }
     }
 }
@@ -346,6 +401,24 @@ impl TacTipConfig {
         positive("mechanics.shear_limit_deg", m.shear_limit_deg)?;
         positive("mechanics.contact_scale_mm", m.contact_scale_mm)?;
         positive("mechanics.rim_clamp_mm", m.rim_clamp_mm)?;
+        non_negative("mechanics.brush_slip_ratio", m.brush_slip_ratio)?;
+        finite("mechanics.brush_local_gain", m.brush_local_gain)?;
+        finite("mechanics.brush_skin_gain", m.brush_skin_gain)?;
+        if !(0.0..=0.5).contains(&m.slip_poisson) {
+            return Err(SensorError::InvalidConfig {
+                field: "mechanics.slip_poisson",
+                value: m.slip_poisson,
+                reason: "must be between 0 and 0.5",
+            });
+        }
+        positive("mechanics.slip_core_mm", m.slip_core_mm)?;
+        if m.brush_steps == 0 || m.brush_steps > 1000 {
+            return Err(SensorError::InvalidConfig {
+                field: "mechanics.brush_steps",
+                value: m.brush_steps as f64,
+                reason: "must be between 1 and 1000",
+            });
+        }
         non_negative("nuisance.pin_jitter_px", n.pin_jitter_px)?;
         non_negative("nuisance.image_noise_std", n.image_noise_std)?;
         finite("calibration.angle_offset_deg", k.angle_offset_deg)?;

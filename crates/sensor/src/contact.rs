@@ -8,7 +8,7 @@
 //! gradient, away from the pressed region (eq. S6). The pin-patch kernel
 //! weights are precomputed, so a tap costs one pass over the contact patch
 //! and a few dozen signed-distance queries.
-use crate::config::Mechanics;
+use crate::config::{Mechanics, SlipSpread};
 use crate::layout::{hex_lattice, Projection};
 use crate::render::floor_i64;
 use tactrace_geometry::{Pose, Vec2};
@@ -46,6 +46,10 @@ pub(crate) struct ContactField {
     /// times the edge's proximity e = clamp(1 - |sd(axis)| / reach, 0, 1)
     /// (eq. S7f); zero when no edge crosses the contact.
     pub edge_normal: [f64; 2],
+    /// Cerruti sums at each pin (eq. S7h): [sum p dA / rho,
+    /// sum p dA dx dx / rho^3, ... dx dy ..., ... dy dy ...]; empty
+    /// unless the slip spread is Cerruti.
+    pub cerruti: Vec<[f64; 4]>,
 }
 
 impl ContactField {
@@ -55,6 +59,7 @@ impl ContactField {
             smoothed: &self.smoothed,
             load_mm3: self.load_mm3,
             edge_normal: self.edge_normal,
+            cerruti: &self.cerruti,
         }
     }
 }
@@ -69,6 +74,10 @@ pub(crate) struct ContactModel {
     kernel_x: Vec<f32>,
     kernel_y: Vec<f32>,
     kernel_g: Vec<f32>,
+    /// Cerruti weights (eq. S7h) per patch point and pin, in the layout of
+    /// `kernel_x`: 1 / rho, dx^2 / rho^3, dx dy / rho^3, dy^2 / rho^3
+    /// (times dA); empty unless the slip spread is Cerruti.
+    kernel_c: [Vec<f32>; 4],
     pins_g: Vec<[f64; 2]>,
     mech: Mechanics,
 }
@@ -113,7 +122,19 @@ impl ContactModel {
                 kernel_g.push(k[2]);
             }
         }
+        let mut kernel_c: [Vec<f32>; 4] = Default::default();
+        if mech.slip_spread == SlipSpread::Cerruti {
+            for (gj, _) in &patch {
+                for gi in &pins_g {
+                    let k = cerruti_weights(*gi, *gj, mech.slip_core_mm, area);
+                    for (v, w) in kernel_c.iter_mut().zip(k) {
+                        v.push(w);
+                    }
+                }
+            }
+        }
         Self {
+            kernel_c,
             patch: patch.into_iter().map(|(_, p)| p).collect(),
             kernel_x,
             kernel_y,
@@ -133,27 +154,28 @@ impl ContactModel {
             smoothed: vec![0.0; n],
             load_mm3: 0.0,
             edge_normal: [0.0; 2],
+            cerruti: Vec::new(),
         };
         let depth = (-tip.z).min(self.mech.max_depth_mm);
         if depth.is_nan() || depth <= 0.0 {
             return field;
         }
-        let active = self.patch.partition_point(|p| p.height < depth);
-        let reach = self.patch[..active]
-            .iter()
-            .map(|p| p.radius)
-            .fold(0.0, f64::max);
+        let (active, reach) = self.active(depth);
         let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, tip);
-        let h = self.mech.patch_grid_mm;
-        let area = 3f64.sqrt() / 2.0 * h * h;
+        let area = self.patch_area();
         let (mut ux, mut uy) = (vec![0.0; n], vec![0.0; n]);
+        let cerruti = !self.kernel_c[0].is_empty();
+        if cerruti {
+            field.cerruti = vec![[0.0; 4]; n];
+        }
         for (j, point) in self.patch[..active].iter().enumerate() {
-            let dist = grid.interpolate(sd, point.horiz);
-            let inside = (0.5 - dist / h).clamp(0.0, 1.0);
-            let pen = inside * (depth - point.height);
+            let pen = self.penetration(&mut grid, sd, point, depth);
             if pen > 0.0 {
                 field.load_mm3 += pen * area;
                 self.accumulate(j, pen, [&mut ux, &mut uy, &mut field.smoothed]);
+                if cerruti {
+                    self.accumulate_cerruti(j, pen, &mut field.cerruti);
+                }
             }
         }
         for ((d, x), y) in field.disp.iter_mut().zip(&ux).zip(&uy) {
@@ -163,6 +185,100 @@ impl ContactModel {
             field.edge_normal = edge_normal(&mut grid, sd, reach);
         }
         field
+    }
+
+    /// Patch points that can touch at indentation `depth` (the patch is
+    /// sorted by height): their count and horizontal reach, mm.
+    fn active(&self, depth: f64) -> (usize, f64) {
+        let active = self.patch.partition_point(|p| p.height < depth);
+        let reach = self.patch[..active]
+            .iter()
+            .map(|p| p.radius)
+            .fold(0.0, f64::max);
+        (active, reach)
+    }
+
+    fn patch_area(&self) -> f64 {
+        let h = self.mech.patch_grid_mm;
+        3f64.sqrt() / 2.0 * h * h
+    }
+
+    /// Eq. S4 at one patch point: the anti-aliased inside-fraction times
+    /// the depth below the object's top face.
+    fn penetration(
+        &self,
+        grid: &mut DistanceGrid,
+        sd: &dyn Fn(Vec2) -> f64,
+        point: &PatchPoint,
+        depth: f64,
+    ) -> f64 {
+        let h = self.mech.patch_grid_mm;
+        let inside = (0.5 - grid.interpolate(sd, point.horiz) / h).clamp(0.0, 1.0);
+        inside * (depth - point.height)
+    }
+
+    /// The contact along a slide (eq. B1): the horizontal positions of the
+    /// patch points that can touch, and their indentation (eq. S4) at
+    /// every pose of `path` (all at the same height).
+    pub fn path_contact(&self, sd: &dyn Fn(Vec2) -> f64, path: &[Pose]) -> PathContact {
+        let depth = path
+            .last()
+            .map_or(0.0, |p| (-p.z).min(self.mech.max_depth_mm));
+        if depth.is_nan() || depth <= 0.0 {
+            return PathContact::default();
+        }
+        let (active, reach) = self.active(depth);
+        let points = &self.patch[..active];
+        let pens = path
+            .iter()
+            .map(|tip| {
+                let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, *tip);
+                points
+                    .iter()
+                    .map(|p| self.penetration(&mut grid, sd, p, depth))
+                    .collect()
+            })
+            .collect();
+        PathContact {
+            horiz: points.iter().map(|p| p.horiz).collect(),
+            pens,
+            path: path.to_vec(),
+        }
+    }
+
+    /// The bristle field as the pins see it (eq. B3): each pin's S5
+    /// Gaussian sum of the bristle displacements `b` (one per active
+    /// patch point, in patch order), and their total over the contact
+    /// area (mm^3).
+    pub fn spread_bristles(&self, b: &[[f64; 2]]) -> (Vec<[f64; 2]>, [f64; 2]) {
+        let n = self.pins_g.len();
+        let (mut sx, mut sy) = (vec![0.0; n], vec![0.0; n]);
+        let mut total = [0.0; 2];
+        let area = self.patch_area();
+        for (j, bj) in b.iter().enumerate() {
+            if bj[0] == 0.0 && bj[1] == 0.0 {
+                continue;
+            }
+            total[0] += bj[0] * area;
+            total[1] += bj[1] * area;
+            let row = &self.kernel_g[j * n..(j + 1) * n];
+            for ((x, y), k) in sx.iter_mut().zip(sy.iter_mut()).zip(row) {
+                *x += bj[0] * *k as f64;
+                *y += bj[1] * *k as f64;
+            }
+        }
+        (sx.into_iter().zip(sy).map(|(x, y)| [x, y]).collect(), total)
+    }
+
+    /// Add patch point j's indentation `pen` to every pin's Cerruti sums
+    /// (eq. S7h).
+    fn accumulate_cerruti(&self, j: usize, pen: f64, sums: &mut [[f64; 4]]) {
+        let n = self.pins_g.len();
+        for (c, kernel) in self.kernel_c.iter().enumerate() {
+            for (s, k) in sums.iter_mut().zip(&kernel[j * n..(j + 1) * n]) {
+                s[c] += pen * *k as f64;
+            }
+        }
     }
 
     /// Add patch point j's indentation `pen` to every pin (eqs. S5, S6).
@@ -180,6 +296,17 @@ impl ContactModel {
             *u += pen * *k as f64;
         }
     }
+}
+
+/// The contact along a slide (eq. B1): see [`ContactModel::path_contact`].
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PathContact {
+    /// Horizontal position of each patch point that can touch, mm.
+    pub horiz: Vec<[f64; 2]>,
+    /// `pens[k][j]`: indentation of point j at the path's pose k, mm.
+    pub pens: Vec<Vec<f64>>,
+    /// The path's poses (filled in by the model).
+    pub path: Vec<Pose>,
 }
 
 /// Normal into the object of the edge nearest the sensor's axis (minus the
@@ -210,6 +337,23 @@ fn kernel_weights(gi: [f64; 2], gj: [f64; 2], (c, a): (f64, f64), area: f64) -> 
     let source = area / (tau * (r2 + c * c));
     let gauss = area * (-r2 / (2.0 * a * a)).exp() / (tau * a * a);
     [(source * d[0]) as f32, (source * d[1]) as f32, gauss as f32]
+}
+
+/// Eq. S7h weights of a patch point at `gj` on a pin at `gi`: the
+/// surface response of an elastic half-space to a tangential point load
+/// (Cerruti), u = (1 - nu) Q / rho + nu d (d . Q) / rho^3 up to a
+/// constant, regularised by rho = sqrt(|d|^2 + c^2): dA times [1 / rho,
+/// dx^2 / rho^3, dx dy / rho^3, dy^2 / rho^3].
+fn cerruti_weights(gi: [f64; 2], gj: [f64; 2], core: f64, area: f64) -> [f32; 4] {
+    let d = [gi[0] - gj[0], gi[1] - gj[1]];
+    let rho = (d[0] * d[0] + d[1] * d[1] + core * core).sqrt();
+    let cube = rho * rho * rho;
+    [
+        (area / rho) as f32,
+        (area * d[0] * d[0] / cube) as f32,
+        (area * d[0] * d[1] / cube) as f32,
+        (area * d[1] * d[1] / cube) as f32,
+    ]
 }
 
 /// The object's signed distance sampled lazily on a square grid in the

@@ -42,6 +42,8 @@ pub struct SlipParams {
     pub edge_gain_out: f64,
     /// `mechanics.edge_bite` gamma (eq. S7g).
     pub edge_bite: f64,
+    /// `mechanics.slip_poisson` nu (eq. S7h; moves only the Cerruti spread).
+    pub slip_poisson: f64,
 }
 
 impl SlipParams {
@@ -59,6 +61,7 @@ impl SlipParams {
             edge_gain_in: m.edge_gain_in,
             edge_gain_out: m.edge_gain_out,
             edge_bite: m.edge_bite,
+            slip_poisson: m.slip_poisson,
         }
     }
 
@@ -75,6 +78,7 @@ impl SlipParams {
         m.edge_gain_in = self.edge_gain_in;
         m.edge_gain_out = self.edge_gain_out;
         m.edge_bite = self.edge_bite;
+        m.slip_poisson = self.slip_poisson;
     }
 
     fn to_vec(self) -> Vec<f64> {
@@ -89,6 +93,7 @@ impl SlipParams {
             self.edge_gain_in,
             self.edge_gain_out,
             self.edge_bite,
+            self.slip_poisson,
         ]
     }
 
@@ -103,7 +108,8 @@ impl SlipParams {
             && (-1.0..2.0).contains(&x[6])
             && (0.0..5.0).contains(&x[7])
             && (0.0..5.0).contains(&x[8])
-            && (-3.0..3.0).contains(&x[9]);
+            && (-3.0..3.0).contains(&x[9])
+            && (0.0..=0.5).contains(&x[10]);
         ok.then_some(Self {
             shear_angle_offset_deg: x[0],
             stick_gain: x[1],
@@ -115,6 +121,7 @@ impl SlipParams {
             edge_gain_in: x[7],
             edge_gain_out: x[8],
             edge_bite: x[9],
+            slip_poisson: x[10],
         })
     }
 }
@@ -154,7 +161,8 @@ pub(crate) fn misfit_sums(model: &TacTipModel, samples: &[FitSample]) -> [f64; 3
     a
 }
 
-/// Fit psi, kappa, L_ref, beta, S_T, Theta, alpha, rho_in, rho_out and gamma (eq. S7) to the samples,
+/// Fit psi, kappa, L_ref, beta, S_T, Theta, alpha, rho_in, rho_out,
+/// gamma and nu (eq. S7) to the samples,
 /// starting from `cfg`, with the rest of `cfg` held; `rest_px` are the
 /// rest pins the displacements are measured from. `rounds` restarts of
 /// `iterations` Nelder-Mead steps each, with halving first steps.
@@ -182,7 +190,7 @@ pub fn fit_slip(
     let rms = |sse: f64| (sse / (2 * count.max(1)) as f64).sqrt();
     let mut x = SlipParams::of(cfg).to_vec();
     let start = objective(&x);
-    let step = [5.0, 0.3, 0.5, 0.3, 10.0, 2.0, 0.3, 0.3, 0.3, 0.3];
+    let step = [5.0, 0.3, 0.5, 0.3, 10.0, 2.0, 0.3, 0.3, 0.3, 0.3, -0.1];
     for round in 0..rounds {
         let s: Vec<f64> = step.iter().map(|v| v * 0.5f64.powi(round as i32)).collect();
         x = minimise(&objective, &x, &s, iterations).0;

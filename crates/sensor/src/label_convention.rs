@@ -173,8 +173,9 @@ mod tests {
 
     /// Without a mount the tool is the simulated lattice: the pose of a
     /// labelled tap is the twin's tip pose (`EdgeTap::tip_pose`) seen from
-    /// the outward normal, and with the default calibration the label
-    /// theta = 0 is 74.3 deg from the controller's theta = 0.
+    /// the outward normal, and the label theta = 0 is 90 deg plus the
+    /// angle offset from the controller's theta = 0 (70.7 deg with the
+    /// default calibration).
     #[test]
     fn the_unmounted_convention_is_the_twins_tip_pose() {
         let model = TacTipModel::new(TacTipConfig::default()).unwrap();
@@ -200,7 +201,8 @@ mod tests {
         assert!(close(pose.theta_deg, tip.rz + 90.0));
         assert!(close(pose.depth_mm, -tip.z));
         let zero = conv.to_pose(EdgeLabels::default());
-        assert!((zero.theta_deg - 74.33).abs() < 1e-9, "{}", zero.theta_deg);
+        let want = 90.0 + cal.angle_offset_deg;
+        assert!((zero.theta_deg - want).abs() < 1e-9, "{}", zero.theta_deg);
         let centred = LabelConvention::centred(cal);
         assert!(close(centred.to_pose(EdgeLabels::default()).theta_deg, 0.0));
     }

@@ -9,12 +9,14 @@
 //! labels, through a [`LabelConvention`], are nearest the tip's true pose).
 //! Only the replay and nearest-frame sensors and [`read_frame`] touch files.
 
+mod brush;
 mod config;
 mod contact;
 mod correction;
 mod edge_tap;
 mod error;
 mod fit;
+mod fit_brush;
 mod fit_joint;
 mod fit_layout;
 mod label_convention;
@@ -28,12 +30,16 @@ mod sensor;
 mod sim;
 mod slip;
 
-pub use config::{Calibration, CameraConfig, Mechanics, Nuisance, SkinGeometry, TacTipConfig};
+pub use brush::{bristles, brush_slip, slide_path, REFERENCE_AREA_MM2};
+pub use config::{
+    Calibration, CameraConfig, Mechanics, Nuisance, SkinGeometry, SlipLaw, SlipSpread, TacTipConfig,
+};
 pub use contact::Shear;
 pub use correction::FieldCorrection;
 pub use edge_tap::EdgeTap;
 pub use error::SensorError;
 pub use fit::{field_misfit, fit_slip, FitSample, SlipFit, SlipParams};
+pub use fit_brush::{fit_brush, BrushFit, BRUSH_PARAMS};
 pub use fit_joint::{fit_joint, JointFit, JOINT_PARAMS};
 pub use fit_layout::fit_layout;
 pub use label_convention::{wrap_deg, EdgeLabels, LabelConvention, ToolEdgePose};

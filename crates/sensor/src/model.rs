@@ -1,11 +1,13 @@
 //! The simulated TacTip: pin layout, contact response and rendering in one
 //! checked model, shared by simulated taps and (through measured rest pins)
 //! the real sensor's geometry.
+use crate::brush::{bristles, brush_slip, slide_path};
 use crate::config::{Mechanics, TacTipConfig};
 use crate::contact::{ContactField, ContactModel, Shear};
 use crate::layout::{hex_lattice, pin_count, Projection};
 use crate::render::{add_noise, draw_disc, jitter};
-use crate::slip::slip_field;
+use crate::slip::{lag_profile, slip_field};
+use crate::SlipLaw;
 use crate::{Frame, SensorError};
 use rand_chacha::ChaCha8Rng;
 use tactrace_geometry::{Contour, Pose, Vec2};
@@ -156,7 +158,54 @@ impl TacTipModel {
         shear: Option<Shear>,
     ) -> Vec<[f64; 2]> {
         let field = self.contact.field(sd, tip);
-        self.compose(&field, &self.cfg.mechanics, shear)
+        let mech = &self.cfg.mechanics;
+        match (mech.slip_law, shear) {
+            (SlipLaw::Brush, Some(s)) => {
+                let slip = self.brush_slip(&self.path_contact(sd, tip, s), mech);
+                self.compose_slip(&field, Some(&slip))
+            }
+            _ => self.compose(&field, mech, shear),
+        }
+    }
+
+    /// The contact along the slide `shear` that ends at `tip` (eq. B1).
+    pub(crate) fn path_contact(
+        &self,
+        sd: &dyn Fn(Vec2) -> f64,
+        tip: Pose,
+        shear: Shear,
+    ) -> crate::contact::PathContact {
+        let path = slide_path(tip, shear, self.cfg.mechanics.brush_steps);
+        let mut contact = self.contact.path_contact(sd, &path);
+        contact.path = path;
+        contact
+    }
+
+    /// The pins' slip (mm on the skin) by the brush law (eqs. B1-B3) with
+    /// the brush parameters of `mech`.
+    pub(crate) fn brush_slip(
+        &self,
+        contact: &crate::contact::PathContact,
+        mech: &Mechanics,
+    ) -> Vec<[f64; 2]> {
+        let b = bristles(
+            &contact.horiz,
+            &contact.pens,
+            &contact.path,
+            mech.brush_slip_ratio,
+        );
+        let (spread, total) = self.contact.spread_bristles(&b);
+        let profile: Vec<f64> = self
+            .pins_g
+            .iter()
+            .map(|g| lag_profile(mech, g[0].hypot(g[1])))
+            .collect();
+        brush_slip(
+            &spread,
+            total,
+            &profile,
+            (mech.brush_local_gain, mech.brush_skin_gain),
+        )
     }
 
     /// Contact state of a tap without slip (eqs. S4-S6), for fits that
@@ -175,7 +224,18 @@ impl TacTipModel {
         shear: Option<Shear>,
     ) -> Vec<[f64; 2]> {
         let slip = shear.map(|s| slip_field(mech, &self.pins_g, field.state(), s));
-        let slip_of = |i: usize| slip.as_ref().map_or([0.0; 2], |v| v[i]);
+        self.compose_slip(field, slip.as_deref())
+    }
+
+    /// Pin centres (px) from a contact state and the pins' slip (mm on
+    /// the skin): eqs. S6, S8, S8a plus the slip, which the rim clamp
+    /// does not scale.
+    pub(crate) fn compose_slip(
+        &self,
+        field: &ContactField,
+        slip: Option<&[[f64; 2]]>,
+    ) -> Vec<[f64; 2]> {
+        let slip_of = |i: usize| slip.map_or([0.0; 2], |v| v[i]);
         self.rest_px
             .iter()
             .zip(self.pins_g.iter().zip(&self.base_px))

@@ -6,7 +6,7 @@
 //! friction; then it slips and the lag stays at a limit that grows with
 //! the normal load (Coulomb: friction ~ mu N). The lag is spread over the
 //! skin by a radial profile (the sensor body holds the skin at its base).
-use crate::config::Mechanics;
+use crate::config::{Mechanics, SlipSpread};
 use crate::contact::Shear;
 
 /// Contact load (indented volume, mm^3) at which the slip limit equals
@@ -58,6 +58,7 @@ pub fn slip_field(
         smoothed,
         load_mm3,
         edge_normal,
+        cerruti,
     } = contact;
     let mut out = vec![[0.0; 2]; pins_g.len()];
     if load_mm3 <= 0.0 {
@@ -76,19 +77,51 @@ pub fn slip_field(
     let lim = mech.shear_limit_deg;
     let twist = -(lim * (shear.drz_deg / lim).tanh()).to_radians();
     let (c, s) = (twist.cos(), twist.sin());
-    let pins = pins_g.iter().zip(&weights).zip(smoothed);
-    for (((g, w), d), o) in pins.zip(out.iter_mut()) {
+    let spread = pressed_spread(mech, smoothed, cerruti, lag);
+    let pins = pins_g.iter().zip(&weights).zip(smoothed).zip(spread);
+    for ((((g, w), d), pressed_lag), o) in pins.zip(out.iter_mut()) {
         let phi = lag_profile(mech, g[0].hypot(g[1]));
-        let share = (1.0 - alpha) * phi + alpha * d / peak;
         let r = [g[0] - centre[0], g[1] - centre[1]];
         let turn = [c * r[0] - s * r[1] - r[0], s * r[0] + c * r[1] - r[1]];
         let pressed = d / peak;
+        let skin = (1.0 - alpha) * phi;
         *o = [
-            share * lag[0] + pressed * bite[0] + phi * w * turn[0],
-            share * lag[1] + pressed * bite[1] + phi * w * turn[1],
+            skin * lag[0] + alpha * pressed_lag[0] + pressed * bite[0] + phi * w * turn[0],
+            skin * lag[1] + alpha * pressed_lag[1] + pressed * bite[1] + phi * w * turn[1],
         ];
     }
     out
+}
+
+/// The lag the pressed skin passes to each pin (eq. S7e/h): the lag
+/// times D_i / max D for the pressure spread; for the Cerruti spread the
+/// half-space response (1 - nu) S_i lag + nu T_i lag (S_i = sum p dA / rho,
+/// T_i = sum p dA d d^T / rho^3), divided by the largest S_i.
+fn pressed_spread(
+    mech: &Mechanics,
+    smoothed: &[f64],
+    cerruti: &[[f64; 4]],
+    lag: [f64; 2],
+) -> Vec<[f64; 2]> {
+    if mech.slip_spread == SlipSpread::Pressure || cerruti.len() != smoothed.len() {
+        let peak = smoothed.iter().copied().fold(0.0, f64::max).max(1e-12);
+        return smoothed
+            .iter()
+            .map(|d| [d / peak * lag[0], d / peak * lag[1]])
+            .collect();
+    }
+    let peak = cerruti.iter().map(|c| c[0]).fold(0.0, f64::max).max(1e-12);
+    let nu = mech.slip_poisson;
+    cerruti
+        .iter()
+        .map(|c| {
+            let iso = (1.0 - nu) * c[0];
+            [
+                (iso * lag[0] + nu * (c[1] * lag[0] + c[2] * lag[1])) / peak,
+                (iso * lag[1] + nu * (c[2] * lag[0] + c[3] * lag[1])) / peak,
+            ]
+        })
+        .collect()
 }
 
 /// What [`slip_field`] needs of the contact (eqs. S5, S7a, S7f).
@@ -100,6 +133,9 @@ pub struct ContactState<'a> {
     pub load_mm3: f64,
     /// Edge normal into the object times the edge's proximity (eq. S7f).
     pub edge_normal: [f64; 2],
+    /// Cerruti sums per pin (eq. S7h; empty for the pressure spread):
+    /// [sum p dA / rho, sum p dA dx^2 / rho^3, dx dy, dy^2].
+    pub cerruti: &'a [[f64; 4]],
 }
 
 /// The slide as the skin feels it at an edge (eq. S7f): its component
@@ -155,6 +191,7 @@ mod tests {
             smoothed,
             load_mm3,
             edge_normal: [0.0; 2],
+            cerruti: &[],
         }
     }
 
@@ -174,6 +211,38 @@ mod tests {
         assert_eq!(edge_slide(&m, [0.0, 1.0], [2.0, -1.0]), [2.0, -0.5]);
         // Half proximity: half the change.
         assert_eq!(edge_slide(&m, [0.0, 0.5], [0.0, 1.0]), [0.0, 1.25]);
+    }
+
+    /// Eq. S7h's theory: a point load's response along the load is
+    /// 1 / (1 - nu) times the response across it at the same distance, and
+    /// a pin on the load's axis is not pushed sideways.
+    #[test]
+    fn the_cerruti_spread_pushes_twice_as_far_along_the_load_when_incompressible() {
+        let mut m = mech();
+        m.slip_spread = SlipSpread::Cerruti;
+        m.slip_poisson = 0.5;
+        // One unit load at the origin; pins at (5, 0) and (0, 5), no core:
+        // [1 / rho, dx^2 / rho^3, dx dy / rho^3, dy^2 / rho^3].
+        let sums = [[0.2, 0.2, 0.0, 0.0], [0.2, 0.0, 0.0, 0.2]];
+        let out = pressed_spread(&m, &[1.0, 1.0], &sums, [1.0, 0.0]);
+        assert!(
+            (out[0][0] - 1.0).abs() < 1e-12 && out[0][1] == 0.0,
+            "{out:?}"
+        );
+        assert!(
+            (out[1][0] - 0.5).abs() < 1e-12 && out[1][1] == 0.0,
+            "{out:?}"
+        );
+        m.slip_poisson = 0.25;
+        let out = pressed_spread(&m, &[1.0, 1.0], &sums, [1.0, 0.0]);
+        assert!(
+            (out[0][0] / out[1][0] - 1.0 / 0.75).abs() < 1e-12,
+            "{out:?}"
+        );
+        // The pressure spread ignores the sums.
+        m.slip_spread = SlipSpread::Pressure;
+        let out = pressed_spread(&m, &[1.0, 0.5], &sums, [2.0, 0.0]);
+        assert_eq!(out, vec![[2.0, 0.0], [1.0, 0.0]]);
     }
 
     #[test]

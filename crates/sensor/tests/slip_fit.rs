@@ -111,6 +111,7 @@ fn the_slip_fit_recovers_known_parameters_from_simulated_fields() {
         edge_gain_in: 1.4,
         edge_gain_out: 0.7,
         edge_bite: 0.3,
+        slip_poisson: 0.5,
     };
     known.apply(&mut truth);
     let model = TacTipModel::new(truth.clone()).expect("valid");
@@ -136,6 +137,7 @@ fn the_slip_fit_recovers_known_parameters_from_simulated_fields() {
         edge_gain_in: 1.0,
         edge_gain_out: 1.0,
         edge_bite: 0.0,
+        slip_poisson: 0.5,
     }
     .apply(&mut start);
     let rest = model.rest_pins().to_vec();

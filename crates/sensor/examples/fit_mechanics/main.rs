@@ -167,6 +167,12 @@ fn main() {
         support::MIN_BIN
     );
     let mut cfg = TacTipConfig::default();
+    if std::env::var("SPREAD").is_ok_and(|v| v == "cerruti") {
+        cfg.mechanics.slip_spread = tactrace_sensor::SlipSpread::Cerruti;
+        if let Some(c) = std::env::var("CORE").ok().and_then(|v| v.parse().ok()) {
+            cfg.mechanics.slip_core_mm = c;
+        }
+    }
     if let Ok(out) = std::env::var("DUMP") {
         dump(&cfg, &rest, &taps, &out);
         return;
@@ -176,6 +182,9 @@ fn main() {
     }
     if std::env::var("FIT").is_ok_and(|v| v == "joint") {
         cfg = slip::run_joint(&cfg, &rest, &taps);
+    }
+    if std::env::var("FIT").is_ok_and(|v| v == "brush") {
+        cfg = slip::run_brush(&cfg, &rest, &taps);
     }
     let build = |c: &TacTipConfig| TacTipModel::with_rest_pins(c.clone(), rest.clone()).ok();
     if std::env::var("FIT").is_ok_and(|v| v == "frames") {
@@ -215,7 +224,8 @@ fn main() {
         cfg.mechanics.shear_limit_mm = x[8];
         cfg.mechanics.shear_limit_deg = x[9];
         cfg.mechanics.contact_scale_mm = x[10];
-    } else if std::env::var("FIT").is_ok_and(|v| v != "slip" && v != "joint") {
+    } else if std::env::var("FIT").is_ok_and(|v| !["slip", "joint", "brush"].contains(&v.as_str()))
+    {
         let objective = |x: &[f64]| -> f64 {
             let Some(c) = with_params(&cfg, x) else {
                 return 1e12;

@@ -1,0 +1,334 @@
+//! `tactrace sim-fit`: the simulator's physical parameters fitted by what
+//! a model trained on its taps makes of real frames (docs/sensor-model.md,
+//! "Transfer fit").
+//!
+//! A field fit (eqs. S4-S8 against measured pin fields, `fit_slip`,
+//! `fit_joint`) weighs every pixel of misfit alike, but a network trained on
+//! simulated taps is hurt only by the misfit along the directions it reads
+//! the labels from: a better field fit did not transfer better. Here each
+//! candidate parameter set simulates the twin of the given labelled taps,
+//! a PDenNN is trained on it exactly as `tactrace train --model pdennn
+//! --val-fraction 0.15` does, and the candidate's cost is that model's mean
+//! absolute error on the real frames, position / 1 mm + angle / 5 deg
+//! (the target ratio). CMA-ES ([`tactrace_optim::Cmaes`], seeded)
+//! searches the parameters of [`TRANSFER_PARAMS`] in units of their
+//! scales. Only physical and label-convention parameters move: no per-pin
+//! correction, so the result is a plain simulated sensor.
+use crate::error::{LabError, Result};
+use crate::import::import;
+use crate::train::{holdout, resolve_config, train_with_validation, validate_net};
+use crate::twin::{simulate_twin, TwinConfig};
+use std::path::{Path, PathBuf};
+use tactrace_learn::{ModelKind, Preset};
+use tactrace_optim::{Cmaes, CmaesConfig};
+use tactrace_sensor::TacTipConfig;
+use tactrace_store::fsutil::{write_atomic, StagedDir};
+use tactrace_store::TapData;
+use tactrace_vision::BlobParams;
+
+/// A parameter the transfer fit moves: its rig-file key (under
+/// `[sensor]`), getter, setter and search scale (one unit of the search).
+pub struct TransferParam {
+    pub key: &'static str,
+    pub get: fn(&TacTipConfig) -> f64,
+    pub set: fn(&mut TacTipConfig, f64),
+    pub scale: f64,
+}
+
+macro_rules! param {
+    ($table:ident . $field:ident, $scale:expr) => {
+        TransferParam {
+            key: concat!(stringify!($table), ".", stringify!($field)),
+            get: |c| c.$table.$field,
+            set: |c, v| c.$table.$field = v,
+            scale: $scale,
+        }
+    };
+}
+
+/// The parameters [`fit_transfer`] searches, with their scales: the label
+/// convention's offsets and tap depth, the contact mechanics (eqs. S4-S8a),
+/// the stick-slip law (eq. S7) and the pins' jitter (the sensor's noise).
+pub const TRANSFER_PARAMS: [TransferParam; 18] = [
+    param!(calibration.shear_angle_offset_deg, 3.0),
+    param!(calibration.edge_offset_mm, 0.5),
+    param!(calibration.angle_offset_deg, 3.0),
+    param!(calibration.tap_depth_mm, 0.5),
+    param!(calibration.depth_per_offset, 0.2),
+    param!(mechanics.stick_gain, 0.3),
+    param!(mechanics.shear_limit_mm, 0.3),
+    param!(mechanics.slip_load_exponent, 0.3),
+    param!(mechanics.slip_profile_mm, 4.0),
+    param!(mechanics.stick_share, 0.2),
+    param!(mechanics.edge_gain_in, 0.3),
+    param!(mechanics.edge_gain_out, 0.3),
+    param!(mechanics.flow_core_mm, 0.3),
+    param!(mechanics.kernel_width_mm, 1.0),
+    param!(mechanics.layer_thickness_mm, 2.0),
+    param!(mechanics.lift_gain, 0.1),
+    param!(mechanics.rim_clamp_mm, 3.0),
+    param!(nuisance.pin_jitter_px, 0.2),
+];
+
+/// What to fit on and how long to search.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TransferFitConfig {
+    /// Folder of the real frames named in the labels file.
+    pub frames: PathBuf,
+    /// The labels file (every row is a cost tap), columns, reference frame
+    /// and the twin's rendering seed.
+    pub twin: TwinConfig,
+    /// CMA-ES generations.
+    pub generations: usize,
+    /// Candidates per generation (`None`: CMA-ES's default, 4 + 3 ln n).
+    pub population: Option<usize>,
+    /// Initial step, in units of each parameter's scale.
+    pub sigma: f64,
+    /// Seed of the search.
+    pub seed: u64,
+    /// Held-out fraction of each twin when training (as `train
+    /// --val-fraction`), split with seed 1 as `train` does by default.
+    pub val_fraction: f64,
+    /// Degrees of angle error that cost as much as 1 mm of position error
+    /// (the targets: 5).
+    pub deg_per_mm: f64,
+    /// Twins per candidate, rendered with seeds `twin.seed`,
+    /// `twin.seed + 1`, ...: the cost is their mean, so that no candidate
+    /// wins by one render's noise.
+    pub renders: usize,
+}
+
+/// One evaluated candidate.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Candidate {
+    pub generation: usize,
+    pub values: Vec<f64>,
+    /// Position and angle mean absolute error on the real frames (mm, deg);
+    /// `None` when the candidate is not a valid sensor.
+    pub mae: Option<[f64; 2]>,
+    pub cost: f64,
+}
+
+/// The search's outcome: the best sensor, its start, every candidate.
+pub struct TransferFit {
+    pub start: Candidate,
+    pub best: Candidate,
+    pub config: TacTipConfig,
+    pub candidates: Vec<Candidate>,
+    /// Real frames the cost was measured on.
+    pub real_frames: usize,
+}
+
+/// Cost of a candidate: position MAE / 1 mm + angle MAE / `deg_per_mm`
+/// deg.
+pub fn transfer_cost(mae: [f64; 2], deg_per_mm: f64) -> f64 {
+    mae[0] + mae[1] / deg_per_mm
+}
+
+/// `base` with the search vector `values` (in parameter units) written in.
+pub fn with_values(base: &TacTipConfig, values: &[f64]) -> TacTipConfig {
+    let mut c = base.clone();
+    for (p, v) in TRANSFER_PARAMS.iter().zip(values) {
+        (p.set)(&mut c, *v);
+    }
+    c
+}
+
+/// Fit [`TRANSFER_PARAMS`] of `base` (module docs); `progress` is told of
+/// every candidate as it is scored.
+pub fn fit_transfer(
+    cfg: &TransferFitConfig,
+    base: &TacTipConfig,
+    blob: &BlobParams,
+    progress: &mut dyn FnMut(&Candidate, &Candidate),
+) -> Result<TransferFit> {
+    let t = &cfg.twin;
+    let real = import(&t.import_config(cfg.frames.clone()), blob, &|| {})?.data;
+    let start_values: Vec<f64> = TRANSFER_PARAMS.iter().map(|p| (p.get)(base)).collect();
+    let score = |values: &[f64], generation: usize| -> Result<Candidate> {
+        let sensor = with_values(base, values);
+        let mae = match sensor.validate() {
+            Ok(()) => Some(transfer_mae(cfg, &sensor, blob, &real)?),
+            Err(_) => None,
+        };
+        Ok(Candidate {
+            generation,
+            values: values.to_vec(),
+            mae,
+            cost: mae.map_or(f64::NAN, |m| transfer_cost(m, cfg.deg_per_mm)),
+        })
+    };
+    let start = score(&start_values, 0)?;
+    let mut best = start.clone();
+    progress(&start, &best);
+    let mut search = Cmaes::new(&CmaesConfig {
+        start: vec![0.0; TRANSFER_PARAMS.len()],
+        sigma: cfg.sigma,
+        population: cfg.population,
+        seed: cfg.seed,
+    })
+    .map_err(|e| LabError::Config(e.to_string()))?;
+    let mut candidates = vec![start.clone()];
+    for generation in 1..=cfg.generations {
+        let mut costs = Vec::new();
+        for unit in search.ask() {
+            let values: Vec<f64> = TRANSFER_PARAMS
+                .iter()
+                .zip(&start_values)
+                .zip(&unit)
+                .map(|((p, s), u)| s + p.scale * u)
+                .collect();
+            let c = score(&values, generation)?;
+            if c.cost < best.cost {
+                best = c.clone();
+            }
+            progress(&c, &best);
+            costs.push(c.cost);
+            candidates.push(c);
+        }
+        search
+            .tell(&costs)
+            .map_err(|e| LabError::Config(e.to_string()))?;
+    }
+    Ok(TransferFit {
+        config: with_values(base, &best.values),
+        start,
+        best,
+        candidates,
+        real_frames: real.len(),
+    })
+}
+
+/// Twins of the labels with `sensor`, a PDenNN trained on each as
+/// `tactrace train --model pdennn --val-fraction F` does, their mean MAE
+/// on `real`.
+fn transfer_mae(
+    cfg: &TransferFitConfig,
+    sensor: &TacTipConfig,
+    blob: &BlobParams,
+    real: &TapData,
+) -> Result<[f64; 2]> {
+    let renders = cfg.renders.max(1);
+    let mut sum = [0.0; 2];
+    for k in 0..renders {
+        let twin_cfg = TwinConfig {
+            seed: cfg.twin.seed + k as u64,
+            ..cfg.twin.clone()
+        };
+        let twin = simulate_twin(&twin_cfg, sensor, blob, &|| {})?.data;
+        let (train, val) = holdout(&twin, cfg.val_fraction, 1)?;
+        let model_cfg = resolve_config(ModelKind::PDenNN, Preset::Default, None, None)?;
+        let (model, _) = train_with_validation(&model_cfg, &train, Some(&val), &mut |_| {})?;
+        let v = validate_net(&model, real)?;
+        sum[0] += v.position_mae_mm / renders as f64;
+        sum[1] += v.angle_mae_deg / renders as f64;
+    }
+    Ok(sum)
+}
+
+/// Write the fit into `out` (appears only when complete; an existing
+/// folder only with `force`): `sensor.toml`, a rig file whose `[sensor]`
+/// table is the best sensor (for `--config` of `twin`, `collect`,
+/// `follow`...); `search.csv`, every candidate; `summary.json`, the
+/// configuration, seed, version, start and best.
+pub fn write_transfer_fit(
+    fit: &TransferFit,
+    cfg: &TransferFitConfig,
+    out: &Path,
+    force: bool,
+) -> Result<PathBuf> {
+    let stage = StagedDir::new(out, force)?;
+    let dir = stage.path();
+    let rig = toml::Table::from_iter([(
+        "sensor".to_string(),
+        toml::Value::try_from(&fit.config).map_err(|e| LabError::Config(e.to_string()))?,
+    )]);
+    let head = format!(
+        "# tactrace {} sim-fit: best of {} candidates, seed {}; real frames {}: position {} mm, angle {} deg\n",
+        env!("CARGO_PKG_VERSION"),
+        fit.candidates.len(),
+        cfg.seed,
+        fit.real_frames,
+        fmt_mae(&fit.best, 0),
+        fmt_mae(&fit.best, 1),
+    );
+    let body = toml::to_string(&rig).map_err(|e| LabError::Config(e.to_string()))?;
+    write_atomic(&dir.join("sensor.toml"), (head + &body).as_bytes())?;
+    write_atomic(
+        &dir.join("search.csv"),
+        search_csv(&fit.candidates).as_bytes(),
+    )?;
+    let summary = serde_json::json!({
+        "tactrace_version": env!("CARGO_PKG_VERSION"),
+        "config": cfg,
+        "parameters": TRANSFER_PARAMS.iter().map(|p| p.key).collect::<Vec<_>>(),
+        "scales": TRANSFER_PARAMS.iter().map(|p| p.scale).collect::<Vec<_>>(),
+        "real_frames": fit.real_frames,
+        "start": fit.start,
+        "best": fit.best,
+    });
+    let text =
+        serde_json::to_string_pretty(&summary).map_err(|e| LabError::Config(e.to_string()))?;
+    write_atomic(&dir.join("summary.json"), text.as_bytes())?;
+    Ok(stage.commit()?)
+}
+
+fn fmt_mae(c: &Candidate, k: usize) -> String {
+    c.mae.map_or("-".into(), |m| format!("{:.3}", m[k]))
+}
+
+/// One row per candidate: generation, cost, position and angle MAE, then
+/// the parameters by key.
+fn search_csv(candidates: &[Candidate]) -> String {
+    let mut s = String::from("generation,cost,position_mae_mm,angle_mae_deg");
+    for p in &TRANSFER_PARAMS {
+        s.push(',');
+        s.push_str(p.key);
+    }
+    s.push('\n');
+    for c in candidates {
+        s.push_str(&format!(
+            "{},{},{},{}",
+            c.generation,
+            c.cost,
+            fmt_mae(c, 0),
+            fmt_mae(c, 1)
+        ));
+        for v in &c.values {
+            s.push_str(&format!(",{v}"));
+        }
+        s.push('\n');
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_parameter_key_names_the_field_it_sets() {
+        let base = TacTipConfig::default();
+        for (k, p) in TRANSFER_PARAMS.iter().enumerate() {
+            let mut values: Vec<f64> = TRANSFER_PARAMS.iter().map(|q| (q.get)(&base)).collect();
+            values[k] += 0.125;
+            let moved = with_values(&base, &values);
+            assert_eq!((p.get)(&moved), (p.get)(&base) + 0.125, "{}", p.key);
+            let text = toml::to_string(&moved).unwrap();
+            let (table, field) = p.key.split_once('.').unwrap();
+            let doc: toml::Table = toml::from_str(&text).unwrap();
+            let v = doc[table][field].as_float().unwrap();
+            assert_eq!(v, (p.get)(&moved), "{}", p.key);
+        }
+    }
+
+    #[test]
+    fn cost_weighs_one_mm_as_the_given_degrees() {
+        assert_eq!(
+            transfer_cost([1.0, 0.0], 5.0),
+            transfer_cost([0.0, 5.0], 5.0)
+        );
+        assert_eq!(transfer_cost([0.5, 2.5], 5.0), 1.0);
+        assert_eq!(transfer_cost([0.5, 1.5], 3.0), 1.0);
+    }
+}

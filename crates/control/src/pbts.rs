@@ -90,8 +90,9 @@ impl PbtsConfig {
     /// "Tuned defaults"): `tactrace tune --trials 300 --seed 1` from the
     /// report's controller on the training contours, then a refining
     /// `--config configs/tune-refine.toml --trials 150 --seed 2` from that,
-    /// with a PDenNN trained on the disk (docs/results.md). The simulated
-    /// world's default.
+    /// with a PDenNN trained on the disk (docs/results.md); retuned the
+    /// same refining way (seed 3) when the simulated sensor became the
+    /// transfer-fitted one (issue 11). The simulated world's default.
     pub fn tuned() -> Self {
         Self {
             reference: [0.0, TUNED[0], 0.0, 0.0, 0.0, 0.0],
@@ -147,13 +148,16 @@ impl PbtsConfig {
     }
 }
 
-/// [`PbtsConfig::tuned`]'s values, rounded to 4 significant digits (the
-/// step then shortened from 1.095 to 0.9 mm on small squares added to the
-/// training set, docs/results.md): step (mm), Kp x, Ki x, Kd x, Kp rz, Ki rz, Kd rz, then the policy's
+/// [`PbtsConfig::tuned`]'s values, rounded to 4 significant digits:
+/// retuned on the transfer-fitted sensor (issue 11) by a refining search
+/// from the previous tuned values (`tactrace tune --config
+/// configs/tune-refine.toml --trials 150 --seed 3`, docs/results.md):
+/// step (mm), Kp x, Ki x, Kd x, Kp rz, Ki rz, Kd rz, then the policy's
 /// curvature_offset_mm2, max_offset_mm, curvature_smoothing,
 /// step_curvature_mm, step_angle_deg, min_step_fraction.
 const TUNED: [f64; 13] = [
-    0.9, 0.1368, 0.04422, 0.0, 0.5867, 0.05672, 0.5810, 14.33, 2.197, 0.7079, 7.202, 115.0, 0.2128,
+    0.7110, 0.1292, 0.04531, 0.03255, 0.6294, 0.09844, 0.3677, 5.893, 1.903, 0.9044, 14.18, 61.27,
+    0.2203,
 ];
 
 /// The discrete PI(D) controller of eq. 5.5; keeps only the running

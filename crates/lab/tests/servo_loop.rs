@@ -33,7 +33,7 @@ fn model(toml: Option<&str>, epochs: usize) -> StoredModel {
 
 fn run(model: &StoredModel, shape: &Contour) -> (FollowOutcome, FollowMetrics) {
     let mut cfg = SimFollowConfig::default();
-    cfg.follow.max_steps = 700;
+    cfg.follow.max_steps = 1000;
     let root = tempfile::tempdir().unwrap();
     let dir = root.path().join("run");
     let out = follow_simulated(&cfg, model, ("shape", shape), (&dir, false), &mut |_| {}).unwrap();

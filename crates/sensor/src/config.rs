@@ -194,24 +194,24 @@ impl Default for Mechanics {
     /// numerical settings, not fitted.
     fn default() -> Self {
         Self {
-            kernel_width_mm: 5.3414,
-            lift_gain: 0.3173,
-            flow_core_mm: 0.7136,
-            layer_thickness_mm: 9.834,
+            kernel_width_mm: 6.0988,
+            lift_gain: 0.3001,
+            flow_core_mm: 0.76,
+            layer_thickness_mm: 9.068,
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 0.8708,
-            slip_load_exponent: 1.3893,
-            stick_gain: 1.5641,
-            slip_profile_mm: 39.3966,
-            stick_share: 0.783,
-            edge_gain_in: 1.7471,
-            edge_gain_out: 2.0611,
+            shear_limit_mm: 0.8634,
+            slip_load_exponent: 1.4658,
+            stick_gain: 1.8032,
+            slip_profile_mm: 41.1044,
+            stick_share: 0.7666,
+            edge_gain_in: 1.7576,
+            edge_gain_out: 2.0141,
             edge_bite: 0.0,
             shear_limit_deg: 0.1982,
             contact_scale_mm: 0.0374,
-            rim_clamp_mm: 31.8824,
+            rim_clamp_mm: 30.785,
             slip_law: SlipLaw::Lag,
             brush_slip_ratio: 0.3,
             brush_local_gain: 0.5,
@@ -237,7 +237,7 @@ pub struct Nuisance {
 impl Default for Nuisance {
     fn default() -> Self {
         Self {
-            pin_jitter_px: 0.0743,
+            pin_jitter_px: 0.0132,
             image_noise_std: 0.0,
         }
     }
@@ -277,15 +277,15 @@ impl Default for Calibration {
     /// depth fitted with the mechanics (docs/sensor-model.md).
     fn default() -> Self {
         Self {
-            angle_offset_deg: -19.3381,
-            edge_offset_mm: 2.1885,
+            angle_offset_deg: -17.9862,
+            edge_offset_mm: 1.8125,
             angle_scale: 1.0,
             edge_scale: 1.0,
-            tap_depth_mm: 6.7885,
-            depth_per_offset: -1.1954,
+            tap_depth_mm: 6.2786,
+            depth_per_offset: -1.25,
             object_side: -1.0,
             shear_sign: 1.0,
-            shear_angle_offset_deg: 14.9077,
+            shear_angle_offset_deg: 16.0292,
         }
     }
 }

@@ -142,7 +142,10 @@ fn a_sensor_with_another_pin_count_and_frame_size_is_calibrated() {
     .unwrap()
     .data;
     assert_eq!(data.dim(), 2 * 61);
-    assert_eq!(data.meta.frames_with_missing_pins, 0);
+    // The transfer-fitted mechanics press harder and sharper (issue 11):
+    // on this coarser, larger synthetic dome a deep tap can merge two
+    // pins now and then (2 of 50 with seed 1); never more than one in ten.
+    assert!(data.meta.frames_with_missing_pins <= 5, "{:?}", data.meta);
 }
 
 /// A sensor whose labels follow another convention (angle and edge

@@ -194,24 +194,24 @@ impl Default for Mechanics {
     /// numerical settings, not fitted.
     fn default() -> Self {
         Self {
-            kernel_width_mm: 6.0988,
-            lift_gain: 0.3001,
-            flow_core_mm: 0.76,
-            layer_thickness_mm: 9.068,
+            kernel_width_mm: 5.8163,
+            lift_gain: 0.3756,
+            flow_core_mm: 0.305,
+            layer_thickness_mm: 8.404,
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 0.8634,
-            slip_load_exponent: 1.4658,
-            stick_gain: 1.8032,
-            slip_profile_mm: 41.1044,
-            stick_share: 0.7666,
-            edge_gain_in: 1.7576,
-            edge_gain_out: 2.0141,
+            shear_limit_mm: 0.9578,
+            slip_load_exponent: 1.5221,
+            stick_gain: 2.1791,
+            slip_profile_mm: 40.2836,
+            stick_share: 0.7521,
+            edge_gain_in: 1.8519,
+            edge_gain_out: 2.0133,
             edge_bite: 0.0,
             shear_limit_deg: 0.1982,
             contact_scale_mm: 0.0374,
-            rim_clamp_mm: 30.785,
+            rim_clamp_mm: 30.2764,
             slip_law: SlipLaw::Lag,
             brush_slip_ratio: 0.3,
             brush_local_gain: 0.5,
@@ -237,7 +237,7 @@ pub struct Nuisance {
 impl Default for Nuisance {
     fn default() -> Self {
         Self {
-            pin_jitter_px: 0.0132,
+            pin_jitter_px: 0.0589,
             image_noise_std: 0.0,
         }
     }
@@ -277,15 +277,15 @@ impl Default for Calibration {
     /// depth fitted with the mechanics (docs/sensor-model.md).
     fn default() -> Self {
         Self {
-            angle_offset_deg: -17.9862,
-            edge_offset_mm: 1.8125,
+            angle_offset_deg: -17.1529,
+            edge_offset_mm: 1.5438,
             angle_scale: 1.0,
             edge_scale: 1.0,
-            tap_depth_mm: 6.2786,
-            depth_per_offset: -1.25,
+            tap_depth_mm: 6.6599,
+            depth_per_offset: -1.4599,
             object_side: -1.0,
             shear_sign: 1.0,
-            shear_angle_offset_deg: 16.0292,
+            shear_angle_offset_deg: 16.0583,
         }
     }
 }

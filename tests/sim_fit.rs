@@ -34,6 +34,9 @@ fn sim_fit_writes_a_usable_rig_file_reproducibly_and_refuses_bad_input() {
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert_eq!(r.stderr.matches("generation ").count(), 4, "{}", r.stderr);
     let dir = t.join("fit");
+    for figure in ["convergence.svg", "convergence.png"] {
+        assert!(dir.join(figure).is_file(), "{figure}");
+    }
     let csv = std::fs::read_to_string(dir.join("search.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 1 + 3, "{csv}");
     assert!(csv.starts_with("generation,cost,position_mae_mm,angle_mae_deg,calibration."));

@@ -229,7 +229,8 @@ fn transfer_mae(
 /// Write the fit into `out` (appears only when complete; an existing
 /// folder only with `force`): `sensor.toml`, a rig file whose `[sensor]`
 /// table is the best sensor (for `--config` of `twin`, `collect`,
-/// `follow`...); `search.csv`, every candidate; `summary.json`, the
+/// `follow`...); `search.csv`, every candidate; `convergence.{svg,png}`,
+/// each generation's best and the best so far; `summary.json`, the
 /// configuration, seed, version, start and best.
 pub fn write_transfer_fit(
     fit: &TransferFit,
@@ -258,6 +259,11 @@ pub fn write_transfer_fit(
         &dir.join("search.csv"),
         search_csv(&fit.candidates).as_bytes(),
     )?;
+    tactrace_report::figures::convergence(
+        &dir.join("convergence"),
+        ("sim-fit: CMA-ES over the simulator's physics", "candidates"),
+        &history(&fit.candidates),
+    )?;
     let summary = serde_json::json!({
         "tactrace_version": env!("CARGO_PKG_VERSION"),
         "config": cfg,
@@ -271,6 +277,35 @@ pub fn write_transfer_fit(
         serde_json::to_string_pretty(&summary).map_err(|e| LabError::Config(e.to_string()))?;
     write_atomic(&dir.join("summary.json"), text.as_bytes())?;
     Ok(stage.commit()?)
+}
+
+/// Per generation: candidates so far, the generation's best cost, the
+/// best so far (invalid candidates count as evaluated, never as best).
+fn history(candidates: &[Candidate]) -> Vec<tactrace_report::figures::GenerationCost> {
+    let mut out: Vec<tactrace_report::figures::GenerationCost> = Vec::new();
+    let mut best = f64::INFINITY;
+    for (k, c) in candidates.iter().enumerate() {
+        let cost = if c.cost.is_finite() {
+            c.cost
+        } else {
+            f64::INFINITY
+        };
+        best = best.min(cost);
+        match out.last_mut() {
+            Some(g) if k > 0 && candidates[k - 1].generation == c.generation => {
+                g.evaluations = k + 1;
+                g.generation_best = g.generation_best.min(cost);
+                g.best_so_far = best;
+            }
+            _ => out.push(tactrace_report::figures::GenerationCost {
+                evaluations: k + 1,
+                generation_best: cost,
+                best_so_far: best,
+            }),
+        }
+    }
+    out.retain(|g| g.generation_best.is_finite());
+    out
 }
 
 fn fmt_mae(c: &Candidate, k: usize) -> String {

@@ -181,9 +181,14 @@ pub struct GenerationCost {
     pub best_so_far: f64,
 }
 
-/// The tuning's convergence: each generation's best and the best so far
-/// against the number of simulated runs, log y.
-pub fn convergence(stem: &Path, title: &str, history: &[GenerationCost]) -> Result<Vec<PathBuf>> {
+/// A search's convergence: each generation's best and the best so far
+/// against the number of evaluations (named `x_label`: the tuning's
+/// simulated runs, the transfer fit's candidates), log y.
+pub fn convergence(
+    stem: &Path,
+    (title, x_label): (&str, &str),
+    history: &[GenerationCost],
+) -> Result<Vec<PathBuf>> {
     let series = |name: &str, style: Style, f: fn(&GenerationCost) -> f64| Series {
         name: name.into(),
         points: history
@@ -196,7 +201,7 @@ pub fn convergence(stem: &Path, title: &str, history: &[GenerationCost]) -> Resu
         stem,
         &Axes {
             log_y: true,
-            ..axes(title, "simulated runs", "cost")
+            ..axes(title, x_label, "cost")
         },
         &[
             series("generation best", Style::Points, |g| g.generation_best),

@@ -100,7 +100,11 @@ impl Outputs {
             ));
         }
         write_atomic(&dir.join("history.csv"), csv.as_bytes())?;
-        figures::convergence(&dir.join("convergence"), "CMA-ES tuning", history)?;
+        figures::convergence(
+            &dir.join("convergence"),
+            ("CMA-ES tuning", "simulated runs"),
+            history,
+        )?;
         Ok(())
     }
 

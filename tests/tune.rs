@@ -82,14 +82,10 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
     );
     let config = std::fs::read_to_string(t.join("tuned/config.toml")).unwrap();
     assert!(config.contains("seed = 5"), "{config}");
-    let r = tactrace(
-        &t.0,
+    let r = follow(
+        &t,
+        "square:50",
         &[
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "square:50",
             "--config",
             "tuned/tuned.toml",
             "--steps",
@@ -109,20 +105,7 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
         "[controller.policy]\nstep_boost = 2.0\n",
     );
     std::fs::write(t.join("bad.toml"), bad).unwrap();
-    let r = tactrace(
-        &t.0,
-        &[
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "square:50",
-            "--config",
-            "bad.toml",
-            "--out",
-            "run2",
-        ],
-    );
+    let r = follow(&t, "square:50", &["--config", "bad.toml", "--out", "run2"]);
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("step_boost"), "{}", r.stderr);
     // A policy value that cannot work is refused before anything is written.
@@ -131,20 +114,7 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
         "[controller.policy]\nmin_step_fraction = 0.0\n",
     )
     .unwrap();
-    let r = tactrace(
-        &t.0,
-        &[
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "square:50",
-            "--config",
-            "zero.toml",
-            "--out",
-            "run4",
-        ],
-    );
+    let r = follow(&t, "square:50", &["--config", "zero.toml", "--out", "run4"]);
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("min_step_fraction"), "{}", r.stderr);
     assert!(!t.join("run4").exists() && !t.join("run4.partial").exists());
@@ -160,20 +130,15 @@ fn a_tiny_tuning_writes_a_config_that_follow_accepts() {
         r.stderr
     );
     // A malformed parametric shape says what is wrong.
-    let r = tactrace(
-        &t.0,
-        &[
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "star:35,7",
-            "--out",
-            "run3",
-        ],
-    );
+    let r = follow(&t, "star:35,7", &["--out", "run3"]);
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("star:R,A,K"), "{}", r.stderr);
+}
+
+/// `tactrace follow --model m --shape SHAPE` with `extra` arguments, in `t`.
+fn follow(t: &TempDir, shape: &str, extra: &[&str]) -> util::Run {
+    let args = [&["follow", "--model", "m", "--shape", shape][..], extra].concat();
+    tactrace(&t.0, &args)
 }
 
 #[test]
@@ -219,14 +184,10 @@ fn an_interrupted_tuning_keeps_its_best_so_far() {
         kept
     );
     // ...is a follow configuration, and the start of a new search.
-    let r = tactrace(
-        &t.0,
+    let r = follow(
+        &t,
+        "square:50",
         &[
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "square:50",
             "--config",
             "out.partial/tuned.toml",
             "--steps",

@@ -222,7 +222,7 @@ fn sum_squares(
         .sum()
 }
 
-fn displacement(model: &TacTipModel, pins: &[[f64; 2]]) -> Vec<[f64; 2]> {
+pub(crate) fn displacement(model: &TacTipModel, pins: &[[f64; 2]]) -> Vec<[f64; 2]> {
     pins.iter()
         .zip(model.rest_pins())
         .map(|(p, r)| [p[0] - r[0], p[1] - r[1]])
@@ -231,7 +231,7 @@ fn displacement(model: &TacTipModel, pins: &[[f64; 2]]) -> Vec<[f64; 2]> {
 
 /// [squared difference, coordinates, dot, |sim|^2, |real|^2] over the
 /// tracked pins.
-fn compare(sim: &[[f64; 2]], real: &[Option<[f64; 2]>]) -> [f64; 5] {
+pub(crate) fn compare(sim: &[[f64; 2]], real: &[Option<[f64; 2]>]) -> [f64; 5] {
     let mut a = [0.0; 5];
     for (e, d) in sim.iter().zip(real) {
         if let Some(d) = d {

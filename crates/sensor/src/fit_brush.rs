@@ -4,7 +4,7 @@
 //! (eqs. S4-S6) and the indentation along each slide's path do not depend
 //! on the brush parameters, so they are computed once per frame.
 use crate::contact::{ContactField, PathContact};
-use crate::fit::FitSample;
+use crate::fit::{compare, displacement, FitSample};
 use crate::nelder_mead::minimise;
 use crate::{SensorError, SlipLaw, TacTipConfig, TacTipModel};
 use tactrace_geometry::Vec2;
@@ -127,13 +127,7 @@ fn sum_squares(model: &TacTipModel, cfg: &TacTipConfig, frames: &[Frame]) -> f64
         .map(|f| {
             let slip = f.path.as_ref().map(|p| model.brush_slip(p, &cfg.mechanics));
             let pins = model.compose_slip(&f.field, slip.as_deref());
-            let mut sq = 0.0;
-            for ((p, r), d) in pins.iter().zip(model.rest_pins()).zip(&f.sample.disp) {
-                if let Some(d) = d {
-                    sq += (p[0] - r[0] - d[0]).powi(2) + (p[1] - r[1] - d[1]).powi(2);
-                }
-            }
-            sq
+            compare(&displacement(model, &pins), &f.sample.disp)[0]
         })
         .sum()
 }

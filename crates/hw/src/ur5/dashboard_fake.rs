@@ -63,13 +63,7 @@ impl FakeDashboard {
     /// Serves `state` on an ephemeral port of 127.0.0.1 for at most
     /// `lifetime`.
     pub fn start(state: FakeDashboardState, lifetime: Duration) -> Result<Self, HwError> {
-        let io_err = |source| HwError::Io {
-            what: "fake dashboard".into(),
-            source,
-        };
-        let listener = TcpListener::bind("127.0.0.1:0").map_err(io_err)?;
-        listener.set_nonblocking(true).map_err(io_err)?;
-        let port = listener.local_addr().map_err(io_err)?.port();
+        let (listener, port) = super::fake_listener(0, "fake dashboard")?;
         let shared = Arc::new(Mutex::new(Shared {
             state,
             commands: Vec::new(),

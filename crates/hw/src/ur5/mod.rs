@@ -22,3 +22,19 @@ pub use dashboard_fake::{FakeDashboard, FakeDashboardState};
 pub use fake::{FakeBehaviour, FakeUrController, FakeUrOptions};
 pub use probe::{probe_state, StateProbe};
 pub use realtime::RobotState;
+
+/// A non-blocking listener of a loopback fake on 127.0.0.1:`port` (0: an
+/// ephemeral port) and the port it got; errors name `what`.
+pub(crate) fn fake_listener(
+    port: u16,
+    what: &str,
+) -> Result<(std::net::TcpListener, u16), crate::HwError> {
+    let io_err = |source| crate::HwError::Io {
+        what: what.to_string(),
+        source,
+    };
+    let listener = std::net::TcpListener::bind(("127.0.0.1", port)).map_err(io_err)?;
+    listener.set_nonblocking(true).map_err(io_err)?;
+    let port = listener.local_addr().map_err(io_err)?.port();
+    Ok((listener, port))
+}

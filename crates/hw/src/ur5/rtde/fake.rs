@@ -337,13 +337,8 @@ pub struct FakeRtdeServer {
 impl FakeRtdeServer {
     /// Serves on 127.0.0.1:`port` (0: an ephemeral port).
     pub fn start(port: u16, options: FakeRtdeOptions) -> Result<Self, HwError> {
-        let io_err = |source| HwError::Io {
-            what: format!("fake RTDE server on 127.0.0.1:{port}"),
-            source,
-        };
-        let listener = TcpListener::bind(("127.0.0.1", port)).map_err(io_err)?;
-        listener.set_nonblocking(true).map_err(io_err)?;
-        let port = listener.local_addr().map_err(io_err)?.port();
+        let what = format!("fake RTDE server on 127.0.0.1:{port}");
+        let (listener, port) = crate::ur5::fake_listener(port, &what)?;
         let shared = Arc::new(Mutex::new(Shared {
             state: Some(resting_state()),
             ..Shared::default()

@@ -27,47 +27,58 @@ use tactrace_store::TapData;
 use tactrace_vision::BlobParams;
 
 /// A parameter the transfer fit moves: its rig-file key (under
-/// `[sensor]`), getter, setter and search scale (one unit of the search).
+/// `[sensor]`), getter, setter, search scale (one unit of the search) and
+/// least value (a proposal below it is scored, and recorded, at it).
 pub struct TransferParam {
     pub key: &'static str,
     pub get: fn(&TacTipConfig) -> f64,
     pub set: fn(&mut TacTipConfig, f64),
     pub scale: f64,
+    pub min: f64,
 }
 
 macro_rules! param {
     ($table:ident . $field:ident, $scale:expr) => {
+        param!($table.$field, $scale, f64::NEG_INFINITY)
+    };
+    ($table:ident . $field:ident, $scale:expr, $min:expr) => {
         TransferParam {
             key: concat!(stringify!($table), ".", stringify!($field)),
             get: |c| c.$table.$field,
             set: |c, v| c.$table.$field = v,
             scale: $scale,
+            min: $min,
         }
     };
 }
 
 /// The parameters [`fit_transfer`] searches, with their scales: the label
-/// convention's offsets and tap depth, the contact mechanics (eqs. S4-S8a),
-/// the stick-slip law (eq. S7) and the pins' jitter (the sensor's noise).
-pub const TRANSFER_PARAMS: [TransferParam; 18] = [
+/// convention's offsets, pivot (eq. L3) and tap depth, the contact mechanics (eqs. S4-S8a),
+/// the stick-slip law (eq. S7), the mount's compliance (eq. S4a), the gel
+/// flow's screening (eq. S6a) and the pins' jitter (the sensor's noise).
+pub const TRANSFER_PARAMS: [TransferParam; 22] = [
     param!(calibration.shear_angle_offset_deg, 3.0),
     param!(calibration.edge_offset_mm, 0.5),
     param!(calibration.angle_offset_deg, 3.0),
-    param!(calibration.tap_depth_mm, 0.5),
+    param!(calibration.tap_depth_mm, 0.5, 0.5),
     param!(calibration.depth_per_offset, 0.2),
-    param!(mechanics.stick_gain, 0.3),
-    param!(mechanics.shear_limit_mm, 0.3),
+    param!(calibration.pivot_x_mm, 0.5),
+    param!(calibration.pivot_y_mm, 0.5),
+    param!(mechanics.stick_gain, 0.3, 0.0),
+    param!(mechanics.shear_limit_mm, 0.3, 0.01),
     param!(mechanics.slip_load_exponent, 0.3),
-    param!(mechanics.slip_profile_mm, 4.0),
+    param!(mechanics.slip_profile_mm, 4.0, 1.0),
     param!(mechanics.stick_share, 0.2),
-    param!(mechanics.edge_gain_in, 0.3),
-    param!(mechanics.edge_gain_out, 0.3),
-    param!(mechanics.flow_core_mm, 0.3),
-    param!(mechanics.kernel_width_mm, 1.0),
-    param!(mechanics.layer_thickness_mm, 2.0),
-    param!(mechanics.lift_gain, 0.1),
-    param!(mechanics.rim_clamp_mm, 3.0),
-    param!(nuisance.pin_jitter_px, 0.2),
+    param!(mechanics.edge_gain_in, 0.3, 0.0),
+    param!(mechanics.edge_gain_out, 0.3, 0.0),
+    param!(mechanics.flow_core_mm, 0.3, 0.01),
+    param!(mechanics.kernel_width_mm, 1.0, 0.5),
+    param!(mechanics.layer_thickness_mm, 2.0, 0.5),
+    param!(mechanics.lift_gain, 0.1, 0.0),
+    param!(mechanics.rim_clamp_mm, 3.0, 1.0),
+    param!(mechanics.compliance_mm, 0.2, 0.0),
+    param!(mechanics.flow_screening_per_mm, 0.02, 0.0),
+    param!(nuisance.pin_jitter_px, 0.2, 0.0),
 ];
 
 /// What to fit on and how long to search.
@@ -125,6 +136,17 @@ pub fn transfer_cost(mae: [f64; 2], deg_per_mm: f64) -> f64 {
     mae[0] + mae[1] / deg_per_mm
 }
 
+/// The parameter values of the search's point `unit` (in units of each
+/// parameter's scale from `start`), each held at its least value.
+pub fn search_point(start: &[f64], unit: &[f64]) -> Vec<f64> {
+    TRANSFER_PARAMS
+        .iter()
+        .zip(start)
+        .zip(unit)
+        .map(|((p, s), u)| (s + p.scale * u).max(p.min))
+        .collect()
+}
+
 /// `base` with the search vector `values` (in parameter units) written in.
 pub fn with_values(base: &TacTipConfig, values: &[f64]) -> TacTipConfig {
     let mut c = base.clone();
@@ -172,12 +194,7 @@ pub fn fit_transfer(
     for generation in 1..=cfg.generations {
         let mut costs = Vec::new();
         for unit in search.ask() {
-            let values: Vec<f64> = TRANSFER_PARAMS
-                .iter()
-                .zip(&start_values)
-                .zip(&unit)
-                .map(|((p, s), u)| s + p.scale * u)
-                .collect();
+            let values = search_point(&start_values, &unit);
             let c = score(&values, generation)?;
             if c.cost < best.cost {
                 best = c.clone();
@@ -355,6 +372,33 @@ mod tests {
             let v = doc[table][field].as_float().unwrap();
             assert_eq!(v, (p.get)(&moved), "{}", p.key);
         }
+    }
+
+    #[test]
+    fn a_search_point_moves_by_scales_and_stops_at_each_least_value() {
+        let base = TacTipConfig::default();
+        let start: Vec<f64> = TRANSFER_PARAMS.iter().map(|p| (p.get)(&base)).collect();
+        let up = search_point(&start, &vec![1.0; start.len()]);
+        for ((p, s), v) in TRANSFER_PARAMS.iter().zip(&start).zip(&up) {
+            assert_eq!(*v, s + p.scale, "{}", p.key);
+        }
+        let far_down = search_point(&start, &vec![-1e6; start.len()]);
+        let bounded: Vec<_> = TRANSFER_PARAMS
+            .iter()
+            .zip(&far_down)
+            .filter(|(p, _)| p.min.is_finite())
+            .collect();
+        for (p, v) in &bounded {
+            assert_eq!(**v, p.min, "{}", p.key);
+        }
+        // The least values make a valid sensor, so no candidate is lost.
+        let mut lowest = base.clone();
+        for (p, v) in bounded {
+            (p.set)(&mut lowest, *v);
+        }
+        lowest
+            .validate()
+            .expect("the least values are a valid sensor");
     }
 
     #[test]

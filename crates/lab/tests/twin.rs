@@ -46,7 +46,9 @@ fn the_twin_keeps_labels_and_order_and_is_reproducible() {
     let dir = temp_dir("synthetic");
     let cfg = synthetic_set(&dir, &ROWS);
     let blob = BlobParams::preset("sim").unwrap();
-    let sensor = TacTipConfig::default();
+    // Pin jitter on (the fitted default is 0), so that seeds differ below.
+    let mut sensor = TacTipConfig::default();
+    sensor.nuisance.pin_jitter_px = 0.2;
     let a = simulate_twin(&cfg, &sensor, &blob, &|| {}).unwrap();
     let b = simulate_twin(&cfg, &sensor, &blob, &|| {}).unwrap();
     assert_eq!(a.data.len(), 3);

@@ -97,6 +97,11 @@ pub struct Mechanics {
     pub lift_gain: f64,
     /// Core radius of the sideways gel-flow kernel, mm.
     pub flow_core_mm: f64,
+    /// Screening 1 / lambda of the sideways gel flow, per mm: the gel is
+    /// bonded to the rigid core, so a source's push decays as
+    /// exp(-rho / lambda) beyond the plain 2-D source (eq. S6a); 0 = an
+    /// unscreened source.
+    pub flow_screening_per_mm: f64,
     /// Thickness of the gel layer carrying the displaced volume, mm
     /// (smaller = larger pin motion).
     pub layer_thickness_mm: f64,
@@ -139,6 +144,11 @@ pub struct Mechanics {
     /// holds the skin still: pin motion is scaled by 1 - (s / S)^2, zero
     /// beyond S (eq. S8a). A very large value switches the clamp off.
     pub rim_clamp_mm: f64,
+    /// Compliance C of the dome and its mount: indentation depth lost per
+    /// 1000 mm^3 of indented volume, mm. The contact load pushes the sensor
+    /// back, so a wide contact indents less deeply than the commanded depth:
+    /// d + C V(d) / 1000 mm^3 = d_cmd (eq. S4a). 0 = rigid.
+    pub compliance_mm: f64,
     /// Which law turns a slide made in contact into skin slip: the lumped
     /// lag of eq. S7 or the bristles along the slide's path (eqs. B1-B3).
     pub slip_law: SlipLaw,
@@ -194,24 +204,26 @@ impl Default for Mechanics {
     /// numerical settings, not fitted.
     fn default() -> Self {
         Self {
-            kernel_width_mm: 5.8163,
-            lift_gain: 0.3756,
-            flow_core_mm: 0.305,
-            layer_thickness_mm: 8.404,
+            kernel_width_mm: 5.2439,
+            lift_gain: 0.417,
+            flow_core_mm: 0.1913,
+            flow_screening_per_mm: 0.0282,
+            layer_thickness_mm: 7.2428,
             patch_grid_mm: 1.0,
             distance_grid_mm: 3.0,
             max_depth_mm: 8.0,
-            shear_limit_mm: 0.9578,
-            slip_load_exponent: 1.5221,
-            stick_gain: 2.1791,
-            slip_profile_mm: 40.2836,
-            stick_share: 0.7521,
-            edge_gain_in: 1.8519,
-            edge_gain_out: 2.0133,
+            shear_limit_mm: 0.9348,
+            slip_load_exponent: 1.5181,
+            stick_gain: 2.3464,
+            slip_profile_mm: 36.2505,
+            stick_share: 0.688,
+            edge_gain_in: 1.8193,
+            edge_gain_out: 1.9287,
             edge_bite: 0.0,
             shear_limit_deg: 0.1982,
             contact_scale_mm: 0.0374,
-            rim_clamp_mm: 30.2764,
+            rim_clamp_mm: 28.8466,
+            compliance_mm: 0.3161,
             slip_law: SlipLaw::Lag,
             brush_slip_ratio: 0.3,
             brush_local_gain: 0.5,
@@ -237,7 +249,7 @@ pub struct Nuisance {
 impl Default for Nuisance {
     fn default() -> Self {
         Self {
-            pin_jitter_px: 0.0589,
+            pin_jitter_px: 0.0,
             image_noise_std: 0.0,
         }
     }
@@ -270,6 +282,26 @@ pub struct Calibration {
     /// turned further: the arm's tool axes against the pin lattice's
     /// (eq. S7d).
     pub shear_angle_offset_deg: f64,
+    /// Offset of the dome's axis from the point the labelled pose turns
+    /// about (the arm's tool centre point), sensor frame, mm: the dome
+    /// centre is the labelled position plus this offset turned by the
+    /// sensor's yaw, so its distance from the edge changes with the angle
+    /// (eq. L3). 0 = the labelled pose is the dome's centre.
+    pub pivot_x_mm: f64,
+    /// The pivot offset's sensor-frame y component, mm (eq. L3).
+    pub pivot_y_mm: f64,
+}
+
+impl Calibration {
+    /// The dome centre's offset from the labelled pose at the edge-frame
+    /// yaw `yaw_deg` (eq. L3): the pivot offset turned by the yaw, mm.
+    pub fn pivot_offset(&self, yaw_deg: f64) -> [f64; 2] {
+        let (s, c) = yaw_deg.to_radians().sin_cos();
+        [
+            c * self.pivot_x_mm - s * self.pivot_y_mm,
+            s * self.pivot_x_mm + c * self.pivot_y_mm,
+        ]
+    }
 }
 
 impl Default for Calibration {
@@ -277,15 +309,17 @@ impl Default for Calibration {
     /// depth fitted with the mechanics (docs/sensor-model.md).
     fn default() -> Self {
         Self {
-            angle_offset_deg: -17.1529,
-            edge_offset_mm: 1.5438,
+            angle_offset_deg: -17.2919,
+            edge_offset_mm: 2.2635,
             angle_scale: 1.0,
             edge_scale: 1.0,
-            tap_depth_mm: 6.6599,
-            depth_per_offset: -1.4599,
+            tap_depth_mm: 7.0472,
+            depth_per_offset: -1.4934,
             object_side: -1.0,
             shear_sign: 1.0,
-            shear_angle_offset_deg: 16.0583,
+            shear_angle_offset_deg: 14.966,
+            pivot_x_mm: 1.1958,
+            pivot_y_mm: 0.6531,
         }
     }
 }
@@ -401,6 +435,8 @@ impl TacTipConfig {
         positive("mechanics.shear_limit_deg", m.shear_limit_deg)?;
         positive("mechanics.contact_scale_mm", m.contact_scale_mm)?;
         positive("mechanics.rim_clamp_mm", m.rim_clamp_mm)?;
+        non_negative("mechanics.compliance_mm", m.compliance_mm)?;
+        non_negative("mechanics.flow_screening_per_mm", m.flow_screening_per_mm)?;
         non_negative("mechanics.brush_slip_ratio", m.brush_slip_ratio)?;
         finite("mechanics.brush_local_gain", m.brush_local_gain)?;
         finite("mechanics.brush_skin_gain", m.brush_skin_gain)?;

@@ -107,7 +107,11 @@ impl ContactModel {
             .collect();
         patch.sort_by(|a, b| a.1.height.total_cmp(&b.1.height));
         let area = 3f64.sqrt() / 2.0 * h * h;
-        let widths = (mech.flow_core_mm, mech.kernel_width_mm);
+        let widths = (
+            mech.flow_core_mm,
+            mech.kernel_width_mm,
+            mech.flow_screening_per_mm,
+        );
         let size = patch.len() * pins_g.len();
         let (mut kernel_x, mut kernel_y, mut kernel_g) = (
             Vec::with_capacity(size),
@@ -162,6 +166,7 @@ impl ContactModel {
         }
         let (active, reach) = self.active(depth);
         let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, tip);
+        let depth = self.settle(&mut grid, sd, depth, active);
         let area = self.patch_area();
         let (mut ux, mut uy) = (vec![0.0; n], vec![0.0; n]);
         let cerruti = !self.kernel_c[0].is_empty();
@@ -198,6 +203,30 @@ impl ContactModel {
         (active, reach)
     }
 
+    /// Eq. S4a: the depth the compliant dome settles at under the
+    /// commanded `depth`, over the first `active` patch points.
+    fn settle(
+        &self,
+        grid: &mut DistanceGrid,
+        sd: &dyn Fn(Vec2) -> f64,
+        depth: f64,
+        active: usize,
+    ) -> f64 {
+        if self.mech.compliance_mm <= 0.0 {
+            return depth;
+        }
+        let h = self.mech.patch_grid_mm;
+        let area = self.patch_area();
+        let points: Vec<(f64, f64)> = self.patch[..active]
+            .iter()
+            .map(|p| {
+                let inside = (0.5 - grid.interpolate(sd, p.horiz) / h).clamp(0.0, 1.0);
+                (p.height, inside * area)
+            })
+            .collect();
+        settled_depth(depth, self.mech.compliance_mm / 1000.0, &points)
+    }
+
     fn patch_area(&self) -> f64 {
         let h = self.mech.patch_grid_mm;
         3f64.sqrt() / 2.0 * h * h
@@ -228,6 +257,13 @@ impl ContactModel {
             return PathContact::default();
         }
         let (active, reach) = self.active(depth);
+        let depth = match path.last() {
+            Some(last) => {
+                let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, *last);
+                self.settle(&mut grid, sd, depth, active)
+            }
+            None => depth,
+        };
         let points = &self.patch[..active];
         let pens = path
             .iter()
@@ -309,6 +345,28 @@ pub(crate) struct PathContact {
     pub path: Vec<Pose>,
 }
 
+/// Solve d + k V(d) = `commanded` for the settled depth d (eq. S4a), where
+/// V(d) = sum_j w_j max(0, d - h_j) is the indented volume of patch points
+/// at heights h_j with inside-area weights w_j (`points`, sorted by
+/// height) and k the compliance, mm per mm^3. V is piecewise linear and
+/// rising, so the root is found exactly, segment by segment.
+pub(crate) fn settled_depth(commanded: f64, k: f64, points: &[(f64, f64)]) -> f64 {
+    let (mut weight, mut moment) = (0.0, 0.0);
+    for (m, &(height, w)) in points.iter().enumerate() {
+        if height >= commanded {
+            break;
+        }
+        weight += w;
+        moment += w * height;
+        let next = points.get(m + 1).map_or(commanded, |p| p.0.min(commanded));
+        let d = (commanded + k * moment) / (1.0 + k * weight);
+        if d <= next {
+            return d;
+        }
+    }
+    commanded
+}
+
 /// Normal into the object of the edge nearest the sensor's axis (minus the
 /// signed distance's gradient there, sensor frame), scaled by the edge's
 /// proximity clamp(1 - |sd| / reach, 0, 1) (eq. S7f).
@@ -328,13 +386,25 @@ fn edge_normal(grid: &mut DistanceGrid, sd: &dyn Fn(Vec2) -> f64, reach: f64) ->
 ///
 /// Displacement: the indented gel volume flows sideways in a layer, like a
 /// regularised 2-D source, K = dA (gi - gj) / (2 pi (r^2 + c^2)) (divided
-/// by the layer thickness later; c = flow core). Smoothing: the unit-mass
-/// Gaussian G = dA exp(-r^2 / 2 a^2) / (2 pi a^2) (a = kernel width).
-fn kernel_weights(gi: [f64; 2], gj: [f64; 2], (c, a): (f64, f64), area: f64) -> [f32; 3] {
+/// by the layer thickness later; c = flow core), screened by
+/// exp(-s sqrt(r^2 + c^2)) (eq. S6a; s = screening). Smoothing: the
+/// unit-mass Gaussian G = dA exp(-r^2 / 2 a^2) / (2 pi a^2) (a = kernel
+/// width).
+fn kernel_weights(
+    gi: [f64; 2],
+    gj: [f64; 2],
+    (c, a, screening): (f64, f64, f64),
+    area: f64,
+) -> [f32; 3] {
     let d = [gi[0] - gj[0], gi[1] - gj[1]];
     let r2 = d[0] * d[0] + d[1] * d[1];
     let tau = std::f64::consts::TAU;
-    let source = area / (tau * (r2 + c * c));
+    let screen = if screening > 0.0 {
+        (-screening * (r2 + c * c).sqrt()).exp()
+    } else {
+        1.0
+    };
+    let source = area * screen / (tau * (r2 + c * c));
     let gauss = area * (-r2 / (2.0 * a * a)).exp() / (tau * a * a);
     [(source * d[0]) as f32, (source * d[1]) as f32, gauss as f32]
 }
@@ -415,5 +485,58 @@ impl DistanceGrid {
         let top = v00 + fu * (v10 - v00);
         let bottom = v01 + fu * (v11 - v01);
         top + fv * (bottom - top)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::settled_depth;
+
+    /// The residual d + k V(d) - commanded of eq. S4a.
+    fn residual(d: f64, k: f64, commanded: f64, points: &[(f64, f64)]) -> f64 {
+        let volume: f64 = points.iter().map(|&(h, w)| w * (d - h).max(0.0)).sum();
+        d + k * volume - commanded
+    }
+
+    #[test]
+    fn the_settled_depth_solves_eq_s4a_exactly() {
+        let points: Vec<(f64, f64)> = (0..40)
+            .map(|j| (0.15 * j as f64, 1.0 + (j % 7) as f64 * 0.3))
+            .collect();
+        for (k, commanded) in [(1e-4, 5.0), (2e-3, 5.0), (0.05, 3.3), (1.0, 6.5)] {
+            let d = settled_depth(commanded, k, &points);
+            assert!(
+                residual(d, k, commanded, &points).abs() < 1e-9,
+                "k {k}: d {d}"
+            );
+            assert!(
+                d > 0.0 && d < commanded,
+                "k {k}: {d} not in (0, {commanded})"
+            );
+        }
+    }
+
+    #[test]
+    fn a_rigid_mount_or_no_contact_keeps_the_commanded_depth() {
+        let points = [(0.0, 2.0), (1.0, 3.0)];
+        assert_eq!(settled_depth(4.0, 0.0, &points), 4.0);
+        assert_eq!(settled_depth(4.0, 0.1, &[]), 4.0);
+        assert_eq!(settled_depth(4.0, 0.1, &[(4.5, 1.0)]), 4.0);
+    }
+
+    #[test]
+    fn one_flat_patch_settles_at_the_spring_divider() {
+        // V(d) = A d for a flat patch at height 0: d = D / (1 + k A).
+        let d = settled_depth(6.0, 0.01, &[(0.0, 50.0)]);
+        assert!((d - 6.0 / 1.5).abs() < 1e-12, "{d}");
+    }
+
+    #[test]
+    fn a_stiffer_mount_or_wider_contact_settles_deeper_or_shallower_as_it_should() {
+        let narrow = [(0.0, 10.0), (1.0, 10.0)];
+        let wide = [(0.0, 30.0), (1.0, 30.0)];
+        let soft = settled_depth(5.0, 0.01, &narrow);
+        assert!(settled_depth(5.0, 0.001, &narrow) > soft);
+        assert!(settled_depth(5.0, 0.01, &wide) < soft);
     }
 }

@@ -39,15 +39,18 @@ impl EdgeTap {
         })
     }
 
-    /// Tip pose in the edge's frame (edge along x through the origin).
+    /// Tip pose in the edge's frame (edge along x through the origin):
+    /// the labelled pose moved by the pivot offset (eq. L3).
     pub fn tip_pose(&self, model: &TacTipModel) -> Pose {
         let cal = &model.config().calibration;
         let depth = cal.tap_depth_mm + cal.depth_per_offset * self.dz_mm;
+        let yaw = cal.angle_scale * self.theta_deg + cal.angle_offset_deg;
+        let pivot = cal.pivot_offset(yaw);
         Pose::planar(
-            0.0,
-            cal.edge_scale * self.r_mm + cal.edge_offset_mm,
+            pivot[0],
+            cal.edge_scale * self.r_mm + cal.edge_offset_mm + pivot[1],
             -depth,
-            cal.angle_scale * self.theta_deg + cal.angle_offset_deg,
+            yaw,
         )
     }
 }
@@ -82,6 +85,8 @@ mod tests {
             angle_scale: 0.8,
             edge_offset_mm: -0.7,
             angle_offset_deg: 31.0,
+            pivot_x_mm: 1.3,
+            pivot_y_mm: -0.6,
             ..Calibration::default()
         };
         let default = Calibration::default();

@@ -10,8 +10,11 @@
 //! (edge along x, the object on the side `object_side` says, see
 //! [`crate::EdgeTap::tip_pose`]):
 //!
-//! - y_edge = edge_scale r_label + edge_offset, and the outward normal
-//!   points along object_side y, so r_tool = object_side y_edge;
+//! - y_edge = edge_scale r_label + edge_offset + p_y(yaw_edge), where p
+//!   is the pivot offset turned by the yaw (eq. L3: the labelled pose is
+//!   the point the arm turns about, the dome's centre sits off it), and
+//!   the outward normal points along object_side y, so r_tool = object_side
+//!   y_edge;
 //! - yaw_edge = angle_scale theta_label + angle_offset, the outward normal
 //!   has yaw object_side 90 deg in that frame, and the sensor sits on the
 //!   tool turned by `mount_yaw_deg`: yaw_edge = theta_tool + mount_yaw +
@@ -74,8 +77,9 @@ impl LabelConvention {
         let side = c.object_side.signum();
         let y_edge = side * pose.r_mm;
         let yaw_edge = pose.theta_deg + self.mount_yaw_deg + 90.0 * side;
+        let pivot = c.pivot_offset(yaw_edge)[1];
         EdgeLabels {
-            r_mm: (y_edge - c.edge_offset_mm) / c.edge_scale,
+            r_mm: (y_edge - pivot - c.edge_offset_mm) / c.edge_scale,
             theta_deg: wrap_deg((yaw_edge - c.angle_offset_deg) / c.angle_scale),
             dz_mm: (pose.depth_mm - c.tap_depth_mm) / c.depth_per_offset,
         }
@@ -103,8 +107,8 @@ impl LabelConvention {
     pub fn to_pose(&self, labels: EdgeLabels) -> ToolEdgePose {
         let c = &self.calibration;
         let side = c.object_side.signum();
-        let y_edge = c.edge_scale * labels.r_mm + c.edge_offset_mm;
         let yaw_edge = c.angle_scale * labels.theta_deg + c.angle_offset_deg;
+        let y_edge = c.edge_scale * labels.r_mm + c.edge_offset_mm + c.pivot_offset(yaw_edge)[1];
         ToolEdgePose {
             r_mm: side * y_edge,
             theta_deg: wrap_deg(yaw_edge - self.mount_yaw_deg - 90.0 * side),
@@ -139,6 +143,8 @@ mod tests {
                 object_side: side,
                 edge_scale: 0.9,
                 angle_scale: 1.1,
+                pivot_x_mm: 1.2,
+                pivot_y_mm: -0.4,
                 ..Calibration::default()
             };
             for conv in [
@@ -178,7 +184,10 @@ mod tests {
     /// default calibration).
     #[test]
     fn the_unmounted_convention_is_the_twins_tip_pose() {
-        let model = TacTipModel::new(TacTipConfig::default()).unwrap();
+        let mut cfg = TacTipConfig::default();
+        cfg.calibration.pivot_x_mm = 0.8;
+        cfg.calibration.pivot_y_mm = 0.3;
+        let model = TacTipModel::new(cfg).unwrap();
         let cal = model.config().calibration.clone();
         let conv = LabelConvention {
             calibration: cal.clone(),
@@ -205,6 +214,35 @@ mod tests {
         assert!((zero.theta_deg - want).abs() < 1e-9, "{}", zero.theta_deg);
         let centred = LabelConvention::centred(cal);
         assert!(close(centred.to_pose(EdgeLabels::default()).theta_deg, 0.0));
+    }
+
+    /// Eq. L3: turning about a pivot off the dome's axis moves the dome
+    /// centre's distance from the edge by p_x sin(yaw) + p_y cos(yaw).
+    #[test]
+    fn a_pivot_offset_moves_the_dome_with_the_angle() {
+        let plain = Calibration {
+            pivot_x_mm: 0.0,
+            pivot_y_mm: 0.0,
+            ..Calibration::default()
+        };
+        let pivoted = Calibration {
+            pivot_x_mm: 1.0,
+            pivot_y_mm: 0.5,
+            ..plain.clone()
+        };
+        for t in [-40.0, 0.0, 35.0] {
+            let labels = EdgeLabels {
+                r_mm: 1.0,
+                theta_deg: t,
+                dz_mm: 0.0,
+            };
+            let a = LabelConvention::centred(plain.clone()).to_pose(labels);
+            let b = LabelConvention::centred(pivoted.clone()).to_pose(labels);
+            let yaw = (t + plain.angle_offset_deg).to_radians();
+            let shift = plain.object_side * (yaw.sin() + 0.5 * yaw.cos());
+            assert!(close(b.r_mm - a.r_mm, shift), "theta {t}");
+            assert!(close(b.theta_deg, a.theta_deg));
+        }
     }
 
     #[test]

@@ -267,7 +267,7 @@ mod tests {
     }
 
     /// The tip over the square's right edge at r = 0.9 mm (controller
-    /// frame), label r = -(0.9 + edge offset): answered by the frame
+    /// frame), label r = -(0.9 + edge offset + pivot, eq. L3): answered by the frame
     /// labelled nearest, and the answer recorded with its distance.
     #[test]
     fn each_capture_answers_the_frame_nearest_the_true_pose() {
@@ -288,7 +288,8 @@ mod tests {
         assert_eq!(frame.get_pixel(0, 0).0[0], 15, "frame 1 answered");
         let a = sensor.answers()[0];
         assert_eq!(a.frame, 1);
-        assert!((a.wanted.r_mm + 0.9 + cal.edge_offset_mm).abs() < 1e-9);
+        let pivot = cal.pivot_offset(cal.angle_offset_deg)[1];
+        assert!((a.wanted.r_mm + 0.9 + cal.edge_offset_mm + pivot).abs() < 1e-9);
         assert!(a.wanted.theta_deg.abs() < 1e-9 && a.wanted.dz_mm.abs() < 1e-9);
         let s = sensor.bank().scales();
         let expected = s.distance(&a.wanted, &set[1]);

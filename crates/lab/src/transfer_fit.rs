@@ -53,13 +53,15 @@ macro_rules! param {
 }
 
 /// The parameters [`fit_transfer`] searches, with their scales: the label
-/// convention's offsets, pivot (eq. L3) and tap depth, the contact mechanics (eqs. S4-S8a),
+/// convention's offsets, scales, pivot (eq. L3) and tap depth, the contact mechanics (eqs. S4-S8a),
 /// the stick-slip law (eq. S7), the mount's compliance (eq. S4a), the gel
 /// flow's screening (eq. S6a) and the pins' jitter (the sensor's noise).
-pub const TRANSFER_PARAMS: [TransferParam; 22] = [
+pub const TRANSFER_PARAMS: [TransferParam; 24] = [
     param!(calibration.shear_angle_offset_deg, 3.0),
     param!(calibration.edge_offset_mm, 0.5),
     param!(calibration.angle_offset_deg, 3.0),
+    param!(calibration.edge_scale, 0.05, 0.5),
+    param!(calibration.angle_scale, 0.05, 0.5),
     param!(calibration.tap_depth_mm, 0.5, 0.5),
     param!(calibration.depth_per_offset, 0.2),
     param!(calibration.pivot_x_mm, 0.5),

@@ -104,7 +104,8 @@ impl SimTacTip {
     /// ``(dx_mm, dy_mm, drz_deg)`` (sensor frame; for a calibrated sensor
     /// its move labels), ``arc_mm`` the edge point's arc length on the
     /// contour. ``noise=True`` adds the configured pin jitter and image
-    /// noise from the seeded generator.
+    /// noise from the seeded generator (both 0 in the fitted default
+    /// sensor: set ``[sensor.nuisance]`` in ``config``).
     #[pyo3(signature = (r_mm, theta_deg, depth_mm = None, shear = None, *, arc_mm = 0.0, noise = false))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(

@@ -50,11 +50,16 @@ def test_a_simulated_tap_gives_254_displacements_near_the_true_pins():
     assert np.array_equal(extractor.displacement(frame.astype(np.float64)), d)
 
 
-def test_noise_is_seeded():
-    a = tactrace.SimTacTip(seed=3).render(0.0, 0.0, noise=True)
-    b = tactrace.SimTacTip(seed=3).render(0.0, 0.0, noise=True)
-    c = tactrace.SimTacTip(seed=4).render(0.0, 0.0, noise=True)
+def test_noise_is_seeded(tmp_path):
+    # The fitted default sensor has no pin jitter; configure some.
+    rig = tmp_path / "rig.toml"
+    rig.write_text("[sensor.nuisance]\npin_jitter_px = 0.2\n")
+    a = tactrace.SimTacTip(seed=3, config=rig).render(0.0, 0.0, noise=True)
+    b = tactrace.SimTacTip(seed=3, config=rig).render(0.0, 0.0, noise=True)
+    c = tactrace.SimTacTip(seed=4, config=rig).render(0.0, 0.0, noise=True)
     assert np.array_equal(a, b) and not np.array_equal(a, c)
+    plain = tactrace.SimTacTip(seed=3)
+    assert np.array_equal(plain.render(0.0, 0.0, noise=True), plain.render(0.0, 0.0))
 
 
 def test_bad_taps_and_frames_are_refused(tmp_path):

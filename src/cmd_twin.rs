@@ -190,10 +190,11 @@ pub struct CalibrateArgs {
     /// Seed of the tap selection and of the replayed taps' rendering noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Also fit the simulator's label convention (angle and edge offsets
-    /// and scales, tap depth) and mechanics to the calibration taps before
-    /// the field correction: for a sensor unlike the shared one (a few
-    /// seconds more).
+    /// Also fit the simulator's label convention (the object's side of
+    /// the edge and the slide's sign, tried both ways; angle and edge
+    /// offsets and scales, tap depth) and mechanics to the calibration
+    /// taps before the field correction: for a sensor unlike the shared
+    /// one (up to a minute more).
     #[arg(long)]
     fit_physics: bool,
     /// The sensor folder to write.

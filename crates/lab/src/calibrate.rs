@@ -244,8 +244,51 @@ fn fit_physics(
     let rest = &data.meta.reference_pins;
     let (rounds, iterations) = PHYSICS_FIT;
     let threads = rayon::current_num_threads();
-    let fit = tactrace_sensor::fit_joint(sensor, rest, &samples, (rounds, iterations, threads))?;
+    let mut best: Option<tactrace_sensor::JointFit> = None;
+    for start in discrete_conventions(sensor, &samples) {
+        let fit = tactrace_sensor::fit_joint(&start, rest, &samples, (1, iterations, threads))?;
+        if best.as_ref().is_none_or(|b| fit.rms_px < b.rms_px) {
+            best = Some(fit);
+        }
+    }
+    let Some(best) = best else {
+        return Ok(sensor.clone());
+    };
+    let fit =
+        tactrace_sensor::fit_joint(&best.config, rest, &samples, (rounds, iterations, threads))?;
     Ok(fit.config)
+}
+
+/// The discrete label conventions `--fit-physics` tries, `sensor`'s own
+/// first (so that a tie keeps it): the object on either side of the edge
+/// (eq. L1; a local fit cannot turn the angle offset by 180 deg) and,
+/// when some tap slid, either sign of the slide. Each is fitted one round
+/// and the best fitted on.
+fn discrete_conventions(
+    sensor: &TacTipConfig,
+    samples: &[tactrace_sensor::FitSample],
+) -> Vec<TacTipConfig> {
+    let slid = samples
+        .iter()
+        .any(|s| s.tap.shear.is_some_and(|m| m != Default::default()));
+    let own = &sensor.calibration;
+    let sides = [own.object_side, -own.object_side];
+    let signs: &[f64] = if slid {
+        &[own.shear_sign, -own.shear_sign]
+    } else {
+        &[own.shear_sign]
+    };
+    sides
+        .iter()
+        .flat_map(|&side| {
+            signs.iter().map(move |&sign| {
+                let mut c = sensor.clone();
+                c.calibration.object_side = side;
+                c.calibration.shear_sign = sign;
+                c
+            })
+        })
+        .collect()
 }
 
 /// `sensor` with the layout of the reference frame at `path`

@@ -186,3 +186,34 @@ fn the_physics_fit_finds_another_label_convention() {
         before(&plain)
     );
 }
+
+/// A sensor whose labels put the object on the other side of the edge (a
+/// 180 deg turn no local fit makes): `--fit-physics` tries both sides.
+#[test]
+fn the_physics_fit_finds_the_object_on_the_other_side() {
+    let root = tempfile::tempdir().unwrap();
+    let mut other = TacTipConfig::default();
+    other.calibration.object_side = -other.calibration.object_side;
+    let twin = sensor_set(root.path(), 120, other.clone());
+    let blob = BlobParams::preset("sim").unwrap();
+    let cfg = CalibrateConfig {
+        frames: root.path().join("frames"),
+        twin,
+        samples: Some(80),
+        seed: 1,
+        allowed_rows: None,
+        score_rows: None,
+        fit_physics: true,
+    };
+    let fitted = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let cal = &fitted.sensor.spec.sensor.calibration;
+    assert_eq!(cal.object_side, other.calibration.object_side, "{cal:?}");
+    let held_out = fitted
+        .sensor
+        .spec
+        .calibration
+        .held_out_before
+        .unwrap()
+        .rms_px;
+    assert!(held_out < 0.6, "uncorrected held-out misfit {held_out} px");
+}

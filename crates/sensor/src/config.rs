@@ -199,9 +199,10 @@ pub enum SlipLaw {
 }
 
 impl Default for Mechanics {
-    /// Fitted to the real edge frames (docs/sensor-model.md, "Mechanics
-    /// fit"; `examples/fit_mechanics`); the grids and `max_depth_mm` are
-    /// numerical settings, not fitted.
+    /// Fitted to the real edge frames by the transfer fit, stage 7
+    /// (docs/sensor-model.md, "Transfer fit"; `tactrace sim-fit`); the
+    /// grids, `max_depth_mm` and the unused laws' settings are numerical
+    /// settings, not fitted.
     fn default() -> Self {
         Self {
             kernel_width_mm: 5.2439,
@@ -305,8 +306,9 @@ impl Calibration {
 }
 
 impl Default for Calibration {
-    /// Orientation conventions found on the real data; offsets and tap
-    /// depth fitted with the mechanics (docs/sensor-model.md).
+    /// Orientation conventions found on the real data; offsets, pivot and
+    /// tap depth fitted with the mechanics by the transfer fit, stage 7
+    /// (docs/sensor-model.md, "Transfer fit").
     fn default() -> Self {
         Self {
             angle_offset_deg: -17.2919,

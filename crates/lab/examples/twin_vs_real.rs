@@ -12,7 +12,6 @@
 //!   in the bin by least squares on [1, theta / 45, r]: the cosine of the
 //!   real and twin changes and the ratio of their sizes (twin / real).
 //!   A model trained on the twin reads the angle along the twin's change.
-use std::collections::HashMap;
 use std::path::Path;
 use tactrace_store::{read_dataset, TapData};
 
@@ -66,13 +65,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
 /// The twin's samples in the order of `real`'s, matched by image name.
 fn paired(real: &TapData, twin: &TapData) -> Result<TapData, String> {
-    let at: HashMap<&str, usize> = twin
-        .meta
-        .images
-        .iter()
-        .enumerate()
-        .map(|(i, n)| (n.as_str(), i))
-        .collect();
+    let at = twin.image_rows();
     let rows = real
         .meta
         .images

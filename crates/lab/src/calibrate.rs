@@ -11,7 +11,7 @@
 use crate::error::{LabError, Result};
 use crate::import::{import_rows, Imported};
 use crate::twin::{simulate_twin_rows, twin_rows, TwinConfig};
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 use std::path::PathBuf;
 use tactrace_calib::{
     calibrate, check_labels, field_stats, select_taps, CalibError, CalibrationPlan, Fields, Label,
@@ -220,13 +220,7 @@ fn fit_physics(
 ) -> Result<TacTipConfig> {
     let data = &real.data;
     let p = data.dim() / 2;
-    let of_image: HashMap<&str, usize> = data
-        .meta
-        .images
-        .iter()
-        .enumerate()
-        .map(|(k, n)| (n.as_str(), k))
-        .collect();
+    let of_image = data.image_rows();
     let samples: Vec<tactrace_sensor::FitSample> = chosen
         .iter()
         .filter_map(|&i| {
@@ -428,13 +422,7 @@ impl Pairs {
 /// name), with their labels.
 fn paired(real: &Imported, twin: &Imported) -> Result<Pairs> {
     let (r, s) = (&real.data, &twin.data);
-    let row_of: HashMap<&str, usize> = s
-        .meta
-        .images
-        .iter()
-        .enumerate()
-        .map(|(i, n)| (n.as_str(), i))
-        .collect();
+    let row_of = s.image_rows();
     let d = r.dim();
     if d != s.dim() {
         return Err(LabError::Config(format!(

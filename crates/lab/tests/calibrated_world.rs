@@ -11,6 +11,7 @@ use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
 use tactrace_lab::collect::{collect_calibrated, CollectConfig};
 use tactrace_lab::follow::{follow_simulated, SimFollowConfig};
 use tactrace_lab::train::{resolve_config, train};
+use tactrace_lab::twin::TwinConfig;
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_sensor::TacTipConfig;
 use tactrace_servo::{Ending, RigConfig};
@@ -92,6 +93,19 @@ fn a_model_of_the_calibrated_sensor_follows_the_disk_in_its_world() {
 
 /// A TacTip with 61 pins seen in a 320 x 240 frame by another camera:
 /// calibrate lays the simulator out like it, and its world works.
+/// Calibration of the synthetic set in `root` with 80 taps, seed 1.
+fn calibrate_80(root: &std::path::Path, twin: TwinConfig, fit_physics: bool) -> CalibrateConfig {
+    CalibrateConfig {
+        frames: root.join("frames"),
+        twin,
+        samples: Some(80),
+        seed: 1,
+        allowed_rows: None,
+        score_rows: None,
+        fit_physics,
+    }
+}
+
 #[test]
 fn a_sensor_with_another_pin_count_and_frame_size_is_calibrated() {
     let root = tempfile::tempdir().unwrap();
@@ -105,15 +119,7 @@ fn a_sensor_with_another_pin_count_and_frame_size_is_calibrated() {
     other.camera.focal_px = 72.0;
     other.camera.rotation_deg = 165.0;
     let twin = sensor_set(root.path(), 120, other.clone());
-    let cfg = CalibrateConfig {
-        frames: root.path().join("frames"),
-        twin,
-        samples: Some(80),
-        seed: 1,
-        allowed_rows: None,
-        score_rows: None,
-        fit_physics: false,
-    };
+    let cfg = calibrate_80(root.path(), twin, false);
     let blob = BlobParams::preset("sim").unwrap();
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
     let spec = &got.sensor.spec;
@@ -160,15 +166,7 @@ fn the_physics_fit_finds_another_label_convention() {
     let twin = sensor_set(root.path(), 120, other.clone());
     let blob = BlobParams::preset("sim").unwrap();
     let run = |fit_physics| {
-        let cfg = CalibrateConfig {
-            frames: root.path().join("frames"),
-            twin: twin.clone(),
-            samples: Some(80),
-            seed: 1,
-            allowed_rows: None,
-            score_rows: None,
-            fit_physics,
-        };
+        let cfg = calibrate_80(root.path(), twin.clone(), fit_physics);
         calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap()
     };
     let (plain, fitted) = (run(false), run(true));
@@ -196,15 +194,7 @@ fn the_physics_fit_finds_the_object_on_the_other_side() {
     other.calibration.object_side = -other.calibration.object_side;
     let twin = sensor_set(root.path(), 120, other.clone());
     let blob = BlobParams::preset("sim").unwrap();
-    let cfg = CalibrateConfig {
-        frames: root.path().join("frames"),
-        twin,
-        samples: Some(80),
-        seed: 1,
-        allowed_rows: None,
-        score_rows: None,
-        fit_physics: true,
-    };
+    let cfg = calibrate_80(root.path(), twin, true);
     let fitted = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
     let cal = &fitted.sensor.spec.sensor.calibration;
     assert_eq!(cal.object_side, other.calibration.object_side, "{cal:?}");

@@ -166,15 +166,16 @@ impl ContactModel {
         }
         let (active, reach) = self.active(depth);
         let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, tip);
-        let depth = self.settle(&mut grid, sd, depth, active);
+        let inside = self.inside_fractions(&mut grid, sd, active);
+        let depth = self.settle(&inside, depth);
         let area = self.patch_area();
         let (mut ux, mut uy) = (vec![0.0; n], vec![0.0; n]);
         let cerruti = !self.kernel_c[0].is_empty();
         if cerruti {
             field.cerruti = vec![[0.0; 4]; n];
         }
-        for (j, point) in self.patch[..active].iter().enumerate() {
-            let pen = self.penetration(&mut grid, sd, point, depth);
+        for (j, (point, chi)) in self.patch.iter().zip(&inside).enumerate() {
+            let pen = chi * (depth - point.height);
             if pen > 0.0 {
                 field.load_mm3 += pen * area;
                 self.accumulate(j, pen, [&mut ux, &mut uy, &mut field.smoothed]);
@@ -204,27 +205,34 @@ impl ContactModel {
     }
 
     /// Eq. S4a: the depth the compliant dome settles at under the
-    /// commanded `depth`, over the first `active` patch points.
-    fn settle(
-        &self,
-        grid: &mut DistanceGrid,
-        sd: &dyn Fn(Vec2) -> f64,
-        depth: f64,
-        active: usize,
-    ) -> f64 {
+    /// commanded `depth`, over the first patch points with the inside
+    /// fractions `inside` (eq. S4).
+    fn settle(&self, inside: &[f64], depth: f64) -> f64 {
         if self.mech.compliance_mm <= 0.0 {
             return depth;
         }
-        let h = self.mech.patch_grid_mm;
         let area = self.patch_area();
-        let points: Vec<(f64, f64)> = self.patch[..active]
+        let points: Vec<(f64, f64)> = self
+            .patch
             .iter()
-            .map(|p| {
-                let inside = (0.5 - grid.interpolate(sd, p.horiz) / h).clamp(0.0, 1.0);
-                (p.height, inside * area)
-            })
+            .zip(inside)
+            .map(|(p, chi)| (p.height, chi * area))
             .collect();
         settled_depth(depth, self.mech.compliance_mm / 1000.0, &points)
+    }
+
+    /// The inside fractions chi_j (eq. S4) of the first `active` patch
+    /// points.
+    fn inside_fractions(
+        &self,
+        grid: &mut DistanceGrid,
+        sd: &dyn Fn(Vec2) -> f64,
+        active: usize,
+    ) -> Vec<f64> {
+        self.patch[..active]
+            .iter()
+            .map(|p| self.inside_fraction(grid, sd, p))
+            .collect()
     }
 
     fn patch_area(&self) -> f64 {
@@ -241,9 +249,18 @@ impl ContactModel {
         point: &PatchPoint,
         depth: f64,
     ) -> f64 {
+        self.inside_fraction(grid, sd, point) * (depth - point.height)
+    }
+
+    /// Eq. S4's anti-aliased inside-fraction chi of one patch point.
+    fn inside_fraction(
+        &self,
+        grid: &mut DistanceGrid,
+        sd: &dyn Fn(Vec2) -> f64,
+        point: &PatchPoint,
+    ) -> f64 {
         let h = self.mech.patch_grid_mm;
-        let inside = (0.5 - grid.interpolate(sd, point.horiz) / h).clamp(0.0, 1.0);
-        inside * (depth - point.height)
+        (0.5 - grid.interpolate(sd, point.horiz) / h).clamp(0.0, 1.0)
     }
 
     /// The contact along a slide (eq. B1): the horizontal positions of the
@@ -260,7 +277,7 @@ impl ContactModel {
         let depth = match path.last() {
             Some(last) => {
                 let mut grid = DistanceGrid::new(reach, self.mech.distance_grid_mm, *last);
-                self.settle(&mut grid, sd, depth, active)
+                self.settle(&self.inside_fractions(&mut grid, sd, active), depth)
             }
             None => depth,
         };

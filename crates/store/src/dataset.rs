@@ -87,6 +87,17 @@ impl TapData {
         (self.subset(&idx[..cut]), self.subset(&idx[cut..]))
     }
 
+    /// Row of each sample by its frame's image name (imports and twins of
+    /// the same labels are joined on it); empty for simulated collections.
+    pub fn image_rows(&self) -> std::collections::HashMap<&str, usize> {
+        self.meta
+            .images
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.as_str(), i))
+            .collect()
+    }
+
     /// The samples at `rows`, in that order.
     pub fn subset(&self, rows: &[usize]) -> TapData {
         let d = self.dim();

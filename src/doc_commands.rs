@@ -23,7 +23,6 @@ use std::path::{Path, PathBuf};
 /// One command found in a document.
 #[derive(Debug)]
 struct Found {
-    file: PathBuf,
     line: usize,
     /// The arguments after the program name, in synopsis notation.
     args: Vec<String>,
@@ -120,7 +119,7 @@ fn expand(word: &str, vars: &HashMap<String, String>) -> String {
 fn invocation(segment: &[String]) -> Option<Vec<String>> {
     let start = segment
         .iter()
-        .position(|w| !(w.contains('=') && !w.starts_with('-')))?;
+        .position(|w| !w.contains('=') || w.starts_with('-'))?;
     let rest = &segment[start..];
     let program = rest.first()?.as_str();
     if program.ends_with("target/release/tactrace") || program == "tactrace" {
@@ -240,7 +239,6 @@ fn commands_in(file: &Path) -> Vec<Found> {
                 learn_vars(&logical, &mut vars);
                 for args in commands_of_line(&logical, &vars) {
                     found.push(Found {
-                        file: file.to_path_buf(),
                         line: pending_line,
                         args,
                         block: true,
@@ -253,7 +251,7 @@ fn commands_in(file: &Path) -> Vec<Found> {
                     prose_line = i + 1;
                 }
                 if line.trim().is_empty() {
-                    found.extend(inline_commands(file, prose_line, &prose));
+                    found.extend(inline_commands(prose_line, &prose));
                     prose.clear();
                 } else {
                     prose.push_str(line);
@@ -262,12 +260,12 @@ fn commands_in(file: &Path) -> Vec<Found> {
             }
         }
     }
-    found.extend(inline_commands(file, prose_line, &prose));
+    found.extend(inline_commands(prose_line, &prose));
     found
 }
 
 /// The inline code spans of a paragraph that start with `tactrace `.
-fn inline_commands(file: &Path, line: usize, paragraph: &str) -> Vec<Found> {
+fn inline_commands(line: usize, paragraph: &str) -> Vec<Found> {
     paragraph
         .split('`')
         .skip(1)
@@ -285,7 +283,6 @@ fn inline_commands(file: &Path, line: usize, paragraph: &str) -> Vec<Found> {
                 }
             };
             Some(Found {
-                file: file.to_path_buf(),
                 line,
                 args,
                 block: false,
@@ -456,7 +453,6 @@ fn issue20_the_doc_command_checker_reads_synopses_and_shell() {
         words("train --model pdennn --train d --val v --out m")
     );
     let bad = Found {
-        file: PathBuf::new(),
         line: 1,
         args: words("follow --model m --shape disk --no-such-flag --out r"),
         block: true,

@@ -246,8 +246,14 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
         let predicted = Predicted {
             truth: &v.truth,
             predictions: &v.predictions,
+            mae: [v.position_mae_mm, v.angle_mae_deg],
         };
-        figures::predicted_vs_true(&dir.join("predicted_vs_true"), "model", &predicted)
+        let kind = model
+            .for_data(&data, &a.data)
+            .map_err(LabError::from)?
+            .kind();
+        let title = figures::model_on_data_title(kind, &a.model, &a.data);
+        figures::predicted_vs_true(&dir.join("predicted_vs_true"), &title, &predicted)
             .map_err(LabError::from)?;
     }
     if a.json {

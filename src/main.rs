@@ -5,12 +5,15 @@
 //! input (arguments, files, configuration, data). A closed standard output
 //! (`tactrace predict ... | head`) ends the command quietly with 0.
 
+mod cmd_completions;
 mod cmd_data;
 mod cmd_follow;
 mod cmd_learn;
 mod cmd_rig;
 mod cmd_tune;
 mod cmd_twin;
+#[cfg(test)]
+mod doc_commands;
 mod progress;
 
 /// Print a line on standard output; a closed pipe becomes an error that
@@ -72,6 +75,8 @@ enum Command {
     /// Set up the TacTip camera: list V4L2 devices, grab a frame.
     #[command(subcommand)]
     Camera(cmd_rig::CameraCommand),
+    /// Print a shell completion script (bash, zsh or fish) for every command and option.
+    Completions(cmd_completions::CompletionsArgs),
 }
 
 fn main() -> ExitCode {
@@ -93,6 +98,9 @@ fn main() -> ExitCode {
         Command::Bench(a) => cmd_follow::bench(a),
         Command::Rig(c) => cmd_rig::rig(c),
         Command::Camera(c) => cmd_rig::camera(c),
+        Command::Completions(a) => {
+            cmd_completions::completions(a, <Cli as clap::CommandFactory>::command())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -386,7 +386,7 @@ pub fn write_results_with(
     if !records.is_empty() {
         let xy: Vec<(f64, f64)> = traj.iter().map(|p| (p.x, p.y)).collect();
         figures::trajectory(&dir.join("trajectory"), name, contour, &xy)?;
-        figures::error_curve(&dir.join("l2_error"), name, &curve)?;
+        figures::error_curve(&dir.join("l2_error"), name, contour, &curve)?;
     }
     Ok((Some(metrics), curve))
 }

@@ -270,10 +270,7 @@ fn write_answers(path: &Path, answers: &[Answer], bank: &FrameBank) -> Result<()
     );
     for (step, a) in answers.iter().enumerate() {
         let f = &bank.frames()[a.frame];
-        let name = f
-            .path
-            .file_name()
-            .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        let name = image_name(&f.path);
         let (w, g) = (a.wanted, f.labels);
         text.push_str(&format!(
             "{step},{:.4},{:.3},{:.4},{name},{:.4},{:.3},{:.4},{:.4}\n",
@@ -284,22 +281,45 @@ fn write_answers(path: &Path, answers: &[Answer], bank: &FrameBank) -> Result<()
     Ok(())
 }
 
-/// The files of the distinct frames that answered (PNG bytes, in order of
-/// first use) and each tap's index among them, for the run's replay page.
-fn answered_frames(answers: &[Answer], bank: &FrameBank) -> Result<(Vec<Vec<u8>>, Vec<usize>)> {
+/// The distinct frames that answered, in order of first use, for the
+/// run's replay page.
+struct Answered {
+    /// Their files (PNG bytes).
+    images: Vec<Vec<u8>>,
+    /// Their image names.
+    names: Vec<String>,
+    /// Each tap's index among them.
+    per_step: Vec<usize>,
+    /// Each tap's label distance.
+    distances: Vec<f64>,
+}
+
+fn answered_frames(answers: &[Answer], bank: &FrameBank) -> Result<Answered> {
     let mut slot = std::collections::HashMap::new();
-    let mut images = Vec::new();
-    let mut per_step = Vec::with_capacity(answers.len());
+    let mut out = Answered {
+        images: Vec::new(),
+        names: Vec::new(),
+        per_step: Vec::with_capacity(answers.len()),
+        distances: answers.iter().map(|a| a.distance).collect(),
+    };
     for a in answers {
         let next = slot.len();
         let k = *slot.entry(a.frame).or_insert(next);
-        if k == images.len() {
+        if k == out.images.len() {
             let path = &bank.frames()[a.frame].path;
-            images.push(std::fs::read(path).map_err(tactrace_store::read_err(path))?);
+            out.images
+                .push(std::fs::read(path).map_err(tactrace_store::read_err(path))?);
+            out.names.push(image_name(path));
         }
-        per_step.push(k);
+        out.per_step.push(k);
     }
-    Ok((images, per_step))
+    Ok(out)
+}
+
+/// A frame's image name: its file name in the collection.
+fn image_name(path: &Path) -> String {
+    path.file_name()
+        .map_or(String::new(), |n| n.to_string_lossy().into_owned())
 }
 
 /// The outcome of a run in the real-frame world.
@@ -356,11 +376,13 @@ pub fn follow_replay(
         follow_on_rig_recorded(arm, sensor, &perception, &settings, run.path(), progress)?;
     let stats = ReplayStats::of(rig.answers(), rig.bank(), world.far_distance);
     write_answers(&run.path().join("answers.csv"), rig.answers(), rig.bank())?;
-    let (images, per_step) = answered_frames(rig.answers(), rig.bank())?;
+    let answered = answered_frames(rig.answers(), rig.bank())?;
     let extras = RunExtras {
         frames: Some(tactrace_report::replay_html::StepFrames {
-            images: &images,
-            per_step: &per_step,
+            images: &answered.images,
+            names: &answered.names,
+            per_step: &answered.per_step,
+            distances: &answered.distances,
         }),
         replay: Some(&stats),
         fields: Some(tactrace_report::replay_html::PinFields {

@@ -93,6 +93,7 @@ pub(crate) fn train_and_score(
     let predicted = Predicted {
         truth: &v.truth,
         predictions: &v.predictions,
+        mae: [v.position_mae_mm, v.angle_mae_deg],
     };
     figures::predicted_vs_true(
         &dir.join("figures").join(format!("fig4_4_{}", slug(name))),
@@ -246,6 +247,7 @@ fn follow_report_shapes(
             figures::error_curve(
                 &figs.join(format!("fig5_4_{tag}{name}")),
                 name,
+                &contour,
                 &res.l2_curve,
             )?;
             let metrics = res.metrics.expect("scored against the known contour");

@@ -19,6 +19,19 @@ pub enum ModelKind {
     Mlp,
 }
 
+impl ModelKind {
+    /// The family's name as the report writes it ("PDenNN"; "MLP" for the
+    /// backprop twin), for titles and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::DisDenNN => "DisDenNN",
+            ModelKind::PcaDenNN => "PCADenNN",
+            ModelKind::PDenNN => "PDenNN",
+            ModelKind::Mlp => "MLP",
+        }
+    }
+}
+
 /// Which hyper-parameters a preset holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Preset {

@@ -9,6 +9,33 @@ use tactrace_learn::TrainingHistory;
 pub struct Predicted<'a> {
     pub truth: &'a [[f64; 2]],
     pub predictions: &'a [[f64; 2]],
+    /// The mean absolute errors shown on the panels: position (mm), angle
+    /// (deg), as the command that made the predictions reports them.
+    pub mae: [f64; 2],
+}
+
+/// The title of a model's figures on a dataset: its kind, the model
+/// folder's name and the dataset folder's name ("PDenNN pdennn on val").
+pub fn model_on_data_title(kind: tactrace_learn::ModelKind, model: &Path, data: &Path) -> String {
+    format!(
+        "{} {} on {}",
+        kind.name(),
+        short_name(model),
+        short_name(data)
+    )
+}
+
+/// A folder's last component, cut to 24 characters so titles fit.
+fn short_name(path: &Path) -> String {
+    let name = path
+        .file_name()
+        .unwrap_or(path.as_os_str())
+        .to_string_lossy();
+    if name.chars().count() <= 24 {
+        return name.into_owned();
+    }
+    let head: String = name.chars().take(23).collect();
+    format!("{head}\u{2026}")
 }
 
 fn axes(title: &str, x: &str, y: &str) -> Axes {
@@ -48,7 +75,8 @@ pub fn training_curves(stem: &Path, history: &TrainingHistory) -> Result<Vec<Pat
     grid(stem, 2, &panels, (1200, 480)).map_err(Into::into)
 }
 
-/// Fig. 4.4: predicted against true position and angle.
+/// Fig. 4.4: predicted against true position and angle, each panel titled
+/// `name` and its mean absolute error.
 pub fn predicted_vs_true(stem: &Path, name: &str, v: &Predicted) -> Result<Vec<PathBuf>> {
     let panel = |k: usize, what: &str, unit: &str| {
         let pts: Vec<(f64, f64)> = v
@@ -60,7 +88,7 @@ pub fn predicted_vs_true(stem: &Path, name: &str, v: &Predicted) -> Result<Vec<P
         let lo = pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
         let hi = pts.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
         let a = axes(
-            &format!("{name}: {what}"),
+            &format!("{name}: {what}, MAE {:.3} {unit}", v.mae[k]),
             &format!("true {what} ({unit})"),
             &format!("predicted {what} ({unit})"),
         );
@@ -126,20 +154,23 @@ pub fn contour_series(contour: &Contour) -> Series {
     }
 }
 
-/// Fig. 5.4: L2 error along the contour with its mean.
-pub fn error_curve(stem: &Path, title: &str, curve: &[f64]) -> Result<Vec<PathBuf>> {
+/// Fig. 5.4: L2 error along the contour with its mean, against the arc
+/// length (mm) from the contour's first point; `curve` is
+/// [`tactrace_servo::l2_curve`] of `contour`.
+pub fn error_curve(
+    stem: &Path,
+    title: &str,
+    contour: &Contour,
+    curve: &[f64],
+) -> Result<Vec<PathBuf>> {
     let mean = curve.iter().sum::<f64>() / curve.len().max(1) as f64;
-    let n = curve.len() as f64;
-    let pts = curve
-        .iter()
-        .enumerate()
-        .map(|(i, d)| (i as f64, *d))
-        .collect();
+    let arc = tactrace_servo::l2_curve_arc_mm(contour, curve.len());
+    let pts = arc.iter().zip(curve).map(|(s, d)| (*s, *d)).collect();
     chart(
         stem,
         &Axes {
             y_from_zero: true,
-            ..axes(title, "contour point", "L2 error (mm)")
+            ..axes(title, "arc length along the contour (mm)", "L2 error (mm)")
         },
         &[
             Series {
@@ -149,7 +180,7 @@ pub fn error_curve(stem: &Path, title: &str, curve: &[f64]) -> Result<Vec<PathBu
             },
             Series {
                 name: format!("mean {mean:.2} mm"),
-                points: vec![(0.0, mean), (n, mean)],
+                points: vec![(0.0, mean), (contour.perimeter(), mean)],
                 style: Style::Dashed,
             },
         ],

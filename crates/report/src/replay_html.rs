@@ -4,9 +4,15 @@
 //! button and a step slider. The data is inline JSON and the page's script
 //! a few dozen lines: no network, no files beside it.
 //!
+//! Steps are numbered from 0, as in the run's `trajectory.csv` and
+//! `answers.csv`; the status line also says which of how many the step is
+//! ("step 367 (368 of 368)"), so it agrees with the summary's step count.
 //! The page opens at step K when its address ends in `#step=K`; the
-//! element `#status` then says that step's values (what the browser test
-//! reads).
+//! element `#status` then says that step's values, `#frame` names the frame
+//! that answered the tap (the real-frame world), and the world canvas
+//! carries its tick values and scale bar as `data-` attributes (what the
+//! browser test reads). The world is drawn with its axes ticked in mm and
+//! a scale bar.
 use base64::engine::general_purpose::STANDARD as BASE64;
 use base64::Engine as _;
 use serde::Serialize;
@@ -22,11 +28,19 @@ pub struct PinFields<'a> {
 }
 
 /// The frames the taps saw, as image files (PNG bytes): each distinct
-/// frame once, and for every step the index of its frame.
+/// frame once with its image name, and for every step the index of its
+/// frame and how far that frame's labels were from the pose reached.
 #[derive(Clone, Copy)]
 pub struct StepFrames<'a> {
+    /// Each distinct frame's file (PNG bytes).
     pub images: &'a [Vec<u8>],
+    /// Each distinct frame's image name (its file name in the collection).
+    pub names: &'a [String],
+    /// For every step, the index of its frame in `images`.
     pub per_step: &'a [usize],
+    /// For every step, the scaled label distance between the pose reached
+    /// and the answering frame's labels (empty when not measured).
+    pub distances: &'a [f64],
 }
 
 /// What the page shows of one run.
@@ -60,9 +74,12 @@ struct PageData<'a> {
     pins: Vec<[f64; 2]>,
     /// Per step: dx of every pin, then dy (empty when not kept).
     fields: Vec<Vec<f64>>,
-    /// The distinct frames as data URIs, and each step's index into them.
+    /// The distinct frames as data URIs and their image names, each step's
+    /// index into them and its label distance (null when not measured).
     images: Vec<String>,
+    image_names: &'a [String],
     step_image: Vec<usize>,
+    step_distance: Vec<Option<f64>>,
 }
 
 fn round2(v: f64) -> f64 {
@@ -108,10 +125,12 @@ pub fn replay_html(page: &ReplayPage) -> String {
             .collect();
         (pins, f)
     });
-    let (images, step_image) = page.frames.map_or((Vec::new(), Vec::new()), |f| {
-        let uri = |png: &Vec<u8>| format!("data:image/png;base64,{}", BASE64.encode(png));
-        (f.images.iter().map(uri).collect(), f.per_step.to_vec())
-    });
+    let uri = |png: &Vec<u8>| format!("data:image/png;base64,{}", BASE64.encode(png));
+    let images = page
+        .frames
+        .map_or(Vec::new(), |f| f.images.iter().map(uri).collect());
+    let distance = |d: &f64| d.is_finite().then(|| (d * 1000.0).round() / 1000.0);
+    let frames = page.frames;
     let data = PageData {
         title: page.title,
         notes: page.notes,
@@ -121,7 +140,9 @@ pub fn replay_html(page: &ReplayPage) -> String {
         pins,
         fields,
         images,
-        step_image,
+        image_names: frames.map_or(&[], |f| f.names),
+        step_image: frames.map_or(Vec::new(), |f| f.per_step.to_vec()),
+        step_distance: frames.map_or(Vec::new(), |f| f.distances.iter().map(distance).collect()),
     };
     // Inside a script element nothing may close it: `</` is written `<\/`.
     let json = serde_json::to_string(&data)
@@ -143,20 +164,14 @@ fn escape(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
-const STYLE: &str = "body{font-family:sans-serif;margin:1.5em;color:#222;background:#fafafa}\
-h1{font-size:1.3em;margin:0 0 .3em}#notes{color:#555;font-size:.9em;margin:0 0 .8em}\
-#notes p{margin:.15em 0}.panes{display:flex;gap:1em;flex-wrap:wrap}\
-canvas{background:#fff;border:1px solid #ccc;border-radius:4px}\
-.controls{display:flex;align-items:center;gap:.8em;margin:.8em 0}\
-#slider{flex:0 0 820px}.cap{font-size:.85em;color:#555;max-width:400px}button{font-size:1em;padding:.3em 1em}\
-#status{font-family:monospace;font-size:.95em;white-space:pre}\
-.key span{display:inline-block;margin-right:1.2em;font-size:.85em}\
-.sw{display:inline-block;width:1.6em;height:.35em;vertical-align:middle;margin-right:.3em}";
+/// The page's style sheet, inlined.
+const STYLE: &str = include_str!("replay_html.css");
 
 const BODY: &str = "<h1 id=\"title\"></h1><div id=\"notes\"></div>\n\
 <div class=\"panes\"><canvas id=\"world\" width=\"560\" height=\"560\"></canvas>\
 <div><canvas id=\"pins\" width=\"400\" height=\"400\"></canvas>\
-<div class=\"cap\">the tap&#39;s frame (when the run kept it, faded), its pins at rest (grey) and their displacement x3 (green)</div></div></div>\n\
+<div class=\"cap\">the tap&#39;s frame (when the run kept it, faded), its pins at rest (grey) and their displacement x3 (green)</div>\
+<div id=\"frame\"></div></div></div>\n\
 <div class=\"key\"><span><i class=\"sw\" style=\"background:#999\"></i>contour</span>\
 <span><i class=\"sw\" style=\"background:#1f77b4\"></i>path (commanded)</span>\
 <span><i class=\"sw\" style=\"background:#d62728\"></i>sensor and its x axis</span>\
@@ -164,76 +179,12 @@ const BODY: &str = "<h1 id=\"title\"></h1><div id=\"notes\"></div>\n\
 <span><i class=\"sw\" style=\"background:#2ca02c\"></i>pin displacement (x3)</span></div>\n\
 <div class=\"controls\"><button id=\"play\">Play</button>\
 <input id=\"slider\" type=\"range\" min=\"0\" value=\"0\" step=\"1\"></div>\
-<div id=\"status\" data-step=\"\"></div>\n";
+<div id=\"status\" data-step=\"\"></div>\n\
+<div class=\"cap\">steps are numbered from 0, as in trajectory.csv</div>\n";
 
-const SCRIPT: &str = r#"
-const D = JSON.parse(document.getElementById('data').textContent);
-const S = D.steps, slider = document.getElementById('slider');
-const status = document.getElementById('status'), play = document.getElementById('play');
-document.getElementById('title').textContent = D.title;
-for (const n of D.notes) { const p = document.createElement('p'); p.textContent = n; document.getElementById('notes').appendChild(p); }
-slider.max = Math.max(S.length - 1, 0);
-const pts = D.contour.concat(S.map(s => [s[0], s[1]]));
-let x0 = Math.min(...pts.map(p => p[0])) - D.radius, x1 = Math.max(...pts.map(p => p[0])) + D.radius;
-let y0 = Math.min(...pts.map(p => p[1])) - D.radius, y1 = Math.max(...pts.map(p => p[1])) + D.radius;
-const W = document.getElementById('world'), wc = W.getContext('2d');
-const k = Math.min(W.width / (x1 - x0), W.height / (y1 - y0));
-const tx = p => [(p[0] - x0) * k, W.height - (p[1] - y0) * k];
-function line(c, a, b, col, w) { c.strokeStyle = col; c.lineWidth = w; c.beginPath(); c.moveTo(...a); c.lineTo(...b); c.stroke(); }
-function poly(c, ps, col, w, close) {
-  if (!ps.length) return; c.strokeStyle = col; c.lineWidth = w; c.beginPath(); c.moveTo(...ps[0]);
-  for (const p of ps.slice(1)) c.lineTo(...p); if (close) c.closePath(); c.stroke();
-}
-function drawWorld(i) {
-  wc.clearRect(0, 0, W.width, W.height);
-  poly(wc, D.contour.map(tx), '#999', 2, true);
-  poly(wc, S.slice(0, i + 1).map(s => tx(s)), '#1f77b4', 1.5, false);
-  const s = S[i]; if (!s) return;
-  const a = s[2] * Math.PI / 180, c = tx(s);
-  wc.strokeStyle = '#d62728'; wc.lineWidth = 1.5; wc.beginPath(); wc.arc(c[0], c[1], D.radius * k, 0, 2 * Math.PI); wc.stroke();
-  line(wc, c, tx([s[0] + D.radius * Math.cos(a), s[1] + D.radius * Math.sin(a)]), '#d62728', 2);
-  const n = a - s[4] * Math.PI / 180, e = [s[0] - s[3] * Math.cos(n), s[1] - s[3] * Math.sin(n)];
-  const t = [-Math.sin(n), Math.cos(n)], h = D.radius * 0.8;
-  line(wc, tx([e[0] - h * t[0], e[1] - h * t[1]]), tx([e[0] + h * t[0], e[1] + h * t[1]]), '#ff7f0e', 3);
-}
-const P = document.getElementById('pins'), pc = P.getContext('2d');
-const imgs = D.images.map(u => { const im = new Image(); im.onload = () => show(+slider.value); im.src = u; return im; });
-function drawPins(i) {
-  pc.clearRect(0, 0, P.width, P.height);
-  const f = D.fields[i], im = imgs[D.step_image[i]];
-  let q, ox = 20, oy = 20, px0 = 0, py0 = 0;
-  if (im && im.complete && im.naturalWidth) {
-    q = Math.min(P.width / im.naturalWidth, P.height / im.naturalHeight); ox = 0; oy = 0;
-    pc.globalAlpha = 0.45; pc.drawImage(im, 0, 0, im.naturalWidth * q, im.naturalHeight * q); pc.globalAlpha = 1;
-  }
-  if (!D.pins.length || !f || !f.length) { pc.fillStyle = '#888'; pc.font = '14px sans-serif'; pc.fillText('no pin displacements kept for this run', 20, 30); return; }
-  const xs = D.pins.map(p => p[0]), ys = D.pins.map(p => p[1]);
-  if (!q) { px0 = Math.min(...xs); py0 = Math.min(...ys); q = (P.width - 40) / Math.max(Math.max(...xs) - px0, Math.max(...ys) - py0); }
-  const m = D.pins.length;
-  for (let j = 0; j < m; j++) {
-    const p = [ox + (D.pins[j][0] - px0) * q, oy + (D.pins[j][1] - py0) * q];
-    pc.fillStyle = '#bbb'; pc.beginPath(); pc.arc(p[0], p[1], 2.5, 0, 2 * Math.PI); pc.fill();
-    line(pc, p, [p[0] + 3 * q * f[j], p[1] + 3 * q * f[m + j]], '#2ca02c', 1.5);
-  }
-}
-function show(i) {
-  i = Math.max(0, Math.min(S.length - 1, i | 0)); slider.value = i;
-  drawWorld(i); drawPins(i);
-  const s = S[i] || [0, 0, 0, 0, 0, 0, 0];
-  status.dataset.step = i;
-  status.textContent = `step ${i} of ${S.length - 1}: x ${s[0].toFixed(2)} mm, y ${s[1].toFixed(2)} mm, angle ${s[2].toFixed(1)} deg | predicted r ${s[3].toFixed(2)} mm, theta ${s[4].toFixed(1)} deg | mean |d| ${s[5].toFixed(2)} px, ${s[6] ? 'contact' : 'no contact'}`;
-}
-let timer = null;
-play.onclick = () => {
-  if (timer) { clearInterval(timer); timer = null; play.textContent = 'Play'; return; }
-  if (+slider.value >= S.length - 1) show(0);
-  play.textContent = 'Pause';
-  timer = setInterval(() => { if (+slider.value >= S.length - 1) { play.onclick(); return; } show(+slider.value + 1); }, 60);
-};
-slider.oninput = () => show(+slider.value);
-const m = /step=(\d+)/.exec(location.hash + location.search);
-show(m ? +m[1] : S.length - 1);
-"#;
+/// The page's script, inlined: the world with its axes in mm and a scale
+/// bar, the tap's pins, the status line and the answering frame.
+const SCRIPT: &str = include_str!("replay_html.js");
 
 #[cfg(test)]
 mod tests {
@@ -280,7 +231,9 @@ mod tests {
             }),
             frames: Some(StepFrames {
                 images: &[vec![1, 2, 3]],
+                names: &["frame_7_0.png".to_string()],
                 per_step: &[0, 0, 0, 0],
+                distances: &[0.5, f64::NAN, 0.25, 1.0 / 3.0],
             }),
             notes: &notes,
         });
@@ -293,6 +246,8 @@ mod tests {
         assert!(html.contains("[40.0,0.0]"), "contour inline");
         assert!(html.contains("\"images\":[\"data:image/png;base64,AQID\"]"));
         assert!(html.contains("\"step_image\":[0,0,0,0]"));
+        assert!(html.contains("\"image_names\":[\"frame_7_0.png\"]"));
+        assert!(html.contains("\"step_distance\":[0.5,null,0.25,0.333]"));
         assert!(
             html.contains("mean L2 0.5 mm <\\/script>"),
             "no early end of script"

@@ -22,7 +22,8 @@ pub mod start;
 
 pub use error::{Result, ServoError};
 pub use metrics::{
-    evaluate, l2_curve, traced_fraction, trajectory_closes, ClosureDetector, FollowMetrics,
+    evaluate, l2_curve, l2_curve_arc_mm, traced_fraction, trajectory_closes, ClosureDetector,
+    FollowMetrics,
 };
 pub use perception::{Percept, Perception};
 pub use replay_rig::ReplayRig;

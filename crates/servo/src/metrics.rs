@@ -31,7 +31,9 @@ pub struct FollowMetrics {
 }
 
 /// The report's error curve: for each of `n` contour points evenly spaced by
-/// arc length, the distance to the nearest trajectory point (mm).
+/// arc length, the distance to the nearest trajectory point (mm). Point `k`
+/// lies at arc length `k P / n` from the contour's first vertex, `P` the
+/// perimeter ([`l2_curve_arc_mm`]).
 pub fn l2_curve(contour: &Contour, trajectory: &[Vec2], n: usize) -> Vec<f64> {
     contour
         .resample(n)
@@ -43,6 +45,13 @@ pub fn l2_curve(contour: &Contour, trajectory: &[Vec2], n: usize) -> Vec<f64> {
                 .fold(f64::INFINITY, f64::min)
         })
         .collect()
+}
+
+/// Arc length (mm) along `contour` of each of the `n` points of
+/// [`l2_curve`], the error curve's x axis.
+pub fn l2_curve_arc_mm(contour: &Contour, n: usize) -> Vec<f64> {
+    let step = contour.perimeter() / n.max(1) as f64;
+    (0..n).map(|k| k as f64 * step).collect()
 }
 
 /// Detects, point by point, that a trajectory has come back to its start:
@@ -265,5 +274,24 @@ mod tests {
         assert!(!m.closed);
         assert!((m.coverage - 0.5).abs() < 0.03, "{}", m.coverage);
         assert!(m.mean_l2_mm > 10.0);
+    }
+
+    /// Issue 20: the L2 curve was plotted against "contour point" 0-1000;
+    /// its x axis is now the arc length in mm, and each value belongs to
+    /// the contour point at that arc length.
+    #[test]
+    fn issue20_l2_curve_points_sit_at_their_arc_length() {
+        let contour = Contour::new(circle(50.0, 2000)).unwrap();
+        let arc = l2_curve_arc_mm(&contour, 1000);
+        assert_eq!(arc.len(), 1000);
+        assert_eq!(arc[0], 0.0);
+        let step = contour.perimeter() / 1000.0;
+        assert!((arc[999] - 999.0 * step).abs() < 1e-9);
+        // A single trajectory point at the contour point of arc length
+        // arc[250] is 0 mm from it, and the curve says so at index 250.
+        let at = contour.at_arc_length(arc[250]).0;
+        let curve = l2_curve(&contour, &[at], 1000);
+        assert!(curve[250] < 1e-9, "{}", curve[250]);
+        assert!(curve[750] > 99.0, "the opposite point is a diameter away");
     }
 }

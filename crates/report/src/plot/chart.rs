@@ -128,14 +128,14 @@ impl Figure for Grid<'_> {
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
-        _: Raster,
+        raster: Raster,
     ) -> Result<(), String> {
         let cols = self.cols.min(self.panels.len()).max(1);
         let rows = self.panels.len().div_ceil(cols);
         let areas = root.split_evenly((rows, cols));
         for (area, (axes, panel)) in areas.iter().zip(&self.panels) {
             match panel {
-                Some(panel) => draw_panel(area, panel)?,
+                Some(panel) => draw_panel(area, panel, raster)?,
                 None => draw_empty(area, &axes.title)?,
             }
         }
@@ -170,6 +170,7 @@ pub(crate) fn builder<'a, 'b, DB: DrawingBackend>(
 fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     panel: &Panel,
+    raster: Raster,
 ) -> Result<(), String> {
     let area = titled(area, &panel.axes.title)?;
     let (x, y) = (panel.x, panel.y);
@@ -177,7 +178,7 @@ fn draw_panel<DB: DrawingBackend>(
         let chart = builder(&area)
             .build_cartesian_2d(x.lo..x.hi, (y.lo..y.hi).log_scale())
             .map_err(draw_err)?;
-        return fill_chart(chart, panel);
+        return fill_chart(chart, panel, raster);
     }
     let (x, y) = if panel.axes.equal_aspect {
         equal_aspect(x, y, plot_pixels(&area)?)
@@ -187,7 +188,7 @@ fn draw_panel<DB: DrawingBackend>(
     let chart = builder(&area)
         .build_cartesian_2d(x.lo..x.hi, y.lo..y.hi)
         .map_err(draw_err)?;
-    fill_chart(chart, panel)
+    fill_chart(chart, panel, raster)
 }
 
 /// Pixel size of the plotting area [`builder`] leaves inside `area`.
@@ -203,6 +204,7 @@ pub(crate) fn plot_pixels<DB: DrawingBackend>(
 fn fill_chart<'a, DB, Y>(
     mut chart: ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
     panel: &Panel,
+    raster: Raster,
 ) -> Result<(), String>
 where
     DB: DrawingBackend + 'a,
@@ -222,7 +224,7 @@ where
         .draw()
         .map_err(draw_err)?;
     for cleaned in &panel.series {
-        draw_series(&mut chart, cleaned)?;
+        draw_series(&mut chart, cleaned, raster)?;
     }
     if panel.series.iter().any(|c| !c.series.name.is_empty()) {
         chart

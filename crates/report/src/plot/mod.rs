@@ -25,6 +25,8 @@ mod render;
 mod series;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_clip;
 
 use std::path::PathBuf;
 

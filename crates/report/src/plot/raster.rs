@@ -14,7 +14,8 @@ use image::{ExtendedColorType, GrayImage, ImageEncoder, ImageError};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-/// How a figure should draw camera frames on the current backend.
+/// Which backend draws: how a figure draws camera frames on it (and
+/// whether thick lines go as one path or as segments, `series.rs`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Raster {
     /// Copy the pixels (bitmap backend).

@@ -1,4 +1,5 @@
 //! Experiment commands: `follow` and `reproduce`.
+use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::Result;
 use clap::Args;
@@ -144,6 +145,19 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     if let Some(dir) = &a.replay.replay {
         cfg.replay = Some(a.replay.world(dir)?);
     }
+    let world = cfg.replay.as_ref();
+    Inputs::new()
+        .add("--model", &a.model)
+        .file_arg("--shape", a.shape.as_deref().unwrap_or_default())
+        .opt("--config", a.config.as_deref())
+        .opt("--sensor", cfg.calibrated_sensor.as_deref())
+        .opt("--replay", a.replay.replay.as_deref())
+        .opt("--replay", world.map(|w| w.frames.as_path()))
+        .opt("--targets", world.map(|w| w.targets.as_path()))
+        .opt("--reference", world.map(|w| w.reference.as_path()))
+        .opt("--params", a.replay.params.as_deref())
+        .check_apart("--out", &a.out)?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     if let Some(world) = cfg.replay.take() {
         return follow_replay_world(a, cfg, &world);
     }
@@ -275,7 +289,12 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
         cfg.follow.calibrated_sensor = a.sensor.clone();
     }
     let log = |msg: &str| eprintln!("[reproduce] {msg}");
-    fsutil::check_output_dir(&a.out, a.force)?;
+    Inputs::new()
+        .opt("--real", cfg.real.as_deref())
+        .opt("--sensor", cfg.follow.calibrated_sensor.as_deref())
+        .opt("--config", a.config.as_deref())
+        .check_apart("--out", &a.out)?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let r = run_reproduce(&cfg, (&a.out, a.force), &log)?;
     let runs = [
         ("simulated", &r.networks),
@@ -432,6 +451,11 @@ fn overrides(a: &FollowArgs, follow: &mut LoopConfig) {
 
 /// `follow --hardware`: the same loop on the real rig.
 fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
+    Inputs::new()
+        .add("--hardware", path)
+        .add("--model", &a.model)
+        .file_arg("--shape", a.shape.as_deref().unwrap_or_default())
+        .check_apart("--out", &a.out)?;
     let text = fsutil::read_text(path)?;
     let mut cfg = HardwareConfig::from_toml(&text, &path.display().to_string())?;
     overrides(&a, &mut cfg.follow);

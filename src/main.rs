@@ -11,6 +11,7 @@ mod cmd_learn;
 mod cmd_rig;
 mod cmd_tune;
 mod cmd_twin;
+mod inputs;
 mod progress;
 
 /// Print a line on standard output; a closed pipe becomes an error that

@@ -234,11 +234,8 @@ fn write_file(path: &Path, bytes: &[u8], replace: bool) -> Result<()> {
 /// Read a whole text file (a regular file of at most
 /// [`crate::input_file::MAX_TEXT_BYTES`]), naming it on error.
 pub fn read_text(path: &Path) -> Result<String> {
-    let bytes = crate::input_file::read_bounded(
-        path,
-        crate::input_file::MAX_TEXT_BYTES,
-        "text file",
-    )?;
+    let bytes =
+        crate::input_file::read_bounded(path, crate::input_file::MAX_TEXT_BYTES, "text file")?;
     String::from_utf8(bytes).map_err(|_| StoreError::Format {
         path: path.to_path_buf(),
         reason: "not UTF-8 text".into(),
@@ -323,7 +320,10 @@ mod tests {
             stage.commit(),
             Err(StoreError::OutputExists { .. })
         ));
-        assert_eq!(fs::read_to_string(target.join("theirs.txt")).unwrap(), "old");
+        assert_eq!(
+            fs::read_to_string(target.join("theirs.txt")).unwrap(),
+            "old"
+        );
         assert!(!target.join("mine.txt").exists());
         // An empty folder is no output: it is replaced, as the start allows.
         let other = root.path().join("empty");

@@ -118,6 +118,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(msg.contains("100 bytes, more than the 99 bytes"), "{msg}");
-        assert_eq!(read_bounded(&p, 100, "configuration file").unwrap().len(), 100);
+        assert_eq!(
+            read_bounded(&p, 100, "configuration file").unwrap().len(),
+            100
+        );
     }
 }

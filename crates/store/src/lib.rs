@@ -11,7 +11,8 @@
 //!   writer per output;
 //! - [`input_file`], [`npy_file`]: inputs read within bounds (regular files
 //!   only, declared sizes checked against the file's); [`overlap`]: no
-//!   output in or around an input.
+//!   output in or around an input;
+//! - [`row_file`]: CSV files appended a whole row at a time.
 //!
 //! Every error names the file at fault ([`StoreError`]).
 
@@ -26,6 +27,7 @@ pub mod model_dir;
 pub mod npy_file;
 pub mod overlap;
 pub mod pin_order;
+pub mod row_file;
 pub mod sensor_file;
 pub mod shape_file;
 
@@ -37,8 +39,8 @@ pub use fsutil::{
 };
 pub use input_file::{open_regular, read_bounded};
 pub use lock::OutputLock;
-pub use overlap::{check_output_apart, check_output_outside};
 pub use model_dir::{stage_model, StoredModel};
+pub use overlap::{check_output_apart, check_output_outside};
 pub use pin_order::{pin_order_mismatch, PinOrderError};
 pub use sensor_file::SensorFolder;
 pub use shape_file::load_shape;

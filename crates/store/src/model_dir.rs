@@ -10,8 +10,8 @@
 //! cannot be forgotten.
 use crate::dataset::TapData;
 use crate::error::{write_err, Result, StoreError};
-use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
 use crate::fsutil::{read_text, StagedDir};
+use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
 use crate::pin_order::pin_order_mismatch;
 use std::path::{Path, PathBuf};
 use tactrace_learn::{PoseModel, TrainingHistory};

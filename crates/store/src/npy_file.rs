@@ -37,7 +37,9 @@ pub fn read_f32_matrix(path: &Path) -> Result<Array2<f32>> {
             "its header declares a {} array of {item}-byte values ({}), but the file holds \
              {held} bytes of data: a damaged or truncated .npy file",
             shape.join(" x "),
-            data.map_or("more bytes than can be counted".into(), |d| format!("{d} bytes")),
+            data.map_or("more bytes than can be counted".into(), |d| format!(
+                "{d} bytes"
+            )),
         )));
     }
     file.seek(SeekFrom::Start(0)).map_err(read_err(path))?;
@@ -152,6 +154,9 @@ mod tests {
         std::fs::write(&p, npy("(1, 2)", &data)).unwrap();
         assert_eq!(read_f32_matrix(&p).unwrap().dim(), (1, 2));
         std::fs::write(&p, b"hello").unwrap();
-        assert!(read_f32_matrix(&p).unwrap_err().to_string().contains("not a .npy"));
+        assert!(read_f32_matrix(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("not a .npy"));
     }
 }

@@ -109,14 +109,18 @@ mod tests {
             matches!(err, StoreError::OutputInInput { equal: true, .. }),
             "{err}"
         );
-        assert!(err.to_string().contains("is the same as the input --frames"));
+        assert!(err
+            .to_string()
+            .contains("is the same as the input --frames"));
         let inside = frames.join("new/ds");
         let err = check_output_apart("--out", &inside, &inputs).unwrap_err();
-        assert!(err.to_string().contains("is inside the input --frames"), "{err}");
+        assert!(
+            err.to_string().contains("is inside the input --frames"),
+            "{err}"
+        );
         // An input inside the output folder that --force would replace.
         let reference = frames.join("init_0.png");
-        let err = check_output_apart("--out", &frames, &[("--reference", &reference)])
-            .unwrap_err();
+        let err = check_output_apart("--out", &frames, &[("--reference", &reference)]).unwrap_err();
         assert!(matches!(err, StoreError::InputInOutput { .. }), "{err}");
         // ... which a file output or a plots folder does not replace.
         check_output_outside("--plots", root.path(), &[("--data", &frames)]).unwrap();

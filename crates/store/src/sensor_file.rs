@@ -12,8 +12,8 @@
 //! - `correction.safetensors`: the field correction W, b and the chosen
 //!   real calibration taps (fields and labels).
 use crate::error::{write_err, Result, StoreError};
-use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
 use crate::fsutil::{read_text, StagedDir};
+use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
 use safetensors::tensor::TensorView;
 use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};

@@ -64,7 +64,6 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         .opt("--config", a.config.as_deref())
         .opt("--sensor", a.sensor.as_deref())
         .check_apart("--out", &a.out)?;
-    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let spec = ShapeSpec::parse(&a.shape);
     let shape = load_shape(&spec)?;
     let rig = rig_config(a.config.as_deref())?;
@@ -78,6 +77,7 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         Some(dir) => Some(tactrace_store::SensorFolder::read(dir)?),
         None => None,
     };
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(a.samples as u64, "collect");
     let tick = |i: usize| pb.set_position(i as u64);
     let got = match &sensor {
@@ -186,8 +186,8 @@ pub fn import(a: ImportArgs) -> Result<()> {
         .add("--reference", &a.labels.reference)
         .opt("--params", a.params.as_deref())
         .check_apart("--out", &a.out)?;
-    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let blob = blob_params(a.params.as_deref(), "real256")?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let cfg = imp::ImportConfig {
         frames: a.frames,
         targets: a.labels.targets,

@@ -141,7 +141,10 @@ fn issue20_a_second_follow_is_refused_while_the_first_runs() {
     let still_running = first.try_wait().unwrap().is_none();
     let _ = first.kill();
     first.wait().unwrap();
-    assert!(still_running, "the first run ended before the second started");
+    assert!(
+        still_running,
+        "the first run ended before the second started"
+    );
     expect_code(&r, 2, "a second follow into the same --out");
     let pid = format!("(pid {})", first.id());
     assert!(r.stderr.contains(&pid), "{pid}: {}", r.stderr);
@@ -167,7 +170,11 @@ fn issue20_every_file_output_obeys_force() {
     let first = fs::read(t.join("tap.png")).unwrap();
     let r = render("-2", false);
     expect_code(&r, 2, "render over an existing file");
-    assert!(r.stderr.contains("tap.png already exists; pass --force"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("tap.png already exists; pass --force"),
+        "{}",
+        r.stderr
+    );
     assert_eq!(fs::read(t.join("tap.png")).unwrap(), first);
     expect_code(&render("-2", true), 0, "render --force");
     assert_ne!(fs::read(t.join("tap.png")).unwrap(), first);
@@ -186,7 +193,10 @@ fn issue20_every_file_output_obeys_force() {
     let r = validate(false);
     expect_code(&r, 2, "validate --plots over existing plots");
     assert!(r.stderr.contains("--force"), "{}", r.stderr);
-    assert_eq!(fs::read_to_string(t.join("p/predicted_vs_true.svg")).unwrap(), "old");
+    assert_eq!(
+        fs::read_to_string(t.join("p/predicted_vs_true.svg")).unwrap(),
+        "old"
+    );
     expect_code(&validate(true), 0, "validate --plots --force");
     assert!(fs::read_to_string(t.join("p/predicted_vs_true.svg"))
         .unwrap()
@@ -195,7 +205,14 @@ fn issue20_every_file_output_obeys_force() {
     assert_eq!(fs::read_to_string(t.join("p/notes.txt")).unwrap(), "mine");
 
     // camera grab refuses before it opens any device.
-    let args = ["camera", "grab", "--device", "/nonexistent", "--out", "tap.png"];
+    let args = [
+        "camera",
+        "grab",
+        "--device",
+        "/nonexistent",
+        "--out",
+        "tap.png",
+    ];
     let r = tactrace(&t.0, &args);
     expect_code(&r, 2, "camera grab over an existing file");
     assert!(r.stderr.contains("pass --force"), "{}", r.stderr);
@@ -217,7 +234,13 @@ fn issue20_an_output_in_or_around_an_input_is_refused() {
     let frames = fs::read_dir(t.join("ds/frames")).unwrap().count();
     fs::create_dir(t.join("cfg")).unwrap();
     fs::write(t.join("cfg/rig.toml"), "[tap]\ndepth_mm = 6.25\n").unwrap();
-    let import = ["import", "--frames", "ds/frames", "--targets", "targets.csv"];
+    let import = [
+        "import",
+        "--frames",
+        "ds/frames",
+        "--targets",
+        "targets.csv",
+    ];
     let import = [&import[..], &["--reference", "ds/frames/reference.png"]].concat();
     let cases: [(Vec<&str>, &str); 6] = [
         (
@@ -229,7 +252,14 @@ fn issue20_an_output_in_or_around_an_input_is_refused() {
             "is inside the input --frames ds/frames",
         ),
         (
-            vec!["collect", "--config", "cfg/rig.toml", "--out", "cfg", "--force"],
+            vec![
+                "collect",
+                "--config",
+                "cfg/rig.toml",
+                "--out",
+                "cfg",
+                "--force",
+            ],
             "the input --config cfg/rig.toml is inside --out cfg, which --force would replace",
         ),
         (
@@ -237,11 +267,20 @@ fn issue20_an_output_in_or_around_an_input_is_refused() {
             "--out ds is the same as the input --train ds",
         ),
         (
-            vec!["sensor", "render", "--config", "cfg/rig.toml", "--out", "cfg/rig.toml"],
+            vec![
+                "sensor",
+                "render",
+                "--config",
+                "cfg/rig.toml",
+                "--out",
+                "cfg/rig.toml",
+            ],
             "--out cfg/rig.toml is the same as the input --config",
         ),
         (
-            vec!["validate", "--model", "m", "--data", "ds", "--plots", "m/plots"],
+            vec![
+                "validate", "--model", "m", "--data", "ds", "--plots", "m/plots",
+            ],
             "--plots m/plots is inside the input --model m",
         ),
     ];
@@ -287,7 +326,8 @@ fn issue20_a_dataset_claiming_more_than_its_file_holds_is_bad_input() {
         let r = tactrace(&t.0, args);
         expect_code(&r, 2, &format!("{args:?}"));
         assert!(
-            r.stderr.contains("inputs.npy: its header declares a 100000000 x 254 array"),
+            r.stderr
+                .contains("inputs.npy: its header declares a 100000000 x 254 array"),
             "{args:?}: {}",
             r.stderr
         );
@@ -301,9 +341,18 @@ fn issue20_a_dataset_claiming_more_than_its_file_holds_is_bad_input() {
 fn issue20_configs_implying_huge_grids_are_refused_with_the_bound() {
     let t = TempDir::new("gridbomb");
     let cases = [
-        ("[sensor.mechanics]\npatch_grid_mm = 0.01\n", "more than the 2e7 allowed"),
-        ("[sensor.mechanics]\ndistance_grid_mm = 1e-6\n", "more than the 4e6 allowed"),
-        ("[sensor.geometry]\ndome_radius_mm = 1e9\n", "must be at most 500 mm"),
+        (
+            "[sensor.mechanics]\npatch_grid_mm = 0.01\n",
+            "more than the 2e7 allowed",
+        ),
+        (
+            "[sensor.mechanics]\ndistance_grid_mm = 1e-6\n",
+            "more than the 4e6 allowed",
+        ),
+        (
+            "[sensor.geometry]\ndome_radius_mm = 1e9\n",
+            "must be at most 500 mm",
+        ),
     ];
     for (toml, bound) in cases {
         fs::write(t.join("rig.toml"), toml).unwrap();
@@ -313,7 +362,15 @@ fn issue20_configs_implying_huge_grids_are_refused_with_the_bound() {
         assert!(r.stderr.contains(bound), "{toml}: {}", r.stderr);
         // collect reaches the same check through the rig; its exit code
         // for a sensor setting is the exit-code item's.
-        let args = ["collect", "--config", "rig.toml", "--samples", "3", "--out", "c"];
+        let args = [
+            "collect",
+            "--config",
+            "rig.toml",
+            "--samples",
+            "3",
+            "--out",
+            "c",
+        ];
         let r = tactrace_within(&t.0, &args, Duration::from_secs(60));
         assert!(r.code != 0 && r.code != 134, "{toml}: exit {}", r.code);
         assert!(r.stderr.contains(bound), "{toml}: {}", r.stderr);
@@ -344,8 +401,15 @@ fn issue20_a_fifo_or_device_for_an_input_file_is_refused_at_once() {
     mkfifo(&t.join("fifo.csv"));
     let import = |targets: &str, reference: &str| {
         let args = [
-            "import", "--frames", "ds/frames", "--targets", targets, "--reference", reference,
-            "--out", "real",
+            "import",
+            "--frames",
+            "ds/frames",
+            "--targets",
+            targets,
+            "--reference",
+            reference,
+            "--out",
+            "real",
         ];
         tactrace_within(&t.0, &args, Duration::from_secs(60))
     };
@@ -353,7 +417,10 @@ fn issue20_a_fifo_or_device_for_an_input_file_is_refused_at_once() {
     for (r, what) in [
         (import("targets.csv", reference), "frame_00007.png"),
         (import("fifo.csv", reference), "fifo.csv"),
-        (import("targets.csv", "ds/frames/frame_00007.png"), "frame_00007.png"),
+        (
+            import("targets.csv", "ds/frames/frame_00007.png"),
+            "frame_00007.png",
+        ),
     ] {
         expect_code(&r, 2, what);
         assert!(
@@ -365,5 +432,9 @@ fn issue20_a_fifo_or_device_for_an_input_file_is_refused_at_once() {
     let args = ["collect", "--config", "/dev/zero", "--out", "c"];
     let r = tactrace_within(&t.0, &args, Duration::from_secs(60));
     expect_code(&r, 2, "/dev/zero as a configuration");
-    assert!(r.stderr.contains("is a device, not a regular file"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("is a device, not a regular file"),
+        "{}",
+        r.stderr
+    );
 }

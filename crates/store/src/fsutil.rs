@@ -171,14 +171,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Refuse an existing single output file `path` (named by the option
-/// `flag`) unless `force`: before the work that makes it.
+/// `flag`; anything there, a folder too) unless `force`: before the work
+/// that makes it. With `force`, what cannot be replaced fails the write.
 pub fn check_output_file(path: &Path, force: bool, flag: &'static str) -> Result<()> {
-    if path.is_dir() {
-        return Err(StoreError::Format {
-            path: path.to_path_buf(),
-            reason: format!("is a folder; {flag} names the file to write"),
-        });
-    }
     if !force && fs::symlink_metadata(path).is_ok() {
         return Err(StoreError::OutputFileExists {
             path: path.to_path_buf(),

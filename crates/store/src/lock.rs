@@ -89,18 +89,30 @@ impl Drop for OutputLock {
     }
 }
 
-/// `.OUT.lock` in OUT's (canonical) parent folder, which is created.
+/// `.OUT.lock` in OUT's parent folder (created if needed), canonical: one
+/// file for every spelling of the output (`out`, `./out`, `.` for the
+/// current folder, a path through a symbolic link).
 fn lock_path(target: &Path) -> Result<PathBuf> {
-    let parent = match target.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
+    let target = match fs::canonicalize(target) {
+        Ok(real) => real,
+        Err(_) => {
+            let parent = match target.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            fs::create_dir_all(&parent).map_err(write_err(&parent))?;
+            let parent = fs::canonicalize(&parent).map_err(write_err(&parent))?;
+            match target.file_name() {
+                Some(name) => parent.join(name),
+                None => parent,
+            }
+        }
     };
-    fs::create_dir_all(&parent).map_err(write_err(&parent))?;
-    let parent = fs::canonicalize(&parent).map_err(write_err(&parent))?;
+    let parent = target.parent().unwrap_or(&target);
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
+        .unwrap_or_else(|| "root".into());
     Ok(parent.join(format!(".{name}.lock")))
 }
 
@@ -216,9 +228,13 @@ mod tests {
         let root = tempfile::tempdir().unwrap();
         let target = root.path().join("sub/out");
         let a = OutputLock::acquire(&target).unwrap();
-        // Another spelling of the same output.
+        // Other spellings of the same output, before and after it exists.
         let b = OutputLock::acquire(&root.path().join("sub/./out")).unwrap();
         assert_eq!(a.path(), b.path());
+        fs::create_dir(&target).unwrap();
+        let c = OutputLock::acquire(&target.join(".")).unwrap();
+        assert_eq!(a.path(), c.path());
+        drop(c);
         drop(a);
         assert!(b.path().exists(), "still held by the second handle");
         let path = b.path().to_path_buf();

@@ -356,7 +356,7 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// Number of simulated taps to time.
+    /// Number of simulated taps to time (at most 20000).
     #[arg(long, default_value_t = 2000)]
     taps: usize,
     /// A model directory: also time the control loop (frame -> command).
@@ -375,11 +375,22 @@ pub struct BenchArgs {
     json: bool,
 }
 
+/// The most taps `bench` times: it keeps every tap's frame (64 KB at 256
+/// x 256 px), so 1e11 aborted on allocation.
+const MAX_BENCH_TAPS: usize = 20_000;
+
 pub fn bench(a: BenchArgs) -> Result<()> {
     if a.real_frames.is_some() && a.model.is_none() {
         return Err(LabError::Config(
             "--real-frames times the control loop on real frames, which needs --model".into(),
         )
+        .into());
+    }
+    if a.taps > MAX_BENCH_TAPS {
+        return Err(LabError::Config(format!(
+            "--taps {}: at most {MAX_BENCH_TAPS} (every tap's frame is kept in memory)",
+            a.taps
+        ))
         .into());
     }
     let stored = a.model.as_deref().map(StoredModel::load).transpose()?;

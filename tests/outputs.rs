@@ -438,3 +438,28 @@ fn issue20_a_fifo_or_device_for_an_input_file_is_refused_at_once() {
         r.stderr
     );
 }
+
+/// Sizes given on the command line that allocate up front: `collect
+/// --samples 1e11` and `bench --taps 1e11` aborted (exit 134). A huge
+/// collection now starts (buffers grow as taps come); bench's taps are
+/// bounded (exit 2).
+#[test]
+fn issue20_huge_counts_on_the_command_line_do_not_abort() {
+    let t = TempDir::new("counts");
+    let r = tactrace(&t.0, &["bench", "--taps", "100000000000"]);
+    expect_code(&r, 2, "bench --taps 1e11");
+    assert!(r.stderr.contains("at most 20000"), "{}", r.stderr);
+    // Started and killed: it must be running, not aborted, after a moment.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tactrace"))
+        .args(["collect", "--samples", "100000000000", "--out", "big"])
+        .current_dir(&t.0)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("binary starts");
+    std::thread::sleep(Duration::from_millis(1500));
+    let status = child.try_wait().unwrap();
+    let _ = child.kill();
+    child.wait().unwrap();
+    assert!(status.is_none(), "collect --samples 1e11 ended: {status:?}");
+}

@@ -1,4 +1,5 @@
 //! Data commands: `collect`, `import`, `sensor render`, `sensor pins`.
+use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
@@ -58,6 +59,11 @@ pub fn collect(a: CollectArgs) -> Result<()> {
     if let Some(path) = &a.hardware {
         return collect_hardware(&a, path);
     }
+    Inputs::new()
+        .file_arg("--shape", &a.shape)
+        .opt("--config", a.config.as_deref())
+        .opt("--sensor", a.sensor.as_deref())
+        .check_apart("--out", &a.out)?;
     let spec = ShapeSpec::parse(&a.shape);
     let shape = load_shape(&spec)?;
     let rig = rig_config(a.config.as_deref())?;
@@ -71,6 +77,7 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         Some(dir) => Some(tactrace_store::SensorFolder::read(dir)?),
         None => None,
     };
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(a.samples as u64, "collect");
     let tick = |i: usize| pb.set_position(i as u64);
     let got = match &sensor {
@@ -91,6 +98,9 @@ pub fn collect(a: CollectArgs) -> Result<()> {
 
 /// `collect --hardware`: the same collection on the real rig.
 fn collect_hardware(a: &CollectArgs, path: &Path) -> Result<()> {
+    Inputs::new()
+        .add("--hardware", path)
+        .check_apart("--out", &a.out)?;
     let text = fsutil::read_text(path)?;
     let hw = HardwareConfig::from_toml(&text, &path.display().to_string())?;
     let cfg = CollectConfig {
@@ -99,7 +109,7 @@ fn collect_hardware(a: &CollectArgs, path: &Path) -> Result<()> {
         save_frames: a.save_frames,
         ..CollectConfig::default()
     };
-    fsutil::check_output_dir(&a.out, a.force)?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(a.samples as u64, "collect");
     let got = collect_hardware_on(&hw, &cfg, "real rig", |i| pb.set_position(i as u64))?;
     pb.finish_and_clear();
@@ -170,7 +180,14 @@ pub fn blob_params(path: Option<&Path>, preset: &str) -> Result<BlobParams> {
 }
 
 pub fn import(a: ImportArgs) -> Result<()> {
+    Inputs::new()
+        .add("--frames", &a.frames)
+        .add("--targets", &a.labels.targets)
+        .add("--reference", &a.labels.reference)
+        .opt("--params", a.params.as_deref())
+        .check_apart("--out", &a.out)?;
     let blob = blob_params(a.params.as_deref(), "real256")?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let cfg = imp::ImportConfig {
         frames: a.frames,
         targets: a.labels.targets,
@@ -201,8 +218,13 @@ pub fn import(a: ImportArgs) -> Result<()> {
 }
 
 /// `sensor render --sensor`: one tap of a calibrated sensor on a straight
-/// edge at the labels `(r, theta, dz)` of its own convention.
-fn render_calibrated(dir: &Path, (r, theta, dz): (f64, f64, f64), out: &Path) -> Result<()> {
+/// edge at the labels `(r, theta, dz)` of its own convention, into `out`
+/// (replaced only when `force`).
+fn render_calibrated(
+    dir: &Path,
+    (r, theta, dz): (f64, f64, f64),
+    (out, force): (&Path, bool),
+) -> Result<()> {
     let sensor = tactrace_store::SensorFolder::read(dir)?;
     let renderer = TapRenderer::calibrated(&sensor)?;
     let frame = renderer.render(&TapPose {
@@ -211,7 +233,7 @@ fn render_calibrated(dir: &Path, (r, theta, dz): (f64, f64, f64), out: &Path) ->
         depth: Some(dz),
         ..TapPose::default()
     })?;
-    fsutil::write_atomic(out, &png_bytes(&frame, "frame")?)?;
+    fsutil::write_output_file(out, &png_bytes(&frame, "frame")?, force, "--out")?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }
@@ -240,6 +262,9 @@ pub enum SensorCommand {
         /// Output PNG file.
         #[arg(long)]
         out: PathBuf,
+        /// Replace an existing --out file.
+        #[arg(long)]
+        force: bool,
         /// Rig configuration TOML (its `sensor` table is the TacTip rendered).
         #[arg(long)]
         config: Option<PathBuf>,
@@ -279,11 +304,19 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
             depth,
             arc,
             out,
+            force,
             config,
             sensor,
         } => {
+            Inputs::new()
+                .file_arg("--shape", &shape)
+                .opt("--config", config.as_deref())
+                .opt("--sensor", sensor.as_deref())
+                .check_outside("--out", &out)?;
+            fsutil::check_output_file(&out, force, "--out")?;
             if let Some(dir) = sensor {
-                return render_calibrated(&dir, (r, theta, depth.unwrap_or(0.0)), &out);
+                let labels = (r, theta, depth.unwrap_or(0.0));
+                return render_calibrated(&dir, labels, (&out, force));
             }
             let contour = load_shape(&ShapeSpec::parse(&shape))?;
             let rig = rig_config(config.as_deref())?;
@@ -294,7 +327,7 @@ pub fn sensor(c: SensorCommand) -> Result<()> {
                 arc_mm: arc,
                 shear: None,
             })?;
-            fsutil::write_atomic(&out, &png_bytes(&frame, "frame")?)?;
+            fsutil::write_output_file(&out, &png_bytes(&frame, "frame")?, force, "--out")?;
             eprintln!("wrote {}", out.display());
             Ok(())
         }

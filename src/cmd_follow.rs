@@ -1,4 +1,5 @@
 //! Experiment commands: `follow` and `reproduce`.
+use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::Result;
 use clap::Args;
@@ -144,6 +145,19 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     if let Some(dir) = &a.replay.replay {
         cfg.replay = Some(a.replay.world(dir)?);
     }
+    let world = cfg.replay.as_ref();
+    Inputs::new()
+        .add("--model", &a.model)
+        .file_arg("--shape", a.shape.as_deref().unwrap_or_default())
+        .opt("--config", a.config.as_deref())
+        .opt("--sensor", cfg.calibrated_sensor.as_deref())
+        .opt("--replay", a.replay.replay.as_deref())
+        .opt("--replay", world.map(|w| w.frames.as_path()))
+        .opt("--targets", world.map(|w| w.targets.as_path()))
+        .opt("--reference", world.map(|w| w.reference.as_path()))
+        .opt("--params", a.replay.params.as_deref())
+        .check_apart("--out", &a.out)?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     if let Some(world) = cfg.replay.take() {
         return follow_replay_world(a, cfg, &world);
     }
@@ -275,7 +289,12 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
         cfg.follow.calibrated_sensor = a.sensor.clone();
     }
     let log = |msg: &str| eprintln!("[reproduce] {msg}");
-    fsutil::check_output_dir(&a.out, a.force)?;
+    Inputs::new()
+        .opt("--real", cfg.real.as_deref())
+        .opt("--sensor", cfg.follow.calibrated_sensor.as_deref())
+        .opt("--config", a.config.as_deref())
+        .check_apart("--out", &a.out)?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let r = run_reproduce(&cfg, (&a.out, a.force), &log)?;
     let runs = [
         ("simulated", &r.networks),
@@ -337,7 +356,7 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// Number of simulated taps to time.
+    /// Number of simulated taps to time (at most 20000).
     #[arg(long, default_value_t = 2000)]
     taps: usize,
     /// A model directory: also time the control loop (frame -> command).
@@ -356,11 +375,22 @@ pub struct BenchArgs {
     json: bool,
 }
 
+/// The most taps `bench` times: it keeps every tap's frame (64 KB at 256
+/// x 256 px), so 1e11 aborted on allocation.
+const MAX_BENCH_TAPS: usize = 20_000;
+
 pub fn bench(a: BenchArgs) -> Result<()> {
     if a.real_frames.is_some() && a.model.is_none() {
         return Err(LabError::Config(
             "--real-frames times the control loop on real frames, which needs --model".into(),
         )
+        .into());
+    }
+    if a.taps > MAX_BENCH_TAPS {
+        return Err(LabError::Config(format!(
+            "--taps {}: at most {MAX_BENCH_TAPS} (every tap's frame is kept in memory)",
+            a.taps
+        ))
         .into());
     }
     let stored = a.model.as_deref().map(StoredModel::load).transpose()?;
@@ -432,6 +462,11 @@ fn overrides(a: &FollowArgs, follow: &mut LoopConfig) {
 
 /// `follow --hardware`: the same loop on the real rig.
 fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
+    Inputs::new()
+        .add("--hardware", path)
+        .add("--model", &a.model)
+        .file_arg("--shape", a.shape.as_deref().unwrap_or_default())
+        .check_apart("--out", &a.out)?;
     let text = fsutil::read_text(path)?;
     let mut cfg = HardwareConfig::from_toml(&text, &path.display().to_string())?;
     overrides(&a, &mut cfg.follow);

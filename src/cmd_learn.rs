@@ -1,8 +1,9 @@
 //! Learning commands: `train`, `validate`, `predict`.
+use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use tactrace_lab::{train as tr, LabError};
 use tactrace_learn::{ModelKind, Preset, SearchSpace};
 use tactrace_report::figures::{self, Predicted};
@@ -113,7 +114,13 @@ pub fn train(a: TrainArgs) -> Result<()> {
         crate::say!("{}", toml::to_string(&cfg)?.trim_end());
         return Ok(());
     }
-    check_output_dir(&a.out, a.force)?;
+    Inputs::new()
+        .add("--train", &a.train)
+        .opt("--val", a.val.as_deref())
+        .opt("--config", a.config.as_deref())
+        .opt("--search-space", a.search_space.as_deref())
+        .check_apart("--out", &a.out)?;
+    let _out = check_output_dir(&a.out, a.force)?;
     let data = read_dataset(&a.train)?;
     let (data, val) = match (a.val.as_deref(), a.val_fraction) {
         (Some(dir), _) => {
@@ -230,18 +237,53 @@ pub struct ValidateArgs {
     /// Print exactly one JSON object on stdout.
     #[arg(long)]
     json: bool,
-    /// Write predicted-vs-true plots (report Fig. 4.4) here.
+    /// Write predicted-vs-true plots (report Fig. 4.4) into this folder
+    /// (`predicted_vs_true.png` and `.svg`).
     #[arg(long)]
     plots: Option<PathBuf>,
+    /// Replace existing plots in --plots.
+    #[arg(long, requires = "plots")]
+    force: bool,
+}
+
+/// The stem of the plots `validate --plots` writes (`.png`, `.svg`).
+const PLOTS_STEM: &str = "predicted_vs_true";
+
+/// Lock the plots folder `dir` and refuse its plots when they exist,
+/// unless `force` (the folder's other files are left alone).
+fn start_plots(dir: &Path, force: bool) -> Result<tactrace_store::OutputLock> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(tactrace_store::StoreError::Format {
+            path: dir.to_path_buf(),
+            reason: "exists and is not a folder (--plots names a folder)".into(),
+        }
+        .into());
+    }
+    let lock = tactrace_store::OutputLock::acquire(dir)?;
+    for ext in ["png", "svg"] {
+        let file = dir.join(format!("{PLOTS_STEM}.{ext}"));
+        fsutil::check_output_file(&file, force, "--plots")?;
+    }
+    Ok(lock)
 }
 
 pub fn validate(a: ValidateArgs) -> Result<()> {
+    let plots = match &a.plots {
+        Some(dir) => {
+            Inputs::new()
+                .add("--model", &a.model)
+                .add("--data", &a.data)
+                .check_outside("--plots", dir)?;
+            Some((dir, start_plots(dir, a.force)?))
+        }
+        None => None,
+    };
     let model = StoredModel::load(&a.model)?;
     let data = read_dataset(&a.data)?;
     let v = tr::validate(&model, &data, &a.data)?;
-    if let Some(dir) = &a.plots {
+    if let Some((dir, _lock)) = &plots {
         std::fs::create_dir_all(dir)
-            .map_err(tactrace_store::write_err(dir))
+            .map_err(tactrace_store::write_err(dir.as_path()))
             .map_err(LabError::from)?;
         let predicted = Predicted {
             truth: &v.truth,
@@ -253,7 +295,7 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
             .map_err(LabError::from)?
             .kind();
         let title = figures::model_on_data_title(kind, &a.model, &a.data);
-        figures::predicted_vs_true(&dir.join("predicted_vs_true"), &title, &predicted)
+        figures::predicted_vs_true(&dir.join(PLOTS_STEM), &title, &predicted)
             .map_err(LabError::from)?;
     }
     if a.json {

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use tactrace_lab::hardware::{
     grab_camera_frame, list_cameras, rig_check, HardwareConfig, RigCheck,
 };
-use tactrace_store::{fsutil, StoreError, StoredModel};
+use tactrace_store::{fsutil, StoredModel};
 
 #[derive(Subcommand)]
 pub enum RigCommand {
@@ -112,9 +112,10 @@ fn list() -> Result<()> {
 }
 
 fn grab(a: GrabArgs) -> Result<()> {
-    if a.out.exists() && !a.force {
-        return Err(StoreError::OutputExists { path: a.out }.into());
-    }
+    crate::inputs::Inputs::new()
+        .opt("--rig", a.rig.as_deref())
+        .check_outside("--out", &a.out)?;
+    fsutil::check_output_file(&a.out, a.force, "--out")?;
     let rig = match &a.rig {
         Some(path) => {
             let text = fsutil::read_text(path)?;
@@ -128,7 +129,7 @@ fn grab(a: GrabArgs) -> Result<()> {
     let frame = grab_camera_frame(&a.device, rig.as_ref())?;
     let mut png = Vec::new();
     frame.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)?;
-    fsutil::write_atomic(&a.out, &png)?;
+    fsutil::write_output_file(&a.out, &png, a.force, "--out")?;
     say!(
         "{} x {} frame from {} written to {}",
         frame.width(),

@@ -1,5 +1,6 @@
 //! `tactrace tune`: the controller tuned by CMA-ES over simulated runs
 //! (issue 12), judged on held-out contours.
+use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::Result;
 use clap::Args;
@@ -58,6 +59,13 @@ pub fn tune(a: TuneArgs) -> Result<()> {
     }
     cfg.trials = a.trials.unwrap_or(cfg.trials);
     cfg.seed = a.seed.unwrap_or(cfg.seed);
+    let inputs = Inputs::new()
+        .add("--model", &a.model)
+        .opt("--config", a.config.as_deref())
+        .opt("--base", a.base.as_deref());
+    let shapes = cfg.training.iter().chain(&cfg.held_out);
+    let inputs = shapes.fold(inputs, |i, s| i.file_arg("--shapes", s));
+    inputs.check_apart("--out", &a.out)?;
     let base: SimFollowConfig = load_config(a.base.as_deref(), "follow configuration")?;
     let model = StoredModel::load(&a.model)?;
     let pb = bar(0, "tune");

@@ -3,6 +3,7 @@
 //! `calibrate`: the simulator fitted to a user's own taps
 //! (docs/calibration.md).
 use crate::cmd_data::{blob_params, rig_config, LabelArgs};
+use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::Result;
 use clap::Args;
@@ -100,8 +101,15 @@ fn twin_config(
 }
 
 pub fn twin(a: TwinArgs) -> Result<()> {
+    Inputs::new()
+        .add("--targets", &a.labels.targets)
+        .add("--reference", &a.labels.reference)
+        .opt("--sensor", a.sensor.as_deref())
+        .opt("--config", a.config.as_deref())
+        .opt("--params", a.params.as_deref())
+        .check_apart("--out", &a.out)?;
     let cfg = twin_config(a.labels, &a.columns, a.limit, a.seed)?;
-    fsutil::check_output_dir(&a.out, a.force)?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "twin");
     let tick = || pb.inc(1);
     let got = match &a.sensor {
@@ -160,6 +168,18 @@ pub struct RealTapArgs {
 }
 
 impl RealTapArgs {
+    /// Refuse an output folder `out` in or around these inputs.
+    fn check_apart(&self, out: &std::path::Path) -> Result<()> {
+        Inputs::new()
+            .add("--frames", &self.frames)
+            .add("--targets", &self.labels.targets)
+            .add("--reference", &self.labels.reference)
+            .opt("--config", self.config.as_deref())
+            .opt("--params", self.params.as_deref())
+            .check_apart("--out", out)?;
+        Ok(())
+    }
+
     /// The frames folder, the twin configuration (rendering seed `seed`),
     /// the starting simulator and the blob detector.
     fn resolve(
@@ -206,6 +226,7 @@ pub struct CalibrateArgs {
 }
 
 pub fn calibrate(a: CalibrateArgs) -> Result<()> {
+    a.taps.check_apart(&a.out)?;
     let (frames, twin, sensor, blob) = a.taps.resolve(a.seed)?;
     let cfg = CalibrateConfig {
         frames,
@@ -216,7 +237,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
         score_rows: None,
         fit_physics: a.fit_physics,
     };
-    fsutil::check_output_dir(&a.out, a.force)?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let t0 = std::time::Instant::now();
     let pb = bar(0, "calibrate");
     let tick = || pb.inc(1);
@@ -298,6 +319,7 @@ pub fn sim_fit(a: SimFitArgs) -> Result<()> {
     if a.renders == 0 {
         return Err(LabError::Config("--renders must be at least 1".into()).into());
     }
+    a.taps.check_apart(&a.out)?;
     let (frames, twin, sensor, blob) = a.taps.resolve(1)?;
     let cfg = TransferFitConfig {
         renders: a.renders,
@@ -310,7 +332,7 @@ pub fn sim_fit(a: SimFitArgs) -> Result<()> {
         seed: a.seed,
         val_fraction: 0.15,
     };
-    fsutil::check_output_dir(&a.out, a.force)?;
+    let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let t0 = std::time::Instant::now();
     let pb = bar(0, "sim-fit");
     let mut report = |c: &tactrace_lab::transfer_fit::Candidate,

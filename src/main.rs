@@ -14,6 +14,7 @@ mod cmd_tune;
 mod cmd_twin;
 #[cfg(test)]
 mod doc_commands;
+mod inputs;
 mod progress;
 
 /// Print a line on standard output; a closed pipe becomes an error that

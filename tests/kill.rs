@@ -128,6 +128,9 @@ fn assert_nothing_looks_complete(kind: Kind, root: &Path, out: &str) -> (bool, b
                 assert_whole_rows(&text);
                 rows |= text.lines().count() > 1;
             }
+        } else if name == format!(".{out}.lock") || name == format!(".{partial}.lock") {
+            // The killed run's output lock: unlocked now that it is dead,
+            // taken over (and removed) by the next run.
         } else if !INPUTS.contains(&name.as_str()) {
             assert!(
                 name.starts_with(&staging),
@@ -166,6 +169,7 @@ fn kill_and_rerun(kind: Kind, setup: &Path, long: &[&str], short: &[&str]) -> (u
             ok(root.path(), short);
             assert_complete(kind, &root.path().join("out"));
             assert!(!root.path().join("out.partial").exists());
+            assert!(!root.path().join(".out.lock").exists());
             rerun = true;
         }
     }

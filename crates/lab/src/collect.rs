@@ -16,6 +16,9 @@ use tactrace_sensor::{EdgeLabels, Frame, LabelConvention, TactileSensor};
 use tactrace_servo::{pose_at_edge, tap, RigConfig, SimRig, TapConfig};
 use tactrace_store::frame_file::png_bytes;
 use tactrace_store::{DatasetMeta, SensorFolder, TapData};
+
+/// Rows whose buffers are reserved up front; more grow as they come.
+const PRESIZED_ROWS: usize = 1 << 16;
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// What to collect.
@@ -205,8 +208,11 @@ pub fn collect_on(
     let extractor = PinExtractor::from_reference_frame(reference, blob.clone())?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let dim = 2 * extractor.tracker.reference().len();
-    let mut inputs = Vec::with_capacity(cfg.samples * dim);
-    let mut targets = Vec::with_capacity(cfg.samples * 2);
+    // Reserved for at most PRESIZED_ROWS: a huge --samples grows the
+    // buffers as taps come instead of aborting on one giant allocation.
+    let rows = cfg.samples.min(PRESIZED_ROWS);
+    let mut inputs = Vec::with_capacity(rows * dim);
+    let mut targets = Vec::with_capacity(rows * 2);
     let mut frames = Vec::new();
     let mut with_missing = 0;
     for i in 0..cfg.samples {

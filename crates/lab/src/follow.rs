@@ -13,6 +13,7 @@
 //! `OUT` replaces.
 use crate::error::{LabError, Result};
 use crate::replay_world::{ReplayStats, ReplayWorld};
+use crate::trajectory_csv::TrajectoryCsv;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_arm::Arm;
@@ -23,9 +24,9 @@ use tactrace_report::replay_html::{replay_html, PinFields, ReplayPage, StepFrame
 use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_servo::{
     evaluate, l2_curve, servo_loop, start_pose, FnSink, FollowMetrics, LoopConfig, LoopSummary,
-    Perception, RigConfig, SimRig, StartConfig, StepRecord, StepSink, TapConfig,
+    Perception, RigConfig, SimRig, StartConfig, StepRecord, TapConfig,
 };
-use tactrace_store::{write_atomic, write_err, SensorFolder, StagedDir, StoredModel};
+use tactrace_store::{write_atomic, SensorFolder, StagedDir, StoredModel};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// A follow run in the simulated world: one TOML file with these tables,
@@ -107,30 +108,6 @@ pub struct FollowOutcome {
     pub dir: PathBuf,
 }
 
-/// Writes each step to `trajectory.csv` as it happens (flushed).
-struct TrajectoryCsv(csv::Writer<std::fs::File>);
-
-type SinkResult = std::result::Result<(), Box<dyn std::error::Error + Send + Sync>>;
-
-impl StepSink for TrajectoryCsv {
-    fn on_step(&mut self, r: &StepRecord) -> SinkResult {
-        let p = &r.percept;
-        let f = |v: f64| format!("{v:.4}");
-        self.0.write_record([
-            r.step.to_string(),
-            f(r.pose.x),
-            f(r.pose.y),
-            f(r.pose.rz),
-            f(p.r_mm),
-            f(p.theta_deg),
-            f(p.mean_displacement_px),
-            p.contact.to_string(),
-        ])?;
-        self.0.flush()?;
-        Ok(())
-    }
-}
-
 /// The perception of a rig whose undeformed frame is `reference`: refused
 /// (before anything moves) when the frame lists its pins otherwise than the
 /// model's training data, or the settings cannot work.
@@ -210,26 +187,7 @@ pub fn follow_on_rig_recorded(
 ) -> Result<Recorded> {
     let mut controller = PbtsController::try_new(settings.controller.clone())
         .map_err(|e| LabError::Config(e.to_string()))?;
-    let path = dir.join("trajectory.csv");
-    let file = std::fs::File::create(&path).map_err(write_err(&path))?;
-    let mut writer = csv::Writer::from_writer(file);
-    writer
-        .write_record([
-            "step",
-            "x_mm",
-            "y_mm",
-            "angle_deg",
-            "r_pred_mm",
-            "theta_pred_deg",
-            "mean_displacement_px",
-            "contact",
-        ])
-        .and_then(|_| writer.flush().map_err(Into::into))
-        .map_err(|e| tactrace_store::StoreError::Write {
-            path: path.clone(),
-            source: std::io::Error::other(e),
-        })?;
-    let mut csv = TrajectoryCsv(writer);
+    let mut csv = TrajectoryCsv::create(&dir.join("trajectory.csv"))?;
     let mut records: Vec<StepRecord> = Vec::new();
     let mut bar = FnSink(|r: &StepRecord| progress(r));
     let mut recorder = FieldRecorder {

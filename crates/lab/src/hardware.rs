@@ -195,7 +195,7 @@ pub fn follow_hardware(
     progress: &mut dyn FnMut(&StepRecord),
 ) -> Result<FollowOutcome> {
     cfg.validate()?;
-    tactrace_store::check_output_dir(out, force)?;
+    let _out = tactrace_store::check_output_dir(out, force)?;
     let (mut arm, mut sensor, reference) = connect_at(cfg, cfg.start_pose())?;
     let settings = cfg.servo_settings();
     let perception = perception_for(&reference, model, &settings)?;

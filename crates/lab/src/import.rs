@@ -91,7 +91,8 @@ pub(crate) fn read_rows(
         path: path.clone(),
         reason,
     };
-    let file = std::fs::File::open(path).map_err(tactrace_store::read_err(path))?;
+    // A regular file only: a FIFO would block the import for ever.
+    let (file, _) = tactrace_store::open_regular(path)?;
     let mut rdr = csv::Reader::from_reader(std::io::BufReader::new(file));
     let headers = rdr.headers().map_err(|e| fmt(e.to_string()))?.clone();
     let needed = [cols.image, cols.r, cols.theta]

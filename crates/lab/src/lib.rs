@@ -28,6 +28,7 @@ pub mod render;
 pub mod replay_world;
 pub mod reproduce;
 pub mod train;
+pub mod trajectory_csv;
 pub mod transfer_fit;
 pub mod tune;
 pub mod twin;

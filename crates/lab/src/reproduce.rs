@@ -438,7 +438,8 @@ fn write_rows_of(targets: &Path, image_column: &str, images: &[String], out: &Pa
         path: targets.to_path_buf(),
         reason: e.to_string(),
     };
-    let mut rdr = csv::Reader::from_path(targets).map_err(fmt)?;
+    let (file, _) = tactrace_store::open_regular(targets)?;
+    let mut rdr = csv::Reader::from_reader(std::io::BufReader::new(file));
     let headers = rdr.headers().map_err(fmt)?.clone();
     let col = headers
         .iter()

@@ -11,6 +11,10 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 
+/// The largest population accepted (the tutorial's default for 13
+/// dimensions is 11).
+pub const MAX_POPULATION: usize = 100_000;
+
 /// Start point, spread and population.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CmaesConfig {
@@ -112,6 +116,12 @@ impl Cmaes {
         if lambda < 2 {
             return Err(OptimError::Config(format!(
                 "population {lambda} is too small (at least 2)"
+            )));
+        }
+        if lambda > MAX_POPULATION {
+            // The weights alone take lambda / 2 numbers: 1e12 aborted.
+            return Err(OptimError::Config(format!(
+                "population {lambda} is too large (at most {MAX_POPULATION})"
             )));
         }
         Ok(Self {

@@ -91,3 +91,19 @@ fn bad_set_ups_and_generations_are_refused() {
         })
     );
 }
+
+/// Issue 20: a population of 1e12 (`tune`'s `population`, `sim-fit
+/// --population`) aborted on allocating its weights; it is refused with
+/// the bound.
+#[test]
+fn issue20_a_huge_population_is_refused_with_the_bound() {
+    let cfg = |population: usize| CmaesConfig {
+        start: vec![0.0; 3],
+        sigma: 1.0,
+        population: Some(population),
+        seed: 1,
+    };
+    let err = Cmaes::new(&cfg(1_000_000_000_000)).unwrap_err();
+    assert!(err.to_string().contains("at most 100000"), "{err}");
+    assert!(Cmaes::new(&cfg(100_000)).is_ok());
+}

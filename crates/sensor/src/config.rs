@@ -373,6 +373,16 @@ impl TacTipConfig {
             &self.calibration,
         );
         positive("geometry.dome_radius_mm", g.dome_radius_mm)?;
+        if g.dome_radius_mm > MAX_DOME_RADIUS_MM {
+            return Err(SensorError::TooLarge {
+                field: "geometry.dome_radius_mm",
+                value: g.dome_radius_mm,
+                reason: format!(
+                    "must be at most {MAX_DOME_RADIUS_MM} mm (a TacTip's dome is about 20 mm; \
+                     the contact patch grows with it)"
+                ),
+            });
+        }
         positive("geometry.pin_spacing_mm", g.pin_spacing_mm)?;
         positive("geometry.pin_radius_mm", g.pin_radius_mm)?;
         if g.rings == 0 || g.rings > 20 {
@@ -471,6 +481,76 @@ impl TacTipConfig {
             "calibration.shear_angle_offset_deg",
             k.shear_angle_offset_deg,
         )?;
+        self.check_sizes()
+    }
+
+    /// The tables the contact model allocates, bounded: the patch's kernel
+    /// weights (points x pins, eqs. S5-S6) and the distance grid of a tap
+    /// (docs/sensor-model.md). Called by [`Self::validate`] once the
+    /// values are in range.
+    fn check_sizes(&self) -> Result<(), SensorError> {
+        let (g, m) = (&self.geometry, &self.mechanics);
+        // The patch's radius along the skin: the dome within
+        // `max_depth_mm` of its lowest point; horizontal reaches are less.
+        let reach = g.dome_radius_mm * (1.0 - m.max_depth_mm / g.dome_radius_mm).acos();
+        let rings = g.rings as f64;
+        let pins = 3.0 * rings * rings + 3.0 * rings + 1.0;
+        // ContactModel::new: a hexagonal lattice of ceil(reach / h) + 1 rings.
+        let patch_rings = (reach / m.patch_grid_mm).ceil() + 1.0;
+        let lattice = 3.0 * patch_rings * patch_rings + 3.0 * patch_rings + 1.0;
+        if lattice * pins > MAX_KERNEL_WEIGHTS {
+            let most = largest_rings(MAX_KERNEL_WEIGHTS / pins);
+            return Err(SensorError::TooLarge {
+                field: "mechanics.patch_grid_mm",
+                value: m.patch_grid_mm,
+                reason: format!(
+                    "the contact patch (out to {reach:.1} mm from the pole along the skin) \
+                     would hold {lattice:.3e} points x {pins} pins = {:.3e} kernel weights, more \
+                     than the {MAX_KERNEL_WEIGHTS:.0e} allowed: use a grid of at least \
+                     {:.3} mm",
+                    lattice * pins,
+                    round_up(reach / (most - 1.0)),
+                ),
+            });
+        }
+        // DistanceGrid::new: (2 (ceil(reach / s) + 1) + 1)^2 nodes a tap.
+        let side = 2.0 * ((reach / m.distance_grid_mm).ceil() + 1.0) + 1.0;
+        if side * side > MAX_DISTANCE_NODES {
+            let half = ((MAX_DISTANCE_NODES.sqrt() - 1.0) / 2.0).floor() - 1.0;
+            return Err(SensorError::TooLarge {
+                field: "mechanics.distance_grid_mm",
+                value: m.distance_grid_mm,
+                reason: format!(
+                    "the distance grid over the contact (out to {reach:.1} mm) would hold \
+                     {:.3e} nodes a tap, more than the {MAX_DISTANCE_NODES:.0e} allowed: use \
+                     a grid of at least {:.3} mm",
+                    side * side,
+                    round_up(reach / half),
+                ),
+            });
+        }
         Ok(())
     }
+}
+
+/// The largest dome radius accepted, mm.
+pub const MAX_DOME_RADIUS_MM: f64 = 500.0;
+
+/// The most kernel weights (contact patch points x pins) the contact
+/// model may tabulate: 2e7, 240 MB of tables (the defaults use 1.6e5).
+pub const MAX_KERNEL_WEIGHTS: f64 = 2e7;
+
+/// The most nodes of a tap's distance grid: 4e6, 32 MB (the defaults use
+/// 289).
+pub const MAX_DISTANCE_NODES: f64 = 4e6;
+
+/// The most hexagonal rings whose lattice (3 n^2 + 3 n + 1 points) holds at
+/// most `points` points.
+fn largest_rings(points: f64) -> f64 {
+    ((-3.0 + (9.0 - 12.0 * (1.0 - points)).sqrt()) / 6.0).floor()
+}
+
+/// `v` rounded up at the third decimal (a grid spacing that fits).
+fn round_up(v: f64) -> f64 {
+    (v * 1000.0).ceil() / 1000.0
 }

@@ -15,6 +15,14 @@ pub enum SensorError {
         value: f64,
         reason: &'static str,
     },
+    /// Configuration values that would need more memory (or time) than
+    /// the model allows: `reason` says how much and the bound.
+    #[error("invalid sensor config `{field}` = {value}: {reason}")]
+    TooLarge {
+        field: &'static str,
+        value: f64,
+        reason: String,
+    },
     /// Measured rest pins that do not fit the configured layout.
     #[error("rest pin layout mismatch: expected {expected} pins, got {got}: {reason}")]
     RestPins {

@@ -37,20 +37,44 @@ impl TactileSensor for ReplaySensor {
     }
 }
 
+/// The largest frame file read, bytes (a 4096 x 4096 16-bit RGBA PNG
+/// stored uncompressed is 128 MiB).
+pub const MAX_FRAME_BYTES: u64 = 256 << 20;
+
 /// Read one frame from an image file, converting colour to 8-bit grey.
 ///
 /// Errors name the file and say whether it is missing, unreadable, not an
-/// image or corrupt.
+/// image or corrupt. Only a regular file of at most [`MAX_FRAME_BYTES`]
+/// is read: a FIFO named like a frame would block the reader for ever.
 pub fn read_frame(path: &Path) -> Result<Frame, SensorError> {
     if !path.exists() {
         return Err(SensorError::FrameMissing {
             path: path.to_path_buf(),
         });
     }
-    let bytes = std::fs::read(path).map_err(|e| SensorError::FrameUnreadable {
+    let unreadable = |reason: String| SensorError::FrameUnreadable {
         path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+        reason,
+    };
+    let meta = std::fs::metadata(path).map_err(|e| unreadable(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(unreadable(
+            "not a regular file (a folder, FIFO or device)".into(),
+        ));
+    }
+    if meta.len() > MAX_FRAME_BYTES {
+        return Err(unreadable(format!(
+            "{} bytes, more than the {MAX_FRAME_BYTES} bytes a frame file may have",
+            meta.len()
+        )));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| {
+            use std::io::Read;
+            f.take(MAX_FRAME_BYTES).read_to_end(&mut bytes)
+        })
+        .map_err(|e| unreadable(e.to_string()))?;
     let format = image::guess_format(&bytes).map_err(|_| SensorError::NotAnImage {
         path: path.to_path_buf(),
         reason: "contents match no supported image format".into(),

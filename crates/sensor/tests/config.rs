@@ -85,3 +85,56 @@ fn wrong_rest_layouts_are_rejected() {
     nan[0] = [f64::NAN, 0.0];
     assert!(TacTipModel::with_rest_pins(cfg, nan).is_err());
 }
+
+/// Issue 20: `patch_grid_mm = 0.01` (5 GB of tables), `distance_grid_mm =
+/// 1e-6` and `dome_radius_mm = 1e9` aborted the process on allocation;
+/// they are refused with the bound, and the spacing the message suggests
+/// is accepted.
+#[test]
+fn issue20_configs_implying_huge_tables_are_refused_with_the_bound() {
+    let suggested = |err: &SensorError| -> f64 {
+        let msg = err.to_string();
+        let tail = msg.rsplit("at least ").next().unwrap();
+        tail.trim_end_matches(" mm").parse().unwrap()
+    };
+    let mut cfg = TacTipConfig::default();
+    cfg.mechanics.patch_grid_mm = 0.01;
+    let err = cfg.validate().expect_err("a 0.01 mm patch grid");
+    let msg = err.to_string();
+    assert!(
+        matches!(
+            err,
+            SensorError::TooLarge {
+                field: "mechanics.patch_grid_mm",
+                ..
+            }
+        ) && msg.contains("kernel weights, more than the 2e7 allowed"),
+        "{msg}"
+    );
+    cfg.mechanics.patch_grid_mm = suggested(&err);
+    cfg.validate().expect("the suggested patch grid");
+    cfg.mechanics.patch_grid_mm = suggested(&err) - 0.002;
+    assert!(cfg.validate().is_err(), "just finer than the suggestion");
+
+    let mut cfg = TacTipConfig::default();
+    cfg.mechanics.distance_grid_mm = 1e-6;
+    let err = cfg.validate().expect_err("a 1e-6 mm distance grid");
+    assert!(
+        matches!(
+            err,
+            SensorError::TooLarge {
+                field: "mechanics.distance_grid_mm",
+                ..
+            }
+        ) && err.to_string().contains("more than the 4e6 allowed"),
+        "{err}"
+    );
+    cfg.mechanics.distance_grid_mm = suggested(&err);
+    cfg.validate().expect("the suggested distance grid");
+
+    let mut cfg = TacTipConfig::default();
+    cfg.geometry.dome_radius_mm = 1e9;
+    let err = TacTipModel::new(cfg).expect_err("a 1e9 mm dome");
+    assert!(err.to_string().contains("must be at most 500 mm"), "{err}");
+    TacTipConfig::default().validate().expect("the defaults");
+}

@@ -227,8 +227,5 @@ pub fn read_dataset(dir: &Path) -> Result<TapData> {
 }
 
 fn read_npy(path: &Path) -> Result<Array2<f32>> {
-    ndarray_npy::read_npy(path).map_err(|e| StoreError::Format {
-        path: path.into(),
-        reason: format!("not a 2-D float32 .npy file: {e}"),
-    })
+    crate::npy_file::read_f32_matrix(path)
 }

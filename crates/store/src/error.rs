@@ -28,6 +28,43 @@ pub enum StoreError {
     /// The output exists and would be overwritten.
     #[error("{path} already exists and is not empty; choose another --out or pass --force")]
     OutputExists { path: PathBuf },
+    /// A single output file (or a file of a plots folder) exists and would
+    /// be overwritten; `flag` is the option naming it (`--out`, `--plots`).
+    #[error("{path} already exists; pass --force to replace it, or choose another {flag}")]
+    OutputFileExists { path: PathBuf, flag: &'static str },
+    /// Another process is writing the same output (it holds the output's
+    /// lock, [`crate::lock`]).
+    #[error(
+        "{path} is being written by another tactrace run ({}); wait for it to end or \
+         choose another output",
+        pid_text(*.pid)
+    )]
+    OutputBusy { path: PathBuf, pid: Option<u32> },
+    /// An output (`out_flag`) equal to or inside an input (`in_flag`),
+    /// which the run would write into or, with `--force`, delete.
+    #[error(
+        "{out_flag} {out} is {} the input {in_flag} {input}: choose an output outside \
+         the inputs",
+        if *.equal { "the same as" } else { "inside" }
+    )]
+    OutputInInput {
+        out_flag: &'static str,
+        out: PathBuf,
+        in_flag: &'static str,
+        input: PathBuf,
+        equal: bool,
+    },
+    /// An input inside an output folder that `--force` would replace.
+    #[error(
+        "the input {in_flag} {input} is inside {out_flag} {out}, which --force would \
+         replace: choose another output"
+    )]
+    InputInOutput {
+        out_flag: &'static str,
+        out: PathBuf,
+        in_flag: &'static str,
+        input: PathBuf,
+    },
     /// Data whose pins are ordered against other reference pins than the
     /// model's training data.
     #[error("{path}: not ordered like the model's training data")]
@@ -44,6 +81,11 @@ impl StoreError {
     pub fn is_bad_input(&self) -> bool {
         !matches!(self, StoreError::Write { .. })
     }
+}
+
+/// "pid N", or that the holder has not written it yet.
+fn pid_text(pid: Option<u32>) -> String {
+    pid.map_or_else(|| "its pid not yet recorded".into(), |p| format!("pid {p}"))
 }
 
 /// Result with [`StoreError`].

@@ -1,18 +1,30 @@
 //! Atomic outputs: an interrupted run never leaves a half-written result that
-//! looks complete.
+//! looks complete, and one output has one writer.
 //!
 //! Directories are built in a staging folder beside the target and renamed
 //! into place at the end; single files are written to a uniquely named
-//! temporary sibling, synced to disk and renamed.
-use crate::error::{read_err, write_err, Result, StoreError};
+//! temporary sibling, synced to disk and renamed. A folder being written is
+//! locked for the run's whole life ([`crate::lock`]), and its commit never
+//! replaces an existing output without `force`.
+use crate::error::{write_err, Result, StoreError};
+use crate::lock::OutputLock;
 use std::fs;
-use std::io::Write;
+use std::io::{ErrorKind, Write};
 use std::path::{Path, PathBuf};
 
-/// Refuse a non-empty existing `target` unless `force`: the check
-/// [`StagedDir::new`] makes, available before a long run (a collection on
-/// the real rig) starts rather than after it.
-pub fn check_output_dir(target: &Path, force: bool) -> Result<()> {
+/// Lock the output folder `target` ([`OutputLock`]) and refuse it when it
+/// exists and is not empty, unless `force`: the check [`StagedDir::new`]
+/// makes, available before a long run (a collection on the real rig)
+/// starts rather than after it. Keep the lock for the run's whole life.
+pub fn check_output_dir(target: &Path, force: bool) -> Result<OutputLock> {
+    let lock = OutputLock::acquire(target)?;
+    check_existing(target, force)?;
+    Ok(lock)
+}
+
+/// Refuse a non-empty existing `target` unless `force`, and anything but a
+/// folder.
+fn check_existing(target: &Path, force: bool) -> Result<()> {
     if target.exists() && !target.is_dir() {
         return Err(StoreError::Format {
             path: target.to_path_buf(),
@@ -28,22 +40,28 @@ pub fn check_output_dir(target: &Path, force: bool) -> Result<()> {
 }
 
 /// A directory being written; becomes `target` only on [`StagedDir::commit`].
+/// It holds the target's lock ([`OutputLock`]) until dropped.
 pub struct StagedDir {
     staging: PathBuf,
     target: PathBuf,
     /// Keep the staging folder when dropped uncommitted (a run's partial
     /// results), rather than removing it.
     keep_partial: bool,
+    /// Replace an existing target at commit time.
+    force: bool,
     committed: bool,
+    /// The target's lock (and, for `<target>.partial`, that folder's):
+    /// dropped after the staging folder is cleaned up.
+    _locks: Vec<OutputLock>,
 }
 
 impl StagedDir {
     /// Start writing `target` in a hidden, uniquely named staging folder
-    /// that is removed if the write is abandoned. Refuses a non-empty
-    /// existing target unless `force`, in which case the old one is
-    /// replaced only at commit time.
+    /// that is removed if the write is abandoned. Refuses a target another
+    /// run is writing, and a non-empty existing target unless `force`, in
+    /// which case the old one is replaced only at commit time.
     pub fn new(target: &Path, force: bool) -> Result<Self> {
-        check_output_dir(target, force)?;
+        let lock = check_output_dir(target, force)?;
         let parent = parent_of(target);
         fs::create_dir_all(&parent).map_err(write_err(&parent))?;
         let staging = tempfile::Builder::new()
@@ -55,7 +73,9 @@ impl StagedDir {
             staging,
             target: target.to_path_buf(),
             keep_partial: false,
+            force,
             committed: false,
+            _locks: vec![lock],
         })
     }
 
@@ -65,11 +85,13 @@ impl StagedDir {
     /// trajectory). A leftover `<target>.partial` (a run that stopped
     /// early or was killed) is clearly partial and is replaced, with or
     /// without `force`: re-running the same command after a crash must
-    /// work. Two runs into the same `target` at once are not supported.
+    /// work. A `<target>.partial` that a live run is writing is never
+    /// touched: that run holds `target`'s lock, and this one is refused.
     pub fn new_keeping_partial(target: &Path, force: bool) -> Result<Self> {
-        check_output_dir(target, force)?;
+        let lock = check_output_dir(target, force)?;
         let staging = partial_path(target);
-        check_output_dir(&staging, true)?;
+        // A run writing `<target>.partial` as its own output.
+        let partial_lock = check_output_dir(&staging, true)?;
         if staging.exists() {
             fs::remove_dir_all(&staging).map_err(write_err(&staging))?;
         }
@@ -78,7 +100,9 @@ impl StagedDir {
             staging,
             target: target.to_path_buf(),
             keep_partial: true,
+            force,
             committed: false,
+            _locks: vec![lock, partial_lock],
         })
     }
 
@@ -92,9 +116,12 @@ impl StagedDir {
         &self.target
     }
 
-    /// Move the finished directory into place.
+    /// Move the finished directory into place. Without `force` an output
+    /// that appeared meanwhile (written by something that does not take
+    /// the lock) is never replaced: the rename itself refuses a non-empty
+    /// folder, atomically.
     pub fn commit(mut self) -> Result<PathBuf> {
-        if self.target.exists() {
+        if self.force && self.target.exists() {
             let old = parent_of(&self.target).join(format!(
                 ".{}.old-{}",
                 file_name(&self.target),
@@ -104,7 +131,20 @@ impl StagedDir {
             fs::rename(&self.staging, &self.target).map_err(write_err(&self.target))?;
             fs::remove_dir_all(&old).map_err(write_err(&old))?;
         } else {
-            fs::rename(&self.staging, &self.target).map_err(write_err(&self.target))?;
+            // rename(2) replaces only an empty folder, as
+            // `check_output_dir` allows; a non-empty one or a file fails.
+            fs::rename(&self.staging, &self.target).map_err(|e| match e.kind() {
+                ErrorKind::DirectoryNotEmpty | ErrorKind::AlreadyExists => {
+                    StoreError::OutputExists {
+                        path: self.target.clone(),
+                    }
+                }
+                ErrorKind::NotADirectory => StoreError::Format {
+                    path: self.target.clone(),
+                    reason: "exists and is not a folder".into(),
+                },
+                _ => write_err(&self.target)(e),
+            })?;
         }
         self.committed = true;
         Ok(self.target.clone())
@@ -127,6 +167,42 @@ pub fn partial_path(target: &Path) -> PathBuf {
 /// Write `bytes` to `path` atomically: a uniquely named temporary sibling,
 /// synced to disk, then renamed over `path`.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_file(path, bytes, true)
+}
+
+/// Refuse an existing single output file `path` (named by the option
+/// `flag`; anything there, a folder too) unless `force`: before the work
+/// that makes it. With `force`, what cannot be replaced fails the write.
+pub fn check_output_file(path: &Path, force: bool, flag: &'static str) -> Result<()> {
+    if !force && fs::symlink_metadata(path).is_ok() {
+        return Err(StoreError::OutputFileExists {
+            path: path.to_path_buf(),
+            flag,
+        });
+    }
+    Ok(())
+}
+
+/// Write a single output file (named by the option `flag`) atomically, as
+/// [`write_atomic`]; without `force` an existing file is never replaced,
+/// even one that appeared since [`check_output_file`] (the final link is
+/// made without replacing).
+pub fn write_output_file(path: &Path, bytes: &[u8], force: bool, flag: &'static str) -> Result<()> {
+    check_output_file(path, force, flag)?;
+    write_file(path, bytes, force).map_err(|e| match e {
+        StoreError::Write { source, .. } if source.kind() == ErrorKind::AlreadyExists => {
+            StoreError::OutputFileExists {
+                path: path.to_path_buf(),
+                flag,
+            }
+        }
+        other => other,
+    })
+}
+
+/// Write `path` through a synced temporary sibling, replacing an existing
+/// file only when `replace`.
+fn write_file(path: &Path, bytes: &[u8], replace: bool) -> Result<()> {
     let parent = parent_of(path);
     fs::create_dir_all(&parent).map_err(write_err(&parent))?;
     let prefix = format!(".{}.", file_name(path));
@@ -139,16 +215,22 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut tmp = builder.tempfile_in(&parent).map_err(write_err(path))?;
     tmp.write_all(bytes).map_err(write_err(path))?;
     tmp.as_file().sync_all().map_err(write_err(path))?;
-    tmp.persist(path).map_err(|e| StoreError::Write {
+    let persisted = if replace {
+        tmp.persist(path).map(drop)
+    } else {
+        tmp.persist_noclobber(path).map(drop)
+    };
+    persisted.map_err(|e| StoreError::Write {
         path: path.to_path_buf(),
         source: e.error,
-    })?;
-    Ok(())
+    })
 }
 
-/// Read a whole text file, naming it on error.
+/// Read a whole text file (a regular file of at most
+/// [`crate::input_file::MAX_TEXT_BYTES`]), naming it on error.
 pub fn read_text(path: &Path) -> Result<String> {
-    let bytes = fs::read(path).map_err(read_err(path))?;
+    let bytes =
+        crate::input_file::read_bounded(path, crate::input_file::MAX_TEXT_BYTES, "text file")?;
     String::from_utf8(bytes).map_err(|_| StoreError::Format {
         path: path.to_path_buf(),
         reason: "not UTF-8 text".into(),
@@ -216,6 +298,96 @@ mod tests {
         assert!(target.is_dir() && !partial_path(&target).exists());
         // A complete run is refused without force.
         assert!(StagedDir::new_keeping_partial(&target, false).is_err());
+    }
+
+    /// Issue 20: `commit` renamed an existing target away without
+    /// `--force`, so a second run (or another program) that made the
+    /// output meanwhile lost it.
+    #[test]
+    fn issue20_commit_never_replaces_an_output_that_appeared_without_force() {
+        let root = tempfile::tempdir().unwrap();
+        let target = root.path().join("ds");
+        let stage = StagedDir::new(&target, false).unwrap();
+        fs::write(stage.path().join("mine.txt"), "new").unwrap();
+        fs::create_dir(&target).unwrap();
+        fs::write(target.join("theirs.txt"), "old").unwrap();
+        assert!(matches!(
+            stage.commit(),
+            Err(StoreError::OutputExists { .. })
+        ));
+        assert_eq!(
+            fs::read_to_string(target.join("theirs.txt")).unwrap(),
+            "old"
+        );
+        assert!(!target.join("mine.txt").exists());
+        // An empty folder is no output: it is replaced, as the start allows.
+        let other = root.path().join("empty");
+        let stage = StagedDir::new(&other, false).unwrap();
+        fs::write(stage.path().join("mine.txt"), "new").unwrap();
+        fs::create_dir(&other).unwrap();
+        stage.commit().unwrap();
+        assert!(other.join("mine.txt").exists());
+        // With force the existing output is replaced.
+        let stage = StagedDir::new(&target, true).unwrap();
+        fs::write(stage.path().join("mine.txt"), "new").unwrap();
+        stage.commit().unwrap();
+        assert!(target.join("mine.txt").exists() && !target.join("theirs.txt").exists());
+    }
+
+    /// Issue 20: `new_keeping_partial` deleted the `OUT.partial` of a run
+    /// still writing it.
+    #[test]
+    fn issue20_a_live_partial_run_is_never_deleted() {
+        let root = tempfile::tempdir().unwrap();
+        let target = root.path().join("run");
+        let partial = partial_path(&target);
+        fs::create_dir(&partial).unwrap();
+        fs::write(partial.join("trajectory.csv"), "step\n0\n").unwrap();
+        // Another process writing `run`: its lock, taken as it would be.
+        let lock = root.path().join(".run.lock");
+        let other = fs::File::create(&lock).unwrap();
+        other.try_lock().unwrap();
+        for force in [false, true] {
+            assert!(matches!(
+                StagedDir::new_keeping_partial(&target, force),
+                Err(StoreError::OutputBusy { .. })
+            ));
+        }
+        assert!(partial.join("trajectory.csv").exists());
+        // A run writing `run.partial` as its own output blocks it too.
+        drop(other);
+        let other = fs::File::create(root.path().join(".run.partial.lock")).unwrap();
+        other.try_lock().unwrap();
+        assert!(matches!(
+            StagedDir::new_keeping_partial(&target, false),
+            Err(StoreError::OutputBusy { .. })
+        ));
+        assert!(partial.join("trajectory.csv").exists());
+        // Once that run is gone, its leftover is replaced.
+        drop(other);
+        let stage = StagedDir::new_keeping_partial(&target, false).unwrap();
+        assert!(!stage.path().join("trajectory.csv").exists());
+    }
+
+    /// Issue 20: single output files were replaced without `--force`.
+    #[test]
+    fn issue20_an_output_file_is_replaced_only_with_force() {
+        let root = tempfile::tempdir().unwrap();
+        let p = root.path().join("tap.png");
+        write_output_file(&p, b"1", false, "--out").unwrap();
+        let err = write_output_file(&p, b"2", false, "--out").unwrap_err();
+        assert!(matches!(err, StoreError::OutputFileExists { .. }));
+        assert!(err.to_string().contains("pass --force"), "{err}");
+        assert_eq!(fs::read(&p).unwrap(), b"1");
+        write_output_file(&p, b"3", true, "--out").unwrap();
+        assert_eq!(fs::read(&p).unwrap(), b"3");
+        assert_eq!(fs::read_dir(root.path()).unwrap().count(), 1);
+        // The file appearing after the check is not replaced either.
+        let q = root.path().join("late.png");
+        check_output_file(&q, false, "--out").unwrap();
+        fs::write(&q, b"theirs").unwrap();
+        assert!(write_file(&q, b"mine", false).is_err());
+        assert_eq!(fs::read(&q).unwrap(), b"theirs");
     }
 
     #[test]

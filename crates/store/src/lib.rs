@@ -7,7 +7,12 @@
 //! - [`frame_file`], [`shape_file`]: frames (PNG) and contours (CSV);
 //! - [`sensor_file`]: calibrated sensor folders (`tactrace calibrate`);
 //! - [`config_file`]: defaults, then the file, unknown keys rejected;
-//! - [`fsutil`]: outputs that appear only when complete.
+//! - [`fsutil`]: outputs that appear only when complete; [`lock`]: one
+//!   writer per output;
+//! - [`input_file`], [`npy_file`]: inputs read within bounds (regular files
+//!   only, declared sizes checked against the file's); [`overlap`]: no
+//!   output in or around an input;
+//! - [`row_file`]: CSV files appended a whole row at a time.
 //!
 //! Every error names the file at fault ([`StoreError`]).
 
@@ -16,16 +21,26 @@ pub mod dataset;
 pub mod error;
 pub mod frame_file;
 pub mod fsutil;
+pub mod input_file;
+pub mod lock;
 pub mod model_dir;
+pub mod npy_file;
+pub mod overlap;
 pub mod pin_order;
+pub mod row_file;
 pub mod sensor_file;
 pub mod shape_file;
 
 pub use config_file::{load_config, overlay, resolved_config_toml};
 pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData};
 pub use error::{read_err, write_err, Result, StoreError};
-pub use fsutil::{check_output_dir, read_text, write_atomic, StagedDir};
+pub use fsutil::{
+    check_output_dir, check_output_file, read_text, write_atomic, write_output_file, StagedDir,
+};
+pub use input_file::{open_regular, read_bounded};
+pub use lock::OutputLock;
 pub use model_dir::{stage_model, StoredModel};
+pub use overlap::{check_output_apart, check_output_outside};
 pub use pin_order::{pin_order_mismatch, PinOrderError};
 pub use sensor_file::SensorFolder;
 pub use shape_file::load_shape;

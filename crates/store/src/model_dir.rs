@@ -9,8 +9,9 @@
 //! pins of the data or rig it is about to see, so the pin-order check
 //! cannot be forgotten.
 use crate::dataset::TapData;
-use crate::error::{read_err, write_err, Result, StoreError};
+use crate::error::{write_err, Result, StoreError};
 use crate::fsutil::{read_text, StagedDir};
+use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
 use crate::pin_order::pin_order_mismatch;
 use std::path::{Path, PathBuf};
 use tactrace_learn::{PoseModel, TrainingHistory};
@@ -59,7 +60,7 @@ impl StoredModel {
         }
         let json = read_text(&json_path)?;
         let weights_path = dir.join(WEIGHTS);
-        let weights = std::fs::read(&weights_path).map_err(read_err(&weights_path))?;
+        let weights = read_bounded(&weights_path, MAX_BINARY_BYTES, "weights file")?;
         let model = PoseModel::from_bytes(&json, &weights).map_err(|e| StoreError::Format {
             path: dir.into(),
             reason: e.to_string(),

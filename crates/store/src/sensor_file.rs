@@ -11,8 +11,9 @@
 //!   simulated tap, so models move between the simulator and the sensor);
 //! - `correction.safetensors`: the field correction W, b and the chosen
 //!   real calibration taps (fields and labels).
-use crate::error::{read_err, write_err, Result, StoreError};
+use crate::error::{write_err, Result, StoreError};
 use crate::fsutil::{read_text, StagedDir};
+use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
 use safetensors::tensor::TensorView;
 use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};
@@ -196,7 +197,7 @@ impl SensorFolder {
                 reason: e.to_string(),
             })?;
         let tensors_path = dir.join(TENSORS_NAME);
-        let bytes = std::fs::read(&tensors_path).map_err(read_err(&tensors_path))?;
+        let bytes = read_bounded(&tensors_path, MAX_BINARY_BYTES, "tensor file")?;
         let tensors = deserialise(&bytes, &tensors_path)?;
         let correction =
             LinearCorrection::from_tensors(&tensors, &spec.calibration).map_err(|e| {

@@ -54,6 +54,8 @@ impl Outputs {
         cfg: &TuneConfig,
         base: &SimFollowConfig,
     ) -> Result<Self> {
+        // Locked first: a live tuning's OUT.partial is not an interrupted one.
+        let _out = tactrace_store::check_output_dir(out, force)?;
         let kept = partial_path(out).join("tuned.toml");
         if kept.exists() && !force {
             return Err(LabError::Config(format!(

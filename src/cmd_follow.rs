@@ -108,7 +108,10 @@ impl ReplayArgs {
             theta_column: Some(self.theta_column.clone()),
             dz_column: Some(self.dz_column.clone()),
             keep: self.replay_keep.clone(),
-            blob: Some(crate::cmd_data::blob_params(self.params.as_deref(), "real256")?),
+            blob: Some(crate::cmd_data::blob_params(
+                self.params.as_deref(),
+                "real256",
+            )?),
         };
         Ok(ReplayWorld::with_options(dir, &options)?)
     }

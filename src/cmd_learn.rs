@@ -115,7 +115,11 @@ pub fn train(a: TrainArgs) -> Result<()> {
     }
     check_output_dir(&a.out, a.force)?;
     let all = read_dataset(&a.train)?;
-    let split = tr::training_split(&all, Some(&a.train), a.val_fraction.map(|f| (f, a.split_seed)))?;
+    let split = tr::training_split(
+        &all,
+        Some(&a.train),
+        a.val_fraction.map(|f| (f, a.split_seed)),
+    )?;
     let (data, val, record) = match a.val.as_deref() {
         Some(dir) => {
             let val = read_dataset(dir)?;

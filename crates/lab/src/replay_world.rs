@@ -304,7 +304,11 @@ impl ReplayStats {
         let trained: Vec<bool> = bank
             .frames()
             .iter()
-            .map(|f| f.path.file_name().is_some_and(|n| seen.contains(&*n.to_string_lossy())))
+            .map(|f| {
+                f.path
+                    .file_name()
+                    .is_some_and(|n| seen.contains(&*n.to_string_lossy()))
+            })
             .collect();
         self.bank_frames_seen_in_training = Some(trained.iter().filter(|&&t| t).count());
         self.taps_answered_by_training_frames =
@@ -339,16 +343,19 @@ impl ReplayStats {
                 self.far_taps, self.taps, self.far_distance, self.distance_max
             )
         });
-        let seen = self.bank_frames_seen_in_training.filter(|&k| k > 0).map(|k| {
-            format!(
-                "{k} of the bank's {} frames (answering {} of {} taps) are frames the model \
+        let seen = self
+            .bank_frames_seen_in_training
+            .filter(|&k| k > 0)
+            .map(|k| {
+                format!(
+                    "{k} of the bank's {} frames (answering {} of {} taps) are frames the model \
                  was trained on: the run is judged on frames it was fitted to; answer with \
                  held-out frames only (--replay-keep, or --targets listing them)",
-                self.bank_frames,
-                self.taps_answered_by_training_frames.unwrap_or(0),
-                self.taps
-            )
-        });
+                    self.bank_frames,
+                    self.taps_answered_by_training_frames.unwrap_or(0),
+                    self.taps
+                )
+            });
         let all: Vec<String> = far.into_iter().chain(seen).collect();
         (!all.is_empty()).then(|| all.join("; "))
     }

@@ -298,7 +298,11 @@ fn check_held_out(
             short(&hash),
             trained.rows,
             short(&trained.sha256),
-            trained.path.as_ref().map(|p| format!(", read from {p}")).unwrap_or_default()
+            trained
+                .path
+                .as_ref()
+                .map(|p| format!(", read from {p}"))
+                .unwrap_or_default()
         ));
     }
     let Some(split) = &record.split else {

@@ -156,9 +156,14 @@ pub fn follow<'py>(
             warn(py, &w)?;
         }
         let res = run_detached(py, || {
-            follow_replay(&cfg, &world, &model, (&name, &contour), (&dir, force), &mut |_| {
-                checkpoint()
-            })
+            follow_replay(
+                &cfg,
+                &world,
+                &model,
+                (&name, &contour),
+                (&dir, force),
+                &mut |_| checkpoint(),
+            )
         })?
         .map_err(lab)?;
         if let Some(w) = res.stats.warning() {
@@ -203,7 +208,7 @@ fn replay_world(obj: &Bound<'_, PyAny>) -> PyResult<ReplayWorld> {
         let text = || -> PyResult<String> {
             v.extract::<PathBuf>()
                 .map(|p| p.to_string_lossy().into_owned())
-                .map_err(|_| input(format!("replay[{key:?}] must be a string or a path")))
+                .map_err(|_| input(format!("replay: `{key}` must be a string or a path")))
         };
         match key.as_str() {
             "dir" => dir = Some(PathBuf::from(text()?)),
@@ -217,7 +222,7 @@ fn replay_world(obj: &Bound<'_, PyAny>) -> PyResult<ReplayWorld> {
             "params" => o.blob = Some(crate::vision::blob_params(Some(text()?.into()), "real256")?),
             _ => {
                 return Err(input(format!(
-                    "replay: unknown key {key:?}: give dir and any of {REPLAY_KEYS}"
+                    "replay: unknown key `{key}`: give dir and any of {REPLAY_KEYS}"
                 )))
             }
         }

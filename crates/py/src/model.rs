@@ -4,13 +4,13 @@
 use crate::arrays::{json_to_py, points_array, py_to_json, to_matrix};
 use crate::errors::{core, input, lab, store};
 use crate::interrupt::{checkpoint, run_detached};
+use crate::samples::Samples;
 use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
-use tactrace_learn::{ModelKind, PoseModel, Preset, TrainingHistory};
-use crate::samples::Samples;
 use std::sync::Mutex;
 use tactrace_lab::train::Validation;
+use tactrace_learn::{ModelKind, PoseModel, Preset, TrainingHistory};
 use tactrace_store::StoredModel;
 
 /// Rows predicted between two Ctrl-C checks.
@@ -76,8 +76,8 @@ impl Model {
     fn validation_of(&self, py: Python<'_>, samples: &Samples) -> PyResult<Validation> {
         let net = self.net_for(samples)?;
         let data = samples.to_tap_data()?;
-        let mut v = run_detached(py, || tactrace_lab::train::validate_net(net, &data))?
-            .map_err(lab)?;
+        let mut v =
+            run_detached(py, || tactrace_lab::train::validate_net(net, &data))?.map_err(lab)?;
         v.rows_seen_in_training = self.stored.training().map(|t| t.rows_seen(&data));
         Ok(v)
     }
@@ -222,10 +222,8 @@ impl Model {
     /// ``force=True``. Returns the folder's path.
     #[pyo3(signature = (dir, *, force = false))]
     fn save(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<PathBuf> {
-        py.detach(|| {
-            tactrace_lab::train::save_model(&dir, &self.stored, &self.history, force, &[])
-        })
-        .map_err(lab)
+        py.detach(|| tactrace_lab::train::save_model(&dir, &self.stored, &self.history, force, &[]))
+            .map_err(lab)
     }
 
     fn __repr__(&self) -> PyResult<String> {

@@ -88,7 +88,12 @@ impl TrainingRecord {
         let d = data.dim();
         let row_hashes = train_rows
             .iter()
-            .map(|&r| row_hash(&data.inputs[r * d..(r + 1) * d], &data.targets[2 * r..2 * r + 2]))
+            .map(|&r| {
+                row_hash(
+                    &data.inputs[r * d..(r + 1) * d],
+                    &data.targets[2 * r..2 * r + 2],
+                )
+            })
             .collect();
         let real = data.meta.source == "real" && data.meta.images.len() == data.len();
         let images = if real {
@@ -192,7 +197,12 @@ pub fn row_hash(inputs: &[f32], targets: &[f32]) -> String {
 pub fn row_hashes(data: &TapData) -> Vec<String> {
     let d = data.dim();
     (0..data.len())
-        .map(|r| row_hash(&data.inputs[r * d..(r + 1) * d], &data.targets[2 * r..2 * r + 2]))
+        .map(|r| {
+            row_hash(
+                &data.inputs[r * d..(r + 1) * d],
+                &data.targets[2 * r..2 * r + 2],
+            )
+        })
         .collect()
 }
 
@@ -247,7 +257,11 @@ mod tests {
         rec.check().unwrap();
         assert_eq!(rec.rows_seen(&d), 5);
         assert_eq!(rec.rows_seen(&d.subset(&[1, 3, 5])), 0);
-        assert_eq!(rec.rows_seen(&d.subset(&[9, 8, 1, 0])), 2, "reordered subset");
+        assert_eq!(
+            rec.rows_seen(&d.subset(&[9, 8, 1, 0])),
+            2,
+            "reordered subset"
+        );
         assert_eq!(rec.images[1], "frame_2_0.png");
         let seen = rec.real_frames_seen().unwrap();
         assert!(seen.contains("frame_4_0.png") && !seen.contains("frame_5_0.png"));
@@ -257,6 +271,9 @@ mod tests {
         assert!(python.real_frames_seen().is_none(), "unknown frames");
         let mut bad = rec.clone();
         bad.train_rows.push(10);
-        assert!(bad.check().unwrap_err().contains("past the dataset's 10 rows"));
+        assert!(bad
+            .check()
+            .unwrap_err()
+            .contains("past the dataset's 10 rows"));
     }
 }

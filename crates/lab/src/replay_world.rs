@@ -516,6 +516,46 @@ mod tests {
         }
     }
 
+    #[test]
+    fn issue20_bank_frames_the_model_trained_on_are_counted_and_said() {
+        let names = ["frame_1_0.png", "frame_2_0.png", "frame_3_0.png"];
+        let frames = names
+            .iter()
+            .zip([labels(-1.0, 0.0), labels(0.0, 5.0), labels(1.0, 10.0)])
+            .map(|(n, labels)| LabelledFrame {
+                path: Path::new("frames").join(n),
+                labels,
+            })
+            .collect();
+        let bank = FrameBank::new(frames, false).unwrap();
+        let answer = |frame| Answer {
+            wanted: labels(0.0, 0.0),
+            frame,
+            distance: 0.1,
+        };
+        let answers = [answer(0), answer(1), answer(1), answer(2)];
+        let data: tactrace_store::TapData = tactrace_store::TapData {
+            inputs: vec![0.0; 4],
+            targets: vec![0.0; 4],
+            meta: serde_json::from_value(serde_json::json!({
+                "source": "real", "origin": "", "seed": null, "samples": 2, "pins": 1,
+                "targets": ["r", "theta"], "frames_with_missing_pins": 0,
+                "reference_pins": [[0.0, 0.0]], "settings": null, "tactrace_version": "",
+                "images": ["frame_2_0.png", "frame_9_0.png"]
+            }))
+            .unwrap(),
+        };
+        let record = TrainingRecord::all_rows(&data, None);
+        let s = ReplayStats::of(&answers, &bank, 0.5);
+        assert_eq!(s.bank_frames_seen_in_training, None, "unknown");
+        assert!(s.warning().is_none());
+        let s = s.with_training(Some(&record), &answers, &bank);
+        assert_eq!(s.bank_frames_seen_in_training, Some(1));
+        assert_eq!(s.taps_answered_by_training_frames, Some(2));
+        let w = s.warning().unwrap();
+        assert!(w.starts_with("1 of the bank's 3 frames (answering 2 of 4 taps) are frames the model was trained on"), "{w}");
+    }
+
     /// Twenty answers at distances 0.05, 0.10, ..., 1.00 from two frames.
     #[test]
     fn the_statistics_are_those_of_the_answers() {

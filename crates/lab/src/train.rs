@@ -219,8 +219,8 @@ impl Validation {
     pub fn seen_warning(&self) -> Option<String> {
         let seen = self.rows_seen_in_training.filter(|&k| k > 0)?;
         Some(format!(
-            "{seen} of the {} samples are rows the model was trained on: these errors are \
-             not held-out errors (score held-out rows: a dataset the model never saw, or \
+            "{seen} of the {} samples are rows the model was trained on: these are \
+             not held-out scores (score held-out rows: a dataset the model never saw, or \
              --val-fraction/--split-seed as given to `train`)",
             self.samples
         ))

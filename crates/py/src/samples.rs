@@ -87,8 +87,7 @@ impl Samples {
         let meta = meta_from_dict(&meta_obj)?;
         let pins = meta.reference_pins.clone();
         let targets = tuple.get_item(1)?;
-        let mut samples =
-            Self::from_arrays(&tuple.get_item(0)?, Some(&targets), pins, Some(meta))?;
+        let mut samples = Self::from_arrays(&tuple.get_item(0)?, Some(&targets), pins, Some(meta))?;
         samples.what = PathBuf::from("the dataset's meta[\"reference_pins\"]");
         Ok(samples)
     }

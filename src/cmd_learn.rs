@@ -242,8 +242,8 @@ pub struct ValidateArgs {
     #[arg(long)]
     plots: Option<PathBuf>,
     /// Score only the rows `train --val-fraction F --split-seed S` held
-    /// out of this dataset (refused unless the model records that it was
-    /// trained on this dataset with this split).
+    /// out of this dataset (refused when the model folder records another
+    /// dataset, another split or no held-out part).
     #[arg(long)]
     val_fraction: Option<f64>,
     /// Seed of the --val-fraction split, as given to `train`.

@@ -9,7 +9,7 @@ use tactrace_lab::follow::{
     follow_simulated, size_warning, tactip_diameter_mm, FollowOutcome, SimFollowConfig,
 };
 use tactrace_lab::hardware::{follow_hardware as follow_on_hardware, HardwareConfig};
-use tactrace_lab::replay_world::{follow_replay, KeepRule, ReplayWorld};
+use tactrace_lab::replay_world::{follow_replay, ReplayOptions, ReplayWorld};
 use tactrace_lab::reproduce::{reproduce as run_reproduce, ReproduceConfig};
 use tactrace_lab::LabError;
 use tactrace_servo::LoopConfig;
@@ -101,35 +101,20 @@ pub struct ReplayArgs {
 impl ReplayArgs {
     /// The world these flags describe.
     fn world(&self, dir: &std::path::Path) -> Result<ReplayWorld> {
-        let mut w = ReplayWorld::bristol(dir)?;
-        if let Some(t) = &self.targets {
-            w.targets = t.clone();
-        }
-        if let Some(r) = &self.reference {
-            w.reference = r.clone();
-        }
-        w.image_column = self.image_column.clone();
-        w.r_column = self.r_column.clone();
-        w.theta_column = self.theta_column.clone();
-        let dz = self.dz_column.trim();
-        w.dz_column = (!dz.is_empty() && !dz.eq_ignore_ascii_case("none")).then(|| dz.to_string());
-        w.keep = self
-            .replay_keep
-            .as_deref()
-            .map(KeepRule::parse)
-            .transpose()?;
-        w.blob = crate::cmd_data::blob_params(self.params.as_deref(), "real256")?;
-        if !w.frames.is_dir() || !w.targets.is_file() {
-            return Err(LabError::Config(format!(
-                "--replay {}: not a labelled collection: it needs frames/ and targets.csv \
-                 (or --targets); found frames/: {}, labels: {}",
-                dir.display(),
-                w.frames.is_dir(),
-                w.targets.is_file()
-            ))
-            .into());
-        }
-        Ok(w)
+        let options = ReplayOptions {
+            targets: self.targets.clone(),
+            reference: self.reference.clone(),
+            image_column: Some(self.image_column.clone()),
+            r_column: Some(self.r_column.clone()),
+            theta_column: Some(self.theta_column.clone()),
+            dz_column: Some(self.dz_column.clone()),
+            keep: self.replay_keep.clone(),
+            blob: Some(crate::cmd_data::blob_params(
+                self.params.as_deref(),
+                "real256",
+            )?),
+        };
+        Ok(ReplayWorld::with_options(dir, &options)?)
     }
 }
 

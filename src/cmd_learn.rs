@@ -121,30 +121,35 @@ pub fn train(a: TrainArgs) -> Result<()> {
         .opt("--search-space", a.search_space.as_deref())
         .check_apart("--out", &a.out)?;
     let _out = check_output_dir(&a.out, a.force)?;
-    let data = read_dataset(&a.train)?;
-    let (data, val) = match (a.val.as_deref(), a.val_fraction) {
-        (Some(dir), _) => {
+    let all = read_dataset(&a.train)?;
+    let split = tr::training_split(
+        &all,
+        Some(&a.train),
+        a.val_fraction.map(|f| (f, a.split_seed)),
+    )?;
+    let (data, val, record) = match a.val.as_deref() {
+        Some(dir) => {
             let val = read_dataset(dir)?;
-            tactrace_store::pin_order_mismatch(&data.meta.reference_pins, &val.meta.reference_pins)
+            tactrace_store::pin_order_mismatch(&all.meta.reference_pins, &val.meta.reference_pins)
                 .map_or(Ok(()), |source| {
                     Err(tactrace_store::StoreError::PinOrder {
                         path: dir.to_path_buf(),
                         source,
                     })
                 })?;
-            (data, Some(val))
+            (split.train, Some(val), split.record)
         }
-        (None, Some(f)) => {
-            let (tr, va) = tr::holdout(&data, f, a.split_seed)?;
-            eprintln!(
-                "training on {} samples, holding out {} (fraction {f}, seed {})",
-                tr.len(),
-                va.len(),
-                a.split_seed
-            );
-            (tr, Some(va))
+        None => {
+            if let (Some(f), Some(va)) = (a.val_fraction, &split.val) {
+                eprintln!(
+                    "training on {} samples, holding out {} (fraction {f}, seed {})",
+                    split.train.len(),
+                    va.len(),
+                    a.split_seed
+                );
+            }
+            (split.train, split.val, split.record)
         }
-        (None, None) => (data, None),
     };
     let (cfg, extra) = if a.search {
         let space = search_space(a.search_space.as_deref(), a.trials)?;
@@ -188,8 +193,8 @@ pub fn train(a: TrainArgs) -> Result<()> {
     pb.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     let extra: Vec<(&str, String)> = extra;
-    let pins = &data.meta.reference_pins;
-    let dir = tr::save_model(&a.out, &model, pins, &history, a.force, &extra)?;
+    let model = StoredModel::new(model, data.meta.reference_pins.clone()).with_training(record);
+    let dir = tr::save_model(&a.out, &model, &history, a.force, &extra)?;
     eprintln!("trained in {secs:.1} s; saved model to {}", dir.display());
     if history.lr_halvings > 0 {
         eprintln!(
@@ -200,13 +205,16 @@ pub fn train(a: TrainArgs) -> Result<()> {
         );
     }
     if let Some(val) = val {
-        let v = tr::validate_net(&model, &val)?;
+        let v = tr::validate(&model, &val, a.val.as_deref().unwrap_or(&a.train))?;
         crate::say!(
             "validation: position {:.3} mm, angle {:.3} deg over {} samples",
             v.position_mae_mm,
             v.angle_mae_deg,
             v.samples
         );
+        if let Some(w) = v.seen_warning() {
+            eprintln!("warning: {w}");
+        }
     }
     Ok(())
 }
@@ -241,6 +249,14 @@ pub struct ValidateArgs {
     /// (`predicted_vs_true.png` and `.svg`).
     #[arg(long)]
     plots: Option<PathBuf>,
+    /// Score only the rows `train --val-fraction F --split-seed S` held
+    /// out of this dataset (refused when the model folder records another
+    /// dataset, another split or no held-out part).
+    #[arg(long)]
+    val_fraction: Option<f64>,
+    /// Seed of the --val-fraction split, as given to `train`.
+    #[arg(long, default_value_t = 1, requires = "val_fraction")]
+    split_seed: u64,
     /// Replace existing plots in --plots.
     #[arg(long, requires = "plots")]
     force: bool,
@@ -280,7 +296,20 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
     };
     let model = StoredModel::load(&a.model)?;
     let data = read_dataset(&a.data)?;
-    let v = tr::validate(&model, &data, &a.data)?;
+    let v = match a.val_fraction {
+        Some(f) => tr::validate_held_out(&model, &data, &a.data, f, a.split_seed)?,
+        None => tr::validate(&model, &data, &a.data)?,
+    };
+    if let Some(w) = v.seen_warning() {
+        eprintln!("warning: {w}");
+    }
+    if v.rows_seen_in_training.is_none() {
+        eprintln!(
+            "note: {} does not record what the model was trained on (a model folder written \
+             before tactrace kept training.json): whether these rows were held out is unknown",
+            a.model.display()
+        );
+    }
     if let Some((dir, _lock)) = &plots {
         std::fs::create_dir_all(dir)
             .map_err(tactrace_store::write_err(dir.as_path()))

@@ -25,7 +25,7 @@ use tactrace_sensor::{
     read_frame, Answer, EdgeLabels, FrameBank, LabelConvention, LabelScales, LabelledFrame,
 };
 use tactrace_servo::{ReplayRig, StepRecord};
-use tactrace_store::StoredModel;
+use tactrace_store::{StoredModel, TrainingRecord};
 use tactrace_vision::BlobParams;
 
 /// Where the real collection is and which of its frames make the bank
@@ -71,6 +71,56 @@ impl ReplayWorld {
             blob: BlobParams::preset("real256")?,
             far_distance: 0.5,
         })
+    }
+}
+
+/// What `follow --replay DIR` (and Python's `follow(replay=...)`) may set
+/// over [`ReplayWorld::bristol`]: each `None` keeps the Bristol layout's.
+#[derive(Debug, Clone, Default)]
+pub struct ReplayOptions {
+    /// The labels CSV (default DIR/targets.csv).
+    pub targets: Option<PathBuf>,
+    /// The undeformed frame (default DIR/frames/init_0.png).
+    pub reference: Option<PathBuf>,
+    pub image_column: Option<String>,
+    pub r_column: Option<String>,
+    pub theta_column: Option<String>,
+    /// The depth column; `none` or empty: depth does not count.
+    pub dz_column: Option<String>,
+    /// `N%M==K` ([`KeepRule::parse`]).
+    pub keep: Option<String>,
+    /// Blob parameters of the real frames (default: the real256 preset).
+    pub blob: Option<BlobParams>,
+}
+
+impl ReplayWorld {
+    /// The world of the labelled collection `dir` with `options`; refused
+    /// when `dir` has no frames folder or labels.
+    pub fn with_options(dir: &Path, options: &ReplayOptions) -> Result<Self> {
+        let mut w = Self::bristol(dir)?;
+        let o = options.clone();
+        w.targets = o.targets.unwrap_or(w.targets);
+        w.reference = o.reference.unwrap_or(w.reference);
+        w.image_column = o.image_column.unwrap_or(w.image_column);
+        w.r_column = o.r_column.unwrap_or(w.r_column);
+        w.theta_column = o.theta_column.unwrap_or(w.theta_column);
+        if let Some(dz) = o.dz_column {
+            let dz = dz.trim();
+            w.dz_column =
+                (!dz.is_empty() && !dz.eq_ignore_ascii_case("none")).then(|| dz.to_string());
+        }
+        w.keep = o.keep.as_deref().map(KeepRule::parse).transpose()?;
+        w.blob = o.blob.unwrap_or(w.blob);
+        if !w.frames.is_dir() || !w.targets.is_file() {
+            return Err(LabError::Config(format!(
+                "--replay {}: not a labelled collection: it needs frames/ and targets.csv \
+                 (or --targets); found frames/: {}, labels: {}",
+                dir.display(),
+                w.frames.is_dir(),
+                w.targets.is_file()
+            )));
+        }
+        Ok(w)
     }
 }
 
@@ -194,6 +244,11 @@ pub struct ReplayStats {
     /// Taps answered by a frame further than `far_distance`.
     pub far_taps: usize,
     pub far_distance: f64,
+    /// Bank frames the model was trained on (by image name; `None`: the
+    /// model folder does not say which frames it was trained on).
+    pub bank_frames_seen_in_training: Option<usize>,
+    /// Taps answered by such a frame.
+    pub taps_answered_by_training_frames: Option<usize>,
 }
 
 impl ReplayStats {
@@ -230,7 +285,35 @@ impl ReplayStats {
             mean_abs_ddz_mm: mean_abs(&|l| l.dz_mm),
             far_taps: answers.iter().filter(|a| a.distance > far_distance).count(),
             far_distance,
+            bank_frames_seen_in_training: None,
+            taps_answered_by_training_frames: None,
         }
+    }
+
+    /// The statistics with the bank frames and answered taps that were
+    /// frames the model trained on (`training`, from its folder).
+    pub fn with_training(
+        mut self,
+        training: Option<&TrainingRecord>,
+        answers: &[Answer],
+        bank: &FrameBank,
+    ) -> Self {
+        let Some(seen) = training.and_then(TrainingRecord::real_frames_seen) else {
+            return self;
+        };
+        let trained: Vec<bool> = bank
+            .frames()
+            .iter()
+            .map(|f| {
+                f.path
+                    .file_name()
+                    .is_some_and(|n| seen.contains(&*n.to_string_lossy()))
+            })
+            .collect();
+        self.bank_frames_seen_in_training = Some(trained.iter().filter(|&&t| t).count());
+        self.taps_answered_by_training_frames =
+            Some(answers.iter().filter(|a| trained[a.frame]).count());
+        self
     }
 
     /// One line for the run's summary.
@@ -249,16 +332,32 @@ impl ReplayStats {
         )
     }
 
-    /// The warning when some taps reached poses the labels do not cover.
+    /// The warnings, as one: taps that reached poses the labels do not
+    /// cover, and bank frames the model was trained on.
     pub fn warning(&self) -> Option<String> {
-        (self.far_taps > 0).then(|| {
+        let far = (self.far_taps > 0).then(|| {
             format!(
                 "{} of {} taps were answered by a real frame more than {} label spreads from \
                  the pose reached (up to {:.2}): the collection's labels do not cover the \
                  poses this run reached, and those taps say little",
                 self.far_taps, self.taps, self.far_distance, self.distance_max
             )
-        })
+        });
+        let seen = self
+            .bank_frames_seen_in_training
+            .filter(|&k| k > 0)
+            .map(|k| {
+                format!(
+                    "{k} of the bank's {} frames (answering {} of {} taps) are frames the model \
+                 was trained on: the run is judged on frames it was fitted to; answer with \
+                 held-out frames only (--replay-keep, or --targets listing them)",
+                    self.bank_frames,
+                    self.taps_answered_by_training_frames.unwrap_or(0),
+                    self.taps
+                )
+            });
+        let all: Vec<String> = far.into_iter().chain(seen).collect();
+        (!all.is_empty()).then(|| all.join("; "))
     }
 }
 
@@ -374,7 +473,11 @@ pub fn follow_replay(
     let (arm, sensor) = rig.parts();
     let recorded =
         follow_on_rig_recorded(arm, sensor, &perception, &settings, run.path(), progress)?;
-    let stats = ReplayStats::of(rig.answers(), rig.bank(), world.far_distance);
+    let stats = ReplayStats::of(rig.answers(), rig.bank(), world.far_distance).with_training(
+        model.training(),
+        rig.answers(),
+        rig.bank(),
+    );
     write_answers(&run.path().join("answers.csv"), rig.answers(), rig.bank())?;
     let answered = answered_frames(rig.answers(), rig.bank())?;
     let extras = RunExtras {
@@ -433,6 +536,46 @@ mod tests {
             theta_deg: t,
             dz_mm: 0.0,
         }
+    }
+
+    #[test]
+    fn issue20_bank_frames_the_model_trained_on_are_counted_and_said() {
+        let names = ["frame_1_0.png", "frame_2_0.png", "frame_3_0.png"];
+        let frames = names
+            .iter()
+            .zip([labels(-1.0, 0.0), labels(0.0, 5.0), labels(1.0, 10.0)])
+            .map(|(n, labels)| LabelledFrame {
+                path: Path::new("frames").join(n),
+                labels,
+            })
+            .collect();
+        let bank = FrameBank::new(frames, false).unwrap();
+        let answer = |frame| Answer {
+            wanted: labels(0.0, 0.0),
+            frame,
+            distance: 0.1,
+        };
+        let answers = [answer(0), answer(1), answer(1), answer(2)];
+        let data: tactrace_store::TapData = tactrace_store::TapData {
+            inputs: vec![0.0; 4],
+            targets: vec![0.0; 4],
+            meta: serde_json::from_value(serde_json::json!({
+                "source": "real", "origin": "", "seed": null, "samples": 2, "pins": 1,
+                "targets": ["r", "theta"], "frames_with_missing_pins": 0,
+                "reference_pins": [[0.0, 0.0]], "settings": null, "tactrace_version": "",
+                "images": ["frame_2_0.png", "frame_9_0.png"]
+            }))
+            .unwrap(),
+        };
+        let record = TrainingRecord::all_rows(&data, None);
+        let s = ReplayStats::of(&answers, &bank, 0.5);
+        assert_eq!(s.bank_frames_seen_in_training, None, "unknown");
+        assert!(s.warning().is_none());
+        let s = s.with_training(Some(&record), &answers, &bank);
+        assert_eq!(s.bank_frames_seen_in_training, Some(1));
+        assert_eq!(s.taps_answered_by_training_frames, Some(2));
+        let w = s.warning().unwrap();
+        assert!(w.starts_with("1 of the bank's 3 frames (answering 2 of 4 taps) are frames the model was trained on"), "{w}");
     }
 
     /// Twenty answers at distances 0.05, 0.10, ..., 1.00 from two frames.

@@ -21,7 +21,9 @@ use tactrace_report::figures::{self, Predicted};
 use tactrace_report::results::slug;
 use tactrace_report::{NetRow, ReplayShapeRow, ReproduceResults, ShapeRow};
 use tactrace_servo::pose_at_edge;
-use tactrace_store::{write_atomic, write_dataset, StagedDir, StoredModel, TapData};
+use tactrace_store::{
+    write_atomic, write_dataset, StagedDir, StoredModel, TapData, TrainingRecord,
+};
 use tactrace_vision::PinExtractor;
 /// The report's contour-following mean L2 errors, mm (ch. 5.3).
 pub const REPORT_L2: [(BuiltinShape, f64, usize); 4] = [
@@ -88,7 +90,9 @@ pub(crate) fn train_and_score(
     let mdir = dir
         .join("models")
         .join(name.split(' ').next().unwrap_or(name).to_lowercase());
-    save_model(&mdir, &model, &tr.meta.reference_pins, &history, true, &[])?;
+    let stored = StoredModel::new(model.clone(), tr.meta.reference_pins.clone())
+        .with_training(TrainingRecord::all_rows(tr, None));
+    save_model(&mdir, &stored, &history, true, &[])?;
     let v = validate_net(&model, va)?;
     let predicted = Predicted {
         truth: &v.truth,

@@ -6,7 +6,7 @@ use tactrace_learn::{
     hyperparameter_search, mean_absolute_error, ModelConfig, ModelKind, PoseModel, Preset,
     SearchSpace, TrainingHistory, Trial,
 };
-use tactrace_store::{stage_model, StoredModel, TapData};
+use tactrace_store::{stage_model, HeldOut, StoredModel, TapData, TrainingRecord};
 
 /// Resolve a model configuration: the preset for `kind`, then the keys of an
 /// optional TOML override (unknown keys are errors), then `epochs`.
@@ -62,12 +62,18 @@ pub fn train_with_validation(
 /// Split `data` into a training part and a held-out part of `fraction`
 /// of the samples (seeded shuffle); both parts must be non-empty.
 pub fn holdout(data: &TapData, fraction: f64, seed: u64) -> Result<(TapData, TapData)> {
+    let (tr, va) = holdout_rows(data, fraction, seed)?;
+    Ok((data.subset(&tr), data.subset(&va)))
+}
+
+/// The row indices of [`holdout`]'s two parts (training, held out).
+pub fn holdout_rows(data: &TapData, fraction: f64, seed: u64) -> Result<(Vec<usize>, Vec<usize>)> {
     if !(fraction > 0.0 && fraction < 1.0) {
         return Err(LabError::Config(format!(
             "validation fraction {fraction} must be strictly between 0 and 1"
         )));
     }
-    let (tr, va) = data.split(1.0 - fraction, seed);
+    let (tr, va) = data.split_rows(1.0 - fraction, seed);
     if tr.is_empty() || va.is_empty() {
         return Err(LabError::Config(format!(
             "{} samples are too few to hold out a fraction {fraction}",
@@ -75,6 +81,46 @@ pub fn holdout(data: &TapData, fraction: f64, seed: u64) -> Result<(TapData, Tap
         )));
     }
     Ok((tr, va))
+}
+
+/// The data a model is fitted on, the part held out, and the record of
+/// both the model folder keeps ([`TrainingRecord`]).
+pub struct TrainingSplit {
+    /// The rows fitted on.
+    pub train: TapData,
+    /// The rows held out (`Some` with a fraction).
+    pub val: Option<TapData>,
+    /// Which rows of which dataset `train` and `val` are.
+    pub record: TrainingRecord,
+}
+
+/// Fit on every row of `data` (read from `path`), or with `held_out =
+/// Some((fraction, seed))` on the rows [`holdout`] keeps, holding out the
+/// rest.
+pub fn training_split(
+    data: &TapData,
+    path: Option<&Path>,
+    held_out: Option<(f64, u64)>,
+) -> Result<TrainingSplit> {
+    let Some((val_fraction, split_seed)) = held_out else {
+        return Ok(TrainingSplit {
+            train: data.clone(),
+            val: None,
+            record: TrainingRecord::all_rows(data, path),
+        });
+    };
+    let (tr, va) = holdout_rows(data, val_fraction, split_seed)?;
+    let (train, val) = (data.subset(&tr), data.subset(&va));
+    let split = HeldOut {
+        val_fraction,
+        split_seed,
+        rows: va,
+    };
+    Ok(TrainingSplit {
+        train,
+        val: Some(val),
+        record: TrainingRecord::new(data, path, tr, Some(split)),
+    })
 }
 
 /// Hyper-parameter search (report's further work) on `data`, the training
@@ -159,36 +205,132 @@ pub struct Validation {
     pub position_mae_mm: f64,
     pub angle_mae_deg: f64,
     pub samples: usize,
+    /// How many of the samples the model was trained on (by row hash);
+    /// `None` (null) when the model folder does not record it.
+    pub rows_seen_in_training: Option<usize>,
     #[serde(skip)]
     pub predictions: Vec<[f64; 2]>,
     #[serde(skip)]
     pub truth: Vec<[f64; 2]>,
 }
 
-/// Save a trained model with the reference pins of its training data, its
-/// history, `extra` text files and the loss/energy figure (Fig. 4.5) into
-/// `dir`, which appears only when complete.
+impl Validation {
+    /// The warning when some of the samples were training samples.
+    pub fn seen_warning(&self) -> Option<String> {
+        let seen = self.rows_seen_in_training.filter(|&k| k > 0)?;
+        Some(format!(
+            "{seen} of the {} samples are rows the model was trained on: these are \
+             not held-out scores (score held-out rows: a dataset the model never saw, or \
+             --val-fraction/--split-seed as given to `train`)",
+            self.samples
+        ))
+    }
+}
+
+/// Save a trained model (its network, the reference pins of its training
+/// data and what it was trained on), its history, `extra` text files and
+/// the loss/energy figure (Fig. 4.5) into `dir`, which appears only when
+/// complete.
 pub fn save_model(
     dir: &Path,
-    model: &PoseModel,
-    reference_pins: &[[f64; 2]],
+    model: &StoredModel,
     history: &TrainingHistory,
     force: bool,
     extra: &[(&str, String)],
 ) -> Result<PathBuf> {
-    let stage = stage_model(dir, model, reference_pins, history, force, extra)?;
+    let stage = stage_model(dir, model, history, force, extra)?;
     tactrace_report::figures::training_curves(&stage.path().join("loss_energy"), history)?;
     Ok(stage.commit()?)
 }
 
 /// Validate `model` on `data` (named `what`), refused when the data's pins
-/// are ordered otherwise than the model's training data.
+/// are ordered otherwise than the model's training data; counts the
+/// samples the model was trained on when its folder records them.
 pub fn validate(model: &StoredModel, data: &TapData, what: &Path) -> Result<Validation> {
-    let model = model.for_data(data, what)?;
-    validate_net(model, data)
+    let net = model.for_data(data, what)?;
+    let mut v = validate_net(net, data)?;
+    v.rows_seen_in_training = model.training().map(|t| t.rows_seen(data));
+    Ok(v)
 }
 
-/// Validate a network just trained on data ordered like `data`.
+/// Validate `model` on exactly the rows of `data` (named `what`) that
+/// `train --val-fraction fraction --split-seed seed` held out. Refused
+/// when the model's folder records another dataset (content hash), no
+/// held-out part or another split; a folder without the record is scored
+/// on the split recomputed (the result's `rows_seen_in_training` is then
+/// `None`).
+pub fn validate_held_out(
+    model: &StoredModel,
+    data: &TapData,
+    what: &Path,
+    fraction: f64,
+    seed: u64,
+) -> Result<Validation> {
+    let (_, rows) = holdout_rows(data, fraction, seed)?;
+    if let Some(record) = model.training() {
+        check_held_out(record, data, what, (fraction, seed), &rows)?;
+    }
+    validate(model, &data.subset(&rows), what)
+}
+
+/// That `record` held out `rows` of `data` with `(fraction, seed)`.
+fn check_held_out(
+    record: &TrainingRecord,
+    data: &TapData,
+    what: &Path,
+    (fraction, seed): (f64, u64),
+    rows: &[usize],
+) -> Result<()> {
+    let trained = &record.dataset;
+    let refuse = |reason: String| {
+        Err(LabError::Format {
+            path: what.to_path_buf(),
+            reason,
+        })
+    };
+    let hash = tactrace_store::training_record::dataset_hash(data);
+    if hash != trained.sha256 {
+        let short = |h: &str| format!("{}...", &h[..h.len().min(23)]);
+        return refuse(format!(
+            "not the dataset the model was trained on ({} rows, {}; the model's: {} rows, \
+             {}{}): --val-fraction scores the held-out rows of the model's own training set",
+            data.len(),
+            short(&hash),
+            trained.rows,
+            short(&trained.sha256),
+            trained
+                .path
+                .as_ref()
+                .map(|p| format!(", read from {p}"))
+                .unwrap_or_default()
+        ));
+    }
+    let Some(split) = &record.split else {
+        return refuse(
+            "the model was trained on every row of this dataset (no --val-fraction): it has \
+             no held-out rows here; validate on a dataset it never saw"
+                .into(),
+        );
+    };
+    if split.val_fraction != fraction || split.split_seed != seed {
+        return refuse(format!(
+            "the model held out --val-fraction {} --split-seed {}, not --val-fraction \
+             {fraction} --split-seed {seed}: give the model's split",
+            split.val_fraction, split.split_seed
+        ));
+    }
+    if split.rows != rows {
+        return refuse(
+            "the split drawn now differs from the one the model recorded (another version of \
+             tactrace's shuffle?); its held-out rows cannot be scored"
+                .into(),
+        );
+    }
+    Ok(())
+}
+
+/// Validate a network just trained on data ordered like `data` (what it
+/// was trained on is not known here: `rows_seen_in_training` is `None`).
 pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
     let ds = data.to_learn()?;
     check_dim(model.input_dim(), data.dim())?;
@@ -203,6 +345,7 @@ pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
         position_mae_mm,
         angle_mae_deg,
         samples: data.len(),
+        rows_seen_in_training: None,
         predictions,
         truth,
     })

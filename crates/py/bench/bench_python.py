@@ -54,30 +54,31 @@ def main():
         data = Path(tmp) / "ds10k"
         subprocess.run([cli, "collect", "--samples", "10000", "--seed", "3", "--out",
                         str(data)], check=True, capture_output=True)
-        inputs, _, _ = tactrace.load_dataset(data)
+        inputs, _, meta = tactrace.load_dataset(data)
+        pins = np.asarray(meta["reference_pins"])
 
         # 1. Call overhead on one 254-value vector.
         v = inputs[0].copy()
         n = 20000
         t0 = time.perf_counter()
         for _ in range(n):
-            model.predict(v)
+            model.predict(v, reference_pins=pins)
         one = (time.perf_counter() - t0) / n
-        per_row = best(lambda: model.predict(inputs)) / len(inputs)
+        per_row = best(lambda: model.predict(inputs, reference_pins=pins)) / len(inputs)
         print(f"predict, one 254-value vector: {one * 1e6:.1f} us per call; "
               f"batch per row {per_row * 1e6:.1f} us; overhead {(one - per_row) * 1e6:.1f} us")
 
         # 2. predict on 10k samples: Python against the CLI.
         def python_predict():
-            x, _, _ = tactrace.load_dataset(data)
-            tactrace.load_model(a.model).predict(x)
+            x, _, m = tactrace.load_dataset(data)
+            tactrace.load_model(a.model).predict(x, reference_pins=m["reference_pins"])
 
         def cli_predict():
             subprocess.run([cli, "predict", "--model", str(a.model), "--data", str(data)],
                            check=True, stdout=subprocess.DEVNULL)
 
         py_t = best(python_predict)
-        predict_only = best(lambda: model.predict(inputs))
+        predict_only = best(lambda: model.predict(inputs, reference_pins=pins))
         cli_t = best(cli_predict)
         print(f"predict 10k: Python (load + predict) {py_t * 1e3:.1f} ms, predict alone "
               f"{predict_only * 1e3:.1f} ms; CLI `predict --data` {cli_t * 1e3:.1f} ms; "
@@ -87,10 +88,13 @@ def main():
     paths = sorted(p for p in a.real_frames.glob("*.png") if p.name != "init_0.png")
     frames = [tactrace.read_frame(p) for p in paths[:a.frames]]
     extractor = tactrace.PinExtractor(a.real_frames / "init_0.png")
+    # Timing only: the model's own pin order is asserted, as `bench` times
+    # any model on the real frames (their predictions are not used).
+    own = model.reference_pins
 
     def python_loop():
         for f in frames:
-            model.predict(extractor.displacement(f))
+            model.predict(extractor.displacement(f), reference_pins=own)
 
     def python_extract():
         for f in frames:
@@ -107,7 +111,8 @@ def main():
     # `bench --taps N` times the first N real frames; 200 taps keep the
     # simulated part short, so time the same count from Python too.
     few = frames[:200]
-    py_few = best(lambda: [model.predict(extractor.displacement(f)) for f in few], 5) / len(few)
+    py_few = best(lambda: [model.predict(extractor.displacement(f), reference_pins=own)
+                           for f in few], 5) / len(few)
     print(f"real frames, Python: extract {py_ex * 1e6:.0f} us, extract + predict "
           f"{py_loop * 1e6:.0f} us per frame ({len(frames)} frames); first 200 frames "
           f"{py_few * 1e6:.0f} us; Rust `bench --real-frames` (first 200): "

@@ -1,5 +1,7 @@
-//! Contour following in the simulated world: `follow` over
-//! `tactrace_lab::follow::follow_simulated`, as `tactrace follow` runs it,
+//! Contour following in the simulated worlds: `follow` over
+//! `tactrace_lab::follow::follow_simulated` (the simulated TacTip or a
+//! calibrated sensor) and `tactrace_lab::replay_world::follow_replay` (the
+//! real-frame world), as `tactrace follow` runs them,
 //! and what `follow_rig` shares with it (model, shape and configuration
 //! arguments, the result dict).
 use crate::arrays::{matrix, py_to_json};
@@ -11,7 +13,11 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 use std::path::PathBuf;
 use tactrace_geometry::{Contour, ShapeSpec, Vec2};
-use tactrace_lab::follow::{follow_simulated, size_warning, FollowOutcome, SimFollowConfig};
+use tactrace_lab::follow::{
+    follow_simulated, read_calibrated, size_warning, tactip_diameter_mm, FollowOutcome,
+    SimFollowConfig,
+};
+use tactrace_lab::replay_world::{follow_replay, ReplayOptions, ReplayWorld};
 use tactrace_store::StoredModel;
 
 /// A model argument: a `Model` or the path of a model folder.
@@ -90,24 +96,36 @@ pub fn run_dir(out: Option<PathBuf>) -> PyResult<(PathBuf, Option<tempfile::Temp
     }
 }
 
-/// Follow a contour with the simulated rig, as ``tactrace follow``.
+/// Follow a contour, as ``tactrace follow``: in the simulated world, a
+/// calibrated sensor's (``sensor``) or the real-frame world (``replay``).
 ///
 /// ``model``: a ``Model`` or a model folder; ``shape``: a built-in name
 /// ("flower", ...), a CSV path or an N x 2 array (mm); ``out``: the run
 /// folder to write (config.toml, trajectory.csv, metrics.json, figures; as
 /// the CLI's ``--out``), or None for none; ``steps``, ``seed`` and
 /// ``config`` (a TOML path or a dict of its tables) as the CLI's flags.
+/// ``sensor``: a calibrated sensor folder (``tactrace calibrate``), as
+/// ``--sensor``: the simulated world is that sensor. ``replay``: a labelled
+/// collection of real frames (frames/, targets.csv, frames/init_0.png), as
+/// ``--replay DIR``: every tap is answered by the real frame whose labels
+/// are nearest; or a dict with ``dir`` and any of the CLI's options
+/// ``keep`` ("N%5==0"), ``targets``, ``reference``, ``image_column``,
+/// ``r_column``, ``theta_column``, ``dz_column`` ("none": depth does not
+/// count) and ``params`` (blob parameters TOML). Warnings (a contour
+/// smaller than the sensor, real frames far from the poses reached or
+/// that the model was trained on) are ``UserWarning``s.
 /// Returns a dict with the keys of metrics.json (``mean_l2_mm``,
-/// ``closed``, ``steps``, ``coverage``, ``ending``, ``succeeded``, ...), the
-/// trajectory as arrays (``x_mm``, ``y_mm``, ``angle_deg``, ``r_pred_mm``,
-/// ``theta_pred_deg``, ``mean_displacement_px``, ``contact``), ``l2_curve``
-/// and ``dir`` (the run folder or None). A run that did not do what was
-/// asked raises ``RunFailedError`` (its folder is kept) unless
-/// ``check=False``. The GIL is released; Ctrl-C stops the run after the
-/// current step, leaving ``OUT.partial``.
+/// ``closed``, ``steps``, ``coverage``, ``ending``, ``succeeded``, and in
+/// the real-frame world ``replay``), the trajectory as arrays (``x_mm``,
+/// ``y_mm``, ``angle_deg``, ``r_pred_mm``, ``theta_pred_deg``,
+/// ``mean_displacement_px``, ``contact``), ``l2_curve`` and ``dir`` (the
+/// run folder or None). A run that did not do what was asked raises
+/// ``RunFailedError`` (its folder is kept) unless ``check=False``. The GIL
+/// is released; Ctrl-C stops the run after the current step, leaving
+/// ``OUT.partial``.
 #[pyfunction]
 #[pyo3(signature = (model, shape, out = None, steps = None, config = None, seed = None, *,
-    force = false, check = true))]
+    sensor = None, replay = None, force = false, check = true))]
 #[allow(clippy::too_many_arguments)]
 pub fn follow<'py>(
     py: Python<'py>,
@@ -117,18 +135,50 @@ pub fn follow<'py>(
     steps: Option<usize>,
     config: Option<&Bound<'py, PyAny>>,
     seed: Option<u64>,
+    sensor: Option<PathBuf>,
+    replay: Option<&Bound<'py, PyAny>>,
     force: bool,
     check: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let cfg = follow_config(config, steps, seed)?;
-    let (name, contour) = shape_contour(shape)?;
-    let diameter = 2.0 * cfg.rig.sensor.geometry.dome_radius_mm;
-    if let Some(w) = size_warning(&name, &contour, diameter) {
-        warn(py, &w)?;
+    let mut cfg = follow_config(config, steps, seed)?;
+    if sensor.is_some() {
+        cfg.calibrated_sensor = sensor;
     }
+    if let Some(r) = replay {
+        cfg.replay = Some(replay_world(r)?);
+    }
+    let (name, contour) = shape_contour(shape)?;
     let model = stored_model(model)?;
     let keep = out.is_some();
     let (dir, _tmp) = run_dir(out)?;
+    if let Some(world) = cfg.replay.take() {
+        if let Some(w) = size_warning(&name, &contour, tactip_diameter_mm()) {
+            warn(py, &w)?;
+        }
+        let res = run_detached(py, || {
+            follow_replay(
+                &cfg,
+                &world,
+                &model,
+                (&name, &contour),
+                (&dir, force),
+                &mut |_| checkpoint(),
+            )
+        })?
+        .map_err(lab)?;
+        if let Some(w) = res.stats.warning() {
+            warn(py, &w)?;
+        }
+        return outcome_dict(py, &res.run, keep, check);
+    }
+    let calibrated = read_calibrated(&cfg).map_err(lab)?;
+    let geometry = match &calibrated {
+        Some(s) => &s.spec.sensor.geometry,
+        None => &cfg.rig.sensor.geometry,
+    };
+    if let Some(w) = size_warning(&name, &contour, 2.0 * geometry.dome_radius_mm) {
+        warn(py, &w)?;
+    }
     let res = run_detached(py, || {
         follow_simulated(&cfg, &model, (&name, &contour), (&dir, force), &mut |_| {
             checkpoint()
@@ -136,6 +186,49 @@ pub fn follow<'py>(
     })?
     .map_err(lab)?;
     outcome_dict(py, &res, keep, check)
+}
+
+/// The keys a `replay` dict may have besides `dir`.
+const REPLAY_KEYS: &str =
+    "keep, targets, reference, image_column, r_column, theta_column, dz_column, params";
+
+/// A `replay` argument: a collection folder, or a dict with `dir` and the
+/// CLI's `--replay` options.
+fn replay_world(obj: &Bound<'_, PyAny>) -> PyResult<ReplayWorld> {
+    let Ok(dict) = obj.cast::<PyDict>() else {
+        let dir: PathBuf = obj.extract().map_err(|_| {
+            input("replay must be the folder of a labelled collection or a dict with `dir`")
+        })?;
+        return ReplayWorld::with_options(&dir, &ReplayOptions::default()).map_err(lab);
+    };
+    let mut dir = None;
+    let mut o = ReplayOptions::default();
+    for (k, v) in dict.iter() {
+        let key: String = k.extract()?;
+        let text = || -> PyResult<String> {
+            v.extract::<PathBuf>()
+                .map(|p| p.to_string_lossy().into_owned())
+                .map_err(|_| input(format!("replay: `{key}` must be a string or a path")))
+        };
+        match key.as_str() {
+            "dir" => dir = Some(PathBuf::from(text()?)),
+            "keep" => o.keep = Some(text()?),
+            "targets" => o.targets = Some(text()?.into()),
+            "reference" => o.reference = Some(text()?.into()),
+            "image_column" => o.image_column = Some(text()?),
+            "r_column" => o.r_column = Some(text()?),
+            "theta_column" => o.theta_column = Some(text()?),
+            "dz_column" => o.dz_column = Some(text()?),
+            "params" => o.blob = Some(crate::vision::blob_params(Some(text()?.into()), "real256")?),
+            _ => {
+                return Err(input(format!(
+                    "replay: unknown key `{key}`: give dir and any of {REPLAY_KEYS}"
+                )))
+            }
+        }
+    }
+    let dir = dir.ok_or_else(|| input("replay: the dict needs `dir`, the collection's folder"))?;
+    ReplayWorld::with_options(&dir, &o).map_err(lab)
 }
 
 /// Issue a Python `UserWarning`.

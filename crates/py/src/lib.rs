@@ -14,6 +14,7 @@ mod follow;
 mod interrupt;
 mod model;
 mod rig;
+mod samples;
 mod sim;
 mod vision;
 

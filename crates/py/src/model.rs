@@ -1,14 +1,17 @@
 //! Pose models: `load_model`, `train` and the `Model` class over
 //! `tactrace_store::StoredModel` and `tactrace_lab::train`, as
 //! `tactrace train` / `validate` / `predict` use them.
-use crate::arrays::{json_to_py, matrix, points, points_array, py_to_json, to_matrix};
+use crate::arrays::{json_to_py, points_array, py_to_json, to_matrix};
 use crate::errors::{core, input, lab, store};
 use crate::interrupt::{checkpoint, run_detached};
-use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use crate::samples::Samples;
+use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use tactrace_lab::train::Validation;
 use tactrace_learn::{ModelKind, PoseModel, Preset, TrainingHistory};
-use tactrace_store::{DatasetMeta, StoredModel, TapData};
+use tactrace_store::StoredModel;
 
 /// Rows predicted between two Ctrl-C checks.
 const ROWS_PER_CHECK: usize = 4096;
@@ -20,8 +23,12 @@ const ROWS_PER_CHECK: usize = 4096;
 pub struct Model {
     pub(crate) stored: StoredModel,
     /// The network, reached once through the pin-order check against the
-    /// model's own pins (the check costs ~0.3 ms: not on every call).
+    /// model's own pins.
     net: PoseModel,
+    /// The last reference pins that passed the check (the check costs
+    /// ~0.3 ms: a loop predicting one vector at a time with the same pins
+    /// pays it once).
+    accepted: Mutex<Vec<[f64; 2]>>,
     history: TrainingHistory,
     validation: Option<tactrace_lab::train::Validation>,
 }
@@ -38,6 +45,7 @@ impl Model {
             .map_err(store)?
             .clone();
         Ok(Self {
+            accepted: Mutex::new(stored.reference_pins().to_vec()),
             stored,
             net,
             history,
@@ -45,34 +53,57 @@ impl Model {
         })
     }
 
-    /// The network, after checking `pins` (if given) against the model's.
-    fn net(&self, pins: Option<&Bound<'_, PyAny>>) -> PyResult<&PoseModel> {
-        if let Some(p) = pins {
-            let pins = points(p, "reference_pins")?;
+    /// The network, for samples ordered against `samples.pins`: refused
+    /// when they are ordered otherwise than the model's training data.
+    fn net_for(&self, samples: &Samples) -> PyResult<&PoseModel> {
+        let mut accepted = self.accepted.lock().unwrap_or_else(|e| e.into_inner());
+        if *accepted != samples.pins {
             self.stored
-                .for_pins(&pins, Path::new("reference_pins"))
+                .for_pins(&samples.pins, &samples.what)
                 .map_err(store)?;
+            accepted.clone_from(&samples.pins);
         }
         Ok(&self.net)
+    }
+
+    /// The network, for the model's own pins (configuration, kind).
+    fn own_net(&self) -> &PoseModel {
+        &self.net
+    }
+
+    /// A validation of `samples`, with the training rows among them
+    /// counted when the model knows what it was trained on.
+    fn validation_of(&self, py: Python<'_>, samples: &Samples) -> PyResult<Validation> {
+        let net = self.net_for(samples)?;
+        let data = samples.to_tap_data()?;
+        let mut v =
+            run_detached(py, || tactrace_lab::train::validate_net(net, &data))?.map_err(lab)?;
+        v.rows_seen_in_training = self.stored.training().map(|t| t.rows_seen(&data));
+        Ok(v)
     }
 }
 
 #[pymethods]
 impl Model {
-    /// Predict ``(r mm, theta deg)`` for each row of ``inputs`` (N x 2P, any
-    /// dtype, used as float32 like the CLI; pixels, ordered like
-    /// ``reference_pins``). A single row (2P,) gives a (2,) array, else an
-    /// N x 2 float64 array. With ``reference_pins`` (those of the data, e.g.
-    /// ``meta["reference_pins"]``) data ordered otherwise is refused.
-    #[pyo3(signature = (inputs, *, reference_pins = None))]
+    /// Predict ``(r mm, theta deg)`` for each sample of ``data``: a dataset
+    /// folder, the ``(inputs, targets, meta)`` tuple ``load_dataset``
+    /// returns, or an N x 2P array (any dtype, used as float32 like the
+    /// CLI; pixels) with ``reference_pins``, the P x 2 pins (px) its
+    /// columns are ordered by (``meta["reference_pins"]``,
+    /// ``PinExtractor.reference_pins``). Data ordered otherwise than the
+    /// model's training data is refused, and so are arrays without
+    /// ``reference_pins``. A single row (2P,) gives a (2,) array, else an N
+    /// x 2 float64 array.
+    #[pyo3(signature = (data, *, reference_pins = None))]
     fn predict<'py>(
         &self,
         py: Python<'py>,
-        inputs: &Bound<'py, PyAny>,
+        data: &Bound<'py, PyAny>,
         reference_pins: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let net = self.net(reference_pins)?;
-        let (x, rows, cols) = matrix::<f32>(inputs, "float32", "inputs", None, true)?;
+        let samples = Samples::read(data, None, reference_pins, false)?;
+        let net = self.net_for(&samples)?;
+        let cols = samples.cols;
         if cols != net.input_dim() {
             return Err(input(format!(
                 "the model takes {} inputs per sample (2 x {} pins), inputs has {cols}",
@@ -80,35 +111,57 @@ impl Model {
                 net.input_dim() / 2
             )));
         }
-        let ro = x.readonly();
-        let flat = ro.as_slice()?;
+        let flat = &samples.inputs;
         let out = run_detached(py, || predict_rows(net, flat, cols))?.map_err(core)?;
-        let one_row = x.ndim() == 1;
-        let arr = to_matrix(py, out, rows, 2)?;
-        if one_row {
+        let arr = to_matrix(py, out, samples.rows, 2)?;
+        if samples.one_row {
             return arr.reshape(vec![2]);
         }
         Ok(arr)
     }
 
-    /// Mean absolute errors on ``(inputs, targets)`` as ``tactrace
-    /// validate --json`` gives them: a dict with ``position_mae_mm``,
-    /// ``angle_mae_deg`` and ``samples``.
-    #[pyo3(signature = (inputs, targets, *, reference_pins = None))]
+    /// Mean absolute errors on ``data`` as ``tactrace validate --json``
+    /// gives them: a dict with ``position_mae_mm``, ``angle_mae_deg``,
+    /// ``samples`` and ``rows_seen_in_training`` (how many samples the
+    /// model was trained on; None when its folder does not say). ``data``
+    /// is a dataset folder, ``load_dataset``'s tuple, or an N x 2P array
+    /// with ``targets`` (N x 2: r mm, theta deg) and ``reference_pins``
+    /// (as ``predict``). Warns (``UserWarning``) when some samples were
+    /// training rows.
+    #[pyo3(signature = (data, targets = None, *, reference_pins = None))]
     fn validate<'py>(
         &self,
         py: Python<'py>,
-        inputs: &Bound<'py, PyAny>,
-        targets: &Bound<'py, PyAny>,
+        data: &Bound<'py, PyAny>,
+        targets: Option<&Bound<'py, PyAny>>,
         reference_pins: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let net = self.net(reference_pins)?;
-        let data = tap_data(inputs, targets, self.stored.reference_pins())?;
-        let v = run_detached(py, || tactrace_lab::train::validate_net(net, &data))?.map_err(lab)?;
+        let samples = Samples::read(data, targets, reference_pins, true)?;
+        let v = self.validation_of(py, &samples)?;
+        if let Some(w) = v.seen_warning() {
+            crate::follow::warn(py, &w)?;
+        }
         json_to_py(
             py,
             &serde_json::to_value(&v).map_err(|e| input(e.to_string()))?,
         )
+    }
+
+    /// Which rows of which dataset the model was trained on (the model
+    /// folder's ``training.json`` as a dict: the dataset's content hash,
+    /// ``train_rows``, the held-out ``split``, ``row_hashes``, the image
+    /// names of real frames), or None for a folder that does not record it.
+    #[getter]
+    fn training<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.stored
+            .training()
+            .map(|t| {
+                json_to_py(
+                    py,
+                    &serde_json::to_value(t).map_err(|e| input(e.to_string()))?,
+                )
+            })
+            .transpose()
     }
 
     /// The training data's reference pins, P x 2 float64 (px): the order
@@ -122,7 +175,7 @@ impl Model {
     /// ``model.json``.
     #[getter]
     fn config<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let net = self.net(None)?;
+        let net = self.own_net();
         let v = serde_json::to_value(net.config()).map_err(|e| input(e.to_string()))?;
         json_to_py(py, &v)
     }
@@ -130,13 +183,13 @@ impl Model {
     /// The kind of model ("pdennn", "pcadennn", "disdennn" or "mlp").
     #[getter]
     fn kind(&self) -> PyResult<&'static str> {
-        Ok(kind_name(self.net(None)?.kind()))
+        Ok(kind_name(self.own_net().kind()))
     }
 
     /// Number of inputs per sample (2 x pins).
     #[getter]
     fn input_dim(&self) -> PyResult<usize> {
-        Ok(self.net(None)?.input_dim())
+        Ok(self.own_net().input_dim())
     }
 
     /// The per-epoch training history (a list of dicts) of a model trained
@@ -163,19 +216,18 @@ impl Model {
     }
 
     /// Write the model folder ``tactrace train`` writes (model.json,
-    /// weights.safetensors, pins.json, history.csv, the loss figure); it
-    /// appears only when complete; an existing non-empty folder is refused
-    /// unless ``force=True``. Returns the folder's path.
+    /// weights.safetensors, pins.json, training.json when what it was
+    /// trained on is known, history.csv, the loss figure); it appears only
+    /// when complete; an existing non-empty folder is refused unless
+    /// ``force=True``. Returns the folder's path.
     #[pyo3(signature = (dir, *, force = false))]
     fn save(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<PathBuf> {
-        let net = self.net(None)?;
-        let pins = self.stored.reference_pins();
-        py.detach(|| tactrace_lab::train::save_model(&dir, net, pins, &self.history, force, &[]))
+        py.detach(|| tactrace_lab::train::save_model(&dir, &self.stored, &self.history, force, &[]))
             .map_err(lab)
     }
 
     fn __repr__(&self) -> PyResult<String> {
-        let net = self.net(None)?;
+        let net = self.own_net();
         Ok(format!(
             "Model(kind={:?}, pins={}, source={:?})",
             kind_name(net.kind()),
@@ -232,46 +284,6 @@ fn parse_preset(s: &str) -> PyResult<Preset> {
     }
 }
 
-/// Arrays as a dataset ordered against `pins`.
-fn tap_data(
-    inputs: &Bound<'_, PyAny>,
-    targets: &Bound<'_, PyAny>,
-    pins: &[[f64; 2]],
-) -> PyResult<TapData> {
-    let (x, n, d) = matrix::<f32>(inputs, "float32", "inputs", None, false)?;
-    let (y, m, _) = matrix::<f32>(targets, "float32", "targets", Some(2), false)?;
-    if n != m {
-        return Err(input(format!(
-            "inputs has {n} rows but targets has {m}: one target row per sample"
-        )));
-    }
-    if d != 2 * pins.len() {
-        return Err(input(format!(
-            "inputs has {d} columns but there are {} reference pins (2 x pins)",
-            pins.len()
-        )));
-    }
-    let meta = DatasetMeta {
-        source: "python".into(),
-        origin: String::new(),
-        seed: None,
-        samples: n,
-        pins: pins.len(),
-        targets: ["r_mm".into(), "theta_deg".into()],
-        frames_with_missing_pins: 0,
-        reference_pins: pins.to_vec(),
-        settings: serde_json::Value::Null,
-        tactrace_version: tactrace_lab::VERSION.into(),
-        input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
-        images: Vec::new(),
-    };
-    Ok(TapData {
-        inputs: x.readonly().as_slice()?.to_vec(),
-        targets: y.readonly().as_slice()?.to_vec(),
-        meta,
-    })
-}
-
 /// The hyper-parameter overrides: a TOML file's path, or a dict of the
 /// same keys.
 fn config_text(config: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
@@ -298,26 +310,28 @@ pub fn load_model(py: Python<'_>, dir: PathBuf) -> PyResult<Model> {
 /// Train a pose model, as ``tactrace train`` does.
 ///
 /// ``kind`` is one of "pdennn", "pcadennn", "disdennn", "mlp" (``train
-/// --model``); ``inputs`` N x 2P and ``targets`` N x 2 (r mm, theta deg),
-/// any dtype (used as float32); ``reference_pins`` P x 2 px, the pins the
-/// inputs are ordered by (``meta["reference_pins"]`` of ``load_dataset``).
+/// --model``). ``data`` is a dataset folder, the ``(inputs, targets,
+/// meta)`` tuple ``load_dataset`` returns, or an N x 2P array of inputs
+/// with ``targets`` (N x 2: r mm, theta deg) and ``reference_pins`` (P x 2
+/// px, the pins the inputs are ordered by); any dtype (used as float32).
 /// ``epochs`` overrides the preset's; ``seed`` the model seed (None: the
 /// preset's, as the CLI); ``preset`` "default" or "report"; ``config`` a
 /// dict or TOML path of hyper-parameter overrides (``train --config``).
 /// ``val_fraction`` holds out that fraction (seeded by ``split_seed``, as
 /// ``--val-fraction`` / ``--split-seed``): the model never sees it, and
-/// ``Model.validation`` reports on it. The GIL is released while training;
-/// Ctrl-C stops it after the current epoch.
+/// ``Model.validation`` reports on it. The model records which rows it was
+/// trained on (``Model.training``; ``Model.save`` writes it). The GIL is
+/// released while training; Ctrl-C stops it after the current epoch.
 #[pyfunction]
-#[pyo3(signature = (kind, inputs, targets, reference_pins, *, epochs = None, seed = None,
-    preset = "default", config = None, val_fraction = None, split_seed = 1))]
+#[pyo3(signature = (kind, data, targets = None, reference_pins = None, *, epochs = None,
+    seed = None, preset = "default", config = None, val_fraction = None, split_seed = 1))]
 #[allow(clippy::too_many_arguments)]
 pub fn train(
     py: Python<'_>,
     kind: &str,
-    inputs: &Bound<'_, PyAny>,
-    targets: &Bound<'_, PyAny>,
-    reference_pins: &Bound<'_, PyAny>,
+    data: &Bound<'_, PyAny>,
+    targets: Option<&Bound<'_, PyAny>>,
+    reference_pins: Option<&Bound<'_, PyAny>>,
     epochs: Option<usize>,
     seed: Option<u64>,
     preset: &str,
@@ -336,26 +350,21 @@ pub fn train(
     if let Some(s) = seed {
         cfg.seed = s;
     }
-    let pins = points(reference_pins, "reference_pins")?;
-    let data = tap_data(inputs, targets, &pins)?;
-    let (data, val) = match val_fraction {
-        Some(f) => {
-            let (tr, va) = tactrace_lab::train::holdout(&data, f, split_seed).map_err(lab)?;
-            (tr, Some(va))
-        }
-        None => (data, None),
-    };
+    let samples = Samples::read(data, targets, reference_pins, true)?;
+    let all = samples.to_tap_data()?;
+    let held_out = val_fraction.map(|f| (f, split_seed));
+    let split = tactrace_lab::train::training_split(&all, samples.folder.as_deref(), held_out)
+        .map_err(lab)?;
+    let (data, val) = (&split.train, split.val.as_ref());
     let fitted = run_detached(py, || {
-        let (model, history) =
-            tactrace_lab::train::train_with_validation(&cfg, &data, val.as_ref(), &mut |_| {
-                checkpoint()
-            })?;
-        let validation = val
-            .as_ref()
-            .map(|v| tactrace_lab::train::validate_net(&model, v))
-            .transpose()?;
-        Ok::<_, tactrace_lab::LabError>((model, history, validation))
+        tactrace_lab::train::train_with_validation(&cfg, data, val, &mut |_| checkpoint())
     })?;
-    let (model, history, validation) = fitted.map_err(lab)?;
-    Model::new(StoredModel::new(model, pins), history, validation)
+    let (model, history) = fitted.map_err(lab)?;
+    let stored = StoredModel::new(model, samples.pins.clone()).with_training(split.record);
+    let mut m = Model::new(stored, history, None)?;
+    if let Some(v) = val {
+        let samples = Samples::from_tap_data(v.clone(), None);
+        m.validation = Some(m.validation_of(py, &samples)?);
+    }
+    Ok(m)
 }

@@ -27,17 +27,19 @@ def test_predict_gives_the_cli_numbers(sim_set, sim_model):
     ours = [[f"{r:.4f}", f"{t:.4f}"] for r, t in pred]
     assert ours == cli_predictions(sim_model, sim_set)
     # One row gives one pose; other dtypes are used as float32.
-    assert np.array_equal(model.predict(inputs[7]), pred[7])
-    assert np.array_equal(model.predict(inputs.astype(np.float64)), pred)
-    assert np.array_equal(model.predict(inputs.tolist()), pred)
+    pins = meta["reference_pins"]
+    assert np.array_equal(model.predict(inputs[7], reference_pins=pins), pred[7])
+    assert np.array_equal(model.predict(inputs.astype(np.float64), reference_pins=pins), pred)
+    assert np.array_equal(model.predict(inputs.tolist(), reference_pins=pins), pred)
 
 
 def test_validate_is_the_cli_validate(sim_set, sim_model):
-    inputs, targets, _ = tactrace.load_dataset(sim_set)
+    inputs, targets, meta = tactrace.load_dataset(sim_set)
     model = tactrace.load_model(sim_model)
     cli = json.loads(run_cli("validate", "--model", sim_model, "--data", sim_set,
                              "--json").stdout)
-    assert model.validate(inputs, targets) == cli
+    with pytest.warns(UserWarning, match="400 of the 400 samples are rows the model"):
+        assert model.validate(inputs, targets, reference_pins=meta["reference_pins"]) == cli
 
 
 def test_train_is_the_cli_train(sim_set, work, tmp_path):
@@ -53,7 +55,9 @@ def test_train_is_the_cli_train(sim_set, work, tmp_path):
     saved = model.save(tmp_path / "m")
     for name in ["weights.safetensors", "model.json", "pins.json", "history.csv"]:
         assert (saved / name).read_bytes() == (out / name).read_bytes(), name
-    assert np.array_equal(tactrace.load_model(saved).predict(inputs), model.predict(inputs))
+    pins = meta["reference_pins"]
+    assert np.array_equal(tactrace.load_model(saved).predict(inputs, reference_pins=pins),
+                          model.predict(inputs, reference_pins=pins))
 
 
 def test_config_and_seed_reach_the_model(sim_set):
@@ -64,18 +68,20 @@ def test_config_and_seed_reach_the_model(sim_set):
     assert a.config["seed"] == 5 and a.config["position"]["hidden"] == [8]
     b = tactrace.train("pdennn", inputs, targets, pins, epochs=2, seed=6,
                        config={"position": {"hidden": [8]}})
-    assert not np.array_equal(a.predict(inputs), b.predict(inputs))
+    assert not np.array_equal(a.predict(inputs, reference_pins=pins),
+                              b.predict(inputs, reference_pins=pins))
 
 
 def test_bad_model_input_is_refused(sim_set, sim_model):
     inputs, targets, meta = tactrace.load_dataset(sim_set)
     model = tactrace.load_model(sim_model)
-    with pytest.raises(tactrace.InputError, match="takes 254 inputs per sample.*has 250"):
-        model.predict(inputs[:, :250])
+    pins = meta["reference_pins"]
+    with pytest.raises(tactrace.InputError, match="inputs has 250 columns but there are 127"):
+        model.predict(inputs[:, :250], reference_pins=pins)
     with pytest.raises(ValueError, match="inputs must be a N x M array"):
-        model.predict(inputs.reshape(400, 2, 127))
+        model.predict(inputs.reshape(400, 2, 127), reference_pins=pins)
     with pytest.raises(ValueError, match="not convertible"):
-        model.predict([["a", "b"]])
+        model.predict([["a", "b"]], reference_pins=pins)
     swapped = np.array(meta["reference_pins"])[[1, 0] + list(range(2, 127))]
     with pytest.raises(tactrace.InputError, match="not ordered like the model's training data"):
         model.predict(inputs, reference_pins=swapped)
@@ -88,7 +94,7 @@ def test_bad_model_input_is_refused(sim_set, sim_model):
     bad = inputs.copy()
     bad[3, 5] = np.nan
     with pytest.raises(tactrace.TactraceError, match="non-finite|NaN|finite"):
-        model.predict(bad)
+        model.predict(bad, reference_pins=pins)
 
 
 def test_ctrl_c_stops_training(sim_set):

@@ -79,12 +79,19 @@ impl TapData {
     /// Split into (first, second) with `frac` of the samples in the first,
     /// after a seeded shuffle; metadata is copied with the counts updated.
     pub fn split(&self, frac: f64, seed: u64) -> (TapData, TapData) {
+        let (first, second) = self.split_rows(frac, seed);
+        (self.subset(&first), self.subset(&second))
+    }
+
+    /// The row indices of the two parts of [`Self::split`], in its order.
+    pub fn split_rows(&self, frac: f64, seed: u64) -> (Vec<usize>, Vec<usize>) {
         use rand::seq::SliceRandom;
         use rand::SeedableRng;
         let mut idx: Vec<usize> = (0..self.len()).collect();
         idx.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
         let cut = ((self.len() as f64 * frac).round() as usize).min(self.len());
-        (self.subset(&idx[..cut]), self.subset(&idx[cut..]))
+        let second = idx.split_off(cut);
+        (idx, second)
     }
 
     /// Row of each sample by its frame's image name (imports and twins of
@@ -177,13 +184,14 @@ pub fn write_dataset(
 
 /// Read a dataset directory written by [`write_dataset`] (or by hand in Python).
 pub fn read_dataset(dir: &Path) -> Result<TapData> {
-    if !dir.is_dir() {
+    let meta_path = dir.join("meta.json");
+    if !dir.is_dir() || !meta_path.exists() {
+        use crate::folder_kind::{wrong_folder, DATASET_EXPECTED};
         return Err(StoreError::Format {
             path: dir.into(),
-            reason: "not a dataset directory (expected inputs.npy, targets.npy, meta.json)".into(),
+            reason: wrong_folder(dir, "dataset", "meta.json", DATASET_EXPECTED),
         });
     }
-    let meta_path = dir.join("meta.json");
     let meta_text = crate::fsutil::read_text(&meta_path)?;
     let meta: DatasetMeta = serde_json::from_str(&meta_text).map_err(|e| StoreError::Format {
         path: meta_path.clone(),

@@ -4,6 +4,8 @@
 //! - [`model_dir`]: a trained model with the reference pins of its training
 //!   data, loaded as one [`StoredModel`] so the pin-order check
 //!   ([`pin_order`]) runs whenever a model meets data or a rig;
+//! - [`training_record`]: which rows of which dataset a model was trained
+//!   on (content hashes), so scores on training rows are told apart;
 //! - [`frame_file`], [`shape_file`]: frames (PNG) and contours (CSV);
 //! - [`sensor_file`]: calibrated sensor folders (`tactrace calibrate`);
 //! - [`config_file`]: defaults, then the file, unknown keys rejected;
@@ -13,12 +15,14 @@
 //!   only, declared sizes checked against the file's); [`overlap`]: no
 //!   output in or around an input;
 //! - [`row_file`]: CSV files appended a whole row at a time.
+//! - [`folder_kind`]: what a folder given in the wrong place is.
 //!
 //! Every error names the file at fault ([`StoreError`]).
 
 pub mod config_file;
 pub mod dataset;
 pub mod error;
+pub mod folder_kind;
 pub mod frame_file;
 pub mod fsutil;
 pub mod input_file;
@@ -30,6 +34,7 @@ pub mod pin_order;
 pub mod row_file;
 pub mod sensor_file;
 pub mod shape_file;
+pub mod training_record;
 
 pub use config_file::{load_config, overlay, resolved_config_toml};
 pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData};
@@ -44,3 +49,4 @@ pub use overlap::{check_output_apart, check_output_outside};
 pub use pin_order::{pin_order_mismatch, PinOrderError};
 pub use sensor_file::SensorFolder;
 pub use shape_file::load_shape;
+pub use training_record::{HeldOut, TrainingRecord};

@@ -1,7 +1,9 @@
 //! Model folders: `model.json` (architecture, hyper-parameters,
 //! standardisation, PCA), `weights.safetensors`, `pins.json` (the reference
 //! pins of the training data, whose order the inputs follow; see
-//! [`crate::pin_order`]), `history.csv` and, written by the caller before
+//! [`crate::pin_order`]), `training.json` (which rows of which dataset it
+//! was trained on: [`crate::training_record`]; absent in folders written
+//! before it was kept), `history.csv` and, written by the caller before
 //! the folder is committed, the loss/energy figure (report Fig. 4.5).
 //!
 //! A loaded model is a [`StoredModel`]: the network and its reference pins
@@ -13,6 +15,7 @@ use crate::error::{write_err, Result, StoreError};
 use crate::fsutil::{read_text, StagedDir};
 use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
 use crate::pin_order::pin_order_mismatch;
+use crate::training_record::{TrainingRecord, TRAINING_FILE};
 use std::path::{Path, PathBuf};
 use tactrace_learn::{PoseModel, TrainingHistory};
 
@@ -32,6 +35,8 @@ struct PinsFile {
 pub struct StoredModel {
     model: PoseModel,
     reference_pins: Vec<[f64; 2]>,
+    /// What it was trained on; `None` when unknown (older folders).
+    training: Option<TrainingRecord>,
     /// Where it was loaded from (for messages); empty for one in memory.
     source: PathBuf,
 }
@@ -42,8 +47,15 @@ impl StoredModel {
         Self {
             model,
             reference_pins,
+            training: None,
             source: PathBuf::new(),
         }
+    }
+
+    /// The model with the record of what it was trained on.
+    pub fn with_training(mut self, training: TrainingRecord) -> Self {
+        self.training = Some(training);
+        self
     }
 
     /// Load a model folder written by [`stage_model`], with errors naming
@@ -51,11 +63,10 @@ impl StoredModel {
     pub fn load(dir: &Path) -> Result<Self> {
         let json_path = dir.join(MODEL_JSON);
         if !json_path.is_file() {
+            use crate::folder_kind::{wrong_folder, MODEL_EXPECTED};
             return Err(StoreError::Format {
                 path: dir.into(),
-                reason: format!(
-                    "not a model directory: no {MODEL_JSON} (train one with `tactrace train`)"
-                ),
+                reason: wrong_folder(dir, "model", MODEL_JSON, MODEL_EXPECTED),
             });
         }
         let json = read_text(&json_path)?;
@@ -79,8 +90,14 @@ impl StoredModel {
         Ok(Self {
             model,
             reference_pins,
+            training: read_training(dir)?,
             source: dir.to_path_buf(),
         })
+    }
+
+    /// What the model was trained on, when its folder records it.
+    pub fn training(&self) -> Option<&TrainingRecord> {
+        self.training.as_ref()
     }
 
     /// The training data's reference pins (px), in input order.
@@ -136,27 +153,47 @@ fn read_pins(dir: &Path) -> Result<Vec<[f64; 2]>> {
     Ok(file.reference_pins)
 }
 
-/// Write a trained model, the reference pins of its training data, its
-/// training history and `extra` text files `(name, contents)` into a staging
-/// folder for `dir`; the caller adds figures and commits it.
+/// `training.json` of `dir`, if there is one (older folders have none).
+fn read_training(dir: &Path) -> Result<Option<TrainingRecord>> {
+    let path = dir.join(TRAINING_FILE);
+    if !path.exists() {
+        return Ok(None);
+    }
+    let bad = |reason: String| StoreError::Format {
+        path: path.clone(),
+        reason,
+    };
+    let record: TrainingRecord =
+        serde_json::from_str(&read_text(&path)?).map_err(|e| bad(e.to_string()))?;
+    record.check().map_err(bad)?;
+    Ok(Some(record))
+}
+
+/// Write a trained model (with the reference pins of its training data and,
+/// when known, the record of its training rows), its training history and
+/// `extra` text files `(name, contents)` into a staging folder for `dir`;
+/// the caller adds figures and commits it.
 pub fn stage_model(
     dir: &Path,
-    model: &PoseModel,
-    reference_pins: &[[f64; 2]],
+    model: &StoredModel,
     history: &TrainingHistory,
     force: bool,
     extra: &[(&str, String)],
 ) -> Result<StagedDir> {
     let stage = StagedDir::new(dir, force)?;
     let pins = PinsFile {
-        reference_pins: reference_pins.to_vec(),
+        reference_pins: model.reference_pins.clone(),
     };
     let pins = serde_json::to_string(&pins).expect("pins serialise");
     write(&stage.path().join(PINS), pins.as_bytes())?;
+    if let Some(training) = &model.training {
+        let text = serde_json::to_string(training).expect("record serialises");
+        write(&stage.path().join(TRAINING_FILE), text.as_bytes())?;
+    }
     for (name, text) in extra {
         write(&stage.path().join(name), text.as_bytes())?;
     }
-    let (json, weights) = model.to_bytes().map_err(|e| StoreError::Format {
+    let (json, weights) = model.model.to_bytes().map_err(|e| StoreError::Format {
         path: dir.into(),
         reason: e.to_string(),
     })?;

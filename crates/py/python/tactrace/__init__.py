@@ -6,16 +6,21 @@ angles degrees, image quantities pixels. Errors are ``TactraceError``;
 bad input (what the CLI exits 2 for) is ``InputError``, also a
 ``ValueError``; a run that failed (exit 1) is ``RunFailedError``.
 
+A model is always given the pin order of its inputs: a dataset (a folder,
+or what ``load_dataset`` returns) or arrays with ``reference_pins``.
+
 >>> import tactrace
->>> inputs, targets, meta = tactrace.load_dataset("data/sim_train")
->>> model = tactrace.load_model("models/pdennn")
->>> pose = model.predict(inputs)             # (N, 2): r mm, theta deg
+>>> inputs, targets, meta = tactrace.load_dataset("runs/reproduce/data/val")
+>>> model = tactrace.load_model("runs/reproduce/models/pdennn")
+>>> pose = model.predict(inputs, reference_pins=meta["reference_pins"])  # (N, 2)
+>>> model.validate("runs/reproduce/data/val")["rows_seen_in_training"]
+0
 >>> tip = tactrace.SimTacTip()
 >>> frame = tip.render(r_mm=1.0, theta_deg=10.0)   # uint8 (256, 256)
 >>> pins = tactrace.PinExtractor(tip.render_rest(), preset="sim")
 >>> pins.displacement(frame).shape
 (254,)
->>> run = tactrace.follow(model, "flower")
+>>> run = tactrace.follow(model, "flower")   # or sensor=FOLDER, replay=DIR
 >>> run["closed"], run["mean_l2_mm"]
 """
 

@@ -29,6 +29,10 @@ def save_dataset(
     force: bool = False,
 ) -> str: ...
 
+Samples = Union[StrPath, Tuple[ArrayLike, ArrayLike, dict], ArrayLike]
+"""A dataset folder, the (inputs, targets, meta) of load_dataset, or an
+N x 2P array of inputs (then reference_pins is required)."""
+
 class Model:
     @property
     def reference_pins(self) -> npt.NDArray[np.float64]: ...
@@ -42,13 +46,15 @@ class Model:
     def history(self) -> list: ...
     @property
     def validation(self) -> Optional[dict]: ...
+    @property
+    def training(self) -> Optional[dict]: ...
     def predict(
-        self, inputs: ArrayLike, *, reference_pins: Optional[ArrayLike] = None
+        self, data: Samples, *, reference_pins: Optional[ArrayLike] = None
     ) -> npt.NDArray[np.float64]: ...
     def validate(
         self,
-        inputs: ArrayLike,
-        targets: ArrayLike,
+        data: Samples,
+        targets: Optional[ArrayLike] = None,
         *,
         reference_pins: Optional[ArrayLike] = None,
     ) -> dict: ...
@@ -57,9 +63,9 @@ class Model:
 def load_model(dir: StrPath) -> Model: ...
 def train(
     kind: str,
-    inputs: ArrayLike,
-    targets: ArrayLike,
-    reference_pins: ArrayLike,
+    data: Samples,
+    targets: Optional[ArrayLike] = None,
+    reference_pins: Optional[ArrayLike] = None,
     *,
     epochs: Optional[int] = None,
     seed: Optional[int] = None,
@@ -130,6 +136,8 @@ def follow(
     config: Optional[Config] = None,
     seed: Optional[int] = None,
     *,
+    sensor: Optional[StrPath] = None,
+    replay: Optional[Union[StrPath, dict]] = None,
     force: bool = False,
     check: bool = True,
 ) -> dict[str, Any]: ...

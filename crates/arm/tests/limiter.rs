@@ -225,20 +225,22 @@ fn issue20_the_refuse_rule_refuses_infinite_steps_and_clamp_never_leaves_the_box
     assert!(matches!(err, ArmError::StepTooLarge { step_mm, .. } if step_mm.is_infinite()));
     assert!(ws.check_move(at(0.0), at(10.0)).is_ok());
     let err = ws.check_inside(Pose::planar(f64::NAN, 0.0, 0.0, 0.0));
-    assert!(matches!(err, Err(ArmError::OutsideWorkspace { axis: 'x', .. })));
+    assert!(matches!(
+        err,
+        Err(ArmError::OutsideWorkspace { axis: 'x', .. })
+    ));
     // Clamp mode from outside the box: a step that would end outside it
     // is refused, never sent.
     let mut a = reporting(LimitMode::Clamp, Pose::planar(500.0, 0.0, 0.0, 0.0));
     let err = a.move_to(Pose::planar(0.0, 0.0, 0.0, 0.0)).unwrap_err();
-    assert!(
-        matches!(err, ArmError::OutsideWorkspace { .. }),
-        "{err}"
-    );
+    assert!(matches!(err, ArmError::OutsideWorkspace { .. }), "{err}");
     assert_eq!(a.inner().moves, 0);
     // A NaN target is refused in both modes, before the arm is asked.
     for mode in [LimitMode::Refuse, LimitMode::Clamp] {
         let mut a = reporting(mode, Pose::default());
-        let err = a.move_to(Pose::planar(0.0, f64::NAN, 0.0, 0.0)).unwrap_err();
+        let err = a
+            .move_to(Pose::planar(0.0, f64::NAN, 0.0, 0.0))
+            .unwrap_err();
         assert!(matches!(err, ArmError::NonFinitePose { .. }), "{err}");
         assert_eq!(a.inner().moves, 0);
     }

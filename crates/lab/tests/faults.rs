@@ -384,6 +384,7 @@ fn hardware_run_on(
         &f.model,
         Some(("disk", &f.disk)),
         (&run.out, false),
+        &tactrace_lab::hardware::StopFlag::new(),
         &mut |_| {},
     )
     .unwrap();

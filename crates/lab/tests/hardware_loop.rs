@@ -85,6 +85,7 @@ fn rig_file(fake: &FakeUrController, frames: &Path, x: f64, y: f64, angle: f64) 
         camera: FrameSourceConfig::Folder {
             path: frames.to_path_buf(),
             looping: false,
+            preprocessed: false,
         },
         preprocess: PreprocessConfig::grayscale_only(),
         workspace: Workspace {

@@ -104,6 +104,7 @@ fn rig_file(fake: &FakeUrController) -> HardwareConfig {
         camera: FrameSourceConfig::Folder {
             path: f.frames.clone(),
             looping: true,
+            preprocessed: false,
         },
         preprocess: PreprocessConfig::grayscale_only(),
         workspace: Workspace {

@@ -49,11 +49,15 @@ pub enum FrameSourceConfig {
     /// An external capture program per frame (`[camera.command]`).
     Command(CommandSourceConfig),
     /// Replay the images of a folder in natural order (`[camera.folder]`):
-    /// dry runs and tests without a camera.
+    /// dry runs and tests without a camera. With `preprocessed = true` the
+    /// images are taken as already preprocessed frames (a dataset's
+    /// `frames/`) and `[preprocess]` is not applied to them.
     Folder {
         path: PathBuf,
         #[serde(default)]
         looping: bool,
+        #[serde(default)]
+        preprocessed: bool,
     },
 }
 
@@ -179,7 +183,15 @@ impl HardwareConfig {
         Ok(match &self.camera {
             FrameSourceConfig::V4l2(c) => boxed(open_v4l2(c)?, preprocess),
             FrameSourceConfig::Command(c) => boxed(CommandSource::from_config(c)?, preprocess),
-            FrameSourceConfig::Folder { path, looping } => {
+            FrameSourceConfig::Folder {
+                path,
+                looping,
+                preprocessed,
+            } => {
+                let preprocess = match preprocessed {
+                    true => PreprocessConfig::grayscale_only().validate()?,
+                    false => preprocess,
+                };
                 boxed(FolderSource::new(path)?.looping(*looping), preprocess)
             }
         })

@@ -6,10 +6,11 @@
 //! the step shortened (translation and rotation separately) along the same
 //! direction, so a runaway controller slows down instead of stopping.
 //!
-//! Every comparison is written so that a NaN refuses (`!(step <= max)`,
-//! never `step > max`, which is false for NaN), and both the target and
-//! the arm's current pose must be finite ([`FinitePose`]) before anything
-//! is compared: a NaN in either is an error, never a move.
+//! Every comparison is written so that a NaN refuses: a move passes only
+//! when `step <= max` holds (false for NaN), never because `step > max`
+//! failed (also false for NaN). Both the target and the arm's current pose
+//! must be finite ([`FinitePose`]) before anything is compared: a NaN in
+//! either is an error, never a move.
 use crate::{Arm, ArmError, FinitePose};
 use nalgebra::UnitQuaternion;
 use serde::{Deserialize, Serialize};
@@ -100,14 +101,16 @@ impl Workspace {
     pub fn check_move(&self, current: FinitePose, target: FinitePose) -> Result<(), ArmError> {
         self.check_inside(*target)?;
         let step_mm = current.distance(*target);
-        if !(step_mm <= self.max_step_mm + SLACK) {
+        let short = step_mm <= self.max_step_mm + SLACK;
+        if !short {
             return Err(ArmError::StepTooLarge {
                 step_mm,
                 max_mm: self.max_step_mm,
             });
         }
         let step_deg = current.angle_to(*target);
-        if !(step_deg <= self.max_step_deg + SLACK) {
+        let small = step_deg <= self.max_step_deg + SLACK;
+        if !small {
             return Err(ArmError::RotationTooLarge {
                 step_deg,
                 max_deg: self.max_step_deg,

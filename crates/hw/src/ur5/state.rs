@@ -43,7 +43,8 @@ impl ToolPose {
             return Err(bad(format!("{} is {}", NAMES[k], v[k])));
         }
         let reach = length([v[0], v[1], v[2]]);
-        if !(reach <= MAX_REACH_M) {
+        let near = reach <= MAX_REACH_M;
+        if !near {
             return Err(bad(format!(
                 "its position is {} m from the robot's base, beyond the {MAX_REACH_M} m \
                  any UR arm reaches",
@@ -51,7 +52,8 @@ impl ToolPose {
             )));
         }
         let angle = length([v[3], v[4], v[5]]);
-        if !(angle <= MAX_ROTATION_RAD) {
+        let turn = angle <= MAX_ROTATION_RAD;
+        if !turn {
             return Err(bad(format!(
                 "its rotation vector is {} rad long, more than a full turn",
                 amount(angle)

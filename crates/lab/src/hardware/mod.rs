@@ -14,7 +14,7 @@
 //! and the error is [`LabError::Interrupted`]. A failure on the way to the
 //! start is [`LabError::StartMove`]: the limiter's refusal (too far from
 //! the start) apart from a fault of the arm. `tactrace rig check` is in
-//! [`check`].
+//! [`rig_check`] (module `check`).
 mod check;
 
 pub use check::{rig_check, RigCheck, RigCheckItem};

@@ -58,12 +58,18 @@ pub enum LabError {
         #[source]
         source: tactrace_arm::ArmError,
     },
-    /// A hardware run stopped by SIGINT or SIGTERM, the arm sent `stopl`;
-    /// what the run did so far is kept in `kept`, if anything.
+    /// A hardware run stopped by SIGINT or SIGTERM: the arm, if it was
+    /// connected (`arm_stopped`), was sent `stopl`; what the run did so far
+    /// is kept in `kept`, if anything.
     #[cfg(feature = "hardware")]
-    #[error("interrupted by {signal}: the arm was stopped (stopl sent){}", kept_text(.kept))]
+    #[error(
+        "interrupted by {signal}: {}{}",
+        if *.arm_stopped { "the arm was sent stopl" } else { "before the arm was connected" },
+        kept_text(.kept)
+    )]
     Interrupted {
         signal: tactrace_hw::StopSignal,
+        arm_stopped: bool,
         kept: Option<PathBuf>,
     },
 }

@@ -272,10 +272,16 @@ fn issue20_a_stop_mid_follow_sends_stopl_and_keeps_the_steps_in_partial() {
     let stop = StopFlag::new();
     let run = follow_on(&rig_file(&fake), &stop, Some(2));
     let err = run.result.unwrap_err();
-    let LabError::Interrupted { signal, kept } = &err else {
+    let LabError::Interrupted {
+        signal,
+        arm_stopped,
+        kept,
+    } = &err
+    else {
         panic!("{err}");
     };
-    assert_eq!(*signal, StopSignal::Interrupt);
+    assert_eq!((*signal, *arm_stopped), (StopSignal::Interrupt, true));
+    assert!(err.to_string().contains("the arm was sent stopl"), "{err}");
     assert_eq!(err.signal_exit_code(), Some(130));
     assert_eq!(kept.as_deref(), Some(partial(&run.out).as_path()));
     assert!(stop.halted());
@@ -292,6 +298,30 @@ fn issue20_a_stop_mid_follow_sends_stopl_and_keeps_the_steps_in_partial() {
     // The start, the tap down, the tap up and the next pose of steps 0
     // and 1, step 2's tap: nothing after the request but stopl.
     assert_eq!(moves(&lines), (1 + 3 * 2 + 2, true), "{lines:#?}");
+}
+
+#[test]
+fn issue20_a_stop_before_the_arm_is_connected_moves_nothing() {
+    let fake = fake_near_start(FakeUrOptions::default());
+    let stop = StopFlag::new();
+    stop.request(StopSignal::Terminate);
+    let run = follow_on(&rig_file(&fake), &stop, None);
+    let err = run.result.unwrap_err();
+    assert!(
+        matches!(
+            err,
+            LabError::Interrupted {
+                signal: StopSignal::Terminate,
+                arm_stopped: false,
+                kept: None
+            }
+        ),
+        "{err}"
+    );
+    assert_eq!(err.signal_exit_code(), Some(143));
+    assert!(stop.halted(), "a second signal may end the process now");
+    assert!(!run.out.exists() && !partial(&run.out).exists());
+    assert_eq!(moves(&fake.received_lines()).0, 0);
 }
 
 #[test]
@@ -324,6 +354,7 @@ fn issue20_a_stop_mid_collection_sends_stopl_and_ends_it() {
             err,
             LabError::Interrupted {
                 signal: StopSignal::Terminate,
+                arm_stopped: true,
                 kept: None
             }
         ),

@@ -247,6 +247,7 @@ pub fn follow_hardware(
         }
         return Err(LabError::Interrupted {
             signal,
+            arm_stopped: true,
             kept: Some(run.path().to_path_buf()),
         });
     }
@@ -283,10 +284,15 @@ fn halt(arm: &mut LimitedArm<Ur5Arm>, signal: StopSignal) -> Result<()> {
 /// The error of a run stopped by `signal`: the arm, if connected, sent
 /// `stopl` first (if that fails, the run's error says so instead).
 fn stopped(signal: StopSignal, stop: &StopFlag, arm: Option<&mut LimitedArm<Ur5Arm>>) -> LabError {
+    let arm_stopped = arm.is_some();
     match arm.map_or(Ok(()), |a| halt(a, signal)) {
         Ok(()) => {
             stop.mark_halted();
-            LabError::Interrupted { signal, kept: None }
+            LabError::Interrupted {
+                signal,
+                arm_stopped,
+                kept: None,
+            }
         }
         Err(e) => e,
     }

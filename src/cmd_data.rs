@@ -6,7 +6,7 @@ use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
 use tactrace_geometry::ShapeSpec;
 use tactrace_lab::collect::{collect as run_collect, collect_calibrated, CollectConfig};
-use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareConfig};
+use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareConfig, StopFlag};
 use tactrace_lab::render::{TapPose, TapRenderer};
 use tactrace_lab::{import as imp, LabError};
 use tactrace_servo::RigConfig;
@@ -110,8 +110,10 @@ fn collect_hardware(a: &CollectArgs, path: &Path) -> Result<()> {
         ..CollectConfig::default()
     };
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
+    // SIGINT / SIGTERM stop the arm (stopl) and the collection: exit 130 / 143.
+    let stop = StopFlag::on_signals().map_err(LabError::from)?;
     let pb = bar(a.samples as u64, "collect");
-    let got = collect_hardware_on(&hw, &cfg, "real rig", |i| pb.set_position(i as u64))?;
+    let got = collect_hardware_on(&hw, &cfg, "real rig", &stop, |i| pb.set_position(i as u64))?;
     pb.finish_and_clear();
     let dir = dataset::write_dataset(&a.out, &got.data, &got.frames, a.force)?;
     eprintln!(

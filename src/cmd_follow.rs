@@ -8,7 +8,7 @@ use tactrace_geometry::ShapeSpec;
 use tactrace_lab::follow::{
     follow_simulated, size_warning, tactip_diameter_mm, FollowOutcome, SimFollowConfig,
 };
-use tactrace_lab::hardware::{follow_hardware as follow_on_hardware, HardwareConfig};
+use tactrace_lab::hardware::{follow_hardware as follow_on_hardware, HardwareConfig, StopFlag};
 use tactrace_lab::replay_world::{follow_replay, ReplayOptions, ReplayWorld};
 use tactrace_lab::reproduce::{reproduce as run_reproduce, ReproduceConfig};
 use tactrace_lab::LabError;
@@ -464,12 +464,16 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
         None => None,
     };
     let model = StoredModel::load(&a.model)?;
+    // From here on SIGINT / SIGTERM stop the arm (stopl) instead of the
+    // process; the run keeps its steps and exits 130 / 143.
+    let stop = StopFlag::on_signals().map_err(LabError::from)?;
     let pb = bar(cfg.follow.step_limit() as u64, "follow");
     let res = follow_on_hardware(
         &cfg,
         &model,
         shape.as_ref().map(|(n, c)| (n.as_str(), c)),
         (&a.out, a.force),
+        &stop,
         &mut |r| pb.set_position(r.step as u64 + 1),
     );
     pb.finish_and_clear();

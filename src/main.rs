@@ -2,8 +2,9 @@
 //! I/O), turned into run configurations, and handed to `tactrace-lab`.
 //! Exit codes: 0 success, 1 a run failed (lost contact, unreachable
 //! contour, diverged, a fault, an output that could not be written), 2 bad
-//! input (arguments, files, configuration, data). A closed standard output
-//! (`tactrace predict ... | head`) ends the command quietly with 0.
+//! input (arguments, files, configuration, data), 130 / 143 a hardware run
+//! stopped by SIGINT / SIGTERM (the arm sent `stopl`). A closed standard
+//! output (`tactrace predict ... | head`) ends the command quietly with 0.
 
 mod cmd_completions;
 mod cmd_data;
@@ -126,6 +127,9 @@ fn is_broken_pipe(err: &anyhow::Error) -> bool {
 fn exit_code(err: &anyhow::Error) -> u8 {
     for e in err.chain() {
         if let Some(lab) = e.downcast_ref::<tactrace_lab::LabError>() {
+            if let Some(code) = lab.signal_exit_code() {
+                return code;
+            }
             return if lab.is_bad_input() { 2 } else { 1 };
         }
         if let Some(store) = e.downcast_ref::<tactrace_store::StoreError>() {

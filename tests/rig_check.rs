@@ -7,8 +7,8 @@ mod util;
 use std::time::Duration;
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_hw::{
-    FakeDashboard, FakeDashboardState, FakeUrController, FakeUrOptions, PreprocessConfig,
-    StateInterface,
+    FakeDashboard, FakeDashboardState, FakeStateFault, FakeUrController, FakeUrOptions,
+    PreprocessConfig, StateInterface,
 };
 use tactrace_lab::follow::SimFollowConfig;
 use tactrace_lab::hardware::{FrameSourceConfig, HardwareConfig, HardwareStart};
@@ -49,6 +49,7 @@ fn write_rig(
         camera: FrameSourceConfig::Folder {
             path: frames.to_path_buf(),
             looping: true,
+            preprocessed: false,
         },
         preprocess: PreprocessConfig::default(),
         workspace: tactrace_arm::Workspace {
@@ -325,4 +326,82 @@ fn camera_list_and_grab_say_clearly_when_there_is_no_camera() {
     );
     assert_eq!(run.code, 2, "{}", run.stderr);
     assert_eq!(std::fs::read(dir.join("f.png")).unwrap(), b"keep");
+}
+
+/// Issue 20: `rig check` said "all ready" with the tool 666 mm from the
+/// start (which `follow` then refuses) and with a state of 1e306 m (the
+/// tool at NaN in the work frame). Both are not ready, exit 1, with the
+/// reason; nothing is commanded.
+#[test]
+fn issue20_rig_check_is_not_ready_far_from_the_start_or_on_an_impossible_state() {
+    let dir = TempDir::new("rig-check-issue20");
+    let frames = reference_frame(&dir);
+    let cases = [
+        (666.0, FakeStateFault::None, "666.0 mm from the start"),
+        (
+            0.0,
+            FakeStateFault::HugePosition,
+            "impossible actual TCP pose",
+        ),
+        (0.0, FakeStateFault::NotFinite, "not finite"),
+    ];
+    for (dx, state_fault, reason) in cases {
+        let ur = FakeUrController::start(FakeUrOptions {
+            start: [
+                (START.0 + dx) / 1000.0,
+                START.1 / 1000.0,
+                0.010,
+                0.0,
+                0.0,
+                0.0,
+            ],
+            state: StateInterface::Rtde,
+            state_fault,
+            lifetime: Duration::from_secs(20),
+            ..FakeUrOptions::default()
+        })
+        .unwrap();
+        let dash =
+            FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();
+        write_rig(&dir, &ur, &dash, &frames);
+        let run = tactrace(&dir.0, &["rig", "check", "rig.toml"]);
+        assert_eq!(run.code, 1, "{}\n{}", run.stdout, run.stderr);
+        let state = line(&run, "state");
+        assert!(
+            state.contains("NOT READY") && state.contains(reason),
+            "{}",
+            run.stdout
+        );
+        assert!(!state.contains("NaN"), "{state}");
+        assert!(!run.stdout.contains("all ready"), "{}", run.stdout);
+        if dx > 0.0 {
+            assert!(state.contains("follow would refuse the move to the start"));
+        }
+        assert!(
+            ur.received_lines().is_empty(),
+            "rig check commanded the arm"
+        );
+    }
+}
+
+/// Issue 20: `camera grab` on a path that is no camera exited 1 (a failed
+/// run); it is bad input, 2, saying so, and the file is untouched.
+#[test]
+fn issue20_camera_grab_on_a_non_camera_path_exits_2() {
+    let dir = TempDir::new("camera-not");
+    std::fs::write(dir.join("notes.txt"), b"not a camera").unwrap();
+    let folder = dir.0.display().to_string();
+    for device in ["notes.txt", "/dev/null", folder.as_str()] {
+        let run = tactrace(
+            &dir.0,
+            &["camera", "grab", "--device", device, "--out", "f.png"],
+        );
+        assert_eq!(run.code, 2, "{device}: {}", run.stderr);
+        assert!(run.stderr.contains("is not a camera"), "{}", run.stderr);
+        assert!(!dir.join("f.png").exists());
+    }
+    assert_eq!(
+        std::fs::read(dir.join("notes.txt")).unwrap(),
+        b"not a camera"
+    );
 }

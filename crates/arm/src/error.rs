@@ -26,6 +26,13 @@ pub enum ArmError {
     /// A pose with a NaN or infinite component.
     #[error("pose {} has a non-finite component", plain(.pose))]
     NonFinitePose { pose: Pose },
+    /// The arm reports a current pose with a NaN or infinite component: no
+    /// step from it can be checked, so no move is made.
+    #[error(
+        "the arm's current pose {} has a non-finite component: no move can be checked from it",
+        plain(.pose)
+    )]
+    CurrentPoseNotFinite { pose: Pose },
     /// A configuration value that cannot be used.
     #[error("invalid arm configuration: {field} = {value} ({reason})")]
     InvalidConfig {

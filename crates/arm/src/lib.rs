@@ -4,13 +4,17 @@
 //! (poses reached up to a configurable repeatability); [`LimitedArm`] wraps
 //! any arm and refuses or clamps moves outside a workspace box or larger
 //! than a maximum step. A real UR5 driver implements the same trait.
+//! [`FinitePose`] is a pose checked to be finite, which the limiter and the
+//! real arm's driver work on.
 
 mod error;
+mod finite;
 mod limiter;
 mod sim;
 mod traits;
 
 pub use error::{ArmError, DriverError};
+pub use finite::FinitePose;
 pub use limiter::{LimitMode, LimitedArm, Workspace};
 pub use sim::{PoseProbe, SimArm, SimArmConfig};
 pub use tactrace_geometry::Pose;

@@ -5,7 +5,13 @@
 //! put; in [`LimitMode::Clamp`] the target is projected into the box and
 //! the step shortened (translation and rotation separately) along the same
 //! direction, so a runaway controller slows down instead of stopping.
-use crate::{Arm, ArmError};
+//!
+//! Every comparison is written so that a NaN refuses: a move passes only
+//! when `step <= max` holds (false for NaN), never because `step > max`
+//! failed (also false for NaN). Both the target and the arm's current pose
+//! must be finite ([`FinitePose`]) before anything is compared: a NaN in
+//! either is an error, never a move.
+use crate::{Arm, ArmError, FinitePose};
 use nalgebra::UnitQuaternion;
 use serde::{Deserialize, Serialize};
 use tactrace_geometry::Pose;
@@ -69,11 +75,13 @@ impl Workspace {
         Ok(())
     }
 
-    /// The first axis on which `pose` is outside the box.
+    /// The first axis on which `pose` is outside the box (a NaN
+    /// coordinate is outside).
     pub fn check_inside(&self, pose: Pose) -> Result<(), ArmError> {
         let p = [pose.x, pose.y, pose.z];
         for k in 0..3 {
-            if p[k] < self.min[k] - SLACK || p[k] > self.max[k] + SLACK {
+            let inside = p[k] >= self.min[k] - SLACK && p[k] <= self.max[k] + SLACK;
+            if !inside {
                 return Err(ArmError::OutsideWorkspace {
                     pose,
                     axis: AXES[k],
@@ -82,6 +90,31 @@ impl Workspace {
                     max_mm: self.max[k],
                 });
             }
+        }
+        Ok(())
+    }
+
+    /// The rule of [`LimitMode::Refuse`] for one move from `current` to
+    /// `target`: the target inside the box, the straight-line step and the
+    /// rotation within the step limits. `tactrace rig check` applies it to
+    /// the move to the start, as `follow` will.
+    pub fn check_move(&self, current: FinitePose, target: FinitePose) -> Result<(), ArmError> {
+        self.check_inside(*target)?;
+        let step_mm = current.distance(*target);
+        let short = step_mm <= self.max_step_mm + SLACK;
+        if !short {
+            return Err(ArmError::StepTooLarge {
+                step_mm,
+                max_mm: self.max_step_mm,
+            });
+        }
+        let step_deg = current.angle_to(*target);
+        let small = step_deg <= self.max_step_deg + SLACK;
+        if !small {
+            return Err(ArmError::RotationTooLarge {
+                step_deg,
+                max_deg: self.max_step_deg,
+            });
         }
         Ok(())
     }
@@ -147,44 +180,38 @@ impl<A: Arm> LimitedArm<A> {
         self.mode
     }
 
-    /// The move the limits allow towards `target` (Refuse: `target` or an error).
-    pub fn limit(&self, target: Pose) -> Result<Pose, ArmError> {
+    /// The move the limits allow towards `target` (Refuse: `target` or an
+    /// error). A non-finite target, or a non-finite current pose of the
+    /// wrapped arm, is an error in both modes.
+    pub fn limit(&self, target: Pose) -> Result<FinitePose, ArmError> {
         self.workspace.validate()?;
-        if !target.is_finite() {
-            return Err(ArmError::NonFinitePose { pose: target });
-        }
-        let current = self.inner.pose();
+        let target = FinitePose::new(target)?;
+        let now = self.inner.pose();
+        let current =
+            FinitePose::new(now).map_err(|_| ArmError::CurrentPoseNotFinite { pose: now })?;
         match self.mode {
-            LimitMode::Refuse => self.refuse(current, target),
-            LimitMode::Clamp => Ok(self.clamp(current, target)),
+            LimitMode::Refuse => {
+                self.workspace.check_move(current, target)?;
+                Ok(target)
+            }
+            LimitMode::Clamp => self.clamp(current, target),
         }
     }
 
-    fn refuse(&self, current: Pose, target: Pose) -> Result<Pose, ArmError> {
-        self.workspace.check_inside(target)?;
-        let step_mm = current.distance(target);
-        if step_mm > self.workspace.max_step_mm + SLACK {
+    /// Project into the box, then shorten the translation and the rotation.
+    /// With `current` inside the box the result stays inside (the box is
+    /// convex and the shortened step lies on the segment to the clamped
+    /// target); a result outside the box (the arm was outside it), or a
+    /// step too long to measure (overflow to infinity), is refused.
+    fn clamp(&self, current: FinitePose, target: FinitePose) -> Result<FinitePose, ArmError> {
+        let boxed = self.workspace.clamp(*target);
+        let step_mm = current.distance(boxed);
+        if !step_mm.is_finite() {
             return Err(ArmError::StepTooLarge {
                 step_mm,
                 max_mm: self.workspace.max_step_mm,
             });
         }
-        let step_deg = current.angle_to(target);
-        if step_deg > self.workspace.max_step_deg + SLACK {
-            return Err(ArmError::RotationTooLarge {
-                step_deg,
-                max_deg: self.workspace.max_step_deg,
-            });
-        }
-        Ok(target)
-    }
-
-    /// Project into the box, then shorten the translation and the rotation.
-    /// With `current` inside the box the result stays inside (the box is
-    /// convex and the shortened step lies on the segment to the clamped target).
-    fn clamp(&self, current: Pose, target: Pose) -> Pose {
-        let boxed = self.workspace.clamp(target);
-        let step_mm = current.distance(boxed);
         let f = if step_mm > self.workspace.max_step_mm {
             self.workspace.max_step_mm / step_mm
         } else {
@@ -197,7 +224,7 @@ impl<A: Arm> LimitedArm<A> {
         ];
         let step_deg = current.angle_to(boxed);
         let orientation = if step_deg > self.workspace.max_step_deg {
-            let (from, to) = (rotation(current), rotation(boxed));
+            let (from, to) = (rotation(*current), rotation(boxed));
             let t = self.workspace.max_step_deg / step_deg;
             let q = from.try_slerp(&to, t, 1e-12).unwrap_or(to);
             let (rx, ry, rz) = q.euler_angles();
@@ -205,14 +232,16 @@ impl<A: Arm> LimitedArm<A> {
         } else {
             [boxed.rx, boxed.ry, boxed.rz]
         };
-        Pose::new(
+        let moved = FinitePose::new(Pose::new(
             position[0],
             position[1],
             position[2],
             orientation[0],
             orientation[1],
             orientation[2],
-        )
+        ))?;
+        self.workspace.check_inside(*moved)?;
+        Ok(moved)
     }
 }
 
@@ -223,7 +252,7 @@ fn rotation(p: Pose) -> UnitQuaternion<f64> {
 impl<A: Arm> Arm for LimitedArm<A> {
     fn move_to(&mut self, pose: Pose) -> Result<(), ArmError> {
         let allowed = self.limit(pose)?;
-        self.inner.move_to(allowed)
+        self.inner.move_to(allowed.pose())
     }
 
     fn pose(&self) -> Pose {

@@ -1,5 +1,7 @@
 //! The workspace/step limiter in both modes, around a noiseless SimArm.
-use tactrace_arm::{Arm, ArmError, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig, Workspace};
+use tactrace_arm::{
+    Arm, ArmError, FinitePose, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig, Workspace,
+};
 
 fn arm(mode: LimitMode, start: Pose) -> LimitedArm<SimArm> {
     let sim = SimArm::new(
@@ -127,4 +129,119 @@ fn configs_read_from_toml_with_defaults_and_reject_typos() {
         .try_into()
         .unwrap();
     assert_eq!(mode, LimitMode::Clamp);
+}
+
+/// An arm that reports whatever pose it is given (a driver reading a
+/// controller's state) and counts the moves that reach it.
+struct Reporting {
+    pose: Pose,
+    moves: usize,
+}
+
+impl Arm for Reporting {
+    fn move_to(&mut self, pose: Pose) -> Result<(), ArmError> {
+        self.moves += 1;
+        self.pose = pose;
+        Ok(())
+    }
+    fn pose(&self) -> Pose {
+        self.pose
+    }
+}
+
+fn reporting(mode: LimitMode, current: Pose) -> LimitedArm<Reporting> {
+    let ws = Workspace {
+        min: [-100.0, -100.0, -10.0],
+        max: [100.0, 100.0, 50.0],
+        max_step_mm: 10.0,
+        max_step_deg: 30.0,
+    };
+    LimitedArm::new(
+        Reporting {
+            pose: current,
+            moves: 0,
+        },
+        ws,
+        mode,
+    )
+}
+
+/// Issue 20: a NaN, infinite or absurdly large current pose (a controller
+/// state of 1e306 m became NaN in the work frame) let the step check pass,
+/// since `NaN > max_step` is false. Every such current pose must refuse,
+/// in both modes, and nothing may reach the arm.
+#[test]
+fn issue20_a_nan_inf_or_huge_current_pose_refuses_every_move() {
+    let target = Pose::planar(1.0, 2.0, 3.0, 4.0);
+    let non_finite = [
+        Pose::planar(f64::NAN, f64::NAN, f64::NAN, 0.0),
+        Pose::planar(0.0, 0.0, f64::INFINITY, 0.0),
+        Pose::new(0.0, 0.0, 0.0, f64::NAN, 0.0, 0.0),
+        Pose::new(0.0, 0.0, 0.0, 0.0, 0.0, f64::NEG_INFINITY),
+    ];
+    for mode in [LimitMode::Refuse, LimitMode::Clamp] {
+        for current in non_finite {
+            let mut a = reporting(mode, current);
+            let err = a.move_to(target).unwrap_err();
+            assert!(
+                matches!(err, ArmError::CurrentPoseNotFinite { .. }),
+                "{mode:?} {current:?}: {err}"
+            );
+            assert!(err.to_string().contains("NaN") || err.to_string().contains("inf"));
+            assert_eq!(a.inner().moves, 0, "{mode:?} {current:?}");
+        }
+        let huge = [
+            Pose::planar(1e306, 0.0, 0.0, 0.0),
+            Pose::planar(-1e200, 1e200, 1e200, 0.0),
+            Pose::planar(f64::MAX, f64::MAX, 0.0, 0.0),
+        ];
+        for current in huge {
+            let mut a = reporting(mode, current);
+            let err = a.move_to(target).unwrap_err();
+            assert!(
+                matches!(err, ArmError::StepTooLarge { .. }),
+                "{mode:?} {current:?}: {err}"
+            );
+            assert_eq!(a.inner().moves, 0, "{mode:?} {current:?}");
+        }
+        // A rotation of 1e200 degrees is finite; the turn it implies is
+        // measured like any other.
+        let mut a = reporting(mode, Pose::new(1.0, 2.0, 3.0, 1e200, 0.0, 0.0));
+        match a.move_to(target) {
+            Err(ArmError::RotationTooLarge { step_deg, .. }) => assert!(step_deg.is_finite()),
+            Ok(()) => assert!(a.pose().is_finite() && a.inner().moves == 1),
+            Err(e) => panic!("{mode:?}: {e}"),
+        }
+    }
+}
+
+/// Issue 20: NaN-proof comparisons in the rule itself, on finite poses
+/// whose steps overflow to infinity or whose box check sees a NaN.
+#[test]
+fn issue20_the_refuse_rule_refuses_infinite_steps_and_clamp_never_leaves_the_box() {
+    let ws = Workspace::default();
+    let at = |x: f64| FinitePose::new(Pose::planar(x, 0.0, 0.0, 0.0)).unwrap();
+    let err = ws.check_move(at(1e300), at(0.0)).unwrap_err();
+    assert!(matches!(err, ArmError::StepTooLarge { step_mm, .. } if step_mm.is_infinite()));
+    assert!(ws.check_move(at(0.0), at(10.0)).is_ok());
+    let err = ws.check_inside(Pose::planar(f64::NAN, 0.0, 0.0, 0.0));
+    assert!(matches!(
+        err,
+        Err(ArmError::OutsideWorkspace { axis: 'x', .. })
+    ));
+    // Clamp mode from outside the box: a step that would end outside it
+    // is refused, never sent.
+    let mut a = reporting(LimitMode::Clamp, Pose::planar(500.0, 0.0, 0.0, 0.0));
+    let err = a.move_to(Pose::planar(0.0, 0.0, 0.0, 0.0)).unwrap_err();
+    assert!(matches!(err, ArmError::OutsideWorkspace { .. }), "{err}");
+    assert_eq!(a.inner().moves, 0);
+    // A NaN target is refused in both modes, before the arm is asked.
+    for mode in [LimitMode::Refuse, LimitMode::Clamp] {
+        let mut a = reporting(mode, Pose::default());
+        let err = a
+            .move_to(Pose::planar(0.0, f64::NAN, 0.0, 0.0))
+            .unwrap_err();
+        assert!(matches!(err, ArmError::NonFinitePose { .. }), "{err}");
+        assert_eq!(a.inner().moves, 0);
+    }
 }

@@ -127,6 +127,30 @@ pub enum HwError {
     /// A camera buffer that cannot be a frame of the negotiated format.
     #[error("bad camera frame: {reason}")]
     FrameData { reason: String },
+    /// The controller reports a state no UR arm can be in (a tool pose far
+    /// outside any UR arm's reach, a rotation vector longer than a turn, a
+    /// non-finite number): a hardware fault; nothing is moved on it.
+    #[error("the controller reports an impossible {field}: {reason}")]
+    ImplausibleState { field: &'static str, reason: String },
+    /// A SIGINT or SIGTERM stopped the run; a connected arm was sent
+    /// `stopl` first.
+    #[error("interrupted by {signal}")]
+    Interrupted { signal: crate::StopSignal },
+    /// A SIGINT or SIGTERM asked for a stop and `stopl` could not be sent.
+    #[error("interrupted by {signal}, but stopl could not be sent")]
+    StopFailed {
+        signal: crate::StopSignal,
+        #[source]
+        source: Box<HwError>,
+    },
+    /// A controller sent more than one reply may hold (a line that does
+    /// not end).
+    #[error("{what}: more than {limit} bytes without a line end")]
+    ReplyTooLong { what: String, limit: usize },
+    /// A camera path that is no V4L2 capture device (a regular file, a
+    /// folder, /dev/null).
+    #[error("{device} is not a camera: {reason}")]
+    NotACamera { device: String, reason: String },
     /// The collection metadata (collection_meta.json) could not be used.
     #[error("collection metadata: {reason}")]
     Meta { reason: String },

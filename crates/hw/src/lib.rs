@@ -4,7 +4,9 @@
 //!   URScript `movel` to the secondary interface, the arm's state
 //!   over RTDE (`ur5::rtde`, port 30004) or the real-time interface
 //!   (port 30003). [`FakeUrController`] is a loopback stand-in for tests.
-//!   Always wrap the real arm in `tactrace_arm::LimitedArm`.
+//!   Always wrap the real arm in `tactrace_arm::LimitedArm`. States are
+//!   checked once as they are read ([`ArmState`]); a [`StopFlag`] set by
+//!   SIGINT/SIGTERM makes the driver send `stopl` and stop.
 //! - [`Dashboard`] talks to the dashboard server (port 29999) for the
 //!   set-up steps (robot mode, safety status, unlock, load and play);
 //!   [`FakeDashboard`] stands in for it; [`probe_state`] reads the arm's
@@ -20,6 +22,7 @@
 
 pub mod camera;
 mod error;
+mod stop;
 pub mod ur5;
 
 pub use camera::v4l2::{list_cameras, open_v4l2, CameraInfo, V4l2Config};
@@ -28,7 +31,9 @@ pub use camera::{
     FrameSource, Preprocess, PreprocessConfig, ThresholdMethod,
 };
 pub use error::HwError;
+pub use stop::{StopFlag, StopSignal};
 pub use ur5::{
-    probe_state, Dashboard, FakeBehaviour, FakeDashboard, FakeDashboardState, FakeUrController,
-    FakeUrOptions, PolyscopeVersion, RobotState, StateInterface, StateProbe, Ur5Arm, Ur5Config,
+    probe_state, ArmState, Dashboard, FakeBehaviour, FakeDashboard, FakeDashboardState,
+    FakeStateFault, FakeUrController, FakeUrOptions, PolyscopeVersion, RobotState, StateInterface,
+    StateProbe, ToolPose, Ur5Arm, Ur5Config,
 };

@@ -49,6 +49,61 @@ pub enum LabError {
     #[cfg(feature = "hardware")]
     #[error(transparent)]
     Hardware(#[from] tactrace_hw::HwError),
+    /// The real arm could not move to the run's start: the limiter refused
+    /// the move (the arm is too far from the start: the set-up, exit 2) or
+    /// the arm failed on the way (a fault, exit 1).
+    #[cfg(feature = "hardware")]
+    #[error("cannot move the arm to the start{}", start_hint(.source))]
+    StartMove {
+        #[source]
+        source: tactrace_arm::ArmError,
+    },
+    /// A hardware run stopped by SIGINT or SIGTERM: the arm, if it was
+    /// connected (`arm_stopped`), was sent `stopl`; what the run did so far
+    /// is kept in `kept`, if anything.
+    #[cfg(feature = "hardware")]
+    #[error(
+        "interrupted by {signal}: {}{}",
+        if *.arm_stopped { "the arm was sent stopl" } else { "before the arm was connected" },
+        kept_text(.kept)
+    )]
+    Interrupted {
+        signal: tactrace_hw::StopSignal,
+        arm_stopped: bool,
+        kept: Option<PathBuf>,
+    },
+}
+
+/// Whether an arm error is the limiter's refusal of a move (the set-up),
+/// not a failure of the arm.
+#[cfg(feature = "hardware")]
+fn refused(e: &tactrace_arm::ArmError) -> bool {
+    use tactrace_arm::ArmError as A;
+    matches!(
+        e,
+        A::OutsideWorkspace { .. }
+            | A::StepTooLarge { .. }
+            | A::RotationTooLarge { .. }
+            | A::NonFinitePose { .. }
+            | A::InvalidConfig { .. }
+    )
+}
+
+#[cfg(feature = "hardware")]
+fn start_hint(e: &tactrace_arm::ArmError) -> &'static str {
+    if refused(e) {
+        " (jog the arm to within the workspace's step limits of it first; \
+         `tactrace rig check` says how far it is)"
+    } else {
+        ""
+    }
+}
+
+#[cfg(feature = "hardware")]
+fn kept_text(kept: &Option<PathBuf>) -> String {
+    kept.as_ref()
+        .map(|p| format!("; the run so far is in {}", p.display()))
+        .unwrap_or_default()
 }
 
 impl LabError {
@@ -81,7 +136,22 @@ impl LabError {
                 tactrace_hw::HwError::Config { .. }
                     | tactrace_hw::HwError::Crop { .. }
                     | tactrace_hw::HwError::CameraMissing { .. }
+                    | tactrace_hw::HwError::NotACamera { .. }
             ),
+            #[cfg(feature = "hardware")]
+            LabError::StartMove { source } => refused(source),
+            #[cfg(feature = "hardware")]
+            LabError::Interrupted { .. } => false,
+        }
+    }
+
+    /// For a hardware run stopped by a signal, the exit code of a process
+    /// that signal ended (130 SIGINT, 143 SIGTERM); `None` otherwise.
+    pub fn signal_exit_code(&self) -> Option<u8> {
+        match self {
+            #[cfg(feature = "hardware")]
+            LabError::Interrupted { signal, .. } => Some(signal.exit_code()),
+            _ => None,
         }
     }
 }

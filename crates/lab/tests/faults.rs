@@ -338,6 +338,7 @@ fn rig_file(fake: &FakeUrController, frames: &Path) -> HardwareConfig {
         camera: FrameSourceConfig::Folder {
             path: frames.to_path_buf(),
             looping: false,
+            preprocessed: false,
         },
         preprocess: PreprocessConfig::grayscale_only(),
         workspace: Workspace {
@@ -384,6 +385,7 @@ fn hardware_run_on(
         &f.model,
         Some(("disk", &f.disk)),
         (&run.out, false),
+        &tactrace_lab::hardware::StopFlag::new(),
         &mut |_| {},
     )
     .unwrap();

@@ -15,6 +15,7 @@ use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{follow_on_rig, perception_for, SimFollowConfig};
 use tactrace_lab::hardware::{
     collect_hardware, follow_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart,
+    StopFlag,
 };
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
@@ -84,6 +85,7 @@ fn rig_file(fake: &FakeUrController, frames: &Path, x: f64, y: f64, angle: f64) 
         camera: FrameSourceConfig::Folder {
             path: frames.to_path_buf(),
             looping: false,
+            preprocessed: false,
         },
         preprocess: PreprocessConfig::grayscale_only(),
         workspace: Workspace {
@@ -169,6 +171,7 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
             &model,
             Some(("disk", &disk)),
             (&hw_out, false),
+            &StopFlag::new(),
             &mut |_| {},
         )
         .unwrap();
@@ -253,7 +256,7 @@ fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
     );
     let fake = fake_near(first, StateInterface::Rtde);
     let hw = rig_file(&fake, &frames, edge.x, edge.y, angle);
-    let real = collect_hardware(&hw, &cfg, "rig", |_| {}).unwrap();
+    let real = collect_hardware(&hw, &cfg, "rig", &StopFlag::new(), |_| {}).unwrap();
     assert_eq!(real.data.targets, simulated.data.targets);
     assert_eq!(real.data.inputs, simulated.data.inputs);
     assert_eq!(real.data.meta.source, "real");
@@ -266,7 +269,7 @@ fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
         },
         ..hw
     };
-    let err = collect_hardware(&narrow, &cfg, "rig", |_| {})
+    let err = collect_hardware(&narrow, &cfg, "rig", &StopFlag::new(), |_| {})
         .err()
         .unwrap();
     assert!(err.to_string().contains("outside the workspace"), "{err}");

@@ -10,21 +10,27 @@
 //! Blocking: [`Ur5Arm::connect`] blocks until both connections are open and
 //! a first state packet arrived; [`Arm::move_to`] blocks until the measured
 //! TCP pose is within tolerance of the target, the controller reports a
-//! stop, or the timeout passes (then a `stopl` is sent).
+//! stop, the timeout passes or a stop is requested (then a `stopl` is
+//! sent; see [`crate::StopFlag`]).
+//!
+//! Safety by types: the state is read only as a checked [`ArmState`], the
+//! commanded pose is a [`FinitePose`], and each `movel` target is a
+//! checked [`ToolPose`], so no NaN reaches the limiter or the controller.
 use std::time::{Duration, Instant};
 
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
-use tactrace_arm::{Arm, ArmError};
+use tactrace_arm::{Arm, ArmError, FinitePose};
 use tactrace_geometry::Pose;
 
 use super::link::{connect, CommandChannel, StateStream};
-use super::realtime::{check_can_move, RobotState};
+use super::realtime::check_can_move;
 use super::script::{
-    base_to_work, check_finite, isometry_to_tool_vector, movel_program, pose_error,
-    pose_to_tool_vector, set_tcp_program, stopl_program, tool_vector_to_isometry, work_to_base,
+    check_finite, movel_program, pose_error, pose_to_tool_vector, set_tcp_program, stopl_program,
+    work_to_base,
 };
-use crate::HwError;
+use super::state::{ArmState, ToolPose};
+use crate::{HwError, StopFlag, StopSignal};
 
 /// Highest linear speed accepted, mm/s (a tactile rig never needs more).
 pub const MAX_LINEAR_SPEED_MM_S: f64 = 250.0;
@@ -153,8 +159,8 @@ impl Ur5Config {
         check_range("tolerance_mm", self.tolerance_mm, 10.0)?;
         check_range("tolerance_deg", self.tolerance_deg, 10.0)?;
         check_range("timeout_s", self.timeout_s, 3600.0)?;
-        check_finite(self.work_frame).map_err(|e| config_err("work_frame", &e.to_string()))?;
-        check_finite(self.tcp).map_err(|e| config_err("tcp", &e.to_string()))
+        check_frame("work_frame", self.work_frame)?;
+        check_frame("tcp", self.tcp)
     }
 
     fn timeout(&self) -> Duration {
@@ -166,6 +172,31 @@ fn config_err(field: &'static str, reason: &str) -> HwError {
     HwError::Config {
         field,
         reason: reason.to_string(),
+    }
+}
+
+/// Largest offset of a configured frame (the work frame from the base,
+/// the TCP from the flange), mm: far beyond any UR arm's reach.
+const MAX_FRAME_OFFSET_MM: f64 = 10_000.0;
+
+/// A frame of the configuration: finite, offsets within
+/// [`MAX_FRAME_OFFSET_MM`], angles within +-360 degrees (so every pose
+/// measured through it is finite).
+fn check_frame(field: &'static str, pose: Pose) -> Result<(), HwError> {
+    check_finite(pose).map_err(|e| config_err(field, &e.to_string()))?;
+    let near = [pose.x, pose.y, pose.z]
+        .iter()
+        .all(|v| v.abs() <= MAX_FRAME_OFFSET_MM);
+    let turns = [pose.rx, pose.ry, pose.rz].iter().all(|v| v.abs() <= 360.0);
+    if near && turns {
+        Ok(())
+    } else {
+        Err(config_err(
+            field,
+            &format!(
+                "offsets must be within +-{MAX_FRAME_OFFSET_MM} mm and angles within +-360 deg"
+            ),
+        ))
     }
 }
 
@@ -182,14 +213,54 @@ pub struct Ur5Arm {
     config: Ur5Config,
     commands: CommandChannel,
     states: StateStream,
-    commanded: Pose,
+    commanded: FinitePose,
+    stop: StopFlag,
+    /// A `stopl` was sent after the last `movel`.
+    halted: bool,
+}
+
+/// Longest single wait on the state stream before the stop flag is
+/// looked at again.
+const STOP_POLL: Duration = Duration::from_millis(20);
+
+/// The next state after `after`, waiting up to `timeout` in slices of
+/// [`STOP_POLL`]; [`HwError::Interrupted`] as soon as `stop` is set.
+fn wait_state(
+    states: &StateStream,
+    stop: &StopFlag,
+    after: u64,
+    timeout: Duration,
+) -> Result<(u64, ArmState), HwError> {
+    let deadline = Instant::now() + timeout;
+    loop {
+        if let Some(signal) = stop.requested() {
+            return Err(HwError::Interrupted { signal });
+        }
+        let left = deadline.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            return Err(HwError::NoState {
+                seconds: timeout.as_secs_f64(),
+            });
+        }
+        match states.wait_newer(after, left.min(STOP_POLL)) {
+            Err(HwError::NoState { .. }) => {}
+            found => return found,
+        }
+    }
 }
 
 impl Ur5Arm {
     /// Connects to the controller, sets the TCP and reads the current pose.
     /// Blocks up to `timeout_s` for each connection and the first packet.
     pub fn connect(config: Ur5Config) -> Result<Self, HwError> {
+        Self::connect_stoppable(config, StopFlag::new())
+    }
+
+    /// As [`Ur5Arm::connect`], with waits that end when `stop` is set: a
+    /// move then sends `stopl` and returns [`HwError::Interrupted`].
+    pub fn connect_stoppable(config: Ur5Config, stop: StopFlag) -> Result<Self, HwError> {
         config.validate()?;
+        stop.check_idle()?;
         let timeout = config.timeout();
         let command_stream = connect(&config.host, config.command_port, timeout)?;
         let states = match config.state {
@@ -202,16 +273,19 @@ impl Ur5Arm {
         };
         let mut commands = CommandChannel::start(command_stream)?;
         commands.send(&set_tcp_program(pose_to_tool_vector(config.tcp)))?;
-        let (_, state) = states.wait_newer(0, timeout)?;
-        let commanded = base_to_work(
-            config.work_frame,
-            &tool_vector_to_isometry(state.tool_actual),
-        );
+        let (_, state) = wait_state(&states, &stop, 0, timeout).inspect_err(|_| {
+            if stop.requested().is_some() {
+                stop.mark_halted();
+            }
+        })?;
+        let commanded = state.tool_actual().in_work_frame(config.work_frame)?;
         Ok(Self {
             config,
             commands,
             states,
             commanded,
+            stop,
+            halted: false,
         })
     }
 
@@ -220,50 +294,89 @@ impl Ur5Arm {
         &self.config
     }
 
+    /// The stop flag this arm's waits poll.
+    pub fn stop_flag(&self) -> &StopFlag {
+        &self.stop
+    }
+
     /// The newest measured TCP pose in the work frame (mm, deg). Does not
     /// block once a packet has arrived (the reader thread keeps the newest);
     /// fails if the state stream has failed.
     pub fn actual_pose(&self) -> Result<Pose, HwError> {
         let state = self.fresh_state()?;
-        Ok(base_to_work(
-            self.config.work_frame,
-            &tool_vector_to_isometry(state.tool_actual),
-        ))
+        Ok(state
+            .tool_actual()
+            .in_work_frame(self.config.work_frame)?
+            .pose())
     }
 
-    /// The newest raw controller state; blocks like [`Ur5Arm::actual_pose`].
-    pub fn fresh_state(&self) -> Result<RobotState, HwError> {
+    /// The newest controller state, checked; blocks like
+    /// [`Ur5Arm::actual_pose`].
+    pub fn fresh_state(&self) -> Result<ArmState, HwError> {
         let after = self.states.seq().saturating_sub(1);
-        self.states
-            .wait_newer(after, self.config.timeout())
-            .map(|(_, s)| s)
+        wait_state(&self.states, &self.stop, after, self.config.timeout()).map(|(_, s)| s)
+    }
+
+    /// Sends `stopl` now (unless one was sent since the last `movel`);
+    /// after a stop request, marks the flag halted once it is sent.
+    pub fn halt(&mut self) -> Result<(), HwError> {
+        if !self.halted {
+            self.commands
+                .send(&stopl_program(self.config.linear_accel_mm_s2 / 1000.0))?;
+            self.halted = true;
+        }
+        if self.stop.requested().is_some() {
+            self.stop.mark_halted();
+        }
+        Ok(())
+    }
+
+    /// The error of a move stopped by `signal`, after halting the arm.
+    fn interrupted(&mut self, signal: StopSignal) -> HwError {
+        match self.halt() {
+            Ok(()) => HwError::Interrupted { signal },
+            Err(e) => HwError::StopFailed {
+                signal,
+                source: Box::new(e),
+            },
+        }
     }
 
     /// Sends `movel` to the base-frame target and waits for arrival.
-    fn move_blocking(&mut self, pose: Pose) -> Result<(), HwError> {
-        check_finite(pose)?;
-        check_can_move(&self.fresh_state()?)?;
-        let target = work_to_base(self.config.work_frame, pose);
-        let program = movel_program(
-            isometry_to_tool_vector(&target),
-            pose_to_tool_vector(self.config.tcp),
-            self.config.linear_accel_mm_s2 / 1000.0,
-            self.config.linear_speed_mm_s / 1000.0,
-        );
-        self.commands.send(&program)?;
-        match self.wait_arrival(&target, pose) {
+    fn move_blocking(&mut self, pose: FinitePose) -> Result<(), HwError> {
+        if let Some(signal) = self.stop.requested() {
+            return Err(self.interrupted(signal));
+        }
+        let result = self.send_move(pose);
+        match result {
             Ok(()) => {
                 self.commanded = pose;
                 Ok(())
             }
+            Err(HwError::Interrupted { signal }) => Err(self.interrupted(signal)),
             Err(e) => {
                 // Best effort: stop a move that is still going.
-                let _ = self
-                    .commands
-                    .send(&stopl_program(self.config.linear_accel_mm_s2 / 1000.0));
+                let _ = self.halt();
                 Err(e)
             }
         }
+    }
+
+    /// Checks the state, writes the `movel` and waits for arrival.
+    fn send_move(&mut self, pose: FinitePose) -> Result<(), HwError> {
+        let state = self.fresh_state()?;
+        check_can_move(&state)?;
+        let base = work_to_base(self.config.work_frame, *pose);
+        let target = ToolPose::from_isometry(&base, "commanded target")?;
+        let program = movel_program(
+            &target,
+            pose_to_tool_vector(self.config.tcp),
+            self.config.linear_accel_mm_s2 / 1000.0,
+            self.config.linear_speed_mm_s / 1000.0,
+        );
+        self.halted = false;
+        self.commands.send(&program)?;
+        self.wait_arrival(&target.isometry(), *pose)
     }
 
     /// Polls the state stream until the TCP is within tolerance of `target`.
@@ -277,19 +390,19 @@ impl Ur5Arm {
             if remaining.is_zero() {
                 return Err(HwError::MoveTimeout {
                     seconds: self.config.timeout_s,
-                    target: format!("{pose:?}"),
+                    target: pose_text(pose),
                     position_error_mm: errors.0,
                     rotation_error_deg: errors.1,
                 });
             }
-            let (next, state) = match self.states.wait_newer(seq, remaining) {
+            let (next, state) = match wait_state(&self.states, &self.stop, seq, remaining) {
                 Ok(found) => found,
                 Err(HwError::NoState { .. }) => continue,
                 Err(e) => return Err(e),
             };
             seq = next;
             check_can_move(&state)?;
-            errors = pose_error(&tool_vector_to_isometry(state.tool_actual), target);
+            errors = pose_error(&state.tool_actual().isometry(), target);
             if errors.0 <= self.config.tolerance_mm && errors.1 <= self.config.tolerance_deg {
                 return Ok(());
             }
@@ -297,22 +410,29 @@ impl Ur5Arm {
     }
 }
 
+/// A pose for a message: mm and degrees, no debug form.
+fn pose_text(p: Pose) -> String {
+    format!(
+        "({:.3}, {:.3}, {:.3}) mm, ({:.3}, {:.3}, {:.3}) deg",
+        p.x, p.y, p.z, p.rx, p.ry, p.rz
+    )
+}
+
 impl Arm for Ur5Arm {
     /// Linear move of the sensor tip to `pose` (work frame, mm/deg) at the
     /// configured speed. Blocks until the measured pose is within
-    /// tolerance; on timeout or a safety stop, sends `stopl` and returns
-    /// `ArmError::Hardware` (the timeout message starts with "timeout").
+    /// tolerance; on timeout, a safety stop or a stop request, sends
+    /// `stopl` and returns `ArmError::Hardware` (the timeout message
+    /// starts with "timeout"; a stop request is `HwError::Interrupted`).
     fn move_to(&mut self, pose: Pose) -> Result<(), ArmError> {
-        if check_finite(pose).is_err() {
-            return Err(ArmError::NonFinitePose { pose });
-        }
+        let pose = FinitePose::new(pose)?;
         self.move_blocking(pose).map_err(ArmError::from)
     }
 
     /// The last target reached (within tolerance), or the measured pose at
     /// connection before any move; does not block.
     fn pose(&self) -> Pose {
-        self.commanded
+        self.commanded.pose()
     }
 }
 

@@ -15,6 +15,8 @@
 //! answered `could not understand: '<command>'`.
 //!
 //! Blocking: every call waits for its reply line up to the timeout.
+//! Bounded: a reply longer than [`MAX_REPLY_LEN`] bytes without a line end
+//! is an error ([`HwError::ReplyTooLong`]), not a growing buffer.
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 
@@ -23,6 +25,9 @@ use crate::HwError;
 
 /// The dashboard server's port.
 pub const DASHBOARD_PORT: u16 = 29999;
+
+/// Longest reply line accepted, bytes (real replies are under 200).
+pub const MAX_REPLY_LEN: usize = 4096;
 
 /// A connection to the dashboard server.
 pub struct Dashboard {
@@ -177,6 +182,13 @@ impl Dashboard {
             if let Some(end) = self.pending.iter().position(|&b| b == b'\n') {
                 let line: Vec<u8> = self.pending.drain(..=end).collect();
                 return Ok(String::from_utf8_lossy(&line).trim().to_string());
+            }
+            if self.pending.len() > MAX_REPLY_LEN {
+                self.pending.clear();
+                return Err(HwError::ReplyTooLong {
+                    what: format!("dashboard reply to `{command}`"),
+                    limit: MAX_REPLY_LEN,
+                });
             }
             if Instant::now() >= deadline {
                 return Err(refused(

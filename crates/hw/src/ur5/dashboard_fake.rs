@@ -29,6 +29,9 @@ pub struct FakeDashboardState {
     pub loaded: Option<String>,
     /// `PLAYING` after `play`, else `STOPPED`.
     pub playing: bool,
+    /// The greeting never ends: bytes without a line end until the client
+    /// hangs up (a flooding server).
+    pub endless_greeting: bool,
 }
 
 impl Default for FakeDashboardState {
@@ -41,6 +44,7 @@ impl Default for FakeDashboardState {
             programs: vec!["tactrace.urp".into()],
             loaded: None,
             playing: false,
+            endless_greeting: false,
         }
     }
 }
@@ -123,6 +127,9 @@ fn serve(listener: &TcpListener, shared: &Mutex<Shared>, stop: &AtomicBool, dead
 }
 
 fn serve_client(mut stream: TcpStream, shared: &Mutex<Shared>, done: &dyn Fn() -> bool) {
+    if lock(shared).state.endless_greeting {
+        return flood(stream, done);
+    }
     if stream.set_nonblocking(false).is_err()
         || stream
             .set_read_timeout(Some(Duration::from_millis(20)))
@@ -149,6 +156,27 @@ fn serve_client(mut stream: TcpStream, shared: &Mutex<Shared>, done: &dyn Fn() -
                     return;
                 }
             }
+            Ok(_) => {}
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+            Err(_) => return,
+        }
+    }
+}
+
+/// Sends a greeting that never ends until the client hangs up.
+fn flood(mut stream: TcpStream, done: &dyn Fn() -> bool) {
+    let junk = vec![b'x'; 65536];
+    if stream.set_nonblocking(false).is_err()
+        || stream
+            .set_write_timeout(Some(Duration::from_millis(50)))
+            .is_err()
+        || stream.write_all(b"Connected: ").is_err()
+    {
+        return;
+    }
+    while !done() {
+        match stream.write(&junk) {
+            Ok(0) => return,
             Ok(_) => {}
             Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
             Err(_) => return,

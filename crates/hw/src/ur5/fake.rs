@@ -9,7 +9,13 @@
 //! fake RTDE server uses). Every
 //! loop is bounded: the server stops by itself after `lifetime`, when a
 //! client leaves, or when dropped. Behaviours cover the failure paths a
-//! driver must survive (a frozen arm, a malformed packet, a protective stop).
+//! driver must survive (a frozen arm, a malformed packet, a protective
+//! stop, from the first move, the one to the start, or later); a
+//! [`FakeStateFault`] makes the state report an impossible tool pose (far
+//! beyond reach, a huge rotation, NaN), and `text_flood` floods an RTDE
+//! client with text messages. Every URScript line received is kept
+//! ([`FakeUrController::received_lines`]), so a test can check that no
+//! `movel` was sent, or that a `stopl` was.
 use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -42,6 +48,34 @@ pub enum FakeBehaviour {
     DisconnectOnMove,
 }
 
+/// An impossible tool pose the fake's state reports instead of the truth
+/// (actual and target TCP pose alike).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FakeStateFault {
+    /// The true pose (the normal case).
+    #[default]
+    None,
+    /// The tool 1e306 m from the base.
+    HugePosition,
+    /// A rotation vector of 1e200 rad.
+    HugeRotation,
+    /// NaN in the position.
+    NotFinite,
+}
+
+impl FakeStateFault {
+    /// The tool vector sent instead of `truth`.
+    fn tool_vector(self, truth: [f64; 6]) -> [f64; 6] {
+        let [x, y, z, rx, ry, rz] = truth;
+        match self {
+            Self::None => truth,
+            Self::HugePosition => [1e306, y, z, rx, ry, rz],
+            Self::HugeRotation => [x, y, z, 1e200, ry, rz],
+            Self::NotFinite => [f64::NAN, y, z, rx, ry, rz],
+        }
+    }
+}
+
 /// Settings of the fake controller.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FakeUrOptions {
@@ -62,6 +96,11 @@ pub struct FakeUrOptions {
     pub normal_moves: usize,
     /// The state interface served (default: the real-time one).
     pub state: StateInterface,
+    /// What the state says about the tool (default: the truth).
+    pub state_fault: FakeStateFault,
+    /// RTDE only: this many text messages are sent every period, a
+    /// flooding controller (default 0).
+    pub text_flood: usize,
 }
 
 impl Default for FakeUrOptions {
@@ -75,6 +114,8 @@ impl Default for FakeUrOptions {
             behaviour: FakeBehaviour::Follow,
             normal_moves: 0,
             state: StateInterface::Realtime,
+            state_fault: FakeStateFault::None,
+            text_flood: 0,
         }
     }
 }
@@ -224,7 +265,7 @@ impl Server {
             }
             let moving = self.step(&mut motion);
             let state = self.state(&motion, moving, start.elapsed().as_secs_f64());
-            if !out.send(&state, motion.malformed) {
+            if !out.send(&state, motion.malformed, self.options.text_flood) {
                 return;
             }
             std::thread::sleep(self.options.period);
@@ -331,8 +372,10 @@ impl Server {
         } else {
             0.0
         };
-        let tool = isometry_to_tool_vector(&motion.current);
-        let target = motion.target.map_or(tool, |t| isometry_to_tool_vector(&t));
+        let truth = isometry_to_tool_vector(&motion.current);
+        let target = motion.target.map_or(truth, |t| isometry_to_tool_vector(&t));
+        let fault = self.options.state_fault;
+        let (tool, target) = (fault.tool_vector(truth), fault.tool_vector(target));
         RobotState {
             time_s,
             tool_actual: tool,
@@ -352,9 +395,9 @@ enum StateOut {
 }
 
 impl StateOut {
-    /// Sends one state (or a malformed packet); false once the client has
-    /// gone.
-    fn send(&mut self, state: &RobotState, malformed: bool) -> bool {
+    /// Sends one state (or a malformed packet), after `flood` text
+    /// messages over RTDE; false once the client has gone.
+    fn send(&mut self, state: &RobotState, malformed: bool, flood: usize) -> bool {
         match self {
             Self::Realtime(stream) => {
                 let packet = if malformed {
@@ -369,6 +412,9 @@ impl StateOut {
             }
             Self::Rtde(session) => {
                 if !session.poll() {
+                    return false;
+                }
+                if flood > 0 && session.streaming() && session.send_text_flood(flood).is_err() {
                     return false;
                 }
                 if malformed && session.streaming() {

@@ -7,6 +7,11 @@
 //! keeps only the newest parsed packet, the command thread discards what the
 //! secondary interface sends (UR recommend always reading that socket).
 //! The threads check a stop flag every read timeout and end on drop.
+//!
+//! Every state is checked ([`ArmState::check`]) as it is read: a state no
+//! UR arm can be in fails the stream, with the reason, for every waiter.
+//! What the reader keeps is bounded: the newest state, and at most one
+//! packet's bytes (a declared length is checked before more is read).
 use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpStream, ToSocketAddrs};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -16,6 +21,7 @@ use std::time::{Duration, Instant};
 
 use super::realtime::{declared_length, parse_packet, RobotState};
 use super::rtde::{start_state_stream, state_from_values, RtdeClient};
+use super::state::ArmState;
 use crate::HwError;
 
 /// How often the reader threads look at their stop flag.
@@ -44,9 +50,9 @@ pub fn connect(host: &str, port: u16, timeout: Duration) -> Result<TcpStream, Hw
 
 #[derive(Default)]
 struct Latest {
-    state: Option<RobotState>,
+    state: Option<ArmState>,
     seq: u64,
-    failure: Option<String>,
+    failure: Option<HwError>,
 }
 
 type Shared = Arc<(Mutex<Latest>, Condvar)>;
@@ -78,7 +84,10 @@ impl StateStream {
             stream,
             buffer: Vec::with_capacity(8192),
         };
-        Ok(Self::spawn(move || reader.next_state()))
+        Ok(Self::spawn(move || match reader.next_state()? {
+            Some(raw) => ArmState::check(raw).map(Some),
+            None => Ok(None),
+        }))
     }
 
     /// Negotiates RTDE on `stream` (port 30004), sets up the state recipe,
@@ -88,7 +97,9 @@ impl StateStream {
         let mut client = RtdeClient::handshake(stream, timeout)?;
         start_state_stream(&mut client)?;
         Ok(Self::spawn(move || match client.poll_data()? {
-            Some(values) => state_from_values(&values).map(Some),
+            Some(values) => state_from_values(&values)
+                .and_then(ArmState::check)
+                .map(Some),
             None => Ok(None),
         }))
     }
@@ -97,7 +108,7 @@ impl StateStream {
     /// fails or the stream is dropped, publishing every state.
     fn spawn<F>(mut next: F) -> Self
     where
-        F: FnMut() -> Result<Option<RobotState>, HwError> + Send + 'static,
+        F: FnMut() -> Result<Option<ArmState>, HwError> + Send + 'static,
     {
         let shared: Shared = Arc::default();
         let stop = Arc::new(AtomicBool::new(false));
@@ -110,8 +121,7 @@ impl StateStream {
                 match next() {
                     Ok(Some(state)) => publish(&s, state),
                     Ok(None) => {}
-                    Err(HwError::StateStream { reason }) => break reason,
-                    Err(e) => break e.to_string(),
+                    Err(e) => break e,
                 }
             };
             lock(&s).failure = Some(failure);
@@ -126,14 +136,12 @@ impl StateStream {
 
     /// The newest state and its sequence number; blocks until one arrives
     /// with a sequence number above `after`, or fails after `timeout`.
-    pub fn wait_newer(&self, after: u64, timeout: Duration) -> Result<(u64, RobotState), HwError> {
+    pub fn wait_newer(&self, after: u64, timeout: Duration) -> Result<(u64, ArmState), HwError> {
         let deadline = Instant::now() + timeout;
         let mut latest = lock(&self.shared);
         loop {
-            if let Some(reason) = &latest.failure {
-                return Err(HwError::StateStream {
-                    reason: reason.clone(),
-                });
+            if let Some(failure) = &latest.failure {
+                return Err(failure_again(failure));
             }
             if let (Some(state), true) = (latest.state, latest.seq > after) {
                 return Ok((latest.seq, state));
@@ -211,7 +219,24 @@ fn take_packets(buffer: &mut Vec<u8>) -> Result<Option<RobotState>, HwError> {
     Ok(newest)
 }
 
-fn publish(shared: &Shared, state: RobotState) {
+/// The reader's failure, for one more waiter: typed for an impossible
+/// state, else as the stream's failure with the reason.
+fn failure_again(failure: &HwError) -> HwError {
+    match failure {
+        HwError::ImplausibleState { field, reason } => HwError::ImplausibleState {
+            field,
+            reason: reason.clone(),
+        },
+        HwError::StateStream { reason } => HwError::StateStream {
+            reason: reason.clone(),
+        },
+        other => HwError::StateStream {
+            reason: other.to_string(),
+        },
+    }
+}
+
+fn publish(shared: &Shared, state: ArmState) {
     let mut latest = lock(shared);
     latest.state = Some(state);
     latest.seq += 1;
@@ -283,5 +308,37 @@ fn drain(reader: &mut TcpStream, stop: &AtomicBool) {
             Err(e) if is_poll_timeout(&e) => {}
             Err(_) => return,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ur5::realtime::encode_packet;
+    use crate::ur5::rtde::resting_state;
+
+    #[test]
+    fn issue20_the_realtime_reader_keeps_at_most_one_packet() {
+        let packet = encode_packet(&resting_state());
+        let stream: Vec<u8> = packet
+            .iter()
+            .copied()
+            .cycle()
+            .take(packet.len() * 500 + 17)
+            .collect();
+        let mut buffer = Vec::new();
+        for chunk in stream.chunks(4096) {
+            buffer.extend_from_slice(chunk);
+            assert!(take_packets(&mut buffer).unwrap().is_some());
+            assert!(buffer.len() < packet.len(), "{} bytes kept", buffer.len());
+        }
+        // A header declaring more than the largest packet is refused before
+        // anything more is read for it.
+        let mut bogus = i32::MAX.to_be_bytes().to_vec();
+        bogus.extend([0u8; 100]);
+        assert!(matches!(
+            take_packets(&mut bogus),
+            Err(HwError::PacketLength { .. })
+        ));
     }
 }

@@ -15,13 +15,15 @@ mod probe;
 pub mod realtime;
 pub mod rtde;
 pub mod script;
+pub mod state;
 
 pub use arm::{StateInterface, Ur5Arm, Ur5Config, MAX_LINEAR_ACCEL_MM_S2, MAX_LINEAR_SPEED_MM_S};
 pub use dashboard::{Dashboard, PolyscopeVersion, DASHBOARD_PORT};
 pub use dashboard_fake::{FakeDashboard, FakeDashboardState};
-pub use fake::{FakeBehaviour, FakeUrController, FakeUrOptions};
+pub use fake::{FakeBehaviour, FakeStateFault, FakeUrController, FakeUrOptions};
 pub use probe::{probe_state, StateProbe};
 pub use realtime::RobotState;
+pub use state::{ArmState, ToolPose, MAX_REACH_M};
 
 /// A non-blocking listener of a loopback fake on 127.0.0.1:`port` (0: an
 /// ephemeral port) and the port it got; errors name `what`.

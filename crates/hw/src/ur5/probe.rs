@@ -1,23 +1,23 @@
 //! Reading the arm's state once without commanding anything: what
-//! `tactrace rig check` does before a run.
+//! `tactrace rig check` does before a run. The state is checked as the
+//! driver's is ([`ArmState`]): one no UR arm can be in is an error.
 use std::time::{Duration, Instant};
 
-use tactrace_geometry::Pose;
+use tactrace_arm::FinitePose;
 
 use super::arm::{StateInterface, Ur5Config};
 use super::link::{connect, StateStream};
-use super::realtime::RobotState;
 use super::rtde::{start_state_stream, state_from_values, ControllerVersion, RtdeClient};
-use super::script::{base_to_work, tool_vector_to_isometry};
+use super::state::ArmState;
 use crate::HwError;
 
 /// One state read from the configured interface.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StateProbe {
-    /// The raw state.
-    pub state: RobotState,
+    /// The state, checked.
+    pub state: ArmState,
     /// The measured TCP in the work frame, mm and degrees.
-    pub tcp_work: Pose,
+    pub tcp_work: FinitePose,
     /// The controller's version, when read over RTDE.
     pub controller: Option<ControllerVersion>,
 }
@@ -45,7 +45,8 @@ pub fn probe_state(config: &Ur5Config) -> Result<StateProbe, HwError> {
                 }
             };
             let _ = client.pause();
-            (state_from_values(&values)?, Some(client.version()))
+            let state = ArmState::check(state_from_values(&values)?)?;
+            (state, Some(client.version()))
         }
         StateInterface::Realtime => {
             let stream = connect(&config.host, config.state_port, timeout)?;
@@ -53,10 +54,7 @@ pub fn probe_state(config: &Ur5Config) -> Result<StateProbe, HwError> {
             (states.wait_newer(0, timeout)?.1, None)
         }
     };
-    let tcp_work = base_to_work(
-        config.work_frame,
-        &tool_vector_to_isometry(state.tool_actual),
-    );
+    let tcp_work = state.tool_actual().in_work_frame(config.work_frame)?;
     Ok(StateProbe {
         state,
         tcp_work,

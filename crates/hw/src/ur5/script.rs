@@ -11,6 +11,7 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use tactrace_geometry::Pose;
 
+use super::state::ToolPose;
 use crate::HwError;
 
 /// A pose as the UR "tool vector" [x, y, z (m), rx, ry, rz (rotation
@@ -123,11 +124,12 @@ pub fn pose_error(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
 ///
 /// The secondary interface runs a `def ... end` block as one program; the
 /// TCP is set inside it so the move uses it whatever the installation says.
-pub fn movel_program(target: [f64; 6], tcp: [f64; 6], accel_m_s2: f64, speed_m_s: f64) -> String {
+/// The target is a checked [`ToolPose`]: finite and within reach.
+pub fn movel_program(target: &ToolPose, tcp: [f64; 6], accel_m_s2: f64, speed_m_s: f64) -> String {
     format!(
         "def tactrace_move():\n  set_tcp({})\n  movel({}, a={:.4}, v={:.4})\nend\n",
         format_script_pose(tcp),
-        format_script_pose(target),
+        format_script_pose(target.values()),
         accel_m_s2,
         speed_m_s
     )
@@ -242,7 +244,8 @@ mod tests {
     #[test]
     fn movel_program_holds_a_parsable_target() {
         let target = pose_to_tool_vector(Pose::new(400.0, 0.0, 50.0, 180.0, 0.0, 0.0));
-        let program = movel_program(target, [0.0, 0.0, 0.1, 0.0, 0.0, 0.0], 0.1, 0.01);
+        let checked = ToolPose::new(target, "target").unwrap();
+        let program = movel_program(&checked, [0.0, 0.0, 0.1, 0.0, 0.0, 0.0], 0.1, 0.01);
         assert!(program.starts_with("def tactrace_move():\n"));
         assert!(program.ends_with("end\n"));
         let line = program.lines().find(|l| l.contains("movel")).unwrap();

@@ -15,6 +15,45 @@ use crate::HwError;
 const EXPOSURE_MANUAL: i32 = 1;
 /// Linux `ENODEV`: the device went away.
 const ENODEV: i32 = 19;
+/// Linux `ENOTTY` and `EINVAL`: an ioctl the opened file does not know.
+const ENOTTY: i32 = 25;
+const EINVAL: i32 = 22;
+
+/// Refuses, before opening it, a path that cannot be a camera (a regular
+/// file, a folder): V4L2 devices are character devices.
+fn check_device_file(device: &str) -> Result<(), HwError> {
+    use std::os::unix::fs::FileTypeExt;
+    let kind = std::fs::metadata(device)
+        .map_err(|e| open_error(device, e))?
+        .file_type();
+    if kind.is_char_device() {
+        return Ok(());
+    }
+    let what = if kind.is_dir() {
+        "a folder"
+    } else if kind.is_file() {
+        "a regular file"
+    } else {
+        "no device file"
+    };
+    Err(HwError::NotACamera {
+        device: device.to_string(),
+        reason: format!("it is {what}, not a video device"),
+    })
+}
+
+/// The typed error of a failed `Device::open` (which asks the device for
+/// its V4L2 capabilities): a device that does not know the request is no
+/// camera.
+fn device_open_error(device: &str, err: io::Error) -> HwError {
+    if matches!(err.raw_os_error(), Some(ENOTTY | EINVAL)) {
+        return HwError::NotACamera {
+            device: device.to_string(),
+            reason: "it does not answer as a V4L2 video device".into(),
+        };
+    }
+    open_error(device, err)
+}
 
 /// A streaming V4L2 capture device.
 pub struct LinuxDevice {
@@ -43,7 +82,8 @@ impl LinuxDevice {
     pub fn open(config: &V4l2Config) -> Result<Self, HwError> {
         let name = config.device.clone();
         let err = |e| open_error(&name, e);
-        let mut device = Device::open(&config.device).map_err(err)?;
+        check_device_file(&name)?;
+        let mut device = Device::open(&config.device).map_err(|e| device_open_error(&name, e))?;
         let offered: Vec<[u8; 4]> = device
             .formats(BufType::VIDEO_CAPTURE)
             .filter_map(|f| f.ok().map(|f| f.pixel_format().as_fourcc()))
@@ -166,6 +206,24 @@ mod tests {
         assert!(matches!(gone, HwError::CameraUnplugged { .. }), "{gone:?}");
         let other = open_error("/dev/video0", io::Error::from_raw_os_error(13));
         assert!(matches!(other, HwError::CameraIo { .. }), "{other:?}");
+    }
+
+    #[test]
+    fn issue20_a_file_a_folder_or_dev_null_is_not_a_camera() {
+        let dir = std::env::temp_dir();
+        let file = dir.join(format!("tactrace-not-a-camera-{}", std::process::id()));
+        std::fs::write(&file, b"png").unwrap();
+        for path in [file.to_str().unwrap(), dir.to_str().unwrap(), "/dev/null"] {
+            let err = LinuxDevice::open(&V4l2Config::new(path)).err().unwrap();
+            assert!(matches!(err, HwError::NotACamera { .. }), "{path}: {err}");
+            assert!(err.to_string().contains("is not a camera"), "{err}");
+        }
+        assert_eq!(
+            std::fs::read(&file).unwrap(),
+            b"png",
+            "the file is untouched"
+        );
+        std::fs::remove_file(&file).unwrap();
     }
 
     #[test]

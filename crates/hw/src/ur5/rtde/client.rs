@@ -3,6 +3,12 @@
 //! Blocking: every request waits for its reply up to the client's timeout;
 //! text messages arriving meanwhile are kept ([`RtdeClient::messages`]).
 //! [`RtdeClient::poll_data`] waits at most the socket's read timeout.
+//!
+//! Bounded: the newest [`MAX_TEXT_MESSAGES`] text messages are kept and
+//! the older ones only counted, and the unparsed bytes never exceed one
+//! package (the header's `uint16` size) plus one read, so a controller
+//! that floods the connection cannot make the client grow.
+use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
@@ -36,6 +42,9 @@ const STATE_TYPES: [FieldType; 8] = [
     FieldType::Int32,
     FieldType::Uint32,
 ];
+
+/// Text messages kept by a client: the newest ones.
+pub const MAX_TEXT_MESSAGES: usize = 64;
 
 /// The controller's software version (URControl), as `v` reports it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -80,7 +89,8 @@ pub struct RtdeClient {
     timeout: Duration,
     version: ControllerVersion,
     outputs: Option<Recipe>,
-    messages: Vec<TextMessage>,
+    messages: VecDeque<TextMessage>,
+    dropped_messages: u64,
 }
 
 impl RtdeClient {
@@ -101,7 +111,8 @@ impl RtdeClient {
                 build: 0,
             },
             outputs: None,
-            messages: Vec::new(),
+            messages: VecDeque::new(),
+            dropped_messages: 0,
         };
         let reply = client.request(
             PackageType::RequestProtocolVersion,
@@ -134,9 +145,15 @@ impl RtdeClient {
         self.version
     }
 
-    /// Text messages received so far.
-    pub fn messages(&self) -> &[TextMessage] {
+    /// The newest text messages received (at most
+    /// [`MAX_TEXT_MESSAGES`], oldest first).
+    pub fn messages(&self) -> &VecDeque<TextMessage> {
         &self.messages
+    }
+
+    /// Text messages received and not kept (older than the kept ones).
+    pub fn dropped_messages(&self) -> u64 {
+        self.dropped_messages
     }
 
     /// Sets up the output recipe at `frequency_hz`; fails naming every
@@ -249,7 +266,11 @@ impl RtdeClient {
         while let Some(package) = take_package(&mut self.buffer)? {
             if package.package_type() == Some(PackageType::TextMessage) {
                 if let Ok(message) = TextMessage::decode(&package.payload) {
-                    self.messages.push(message);
+                    if self.messages.len() == MAX_TEXT_MESSAGES {
+                        self.messages.pop_front();
+                        self.dropped_messages += 1;
+                    }
+                    self.messages.push_back(message);
                 }
                 continue;
             }

@@ -40,6 +40,7 @@ pub struct RtdeSession {
     received: BTreeMap<String, Value>,
     streaming: bool,
     greeting: Option<String>,
+    flood_at_start: usize,
 }
 
 impl RtdeSession {
@@ -61,7 +62,35 @@ impl RtdeSession {
             received: BTreeMap::new(),
             streaming: false,
             greeting,
+            flood_at_start: 0,
         })
+    }
+
+    /// Also sends `count` text messages (a flooding controller) with the
+    /// greeting, before the reply to start.
+    pub fn with_text_flood(mut self, count: usize) -> Self {
+        self.flood_at_start = count;
+        self
+    }
+
+    /// Sends `count` text messages of 255 characters now.
+    pub fn send_text_flood(&mut self, count: usize) -> std::io::Result<()> {
+        let message = TextMessage {
+            message: "x".repeat(255),
+            source: "fake RTDE flood".into(),
+            level: 3,
+        }
+        .encode()
+        .encode();
+        let batch = 64.min(count.max(1));
+        let bytes: Vec<u8> = message.repeat(batch);
+        let mut sent = 0;
+        while sent < count {
+            let n = batch.min(count - sent);
+            write_all_nonblocking(&mut self.stream, &bytes[..n * message.len()])?;
+            sent += n;
+        }
+        Ok(())
     }
 
     /// Whether the client has started the output stream.
@@ -153,6 +182,10 @@ impl RtdeSession {
                         level: 3,
                     };
                     self.write(&message.encode())?;
+                }
+                let flood = std::mem::take(&mut self.flood_at_start);
+                if flood > 0 {
+                    self.send_text_flood(flood)?;
                 }
                 self.streaming = self.outputs.is_some() || !self.inputs.is_empty();
                 vec![u8::from(self.streaming)]
@@ -285,6 +318,9 @@ pub struct FakeRtdeOptions {
     pub lifetime: Duration,
     /// A text message sent just before the reply to start.
     pub greeting: Option<String>,
+    /// This many text messages are sent after the greeting (a flooding
+    /// controller; 0 by default).
+    pub text_flood: usize,
 }
 
 impl Default for FakeRtdeOptions {
@@ -299,6 +335,7 @@ impl Default for FakeRtdeOptions {
             period: Duration::from_millis(2),
             lifetime: Duration::from_secs(20),
             greeting: None,
+            text_flood: 0,
         }
     }
 }
@@ -411,10 +448,11 @@ fn serve(
             }
             Err(_) => return,
         };
-        let Ok(mut session) = RtdeSession::new(stream, options.version, options.greeting.clone())
+        let Ok(session) = RtdeSession::new(stream, options.version, options.greeting.clone())
         else {
             continue;
         };
+        let mut session = session.with_text_flood(options.text_flood);
         {
             let mut s = lock();
             s.sessions += 1;

@@ -14,6 +14,6 @@ pub mod protocol;
 
 pub use client::{
     start_state_stream, state_from_values, state_values, ControllerVersion, Recipe, RtdeClient,
-    STATE_FIELDS,
+    MAX_TEXT_MESSAGES, STATE_FIELDS,
 };
 pub use fake::{resting_state, FakeRtdeOptions, FakeRtdeServer, RtdeSession};

@@ -8,6 +8,18 @@
 //! configuration must name the workspace and the start pose explicitly:
 //! there is no safe default for a real robot. docs/hardware.md explains
 //! the set-up.
+//!
+//! A run stops on a [`StopFlag`] (SIGINT/SIGTERM in the binary): the
+//! driver sends `stopl`, the follow run keeps its steps in `OUT.partial`,
+//! and the error is [`LabError::Interrupted`]. A failure on the way to the
+//! start is [`LabError::StartMove`]: the limiter's refusal (too far from
+//! the start) apart from a fault of the arm. `tactrace rig check` is in
+//! [`rig_check`] (module `check`).
+mod check;
+
+pub use check::{rig_check, RigCheck, RigCheckItem};
+pub use tactrace_hw::{StopFlag, StopSignal};
+
 use crate::collect::{check_samples, collect_on, CollectConfig, Collected, EdgeRig};
 use crate::error::{LabError, Result};
 use crate::follow::{
@@ -18,10 +30,9 @@ use std::path::{Path, PathBuf};
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
 use tactrace_control::PbtsConfig;
 use tactrace_geometry::{Contour, Vec2};
-use tactrace_hw::ur5::realtime::{check_can_move, safety_mode_name};
 use tactrace_hw::{
-    open_v4l2, probe_state, CameraSensor, CommandSource, CommandSourceConfig, Dashboard,
-    FolderSource, FrameSource, PreprocessConfig, StateInterface, Ur5Arm, Ur5Config, V4l2Config,
+    open_v4l2, CameraSensor, CommandSource, CommandSourceConfig, FolderSource, FrameSource,
+    HwError, PreprocessConfig, Ur5Arm, Ur5Config, V4l2Config,
 };
 use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_servo::{pose_at_edge, LoopConfig, StepRecord, TapConfig};
@@ -38,11 +49,15 @@ pub enum FrameSourceConfig {
     /// An external capture program per frame (`[camera.command]`).
     Command(CommandSourceConfig),
     /// Replay the images of a folder in natural order (`[camera.folder]`):
-    /// dry runs and tests without a camera.
+    /// dry runs and tests without a camera. With `preprocessed = true` the
+    /// images are taken as already preprocessed frames (a dataset's
+    /// `frames/`) and `[preprocess]` is not applied to them.
     Folder {
         path: PathBuf,
         #[serde(default)]
         looping: bool,
+        #[serde(default)]
+        preprocessed: bool,
     },
 }
 
@@ -168,7 +183,15 @@ impl HardwareConfig {
         Ok(match &self.camera {
             FrameSourceConfig::V4l2(c) => boxed(open_v4l2(c)?, preprocess),
             FrameSourceConfig::Command(c) => boxed(CommandSource::from_config(c)?, preprocess),
-            FrameSourceConfig::Folder { path, looping } => {
+            FrameSourceConfig::Folder {
+                path,
+                looping,
+                preprocessed,
+            } => {
+                let preprocess = match preprocessed {
+                    true => PreprocessConfig::grayscale_only().validate()?,
+                    false => preprocess,
+                };
                 boxed(FolderSource::new(path)?.looping(*looping), preprocess)
             }
         })
@@ -186,28 +209,49 @@ fn boxed<S: FrameSource + 'static>(
 /// height, capture the undeformed reference frame there, check it against
 /// the model's pins, then run the servo loop into the run folder `out`.
 /// `shape`, if given, is the object's true contour in the work frame (and
-/// its name) and is used only to score the finished run.
+/// its name) and is used only to score the finished run. When `stop` is
+/// set the arm is sent `stopl`, the loop ends, its results are written
+/// into `OUT.partial` (kept, not renamed) and the error is
+/// [`LabError::Interrupted`].
 pub fn follow_hardware(
     cfg: &HardwareConfig,
     model: &StoredModel,
     shape: Option<(&str, &Contour)>,
     (out, force): (&Path, bool),
+    stop: &StopFlag,
     progress: &mut dyn FnMut(&StepRecord),
 ) -> Result<FollowOutcome> {
     cfg.validate()?;
     let _out = tactrace_store::check_output_dir(out, force)?;
-    let (mut arm, mut sensor, reference) = connect_at(cfg, cfg.start_pose())?;
+    let (mut arm, mut sensor, reference) = connect_at(cfg, cfg.start_pose(), stop)?;
     let settings = cfg.servo_settings();
     let perception = perception_for(&reference, model, &settings)?;
     let run = RunFolder::start(out, force, cfg)?;
-    let (summary, records) = follow_on_rig(
+    let looped = follow_on_rig(
         &mut arm,
         sensor.as_mut(),
         &perception,
         &settings,
         run.path(),
         progress,
-    )?;
+    );
+    if let Some(signal) = stop.requested() {
+        let err = stopped(signal, stop, Some(&mut arm));
+        if !matches!(err, LabError::Interrupted { .. }) {
+            return Err(err);
+        }
+        // The steps so far and how the run ended, in the kept OUT.partial.
+        if let Ok((summary, records)) = &looped {
+            let diameter = crate::follow::tactip_diameter_mm();
+            write_results(shape, records, summary, &cfg.follow, diameter, run.path())?;
+        }
+        return Err(LabError::Interrupted {
+            signal,
+            arm_stopped: true,
+            kept: Some(run.path().to_path_buf()),
+        });
+    }
+    let (summary, records) = looped?;
     let (metrics, l2_curve) = write_results(
         shape,
         &records,
@@ -226,22 +270,69 @@ pub fn follow_hardware(
     })
 }
 
+/// Sends `stopl` after a stop request: [`LabError::Hardware`] with
+/// [`HwError::StopFailed`] when it cannot be sent.
+fn halt(arm: &mut LimitedArm<Ur5Arm>, signal: StopSignal) -> Result<()> {
+    arm.inner_mut().halt().map_err(|e| {
+        LabError::Hardware(HwError::StopFailed {
+            signal,
+            source: Box::new(e),
+        })
+    })
+}
+
+/// The error of a run stopped by `signal`: the arm, if connected, sent
+/// `stopl` first (if that fails, the run's error says so instead).
+fn stopped(signal: StopSignal, stop: &StopFlag, arm: Option<&mut LimitedArm<Ur5Arm>>) -> LabError {
+    let arm_stopped = arm.is_some();
+    match arm.map_or(Ok(()), |a| halt(a, signal)) {
+        Ok(()) => {
+            stop.mark_halted();
+            LabError::Interrupted {
+                signal,
+                arm_stopped,
+                kept: None,
+            }
+        }
+        Err(e) => e,
+    }
+}
+
+/// `err`, or the error of an interrupted run when a stop was asked.
+fn unless_interrupted(
+    err: LabError,
+    stop: &StopFlag,
+    arm: Option<&mut LimitedArm<Ur5Arm>>,
+) -> LabError {
+    match stop.requested() {
+        Some(signal) => stopped(signal, stop, arm),
+        None => err,
+    }
+}
+
 /// Open the camera, connect the arm behind the limiter, move to `first`
 /// (tap height, sensor in the air) and capture the undeformed reference
-/// frame there.
+/// frame there. A move refused or failed on the way is
+/// [`LabError::StartMove`] (a stop request: [`LabError::Interrupted`]).
 fn connect_at(
     cfg: &HardwareConfig,
     first: Pose,
+    stop: &StopFlag,
 ) -> Result<(LimitedArm<Ur5Arm>, Box<dyn TactileSensor>, Frame)> {
     let mut sensor = cfg.camera()?;
-    let ur5 = Ur5Arm::connect(cfg.arm.clone())?;
+    let ur5 = Ur5Arm::connect_stoppable(cfg.arm.clone(), stop.clone())
+        .map_err(|e| unless_interrupted(e.into(), stop, None))?;
     let mut arm = LimitedArm::new(ur5, cfg.workspace.clone(), LimitMode::Refuse);
-    arm.move_to(first).map_err(|e| {
-        LabError::Config(format!(
-            "cannot move to the start (jog the arm to within the step limit of it first): {e}"
-        ))
-    })?;
-    let reference = sensor.capture()?;
+    if let Err(source) = arm.move_to(first) {
+        return Err(unless_interrupted(
+            LabError::StartMove { source },
+            stop,
+            Some(&mut arm),
+        ));
+    }
+    let reference = sensor
+        .capture()
+        .map_err(|e| unless_interrupted(e.into(), stop, Some(&mut arm)))?;
     Ok((arm, sensor, reference))
 }
 
@@ -258,11 +349,14 @@ pub fn collection_edge(cfg: &HardwareConfig) -> (Vec2, Vec2) {
 
 /// Collect taps at the edge on the real rig (report ch. 4.1), exactly as
 /// the simulated collection does; refuses to start when any collection pose
-/// or the deepest tap lies outside the workspace.
+/// or the deepest tap lies outside the workspace. When `stop` is set the
+/// arm is sent `stopl` and the collection ends with
+/// [`LabError::Interrupted`] (no dataset is made of the taps so far).
 pub fn collect_hardware(
     cfg: &HardwareConfig,
     collect: &CollectConfig,
     origin: &str,
+    stop: &StopFlag,
     progress: impl FnMut(usize),
 ) -> Result<Collected> {
     check_samples(collect)?;
@@ -283,7 +377,7 @@ pub fn collect_hardware(
         }
     }
     let first = pose_at_edge(edge, normal, 0.0, -collect.theta_range_deg, t.height_mm);
-    let (mut arm, mut sensor, reference) = connect_at(cfg, first)?;
+    let (mut arm, mut sensor, reference) = connect_at(cfg, first, stop)?;
     let on = EdgeRig {
         arm: &mut arm,
         sensor: sensor.as_mut(),
@@ -295,7 +389,11 @@ pub fn collect_hardware(
         labels: None,
     };
     let settings = serde_json::json!({ "hardware": cfg, "collect": collect });
-    collect_on(on, collect, "real", origin, settings, progress)
+    let collected = collect_on(on, collect, "real", origin, settings, progress);
+    match stop.requested() {
+        Some(signal) => Err(stopped(signal, stop, Some(&mut arm))),
+        None => collected,
+    }
 }
 
 /// The V4L2 capture devices of this machine (`tactrace camera list`).
@@ -314,254 +412,4 @@ pub fn grab_camera_frame(device: &str, rig: Option<&HardwareConfig>) -> Result<i
     config.device = device.to_string();
     let mut source = open_v4l2(&config)?;
     Ok(source.grab()?.to_luma8())
-}
-
-/// One line of `tactrace rig check`: a part of the rig, whether it is
-/// ready, and what was seen (or what to do).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct RigCheckItem {
-    /// `dashboard`, `safety`, `state`, `camera` or `reference`.
-    pub name: &'static str,
-    /// Whether this part is ready for a run.
-    pub ready: bool,
-    /// What was found, or what to do about it.
-    pub detail: String,
-}
-
-/// The outcome of [`rig_check`]: one item per part, and notes that do not
-/// make the rig unready.
-#[derive(Debug, Clone, Default)]
-pub struct RigCheck {
-    /// The parts checked, in order.
-    pub items: Vec<RigCheckItem>,
-    /// Warnings for the operator.
-    pub notes: Vec<String>,
-}
-
-impl RigCheck {
-    /// Whether every part is ready.
-    pub fn ready(&self) -> bool {
-        self.items.iter().all(|i| i.ready)
-    }
-
-    fn push(&mut self, name: &'static str, ready: bool, detail: impl Into<String>) {
-        self.items.push(RigCheckItem {
-            name,
-            ready,
-            detail: detail.into(),
-        });
-    }
-}
-
-/// Longest wait of any rig check connection or read, s.
-const CHECK_TIMEOUT_S: f64 = 5.0;
-
-/// Checks, before anything moves, whether the rig is ready: the arm
-/// (dashboard server: robot mode, PolyScope version, remote control), its
-/// safety state, the state interface (RTDE or real-time: one state read,
-/// no command sent), the camera (one frame grabbed and preprocessed) and
-/// the sensor reference (pins found in that frame; with `model`, the
-/// model's pins in the same order; else with `pins`, that many). Only a
-/// bad rig file is an error.
-pub fn rig_check(
-    cfg: &HardwareConfig,
-    model: Option<&StoredModel>,
-    pins: Option<usize>,
-) -> Result<RigCheck> {
-    cfg.validate()?;
-    let mut arm = cfg.arm.clone();
-    arm.timeout_s = arm.timeout_s.min(CHECK_TIMEOUT_S);
-    let mut check = RigCheck::default();
-    let dashboard_safety = check_dashboard(&arm, &mut check);
-    check_state(cfg, &arm, dashboard_safety, &mut check);
-    let frame = match cfg.camera().and_then(|mut c| Ok(c.capture()?)) {
-        Ok(frame) => {
-            let detail = format!(
-                "one frame grabbed and preprocessed ({} x {} px)",
-                frame.width(),
-                frame.height()
-            );
-            check.push("camera", true, detail);
-            Some(frame)
-        }
-        Err(e) => {
-            check.push("camera", false, format!("no frame: {e}"));
-            None
-        }
-    };
-    match frame {
-        Some(frame) => check_reference(cfg, &frame, (model, pins), &mut check),
-        None => check.push("reference", false, "not checked: no camera frame"),
-    }
-    Ok(check)
-}
-
-/// The dashboard rows; returns the safety status it read, if any.
-fn check_dashboard(arm: &Ur5Config, check: &mut RigCheck) -> Option<String> {
-    let timeout = std::time::Duration::from_secs_f64(arm.timeout_s);
-    let mut d = match Dashboard::connect(&arm.host, arm.dashboard_port, timeout) {
-        Ok(d) => d,
-        Err(e) => {
-            let detail = format!(
-                "dashboard server {}:{} unreachable ({e}): is the controller on and the \
-                 dashboard server enabled (Settings > Security > Services)?",
-                arm.host, arm.dashboard_port
-            );
-            check.push("dashboard", false, detail);
-            return None;
-        }
-    };
-    let version = d.polyscope_version().ok();
-    let mode = d.robot_mode();
-    let remote = d.is_in_remote_control().ok().flatten();
-    let mut detail = match &version {
-        Some(v) => format!("PolyScope {}.{}", v.major, v.minor),
-        None => "PolyScope version unknown".to_string(),
-    };
-    let running = matches!(&mode, Ok(m) if m == "RUNNING");
-    match &mode {
-        Ok(m) => detail.push_str(&format!(", robot mode {m}")),
-        Err(e) => detail.push_str(&format!(", robot mode unreadable ({e})")),
-    }
-    if !running {
-        detail.push_str(": power on and release the brakes on the pendant");
-    }
-    match remote {
-        Some(true) => detail.push_str(", remote control"),
-        Some(false) => {
-            detail.push_str(", local control");
-            check.notes.push(
-                "the robot is in local control: if remote control is enabled on this \
-                 PolyScope 5 robot (Settings > System > Remote Control), switch the pendant \
-                 to remote control, or the URScript tactrace sends to port 30002 is refused"
-                    .into(),
-            );
-        }
-        None => {}
-    }
-    check.push("dashboard", running, detail);
-    match d.safety_status() {
-        Ok(status) => {
-            let ready = matches!(status.as_str(), "NORMAL" | "REDUCED");
-            let detail = match status.as_str() {
-                "PROTECTIVE_STOP" => format!(
-                    "{status}: remove its cause, then unlock it on the pendant (or, in \
-                     remote control, send `unlock protective stop` to the dashboard)"
-                ),
-                s if !ready => format!("{s}: clear it on the pendant"),
-                s => s.to_string(),
-            };
-            check.push("safety", ready, detail);
-            Some(status)
-        }
-        Err(e) => {
-            check.push("safety", false, format!("unreadable: {e}"));
-            None
-        }
-    }
-}
-
-/// The state row: one state read without commanding; the safety row from
-/// it when the dashboard could not give one.
-fn check_state(
-    cfg: &HardwareConfig,
-    arm: &Ur5Config,
-    dashboard_safety: Option<String>,
-    check: &mut RigCheck,
-) {
-    let (interface, port) = match arm.state {
-        StateInterface::Rtde => ("RTDE", arm.rtde_port),
-        StateInterface::Realtime => ("real-time", arm.state_port),
-    };
-    let probe = match probe_state(arm) {
-        Ok(p) => p,
-        Err(e) => {
-            let detail = format!("{interface} {}:{port}: {e}", arm.host);
-            check.push("state", false, detail);
-            if dashboard_safety.is_none() {
-                check.push(
-                    "safety",
-                    false,
-                    "unknown: neither dashboard nor state readable",
-                );
-            }
-            return;
-        }
-    };
-    // `+ 0.0` prints -0.0 as 0.0.
-    let p = probe.tcp_work;
-    let (rx, ry, rz) = (p.rx + 0.0, p.ry + 0.0, p.rz + 0.0);
-    let start = cfg.start_pose();
-    let away = ((p.x - start.x).powi(2) + (p.y - start.y).powi(2) + (p.z - start.z).powi(2)).sqrt();
-    let controller = probe
-        .controller
-        .map(|v| format!(" (controller {}.{}.{})", v.major, v.minor, v.bugfix))
-        .unwrap_or_default();
-    let can_move = check_can_move(&probe.state);
-    let mut detail = format!(
-        "{interface}{controller}: tool at ({:.1}, {:.1}, {:.1}) mm, ({:.1}, {:.1}, {:.1}) deg \
-         in the work frame, {away:.1} mm from the start",
-        p.x, p.y, p.z, rx, ry, rz
-    );
-    if let Err(e) = &can_move {
-        detail.push_str(&format!("; {e}"));
-    }
-    check.push("state", can_move.is_ok(), detail);
-    if dashboard_safety.is_none() {
-        let (name, halted) = safety_mode_name(probe.state.safety_mode);
-        check.push("safety", !halted, format!("{name} (from the state stream)"));
-    }
-}
-
-/// The reference row: pins in the frame, and the model's pins.
-fn check_reference(
-    cfg: &HardwareConfig,
-    frame: &Frame,
-    (model, expected): (Option<&StoredModel>, Option<usize>),
-    check: &mut RigCheck,
-) {
-    let pins = match tactrace_vision::PinExtractor::from_reference_frame(frame, cfg.blob.clone()) {
-        Ok(extractor) => extractor.tracker.reference().to_vec(),
-        Err(e) => {
-            let detail =
-                format!("no usable reference frame ({e}): check the crop and the blob settings");
-            check.push("reference", false, detail);
-            return;
-        }
-    };
-    let Some(model) = model else {
-        let (ready, detail) = match expected {
-            Some(n) if pins.len() == n => (true, format!("{n} pins found, as expected")),
-            Some(n) => (
-                false,
-                format!(
-                    "{} pins found, {n} expected: check the crop, the exposure and the \
-                     blob settings",
-                    pins.len()
-                ),
-            ),
-            None => (
-                !pins.is_empty(),
-                format!(
-                    "{} pins found (give --pins or --model to check the count)",
-                    pins.len()
-                ),
-            ),
-        };
-        check.push("reference", ready, detail);
-        return;
-    };
-    let model_pins = model.reference_pins().len();
-    match model.for_pins(&pins, Path::new("the rig's reference frame")) {
-        Ok(_) => check.push(
-            "reference",
-            true,
-            format!("{} pins, in the order the model was trained on", pins.len()),
-        ),
-        Err(e) => check.push(
-            "reference",
-            false,
-            format!("{} pins found, the model has {model_pins}: {e}", pins.len()),
-        ),
-    }
 }

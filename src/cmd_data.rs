@@ -51,7 +51,9 @@ pub struct CollectArgs {
 
 /// The simulated rig's configuration: the defaults, then the file.
 pub fn rig_config(path: Option<&Path>) -> Result<RigConfig> {
-    Ok(load_config(path, "rig configuration")?)
+    let rig: RigConfig = load_config(path, "rig configuration")?;
+    rig.validate().map_err(tactrace_lab::LabError::from)?;
+    Ok(rig)
 }
 
 pub fn collect(a: CollectArgs) -> Result<()> {

@@ -139,6 +139,12 @@ pub fn train(a: TrainArgs) -> Result<()> {
         }
         (None, None) => (data, None),
     };
+    let held_out = if a.val.is_none() {
+        val.as_ref().map_or(0, |v| v.len())
+    } else {
+        0
+    };
+    tr::check_trainable(&cfg, &data, held_out)?;
     let (cfg, extra) = if a.search {
         let space = search_space(a.search_space.as_deref(), a.trials)?;
         let t0 = std::time::Instant::now();

@@ -140,10 +140,7 @@ pub fn perception_for(
     settings: &ServoSettings,
 ) -> Result<Perception> {
     settings.follow.validate()?;
-    settings
-        .controller
-        .validate()
-        .map_err(|e| LabError::Config(e.to_string()))?;
+    settings.controller.validate()?;
     let extractor = PinExtractor::from_reference_frame(reference, settings.blob.clone())?;
     let net = model.for_pins(
         extractor.tracker.reference(),
@@ -208,8 +205,7 @@ pub fn follow_on_rig_recorded(
     dir: &Path,
     progress: &mut dyn FnMut(&StepRecord),
 ) -> Result<Recorded> {
-    let mut controller = PbtsController::try_new(settings.controller.clone())
-        .map_err(|e| LabError::Config(e.to_string()))?;
+    let mut controller = PbtsController::try_new(settings.controller.clone())?;
     let path = dir.join("trajectory.csv");
     let file = std::fs::File::create(&path).map_err(write_err(&path))?;
     let mut writer = csv::Writer::from_writer(file);
@@ -488,6 +484,7 @@ pub fn follow_simulated(
     let seed = cfg.follow.seed;
     let mut rig = match &calibrated {
         Some(s) => {
+            cfg.rig.validate()?;
             let mount = s.label_convention().mount_yaw_deg;
             SimRig::with_model(&cfg.rig, s.model()?, mount, shape.clone(), start, seed)
         }

@@ -24,6 +24,7 @@ pub mod follow;
 #[cfg(feature = "hardware")]
 pub mod hardware;
 pub mod import;
+pub mod numbers;
 pub mod render;
 pub mod replay_world;
 pub mod reproduce;

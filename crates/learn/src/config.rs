@@ -232,9 +232,11 @@ impl ModelConfig {
     /// `dim_x` is the inputs' length (components beyond it are not kept).
     /// `(samples, what needs them)`.
     pub fn min_train_samples(&self, dim_x: usize) -> (usize, String) {
+        // On a tie the first net (position before angle) is named.
         let pca = self
             .nets()
             .into_iter()
+            .rev()
             .filter_map(|(name, _, n)| {
                 n.n_components
                     .map(|k| (k.min(dim_x) + 1, name, k.min(dim_x)))

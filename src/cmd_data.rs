@@ -199,6 +199,9 @@ pub fn import(a: ImportArgs) -> Result<()> {
     for (name, why) in got.rejected.iter().take(10) {
         eprintln!("  rejected {name}: {why}");
     }
+    for w in &got.warnings {
+        eprintln!("warning: {w}");
+    }
     Ok(())
 }
 

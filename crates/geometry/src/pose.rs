@@ -16,6 +16,19 @@ pub struct Pose {
     pub rz: f64,
 }
 
+impl std::fmt::Display for Pose {
+    /// `(x, y, z) mm, (rx, ry, rz) deg`, three decimals (the precision
+    /// given sets the decimals).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let d = f.precision().unwrap_or(3);
+        write!(
+            f,
+            "({:.d$}, {:.d$}, {:.d$}) mm, ({:.d$}, {:.d$}, {:.d$}) deg",
+            self.x, self.y, self.z, self.rx, self.ry, self.rz
+        )
+    }
+}
+
 impl Pose {
     /// A pose from its six components (mm, mm, mm, deg, deg, deg).
     pub fn new(x: f64, y: f64, z: f64, rx: f64, ry: f64, rz: f64) -> Self {

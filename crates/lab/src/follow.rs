@@ -399,7 +399,7 @@ fn world_name(extras: &RunExtras) -> &'static str {
 /// The replay page's summary lines: how the run ended, its metrics, its
 /// label distances and warnings.
 fn page_notes(doc: &MetricsDocument, extras: &RunExtras) -> Vec<String> {
-    let mut notes = vec![format!("{:?}: {}", doc.ending, doc.message)];
+    let mut notes = vec![format!("{}: {}", doc.ending, doc.message)];
     if let Some(m) = doc.metrics {
         notes.push(format!(
             "{} steps; mean L2 {:.3} mm, track error mean {:.3} / max {:.3} mm, coverage {:.0}%, closed: {}",

@@ -124,12 +124,13 @@ pub fn trial_summary(t: &Trial) -> String {
         .as_ref()
         .or(c.angle.as_ref())
         .expect("a validated config has a net");
+    let hidden: Vec<String> = net.hidden.iter().map(usize::to_string).collect();
     format!(
-        "lr {} output lr {} beta {} hidden {:?} components {}",
+        "lr {} output lr {} beta {} hidden [{}] components {}",
         net.learning_rate,
         net.output_learning_rate.unwrap_or(net.learning_rate),
         net.beta,
-        net.hidden,
+        hidden.join(", "),
         net.n_components
             .map(|k| k.to_string())
             .unwrap_or_else(|| "-".into())

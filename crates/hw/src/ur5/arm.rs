@@ -277,7 +277,7 @@ impl Ur5Arm {
             if remaining.is_zero() {
                 return Err(HwError::MoveTimeout {
                     seconds: self.config.timeout_s,
-                    target: format!("{pose:?}"),
+                    target: pose.to_string(),
                     position_error_mm: errors.0,
                     rotation_error_deg: errors.1,
                 });

@@ -20,6 +20,7 @@ pub type Tensor = (String, Vec<usize>, Vec<f32>);
 
 /// How the calibration taps were chosen.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Selection {
     /// Seed of [`crate::select_taps`].
     pub seed: u64,

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 /// A pose of a frame relative to a base frame, mm and degrees.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Pose {
     pub x: f64,
     pub y: f64,

@@ -85,8 +85,9 @@ enum Engine {
 /// loss may go before the training counts as diverged: 1000 times is an
 /// RMS error about 45 times the targets' spread. Trained nets stay below
 /// the mean's loss (on the shared real set the default models peak at
-/// 0.27-0.41 against 0.5); a net whose loss grew without bound (7e56 once)
-/// is caught long before its weights overflow.
+/// 0.26-0.41, against 0.5 for one target and 1 for two); a net whose loss
+/// grew without bound (7e56 once) is caught long before its weights
+/// overflow.
 pub const DIVERGENCE_FACTOR: f64 = 1000.0;
 
 /// The divergence limit of a net trained on the scaled targets `y`

@@ -314,6 +314,11 @@ pub fn predict(a: PredictArgs) -> Result<()> {
             let [r, t] = net
                 .predict(&tracked.displacement(ex.tracker.reference()))
                 .map_err(LabError::from)?;
+            tactrace_lab::numbers::require_finite(
+                &format!("the model's prediction for {}", image.display()),
+                &[("r", r), ("theta", t)],
+                "the model is degenerate, or the frame far from its training data",
+            )?;
             crate::say!("r_mm,theta_deg\n{r:.4},{t:.4}");
         }
         (None, None, Some(dir)) => {

@@ -57,4 +57,14 @@ mod tests {
             "validation: position MAE is NaN, not a number; retrain"
         );
     }
+
+    #[test]
+    fn issue20_a_run_without_a_step_has_no_metric_to_report() {
+        let disk = tactrace_geometry::builtin_shape(tactrace_geometry::BuiltinShape::Disk);
+        let empty = tactrace_servo::evaluate(&disk, &[], 3.0, 10.0);
+        let err = require_finite_run("disk", &empty).unwrap_err();
+        assert!(err.to_string().starts_with("the run on disk: "), "{err}");
+        let one = tactrace_servo::evaluate(&disk, &[disk.at_arc_length(0.0).0], 3.0, 10.0);
+        require_finite_run("disk", &one).unwrap();
+    }
 }

@@ -52,7 +52,9 @@ pub struct CollectArgs {
 
 /// The simulated rig's configuration: the defaults, then the file.
 pub fn rig_config(path: Option<&Path>) -> Result<RigConfig> {
-    Ok(load_config(path, "rig configuration")?)
+    let rig: RigConfig = load_config(path, "rig configuration")?;
+    rig.validate().map_err(tactrace_lab::LabError::from)?;
+    Ok(rig)
 }
 
 pub fn collect(a: CollectArgs) -> Result<()> {
@@ -215,6 +217,9 @@ pub fn import(a: ImportArgs) -> Result<()> {
     );
     for (name, why) in got.rejected.iter().take(10) {
         eprintln!("  rejected {name}: {why}");
+    }
+    for w in &got.warnings {
+        eprintln!("warning: {w}");
     }
     Ok(())
 }

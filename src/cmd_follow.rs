@@ -205,7 +205,7 @@ fn follow_replay_world(a: FollowArgs, cfg: SimFollowConfig, world: &ReplayWorld)
 fn report_run(name: &str, res: &FollowOutcome) -> Result<()> {
     match &res.metrics {
         Some(m) => crate::say!(
-            "{name}: {} steps, {:?}; mean L2 {:.3} mm, track error mean {:.3} / max {:.3} mm, coverage {:.0}%",
+            "{name}: {} steps, {}; mean L2 {:.3} mm, track error mean {:.3} / max {:.3} mm, coverage {:.0}%",
             m.steps,
             res.summary.ending,
             m.mean_l2_mm,
@@ -213,10 +213,13 @@ fn report_run(name: &str, res: &FollowOutcome) -> Result<()> {
             m.max_track_error_mm,
             100.0 * m.coverage
         ),
-        None => crate::say!("{} steps, {:?}", res.summary.steps, res.summary.ending),
+        None => crate::say!("{} steps, {}", res.summary.steps, res.summary.ending),
     }
     if res.summary.ending.succeeded() {
         eprintln!("{} (run folder {})", res.summary.message, res.dir.display());
+        if let Some(m) = &res.metrics {
+            tactrace_lab::numbers::require_finite_run(name, m)?;
+        }
     } else {
         eprintln!(
             "the run and its trajectory so far are in {}",
@@ -336,6 +339,13 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
         );
     }
     crate::say!("report: {}", a.out.join("report.html").display());
+    let runs = r.shapes.iter().chain(&r.real_model_shapes);
+    for s in runs {
+        tactrace_lab::numbers::require_finite_run(&s.shape, &s.metrics)?;
+    }
+    for s in &r.real_shapes {
+        tactrace_lab::numbers::require_finite_run(&s.shape, &s.metrics)?;
+    }
     Ok(())
 }
 

@@ -151,6 +151,12 @@ pub fn train(a: TrainArgs) -> Result<()> {
             (split.train, split.val, split.record)
         }
     };
+    let held_out = if a.val.is_none() {
+        val.as_ref().map_or(0, |v| v.len())
+    } else {
+        0
+    };
+    tr::check_trainable(&cfg, &data, held_out)?;
     let (cfg, extra) = if a.search {
         let space = search_space(a.search_space.as_deref(), a.trials)?;
         let t0 = std::time::Instant::now();
@@ -385,6 +391,11 @@ pub fn predict(a: PredictArgs) -> Result<()> {
             let [r, t] = net
                 .predict(&tracked.displacement(ex.tracker.reference()))
                 .map_err(LabError::from)?;
+            tactrace_lab::numbers::require_finite(
+                &format!("the model's prediction for {}", image.display()),
+                &[("r", r), ("theta", t)],
+                "the model is degenerate, or the frame far from its training data",
+            )?;
             crate::say!("r_mm,theta_deg\n{r:.4},{t:.4}");
         }
         (None, None, Some(dir)) => {

@@ -137,6 +137,13 @@ pub fn evaluate(a: EvaluateArgs) -> Result<()> {
     let res = evaluate_set(&cfg, &model, &shapes, a.seeds, &|| pb.inc(1));
     pb.finish_and_clear();
     let (runs, wall) = res?;
+    // Printed first (the table shows which run), refused after.
+    let scored = || -> Result<()> {
+        for r in &runs {
+            tactrace_lab::numbers::require_finite_run(&r.score.shape, &r.score.metrics)?;
+        }
+        Ok(())
+    };
     let taps: usize = runs.iter().map(|r| r.score.metrics.steps).sum();
     let threads = tactrace_lab::tune::worker_threads();
     if a.json {
@@ -148,7 +155,7 @@ pub fn evaluate(a: EvaluateArgs) -> Result<()> {
             "taps_per_second": taps as f64 / wall,
         });
         crate::say!("{}", serde_json::to_string_pretty(&doc)?);
-        return Ok(());
+        return scored();
     }
     crate::say!("| contour | perimeter (mm) | seed | mean L2 (mm) | max track error (mm) | coverage | closed | taps | s |");
     crate::say!("|---|---|---|---|---|---|---|---|---|");
@@ -186,5 +193,5 @@ pub fn evaluate(a: EvaluateArgs) -> Result<()> {
         n / wall,
         taps as f64 / wall
     );
-    Ok(())
+    scored()
 }

@@ -139,9 +139,33 @@ fn summary(verb: &str, what: &str, got: &Imported, dir: &std::path::Path) {
         got.frames_with_missing_pins,
         got.rejected.len()
     );
+    if let Some(c) = &got.composition {
+        eprintln!("  {}", composition_text(c));
+    }
     for (name, why) in got.rejected.iter().take(10) {
         eprintln!("  rejected {name}: {why}");
     }
+}
+
+/// Where a calibrated sensor's twin taps come from, in words: the count
+/// `twin --sensor` prints is more than the labelled rows.
+fn composition_text(c: &tactrace_lab::import::TwinComposition) -> String {
+    let rendered = c.rows * c.renders;
+    let mut text = format!(
+        "from {} labelled rows: {} render(s) of each ({rendered} taps, the sensor's training \
+         recipe)",
+        c.rows, c.renders
+    );
+    if c.real_tap_repeats > 0 {
+        text.push_str(&format!(
+            ", then its {} real calibration taps {} time(s) ({} taps; --no-real-taps leaves \
+             them out)",
+            c.real_taps,
+            c.real_tap_repeats,
+            c.real_taps * c.real_tap_repeats
+        ));
+    }
+    text
 }
 
 /// Real labelled taps and the simulator to fit to them (`calibrate`,
@@ -263,6 +287,9 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
             b.mean_cosine,
             f.mean_cosine
         );
+    }
+    for w in &got.warnings {
+        eprintln!("warning: {w}");
     }
     Ok(())
 }

@@ -108,7 +108,8 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            let cause: &(dyn std::error::Error + 'static) = err.as_ref();
+            eprintln!("error: {}", tactrace_lab::error::error_chain(cause));
             ExitCode::from(exit_code(&err))
         }
     }

@@ -30,7 +30,8 @@ pub fn make(base: &Path) {
         &[
             "collect",
             "--samples",
-            "30",
+            // 36 at least for the model's 35 components.
+            "40",
             "--seed",
             "3",
             "--save-frames",

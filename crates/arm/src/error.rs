@@ -48,8 +48,5 @@ pub enum ArmError {
 /// A pose for people: position in mm and rotation in degrees (its debug form
 /// `Pose { x: .. }` once reached the CLI's error messages).
 fn plain(p: &Pose) -> String {
-    format!(
-        "(x {:.3}, y {:.3}, z {:.3} mm; rx {:.3}, ry {:.3}, rz {:.3} deg)",
-        p.x, p.y, p.z, p.rx, p.ry, p.rz
-    )
+    p.to_string()
 }

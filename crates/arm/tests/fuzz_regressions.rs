@@ -33,6 +33,9 @@ fn outside_workspace_message_has_no_debug_pose() {
     for err in errors {
         let msg = err.to_string();
         assert!(!msg.contains("Pose {") && !msg.contains("x:"), "{msg}");
-        assert!(msg.contains("x 59.720") && msg.contains("deg"), "{msg}");
+        assert!(
+            msg.contains("(59.720, -51.500, ") && msg.contains(") deg"),
+            "{msg}"
+        );
     }
 }

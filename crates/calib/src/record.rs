@@ -20,6 +20,7 @@ pub type Tensor = (String, Vec<usize>, Vec<f32>);
 
 /// How the calibration taps were chosen.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Selection {
     /// Seed of [`crate::select_taps`].
     pub seed: u64,
@@ -93,8 +94,14 @@ impl LinearCorrection {
                 .find(|t| t.0 == name)
                 .ok_or_else(|| CalibError::Record(format!("no tensor `{name}`")))?;
             if s != shape || v.len() != shape.iter().product::<usize>() {
+                let dims = |d: &[usize]| {
+                    let parts: Vec<String> = d.iter().map(usize::to_string).collect();
+                    parts.join(" x ")
+                };
                 return Err(CalibError::Record(format!(
-                    "tensor `{name}` has shape {s:?}, expected {shape:?}"
+                    "tensor `{name}` has shape {}, expected {}",
+                    dims(s),
+                    dims(shape)
                 )));
             }
             if v.iter().any(|x| !x.is_finite()) {

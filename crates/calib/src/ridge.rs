@@ -23,6 +23,7 @@ pub const RECOMMENDED_TAPS: usize = 100;
 
 /// Settings of the fit; [`Default`] is the documented baseline.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CorrectionParams {
     /// Scale each simulated coordinate to unit variance before the penalty
     /// (folded back into W: [`LinearCorrection::apply`] is always raw).

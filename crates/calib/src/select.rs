@@ -119,6 +119,7 @@ fn fill_maximin(unit: &[(f64, f64)], chosen: &mut Vec<usize>, n: usize) {
 
 /// What calibration taps must cover.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SpanRule {
     /// Least range of r over the taps, mm.
     pub min_r_range_mm: f64,

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 /// Misfit of paired fields `a` (e.g. corrected twin) and `b` (real).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FieldStats {
     /// Taps compared.
     pub taps: usize,

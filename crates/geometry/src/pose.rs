@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 /// A pose of a frame relative to a base frame, mm and degrees.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Pose {
     pub x: f64,
     pub y: f64,
@@ -14,6 +15,19 @@ pub struct Pose {
     pub rx: f64,
     pub ry: f64,
     pub rz: f64,
+}
+
+impl std::fmt::Display for Pose {
+    /// `(x, y, z) mm, (rx, ry, rz) deg`, three decimals (the precision
+    /// given sets the decimals).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let d = f.precision().unwrap_or(3);
+        write!(
+            f,
+            "({:.d$}, {:.d$}, {:.d$}) mm, ({:.d$}, {:.d$}, {:.d$}) deg",
+            self.x, self.y, self.z, self.rx, self.ry, self.rz
+        )
+    }
 }
 
 impl Pose {

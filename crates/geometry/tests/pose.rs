@@ -96,3 +96,22 @@ fn distance_is_euclidean_in_position() {
     let b = Pose::new(3.0, 4.0, 12.0, 0.0, 50.0, 0.0);
     assert!((a.distance(b) - 13.0).abs() < 1e-12);
 }
+
+/// Issue 20: poses reached messages as Rust debug structs
+/// (`Pose { x: .. }`), and a pose table in a configuration accepted keys it
+/// does not have.
+#[test]
+fn issue20_a_pose_reads_as_millimetres_and_degrees_and_refuses_unknown_keys() {
+    let p = Pose::new(1.0, -2.5, 300.0, 0.0, 90.0, -45.25);
+    assert_eq!(
+        p.to_string(),
+        "(1.000, -2.500, 300.000) mm, (0.000, 90.000, -45.250) deg"
+    );
+    assert_eq!(
+        format!("{p:.1}"),
+        "(1.0, -2.5, 300.0) mm, (0.0, 90.0, -45.2) deg"
+    );
+    let text = r#"{"x": 1, "y": 2, "z": 3, "rx": 0, "ry": 0, "rz": 0, "yaw": 5}"#;
+    let err = serde_json::from_str::<Pose>(text).unwrap_err();
+    assert!(err.to_string().contains("unknown field `yaw`"), "{err}");
+}

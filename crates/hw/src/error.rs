@@ -73,7 +73,10 @@ pub enum HwError {
     #[error("invalid configuration `{field}`: {reason}")]
     Config { field: &'static str, reason: String },
     /// The crop box does not fit in the camera image.
-    #[error("crop box {crop:?} does not fit a {width}x{height} image")]
+    #[error(
+        "crop box [{}, {}, {}, {}] does not fit a {width}x{height} image",
+        crop[0], crop[1], crop[2], crop[3]
+    )]
     Crop {
         crop: [u32; 4],
         width: u32,

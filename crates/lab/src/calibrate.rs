@@ -59,6 +59,9 @@ pub struct Calibrated {
     /// One held-out tap, to look at: its image name and its real,
     /// simulated and corrected fields (2P values, all x then all y).
     pub example: Option<ExampleTap>,
+    /// What the user should know (the real frames' import warnings: a
+    /// reference that looks pressed).
+    pub warnings: Vec<String>,
 }
 
 /// A held-out tap's fields before and after calibration (the tap of
@@ -203,6 +206,7 @@ pub fn calibrate_sensor(
         taps: labels.len(),
         rejected: real.rejected.len(),
         example,
+        warnings: real.warnings.clone(),
     })
 }
 

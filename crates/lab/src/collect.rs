@@ -119,6 +119,7 @@ pub fn collect_calibrated(
     );
     let mount = convention.mount_yaw_deg;
     let model = sensor.model()?;
+    rig_cfg.validate()?;
     let mut rig = SimRig::with_model(rig_cfg, model, mount, shape.clone(), start, cfg.seed);
     let (arm, sensor_part) = rig.parts();
     let names = [

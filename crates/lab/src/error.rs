@@ -2,6 +2,7 @@
 //! [`LabError::is_bad_input`]: every failure names the file or setting at
 //! fault, and the source errors of the other crates stay typed inside.
 use std::path::PathBuf;
+pub use tactrace_servo::error_chain;
 use tactrace_servo::Ending;
 
 /// What can go wrong running an experiment.
@@ -25,8 +26,35 @@ pub enum LabError {
     Config(String),
     /// A run that started but did not do what was asked (lost contact,
     /// step cap, refused move, fault). Its outputs are kept.
-    #[error("the run failed ({ending:?}): {message}")]
+    #[error("the run failed ({ending}): {message}")]
     RunFailed { ending: Ending, message: String },
+    /// A result that is not a number (a NaN or infinite error, loss or
+    /// metric): never reported as success.
+    #[error("{what}: {metric} is {value}, not a number{}", hint_suffix(.hint))]
+    NotANumber {
+        what: String,
+        metric: String,
+        value: f64,
+        hint: String,
+    },
+    /// Too few training samples for the model: `held_out` more were set
+    /// aside for validation.
+    #[error(
+        "too few training samples ({got}): at least {needed} are needed ({reason}); {}",
+        more_samples_hint(*.held_out)
+    )]
+    TooFewSamples {
+        got: usize,
+        needed: usize,
+        reason: String,
+        held_out: usize,
+    },
+    /// A controller setting that cannot work.
+    #[error(transparent)]
+    Control(#[from] tactrace_control::ControlError),
+    /// An optimiser set-up that cannot work, or its misuse.
+    #[error(transparent)]
+    Optim(#[from] tactrace_optim::OptimError),
     #[error(transparent)]
     Store(#[from] tactrace_store::StoreError),
     /// The taps cannot calibrate the sensor (too few, not spanning, ...).
@@ -113,19 +141,20 @@ impl LabError {
     pub fn is_bad_input(&self) -> bool {
         use tactrace_learn::LearnError as L;
         use tactrace_sensor::SensorError as S;
-        use tactrace_servo::ServoError as V;
         match self {
             LabError::Format { .. }
             | LabError::Reference { .. }
             | LabError::Config(_)
             | LabError::Geometry(_)
+            | LabError::TooFewSamples { .. }
             | LabError::Calib(_) => true,
-            LabError::RunFailed { .. } | LabError::Report(_) => false,
+            LabError::Control(e) => {
+                !matches!(e, tactrace_control::ControlError::NonFiniteInput { .. })
+            }
+            LabError::RunFailed { .. } | LabError::NotANumber { .. } | LabError::Report(_) => false,
+            LabError::Optim(e) => matches!(e, tactrace_optim::OptimError::Config(_)),
             LabError::Store(e) => e.is_bad_input(),
-            LabError::Servo(e) => matches!(
-                e,
-                V::Config(_) | V::Start(_) | V::InputSize { .. } | V::Geometry(_)
-            ),
+            LabError::Servo(e) => e.is_bad_input(),
             LabError::Sensor(e) => !matches!(e, S::ReplayExhausted { .. }),
             LabError::Vision(_) => true,
             LabError::Learn(e) => !matches!(e, L::Diverged { .. }),
@@ -153,6 +182,27 @@ impl LabError {
             LabError::Interrupted { signal, .. } => Some(signal.exit_code()),
             _ => None,
         }
+    }
+}
+
+/// What to do about too few training samples.
+fn more_samples_hint(held_out: usize) -> String {
+    if held_out > 0 {
+        format!(
+            "{held_out} more were held out for validation (a smaller --val-fraction, or a \
+             separate --val set, leaves more to train on)"
+        )
+    } else {
+        "collect more taps, or lower n_components (--config)".into()
+    }
+}
+
+/// `; {hint}` when there is a hint.
+fn hint_suffix(hint: &str) -> String {
+    if hint.is_empty() {
+        String::new()
+    } else {
+        format!("; {hint}")
     }
 }
 

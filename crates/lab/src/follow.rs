@@ -117,10 +117,7 @@ pub fn perception_for(
     settings: &ServoSettings,
 ) -> Result<Perception> {
     settings.follow.validate()?;
-    settings
-        .controller
-        .validate()
-        .map_err(|e| LabError::Config(e.to_string()))?;
+    settings.controller.validate()?;
     let extractor = PinExtractor::from_reference_frame(reference, settings.blob.clone())?;
     let net = model.for_pins(
         extractor.tracker.reference(),
@@ -185,8 +182,7 @@ pub fn follow_on_rig_recorded(
     dir: &Path,
     progress: &mut dyn FnMut(&StepRecord),
 ) -> Result<Recorded> {
-    let mut controller = PbtsController::try_new(settings.controller.clone())
-        .map_err(|e| LabError::Config(e.to_string()))?;
+    let mut controller = PbtsController::try_new(settings.controller.clone())?;
     let mut csv = TrajectoryCsv::create(&dir.join("trajectory.csv"))?;
     let mut records: Vec<StepRecord> = Vec::new();
     let mut bar = FnSink(|r: &StepRecord| progress(r));
@@ -361,7 +357,7 @@ fn world_name(extras: &RunExtras) -> &'static str {
 /// The replay page's summary lines: how the run ended, its metrics, its
 /// label distances and warnings.
 fn page_notes(doc: &MetricsDocument, extras: &RunExtras) -> Vec<String> {
-    let mut notes = vec![format!("{:?}: {}", doc.ending, doc.message)];
+    let mut notes = vec![format!("{}: {}", doc.ending, doc.message)];
     if let Some(m) = doc.metrics {
         notes.push(format!(
             "{} steps; mean L2 {:.3} mm, track error mean {:.3} / max {:.3} mm, coverage {:.0}%, closed: {}",
@@ -446,6 +442,7 @@ pub fn follow_simulated(
     let seed = cfg.follow.seed;
     let mut rig = match &calibrated {
         Some(s) => {
+            cfg.rig.validate()?;
             let mount = s.label_convention().mount_yaw_deg;
             SimRig::with_model(&cfg.rig, s.model()?, mount, shape.clone(), start, seed)
         }

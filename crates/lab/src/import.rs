@@ -47,6 +47,24 @@ pub struct Imported {
     pub frames_with_missing_pins: usize,
     /// Frames skipped because too few pins were found (named with the reason).
     pub rejected: Vec<(String, String)>,
+    /// What the caller should tell the user (a reference that looks
+    /// pressed: [`crate::import_checks::pressed_reference`]).
+    pub warnings: Vec<String>,
+    /// How a twin's taps were made from the labelled rows, when several
+    /// renders or the real calibration taps make them more than the rows.
+    pub composition: Option<TwinComposition>,
+}
+
+/// Where the taps of a calibrated sensor's twin come from
+/// (`twin --sensor`): `renders` simulated taps of each of the `rows`
+/// labelled rows, then the sensor's `real_taps` real calibration taps
+/// `real_tap_repeats` times.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TwinComposition {
+    pub rows: usize,
+    pub renders: usize,
+    pub real_taps: usize,
+    pub real_tap_repeats: usize,
 }
 
 /// One labelled row of the targets CSV.
@@ -95,31 +113,13 @@ pub(crate) fn read_rows(
     let (file, _) = tactrace_store::open_regular(path)?;
     let mut rdr = csv::Reader::from_reader(std::io::BufReader::new(file));
     let headers = rdr.headers().map_err(|e| fmt(e.to_string()))?.clone();
-    let needed = [cols.image, cols.r, cols.theta]
-        .iter()
-        .chain(cols.extra)
-        .map(|c| format!("`{c}`"))
-        .collect::<Vec<_>>()
-        .join(", ");
-    let col = |name: &str| {
-        headers
-            .iter()
-            .position(|h| h.trim() == name)
-            .ok_or_else(|| {
-                fmt(format!(
-                    "not a CSV with the label columns {needed}: no column `{name}` \
-                     (its header: {}); name the columns with --image-column, \
-                     --r-column, --theta-column",
-                    header_summary(&headers)
-                ))
-            })
-    };
-    let (ci, cr, ct) = (col(cols.image)?, col(cols.r)?, col(cols.theta)?);
-    let extra_cols = cols
-        .extra
-        .iter()
-        .map(|c| col(c))
-        .collect::<Result<Vec<_>>>()?;
+    let names: Vec<&str> = [cols.image, cols.r, cols.theta]
+        .into_iter()
+        .chain(cols.extra.iter().copied())
+        .collect();
+    let at = crate::labels::column_indices(&headers, &names).map_err(fmt)?;
+    let (ci, cr, ct) = (at[0], at[1], at[2]);
+    let extra_cols = &at[3..];
     let mut rows = Vec::new();
     for (k, rec) in rdr.records().enumerate() {
         let rec = rec.map_err(|e| fmt(e.to_string()))?;
@@ -152,29 +152,6 @@ pub(crate) fn read_rows(
         return Err(fmt("no data rows".into()));
     }
     Ok(rows)
-}
-
-/// A header line for an error message: at most 5 fields of at most 24
-/// characters each (a JSON or binary file given as a CSV has one huge
-/// "column").
-fn header_summary(headers: &csv::StringRecord) -> String {
-    const FIELDS: usize = 5;
-    const CHARS: usize = 24;
-    let mut fields: Vec<String> = headers
-        .iter()
-        .take(FIELDS)
-        .map(|h| {
-            let h = h.trim();
-            match h.char_indices().nth(CHARS) {
-                Some((end, _)) => format!("`{}...`", &h[..end]),
-                None => format!("`{h}`"),
-            }
-        })
-        .collect();
-    if headers.len() > FIELDS {
-        fields.push(format!("... ({} fields in all)", headers.len()));
-    }
-    fields.join(", ")
 }
 
 /// How many of the first rows must all fail for too few pins before the
@@ -238,6 +215,12 @@ pub(crate) fn import_rows(
         read_rows(&cfg.targets, &LabelColumns::of(cfg), cfg.limit)?,
         keep,
     );
+    if let Some(err) = rows
+        .first()
+        .and_then(|r| crate::import_checks::frames_folder(&cfg.frames, &r.image))
+    {
+        return Err(err);
+    }
     let extractor = reference_extractor(&cfg.reference, blob)?;
     let first: Vec<PathBuf> = rows
         .iter()
@@ -278,7 +261,15 @@ pub(crate) fn import_rows(
         input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
         images: Vec::new(),
     };
-    gather(&rows, outcomes, meta, &cfg.frames)
+    let mut got = gather(&rows, outcomes, meta, &cfg.frames)?;
+    let d = &got.data;
+    got.warnings.extend(crate::import_checks::pressed_reference(
+        &cfg.reference,
+        &d.meta.reference_pins,
+        &d.inputs,
+        d.len(),
+    ));
+    Ok(got)
 }
 
 /// The rows at `keep` (all when `None`; indices past the end are ignored).
@@ -344,6 +335,8 @@ pub(crate) fn gather(
         },
         frames_with_missing_pins: missing,
         rejected,
+        warnings: Vec::new(),
+        composition: None,
     })
 }
 

@@ -24,6 +24,9 @@ pub mod follow;
 #[cfg(feature = "hardware")]
 pub mod hardware;
 pub mod import;
+pub mod import_checks;
+mod labels;
+pub mod numbers;
 pub mod render;
 pub mod replay_world;
 pub mod reproduce;

@@ -9,7 +9,9 @@ use tactrace_learn::{
 use tactrace_store::{stage_model, HeldOut, StoredModel, TapData, TrainingRecord};
 
 /// Resolve a model configuration: the preset for `kind`, then the keys of an
-/// optional TOML override (unknown keys are errors), then `epochs`.
+/// optional TOML override (unknown keys are errors), then `epochs`; the
+/// result is validated here, before any work (a NaN or out-of-range value
+/// is an error naming its key).
 pub fn resolve_config(
     kind: ModelKind,
     preset: Preset,
@@ -23,7 +25,27 @@ pub fn resolve_config(
     if let Some(e) = epochs {
         cfg.set_epochs(e);
     }
+    cfg.validate()?;
     Ok(cfg)
+}
+
+/// Error unless `cfg` can be fitted on the `train` samples, before any
+/// work; `held_out` samples were set aside for validation (named in the
+/// message, since they are what made the training part too small).
+pub fn check_trainable(cfg: &ModelConfig, train: &TapData, held_out: usize) -> Result<()> {
+    match cfg.check_samples(train.len(), train.dim()) {
+        Err(tactrace_learn::LearnError::TooFewSamples {
+            got,
+            needed,
+            reason,
+        }) => Err(LabError::TooFewSamples {
+            got,
+            needed,
+            reason,
+            held_out,
+        }),
+        other => Ok(other?),
+    }
 }
 
 /// Fit a model on a training set.
@@ -148,12 +170,13 @@ pub fn trial_summary(t: &Trial) -> String {
         .as_ref()
         .or(c.angle.as_ref())
         .expect("a validated config has a net");
+    let hidden: Vec<String> = net.hidden.iter().map(usize::to_string).collect();
     format!(
-        "lr {} output lr {} beta {} hidden {:?} components {}",
+        "lr {} output lr {} beta {} hidden [{}] components {}",
         net.learning_rate,
         net.output_learning_rate.unwrap_or(net.learning_rate),
         net.beta,
-        net.hidden,
+        hidden.join(", "),
         net.n_components
             .map(|k| k.to_string())
             .unwrap_or_else(|| "-".into())
@@ -336,6 +359,22 @@ pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
     check_dim(model.input_dim(), data.dim())?;
     let predictions = model.predict_batch(&ds)?;
     let [position_mae_mm, angle_mae_deg] = mean_absolute_error(&predictions, &ds);
+    for (k, p) in predictions.iter().enumerate() {
+        crate::numbers::require_finite(
+            &format!("the model's prediction for row {k} of the dataset"),
+            &[("r", p[0]), ("theta", p[1])],
+            "the row's inputs lie far outside the training data's, or the model is \
+             degenerate (trained on too few samples?)",
+        )?;
+    }
+    crate::numbers::require_finite(
+        "the validation",
+        &[
+            ("the position MAE", position_mae_mm),
+            ("the angle MAE", angle_mae_deg),
+        ],
+        "",
+    )?;
     let truth = data
         .targets
         .chunks(2)

@@ -190,8 +190,7 @@ pub fn fit_transfer(
         sigma: cfg.sigma,
         population: cfg.population,
         seed: cfg.seed,
-    })
-    .map_err(|e| LabError::Config(e.to_string()))?;
+    })?;
     let mut candidates = vec![start.clone()];
     for generation in 1..=cfg.generations {
         let mut costs = Vec::new();
@@ -205,9 +204,7 @@ pub fn fit_transfer(
             costs.push(c.cost);
             candidates.push(c);
         }
-        search
-            .tell(&costs)
-            .map_err(|e| LabError::Config(e.to_string()))?;
+        search.tell(&costs)?;
     }
     Ok(TransferFit {
         config: with_values(base, &best.values),

@@ -10,7 +10,7 @@
 use crate::error::{LabError, Result};
 use crate::import::{
     gather, keep_rows, read_rows, reference_extractor, target_names, FrameOutcome, Imported,
-    LabelColumns, Row,
+    LabelColumns, Row, TwinComposition,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -164,6 +164,12 @@ pub fn simulate_twin_calibrated(
         append_real_taps(&mut out.data, sensor, k);
     }
     out.data.meta.samples = out.data.targets.len() / 2;
+    out.composition = Some(TwinComposition {
+        rows: rows.len(),
+        renders,
+        real_taps: sensor.real_labels.len(),
+        real_tap_repeats: repeats,
+    });
     Ok(out)
 }
 

@@ -133,3 +133,55 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
         "{err}"
     );
 }
+
+/// A key appended to the end of sensor.toml (where it reads as a top-level
+/// key but lands in the last table, `[calibration.held_out_after]`) was
+/// accepted: every table of the file refuses unknown keys now.
+#[test]
+fn issue20_an_unknown_key_anywhere_in_sensor_toml_is_refused() {
+    let root = tempfile::tempdir().unwrap();
+    let twin = distorted_sensor_set(root.path(), 40);
+    let cfg = CalibrateConfig {
+        frames: root.path().join("frames"),
+        twin,
+        samples: Some(20),
+        seed: 1,
+        allowed_rows: None,
+        score_rows: None,
+        fit_physics: false,
+    };
+    let blob = BlobParams::preset("sim").unwrap();
+    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let dir = root.path().join("sensor");
+    got.sensor.write(&dir, false).unwrap();
+    let toml = dir.join("sensor.toml");
+    let text = std::fs::read_to_string(&toml).unwrap();
+    SensorFolder::read(&dir).expect("as written");
+    for (at, extra) in [
+        ("end", format!("{text}\nsurprise = 1\n")),
+        ("top", format!("surprise = 1\n{text}")),
+        (
+            "selection",
+            text.replace(
+                "[calibration.selection]\n",
+                "[calibration.selection]\nsurprise = 1\n",
+            ),
+        ),
+        (
+            "params",
+            text.replace(
+                "[calibration.params]\n",
+                "[calibration.params]\nsurprise = 1\n",
+            ),
+        ),
+    ] {
+        assert_ne!(extra, text, "{at}: the key was added");
+        std::fs::write(&toml, &extra).unwrap();
+        let err = SensorFolder::read(&dir).expect_err(at);
+        assert!(err.is_bad_input(), "{at}: {err}");
+        assert!(
+            err.to_string().contains("unknown field `surprise`"),
+            "{at}: {err}"
+        );
+    }
+}

@@ -205,12 +205,18 @@ impl ModelConfig {
             } else {
                 "`pose` only"
             };
-            return Err(config_err("nets", format!("{:?} needs {want}", self.kind)));
+            return Err(config_err("nets", format!("{} needs {want}", self.kind)));
         }
         if self.epochs == 0 {
             return Err(config_err("epochs", "must be at least 1".into()));
         }
         check_phases(self.free_phase, self.clamped_phase)?;
+        if !(0.0..=1.0).contains(&self.anneal_fraction) {
+            return Err(config_err(
+                "anneal_fraction",
+                format!("{} must lie in [0, 1]", self.anneal_fraction),
+            ));
+        }
         if self.divergence_retries > MAX_RETRIES {
             let n = self.divergence_retries;
             return Err(config_err(
@@ -218,11 +224,78 @@ impl ModelConfig {
                 format!("{n} exceeds {MAX_RETRIES}"),
             ));
         }
-        for (_, _, n) in self.nets() {
-            check_net(n, self.kind)?;
-            check_sizes(n)?;
+        for (name, _, n) in self.nets() {
+            let field_err = |field, reason| LearnError::NetConfig {
+                net: name,
+                field,
+                reason,
+            };
+            check_net(n, self.kind).map_err(|(f, r)| field_err(f, r))?;
+            check_sizes(n).map_err(|(f, r)| field_err(f, r))?;
         }
         Ok(())
+    }
+
+    /// The fewest training samples this configuration can be fitted on:
+    /// a net on `k` principal components needs `k + 1` (n samples span at
+    /// most n - 1 directions about their mean, so fewer leave components
+    /// of zero variance: directions picked arbitrarily, which whitening
+    /// divides by zero), and any model
+    /// needs [`MIN_TRAIN_SAMPLES`] to standardise its inputs and targets.
+    /// `dim_x` is the inputs' length (components beyond it are not kept).
+    /// `(samples, what needs them)`.
+    pub fn min_train_samples(&self, dim_x: usize) -> (usize, String) {
+        // On a tie the first net (position before angle) is named.
+        let pca = self
+            .nets()
+            .into_iter()
+            .rev()
+            .filter_map(|(name, _, n)| {
+                n.n_components
+                    .map(|k| (k.min(dim_x) + 1, name, k.min(dim_x)))
+            })
+            .max_by_key(|&(need, ..)| need);
+        match pca {
+            Some((need, name, k)) if need > MIN_TRAIN_SAMPLES => (
+                need,
+                format!("one more than the {name} net's n_components = {k}"),
+            ),
+            _ => (
+                MIN_TRAIN_SAMPLES,
+                "to standardise the inputs and targets".to_string(),
+            ),
+        }
+    }
+
+    /// Error unless `n` training samples of `dim_x` inputs are enough
+    /// ([`Self::min_train_samples`]).
+    pub fn check_samples(&self, n: usize, dim_x: usize) -> Result<(), LearnError> {
+        let (needed, reason) = self.min_train_samples(dim_x);
+        if n >= needed {
+            Ok(())
+        } else {
+            Err(LearnError::TooFewSamples {
+                got: n,
+                needed,
+                reason,
+            })
+        }
+    }
+}
+
+/// The fewest training samples of any model: one sample has no spread to
+/// standardise by.
+pub const MIN_TRAIN_SAMPLES: usize = 2;
+
+impl std::fmt::Display for ModelKind {
+    /// The report's names: DisDenNN, PCADenNN, PDenNN, and MLP.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ModelKind::DisDenNN => "DisDenNN",
+            ModelKind::PcaDenNN => "PCADenNN",
+            ModelKind::PDenNN => "PDenNN",
+            ModelKind::Mlp => "MLP",
+        })
     }
 }
 
@@ -239,26 +312,25 @@ pub const MAX_EULER_STEPS: usize = 10_000;
 /// Largest number of learning-rate halvings after a divergence.
 pub const MAX_RETRIES: usize = 64;
 
+/// A net's key at fault and why.
+type FieldError = (&'static str, String);
+
 /// Error when a net's sizes would take unbounded memory or time.
-fn check_sizes(n: &NetConfig) -> Result<(), LearnError> {
-    let sizes = n.hidden.iter().chain(&n.n_components);
-    if let Some(big) = sizes.filter(|&&s| s > MAX_LAYER).max() {
-        return Err(config_err(
-            "hidden",
-            format!("size {big} exceeds {MAX_LAYER}"),
-        ));
+fn check_sizes(n: &NetConfig) -> Result<(), FieldError> {
+    if let Some(big) = n.hidden.iter().filter(|&&s| s > MAX_LAYER).max() {
+        return Err(("hidden", format!("size {big} exceeds {MAX_LAYER}")));
+    }
+    if let Some(k) = n.n_components.filter(|&k| k > MAX_LAYER) {
+        return Err(("n_components", format!("{k} exceeds {MAX_LAYER}")));
     }
     if n.hidden.len() > MAX_HIDDEN_LAYERS {
         let k = n.hidden.len();
-        return Err(config_err(
-            "hidden",
-            format!("{k} layers exceed {MAX_HIDDEN_LAYERS}"),
-        ));
+        return Err(("hidden", format!("{k} layers exceed {MAX_HIDDEN_LAYERS}")));
     }
     let weights: usize = n.hidden.windows(2).map(|w| w[0] * w[1]).sum();
     if weights > MAX_HIDDEN_WEIGHTS {
         let why = format!("{weights} weights between hidden layers exceed {MAX_HIDDEN_WEIGHTS}");
-        return Err(config_err("hidden", why));
+        return Err(("hidden", why));
     }
     Ok(())
 }
@@ -267,48 +339,38 @@ fn config_err(field: &'static str, reason: String) -> LearnError {
     LearnError::Config { field, reason }
 }
 
-fn check_net(n: &NetConfig, kind: ModelKind) -> Result<(), LearnError> {
-    if !(n.learning_rate.is_finite() && n.learning_rate > 0.0) {
-        return Err(config_err(
-            "learning_rate",
-            format!("{} must be positive", n.learning_rate),
-        ));
+/// A rate or coefficient that must be finite and positive.
+fn positive(field: &'static str, v: f64) -> Result<(), FieldError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err((field, format!("{v} must be a positive number")))
     }
+}
+
+fn check_net(n: &NetConfig, kind: ModelKind) -> Result<(), FieldError> {
+    positive("learning_rate", n.learning_rate)?;
     if let Some(lr) = n.output_learning_rate {
-        if !(lr.is_finite() && lr > 0.0) {
-            return Err(config_err(
-                "output_learning_rate",
-                format!("{lr} must be positive"),
-            ));
-        }
+        positive("output_learning_rate", lr)?;
     }
-    if kind != ModelKind::Mlp && !(n.beta.is_finite() && n.beta > 0.0) {
-        return Err(config_err("beta", format!("{} must be positive", n.beta)));
+    if kind != ModelKind::Mlp {
+        positive("beta", n.beta)?;
     }
     if n.hidden.contains(&0) {
-        return Err(config_err(
-            "hidden",
-            "layer sizes must be at least 1".into(),
-        ));
+        return Err(("hidden", "layer sizes must be at least 1".into()));
     }
     if n.n_components == Some(0) {
-        return Err(config_err("n_components", "must be at least 1".into()));
+        return Err(("n_components", "must be at least 1".into()));
     }
     if kind == ModelKind::DisDenNN && n.n_components.is_some() {
-        return Err(config_err(
-            "n_components",
-            "DisDenNN takes raw displacements".into(),
-        ));
+        return Err(("n_components", "DisDenNN takes raw displacements".into()));
     }
     if matches!(
         kind,
         ModelKind::PcaDenNN | ModelKind::PDenNN | ModelKind::Mlp
     ) && n.n_components.is_none()
     {
-        return Err(config_err(
-            "n_components",
-            format!("{kind:?} needs principal components"),
-        ));
+        return Err(("n_components", format!("{kind} needs principal components")));
     }
     Ok(())
 }

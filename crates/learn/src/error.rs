@@ -33,6 +33,22 @@ pub enum LearnError {
     /// A configuration value is out of range.
     #[error("invalid configuration: {field}: {reason}")]
     Config { field: &'static str, reason: String },
+    /// A value of one net's table (`[position]`, `[angle]`, `[pose]`) is
+    /// out of range: `field` is the key of that table.
+    #[error("invalid configuration: [{net}] {field}: {reason}")]
+    NetConfig {
+        net: &'static str,
+        field: &'static str,
+        reason: String,
+    },
+    /// Fewer training samples than the model can be fitted on
+    /// ([`crate::ModelConfig::min_train_samples`]).
+    #[error("too few training samples ({got}): at least {needed} are needed ({reason})")]
+    TooFewSamples {
+        got: usize,
+        needed: usize,
+        reason: String,
+    },
     /// A serialised model has another format version.
     #[error(
         "model format version {found} is not supported (this build reads version {supported})"
@@ -41,14 +57,33 @@ pub enum LearnError {
     /// A serialised model could not be parsed or is inconsistent.
     #[error("corrupt model data: {reason}")]
     Corrupt { reason: String },
-    /// Training produced non-finite weights (learning rate or beta too large).
+    /// Training diverged (learning rate or beta too large): non-finite
+    /// weights or loss, or a loss above `limit`, the divergence limit
+    /// (`trainer::divergence_limit`; infinite when the loss is not finite).
     #[error(
-        "training diverged in network {net} at epoch {epoch} (loss {loss}); \
-         lower the learning rate (or beta), e.g. with --config"
+        "training diverged in network {net} at epoch {epoch}: loss {loss:.4e} {}; \
+         lower the learning rate (or beta), e.g. with --config",
+        diverged_because(*.loss, *.limit)
     )]
     Diverged {
         net: String,
         epoch: usize,
         loss: f64,
+        limit: f64,
     },
+}
+
+/// Why a loss counts as diverged, for [`LearnError::Diverged`].
+fn diverged_because(loss: f64, limit: f64) -> String {
+    if !loss.is_finite() {
+        "is not a finite number (or the weights are not)".into()
+    } else if limit.is_finite() {
+        format!(
+            "exceeds {limit:.4e}, {} times the loss of predicting the training mean \
+             (at least 0.5 a target)",
+            crate::trainer::DIVERGENCE_FACTOR
+        )
+    } else {
+        "with non-finite weights".into()
+    }
 }

@@ -41,6 +41,16 @@ pub struct Layers {
     pub(crate) b: Vec<Vec<f32>>,
 }
 
+/// Layer sizes for people: `254 -> 1000 -> 1`.
+pub(crate) fn sizes_text(sizes: &[usize]) -> String {
+    let parts: Vec<String> = sizes.iter().map(usize::to_string).collect();
+    if parts.is_empty() {
+        "(no layers)".into()
+    } else {
+        parts.join(" -> ")
+    }
+}
+
 impl Layers {
     /// Uniform weights in `+-1/sqrt(d(l-1))` (keeps hidden pre-activations
     /// of unit-scale inputs near the sigmoid's linear range), zero biases.
@@ -49,7 +59,8 @@ impl Layers {
             return Err(LearnError::Config {
                 field: "sizes",
                 reason: format!(
-                    "{sizes:?}: need at least an input and an output layer, all non-empty"
+                    "{}: need at least an input and an output layer, all non-empty",
+                    sizes_text(sizes)
                 ),
             });
         }
@@ -88,7 +99,7 @@ impl Layers {
             && (0..n).all(|l| w[l].len() == sizes[l] * sizes[l + 1] && b[l].len() == sizes[l + 1]);
         if !shapes_ok {
             return Err(LearnError::Corrupt {
-                reason: format!("weights do not match layer sizes {sizes:?}"),
+                reason: format!("weights do not match layer sizes {}", sizes_text(&sizes)),
             });
         }
         let w = w

@@ -73,7 +73,11 @@ impl Pca {
             .self_adjoint_eigen(Side::Lower)
             .map_err(|e| LearnError::Config {
                 field: "pca",
-                reason: format!("eigendecomposition failed: {e:?}"),
+                reason: match e {
+                    faer::linalg::evd::EvdError::NoConvergence => {
+                        "the eigendecomposition did not converge".into()
+                    }
+                },
             })?;
         let values: Vec<f64> = (0..dim)
             .rev()

@@ -76,6 +76,7 @@ impl PoseModel {
         progress: &mut dyn FnMut(&EpochReport),
     ) -> Result<(PoseModel, TrainingHistory), LearnError> {
         cfg.validate()?;
+        cfg.check_samples(train.n, train.dim_x)?;
         if train.dim_y != 2 {
             return Err(LearnError::Shape {
                 what: "targets per sample",

@@ -178,8 +178,9 @@ fn load_net(
         || n.sizes[n.sizes.len() - 1] != n.targets.len()
     {
         return Err(corrupt(format!(
-            "net {}: layer sizes {:?} do not fit its inputs/targets",
-            n.name, n.sizes
+            "net {}: layer sizes {} do not fit its inputs/targets",
+            n.name,
+            crate::net::sizes_text(&n.sizes)
         )));
     }
     let mut w = Vec::new();
@@ -209,10 +210,15 @@ fn read_f32(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f3
         .tensor(name)
         .map_err(|e| corrupt(format!("tensor {name}: {e}")))?;
     if view.dtype() != Dtype::F32 || view.shape() != shape {
+        let dims = |s: &[usize]| {
+            let parts: Vec<String> = s.iter().map(usize::to_string).collect();
+            parts.join(" x ")
+        };
         return Err(corrupt(format!(
-            "tensor {name}: expected f32 {shape:?}, found {:?} {:?}",
+            "tensor {name}: expected f32 {}, found {} {}",
+            dims(shape),
             view.dtype(),
-            view.shape()
+            dims(view.shape())
         )));
     }
     Ok(view

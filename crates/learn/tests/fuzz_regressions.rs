@@ -17,7 +17,8 @@ fn hidden_layer_of_i64_max_is_a_config_error() {
         assert!(
             matches!(
                 err,
-                LearnError::Config {
+                LearnError::NetConfig {
+                    net: "position",
                     field: "hidden",
                     ..
                 }

@@ -279,7 +279,11 @@ fn invalid_configs_are_errors() {
     cfg.angle.as_mut().unwrap().learning_rate = -1.0;
     assert!(matches!(
         PoseModel::fit(&cfg, &data, &mut |_| {}),
-        Err(LearnError::Config { .. })
+        Err(LearnError::NetConfig {
+            net: "angle",
+            field: "learning_rate",
+            ..
+        })
     ));
     let mut cfg = small(ModelKind::PDenNN, 1);
     cfg.pose = cfg.angle.clone();

@@ -62,16 +62,10 @@ pub fn input_error_type(py: Python<'_>) -> PyResult<Bound<'_, pyo3::types::PyTyp
     Ok(t.bind(py).clone())
 }
 
-/// The message of `err` and its sources, as the CLI prints it.
+/// The message of `err` and its sources, as the CLI prints it (each
+/// cause once).
 pub fn chain_message(err: &(dyn std::error::Error + 'static)) -> String {
-    let mut msg = err.to_string();
-    let mut source = err.source();
-    while let Some(s) = source {
-        msg.push_str(": ");
-        msg.push_str(&s.to_string());
-        source = s.source();
-    }
-    msg
+    tactrace_lab::error::error_chain(err)
 }
 
 /// A lab error as a Python exception.

@@ -173,7 +173,7 @@ fn shapes_table(md: &mut String, shapes: &[crate::ShapeRow], tag: &str) {
         let m = &s.metrics;
         let _ = writeln!(
             md,
-            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0}% | {} | {} | {:?} |",
+            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0}% | {} | {} | {} |",
             s.shape,
             m.mean_l2_mm,
             s.report_l2_mm,

@@ -49,3 +49,18 @@ pub enum SensorError {
     #[error("replay sensor exhausted: all {count} frames were already captured")]
     ReplayExhausted { count: usize },
 }
+
+impl SensorError {
+    /// Whether the sensor's set-up is at fault (its configuration, field
+    /// correction, rest layout or bank of frames), not a frame met while
+    /// running: a bad input wherever it is found.
+    pub fn is_config(&self) -> bool {
+        matches!(
+            self,
+            SensorError::InvalidConfig { .. }
+                | SensorError::Correction { .. }
+                | SensorError::RestPins { .. }
+                | SensorError::Bank(_)
+        )
+    }
+}

@@ -78,13 +78,15 @@ impl FrameBank {
         };
         let usable = |s: f64| s.is_finite() && s > 0.0;
         if !(usable(scales.r_mm) && usable(scales.theta_deg) && scales.dz_mm.is_none_or(usable)) {
+            let depth = scales
+                .dz_mm
+                .map_or(String::new(), |d| format!(", depth {d:.3} mm"));
             return Err(SensorError::Bank(format!(
-                "the labels of its {} frames do not vary (spreads r {:.3} mm, theta {:.3} deg, \
-                 depth {:?} mm): nothing to choose between",
+                "the labels of its {} frames do not vary (spreads r {:.3} mm, theta {:.3} deg{depth}): \
+                 nothing to choose between",
                 frames.len(),
                 scales.r_mm,
                 scales.theta_deg,
-                scales.dz_mm
             )));
         }
         Ok(Self { frames, scales })

@@ -20,7 +20,7 @@ pub mod rig;
 pub mod servo_loop;
 pub mod start;
 
-pub use error::{Result, ServoError};
+pub use error::{error_chain, Result, ServoError};
 pub use metrics::{
     evaluate, l2_curve, l2_curve_arc_mm, traced_fraction, trajectory_closes, ClosureDetector,
     FollowMetrics,

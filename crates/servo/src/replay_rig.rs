@@ -29,6 +29,7 @@ impl ReplayRig {
         start: Pose,
         seed: u64,
     ) -> Result<Self> {
+        cfg.validate()?;
         let arm_cfg = SimArmConfig {
             seed: seed ^ 0xA5A5_0001,
             ..cfg.arm.clone()

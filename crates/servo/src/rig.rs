@@ -3,7 +3,7 @@
 //!
 //! The arm's physical pose (with repeatability noise) reaches the simulated
 //! sensor through a [`tactrace_arm::PoseProbe`]; nothing else sees it.
-use crate::error::Result;
+use crate::error::{Result, ServoError};
 use serde::{Deserialize, Serialize};
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig, Workspace};
 use tactrace_geometry::Contour;
@@ -45,6 +45,30 @@ impl Default for TapConfig {
 }
 
 impl TapConfig {
+    /// Check that the approach height and the move are finite and the move
+    /// and its jitter not negative (a NaN depth once reached the arm as a
+    /// pose and stopped the run as a fault).
+    pub fn validate(&self) -> Result<()> {
+        let fields = [
+            ("height_mm", self.height_mm, f64::NEG_INFINITY),
+            ("depth_mm", self.depth_mm, 0.0),
+            ("depth_jitter_mm", self.depth_jitter_mm, 0.0),
+        ];
+        for (field, value, min) in fields {
+            if !(value.is_finite() && value >= min) {
+                let need = if min == 0.0 {
+                    "a finite number >= 0"
+                } else {
+                    "a finite number"
+                };
+                return Err(ServoError::Config(format!(
+                    "[tap] {field} = {value}: must be {need}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// Indentation of a nominal tap (no jitter), mm.
     pub fn nominal_indentation_mm(&self) -> f64 {
         self.depth_mm - self.height_mm
@@ -60,6 +84,20 @@ pub struct RigConfig {
     pub workspace: Workspace,
     pub tap: TapConfig,
     pub blob: BlobParams,
+}
+
+impl RigConfig {
+    /// Check every table (the sensor, the arm's noise, the workspace, the
+    /// tap, the blob detector), so that a bad value is an error before any
+    /// work, whichever part a command uses, and never a fault at the first
+    /// tap.
+    pub fn validate(&self) -> Result<()> {
+        self.sensor.validate()?;
+        self.arm.validate()?;
+        self.workspace.validate()?;
+        self.tap.validate()?;
+        Ok(self.blob.validate()?)
+    }
 }
 
 /// The defaults of the simulated rig, with the blob preset for simulated
@@ -91,6 +129,7 @@ impl SimRig {
     /// Build the rig over `shape`, the arm starting at `start`; `seed` drives
     /// the arm's repeatability noise and the sensor's nuisance.
     pub fn new(cfg: &RigConfig, shape: Contour, start: Pose, seed: u64) -> Result<Self> {
+        cfg.validate()?;
         let model = TacTipModel::new(cfg.sensor.clone())?;
         Ok(Self::with_model(cfg, model, 0.0, shape, start, seed))
     }
@@ -98,7 +137,8 @@ impl SimRig {
     /// As [`SimRig::new`] with the TacTip `model` instead of `cfg.sensor`
     /// (e.g. a calibrated sensor: `SensorFolder::model` in tactrace-store),
     /// mounted on the tool turned by `mount_yaw_deg` (a sensor whose labels
-    /// follow its own convention: `LabelConvention::centred`).
+    /// follow its own convention: `LabelConvention::centred`). The caller
+    /// checks `cfg` first ([`RigConfig::validate`]).
     pub fn with_model(
         cfg: &RigConfig,
         model: TacTipModel,

@@ -149,6 +149,20 @@ pub enum Ending {
     Fault,
 }
 
+impl std::fmt::Display for Ending {
+    /// How the run ended, in words (`lost contact`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Ending::Closed => "closed",
+            Ending::StepsDone => "steps done",
+            Ending::StepCap => "step cap",
+            Ending::LostContact => "lost contact",
+            Ending::Refused => "refused move",
+            Ending::Fault => "fault",
+        })
+    }
+}
+
 impl Ending {
     /// Whether the run did what was asked (closed the loop or ran the
     /// requested steps); anything else is a failed run.
@@ -178,20 +192,6 @@ impl LoopSummary {
     }
 }
 
-/// `e` and its sources, outermost first: a driver's reason (a timeout, a
-/// protective stop) is the source of the arm's error, and the person
-/// reading why a run stopped needs it.
-fn with_sources(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut next = e.source();
-    while let Some(source) = next {
-        text.push_str(": ");
-        text.push_str(&source.to_string());
-        next = source.source();
-    }
-    text
-}
-
 /// Follow the contour from the arm's current pose (above the object,
 /// roughly on an edge), tapping as `tap` says. Only the commanded pose and
 /// the frames are used.
@@ -211,7 +211,10 @@ pub fn servo_loop(
     let mut closure = ClosureDetector::new(cfg.close_radius_mm, cfg.min_excursion_mm);
     let mut no_contact = 0usize;
     let fault = |step: usize, what: &str, e: &dyn std::error::Error| {
-        let message = format!("stopped safely at step {step}: {what}: {}", with_sources(e));
+        let message = format!(
+            "stopped safely at step {step}: {what}: {}",
+            crate::error::error_chain(e)
+        );
         Ok(LoopSummary::new(step, Ending::Fault, message))
     };
     for step in 0..limit {

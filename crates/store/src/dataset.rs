@@ -204,8 +204,9 @@ pub fn read_dataset(dir: &Path) -> Result<TapData> {
         return Err(StoreError::Format {
             path: dir.join("targets.npy"),
             reason: format!(
-                "expected {n} x 2 targets to match inputs.npy, found {:?}",
-                targets.dim()
+                "expected {n} x 2 targets to match inputs.npy, found {} x {}",
+                targets.dim().0,
+                targets.dim().1
             ),
         });
     }

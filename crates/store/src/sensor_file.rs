@@ -219,7 +219,14 @@ impl SensorFolder {
                 [n, c] if *c == cols => Ok((*n, t.2.clone())),
                 shape => Err(StoreError::Format {
                     path: tensors_path.clone(),
-                    reason: format!("tensor `{name}` has shape {shape:?}, expected [N, {cols}]"),
+                    reason: format!(
+                        "tensor `{name}` has shape {}, expected N x {cols}",
+                        shape
+                            .iter()
+                            .map(usize::to_string)
+                            .collect::<Vec<_>>()
+                            .join(" x ")
+                    ),
                 }),
             }
         };

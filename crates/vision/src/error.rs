@@ -39,3 +39,11 @@ pub enum VisionError {
         required: usize,
     },
 }
+
+impl VisionError {
+    /// Whether the detector's set-up is at fault (its parameters or the
+    /// reference pins), not a frame in which too few pins were found.
+    pub fn is_config(&self) -> bool {
+        !matches!(self, VisionError::TooFewPins { .. })
+    }
+}

@@ -98,7 +98,7 @@ impl PreprocessConfig {
     pub fn validate(&self) -> Result<Preprocess, HwError> {
         if let Some([x0, y0, x1, y1]) = self.crop {
             if x1 <= x0 || y1 <= y0 {
-                return Err(config("crop", format!("{:?} is empty", self.crop)));
+                return Err(config("crop", format!("[{x0}, {y0}, {x1}, {y1}] is empty")));
             }
         }
         if let Some([w, h]) = self.size {

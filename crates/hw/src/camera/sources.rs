@@ -154,7 +154,8 @@ impl CommandSource {
                 Ok(None) => {
                     let _ = child.kill();
                     let _ = child.wait();
-                    return Err(self.fail(format!("timed out after {:?}", self.timeout)));
+                    let secs = self.timeout.as_secs_f64();
+                    return Err(self.fail(format!("timed out after {secs} s")));
                 }
                 Err(e) => return Err(self.fail(format!("wait failed: {e}"))),
             }

@@ -390,7 +390,7 @@ impl Ur5Arm {
             if remaining.is_zero() {
                 return Err(HwError::MoveTimeout {
                     seconds: self.config.timeout_s,
-                    target: pose_text(pose),
+                    target: pose.to_string(),
                     position_error_mm: errors.0,
                     rotation_error_deg: errors.1,
                 });
@@ -408,14 +408,6 @@ impl Ur5Arm {
             }
         }
     }
-}
-
-/// A pose for a message: mm and degrees, no debug form.
-fn pose_text(p: Pose) -> String {
-    format!(
-        "({:.3}, {:.3}, {:.3}) mm, ({:.3}, {:.3}, {:.3}) deg",
-        p.x, p.y, p.z, p.rx, p.ry, p.rz
-    )
 }
 
 impl Arm for Ur5Arm {

@@ -192,8 +192,7 @@ pub fn tune(
         sigma: cfg.sigma,
         population: cfg.population,
         seed: cfg.seed,
-    })
-    .map_err(|e| LabError::Config(e.to_string()))?;
+    })?;
     let generations = cfg.trials.div_ceil(es.population());
     let held_out_runs = 2 * held_out.len() * cfg.held_out_seeds;
     progress(TuneEvent::Planned {
@@ -225,8 +224,7 @@ pub fn tune(
             })
             .collect::<Result<_>>()?;
         let costs: Vec<f64> = scored.iter().map(|(_, c)| *c).collect();
-        es.tell(&costs)
-            .map_err(|e| LabError::Config(e.to_string()))?;
+        es.tell(&costs)?;
         let (gen_best, gen_cost) = scored
             .iter()
             .min_by(|a, b| a.1.total_cmp(&b.1))

@@ -27,9 +27,7 @@ pub fn simulate(
     (name, contour): (&str, &Contour),
 ) -> Result<RunScore> {
     cfg.follow.validate()?;
-    cfg.controller
-        .validate()
-        .map_err(|e| LabError::Config(e.to_string()))?;
+    cfg.controller.validate()?;
     let start = start_pose(contour, &cfg.start, cfg.rig.tap.height_mm)?;
     let mut rig = SimRig::new(&cfg.rig, contour.clone(), start, cfg.follow.seed)?;
     let settings = cfg.servo_settings();

@@ -98,9 +98,9 @@ pub fn to_gray(format: &StreamFormat, bytes: &[u8]) -> Result<GrayImage, HwError
     let needed = stride * (h.max(1) - 1) + w * bytes_per_pixel;
     if w == 0 || h == 0 || bytes.len() < needed {
         return Err(bad(format!(
-            "{} bytes for a {w} x {h} {:?} frame (stride {stride}), need {needed}",
+            "{} bytes for a {w} x {h} {} frame (stride {stride}), need {needed}",
             bytes.len(),
-            format.format
+            String::from_utf8_lossy(&format.format.fourcc())
         )));
     }
     let mut gray = Vec::with_capacity(w * h);

@@ -365,9 +365,10 @@ pub fn start_state_stream(client: &mut RtdeClient) -> Result<(), HwError> {
     let frequency = client.version().max_frequency_hz();
     let recipe = client.setup_outputs(&STATE_FIELDS, frequency)?;
     if recipe.types != STATE_TYPES {
+        let types: Vec<&str> = recipe.types.iter().map(|t| t.name()).collect();
         return Err(rtde_err(format!(
-            "unexpected state field types {:?}",
-            recipe.types
+            "unexpected state field types: {}",
+            types.join(", ")
         )));
     }
     client.start()

@@ -385,6 +385,9 @@ pub fn sim_fit(a: SimFitArgs) -> Result<()> {
     let fit = fit_transfer(&cfg, &sensor, &blob, &mut report);
     pb.finish_and_clear();
     let fit = fit?;
+    for w in &fit.warnings {
+        eprintln!("warning: {w}");
+    }
     let dir = write_transfer_fit(&fit, &cfg, &a.out, a.force)?;
     let show = |c: &tactrace_lab::transfer_fit::Candidate| {
         c.mae

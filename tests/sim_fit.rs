@@ -85,3 +85,38 @@ fn sim_fit_writes_a_usable_rig_file_reproducibly_and_refuses_bad_input() {
     assert!(r.stderr.contains("--generations"), "{}", r.stderr);
     assert!(!t.join("none").exists());
 }
+
+/// Issue 20: a pressed frame given as `--reference` was accepted
+/// silently. `sim-fit` fits its layout to the reference, so a frame
+/// pressed this hard is refused as bad input (lighter ones pass the layout
+/// fit and get the import's "looks pressed" warning on stderr).
+#[test]
+fn issue20_sim_fit_refuses_a_pressed_reference() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("sim-fit-pressed");
+    let [frames, targets, _] = real_paths(&data);
+    let pressed = data.join("frames/frame_1432_0.png").display().to_string();
+    let r = tactrace(
+        &t.0,
+        &[
+            "sim-fit",
+            "--frames",
+            &frames,
+            "--targets",
+            &targets,
+            "--reference",
+            &pressed,
+            "--limit",
+            "80",
+            "--generations",
+            "1",
+            "--population",
+            "2",
+            "--out",
+            "fit",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("not an undeformed frame"), "{}", r.stderr);
+    assert!(!t.join("fit").exists());
+}

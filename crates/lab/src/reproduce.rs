@@ -187,7 +187,7 @@ fn reproduce_into(
     let (real_rows, real_shapes) = match &cfg.real {
         Some(real) => {
             log("importing real frames and training on them, on their simulated twin, and on the calibrated twin");
-            let rows = real_rows(cfg, real, out)?;
+            let rows = real_rows(cfg, real, out, log)?;
             log("following the four shapes in the real-frame world");
             let shapes = match &rows.held_out {
                 Some(va) => real_world_shapes(cfg, real, va, &out.join("real"))?,
@@ -283,11 +283,19 @@ struct RealRows {
 /// the 20 %; then train the PDenNN and the MLP on the simulated twin of the
 /// real set (its own 80 %) and validate them on the same real 20 %; then
 /// the calibrated simulator's rows ([`crate::calibration_sweep`]).
-fn real_rows(cfg: &ReproduceConfig, dir: &Path, out: &Path) -> Result<RealRows> {
+fn real_rows(
+    cfg: &ReproduceConfig,
+    dir: &Path,
+    out: &Path,
+    log: &(dyn Fn(&str) + Sync),
+) -> Result<RealRows> {
     let icfg = crate::import::ImportConfig::bristol(dir);
     let blob = tactrace_vision::BlobParams::preset("real256")?;
     fig_4_1_real(dir, &blob, &out.join("figures/fig4_1_real"))?;
     let imported = crate::import::import(&icfg, &blob, &|| {})?;
+    for w in &imported.warnings {
+        log(&format!("warning: {w}"));
+    }
     let (tr, va) = imported.data.split(0.8, cfg.seed);
     let real = train_rows(cfg, &NETS, "real", &tr, &va, &out.join("real"))?;
     let twin_cfg = crate::twin::TwinConfig::bristol(dir, cfg.seed);

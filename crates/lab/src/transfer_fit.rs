@@ -130,6 +130,8 @@ pub struct TransferFit {
     pub candidates: Vec<Candidate>,
     /// Real frames the cost was measured on.
     pub real_frames: usize,
+    /// What the import of those frames warned of (a pressed reference, ...).
+    pub warnings: Vec<String>,
 }
 
 /// Cost of a candidate: position MAE / 1 mm + angle MAE / `deg_per_mm`
@@ -167,7 +169,8 @@ pub fn fit_transfer(
     progress: &mut dyn FnMut(&Candidate, &Candidate),
 ) -> Result<TransferFit> {
     let t = &cfg.twin;
-    let real = import(&t.import_config(cfg.frames.clone()), blob, &|| {})?.data;
+    let imported = import(&t.import_config(cfg.frames.clone()), blob, &|| {})?;
+    let (real, warnings) = (imported.data, imported.warnings);
     let start_values: Vec<f64> = TRANSFER_PARAMS.iter().map(|p| (p.get)(base)).collect();
     let score = |values: &[f64], generation: usize| -> Result<Candidate> {
         let sensor = with_values(base, values);
@@ -212,6 +215,7 @@ pub fn fit_transfer(
         best,
         candidates,
         real_frames: real.len(),
+        warnings,
     })
 }
 

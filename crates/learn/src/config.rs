@@ -241,7 +241,7 @@ impl ModelConfig {
     /// most n - 1 directions about their mean, so fewer leave components
     /// of zero variance: directions picked arbitrarily, which whitening
     /// divides by zero), and any model
-    /// needs [`MIN_TRAIN_SAMPLES`] to standardise its inputs and targets.
+    /// needs `MIN_TRAIN_SAMPLES` (2) to standardise its inputs and targets.
     /// `dim_x` is the inputs' length (components beyond it are not kept).
     /// `(samples, what needs them)`.
     pub fn min_train_samples(&self, dim_x: usize) -> (usize, String) {

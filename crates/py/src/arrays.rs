@@ -45,15 +45,17 @@ pub fn matrix<'py, T: Element>(
         _ => {
             let want = cols.map_or("N x M".to_string(), |c| format!("N x {c}"));
             return Err(input(format!(
-                "{name} must be a {want} array{}, got shape {shape:?}",
-                if allow_row { " (or one row)" } else { "" }
+                "{name} must be a {want} array{}, got shape {}",
+                if allow_row { " (or one row)" } else { "" },
+                shape_text(&shape)
             )));
         }
     };
     if let Some(want) = cols {
         if c != want {
             return Err(input(format!(
-                "{name} must have {want} columns, got shape {shape:?}"
+                "{name} must have {want} columns, got shape {}",
+                shape_text(&shape)
             )));
         }
     }
@@ -105,4 +107,21 @@ pub fn py_to_json(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<serde_json::Va
         .map_err(|e| input(format!("{name}: not JSON-like: {e}")))?
         .extract()?;
     serde_json::from_str(&text).map_err(|e| input(format!("{name}: {e}")))
+}
+
+/// An array shape as numpy prints it: `(3, 4)`, `(5,)`.
+pub(crate) fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => {
+            let parts: Vec<String> = shape.iter().map(|n| n.to_string()).collect();
+            format!("({})", parts.join(", "))
+        }
+    }
+}
+
+/// Numbers for a message, comma-separated (`1, 2.5, nan`).
+pub(crate) fn numbers_text(values: &[f64]) -> String {
+    let parts: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+    parts.join(", ")
 }

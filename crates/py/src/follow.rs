@@ -260,7 +260,7 @@ pub fn outcome_dict<'py>(
             String::new()
         };
         return Err(crate::errors::RunFailedError::new_err(format!(
-            "the run failed ({:?}): {}{where_}",
+            "the run failed ({}): {}{where_}",
             res.summary.ending, res.summary.message
         )));
     }

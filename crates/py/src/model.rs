@@ -229,7 +229,7 @@ impl Model {
     fn __repr__(&self) -> PyResult<String> {
         let net = self.own_net();
         Ok(format!(
-            "Model(kind={:?}, pins={}, source={:?})",
+            "Model(kind='{}', pins={}, source='{}')",
             kind_name(net.kind()),
             self.stored.reference_pins().len(),
             self.stored.source().display().to_string()
@@ -269,7 +269,7 @@ fn parse_kind(s: &str) -> PyResult<ModelKind> {
         "disdennn" => Ok(ModelKind::DisDenNN),
         "mlp" => Ok(ModelKind::Mlp),
         _ => Err(input(format!(
-            "unknown model kind {s:?}: choose pdennn, pcadennn, disdennn or mlp (as `tactrace train --model`)"
+            "unknown model kind `{s}`: choose pdennn, pcadennn, disdennn or mlp (as `tactrace train --model`)"
         ))),
     }
 }
@@ -279,7 +279,7 @@ fn parse_preset(s: &str) -> PyResult<Preset> {
         "default" => Ok(Preset::Default),
         "report" => Ok(Preset::Report),
         _ => Err(input(format!(
-            "unknown preset {s:?}: choose default or report"
+            "unknown preset `{s}`: choose default or report"
         ))),
     }
 }

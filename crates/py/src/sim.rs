@@ -163,7 +163,10 @@ impl SimTacTip {
             )
         })?;
         if pose.iter().any(|v| !v.is_finite()) {
-            return Err(input(format!("pose {pose:?} has a non-finite component")));
+            return Err(input(format!(
+                "pose ({}) has a non-finite component",
+                crate::arrays::numbers_text(&pose)
+            )));
         }
         let [x, y, z, rx, ry, rz] = pose;
         let model = self.renderer.model();

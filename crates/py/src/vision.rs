@@ -34,8 +34,8 @@ pub fn to_frame(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Frame> {
     let a = contiguous::<u8>(obj, "uint8", name)?;
     let [h, w] = a.shape()[..] else {
         return Err(input(format!(
-            "{name} must be a 2-D (H, W) grey image, got shape {:?}",
-            a.shape()
+            "{name} must be a 2-D (H, W) grey image, got shape {}",
+            crate::arrays::shape_text(a.shape())
         )));
     };
     let ro = a.readonly();

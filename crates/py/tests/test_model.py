@@ -85,7 +85,7 @@ def test_bad_model_input_is_refused(sim_set, sim_model):
     swapped = np.array(meta["reference_pins"])[[1, 0] + list(range(2, 127))]
     with pytest.raises(tactrace.InputError, match="not ordered like the model's training data"):
         model.predict(inputs, reference_pins=swapped)
-    with pytest.raises(ValueError, match='unknown model kind "cnn"'):
+    with pytest.raises(ValueError, match='unknown model kind `cnn`'):
         tactrace.train("cnn", inputs, targets, meta["reference_pins"])
     with pytest.raises(ValueError, match="validation fraction 1.5"):
         tactrace.train("pdennn", inputs, targets, meta["reference_pins"], val_fraction=1.5)
@@ -139,3 +139,16 @@ def test_errors_carry_the_cli_messages(sim_set, tmp_path):
     with pytest.raises(tactrace.InputError) as err:
         tactrace.SimTacTip().render(0.0, 0.0, 11.0)
     assert got.stderr.strip() == f"error: {err.value}"
+
+
+def test_issue20_python_messages_have_no_rust_debug_values():
+    """Shapes read as numpy prints them; names are quoted once, not Rust-escaped."""
+    import numpy as np
+
+    with pytest.raises(tactrace.InputError) as err:
+        tactrace.PinExtractor(np.zeros((2, 3, 4), dtype=np.uint8))
+    assert "(2, 3, 4)" in str(err.value), str(err.value)
+    assert "[2, 3, 4]" not in str(err.value)
+    with pytest.raises(ValueError) as err:
+        tactrace.train("cnn", np.zeros((40, 4), dtype=np.float32), np.zeros((40, 2)), [])
+    assert '"cnn"' not in str(err.value) and "`cnn`" in str(err.value)

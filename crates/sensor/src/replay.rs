@@ -44,7 +44,7 @@ pub const MAX_FRAME_BYTES: u64 = 256 << 20;
 /// Read one frame from an image file, converting colour to 8-bit grey.
 ///
 /// Errors name the file and say whether it is missing, unreadable, not an
-/// image or corrupt. Only a regular file of at most [`MAX_FRAME_BYTES`]
+/// image or corrupt. Only a regular file of at most `MAX_FRAME_BYTES` (256 MiB)
 /// is read: a FIFO named like a frame would block the reader for ever.
 pub fn read_frame(path: &Path) -> Result<Frame, SensorError> {
     if !path.exists() {

@@ -33,6 +33,37 @@ impl Default for StartConfig {
     }
 }
 
+impl StartConfig {
+    /// Every value a number, the largest start distance positive: named by
+    /// its key in the message (`[start] offset_mm = NaN` once read "NaN mm
+    /// from the edge").
+    pub fn validate(&self) -> Result<()> {
+        for (key, value) in [
+            ("offset_mm", self.offset_mm),
+            ("angle_deg", self.angle_deg),
+            ("max_start_distance_mm", self.max_start_distance_mm),
+        ] {
+            if !value.is_finite() {
+                return Err(ServoError::Start(format!(
+                    "[start] {key} = {value} is not a number"
+                )));
+            }
+        }
+        if self.max_start_distance_mm <= 0.0 {
+            return Err(ServoError::Start(format!(
+                "[start] max_start_distance_mm = {} must be > 0",
+                self.max_start_distance_mm
+            )));
+        }
+        if let Some(arc) = self.arc_mm.filter(|a| !a.is_finite()) {
+            return Err(ServoError::Start(format!(
+                "[start] arc_mm = {arc} is not a number"
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// The sensor pose (tip, work frame) for edge position `r` and angle `theta`
 /// at edge point `edge` with outward normal `normal`; `height` above the top.
 pub fn pose_at_edge(edge: Vec2, normal: Vec2, r_mm: f64, theta_deg: f64, height_mm: f64) -> Pose {
@@ -43,6 +74,7 @@ pub fn pose_at_edge(edge: Vec2, normal: Vec2, r_mm: f64, theta_deg: f64, height_
 
 /// The start pose for `cfg` on `shape`.
 pub fn start_pose(shape: &Contour, cfg: &StartConfig, height_mm: f64) -> Result<Pose> {
+    cfg.validate()?;
     let within = cfg.offset_mm.abs() <= cfg.max_start_distance_mm;
     if !within {
         return Err(ServoError::Start(format!(
@@ -50,13 +82,6 @@ pub fn start_pose(shape: &Contour, cfg: &StartConfig, height_mm: f64) -> Result<
             cfg.offset_mm.abs(),
             cfg.max_start_distance_mm
         )));
-    }
-    if let Some(arc) = cfg.arc_mm {
-        if !arc.is_finite() {
-            return Err(ServoError::Start(format!(
-                "start arc_mm = {arc} is not a number"
-            )));
-        }
     }
     let arc = cfg.arc_mm.unwrap_or_else(|| flattest_arc_mm(shape, 20.0));
     let (edge, normal) = shape.at_arc_length(arc);
@@ -90,4 +115,47 @@ pub fn flattest_arc_mm(shape: &Contour, window_mm: f64) -> f64 {
         .min_by(|&a, &b| total(a).total_cmp(&total(b)))
         .unwrap_or(0);
     (best as f64 + k as f64 / 2.0) * step % shape.perimeter()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 20: `[start] offset_mm = nan` exited 2 but read "NaN mm from
+    /// the edge"; every start value that is not a number names its key.
+    #[test]
+    fn issue20_a_start_value_that_is_not_a_number_names_its_key() {
+        let corners = [(0.0, 0.0), (40.0, 0.0), (40.0, 40.0), (0.0, 40.0)];
+        let square = Contour::new(corners.iter().map(|&(x, y)| Vec2::new(x, y)).collect()).unwrap();
+        for (key, cfg) in [
+            (
+                "offset_mm",
+                StartConfig {
+                    offset_mm: f64::NAN,
+                    ..StartConfig::default()
+                },
+            ),
+            (
+                "angle_deg",
+                StartConfig {
+                    angle_deg: f64::INFINITY,
+                    ..StartConfig::default()
+                },
+            ),
+            (
+                "arc_mm",
+                StartConfig {
+                    arc_mm: Some(f64::NAN),
+                    ..StartConfig::default()
+                },
+            ),
+        ] {
+            let err = start_pose(&square, &cfg, 2.0).unwrap_err();
+            let text = err.to_string();
+            assert!(text.contains(&format!("[start] {key}")), "{text}");
+            assert!(!text.contains("from the edge"), "{text}");
+            assert!(err.is_bad_input(), "{text}");
+        }
+        assert!(start_pose(&square, &StartConfig::default(), 2.0).is_ok());
+    }
 }

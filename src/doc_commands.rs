@@ -394,7 +394,7 @@ fn problem(found: &Found) -> Option<String> {
     let tokens = tokens(&found.args);
     let unknown = unknown_options(&tokens);
     if !unknown.is_empty() {
-        return Some(format!("unknown options {unknown:?}"));
+        return Some(format!("unknown options {}", unknown.join(", ")));
     }
     if !found.block {
         return None;

@@ -250,12 +250,13 @@ fn issue20_a_label_column_named_twice_is_refused() {
 fn issue20_a_wrong_column_lists_every_column_and_the_nearest() {
     let t = TempDir::new("wrongcolumn");
     bristol_targets(&t.join("targets.csv"), None, 5);
+    std::fs::create_dir_all(t.join("frames")).unwrap();
     let r = tactrace(
         &t.0,
         &[
             "import",
             "--frames",
-            ".",
+            "frames",
             "--targets",
             "targets.csv",
             "--reference",

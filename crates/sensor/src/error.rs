@@ -58,6 +58,7 @@ impl SensorError {
         matches!(
             self,
             SensorError::InvalidConfig { .. }
+                | SensorError::TooLarge { .. }
                 | SensorError::Correction { .. }
                 | SensorError::RestPins { .. }
                 | SensorError::Bank(_)

@@ -9,6 +9,7 @@ mod binary;
 mod blob;
 mod components;
 mod contour;
+mod detection;
 mod error;
 mod extractor;
 mod field;
@@ -16,14 +17,23 @@ mod fold;
 mod grouping;
 mod merged;
 mod params;
+pub mod preprocess;
+mod rest;
 mod shape;
+mod spots;
 mod tracker;
 
 pub use assign::{assign, Assignment, Edge};
 pub use blob::{detect_blobs, Frame, KeyPoint};
+pub use detection::{Detection, Detector, DetectorParams};
 pub use error::VisionError;
 pub use extractor::PinExtractor;
 pub use fold::TURNED_RATIO;
 pub use merged::{find_clusters, Cluster};
 pub use params::{BlobParams, BLOB_PARAM_KEYS, MAX_THRESHOLDS, PRESET_NAMES};
+pub use preprocess::{
+    MaskCircle, Preprocess, PreprocessParams, PreprocessStage, Resize, ResizeMethod, Threshold,
+};
+pub use rest::{estimate_rest, RestEstimate, RestParams};
+pub use spots::{Connectivity, Spot, SpotDetector, SpotParams, Spots};
 pub use tracker::{median_spacing, PinTracker, Tracked};

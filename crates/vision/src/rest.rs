@@ -1,0 +1,302 @@
+//! The rest pin layout of a sensor when no undeformed frame exists (a
+//! collection of taps, every one in contact). The pins' rest positions are
+//! estimated from the taps themselves:
+//!
+//! 1. a provisional layout: among the frames with exactly the expected pin
+//!    count, the medoid (smallest summed chamfer distance to the others);
+//! 2. every frame is ordered against the layout ([`crate::PinTracker`]);
+//!    the frames whose pins moved least (median displacement over matched
+//!    pins, among the frames with at most a few pins missing) are kept;
+//! 3. each pin's new rest position is the coordinate-wise median of its
+//!    matched positions over the kept frames;
+//! 4. repeat 2-3 until no pin moves more than the tolerance.
+//!
+//! The residual reported is the root mean square distance of the kept
+//! frames' matched pins to their estimated rest positions: how far the
+//! least displaced taps still are from the estimate (a lower bound on how
+//! undeformed the estimate is, not an accuracy).
+
+use serde::{Deserialize, Serialize};
+
+use crate::detection::Detection;
+use crate::error::VisionError;
+use crate::tracker::{PinTracker, Tracked};
+
+/// Settings of [`estimate_rest`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RestParams {
+    /// Share of the usable frames (0..1] kept as least displaced.
+    pub keep_share: f64,
+    /// Most rounds of steps 2-3.
+    pub max_rounds: usize,
+    /// Stop when no pin moved more than this, px.
+    pub tolerance: f64,
+    /// Most frames compared for the provisional layout (spread evenly).
+    pub medoid_candidates: usize,
+    /// Most pins a frame may miss (filled from its neighbours) and still
+    /// count in step 2.
+    pub max_missing: usize,
+}
+
+impl Default for RestParams {
+    fn default() -> Self {
+        Self {
+            keep_share: 0.25,
+            max_rounds: 8,
+            tolerance: 0.01,
+            medoid_candidates: 24,
+            max_missing: 0,
+        }
+    }
+}
+
+/// The estimated rest layout and how well the taps agree with it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RestEstimate {
+    /// Rest pin centres, px, in the order of the provisional frame's pins.
+    pub pins: Vec<[f64; 2]>,
+    /// Root mean square distance of the kept frames' matched pins to
+    /// their rest positions, px.
+    pub residual: f64,
+    /// Median over the kept frames of their median pin displacement, px.
+    pub kept_displacement: f64,
+    /// Index (into the detections) of the provisional frame.
+    pub provisional: usize,
+    /// Frames kept as least displaced in the last round.
+    pub frames_kept: usize,
+    /// Frames that could be ordered with at most `max_missing` pins missing.
+    pub frames_usable: usize,
+    /// Rounds run.
+    pub rounds: usize,
+    /// Largest pin move in the last round, px.
+    pub last_shift: f64,
+}
+
+impl RestParams {
+    fn check(&self) -> Result<(), VisionError> {
+        let invalid =
+            |name: &'static str, reason: String| VisionError::InvalidParam { name, reason };
+        if !(self.keep_share > 0.0 && self.keep_share <= 1.0) {
+            return Err(invalid(
+                "keep_share",
+                format!("{} is not in (0, 1]", self.keep_share),
+            ));
+        }
+        if self.max_rounds == 0 || self.medoid_candidates == 0 {
+            return Err(invalid(
+                "max_rounds",
+                "max_rounds and medoid_candidates must be at least 1".into(),
+            ));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            return Err(invalid(
+                "tolerance",
+                format!("{} must be finite and >= 0", self.tolerance),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Estimates the rest layout of `pins` pins from the detections of many
+/// taps (see the module docs). Fails when no frame has exactly `pins`
+/// points, or when no frame can be ordered against the layout.
+pub fn estimate_rest(
+    detections: &[Detection],
+    pins: usize,
+    params: &RestParams,
+) -> Result<RestEstimate, VisionError> {
+    params.check()?;
+    let provisional = provisional_frame(detections, pins, params.medoid_candidates)
+        .ok_or(VisionError::NoFrameWithPinCount { pins })?;
+    let mut layout: Vec<[f64; 2]> = points_of(&detections[provisional]);
+    let mut estimate = None;
+    for round in 1..=params.max_rounds {
+        let tracker = PinTracker::new(layout.clone())?;
+        let tracked: Vec<Tracked> = detections.iter().map(|d| tracker.track(d)).collect();
+        let (kept, usable) = least_displaced(&tracked, &layout, params);
+        if kept.is_empty() {
+            return Err(VisionError::NoFrameTracked {
+                frames: detections.len(),
+            });
+        }
+        let next = per_pin_medians(&tracked, &kept, &layout);
+        let shift = layout
+            .iter()
+            .zip(&next)
+            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+            .fold(0.0, f64::max);
+        let (residual, kept_displacement) = agreement(&tracked, &kept, &next);
+        layout = next;
+        estimate = Some(RestEstimate {
+            pins: layout.clone(),
+            residual,
+            kept_displacement,
+            provisional,
+            frames_kept: kept.len(),
+            frames_usable: usable,
+            rounds: round,
+            last_shift: shift,
+        });
+        if shift <= params.tolerance {
+            break;
+        }
+    }
+    estimate.ok_or(VisionError::NoFrameTracked {
+        frames: detections.len(),
+    })
+}
+
+fn points_of(d: &Detection) -> Vec<[f64; 2]> {
+    d.points.iter().map(|k| [k.x, k.y]).collect()
+}
+
+/// The medoid, by symmetric chamfer distance, of up to `candidates` frames
+/// (spread evenly over the list) that have exactly `pins` points.
+fn provisional_frame(detections: &[Detection], pins: usize, candidates: usize) -> Option<usize> {
+    let full: Vec<usize> = (0..detections.len())
+        .filter(|&i| detections[i].points.len() == pins)
+        .collect();
+    let step = full.len().div_ceil(candidates).max(1);
+    let chosen: Vec<usize> = full.iter().step_by(step).copied().collect();
+    let sets: Vec<Vec<[f64; 2]>> = chosen.iter().map(|&i| points_of(&detections[i])).collect();
+    let cost = |a: usize| -> f64 {
+        (0..sets.len())
+            .filter(|&b| b != a)
+            .map(|b| chamfer(&sets[a], &sets[b]) + chamfer(&sets[b], &sets[a]))
+            .sum()
+    };
+    (0..chosen.len())
+        .map(|a| (cost(a), a))
+        .min_by(|x, y| x.0.total_cmp(&y.0))
+        .map(|(_, a)| chosen[a])
+}
+
+/// Mean distance from each point of `a` to its nearest point of `b`.
+fn chamfer(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    let mut by_x = b.to_vec();
+    by_x.sort_unstable_by(|p, q| p[0].total_cmp(&q[0]));
+    let total: f64 = a.iter().map(|p| nearest_distance(*p, &by_x)).sum();
+    total / a.len().max(1) as f64
+}
+
+/// Distance from `p` to the nearest of `sorted` (sorted by x).
+fn nearest_distance(p: [f64; 2], sorted: &[[f64; 2]]) -> f64 {
+    let start = sorted.partition_point(|q| q[0] < p[0]);
+    let mut best = f64::INFINITY;
+    for q in sorted[start..].iter() {
+        if q[0] - p[0] >= best {
+            break;
+        }
+        best = best.min((q[0] - p[0]).hypot(q[1] - p[1]));
+    }
+    for q in sorted[..start].iter().rev() {
+        if p[0] - q[0] >= best {
+            break;
+        }
+        best = best.min((q[0] - p[0]).hypot(q[1] - p[1]));
+    }
+    best
+}
+
+/// Indices of the frames kept as least displaced, and how many were usable.
+fn least_displaced(
+    tracked: &[Tracked],
+    layout: &[[f64; 2]],
+    params: &RestParams,
+) -> (Vec<usize>, usize) {
+    let mut scored: Vec<(f64, usize)> = tracked
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.missing <= params.max_missing)
+        .map(|(i, t)| (median_displacement(t, layout), i))
+        .collect();
+    let usable = scored.len();
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let keep = ((usable as f64 * params.keep_share).ceil() as usize).clamp(usable.min(1), usable);
+    (scored[..keep].iter().map(|&(_, i)| i).collect(), usable)
+}
+
+/// Median distance of a frame's matched pins from `layout`, px.
+fn median_displacement(t: &Tracked, layout: &[[f64; 2]]) -> f64 {
+    let mut d: Vec<f64> = t
+        .pins
+        .iter()
+        .zip(layout)
+        .zip(&t.matched)
+        .filter(|(_, &m)| m)
+        .map(|((p, r), _)| (p[0] - r[0]).hypot(p[1] - r[1]))
+        .collect();
+    median(&mut d).unwrap_or(f64::INFINITY)
+}
+
+/// Per pin, the coordinate-wise interquartile mean of its matched positions in the
+/// kept frames (its old position if it was never matched there).
+fn per_pin_medians(tracked: &[Tracked], kept: &[usize], layout: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    (0..layout.len())
+        .map(|i| {
+            let mut xs = Vec::with_capacity(kept.len());
+            let mut ys = Vec::with_capacity(kept.len());
+            for t in kept.iter().map(|&k| &tracked[k]).filter(|t| t.matched[i]) {
+                xs.push(t.pins[i][0]);
+                ys.push(t.pins[i][1]);
+            }
+            match (middle_mean(&mut xs), middle_mean(&mut ys)) {
+                (Some(x), Some(y)) => [x, y],
+                _ => layout[i],
+            }
+        })
+        .collect()
+}
+
+/// (RMS distance of the kept frames' matched pins to `layout`, median of
+/// their median displacements), px.
+fn agreement(tracked: &[Tracked], kept: &[usize], layout: &[[f64; 2]]) -> (f64, f64) {
+    let (mut sum, mut n) = (0.0, 0usize);
+    let mut medians = Vec::with_capacity(kept.len());
+    for t in kept.iter().map(|&k| &tracked[k]) {
+        for ((p, r), _) in t
+            .pins
+            .iter()
+            .zip(layout)
+            .zip(&t.matched)
+            .filter(|(_, &m)| m)
+        {
+            sum += (p[0] - r[0]).powi(2) + (p[1] - r[1]).powi(2);
+            n += 1;
+        }
+        medians.push(median_displacement(t, layout));
+    }
+    let rms = if n == 0 { 0.0 } else { (sum / n as f64).sqrt() };
+    (rms, median(&mut medians).unwrap_or(0.0))
+}
+
+/// Mean of the middle half of the values (the interquartile mean): as
+/// robust as the median to the frames where the pin is pushed, but
+/// smooth in the values, so the rounds settle (a median of centroids on a
+/// pixel grid jumps between a few values).
+fn middle_mean(values: &mut [f64]) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_unstable_by(f64::total_cmp);
+    let n = values.len();
+    let (lo, hi) = (n / 4, n - n / 4);
+    let middle = &values[lo..hi.max(lo + 1)];
+    Some(middle.iter().sum::<f64>() / middle.len() as f64)
+}
+
+/// Median (mean of the two middle values for an even count).
+fn median(values: &mut [f64]) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_unstable_by(f64::total_cmp);
+    let n = values.len();
+    Some(if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    })
+}

@@ -42,7 +42,7 @@ pub struct Detection {
     pub points: Vec<KeyPoint>,
     /// Components that may hold touching pins (see
     /// [`crate::PinTracker::order_with_clusters`]); for the blob detector
-    /// they are found only when [`Detector::detect`] is asked for them.
+    /// they are found only by [`Detector::add_clusters`].
     pub clusters: Vec<Cluster>,
 }
 
@@ -69,25 +69,31 @@ impl Detector {
         }
     }
 
-    /// The pins of `frame`; with `clusters` also the components that may
-    /// hold touching pins (free for the spot detector, a second pass over
-    /// the frame for the blob detector).
-    pub fn detect(&self, frame: &Frame, clusters: bool) -> Detection {
+    /// The pins of `frame`, with the clusters of touching pins for the
+    /// spot detector (found on the way); the blob detector's need a second
+    /// pass ([`Detector::add_clusters`]).
+    pub fn detect(&self, frame: &Frame) -> Detection {
         match self {
             Self::Blobs(p) => Detection {
                 points: detect_blobs(frame, p),
-                clusters: if clusters {
-                    find_clusters(frame, p)
-                } else {
-                    Vec::new()
-                },
+                clusters: Vec::new(),
             },
             Self::Spots(d) => {
                 let spots = d.detect(frame);
                 Detection {
                     points: spots.keypoints(),
-                    clusters: if clusters { spots.clusters } else { Vec::new() },
+                    clusters: spots.clusters,
                 }
+            }
+        }
+    }
+
+    /// Fills in the clusters of a blob detection of `frame` (the spot
+    /// detector's are there already).
+    pub fn add_clusters(&self, frame: &Frame, detection: &mut Detection) {
+        if let Self::Blobs(p) = self {
+            if detection.clusters.is_empty() {
+                detection.clusters = find_clusters(frame, p);
             }
         }
     }

@@ -55,4 +55,10 @@ pub enum VisionError {
     /// A frame's size is not the one the preprocessing was laid out for.
     #[error("the frame is {} x {} px, the preprocessing expects {} x {}", found[0], found[1], expected[0], expected[1])]
     FrameSize { expected: [u32; 2], found: [u32; 2] },
+    /// Inspection was given no frames.
+    #[error("no frames to inspect")]
+    NoFrames,
+    /// Inspection found nothing pin-like in the frames.
+    #[error("no pins found in the {frames} frames inspected")]
+    NoPins { frames: usize },
 }

@@ -15,9 +15,11 @@ mod extractor;
 mod field;
 mod fold;
 mod grouping;
+mod inspect;
 mod merged;
 mod params;
 pub mod preprocess;
+mod reader;
 mod rest;
 mod shape;
 mod spots;
@@ -29,11 +31,13 @@ pub use detection::{Detection, Detector, DetectorParams};
 pub use error::VisionError;
 pub use extractor::PinExtractor;
 pub use fold::TURNED_RATIO;
+pub use inspect::{draw_inspection, inspect, Inspection, LayoutKind, Picture};
 pub use merged::{find_clusters, Cluster};
 pub use params::{BlobParams, BLOB_PARAM_KEYS, MAX_THRESHOLDS, PRESET_NAMES};
 pub use preprocess::{
     MaskCircle, Preprocess, PreprocessParams, PreprocessStage, Resize, ResizeMethod, Threshold,
 };
+pub use reader::{FrameDetector, PinReader, Reading, SightParams, TrackCounts};
 pub use rest::{estimate_rest, RestEstimate, RestParams};
 pub use spots::{Connectivity, Spot, SpotDetector, SpotParams, Spots};
 pub use tracker::{median_spacing, PinTracker, Tracked};

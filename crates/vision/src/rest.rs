@@ -2,14 +2,18 @@
 //! collection of taps, every one in contact). The pins' rest positions are
 //! estimated from the taps themselves:
 //!
-//! 1. a provisional layout: among the frames with exactly the expected pin
-//!    count, the medoid (smallest summed chamfer distance to the others);
+//! 1. a provisional layout: among some frames with exactly the expected
+//!    pin count, the one against which most of the others can be ordered
+//!    with no pin missing and no neighbour triangle turned over;
 //! 2. every frame is ordered against the layout ([`crate::PinTracker`]);
 //!    the frames whose pins moved least (median displacement over matched
 //!    pins, among the frames with at most a few pins missing) are kept;
 //! 3. each pin's new rest position is the coordinate-wise median of its
 //!    matched positions over the kept frames;
-//! 4. repeat 2-3 until no pin moves more than the tolerance.
+//! 4. repeat 2-3 until no pin moves more than the tolerance. A layout
+//!    pin matched in fewer than half of the frames is no pin (a speck the
+//!    provisional frame happened to hold): it is dropped, and the round
+//!    run again without it.
 //!
 //! The residual reported is the root mean square distance of the kept
 //! frames' matched pins to their estimated rest positions: how far the
@@ -44,7 +48,7 @@ impl Default for RestParams {
         Self {
             keep_share: 0.25,
             max_rounds: 8,
-            tolerance: 0.01,
+            tolerance: 0.02,
             medoid_candidates: 24,
             max_missing: 0,
         }
@@ -71,6 +75,10 @@ pub struct RestEstimate {
     pub rounds: usize,
     /// Largest pin move in the last round, px.
     pub last_shift: f64,
+    /// Points of the provisional frame dropped from the layout as no pins:
+    /// matched in fewer than half of the frames (a speck of dust, a fleck
+    /// of the rim), px.
+    pub dropped: Vec<[f64; 2]>,
 }
 
 impl RestParams {
@@ -100,7 +108,8 @@ impl RestParams {
 }
 
 /// Estimates the rest layout of `pins` pins from the detections of many
-/// taps (see the module docs). Fails when no frame has exactly `pins`
+/// taps (see the module docs; the layout may end with fewer pins, see
+/// [`RestEstimate::dropped`]). Fails when no frame has exactly `pins`
 /// points, or when no frame can be ordered against the layout.
 pub fn estimate_rest(
     detections: &[Detection],
@@ -112,9 +121,17 @@ pub fn estimate_rest(
         .ok_or(VisionError::NoFrameWithPinCount { pins })?;
     let mut layout: Vec<[f64; 2]> = points_of(&detections[provisional]);
     let mut estimate = None;
+    let mut dropped = Vec::new();
     for round in 1..=params.max_rounds {
         let tracker = PinTracker::new(layout.clone())?;
         let tracked: Vec<Tracked> = detections.iter().map(|d| tracker.track(d)).collect();
+        let rare = rarely_matched(&tracked, layout.len());
+        if !rare.is_empty() && round < params.max_rounds {
+            for &i in rare.iter().rev() {
+                dropped.push(layout.remove(i));
+            }
+            continue;
+        }
         let (kept, usable) = least_displaced(&tracked, &layout, params);
         if kept.is_empty() {
             return Err(VisionError::NoFrameTracked {
@@ -138,6 +155,7 @@ pub fn estimate_rest(
             frames_usable: usable,
             rounds: round,
             last_shift: shift,
+            dropped: dropped.clone(),
         });
         if shift <= params.tolerance {
             break;
@@ -152,52 +170,55 @@ fn points_of(d: &Detection) -> Vec<[f64; 2]> {
     d.points.iter().map(|k| [k.x, k.y]).collect()
 }
 
-/// The medoid, by symmetric chamfer distance, of up to `candidates` frames
-/// (spread evenly over the list) that have exactly `pins` points.
+/// The best of up to `candidates` frames (spread evenly over the list)
+/// that have exactly `pins` points, those without unsplit clusters first:
+/// the one against which the most other candidates are ordered with no pin
+/// missing and no neighbour triangle turned over, ties going to the
+/// smallest summed median displacement. (A frame with a merged pair and a
+/// speck also has `pins` points, but orders few others.)
 fn provisional_frame(detections: &[Detection], pins: usize, candidates: usize) -> Option<usize> {
-    let full: Vec<usize> = (0..detections.len())
-        .filter(|&i| detections[i].points.len() == pins)
-        .collect();
+    let exact = |clean: bool| -> Vec<usize> {
+        (0..detections.len())
+            .filter(|&i| detections[i].points.len() == pins)
+            .filter(|&i| !clean || detections[i].clusters.iter().all(|c| c.passed))
+            .collect()
+    };
+    let mut full = exact(true);
+    if full.len() < candidates.min(3) {
+        full = exact(false);
+    }
     let step = full.len().div_ceil(candidates).max(1);
     let chosen: Vec<usize> = full.iter().step_by(step).copied().collect();
-    let sets: Vec<Vec<[f64; 2]>> = chosen.iter().map(|&i| points_of(&detections[i])).collect();
-    let cost = |a: usize| -> f64 {
-        (0..sets.len())
-            .filter(|&b| b != a)
-            .map(|b| chamfer(&sets[a], &sets[b]) + chamfer(&sets[b], &sets[a]))
-            .sum()
-    };
-    (0..chosen.len())
-        .map(|a| (cost(a), a))
-        .min_by(|x, y| x.0.total_cmp(&y.0))
-        .map(|(_, a)| chosen[a])
+    let mut best: Option<((usize, f64), usize)> = None;
+    for &a in &chosen {
+        let layout = points_of(&detections[a]);
+        let Ok(tracker) = PinTracker::new(layout.clone()) else {
+            continue;
+        };
+        let (mut good, mut moved) = (0usize, 0.0);
+        for &b in chosen.iter().filter(|&&b| b != a) {
+            let t = tracker.track(&detections[b]);
+            if t.missing == 0 && tracker.turned_triangles(&t) == 0 {
+                good += 1;
+                moved += median_displacement(&t, &layout);
+            }
+        }
+        let better = best
+            .as_ref()
+            .is_none_or(|&((g, m), _)| good > g || (good == g && moved < m));
+        if better {
+            best = Some(((good, moved), a));
+        }
+    }
+    best.map(|(_, a)| a)
 }
 
-/// Mean distance from each point of `a` to its nearest point of `b`.
-fn chamfer(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
-    let mut by_x = b.to_vec();
-    by_x.sort_unstable_by(|p, q| p[0].total_cmp(&q[0]));
-    let total: f64 = a.iter().map(|p| nearest_distance(*p, &by_x)).sum();
-    total / a.len().max(1) as f64
-}
-
-/// Distance from `p` to the nearest of `sorted` (sorted by x).
-fn nearest_distance(p: [f64; 2], sorted: &[[f64; 2]]) -> f64 {
-    let start = sorted.partition_point(|q| q[0] < p[0]);
-    let mut best = f64::INFINITY;
-    for q in sorted[start..].iter() {
-        if q[0] - p[0] >= best {
-            break;
-        }
-        best = best.min((q[0] - p[0]).hypot(q[1] - p[1]));
-    }
-    for q in sorted[..start].iter().rev() {
-        if p[0] - q[0] >= best {
-            break;
-        }
-        best = best.min((q[0] - p[0]).hypot(q[1] - p[1]));
-    }
-    best
+/// Ascending indices of the layout pins matched in fewer than half of
+/// the frames.
+fn rarely_matched(tracked: &[Tracked], pins: usize) -> Vec<usize> {
+    (0..pins)
+        .filter(|&i| 2 * tracked.iter().filter(|t| t.matched[i]).count() < tracked.len())
+        .collect()
 }
 
 /// Indices of the frames kept as least displaced, and how many were usable.

@@ -5,14 +5,16 @@
 //! part is N % 5 != 0 of `--fit`, everything else is held out.
 //!
 //! `cargo run --release -p tactrace-vision --example any_tactip -- \
-//!     --fit DIR [--inspect K] [--rest-frames K] [--reference PNG] [--params TOML] SET_DIR...`
+//!     --fit DIR [--inspect K] [--rest-frames K] [--reference PNG] [--params TOML] \
+//!     [--pins N] SET_DIR...`
 //!
 //! Each DIR holds frames named with a number (`image_N.png`,
 //! `frame_N_0.png`); `--inspect` frames (default 20) and at most
 //! `--rest-frames` (default all) of the fitting part are used, spread evenly.
 //! `--reference PNG` takes the rest pins from an undeformed frame instead
 //! of estimating them; `--params` reads the sight parameters
-//! (`[preprocess]`, `[detect]`) from a file instead of inspecting.
+//! (`[preprocess]`, `[detect]`) from a file instead of inspecting; `--pins`
+//! overrides the pin count the rest estimate starts from.
 //! Prints the proposal, the rest estimate and, per set and part, the share
 //! of frames fully tracked, the pins split from clusters and filled in,
 //! frames with a turned-over neighbour triangle, and the time per frame.
@@ -30,12 +32,13 @@ struct Args {
     rest_frames: usize,
     reference: Option<PathBuf>,
     params: Option<PathBuf>,
+    pins: Option<usize>,
     sets: Vec<PathBuf>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage = "usage: any_tactip --fit DIR [--inspect K] [--rest-frames K] [--reference PNG] \
-                 [--params TOML] SET_DIR...";
+                 [--params TOML] [--pins N] SET_DIR...";
     let mut args = std::env::args().skip(1);
     let mut a = Args {
         fit: PathBuf::new(),
@@ -43,6 +46,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         rest_frames: usize::MAX,
         reference: None,
         params: None,
+        pins: None,
         sets: Vec::new(),
     };
     while let Some(arg) = args.next() {
@@ -53,6 +57,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--rest-frames" => a.rest_frames = value()?.parse()?,
             "--reference" => a.reference = Some(value()?.into()),
             "--params" => a.params = Some(value()?.into()),
+            "--pins" => a.pins = Some(value()?.parse()?),
             _ => a.sets.push(arg.into()),
         }
     }
@@ -153,9 +158,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .iter()
                 .map(|(_, p)| frames.detect(&load(p)?).map_err(Into::into))
                 .collect::<Result<_, Box<dyn std::error::Error>>>()?;
-            let pins = match &a.params {
-                Some(_) => mode(detections.iter().map(|d| d.points.len())),
-                None => inspect_pins(&a, &fit)?,
+            let pins = match (a.pins, &a.params) {
+                (Some(pins), _) => pins,
+                (None, Some(_)) => mode(detections.iter().map(|d| d.points.len())),
+                (None, None) => inspect_pins(&a, &fit)?,
             };
             let start = Instant::now();
             let est = estimate_rest(&detections, pins, &RestParams::default())?;
@@ -172,6 +178,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 est.rounds,
                 est.last_shift
             );
+            if !est.dropped.is_empty() {
+                println!("  dropped as no pins: {:?}", est.dropped);
+            }
             est.pins
         }
     };

@@ -43,6 +43,7 @@ use crate::error::VisionError;
 use crate::params::BlobParams;
 use crate::preprocess::{adaptive_threshold, MaskCircle, PreprocessParams, Threshold};
 use crate::spots::{white_components, Connectivity, SpotParams};
+use crate::tracker::median_spacing;
 use geometry::{
     distance, fit_circle, nearest_distances, neighbour_counts, orientational_order, rings,
 };
@@ -68,6 +69,21 @@ pub enum LayoutKind {
     Rings,
 }
 
+/// A pin layout described (see [`layout_of`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Layout {
+    /// Hexagonal lattice or rings.
+    pub kind: LayoutKind,
+    /// Six-fold order of the bond directions in the frame, 0..=1 (near 1
+    /// for a lattice).
+    pub lattice_order: f64,
+    /// Six-fold order of the bond directions relative to the direction
+    /// from the centre, 0..=1 (the higher of the two for rings).
+    pub polar_order: f64,
+    /// Pins per ring, innermost first (ring layouts; empty for a lattice).
+    pub rings: Vec<usize>,
+}
+
 /// What [`inspect`] proposes and found.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Inspection {
@@ -81,17 +97,8 @@ pub struct Inspection {
     pub spacing: f64,
     /// Median pin size, pixels.
     pub pin_pixels: f64,
-    /// Hexagonal lattice or rings.
-    pub layout: LayoutKind,
-    /// Six-fold order of the bond directions in the frame, 0..=1 (near 1
-    /// for a lattice).
-    pub lattice_order: f64,
-    /// Six-fold order of the bond directions relative to the direction
-    /// from the centre, 0..=1 (the higher of the two for rings).
-    pub polar_order: f64,
-    /// Pins per ring, innermost first, in the frame the layout was judged
-    /// on (ring layouts; empty for a lattice).
-    pub rings: Vec<usize>,
+    /// Hexagonal lattice or rings, judged on a frame showing all the pins.
+    pub layout: Layout,
     /// The rim of the dome, when one was seen.
     pub rim: Option<MaskCircle>,
     /// Whether the frames were already binary.
@@ -127,57 +134,39 @@ struct Blob {
 /// same size; see the module docs). `crop` is kept in the proposal and
 /// applied first.
 pub fn inspect(frames: &[Frame], crop: Option<[u32; 4]>) -> Result<Inspection, VisionError> {
-    let first = frames.first().ok_or(VisionError::NoFrames)?;
-    let base = PreprocessParams {
-        crop,
-        ..PreprocessParams::default()
-    };
-    let stage = base.check()?.stage(first.width(), first.height())?;
-    let grey: Vec<Frame> = frames
-        .iter()
-        .map(|f| stage.apply_grey(f))
-        .collect::<Result<_, _>>()?;
-    let binary = grey.iter().all(is_binary);
-    let (threshold, bw) = if binary {
-        (None, grey)
-    } else {
-        binarise(&grey)
-    };
-    let level = if binary { binary_level(&bw) } else { 127 };
-    let mut pixels_of_rim = Vec::new();
-    let found: Vec<Vec<Blob>> = bw
-        .iter()
-        .map(|f| components(f, level, &mut pixels_of_rim))
-        .collect();
-    let m = median_pixels(&found).ok_or(VisionError::NoPins {
+    let seen = Binarised::of(frames, crop)?;
+    let no_pins = || VisionError::NoPins {
         frames: frames.len(),
-    })?;
-    let rim_pixels: Vec<[f64; 2]> = pixels_of_rim
+    };
+    let mut large = Vec::new();
+    let found: Vec<Vec<Blob>> = seen
+        .frames
+        .iter()
+        .map(|f| components(f, seen.level, &mut large))
+        .collect();
+    let m = median_pixels(&found).ok_or_else(no_pins)?;
+    let rim_pixels: Vec<[f64; 2]> = large
         .iter()
         .filter(|(n, _)| *n as f64 > 6.0 * m)
         .flat_map(|(_, p)| p.iter().copied())
         .collect();
-    let size = [f64::from(bw[0].width()), f64::from(bw[0].height())];
+    let size = [f64::from(frames[0].width()), f64::from(frames[0].height())];
     let rim = fit_circle(&rim_pixels).filter(|c| plausible_rim(c, size));
     let sizes = Sizes::from_median(m);
     let pin_sets: Vec<Vec<[f64; 2]>> = found.iter().map(|b| sizes.pins(b)).collect();
-    let spacing = median_spacing_of(&pin_sets).ok_or(VisionError::NoPins {
-        frames: frames.len(),
-    })?;
+    let spacing = median_spacing_of(&pin_sets).ok_or_else(no_pins)?;
     let centre = rim.map_or_else(|| field_centre(&pin_sets), |r| r.centre);
     let mask = mask_circle(&found, &sizes, centre, spacing, rim, &rim_pixels);
     let inside = |p: [f64; 2]| distance(p, mask.centre) <= mask.radius;
-    let counts: Vec<usize> = pin_sets
-        .iter()
-        .map(|s| s.iter().filter(|&&p| inside(p)).count())
-        .collect();
     let sites: Vec<usize> = found
         .iter()
         .map(|b| pin_sites(b, &sizes, spacing, &inside))
         .collect();
     let pins = low_count(&sites);
-    let judged = (0..counts.len())
-        .find(|&i| counts[i] == pins && sites[i] == pins)
+    // Judge the layout on a frame showing that many pins, clusters apart.
+    let plain = |i: usize| pin_sets[i].iter().filter(|&&p| inside(p)).count();
+    let judged = (0..sites.len())
+        .find(|&i| sites[i] == pins && plain(i) == pins)
         .or_else(|| (0..sites.len()).find(|&i| sites[i] == pins))
         .unwrap_or(0);
     let judged_pins: Vec<[f64; 2]> = pin_sets[judged]
@@ -185,38 +174,90 @@ pub fn inspect(frames: &[Frame], crop: Option<[u32; 4]>) -> Result<Inspection, V
         .copied()
         .filter(|&p| inside(p))
         .collect();
-    let pin_centre = field_centre(std::slice::from_ref(&judged_pins));
-    let order = orientational_order(&judged_pins, spacing, pin_centre);
-    let layout = if order.lattice - order.polar > HEXAGONAL_MARGIN {
-        LayoutKind::Hexagonal
-    } else {
-        LayoutKind::Rings
-    };
-    let ring_counts = match layout {
-        LayoutKind::Rings => rings(&judged_pins, pin_centre, spacing),
-        LayoutKind::Hexagonal => Vec::new(),
-    };
-    let picture = picture_of(judged, &found[judged], &sizes, &inside);
     Ok(Inspection {
         preprocess: PreprocessParams {
             crop,
             mask: Some(mask),
-            threshold,
+            threshold: seen.threshold,
             ..PreprocessParams::default()
         },
-        detect: sizes.detector(level, spacing),
+        detect: sizes.detector(seen.level, spacing),
         pins,
         spacing,
         pin_pixels: m,
-        layout,
+        layout: layout_of(&judged_pins),
+        rim,
+        binary: seen.binary,
+        counts: sites,
+        picture: picture_of(judged, &found[judged], &sizes, &inside),
+    })
+}
+
+/// How a set of pin centres (px) is laid out: a hexagonal lattice when
+/// the six-fold order of their bond directions in the frame exceeds their
+/// order relative to the direction from their centre by more than 0.5,
+/// else concentric rings (see `geometry::orientational_order`).
+pub fn layout_of(pins: &[[f64; 2]]) -> Layout {
+    let spacing = median_spacing(pins);
+    let centre = field_centre(std::slice::from_ref(&pins.to_vec()));
+    let order = orientational_order(pins, spacing, centre);
+    let kind = if order.lattice - order.polar > HEXAGONAL_MARGIN {
+        LayoutKind::Hexagonal
+    } else {
+        LayoutKind::Rings
+    };
+    Layout {
+        kind,
         lattice_order: order.lattice,
         polar_order: order.polar,
-        rings: ring_counts,
-        rim,
-        binary,
-        counts: sites,
-        picture,
-    })
+        rings: match kind {
+            LayoutKind::Rings => rings(pins, centre, spacing),
+            LayoutKind::Hexagonal => Vec::new(),
+        },
+    }
+}
+
+/// The inspected frames, binary.
+struct Binarised {
+    frames: Vec<Frame>,
+    /// Whether they came binary.
+    binary: bool,
+    /// The threshold that made them binary, if any.
+    threshold: Option<Threshold>,
+    /// White above this grey level.
+    level: u8,
+}
+
+impl Binarised {
+    /// The frames cropped, and binarised when they are grey (step 1).
+    fn of(frames: &[Frame], crop: Option<[u32; 4]>) -> Result<Self, VisionError> {
+        let first = frames.first().ok_or(VisionError::NoFrames)?;
+        let base = PreprocessParams {
+            crop,
+            ..PreprocessParams::default()
+        };
+        let stage = base.check()?.stage(first.width(), first.height())?;
+        let grey: Vec<Frame> = frames
+            .iter()
+            .map(|f| stage.apply_grey(f))
+            .collect::<Result<_, _>>()?;
+        if grey.iter().all(is_binary) {
+            let level = binary_level(&grey);
+            return Ok(Self {
+                frames: grey,
+                binary: true,
+                threshold: None,
+                level,
+            });
+        }
+        let (threshold, frames) = binarise(&grey);
+        Ok(Self {
+            frames,
+            binary: false,
+            threshold,
+            level: 127,
+        })
+    }
 }
 
 /// At most two grey levels.

@@ -9,8 +9,8 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_vision::{
-    estimate_rest, inspect, Detection, DetectorParams, Frame, FrameDetector, Inspection,
-    LayoutKind, PinReader, RestParams, SightParams,
+    draw_inspection, estimate_rest, inspect, Detection, DetectorParams, Frame, FrameDetector,
+    Inspection, LayoutKind, PinReader, RestParams, SightParams,
 };
 
 /// A synthetic sensor: rest pins, pin radius, rim and static specks.
@@ -185,7 +185,7 @@ fn issue21_inspection_tells_rings_from_a_lattice_and_counts_the_pins() {
         (hex_sensor(), LayoutKind::Hexagonal, 14.0, false),
     ] {
         let found = inspected(&s, 5);
-        assert_eq!(found.layout, kind);
+        assert_eq!(found.layout.kind, kind);
         assert_eq!(found.pins, s.rest.len(), "{kind:?}");
         assert!(
             (found.spacing / spacing - 1.0).abs() < 0.1,
@@ -209,7 +209,7 @@ fn issue21_inspection_tells_rings_from_a_lattice_and_counts_the_pins() {
                     .all(|&p| distance(p, mask.centre) > mask.radius),
                 "{mask:?} keeps a speck"
             );
-            assert_eq!(found.rings.len(), 11, "{:?}", found.rings);
+            assert_eq!(found.layout.rings.len(), 11, "{:?}", found.layout.rings);
         }
         let rim = found.rim.expect("the rim is seen");
         assert!(
@@ -217,6 +217,24 @@ fn issue21_inspection_tells_rings_from_a_lattice_and_counts_the_pins() {
         );
         // Binary frames need no threshold.
         assert!(found.binary && found.preprocess.threshold.is_none());
+        // The picture: the inspected frame enlarged to at least 512 px, a
+        // green cross on every pin it kept.
+        assert_eq!(found.picture.pins.len(), s.rest.len());
+        let frame = &taps(&s, 12, 5, 1.0)[found.picture.frame].0;
+        let img = draw_inspection(frame, &found);
+        let scale = img.width() / s.size;
+        assert!(img.width() >= 512 && img.width() == scale * s.size);
+        for p in &found.picture.pins {
+            let (x, y) = (
+                (p[0] + 0.5) * f64::from(scale),
+                (p[1] + 0.5) * f64::from(scale),
+            );
+            assert_eq!(
+                img.get_pixel(x as u32, y as u32).0,
+                [40, 220, 80],
+                "pin at {p:?}"
+            );
+        }
     }
 }
 
@@ -293,5 +311,102 @@ fn issue21_rest_layout_from_taps_alone_and_small_pins_fully_tracked() {
             // The small pins touch now and then: pins split from clusters.
             assert!(split > 0);
         }
+    }
+}
+
+/// A raw colour camera frame (320 x 240 RGB: the dome lit unevenly, pins
+/// as soft bright spots, a bright rim, sensor noise) of a 61-pin lattice,
+/// the pins pushed by `tap`.
+fn camera_frame(tap: &Tap, rng: &mut ChaCha8Rng) -> image::RgbImage {
+    let centre = [170.3, 118.6];
+    let mut pins = Vec::new();
+    for q in -4i32..=4 {
+        for r in -4i32..=4 {
+            if (q + r).abs() <= 4 {
+                let x = centre[0] + 16.0 * (f64::from(q) + 0.5 * f64::from(r));
+                pins.push(tap.moved([x, centre[1] + 16.0 * 0.75f64.sqrt() * f64::from(r)]));
+            }
+        }
+    }
+    image::RgbImage::from_fn(320, 240, |x, y| {
+        let (x, y) = (f64::from(x), f64::from(y));
+        let d = (x - centre[0]).hypot(y - centre[1]);
+        let mut v = 30.0 + x / 10.0 + y / 20.0;
+        if (96.0..=102.0).contains(&d) {
+            v += 150.0;
+        }
+        for p in &pins {
+            let r2 = (x - p[0]).powi(2) + (y - p[1]).powi(2);
+            if r2 < 100.0 {
+                v += 140.0 * (-r2 / (2.0 * 2.2 * 2.2)).exp();
+            }
+        }
+        v += rng.random_range(-3.0..3.0);
+        let g = v.clamp(0.0, 255.0) as u8;
+        image::Rgb([g.saturating_add(10), g, g.saturating_sub(10)])
+    })
+}
+
+/// Raw colour frames in: inspection sees they are grey, proposes an
+/// adaptive threshold and a mask inside the rim, counts the 61 pins of the
+/// lattice; the frames read through that preprocessing (RGB or RGBA alike)
+/// are fully tracked against the rest layout estimated from them.
+#[test]
+fn issue21_raw_colour_frames_inspected_and_read() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let lattice = Sensor {
+        size: 320,
+        centre: [170.3, 118.6],
+        rest: Vec::new(),
+        pin_radius: 3.0,
+        rim: [96.0, 102.0],
+        specks: Vec::new(),
+    };
+    let frames: Vec<image::RgbImage> = (0..40)
+        .map(|_| {
+            let tap = Tap::random(&mut rng, &lattice, 1.0);
+            camera_frame(&tap, &mut rng)
+        })
+        .collect();
+    let grey: Vec<Frame> = frames
+        .iter()
+        .take(12)
+        .map(|f| tactrace_vision::preprocess::grey_of(&image::DynamicImage::ImageRgb8(f.clone())))
+        .collect();
+    let found = inspect(&grey, None).expect("inspection");
+    assert!(!found.binary);
+    assert!(matches!(
+        found.preprocess.threshold,
+        Some(tactrace_vision::Threshold::AdaptiveGaussian { c, .. }) if c < 0.0
+    ));
+    assert_eq!((found.pins, found.layout.kind), (61, LayoutKind::Hexagonal));
+    let mask = found.preprocess.mask.expect("mask");
+    assert!(mask.radius < 96.0 && mask.radius > 4.0 * 16.0, "{mask:?}");
+    let reader_frames = SightParams {
+        preprocess: found.preprocess.clone(),
+        detect: found.detect.clone(),
+    }
+    .check(320, 240)
+    .expect("valid");
+    let detections: Vec<Detection> = frames
+        .iter()
+        .map(|f| {
+            reader_frames
+                .detect(&image::DynamicImage::ImageRgb8(f.clone()))
+                .expect("detect")
+        })
+        .collect();
+    let rest = estimate_rest(&detections, found.pins, &RestParams::default()).expect("rest");
+    let reader = PinReader::new(reader_frames, rest.pins).expect("reader");
+    for f in &frames {
+        let rgb = reader
+            .read(&image::DynamicImage::ImageRgb8(f.clone()))
+            .expect("read");
+        assert!(rgb.counts.fully_tracked(), "{:?}", rgb.counts);
+        let rgba = image::DynamicImage::ImageRgb8(f.clone()).to_rgba8();
+        let again = reader
+            .read(&image::DynamicImage::ImageRgba8(rgba))
+            .expect("read RGBA");
+        assert_eq!(again, rgb);
     }
 }

@@ -87,7 +87,7 @@ fn issue21_331_pin_edge_set_tracked_with_nothing_hand_written() {
         return;
     };
     let (found, rest, reader) = fitted(&fit_part(numbered(&dir.join("train/frames"), "image_")));
-    assert_eq!((found.pins, found.layout), (331, LayoutKind::Rings));
+    assert_eq!((found.pins, found.layout.kind), (331, LayoutKind::Rings));
     assert_eq!(rest.pins.len(), 331);
     assert!(rest.residual < 1.0, "residual {}", rest.residual);
     let val = spread(&numbered(&dir.join("val/frames"), "image_"), 300);
@@ -105,7 +105,7 @@ fn issue21_331_pin_surface_set_tracked_with_nothing_hand_written() {
     let all = numbered(&dir.join("frames"), "image_");
     let held: Vec<(u32, PathBuf)> = all.iter().filter(|(n, _)| n % 5 == 0).cloned().collect();
     let (found, rest, reader) = fitted(&fit_part(all));
-    assert_eq!((found.pins, found.layout), (331, LayoutKind::Rings));
+    assert_eq!((found.pins, found.layout.kind), (331, LayoutKind::Rings));
     assert_eq!(rest.pins.len(), 331);
     let share = fully_tracked(&reader, &spread(&held, 300));
     assert!(share >= 0.99, "{:.1} % fully tracked", 100.0 * share);
@@ -127,7 +127,10 @@ fn issue21_127_pin_sets_tracked_from_inspection() {
         let all = numbered(&dir.join("frames"), "frame_");
         let held: Vec<(u32, PathBuf)> = all.iter().filter(|(n, _)| n % 5 == 0).cloned().collect();
         let (found, rest, reader) = fitted(&fit_part(all));
-        assert_eq!((found.pins, found.layout), (127, LayoutKind::Hexagonal));
+        assert_eq!(
+            (found.pins, found.layout.kind),
+            (127, LayoutKind::Hexagonal)
+        );
         let share = fully_tracked(&reader, &spread(&held, 300));
         assert!(share >= 0.99, "{}: {:.1} %", dir.display(), 100.0 * share);
         if dir == edge {

@@ -52,7 +52,7 @@ pub fn median_blur(frame: &Frame, k: u32) -> Frame {
     let raw = frame.as_raw();
     let mut out = vec![0u8; w * h];
     let mut histogram = [0u32; 256];
-    let half = (k * k / 2) as u32;
+    let half = k * k / 2;
     for y in 0..h {
         histogram.fill(0);
         for dy in -r..=r {

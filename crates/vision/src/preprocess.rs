@@ -14,8 +14,7 @@
 //!    `C`, mean or Gaussian neighbourhood); the masked-out pixels stay
 //!    black whatever the threshold;
 //! 6. resize to `[width, height]` by pixel-area averaging (OpenCV
-//!    `INTER_AREA`, for shrinking) or bilinear interpolation (OpenCV
-//!    `INTER_LINEAR`).
+//!    `INTER_AREA`) or bilinear interpolation (OpenCV `INTER_LINEAR`).
 //!
 //! Settings ([`PreprocessParams`], serde, unknown keys refused) are checked
 //! into a [`Preprocess`], which is made into a [`PreprocessStage`] for one
@@ -110,7 +109,7 @@ pub struct Resize {
 #[serde(rename_all = "snake_case")]
 pub enum ResizeMethod {
     /// Each output pixel the mean of the input area it covers (OpenCV
-    /// `INTER_AREA`); when enlarging, bilinear.
+    /// `INTER_AREA`; when enlarging, OpenCV's enlarging form of it).
     #[default]
     Area,
     /// Bilinear, pixel centres aligned (OpenCV `INTER_LINEAR`).

@@ -4,22 +4,29 @@
 //! (`INTER_LINEAR`, pixel centres aligned: output pixel `i` samples input
 //! position `(i + 0.5) scale - 0.5`, clamped to the frame). Both separable;
 //! weights per output pixel sum to one, so a constant frame stays constant.
+//! Against cv2 5.0.0: area averaging is the same bit for bit; where
+//! OpenCV blends two pixels (bilinear, and area when enlarging) it works in
+//! 11-bit fixed point and this in `f64`, so a pixel may differ by one grey
+//! level.
 
 use super::ResizeMethod;
 use crate::blob::Frame;
 
 /// `frame` resized to `size` = `[width, height]` (identity when equal).
-/// Area averaging applies where the frame shrinks; when enlarging along
-/// an axis, it is bilinear along that axis.
+/// Area averaging when neither side grows; when one does, OpenCV's
+/// `INTER_AREA` takes its enlarging form on both axes (a bilinear blend
+/// only across the boundaries between source pixels), and so does this.
 pub fn resize(frame: &Frame, size: [u32; 2], method: ResizeMethod) -> Frame {
     let (sw, sh) = (frame.width() as usize, frame.height() as usize);
     let (dw, dh) = (size[0] as usize, size[1] as usize);
     if (sw, sh) == (dw, dh) || sw == 0 || sh == 0 || dw == 0 || dh == 0 {
         return frame.clone();
     }
+    let shrinking = dw <= sw && dh <= sh;
     let taps = |src: usize, dst: usize| match method {
-        ResizeMethod::Area if dst < src => area_taps(src, dst),
-        _ => linear_taps(src, dst),
+        ResizeMethod::Area if shrinking => area_taps(src, dst),
+        ResizeMethod::Area => area_up_taps(src, dst),
+        ResizeMethod::Bilinear => linear_taps(src, dst),
     };
     let (tx, ty) = (taps(sw, dw), taps(sh, dh));
     let raw = frame.as_raw();
@@ -58,6 +65,26 @@ fn area_taps(src: usize, dst: usize) -> Vec<Vec<(usize, f64)>> {
             }
             let total: f64 = taps.iter().map(|t| t.1).sum();
             taps.iter().map(|&(i, f)| (i, f / total)).collect()
+        })
+        .collect()
+}
+
+/// OpenCV's `INTER_AREA` when enlarging: output `o` blends source `s =
+/// floor(o src / dst)` and `s + 1` with weight `f = frac((o + 1) - (s + 1)
+/// dst / src)` (0 when that is not positive) on the second, clamped at
+/// the borders.
+fn area_up_taps(src: usize, dst: usize) -> Vec<Vec<(usize, f64)>> {
+    let (scale, inverse) = (src as f64 / dst as f64, dst as f64 / src as f64);
+    (0..dst)
+        .map(|o| {
+            let i = (o as f64 * scale).floor() as usize;
+            let f = (o + 1) as f64 - (i + 1) as f64 * inverse;
+            let f = if f <= 0.0 { 0.0 } else { f - f.floor() };
+            if i + 1 < src && f > 0.0 {
+                vec![(i, 1.0 - f), (i + 1, f)]
+            } else {
+                vec![(i.min(src - 1), 1.0)]
+            }
         })
         .collect()
 }

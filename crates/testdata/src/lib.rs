@@ -39,3 +39,30 @@ pub fn real_edge_set() -> Option<PathBuf> {
         dir.display()
     );
 }
+
+/// Another set of the shared data by its folder name (`tactip331-surface3d`,
+/// `tactip331-edge2d-shear`, `tactip127-surface2d`), when `probe` (a file
+/// inside it) exists; `None` when it is absent and skipping was asked for.
+///
+/// # Panics
+/// When the data is absent and [`SKIP_VAR`] is not `1`.
+pub fn shared_set(name: &str, probe: &str) -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(name);
+    if dir.join(probe).is_file() {
+        return Some(dir);
+    }
+    if std::env::var(SKIP_VAR).is_ok_and(|v| v == "1") {
+        eprintln!(
+            "SKIPPED ({SKIP_VAR}=1): real TacTip data not found at {}",
+            dir.display()
+        );
+        return None;
+    }
+    panic!(
+        "real TacTip data not found at {}: this test needs it (the README says where \
+         ../shared comes from), or set {SKIP_VAR}=1 to skip the tests that need it.",
+        dir.display()
+    );
+}

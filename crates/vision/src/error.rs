@@ -38,6 +38,29 @@ pub enum VisionError {
         total: usize,
         required: usize,
     },
+    /// No frame shows the expected number of pins, so no provisional
+    /// rest layout can be taken from one.
+    #[error("no frame shows exactly {pins} pins, so none can start the rest layout")]
+    NoFrameWithPinCount { pins: usize },
+    /// No frame could be ordered against the layout.
+    #[error("none of the {frames} frames could be ordered against the layout")]
+    NoFrameTracked { frames: usize },
+    /// The crop box does not fit in the frame.
+    #[error("crop [{x0}, {y0}, {x1}, {y1}] does not fit in a {width} x {height} frame", x0 = crop[0], y0 = crop[1], x1 = crop[2], y1 = crop[3])]
+    Crop {
+        crop: [u32; 4],
+        width: u32,
+        height: u32,
+    },
+    /// A frame's size is not the one the preprocessing was laid out for.
+    #[error("the frame is {} x {} px, the preprocessing expects {} x {}", found[0], found[1], expected[0], expected[1])]
+    FrameSize { expected: [u32; 2], found: [u32; 2] },
+    /// Inspection was given no frames.
+    #[error("no frames to inspect")]
+    NoFrames,
+    /// Inspection found nothing pin-like in the frames.
+    #[error("no pins found in the {frames} frames inspected")]
+    NoPins { frames: usize },
 }
 
 impl VisionError {

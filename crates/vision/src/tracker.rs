@@ -10,6 +10,7 @@
 
 use crate::assign::{assign_usable, Edge, EdgeRows};
 use crate::blob::KeyPoint;
+use crate::detection::Detection;
 use crate::error::VisionError;
 use crate::field::{smooth_field, Kernel, Observations};
 use crate::fold::FoldCheck;
@@ -185,6 +186,16 @@ impl PinTracker {
             return self.resplit(kept, &kept_points, &points, clusters);
         }
         kept
+    }
+
+    /// [`PinTracker::order`] on a detection's points, then, if pins are
+    /// missing and it has clusters, [`PinTracker::order_with_clusters`].
+    pub fn track(&self, detection: &Detection) -> Tracked {
+        let first = self.order(&detection.points);
+        if first.missing == 0 || detection.clusters.is_empty() {
+            return first;
+        }
+        self.order_with_clusters(&detection.points, &detection.clusters)
     }
 
     /// For each cluster, how many missing pins are predicted on or next to

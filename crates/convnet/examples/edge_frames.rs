@@ -11,7 +11,7 @@
 //!
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
-//! learning_rate, final_lr_fraction, weight_decay, beta, sweeps,
+//! learning_rate, final_lr_fraction, weight_decay, shift_augment, beta, sweeps,
 //! activation (sigmoid|tanh|relu), input_centring (global|mean_frame), conv (e.g. 16k5s2,32k3s2), dense
 //! (e.g. 256 or 256,64 or none). Prints per epoch the training loss, the
 //! select part's mean absolute errors, the wall time and this process's
@@ -149,6 +149,7 @@ fn set(cfg: &mut ConvConfig, kv: &str) -> Result<(), Box<dyn Error>> {
         "learning_rate" => cfg.learning_rate = v.parse()?,
         "final_lr_fraction" => cfg.final_lr_fraction = v.parse()?,
         "weight_decay" => cfg.weight_decay = v.parse()?,
+        "shift_augment" => cfg.shift_augment = v.parse()?,
         "beta" => cfg.ep.beta = v.parse()?,
         "sweeps" => {
             cfg.ep.clamped_phase = ClampedPhase::Sweeps {

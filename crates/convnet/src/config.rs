@@ -162,6 +162,11 @@ pub struct ConvConfig {
     pub final_lr_fraction: f64,
     /// L2 penalty on the weights (not the biases), added to the gradient.
     pub weight_decay: f64,
+    /// Training frames are moved by up to this many pixels in x and y
+    /// (a fresh seeded draw for each frame and epoch, edge pixels
+    /// repeated), so the network cannot rely on where the whole pin
+    /// pattern sits; 0 turns it off.
+    pub shift_augment: usize,
 }
 
 impl ConvConfig {
@@ -196,6 +201,7 @@ impl ConvConfig {
             learning_rate: 1e-3,
             final_lr_fraction: 0.02,
             weight_decay: 0.0,
+            shift_augment: 0,
         }
     }
 
@@ -212,6 +218,7 @@ impl ConvConfig {
         check_range("epochs", self.epochs, 1, 1_000_000)?;
         check_range("batch_size", self.batch_size, 1, 65_536)?;
         check_range("chunk_size", self.chunk_size, 1, 1024)?;
+        check_range("shift_augment", self.shift_augment, 0, 16)?;
         check_positive("learning_rate", self.learning_rate)?;
         if !(self.final_lr_fraction > 0.0 && self.final_lr_fraction <= 1.0) {
             return Err(config_error(

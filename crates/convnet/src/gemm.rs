@@ -6,8 +6,9 @@
 use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 
-/// `c (m x n) = a (m x k) * b (k x n)`.
-pub(crate) fn product(c: &mut [f32], a: &[f32], b: &[f32], m: usize, k: usize, n: usize) {
+/// `c (m x n) = a (m x k) * b (k x n)`. Here and below, panics when a
+/// slice is shorter than its shape.
+pub fn product(c: &mut [f32], a: &[f32], b: &[f32], m: usize, k: usize, n: usize) {
     let a = MatRef::from_row_major_slice(&a[..m * k], m, k);
     let b = MatRef::from_row_major_slice(&b[..k * n], k, n);
     let c = MatMut::from_row_major_slice_mut(&mut c[..m * n], m, n);
@@ -15,7 +16,7 @@ pub(crate) fn product(c: &mut [f32], a: &[f32], b: &[f32], m: usize, k: usize, n
 }
 
 /// `c (k x n) = a^T b` with `a` stored `m x k` and `b` `m x n`.
-pub(crate) fn product_tn(c: &mut [f32], a: &[f32], b: &[f32], m: usize, k: usize, n: usize) {
+pub fn product_tn(c: &mut [f32], a: &[f32], b: &[f32], m: usize, k: usize, n: usize) {
     let a = MatRef::from_row_major_slice(&a[..m * k], m, k);
     let b = MatRef::from_row_major_slice(&b[..m * n], m, n);
     let c = MatMut::from_row_major_slice_mut(&mut c[..k * n], k, n);
@@ -23,7 +24,7 @@ pub(crate) fn product_tn(c: &mut [f32], a: &[f32], b: &[f32], m: usize, k: usize
 }
 
 /// `c (m x k) += alpha a b^T` with `a` stored `m x n` and `b` `k x n`.
-pub(crate) fn add_product_nt(
+pub fn add_product_nt(
     c: &mut [f32],
     alpha: f32,
     a: &[f32],

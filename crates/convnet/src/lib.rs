@@ -25,6 +25,14 @@ mod serialise;
 mod train;
 mod workspace;
 
+/// The building blocks of a layer as a matrix product, public for the
+/// bench and for tests: im2col and its transpose, and the three products
+/// (forward `W cols`, down `W^T e`, weights `e cols^T`), single-threaded.
+pub mod kernels {
+    pub use crate::gemm::{add_product_nt, product, product_tn};
+    pub use crate::im2col::{col2im, im2col};
+}
+
 pub use config::{
     Activation, ClampedPhase, ConvConfig, ConvSpec, EpSettings, FreePhase, InputCentring,
     ModelKind, Nudging,

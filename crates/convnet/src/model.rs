@@ -64,6 +64,7 @@ impl ConvModel {
         let layout = Layout::new(h, w, &config.conv, &config.dense, targets.dim())?;
         let mut net = Network::new(layout, config.activation, seed);
         let data = FitData {
+            seed,
             frames: *frames,
             targets: *targets,
             input: InputScaling::fit(frames, config.input_centring),

@@ -75,6 +75,31 @@ impl InputScaling {
         }
     }
 
+    /// Standardise `pixels` (`size = (height, width)`) moved by `(dx, dy)`
+    /// px into `out`: `out[y][x]` takes the pixel at `(y - dy, x - dx)`,
+    /// the nearest edge pixel where that falls outside the frame.
+    pub(crate) fn apply_shifted(
+        &self,
+        pixels: &[u8],
+        (h, w): (usize, usize),
+        (dx, dy): (isize, isize),
+        out: &mut [f32],
+    ) {
+        let k = (1.0 / self.std) as f32;
+        let clamp = |v: isize, n: usize| v.clamp(0, n as isize - 1) as usize;
+        for y in 0..h {
+            let sy = clamp(y as isize - dy, h);
+            for x in 0..w {
+                let p = pixels[sy * w + clamp(x as isize - dx, w)] as f32;
+                let m = match self.mean_frame.get(y * w + x) {
+                    Some(&m) => m,
+                    None => self.mean as f32,
+                };
+                out[y * w + x] = (p - m) * k;
+            }
+        }
+    }
+
     /// Whether the numbers are usable for `pixels`-pixel frames.
     pub(crate) fn is_valid(&self, pixels: usize) -> bool {
         self.mean.is_finite()

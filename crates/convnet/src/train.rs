@@ -57,6 +57,8 @@ pub struct TrainingHistory {
 
 /// What a fit reads: frames, targets and their scalings.
 pub(crate) struct FitData<'a> {
+    /// The fit's seed (initialisation, shuffling, shifts).
+    pub seed: u64,
     pub frames: Frames<'a>,
     pub targets: Targets<'a>,
     pub input: InputScaling,
@@ -94,10 +96,10 @@ pub(crate) fn train(
                 config,
                 data,
                 batch,
-                &mut pool,
-                &mut losses,
+                (&mut pool, &mut losses),
                 &mut adam,
                 lr,
+                epoch,
             );
         }
         let loss = total / order.len() as f64;
@@ -143,10 +145,10 @@ fn batch_step(
     config: &ConvConfig,
     data: &FitData,
     batch: &[usize],
-    pool: &mut [Workspace],
-    losses: &mut [f64],
+    (pool, losses): (&mut [Workspace], &mut [f64]),
     adam: &mut Adam,
     lr: f64,
+    epoch: usize,
 ) -> f64 {
     let used = batch.len().div_ceil(config.chunk_size);
     {
@@ -156,7 +158,7 @@ fn batch_step(
             .zip(losses[..used].par_iter_mut())
             .zip(batch.par_chunks(config.chunk_size))
             .for_each(|((ws, loss), idx)| {
-                *loss = chunk_gradient(net, config, data, ws, idx);
+                *loss = chunk_gradient(net, config, data, ws, idx, epoch);
             });
     }
     let (first, rest) = pool.split_at_mut(1);
@@ -181,13 +183,18 @@ fn chunk_gradient(
     data: &FitData,
     ws: &mut Workspace,
     idx: &[usize],
+    epoch: usize,
 ) -> f64 {
     let nb = idx.len();
     let (h, w) = data.frames.size();
     let hw = h * w;
     for (b, &i) in idx.iter().enumerate() {
-        data.input
-            .apply(data.frames.frame(i), &mut ws.x[b * hw..(b + 1) * hw]);
+        let x = &mut ws.x[b * hw..(b + 1) * hw];
+        let frame = data.frames.frame(i);
+        match shift_of(config.shift_augment, data.seed, epoch, i) {
+            (0, 0) => data.input.apply(frame, x),
+            (dx, dy) => data.input.apply_shifted(frame, (h, w), (dx, dy), x),
+        }
         for (j, &v) in data.targets.row(i).iter().enumerate() {
             ws.t[j * nb + b] = data.scaling.scale(j, v);
         }
@@ -199,6 +206,26 @@ fn chunk_gradient(
         ModelKind::ConvDennn => ep_gradient(net, ws, nb, &config.ep),
         ModelKind::ConvMlp => backprop_gradient(net, ws, nb),
     }
+}
+
+/// The shift `(dx, dy)`, each in `-max..=max` px, of frame `i` in
+/// `epoch`: a hash of the three numbers and the seed, so it does not
+/// depend on which thread loads the frame.
+fn shift_of(max: usize, seed: u64, epoch: usize, i: usize) -> (isize, isize) {
+    if max == 0 {
+        return (0, 0);
+    }
+    // SplitMix64's finaliser over the seed, the epoch and the frame.
+    let mut z = seed
+        .wrapping_add((epoch as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15))
+        .wrapping_add((i as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    let span = 2 * max as u64 + 1;
+    let dx = (z % span) as isize - max as isize;
+    let dy = ((z / span) % span) as isize - max as isize;
+    (dx, dy)
 }
 
 /// Mean loss (scaled units) and mean absolute error per target (the

@@ -59,10 +59,14 @@ fn small_config(kind: ModelKind) -> ConvConfig {
 }
 
 fn fit(kind: ModelKind, seed: u64) -> (ConvModel, tactrace_convnet::TrainingHistory) {
+    fit_with(small_config(kind), seed)
+}
+
+fn fit_with(config: ConvConfig, seed: u64) -> (ConvModel, tactrace_convnet::TrainingHistory) {
     let (pixels, targets) = spots(160, 1);
     let frames = Frames::new(&pixels, 160, SIDE, SIDE).unwrap();
     let targets = Targets::new(&targets, 160, 3).unwrap();
-    ConvModel::fit(&frames, &targets, &small_config(kind), seed).unwrap()
+    ConvModel::fit(&frames, &targets, &config, seed).unwrap()
 }
 
 #[test]
@@ -110,12 +114,19 @@ fn issue22_both_rules_learn_where_a_spot_is() {
 #[test]
 fn issue22_seeded_fits_reproduce_whatever_the_thread_count() {
     for kind in [ModelKind::ConvDennn, ModelKind::ConvMlp] {
+        // With the shifts drawn per frame and epoch, and an uneven last
+        // batch and chunk (160 frames, batches of 16 in chunks of 4 -> 48
+        // in chunks of 5).
+        let mut config = small_config(kind);
+        config.shift_augment = 1;
+        config.batch_size = 48;
+        config.chunk_size = 5;
         let run = |threads: usize, seed: u64| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            pool.install(|| fit(kind, seed))
+            pool.install(|| fit_with(config.clone(), seed))
         };
         let (a, ha) = run(1, 5);
         let (b, hb) = run(3, 5);

@@ -63,7 +63,7 @@ fn cpu_seconds() -> f64 {
 
 /// `src` (`side x side`) area-averaged to `size x size` (an integer factor).
 fn downsample(src: &[u8], side: usize, size: usize) -> Result<Vec<u8>, Box<dyn Error>> {
-    if size == 0 || side % size != 0 {
+    if size == 0 || !side.is_multiple_of(size) {
         return Err(format!("{side} px frames cannot be area-averaged to {size} px").into());
     }
     let f = side / size;

@@ -127,52 +127,43 @@ pub fn col2im(s: &LayerShape, nb: usize, cols: &[f32], grad: &mut [f32]) {
     }
 }
 
-/// `dst[i] = src[i * stride]` (stride 2 and 3 unrolled by the compiler).
+/// `dst[i] = src[i * stride]`.
 #[inline(always)]
 fn gather(dst: &mut [f32], src: &[f32], stride: usize) {
-    match stride {
-        2 => gather_by::<2>(dst, src),
-        3 => gather_by::<3>(dst, src),
-        _ => {
-            for (d, c) in dst.iter_mut().zip(src.chunks(stride)) {
-                *d = c[0];
-            }
+    if stride == 2 {
+        // Whole pairs, so the compiler loads vectors and keeps the even
+        // lanes; the last pixel may have no partner.
+        let full = dst.len().min(src.len() / 2);
+        for (d, pair) in dst[..full].iter_mut().zip(src.chunks_exact(2)) {
+            *d = pair[0];
         }
-    }
-}
-
-#[inline(always)]
-fn gather_by<const S: usize>(dst: &mut [f32], src: &[f32]) {
-    let Some(last) = dst.len().checked_sub(1) else {
+        if full < dst.len() {
+            dst[full] = src[2 * full];
+        }
         return;
-    };
-    let src = &src[..last * S + 1];
-    for (i, d) in dst.iter_mut().enumerate() {
-        *d = src[i * S];
+    }
+    for (d, c) in dst.iter_mut().zip(src.chunks(stride)) {
+        *d = c[0];
     }
 }
 
 /// `dst[i * stride] += src[i]`.
 #[inline(always)]
 fn scatter_add(dst: &mut [f32], src: &[f32], stride: usize) {
-    match stride {
-        2 => scatter_add_by::<2>(dst, src),
-        3 => scatter_add_by::<3>(dst, src),
-        _ => {
-            for (c, v) in dst.chunks_mut(stride).zip(src) {
-                c[0] += *v;
-            }
+    if stride == 2 {
+        // Whole pairs (the odd lane gets + 0.0, which leaves it as it
+        // is), so the compiler can load, add and store vectors.
+        let full = src.len().min(dst.len() / 2);
+        for (pair, v) in dst.chunks_exact_mut(2).zip(&src[..full]) {
+            pair[0] += *v;
+            pair[1] += 0.0;
         }
-    }
-}
-
-#[inline(always)]
-fn scatter_add_by<const S: usize>(dst: &mut [f32], src: &[f32]) {
-    let Some(last) = src.len().checked_sub(1) else {
+        if full < src.len() {
+            dst[2 * full] += src[full];
+        }
         return;
-    };
-    let dst = &mut dst[..last * S + 1];
-    for (i, v) in src.iter().enumerate() {
-        dst[i * S] += *v;
+    }
+    for (c, v) in dst.chunks_mut(stride).zip(src) {
+        c[0] += *v;
     }
 }

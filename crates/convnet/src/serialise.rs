@@ -155,7 +155,7 @@ fn read_scalings(
     file: &ModelFile,
 ) -> Result<(InputScaling, TargetScaling), ConvError> {
     let (h, w, k) = (file.input_height, file.input_width, file.outputs);
-    let mean_frame = if tensors.names().iter().any(|n| *n == "input.mean_frame") {
+    let mean_frame = if tensors.names().contains(&"input.mean_frame") {
         read(tensors, "input.mean_frame", Dtype::F64, &[h, w])?
             .chunks_exact(8)
             .map(|c| f64_of(c) as f32)

@@ -103,7 +103,7 @@ pub(crate) fn train(
             );
         }
         let loss = total / order.len() as f64;
-        if !(loss <= limit) || !net.params.is_finite() {
+        if loss.is_nan() || loss > limit || !net.params.is_finite() {
             return Err(ConvError::Diverged {
                 epoch,
                 loss: if net.params.is_finite() {

@@ -3,10 +3,11 @@
 //! 1. training samples/s of `conv-dennn` and `conv-mlp` (default
 //!    configuration, 64 x 64 frames), one thread and every thread;
 //! 2. the convolution layers against the GEMM they are built on: each conv
-//!    layer's forward (im2col, product, bias, rate) and down pass (product
-//!    with `W^T`, col2im, slope) on one chunk, against the bare product of
-//!    the same shape, and against a large square product (this machine's
-//!    GEMM peak, same library, one thread);
+//!    layer's forward (im2col, product, bias, rate), down pass (product
+//!    with `W^T`, col2im, slope; none into the input) and weight term
+//!    (`e cols^T`) on one chunk, against the bare products of the same
+//!    shapes, and against a large square product (this machine's GEMM
+//!    peak, same library, one thread);
 //! 3. inference per frame at 64 x 64, one frame at a time, one thread.
 //!
 //! Times are CPU time (64-bit Linux `clock_gettime`: the thread's for one thread,
@@ -130,9 +131,19 @@ fn peak() -> f64 {
     gflops(2.0 * (n * n * n) as f64, secs)
 }
 
-/// Forward and down pass of one conv layer on an `nb`-frame chunk, and
-/// the bare products; returns (layer s, product s) for both, and flops.
-fn layer_times(s: &LayerShape, nb: usize) -> ([f64; 4], f64) {
+/// Seconds of one conv layer's passes on an `nb`-frame chunk, each
+/// beside the bare product inside it.
+struct LayerTimes {
+    /// im2col, product, bias, rate; and the product alone.
+    forward: (f64, f64),
+    /// Product with `W^T`, col2im, slope; and the product alone.
+    down: (f64, f64),
+    /// The weight term `e cols^T` (a bare product).
+    weights: f64,
+}
+
+/// Times of one conv layer's three passes, and the flops of one product.
+fn layer_times(s: &LayerShape, nb: usize) -> (LayerTimes, f64) {
     let (m, k, n) = (s.cout, s.fan_in(), nb * s.positions());
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let mut r =
@@ -163,13 +174,18 @@ fn layer_times(s: &LayerShape, nb: usize) -> ([f64; 4], f64) {
     });
     let back_gemm = time(&mut || product_tn(&mut cols, &w, &e, m, k, n));
     let mut grad = vec![0.0; m * k];
-    let _ = time(&mut || add_product_nt(&mut grad, 1.0, &e, &cols, m, k, n));
-    (
-        [forward, forward_gemm, back, back_gemm],
-        2.0 * (m * k * n) as f64,
-    )
+    let weights = time(&mut || add_product_nt(&mut grad, 1.0, &e, &cols, m, k, n));
+    let times = LayerTimes {
+        forward: (forward, forward_gemm),
+        down: (back, back_gemm),
+        weights,
+    };
+    (times, 2.0 * (m * k * n) as f64)
 }
 
+/// The conv layers' passes as training runs them (forward, down except
+/// into the input, which is held, and the weight term), against the same
+/// products alone and against the large square product.
 fn conv_layers() {
     let cfg = ConvConfig::new(ModelKind::ConvDennn);
     let layout = Layout::new(SIDE, SIDE, &cfg.conv, &cfg.dense, 2).expect("layout");
@@ -183,10 +199,22 @@ fn conv_layers() {
         .enumerate()
         .filter(|(_, s)| !s.is_dense())
     {
-        let ([fwd, fwd_g, back, back_g], flops) = layer_times(s, nb);
+        let (t, flops) = layer_times(s, nb);
+        let (fwd, fwd_g) = t.forward;
+        let (back, back_g) = t.down;
+        let down = if l == 0 {
+            "no down pass (the input is held)".to_string()
+        } else {
+            format!(
+                "down {:.1} GFLOP/s = {:.0} % of its GEMM ({:.1})",
+                gflops(flops, back),
+                100.0 * back_g / back,
+                gflops(flops, back_g)
+            )
+        };
         println!(
             "conv {} ({} x {} x {} -> {} x {} x {}, chunk {nb}): forward {:.1} GFLOP/s = {:.0} % of \
-             its GEMM ({:.1}), {:.0} % of peak; down {:.1} GFLOP/s = {:.0} % of its GEMM ({:.1})",
+             its GEMM ({:.1}), {:.0} % of peak; {down}; weights {:.1} GFLOP/s",
             l + 1,
             s.cin,
             s.hin,
@@ -198,16 +226,21 @@ fn conv_layers() {
             100.0 * fwd_g / fwd,
             gflops(flops, fwd_g),
             100.0 * gflops(flops, fwd) / peak,
-            gflops(flops, back),
-            100.0 * back_g / back,
-            gflops(flops, back_g),
+            gflops(flops, t.weights),
         );
-        layer_total += fwd + back;
-        gemm_total += fwd_g + back_g;
-        flops_total += 2.0 * flops;
+        let passes = if l == 0 { 2.0 } else { 3.0 };
+        let (layer, gemm) = if l == 0 {
+            (fwd + t.weights, fwd_g + t.weights)
+        } else {
+            (fwd + back + t.weights, fwd_g + back_g + t.weights)
+        };
+        layer_total += layer;
+        gemm_total += gemm;
+        flops_total += passes * flops;
     }
     println!(
-        "conv layers together: {:.1} GFLOP/s = {:.0} % of the same GEMMs ({:.1} GFLOP/s), {:.0} % of peak",
+        "conv layers together (a training step's passes): {:.1} GFLOP/s = {:.0} % of the same \
+         GEMMs ({:.1} GFLOP/s), {:.0} % of peak",
         gflops(flops_total, layer_total),
         100.0 * gemm_total / layer_total,
         gflops(flops_total, gemm_total),

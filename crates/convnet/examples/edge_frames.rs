@@ -7,7 +7,12 @@
 //!
 //! `cargo run --release -p tactrace-convnet --example edge_frames -- \
 //!     [--data DIR] [--model conv-dennn|conv-mlp|both] [--size 64] [--seed 0] \
-//!     [--config JSON] [--set KEY=VALUE]... [--score]`
+//!     [--config JSON] [--set KEY=VALUE]... [--save DIR] [--load DIR] [--score]`
+//!
+//! `--save DIR` writes each trained model to `DIR/<model>.json` and
+//! `DIR/<model>.safetensors`; `--load DIR` trains nothing and scores the
+//! models saved there, so the reported part is scored once, for the
+//! settings adopted on the select part, without training again.
 //!
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
@@ -178,6 +183,8 @@ struct Args {
     seed: u64,
     config: Option<String>,
     sets: Vec<String>,
+    save: Option<PathBuf>,
+    load: Option<PathBuf>,
     score: bool,
 }
 
@@ -189,6 +196,8 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
         seed: 0,
         config: None,
         sets: Vec::new(),
+        save: None,
+        load: None,
         score: false,
     };
     let mut it = std::env::args().skip(1);
@@ -208,11 +217,75 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
             "--seed" => a.seed = value()?.parse()?,
             "--config" => a.config = Some(value()?),
             "--set" => a.sets.push(value()?),
+            "--save" => a.save = Some(PathBuf::from(value()?)),
+            "--load" => a.load = Some(PathBuf::from(value()?)),
             "--score" => a.score = true,
             other => return Err(format!("unknown argument {other}").into()),
         }
     }
     Ok(a)
+}
+
+/// Train `kind` on the fit part, printing every epoch with the select
+/// part's errors.
+fn train(
+    args: &Args,
+    kind: ModelKind,
+    parts: &[Part],
+    fit: &Part,
+) -> Result<ConvModel, Box<dyn Error>> {
+    let mut cfg = match &args.config {
+        Some(json) => serde_json::from_str(json)?,
+        None => ConvConfig::new(kind),
+    };
+    cfg.kind = kind;
+    for kv in &args.sets {
+        set(&mut cfg, kv)?;
+    }
+    println!("{} config {}", kind.name(), serde_json::to_string(&cfg)?);
+    let (wall, cpu0) = (Instant::now(), cpu_seconds());
+    let mut report = |r: &tactrace_convnet::EpochReport| {
+        let v = r
+            .validation
+            .as_ref()
+            .map_or(vec![f64::NAN; 2], |v| v.mae.clone());
+        println!(
+            "{} epoch {:>3} lr {:.2e} loss {:.5} select {:.4} mm {:.3} deg  wall {:.0} s cpu {:.0} s",
+            kind.name(),
+            r.epoch,
+            r.learning_rate,
+            r.loss,
+            v[0],
+            v[1],
+            wall.elapsed().as_secs_f64(),
+            cpu_seconds() - cpu0
+        );
+    };
+    let (ff, ft) = fit.views(args.size)?;
+    let select = Some(parts[1].views(args.size)?);
+    let (model, _) = ConvModel::fit_with(&ff, &ft, &cfg, args.seed, select, &mut report)?;
+    Ok(model)
+}
+
+fn save_model(dir: &Path, kind: ModelKind, model: &ConvModel) -> Result<(), Box<dyn Error>> {
+    std::fs::create_dir_all(dir)?;
+    let (json, tensors) = model.to_bytes()?;
+    std::fs::write(dir.join(format!("{}.json", kind.name())), json)?;
+    std::fs::write(dir.join(format!("{}.safetensors", kind.name())), tensors)?;
+    Ok(())
+}
+
+fn load_model(dir: &Path, kind: ModelKind) -> Result<ConvModel, Box<dyn Error>> {
+    let json = std::fs::read_to_string(dir.join(format!("{}.json", kind.name())))?;
+    let tensors = std::fs::read(dir.join(format!("{}.safetensors", kind.name())))?;
+    let model = ConvModel::from_bytes(&json, &tensors)?;
+    println!(
+        "{} loaded from {}: {}",
+        kind.name(),
+        dir.display(),
+        serde_json::to_string(model.config())?
+    );
+    Ok(model)
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
@@ -238,41 +311,22 @@ fn main() -> Result<(), Box<dyn Error>> {
         parts[0].count,
         s = args.size
     );
-    let (ff, ft) = fit.views(args.size)?;
     for &kind in &args.kinds {
-        let mut cfg = match &args.config {
-            Some(json) => serde_json::from_str(json)?,
-            None => ConvConfig::new(kind),
-        };
-        cfg.kind = kind;
-        for kv in &args.sets {
-            set(&mut cfg, kv)?;
-        }
-        println!("{} config {}", kind.name(), serde_json::to_string(&cfg)?);
         let (wall, cpu0) = (Instant::now(), cpu_seconds());
-        let mut report = |r: &tactrace_convnet::EpochReport| {
-            let v = r
-                .validation
-                .as_ref()
-                .map_or(vec![f64::NAN; 2], |v| v.mae.clone());
-            println!(
-                "{} epoch {:>3} lr {:.2e} loss {:.5} select {:.4} mm {:.3} deg  wall {:.0} s cpu {:.0} s",
-                kind.name(),
-                r.epoch,
-                r.learning_rate,
-                r.loss,
-                v[0],
-                v[1],
-                wall.elapsed().as_secs_f64(),
-                cpu_seconds() - cpu0
-            );
+        let model = match &args.load {
+            Some(dir) => load_model(dir, kind)?,
+            None => {
+                let model = train(&args, kind, &parts, &fit)?;
+                if let Some(dir) = &args.save {
+                    save_model(dir, kind, &model)?;
+                }
+                model
+            }
         };
-        let select = Some(parts[1].views(args.size)?);
-        let (model, _) = ConvModel::fit_with(&ff, &ft, &cfg, args.seed, select, &mut report)?;
         let (sf, st) = parts[1].views(args.size)?;
         let s = model.score(&sf, &st)?;
         println!(
-            "{} select part (N % 5 = 1, {} frames): {:.4} mm / {:.3} deg; training {:.0} s wall, {:.0} s CPU",
+            "{} select part (N % 5 = 1, {} frames): {:.4} mm / {:.3} deg; {:.0} s wall, {:.0} s CPU",
             kind.name(),
             parts[1].count,
             s.mae[0],

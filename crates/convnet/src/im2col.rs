@@ -81,7 +81,6 @@ pub fn im2col(s: &LayerShape, nb: usize, input: &[f32], cols: &mut [f32]) {
 /// added back onto the input pixel it was copied from. `grad` (`cin x nb
 /// x hin x win`) is overwritten.
 pub fn col2im(s: &LayerShape, nb: usize, cols: &[f32], grad: &mut [f32]) {
-    let n = nb * s.positions();
     let plane = s.hin * s.win;
     if s.is_dense() {
         for c in 0..s.cin {
@@ -94,34 +93,90 @@ pub fn col2im(s: &LayerShape, nb: usize, cols: &[f32], grad: &mut [f32]) {
         }
         return;
     }
-    grad[..s.cin * nb * plane].fill(0.0);
+    if s.stride == 1 {
+        col2im_planes(s, nb, cols, grad, None);
+        return;
+    }
+    PHASES.with_borrow_mut(|phases| {
+        let len = s.stride * s.hin * s.win.div_ceil(s.stride);
+        if phases.len() < len {
+            phases.resize(len, 0.0);
+        }
+        col2im_planes(s, nb, cols, grad, Some(&mut phases[..len]));
+    });
+}
+
+thread_local! {
+    /// One input plane split by column phase (`x % stride`), reused.
+    static PHASES: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The body of [`col2im`], one input plane at a time (it stays in the
+/// first-level cache while every kernel offset adds onto it). Without
+/// `phases` (stride 1) the sums go straight into the plane; with them,
+/// into the plane split by column phase `x % stride`, where the columns
+/// one kernel offset reaches are contiguous (a strided scatter-add would
+/// store into what the next offset loads, which the processor cannot
+/// forward), and the phases are interleaved into the plane at the end.
+fn col2im_planes(
+    s: &LayerShape,
+    nb: usize,
+    cols: &[f32],
+    grad: &mut [f32],
+    mut phases: Option<&mut [f32]>,
+) {
+    let n = nb * s.positions();
+    let plane = s.hin * s.win;
+    let wp = s.win.div_ceil(s.stride);
     for c in 0..s.cin {
-        for ky in 0..s.kh {
-            for kx in 0..s.kw {
-                let row = &cols[((c * s.kh + ky) * s.kw + kx) * n..][..n];
-                let (lo, hi) = valid_columns(s, kx);
-                if lo == hi {
-                    continue;
-                }
-                for b in 0..nb {
-                    let dst_plane = &mut grad[(c * nb + b) * plane..][..plane];
+        for b in 0..nb {
+            let dst_plane = &mut grad[(c * nb + b) * plane..][..plane];
+            let target: &mut [f32] = match phases.as_deref_mut() {
+                Some(p) => p,
+                None => dst_plane,
+            };
+            target.fill(0.0);
+            for ky in 0..s.kh {
+                for kx in 0..s.kw {
+                    let row = &cols[((c * s.kh + ky) * s.kw + kx) * n..][..n];
+                    let (lo, hi) = valid_columns(s, kx);
+                    if lo == hi {
+                        continue;
+                    }
+                    let first = lo * s.stride + kx - s.pad;
+                    // Where the first valid column lands in `target`.
+                    let (phase, column) = (first % s.stride, first / s.stride);
                     for oy in 0..s.hout {
                         let iy = oy * s.stride + ky;
                         if iy < s.pad || iy - s.pad >= s.hin {
                             continue;
                         }
-                        let src = &row[(b * s.hout + oy) * s.wout..][..s.wout];
-                        let dst = &mut dst_plane[(iy - s.pad) * s.win..][..s.win];
-                        let first = lo * s.stride + kx - s.pad;
-                        if s.stride == 1 {
-                            for (d, v) in dst[first..first + hi - lo].iter_mut().zip(&src[lo..hi]) {
-                                *d += *v;
-                            }
+                        let src = &row[(b * s.hout + oy) * s.wout..][lo..hi];
+                        let at = if s.stride == 1 {
+                            (iy - s.pad) * s.win + first
                         } else {
-                            scatter_add(&mut dst[first..], &src[lo..hi], s.stride);
-                        }
+                            (phase * s.hin + iy - s.pad) * wp + column
+                        };
+                        let dst = &mut target[at..at + src.len()];
+                        dst.iter_mut().zip(src).for_each(|(d, v)| *d += *v);
                     }
                 }
+            }
+            if let Some(p) = phases.as_deref() {
+                interleave(s, p, &mut grad[(c * nb + b) * plane..][..plane]);
+            }
+        }
+    }
+}
+
+/// `plane[y][x] = phases[x % stride][y][x / stride]`.
+fn interleave(s: &LayerShape, phases: &[f32], plane: &mut [f32]) {
+    let wp = s.win.div_ceil(s.stride);
+    for (y, row) in plane.chunks_exact_mut(s.win).enumerate() {
+        for r in 0..s.stride {
+            let src = &phases[(r * s.hin + y) * wp..][..wp];
+            for (d, v) in row[r..].iter_mut().step_by(s.stride).zip(src) {
+                *d = *v;
             }
         }
     }
@@ -144,26 +199,5 @@ fn gather(dst: &mut [f32], src: &[f32], stride: usize) {
     }
     for (d, c) in dst.iter_mut().zip(src.chunks(stride)) {
         *d = c[0];
-    }
-}
-
-/// `dst[i * stride] += src[i]`.
-#[inline(always)]
-fn scatter_add(dst: &mut [f32], src: &[f32], stride: usize) {
-    if stride == 2 {
-        // Whole pairs (the odd lane gets + 0.0, which leaves it as it
-        // is), so the compiler can load, add and store vectors.
-        let full = src.len().min(dst.len() / 2);
-        for (pair, v) in dst.chunks_exact_mut(2).zip(&src[..full]) {
-            pair[0] += *v;
-            pair[1] += 0.0;
-        }
-        if full < src.len() {
-            dst[2 * full] += src[full];
-        }
-        return;
-    }
-    for (c, v) in dst.chunks_mut(stride).zip(src) {
-        c[0] += *v;
     }
 }

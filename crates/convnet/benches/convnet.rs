@@ -19,8 +19,12 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
-use tactrace_convnet::kernels::{add_product_nt, col2im, im2col, product, product_tn};
-use tactrace_convnet::{ConvConfig, ConvModel, Frames, LayerShape, Layout, ModelKind, Targets};
+use tactrace_convnet::kernels::{
+    add_product_nt, col2im, im2col, product, product_tn, rates, times_slope,
+};
+use tactrace_convnet::{
+    Activation, ConvConfig, ConvModel, Frames, LayerShape, Layout, ModelKind, Targets,
+};
 
 const SIDE: usize = 64;
 
@@ -143,7 +147,7 @@ struct LayerTimes {
 }
 
 /// Times of one conv layer's three passes, and the flops of one product.
-fn layer_times(s: &LayerShape, nb: usize) -> (LayerTimes, f64) {
+fn layer_times(s: &LayerShape, nb: usize, act: Activation) -> (LayerTimes, f64) {
     let (m, k, n) = (s.cout, s.fan_in(), nb * s.positions());
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let mut r =
@@ -155,22 +159,22 @@ fn layer_times(s: &LayerShape, nb: usize) -> (LayerTimes, f64) {
         vec![0.0; m * n],
         vec![0.0; s.in_len() * nb],
     );
+    let mut rate_out = vec![0.0; m * n];
     let reps = ((2e8 / (2.0 * (m * k * n) as f64)) as usize).clamp(3, 200);
     let time = |f: &mut dyn FnMut()| best(5, || (0..reps).for_each(|_| f())) / reps as f64;
     let forward = time(&mut || {
         im2col(s, nb, &input, &mut cols);
         product(&mut out, &w, &cols, m, k, n);
         for (row, &b) in out.chunks_exact_mut(n).zip(&bias) {
-            row.iter_mut().for_each(|v| *v = (*v + b).max(0.0));
+            row.iter_mut().for_each(|v| *v += b);
         }
+        rates(act, &out, &mut rate_out);
     });
     let forward_gemm = time(&mut || product(&mut out, &w, &cols, m, k, n));
     let back = time(&mut || {
         product_tn(&mut cols, &w, &e, m, k, n);
         col2im(s, nb, &cols, &mut down);
-        down.iter_mut()
-            .zip(&rate)
-            .for_each(|(d, &a)| *d = if a > 0.0 { *d } else { 0.0 });
+        times_slope(act, &rate, &mut down);
     });
     let back_gemm = time(&mut || product_tn(&mut cols, &w, &e, m, k, n));
     let mut grad = vec![0.0; m * k];
@@ -192,6 +196,12 @@ fn conv_layers() {
     let nb = cfg.chunk_size;
     let peak = peak();
     println!("GEMM peak (1024 x 1024 x 1024, faer, one thread): {peak:.1} GFLOP/s");
+    let act = match cfg.activation {
+        Activation::Tanh => "tanh",
+        Activation::Sigmoid => "sigmoid",
+        Activation::Relu => "relu",
+    };
+    println!("conv layers of the default configuration ({act} rates), thread CPU time:");
     let (mut layer_total, mut gemm_total, mut flops_total) = (0.0, 0.0, 0.0);
     for (l, s) in layout
         .layers()
@@ -199,7 +209,7 @@ fn conv_layers() {
         .enumerate()
         .filter(|(_, s)| !s.is_dense())
     {
-        let (t, flops) = layer_times(s, nb);
+        let (t, flops) = layer_times(s, nb, cfg.activation);
         let (fwd, fwd_g) = t.forward;
         let (back, back_g) = t.down;
         let down = if l == 0 {

@@ -11,7 +11,10 @@ use crate::config::Activation;
 /// with `n` the nearest integer to `x / ln 2` and `|f| <= ln 2 / 2`
 /// (`n ln 2` taken off in two parts, the first exact in f32, so `f` keeps
 /// its digits); `e^f` by its Taylor series to degree 7 (remainder below
-/// `(ln 2 / 2)^8 / 8! = 5e-9`); `2^n` written into the exponent bits.
+/// `(ln 2 / 2)^8 / 8! = 5e-9`); `2^n` written into the exponent bits, `n`
+/// read as an integer from the low mantissa bits of `x / ln 2 + 1.5 *
+/// 2^23` (a float-to-integer cast saturates, which the compiler does lane
+/// by lane).
 #[inline(always)]
 pub(crate) fn exp_fast(x: f32) -> f32 {
     // 1.5 * 2^23: adding and subtracting it rounds to the nearest integer.
@@ -20,7 +23,10 @@ pub(crate) fn exp_fast(x: f32) -> f32 {
     const LN2_HI: f32 = 0.693_145_75;
     const LN2_LO: f32 = 1.428_606_8e-6;
     let x = x.clamp(-87.0, 87.0);
-    let n = (x * std::f32::consts::LOG2_E + ROUND) - ROUND;
+    let shifted = x * std::f32::consts::LOG2_E + ROUND;
+    // |n| <= 126, so the difference of the bit patterns is n itself.
+    let n_int = shifted.to_bits() as i32 - ROUND.to_bits() as i32;
+    let n = shifted - ROUND;
     let f = (x - n * LN2_HI) - n * LN2_LO;
     let p = 1.0
         + f * (1.0
@@ -28,7 +34,7 @@ pub(crate) fn exp_fast(x: f32) -> f32 {
                 + f * (1.0 / 6.0
                     + f * (1.0 / 24.0
                         + f * (1.0 / 120.0 + f * (1.0 / 720.0 + f * (1.0 / 5040.0)))))));
-    p * f32::from_bits(((n as i32 + 127) as u32) << 23)
+    p * f32::from_bits(((n_int + 127) as u32) << 23)
 }
 
 /// `tanh x = 1 - 2 / (e^(2x) + 1)` (exactly +-1 in f32 beyond +-10).
@@ -43,10 +49,29 @@ pub(crate) fn sigmoid_fast(x: f32) -> f32 {
     1.0 / (1.0 + exp_fast(-x))
 }
 
+/// `out = phi(s)` built for AVX2 (8 lanes; no fused multiply-adds, so
+/// the numbers are the same as the portable build's).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn apply_avx2(activation: Activation, s: &[f32], out: &mut [f32]) {
+    activation.apply_portable(s, out)
+}
+
 impl Activation {
-    /// `out = phi(s)`.
+    /// `out = phi(s)`, with the AVX2 build where the processor has it.
     #[inline]
     pub(crate) fn apply(self, s: &[f32], out: &mut [f32]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            unsafe { apply_avx2(self, s, out) };
+            return;
+        }
+        self.apply_portable(s, out)
+    }
+
+    #[inline(always)]
+    fn apply_portable(self, s: &[f32], out: &mut [f32]) {
         match self {
             Activation::Sigmoid => out
                 .iter_mut()
@@ -84,6 +109,18 @@ impl Activation {
     }
 }
 
+/// `out = phi(s)` for `activation` (for the bench: the rate step of a
+/// layer's forward pass).
+pub fn rates(activation: Activation, s: &[f32], out: &mut [f32]) {
+    activation.apply(s, out);
+}
+
+/// `g *= phi'(s)` with `rate = phi(s)` (for the bench: the slope step of
+/// a layer's down pass).
+pub fn times_slope(activation: Activation, rate: &[f32], g: &mut [f32]) {
+    activation.times_slope(rate, g);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,5 +145,16 @@ mod tests {
         assert_eq!(tanh_fast(30.0), 1.0);
         assert_eq!(tanh_fast(-30.0), -1.0);
         assert!(exp_fast(-200.0) > 0.0 && exp_fast(200.0).is_finite());
+    }
+
+    #[test]
+    fn issue22_dispatched_rates_equal_the_portable_ones_bit_for_bit() {
+        let s: Vec<f32> = (-4000..4000).map(|i| i as f32 * 7e-3 + 1e-4).collect();
+        for act in [Activation::Sigmoid, Activation::Tanh, Activation::Relu] {
+            let (mut a, mut b) = (vec![0.0; s.len()], vec![0.0; s.len()]);
+            act.apply(&s, &mut a);
+            act.apply_portable(&s, &mut b);
+            assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+        }
     }
 }

@@ -192,7 +192,7 @@ impl ConvConfig {
                 },
             ],
             dense: vec![256],
-            activation: Activation::Relu,
+            activation: Activation::Tanh,
             input_centring: InputCentring::Global,
             ep: EpSettings::default(),
             epochs: 40,

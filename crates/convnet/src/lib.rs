@@ -27,8 +27,10 @@ mod workspace;
 
 /// The building blocks of a layer as a matrix product, public for the
 /// bench and for tests: im2col and its transpose, and the three products
-/// (forward `W cols`, down `W^T e`, weights `e cols^T`), single-threaded.
+/// (forward `W cols`, down `W^T e`, weights `e cols^T`), single-threaded,
+/// and the rate and slope steps.
 pub mod kernels {
+    pub use crate::activation::{rates, times_slope};
     pub use crate::gemm::{add_product_nt, product, product_tn};
     pub use crate::im2col::{col2im, im2col};
 }

@@ -196,7 +196,7 @@ impl ConvConfig {
             input_centring: InputCentring::Global,
             ep: EpSettings::default(),
             epochs: 40,
-            batch_size: 32,
+            batch_size: 16,
             chunk_size: 8,
             learning_rate: 1e-3,
             final_lr_fraction: 0.02,

@@ -151,7 +151,7 @@ fn fit_kind(
     start.geometry.pin_radius_mm = g.pin_radius_mm * scale;
     let config = match kind {
         PinLayout::Hex => fit_hex(&start, rest_px),
-        PinLayout::Rings => fit_rings_camera(&start, rest_px).0,
+        PinLayout::Rings => fit_rings_camera(&start, rest_px),
     };
     KindFit {
         residual_px: residual(&config, rest_px),

@@ -13,9 +13,9 @@ const MAX_HEIGHT_MM: f64 = 1e5;
 
 /// `cfg` (a rings layout with its ring count and spacing set) with the
 /// camera centre, focal length, height and ring phases fitted to
-/// `rest_px`, and the fit's cost (the symmetric mean squared nearest-pin
-/// distance, px^2).
-pub(crate) fn fit_rings_camera(cfg: &TacTipConfig, rest_px: &[[f64; 2]]) -> (TacTipConfig, f64) {
+/// `rest_px` by Nelder-Mead on the symmetric mean squared nearest-pin
+/// distance.
+pub(crate) fn fit_rings_camera(cfg: &TacTipConfig, rest_px: &[[f64; 2]]) -> TacTipConfig {
     let start = initial(cfg, rest_px);
     let cost = |x: &[f64]| match candidate(cfg, x) {
         Some(c) => super::fit_layout::chamfer(rest_px, &projected(&with_phases(c, rest_px))),
@@ -23,9 +23,8 @@ pub(crate) fn fit_rings_camera(cfg: &TacTipConfig, rest_px: &[[f64; 2]]) -> (Tac
     };
     let step = [2.0, 2.0, 0.05 * start[2], 0.2];
     let (x, _) = minimise(&cost, &start, &step, 400);
-    let (x, value) = minimise(&cost, &x, &[0.5, 0.5, 0.01 * start[2], 0.05], 400);
-    let fitted = candidate(cfg, &x).map_or_else(|| cfg.clone(), |c| with_phases(c, rest_px));
-    (fitted, value)
+    let (x, _) = minimise(&cost, &x, &[0.5, 0.5, 0.01 * start[2], 0.05], 400);
+    candidate(cfg, &x).map_or_else(|| cfg.clone(), |c| with_phases(c, rest_px))
 }
 
 /// The configuration at x = (centre x, centre y, focal / height px per

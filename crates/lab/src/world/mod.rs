@@ -230,3 +230,52 @@ impl OpenWorld {
         (self.parts, self.settings, self.record)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+    use tactrace_store::LabelledCollection;
+
+    fn round_trip(world: &World) -> String {
+        let text = toml::to_string(world).unwrap();
+        let back: World = toml::from_str(&text).unwrap();
+        assert_eq!(toml::to_string(&back).unwrap(), text);
+        text
+    }
+
+    #[test]
+    fn issue21_a_world_is_a_kind_tagged_value_that_round_trips_and_refuses_unknown_keys() {
+        let sim = SimFollowConfig::default();
+        let text = round_trip(&sim.world());
+        assert!(text.starts_with("kind = \"simulated\""), "{text}");
+        let calibrated = SimFollowConfig {
+            calibrated_sensor: Some("sensors/mine".into()),
+            ..sim.clone()
+        };
+        assert!(matches!(calibrated.world(), World::Calibrated(_)));
+        round_trip(&calibrated.world());
+        let bank = ReplayBank::new(LabelledCollection::bristol(Path::new("set")), 0.5).unwrap();
+        let replay = SimFollowConfig {
+            replay: Some(bank),
+            ..calibrated
+        };
+        let World::Replay(w) = replay.world() else {
+            panic!("a [replay] table is the real-frame world");
+        };
+        assert_eq!(w.sensor.as_deref(), Some(Path::new("sensors/mine")));
+        round_trip(&World::Replay(w));
+        // Only the kind is needed; every table has its defaults.
+        let bare: World = toml::from_str("kind = \"simulated\"\n").unwrap();
+        assert_eq!(toml::to_string(&bare).unwrap(), text);
+        for bad in [
+            "kind = \"simulated\"\nsurprise = 1\n",
+            "kind = \"simulated\"\n[rig]\nsurprise = 1\n",
+            "kind = \"dream\"\n",
+            "[rig]\n",
+            "kind = \"calibrated\"\n",
+        ] {
+            assert!(toml::from_str::<World>(bad).is_err(), "{bad}");
+        }
+    }
+}

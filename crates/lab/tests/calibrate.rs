@@ -140,16 +140,7 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
 #[test]
 fn issue20_an_unknown_key_anywhere_in_sensor_toml_is_refused() {
     let root = tempfile::tempdir().unwrap();
-    let twin = distorted_sensor_set(root.path(), 40);
-    let cfg = CalibrateConfig {
-        collection: twin,
-        render_seed: 1,
-        samples: Some(20),
-        seed: 1,
-        allowed_rows: None,
-        score_rows: None,
-        fit_physics: false,
-    };
+    let cfg = common::calibration(distorted_sensor_set(root.path(), 40), 20);
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     let dir = root.path().join("sensor");
     got.sensor.write(&dir, false).unwrap();

@@ -11,7 +11,7 @@ use std::time::Duration;
 use tactrace_arm::Workspace;
 use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
 use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig};
-use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
+use tactrace_lab::calibrate::calibrate_sensor;
 use tactrace_lab::collect::{collect, collect_calibrated, CollectConfig};
 use tactrace_lab::follow::{run, FollowOutcome, RunHooks, SimFollowConfig};
 use tactrace_lab::hardware::{FrameSourceConfig, HardwareConfig, HardwareStart};
@@ -106,15 +106,7 @@ fn issue21_the_simulated_world_runs_a_few_steps() {
 fn issue21_the_calibrated_world_reads_its_sensor_once_and_runs() {
     let root = tempfile::tempdir().unwrap();
     let taps = common::distorted_sensor_set(&root.path().join("taps"), 40);
-    let cfg = CalibrateConfig {
-        collection: taps,
-        render_seed: 1,
-        samples: Some(20),
-        seed: 1,
-        allowed_rows: None,
-        score_rows: None,
-        fit_physics: false,
-    };
+    let cfg = common::calibration(taps, 20);
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     let dir = root.path().join("sensor");
     got.sensor.write(&dir, false).unwrap();

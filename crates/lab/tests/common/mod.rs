@@ -69,3 +69,20 @@ pub fn sensor_set(dir: &Path, n: usize, sensor: TacTipConfig) -> LabelledCollect
     std::fs::write(&targets, csv).unwrap();
     LabelledCollection::new(frames, targets, reference).with_tap(TapColumns::default())
 }
+
+/// A calibration of `collection` on `samples` taps, seed 1 (replayed taps
+/// rendered with seed 1), nothing else asked.
+pub fn calibration(
+    collection: LabelledCollection,
+    samples: usize,
+) -> tactrace_lab::calibrate::CalibrateConfig {
+    tactrace_lab::calibrate::CalibrateConfig {
+        collection,
+        render_seed: 1,
+        samples: Some(samples),
+        seed: 1,
+        allowed_rows: None,
+        score_rows: None,
+        fit_physics: false,
+    }
+}

@@ -32,9 +32,12 @@ fn model_of(data: &TapData) -> StoredModel {
     StoredModel::new(net, data.meta.reference_pins.clone())
 }
 
+/// Taps, their frames (name, PNG bytes) and a model of them.
+type Simulated = (TapData, Vec<(String, Vec<u8>)>, StoredModel);
+
 /// Taps of the simulated TacTip on the disk (frames kept) and a model of them.
-fn simulated() -> &'static (TapData, Vec<(String, Vec<u8>)>, StoredModel) {
-    static SET: OnceLock<(TapData, Vec<(String, Vec<u8>)>, StoredModel)> = OnceLock::new();
+fn simulated() -> &'static Simulated {
+    static SET: OnceLock<Simulated> = OnceLock::new();
     SET.get_or_init(|| {
         let cfg = CollectConfig {
             samples: 150,

@@ -79,11 +79,11 @@ impl SimFollowConfig {
             start: self.start.clone(),
         };
         match (&self.replay, &self.calibrated_sensor) {
-            (Some(bank), sensor) => World::Replay(ReplayWorld {
+            (Some(bank), sensor) => World::Replay(Box::new(ReplayWorld {
                 bank: bank.clone(),
                 sensor: sensor.clone(),
                 sim,
-            }),
+            })),
             (None, Some(sensor)) => World::Calibrated(CalibratedWorld {
                 sensor: sensor.clone(),
                 sim,

@@ -39,7 +39,7 @@ pub enum World {
     /// A calibrated sensor's simulated TacTip (`--sensor`).
     Calibrated(CalibratedWorld),
     /// The real-frame world (`--replay`).
-    Replay(ReplayWorld),
+    Replay(Box<ReplayWorld>),
     /// A real UR5 and TacTip camera (`--hardware`), always behind the
     /// workspace limiter.
     #[cfg(feature = "hardware")]

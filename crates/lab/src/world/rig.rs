@@ -61,14 +61,14 @@ pub(crate) struct Rig {
 }
 
 enum Kind {
-    Sim(SimRig),
+    Sim(Box<SimRig>),
     Replay {
-        rig: ReplayRig,
+        rig: Box<ReplayRig>,
         far_distance: f64,
     },
     #[cfg(feature = "hardware")]
     Hardware {
-        arm: LimitedArm<tactrace_hw::Ur5Arm>,
+        arm: Box<LimitedArm<tactrace_hw::Ur5Arm>>,
         sensor: Box<dyn TactileSensor>,
     },
     Own {
@@ -130,7 +130,7 @@ impl Parts {
                 let start = reachable_start(&p.rig, &p.start, shape)?;
                 let seed = settings.follow().seed;
                 let banked = (p.bank, p.convention);
-                let rig = ReplayRig::new(&p.rig, banked, shape.clone(), start, seed)?;
+                let rig = Box::new(ReplayRig::new(&p.rig, banked, shape.clone(), start, seed)?);
                 let far_distance = p.far_distance;
                 Ok(Rig {
                     kind: Kind::Replay { rig, far_distance },
@@ -143,7 +143,10 @@ impl Parts {
                     crate::hardware::connect_at(&cfg, cfg.start_pose(), stop)?;
                 let perception = perception_for(&reference, model, settings)?;
                 Ok(Rig {
-                    kind: Kind::Hardware { arm, sensor },
+                    kind: Kind::Hardware {
+                        arm: Box::new(arm),
+                        sensor,
+                    },
                     perception,
                 })
             }
@@ -187,7 +190,7 @@ fn build_sim(
         }
     };
     Ok(Rig {
-        kind: Kind::Sim(rig),
+        kind: Kind::Sim(Box::new(rig)),
         perception,
     })
 }
@@ -221,7 +224,7 @@ impl Rig {
             Kind::Sim(rig) => rig.parts(),
             Kind::Replay { rig, .. } => rig.parts(),
             #[cfg(feature = "hardware")]
-            Kind::Hardware { arm, sensor } => (arm, sensor.as_mut()),
+            Kind::Hardware { arm, sensor } => (arm.as_mut(), sensor.as_mut()),
             Kind::Own { arm, sensor } => (arm.as_mut(), sensor.as_mut()),
         };
         (arm, sensor, &self.perception)
@@ -233,7 +236,9 @@ impl Rig {
     #[cfg(feature = "hardware")]
     pub(crate) fn stop(&mut self, signal: tactrace_hw::StopSignal, stop: &Stop) -> LabError {
         match &mut self.kind {
-            Kind::Hardware { arm, .. } => crate::hardware::stopped(signal, stop, Some(arm)),
+            Kind::Hardware { arm, .. } => {
+                crate::hardware::stopped(signal, stop, Some(arm.as_mut()))
+            }
             _ => crate::hardware::stopped(signal, stop, None),
         }
     }

@@ -1,0 +1,355 @@
+//! First figures of the image models on real frames: the shared 127-pin
+//! edge set (binarised 256 x 256 frames, targets.csv with pose_2 = r mm and
+//! pose_6 = theta deg), frames area-averaged to `--size` px, split by the
+//! frame number N (ARCHITECTURE.md invariant 9): fit on N % 5 in {2, 3, 4},
+//! choose settings on N % 5 = 1 (scored after every epoch), and only with
+//! `--score` the reported part N % 5 = 0, once, at the end.
+//!
+//! `cargo run --release -p tactrace-convnet --example edge_frames -- \
+//!     [--data DIR] [--model conv-dennn|conv-mlp|both] [--size 64] [--seed 0] \
+//!     [--config JSON] [--set KEY=VALUE]... [--save DIR] [--load DIR] [--score]`
+//!
+//! `--save DIR` writes each trained model to `DIR/<model>.json` and
+//! `DIR/<model>.safetensors`; `--load DIR` trains nothing and scores the
+//! models saved there, so the reported part is scored once, for the
+//! settings adopted on the select part, without training again.
+//!
+//! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
+//! `--set` changes one value: epochs, batch_size, chunk_size,
+//! learning_rate, final_lr_fraction, weight_decay, shift_augment, beta, sweeps,
+//! activation (sigmoid|tanh|relu), input_centring (global|mean_frame), conv (e.g. 16k5s2,32k3s2), dense
+//! (e.g. 256 or 256,64 or none). Prints per epoch the training loss, the
+//! select part's mean absolute errors, the wall time and this process's
+//! CPU time (user + system, all threads).
+use std::error::Error;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use tactrace_convnet::{
+    Activation, ClampedPhase, ConvConfig, ConvModel, ConvSpec, Frames, ModelKind, Targets,
+};
+
+struct Part {
+    pixels: Vec<u8>,
+    targets: Vec<f64>,
+    count: usize,
+}
+
+impl Part {
+    fn new() -> Self {
+        Part {
+            pixels: Vec::new(),
+            targets: Vec::new(),
+            count: 0,
+        }
+    }
+
+    fn views(&self, size: usize) -> Result<(Frames<'_>, Targets<'_>), Box<dyn Error>> {
+        Ok((
+            Frames::new(&self.pixels, self.count, size, size)?,
+            Targets::new(&self.targets, self.count, 2)?,
+        ))
+    }
+}
+
+/// This process's CPU time (user + system, all threads), seconds, from
+/// /proc/self/stat (Linux; clock ticks of 1/100 s).
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let ticks = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+/// `src` (`side x side`) area-averaged to `size x size` (an integer factor).
+fn downsample(src: &[u8], side: usize, size: usize) -> Result<Vec<u8>, Box<dyn Error>> {
+    if size == 0 || !side.is_multiple_of(size) {
+        return Err(format!("{side} px frames cannot be area-averaged to {size} px").into());
+    }
+    let f = side / size;
+    let mut out = vec![0u8; size * size];
+    for (i, o) in out.iter_mut().enumerate() {
+        let (y, x) = (i / size, i % size);
+        let mut sum = 0u32;
+        for dy in 0..f {
+            let row = &src[(y * f + dy) * side + x * f..][..f];
+            sum += row.iter().map(|&v| v as u32).sum::<u32>();
+        }
+        let n = (f * f) as u32;
+        *o = ((sum + n / 2) / n) as u8;
+    }
+    Ok(out)
+}
+
+/// The five parts (index N % 5) of the set in `dir`.
+fn load(dir: &Path, size: usize) -> Result<Vec<Part>, Box<dyn Error>> {
+    let csv = std::fs::read_to_string(dir.join("targets.csv"))?;
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines
+        .next()
+        .ok_or("empty targets.csv")?
+        .split(',')
+        .collect();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or(format!("targets.csv has no column {name}"))
+    };
+    let (c_name, c_r, c_t) = (col("image_name")?, col("pose_2")?, col("pose_6")?);
+    let mut parts: Vec<Part> = (0..5).map(|_| Part::new()).collect();
+    for line in lines.filter(|l| !l.trim().is_empty()) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let name = cells[c_name];
+        let number: usize = name
+            .strip_prefix("frame_")
+            .and_then(|s| s.split('_').next())
+            .and_then(|s| s.parse().ok())
+            .ok_or(format!("frame name {name} is not frame_N_0.png"))?;
+        let img = image::open(dir.join("frames").join(name))?.to_luma8();
+        let (w, h) = img.dimensions();
+        if w != h {
+            return Err(format!("{name}: {w} x {h} px is not square").into());
+        }
+        let part = &mut parts[number % 5];
+        part.pixels
+            .extend(downsample(img.as_raw(), w as usize, size)?);
+        part.targets.push(cells[c_r].trim().parse()?);
+        part.targets.push(cells[c_t].trim().parse()?);
+        part.count += 1;
+    }
+    Ok(parts)
+}
+
+fn parse_conv(v: &str) -> Result<Vec<ConvSpec>, Box<dyn Error>> {
+    v.split(',')
+        .filter(|s| !s.is_empty() && *s != "none")
+        .map(|s| {
+            let (c, rest) = s
+                .split_once('k')
+                .ok_or("conv layer as CkKsS, e.g. 16k5s2")?;
+            let (k, st) = rest
+                .split_once('s')
+                .ok_or("conv layer as CkKsS, e.g. 16k5s2")?;
+            Ok(ConvSpec {
+                channels: c.parse()?,
+                kernel: k.parse()?,
+                stride: st.parse()?,
+            })
+        })
+        .collect()
+}
+
+fn set(cfg: &mut ConvConfig, kv: &str) -> Result<(), Box<dyn Error>> {
+    let (k, v) = kv.split_once('=').ok_or("--set KEY=VALUE")?;
+    match k {
+        "epochs" => cfg.epochs = v.parse()?,
+        "batch_size" => cfg.batch_size = v.parse()?,
+        "chunk_size" => cfg.chunk_size = v.parse()?,
+        "learning_rate" => cfg.learning_rate = v.parse()?,
+        "final_lr_fraction" => cfg.final_lr_fraction = v.parse()?,
+        "weight_decay" => cfg.weight_decay = v.parse()?,
+        "shift_augment" => cfg.shift_augment = v.parse()?,
+        "beta" => cfg.ep.beta = v.parse()?,
+        "sweeps" => {
+            cfg.ep.clamped_phase = ClampedPhase::Sweeps {
+                iterations: v.parse()?,
+            }
+        }
+        "activation" => cfg.activation = serde_json::from_str::<Activation>(&format!("\"{v}\""))?,
+        "conv" => cfg.conv = parse_conv(v)?,
+        "input_centring" => cfg.input_centring = serde_json::from_str(&format!("\"{v}\""))?,
+        "dense" => {
+            cfg.dense = v
+                .split(',')
+                .filter(|s| !s.is_empty() && *s != "none")
+                .map(|s| s.parse())
+                .collect::<Result<_, _>>()?
+        }
+        _ => return Err(format!("unknown --set key {k}").into()),
+    }
+    Ok(())
+}
+
+struct Args {
+    data: Option<PathBuf>,
+    kinds: Vec<ModelKind>,
+    size: usize,
+    seed: u64,
+    config: Option<String>,
+    sets: Vec<String>,
+    save: Option<PathBuf>,
+    load: Option<PathBuf>,
+    score: bool,
+}
+
+fn parse_args() -> Result<Args, Box<dyn Error>> {
+    let mut a = Args {
+        data: None,
+        kinds: vec![ModelKind::ConvDennn, ModelKind::ConvMlp],
+        size: 64,
+        seed: 0,
+        config: None,
+        sets: Vec::new(),
+        save: None,
+        load: None,
+        score: false,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(arg) = it.next() {
+        let mut value = || it.next().ok_or(format!("{arg} needs a value"));
+        match arg.as_str() {
+            "--data" => a.data = Some(PathBuf::from(value()?)),
+            "--model" => {
+                a.kinds = match value()?.as_str() {
+                    "conv-dennn" => vec![ModelKind::ConvDennn],
+                    "conv-mlp" => vec![ModelKind::ConvMlp],
+                    "both" => vec![ModelKind::ConvDennn, ModelKind::ConvMlp],
+                    other => return Err(format!("unknown model {other}").into()),
+                }
+            }
+            "--size" => a.size = value()?.parse()?,
+            "--seed" => a.seed = value()?.parse()?,
+            "--config" => a.config = Some(value()?),
+            "--set" => a.sets.push(value()?),
+            "--save" => a.save = Some(PathBuf::from(value()?)),
+            "--load" => a.load = Some(PathBuf::from(value()?)),
+            "--score" => a.score = true,
+            other => return Err(format!("unknown argument {other}").into()),
+        }
+    }
+    Ok(a)
+}
+
+/// Train `kind` on the fit part, printing every epoch with the select
+/// part's errors.
+fn train(
+    args: &Args,
+    kind: ModelKind,
+    parts: &[Part],
+    fit: &Part,
+) -> Result<ConvModel, Box<dyn Error>> {
+    let mut cfg = match &args.config {
+        Some(json) => serde_json::from_str(json)?,
+        None => ConvConfig::new(kind),
+    };
+    cfg.kind = kind;
+    for kv in &args.sets {
+        set(&mut cfg, kv)?;
+    }
+    println!("{} config {}", kind.name(), serde_json::to_string(&cfg)?);
+    let (wall, cpu0) = (Instant::now(), cpu_seconds());
+    let mut report = |r: &tactrace_convnet::EpochReport| {
+        let v = r
+            .validation
+            .as_ref()
+            .map_or(vec![f64::NAN; 2], |v| v.mae.clone());
+        println!(
+            "{} epoch {:>3} lr {:.2e} loss {:.5} select {:.4} mm {:.3} deg  wall {:.0} s cpu {:.0} s",
+            kind.name(),
+            r.epoch,
+            r.learning_rate,
+            r.loss,
+            v[0],
+            v[1],
+            wall.elapsed().as_secs_f64(),
+            cpu_seconds() - cpu0
+        );
+    };
+    let (ff, ft) = fit.views(args.size)?;
+    let select = Some(parts[1].views(args.size)?);
+    let (model, _) = ConvModel::fit_with(&ff, &ft, &cfg, args.seed, select, &mut report)?;
+    Ok(model)
+}
+
+fn save_model(dir: &Path, kind: ModelKind, model: &ConvModel) -> Result<(), Box<dyn Error>> {
+    std::fs::create_dir_all(dir)?;
+    let (json, tensors) = model.to_bytes()?;
+    std::fs::write(dir.join(format!("{}.json", kind.name())), json)?;
+    std::fs::write(dir.join(format!("{}.safetensors", kind.name())), tensors)?;
+    Ok(())
+}
+
+fn load_model(dir: &Path, kind: ModelKind) -> Result<ConvModel, Box<dyn Error>> {
+    let json = std::fs::read_to_string(dir.join(format!("{}.json", kind.name())))?;
+    let tensors = std::fs::read(dir.join(format!("{}.safetensors", kind.name())))?;
+    let model = ConvModel::from_bytes(&json, &tensors)?;
+    println!(
+        "{} loaded from {}: {}",
+        kind.name(),
+        dir.display(),
+        serde_json::to_string(model.config())?
+    );
+    Ok(model)
+}
+
+fn main() -> Result<(), Box<dyn Error>> {
+    let args = parse_args()?;
+    let dir = match &args.data {
+        Some(d) => d.clone(),
+        None => tactrace_testdata::real_edge_set().ok_or("no data")?,
+    };
+    let (wall, cpu) = (Instant::now(), cpu_seconds());
+    let parts = load(&dir, args.size)?;
+    let mut fit = Part::new();
+    for p in &parts[2..] {
+        fit.pixels.extend(&p.pixels);
+        fit.targets.extend(&p.targets);
+        fit.count += p.count;
+    }
+    println!(
+        "loaded {} frames at {s} x {s} px in {:.1} s (fit {}, select {}, score {})",
+        parts.iter().map(|p| p.count).sum::<usize>(),
+        wall.elapsed().as_secs_f64(),
+        fit.count,
+        parts[1].count,
+        parts[0].count,
+        s = args.size
+    );
+    for &kind in &args.kinds {
+        let (wall, cpu0) = (Instant::now(), cpu_seconds());
+        let model = match &args.load {
+            Some(dir) => load_model(dir, kind)?,
+            None => {
+                let model = train(&args, kind, &parts, &fit)?;
+                if let Some(dir) = &args.save {
+                    save_model(dir, kind, &model)?;
+                }
+                model
+            }
+        };
+        let (sf, st) = parts[1].views(args.size)?;
+        let s = model.score(&sf, &st)?;
+        println!(
+            "{} select part (N % 5 = 1, {} frames): {:.4} mm / {:.3} deg; {:.0} s wall, {:.0} s CPU",
+            kind.name(),
+            parts[1].count,
+            s.mae[0],
+            s.mae[1],
+            wall.elapsed().as_secs_f64(),
+            cpu_seconds() - cpu0
+        );
+        if args.score {
+            let (pf, pt) = parts[0].views(args.size)?;
+            let s = model.score(&pf, &pt)?;
+            println!(
+                "{} SCORE part (N % 5 = 0, {} frames): {:.4} mm / {:.3} deg",
+                kind.name(),
+                parts[0].count,
+                s.mae[0],
+                s.mae[1]
+            );
+        }
+    }
+    println!(
+        "total {:.0} s wall, {:.0} s CPU",
+        wall.elapsed().as_secs_f64(),
+        cpu_seconds() - cpu
+    );
+    Ok(())
+}

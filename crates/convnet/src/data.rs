@@ -1,0 +1,117 @@
+//! Borrowed views of what a model learns from: grey frames (u8, `count x
+//! height x width`, the layout of a dataset's `frames.npy`) and their
+//! targets (f64, `count x dim`, frame by frame, in millimetres and
+//! degrees as the caller's labels are).
+use crate::error::ConvError;
+
+/// `count` grey frames of `height x width` px, row-major, frame after frame.
+#[derive(Debug, Clone, Copy)]
+pub struct Frames<'a> {
+    pixels: &'a [u8],
+    count: usize,
+    height: usize,
+    width: usize,
+}
+
+impl<'a> Frames<'a> {
+    /// A view of `pixels`, which must hold exactly `count * height * width`
+    /// values; frames of zero size are refused.
+    pub fn new(
+        pixels: &'a [u8],
+        count: usize,
+        height: usize,
+        width: usize,
+    ) -> Result<Self, ConvError> {
+        if height == 0 || width == 0 {
+            return Err(ConvError::FrameSize {
+                height: 1,
+                width: 1,
+                got_height: height,
+                got_width: width,
+            });
+        }
+        let expected = count.checked_mul(height * width).ok_or(ConvError::Shape {
+            what: "frame pixels",
+            expected: usize::MAX,
+            got: pixels.len(),
+        })?;
+        if pixels.len() != expected {
+            return Err(ConvError::Shape {
+                what: "frame pixels",
+                expected,
+                got: pixels.len(),
+            });
+        }
+        Ok(Frames {
+            pixels,
+            count,
+            height,
+            width,
+        })
+    }
+
+    /// Number of frames.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// `(height, width)` of a frame, px.
+    pub fn size(&self) -> (usize, usize) {
+        (self.height, self.width)
+    }
+
+    /// Frame `i`'s pixels (panics when `i >= count`).
+    pub fn frame(&self, i: usize) -> &'a [u8] {
+        let len = self.height * self.width;
+        &self.pixels[i * len..(i + 1) * len]
+    }
+
+    /// Every pixel of every frame.
+    pub fn pixels(&self) -> &'a [u8] {
+        self.pixels
+    }
+}
+
+/// `count` rows of `dim` targets, row-major.
+#[derive(Debug, Clone, Copy)]
+pub struct Targets<'a> {
+    values: &'a [f64],
+    count: usize,
+    dim: usize,
+}
+
+impl<'a> Targets<'a> {
+    /// A view of `values` (`count * dim` finite numbers, `dim >= 1`).
+    pub fn new(values: &'a [f64], count: usize, dim: usize) -> Result<Self, ConvError> {
+        if dim == 0 || values.len() != count * dim {
+            return Err(ConvError::Shape {
+                what: "target values",
+                expected: count * dim.max(1),
+                got: values.len(),
+            });
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(ConvError::NonFinite {
+                row: i / dim,
+                column: i % dim,
+                value: values[i],
+            });
+        }
+        Ok(Targets { values, count, dim })
+    }
+
+    /// Number of rows.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Targets a row.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Row `i` (panics when `i >= count`).
+    pub fn row(&self, i: usize) -> &'a [f64] {
+        &self.values[i * self.dim..(i + 1) * self.dim]
+    }
+}

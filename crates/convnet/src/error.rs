@@ -1,0 +1,68 @@
+//! The crate's one error type: bad data, a bad configuration, a diverged
+//! fit and a corrupt model file are told apart by variant, never by text.
+use thiserror::Error;
+
+/// Everything that can go wrong while fitting, predicting or
+/// (de)serialising a convolutional model.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum ConvError {
+    /// A buffer does not have the length its declared shape implies.
+    #[error("{what}: expected {expected} values, got {got}")]
+    Shape {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
+    /// Training needs at least one frame (and as many target rows).
+    #[error("no frames to train on")]
+    Empty,
+    /// A target value is NaN or infinite.
+    #[error("target {column} of frame {row} is not a finite number ({value})")]
+    NonFinite {
+        row: usize,
+        column: usize,
+        value: f64,
+    },
+    /// A frame of another size than the model's input.
+    #[error("frame size {got_height} x {got_width} px, the model takes {height} x {width} px")]
+    FrameSize {
+        height: usize,
+        width: usize,
+        got_height: usize,
+        got_width: usize,
+    },
+    /// A configuration value is out of range.
+    #[error("invalid configuration: {field}: {reason}")]
+    Config { field: &'static str, reason: String },
+    /// Training diverged: the epoch's mean loss is not a finite number, or
+    /// exceeds `limit` (`DIVERGENCE_FACTOR` times the loss of predicting
+    /// the training mean).
+    #[error(
+        "training diverged at epoch {epoch}: loss {loss:.4e} {}; lower the learning rate",
+        if loss.is_finite() { format!("exceeds {limit:.4e}") } else { "is not a finite number".into() }
+    )]
+    Diverged { epoch: usize, loss: f64, limit: f64 },
+    /// A serialised model has another format version.
+    #[error("convolutional model format version {found} is not supported (this build reads version {supported})")]
+    Version { found: u32, supported: u32 },
+    /// A serialised model could not be parsed or is inconsistent.
+    #[error("corrupt convolutional model: {reason}")]
+    Corrupt { reason: String },
+}
+
+impl ConvError {
+    /// Whether the error is the caller's input (data, configuration, model
+    /// file) rather than a run that failed (divergence): exit 2 against 1.
+    pub fn is_bad_input(&self) -> bool {
+        !matches!(self, ConvError::Diverged { .. })
+    }
+}
+
+/// A [`ConvError::Config`].
+pub(crate) fn config_error(field: &'static str, reason: impl Into<String>) -> ConvError {
+    ConvError::Config {
+        field,
+        reason: reason.into(),
+    }
+}

@@ -1,0 +1,218 @@
+//! The image pose model: a [`Network`] with its input and target scalings,
+//! its configuration and seed; fitted from frames and targets, predicting
+//! N outputs from one grey frame.
+use crate::config::ConvConfig;
+use crate::data::{Frames, Targets};
+use crate::error::ConvError;
+use crate::layout::Layout;
+use crate::network::Network;
+use crate::predict::{forward_frames, predict_all, prediction_pool, unscaled_output, Predictor};
+use crate::scaling::{InputScaling, TargetScaling};
+use crate::train::{train, EpochReport, FitData, TrainingHistory};
+use crate::workspace::Workspace;
+
+/// A fitted `conv-dennn` or `conv-mlp` model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConvModel {
+    pub(crate) config: ConvConfig,
+    pub(crate) seed: u64,
+    pub(crate) net: Network,
+    pub(crate) input: InputScaling,
+    pub(crate) targets: TargetScaling,
+}
+
+impl ConvModel {
+    /// Fit a model of `config` (its `kind` picks the learning rule) on
+    /// `frames` and their `targets` from `seed` (initialisation and
+    /// shuffling).
+    pub fn fit(
+        frames: &Frames,
+        targets: &Targets,
+        config: &ConvConfig,
+        seed: u64,
+    ) -> Result<(Self, TrainingHistory), ConvError> {
+        Self::fit_with(frames, targets, config, seed, None, &mut |_| ())
+    }
+
+    /// [`Self::fit`], scoring `validation` after every epoch and handing
+    /// each epoch's report to `on_epoch` as it ends.
+    pub fn fit_with(
+        frames: &Frames,
+        targets: &Targets,
+        config: &ConvConfig,
+        seed: u64,
+        validation: Option<(Frames, Targets)>,
+        on_epoch: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(Self, TrainingHistory), ConvError> {
+        config.validate()?;
+        check_pair(frames, targets)?;
+        if frames.count() == 0 {
+            return Err(ConvError::Empty);
+        }
+        if let Some((vf, vt)) = &validation {
+            check_pair(vf, vt)?;
+            check_size(frames.size(), vf.size())?;
+            if vt.dim() != targets.dim() {
+                return Err(ConvError::Shape {
+                    what: "validation targets a row",
+                    expected: targets.dim(),
+                    got: vt.dim(),
+                });
+            }
+        }
+        let (h, w) = frames.size();
+        let layout = Layout::new(h, w, &config.conv, &config.dense, targets.dim())?;
+        let mut net = Network::new(layout, config.activation, seed);
+        let data = FitData {
+            seed,
+            frames: *frames,
+            targets: *targets,
+            input: InputScaling::fit(frames, config.input_centring),
+            scaling: TargetScaling::fit(targets),
+        };
+        let history = train(&mut net, config, seed, &data, validation, on_epoch)?;
+        let model = ConvModel {
+            config: config.clone(),
+            seed,
+            net,
+            input: data.input.clone(),
+            targets: data.scaling,
+        };
+        Ok((model, history))
+    }
+
+    /// The N outputs for one frame (`height x width` grey pixels), in the
+    /// targets' units.
+    pub fn predict(&self, frame: &[u8]) -> Result<Vec<f64>, ConvError> {
+        let mut out = vec![0.0; self.outputs()];
+        self.predict_with(&mut self.predictor(), frame, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Self::predict`] on reusable buffers, into `out` (N values): no
+    /// allocation, for a loop that predicts frame after frame.
+    pub fn predict_with(
+        &self,
+        predictor: &mut Predictor,
+        frame: &[u8],
+        out: &mut [f64],
+    ) -> Result<(), ConvError> {
+        let (h, w) = self.input_size();
+        let frames = Frames::new(frame, 1, h, w).map_err(|_| ConvError::Shape {
+            what: "frame pixels",
+            expected: h * w,
+            got: frame.len(),
+        })?;
+        if out.len() != self.outputs() {
+            return Err(ConvError::Shape {
+                what: "outputs",
+                expected: self.outputs(),
+                got: out.len(),
+            });
+        }
+        let ws = &mut predictor.ws;
+        forward_frames(&self.net, &self.input, ws, &frames, 0, 1);
+        unscaled_output(&self.net, ws, &self.targets, 1, 0, out);
+        Ok(())
+    }
+
+    /// Buffers for [`Self::predict_with`].
+    pub fn predictor(&self) -> Predictor {
+        Predictor {
+            ws: Workspace::for_prediction(&self.net.layout, 1),
+        }
+    }
+
+    /// Every frame's outputs (`count x N`, frame by frame), the frames
+    /// shared among the threads of the current rayon pool.
+    pub fn predict_batch(&self, frames: &Frames) -> Result<Vec<f64>, ConvError> {
+        check_size(self.input_size(), frames.size())?;
+        let mut out = vec![0.0; frames.count() * self.outputs()];
+        let mut pool = prediction_pool(&self.net);
+        predict_all(
+            &self.net,
+            &self.input,
+            &self.targets,
+            frames,
+            &mut pool,
+            &mut out,
+        );
+        Ok(out)
+    }
+
+    /// Mean loss and mean absolute error per target on `frames`.
+    pub fn score(
+        &self,
+        frames: &Frames,
+        targets: &Targets,
+    ) -> Result<crate::train::Validation, ConvError> {
+        check_pair(frames, targets)?;
+        if targets.dim() != self.outputs() {
+            return Err(ConvError::Shape {
+                what: "targets a row",
+                expected: self.outputs(),
+                got: targets.dim(),
+            });
+        }
+        let predictions = self.predict_batch(frames)?;
+        Ok(crate::train::score(&predictions, targets, &self.targets))
+    }
+
+    /// The configuration it was fitted with.
+    pub fn config(&self) -> &ConvConfig {
+        &self.config
+    }
+
+    /// The seed it was fitted from.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The network (layers and parameters).
+    pub fn network(&self) -> &Network {
+        &self.net
+    }
+
+    /// Frame `(height, width)` it takes, px.
+    pub fn input_size(&self) -> (usize, usize) {
+        self.net.layout.input_size()
+    }
+
+    /// Number of outputs N.
+    pub fn outputs(&self) -> usize {
+        self.net.layout.outputs()
+    }
+
+    /// The pixel standardisation fitted on the training frames.
+    pub fn input_scaling(&self) -> &InputScaling {
+        &self.input
+    }
+
+    /// The target standardisation fitted on the training targets.
+    pub fn target_scaling(&self) -> &TargetScaling {
+        &self.targets
+    }
+}
+
+fn check_pair(frames: &Frames, targets: &Targets) -> Result<(), ConvError> {
+    if frames.count() != targets.count() {
+        return Err(ConvError::Shape {
+            what: "target rows (one a frame)",
+            expected: frames.count(),
+            got: targets.count(),
+        });
+    }
+    Ok(())
+}
+
+fn check_size(model: (usize, usize), got: (usize, usize)) -> Result<(), ConvError> {
+    if model != got {
+        return Err(ConvError::FrameSize {
+            height: model.0,
+            width: model.1,
+            got_height: got.0,
+            got_width: got.1,
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,103 @@
+//! The local computations every learning rule is made of, on a chunk of
+//! `nb` frames:
+//! - a layer's dendritic prediction `p(l) = W(l) * phi(s(l-1)) + b(l)`
+//!   (im2col, then one matrix product);
+//! - a layer's top-down input `phi'(s(l-1)) . W(l)^T e(l)` (one product
+//!   with `W(l)^T`, then col2im);
+//! - the weight term `dE/dW(l) = -e(l) phi(s(l-1))^T` summed over frames
+//!   and positions (one product with the im2col matrix transposed), and
+//!   `dE/db(l) = -sum e(l)`.
+//!
+//! With the energy `E = 1/2 sum_l ||e(l)||^2` these are the terms of
+//! `dE/ds` and `dE/dW` (Scellier and Bengio 2017, eqs. 2 and 13, for this
+//! energy; docs/learning.md).
+use crate::gemm::{add_product_nt, product, product_tn};
+use crate::im2col::{col2im, im2col};
+use crate::network::Network;
+use crate::workspace::Workspace;
+
+/// `cols(l) = im2col(phi(s(l-1)))` and `p(l) = W(l) cols(l) + b(l)` for
+/// layer index `l` (0-based).
+pub(crate) fn predict_layer(net: &Network, ws: &mut Workspace, nb: usize, l: usize) {
+    let shape = &net.layout.layers[l];
+    let input: &[f32] = if l == 0 { &ws.x } else { &ws.a[l - 1] };
+    im2col(shape, nb, input, &mut ws.cols[l]);
+    let n = nb * shape.positions();
+    let (m, k) = (shape.cout, shape.fan_in());
+    let p = &mut ws.p[l];
+    product(p, &net.params.weights[l], &ws.cols[l], m, k, n);
+    for (row, &b) in p[..m * n].chunks_exact_mut(n).zip(&net.params.biases[l]) {
+        row.iter_mut().for_each(|v| *v += b);
+    }
+}
+
+/// `s(l) = p(l) + e(l)` and, below the output, `phi(s(l))`.
+pub(crate) fn settle_layer(net: &Network, ws: &mut Workspace, nb: usize, l: usize) {
+    let len = net.layout.layers[l].out_len() * nb;
+    let (s, p, e) = (&mut ws.s[l][..len], &ws.p[l][..len], &ws.e[l][..len]);
+    s.iter_mut()
+        .zip(p.iter().zip(e))
+        .for_each(|(s, (p, e))| *s = p + e);
+    if l + 1 < net.layout.depth() {
+        net.activation.apply(s, &mut ws.a[l][..len]);
+    }
+}
+
+/// The free phase's equilibrium, the feed-forward pass: every `e(l) = 0`,
+/// `s(l) = p(l)`.
+pub(crate) fn feed_forward(net: &Network, ws: &mut Workspace, nb: usize) {
+    for l in 0..net.layout.depth() {
+        predict_layer(net, ws, nb, l);
+        let len = net.layout.layers[l].out_len() * nb;
+        ws.e[l][..len].fill(0.0);
+        settle_layer(net, ws, nb, l);
+    }
+}
+
+/// `dst = phi'(s(l-1)) . W(l)^T src` for layer index `l >= 1`, where `src`
+/// is layer `l`'s error (`cout x nb x positions`) and `dst` has layer
+/// `l - 1`'s output shape.
+pub(crate) fn send_down(net: &Network, ws: &mut Workspace, nb: usize, l: usize, into_down: bool) {
+    let shape = &net.layout.layers[l];
+    let n = nb * shape.positions();
+    let (m, k) = (shape.cout, shape.fan_in());
+    product_tn(&mut ws.dcols, &net.params.weights[l], &ws.e[l], m, k, n);
+    let len = shape.in_len() * nb;
+    let dst = if into_down {
+        &mut ws.down[l - 1]
+    } else {
+        &mut ws.e[l - 1]
+    };
+    col2im(shape, nb, &ws.dcols, dst);
+    net.activation
+        .times_slope(&ws.a[l - 1][..len], &mut dst[..len]);
+}
+
+/// `grad += coeff (e(l) cols(l)^T, sum e(l))` for every layer: `coeff =
+/// -1` adds `dE/dtheta`, `+1` with backprop's deltas in `e` adds the
+/// loss gradient.
+pub(crate) fn accumulate_gradient(net: &Network, ws: &mut Workspace, nb: usize, coeff: f32) {
+    let Some(grad) = ws.grad.as_mut() else { return };
+    for (l, shape) in net.layout.layers.iter().enumerate() {
+        let n = nb * shape.positions();
+        let (m, k) = (shape.cout, shape.fan_in());
+        add_product_nt(&mut grad.weights[l], coeff, &ws.e[l], &ws.cols[l], m, k, n);
+        for (g, row) in grad.biases[l]
+            .iter_mut()
+            .zip(ws.e[l][..m * n].chunks_exact(n))
+        {
+            *g += coeff * row.iter().sum::<f32>();
+        }
+    }
+}
+
+/// `0.5 ||y - t||^2` summed over the chunk, at the output `s(L)`.
+pub(crate) fn output_loss(net: &Network, ws: &Workspace, nb: usize) -> f64 {
+    let last = net.layout.depth() - 1;
+    let len = net.layout.outputs() * nb;
+    ws.s[last][..len]
+        .iter()
+        .zip(&ws.t[..len])
+        .map(|(y, t)| 0.5 * ((y - t) as f64).powi(2))
+        .sum()
+}

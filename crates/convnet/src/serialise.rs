@@ -1,0 +1,222 @@
+//! A model as a JSON string (format, version, kind and configuration,
+//! seed, input size, outputs) plus safetensors bytes: `W1, b1, W2, ...`
+//! (each `W(l)` as `cout x cin x kh x kw`, a dense layer's window covering
+//! its whole input; f32) and the scalings (`input.mean`, `input.std`,
+//! `input.mean_frame` when used, `target.mean`, `target.std`; f64, so a
+//! reloaded model predicts bit for bit as the saved one). Pure: the
+//! caller writes the files, as with the pin models' `model.json` and
+//! `model.safetensors`.
+use crate::config::ConvConfig;
+use crate::error::ConvError;
+use crate::layout::Layout;
+use crate::model::ConvModel;
+use crate::network::Network;
+use crate::params::Parameters;
+use crate::scaling::{InputScaling, TargetScaling};
+use safetensors::tensor::TensorView;
+use safetensors::{Dtype, SafeTensors};
+use serde::{Deserialize, Serialize};
+
+/// Identifies these model files.
+const FORMAT: &str = "tactrace-conv-model";
+/// Bumped on any incompatible change.
+pub const CONV_FORMAT_VERSION: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelFile {
+    format: String,
+    version: u32,
+    config: ConvConfig,
+    seed: u64,
+    input_height: usize,
+    input_width: usize,
+    outputs: usize,
+}
+
+fn corrupt(reason: impl ToString) -> ConvError {
+    ConvError::Corrupt {
+        reason: reason.to_string(),
+    }
+}
+
+fn le_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn le_bytes_f64(v: &[f64]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+impl ConvModel {
+    /// Serialise: `(json, safetensors weights)`.
+    pub fn to_bytes(&self) -> Result<(String, Vec<u8>), ConvError> {
+        let (input_height, input_width) = self.input_size();
+        let file = ModelFile {
+            format: FORMAT.into(),
+            version: CONV_FORMAT_VERSION,
+            config: self.config.clone(),
+            seed: self.seed,
+            input_height,
+            input_width,
+            outputs: self.outputs(),
+        };
+        let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
+        let mut buffers = Vec::new();
+        let p = &self.net.params;
+        for (l, s) in self.net.layout.layers().iter().enumerate() {
+            let shape = vec![s.cout, s.cin, s.kh, s.kw];
+            let (w, b) = (le_bytes(&p.weights[l]), le_bytes(&p.biases[l]));
+            buffers.push((format!("W{}", l + 1), Dtype::F32, shape, w));
+            buffers.push((format!("b{}", l + 1), Dtype::F32, vec![s.cout], b));
+        }
+        let (i, t) = (&self.input, &self.targets);
+        let f64s = |name: &str, shape: Vec<usize>, v: &[f64]| {
+            (name.to_string(), Dtype::F64, shape, le_bytes_f64(v))
+        };
+        buffers.push(f64s("input.mean", vec![1], &[i.mean]));
+        buffers.push(f64s("input.std", vec![1], &[i.std]));
+        if !i.mean_frame.is_empty() {
+            let frame: Vec<f64> = i.mean_frame.iter().map(|&v| v as f64).collect();
+            buffers.push(f64s(
+                "input.mean_frame",
+                vec![input_height, input_width],
+                &frame,
+            ));
+        }
+        buffers.push(f64s("target.mean", vec![t.dim()], &t.mean));
+        buffers.push(f64s("target.std", vec![t.dim()], &t.std));
+        let views = buffers
+            .iter()
+            .map(|(name, dtype, shape, bytes)| {
+                TensorView::new(*dtype, shape.clone(), bytes).map(|v| (name.clone(), v))
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(corrupt)?;
+        let weights = safetensors::serialize(views, None).map_err(corrupt)?;
+        Ok((json, weights))
+    }
+
+    /// Rebuild a model from [`Self::to_bytes`] output. Another format
+    /// version, truncated, inconsistent or non-finite data are errors.
+    pub fn from_bytes(json: &str, safetensors: &[u8]) -> Result<Self, ConvError> {
+        let value: serde_json::Value =
+            serde_json::from_str(json).map_err(|e| corrupt(format!("model json: {e}")))?;
+        if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT) {
+            return Err(corrupt(format!("not a {FORMAT} file")));
+        }
+        let version = value
+            .get("version")
+            .and_then(|v| v.as_u64())
+            .ok_or_else(|| corrupt("model json has no version"))?;
+        if version != CONV_FORMAT_VERSION as u64 {
+            return Err(ConvError::Version {
+                found: version.min(u32::MAX as u64) as u32,
+                supported: CONV_FORMAT_VERSION,
+            });
+        }
+        let file: ModelFile =
+            serde_json::from_value(value).map_err(|e| corrupt(format!("model json: {e}")))?;
+        file.config.validate()?;
+        let c = &file.config;
+        let layout = Layout::new(
+            file.input_height,
+            file.input_width,
+            &c.conv,
+            &c.dense,
+            file.outputs,
+        )?;
+        let tensors =
+            SafeTensors::deserialize(safetensors).map_err(|e| corrupt(format!("weights: {e}")))?;
+        let (input, targets) = read_scalings(&tensors, &file)?;
+        let mut params = Parameters::zeros(&layout);
+        for (l, s) in layout.layers().iter().enumerate() {
+            let w_shape = [s.cout, s.cin, s.kh, s.kw];
+            params.weights[l] = read_f32(&tensors, &format!("W{}", l + 1), &w_shape)?;
+            params.biases[l] = read_f32(&tensors, &format!("b{}", l + 1), &[s.cout])?;
+        }
+        if !params.is_finite() {
+            return Err(corrupt("non-finite weights"));
+        }
+        let net = Network::from_parts(layout, c.activation, params)?;
+        Ok(ConvModel {
+            config: file.config,
+            seed: file.seed,
+            net,
+            input,
+            targets,
+        })
+    }
+}
+
+/// The input and target scalings, checked for usable numbers.
+fn read_scalings(
+    tensors: &SafeTensors,
+    file: &ModelFile,
+) -> Result<(InputScaling, TargetScaling), ConvError> {
+    let (h, w, k) = (file.input_height, file.input_width, file.outputs);
+    let mean_frame = if tensors.names().contains(&"input.mean_frame") {
+        read(tensors, "input.mean_frame", Dtype::F64, &[h, w])?
+            .chunks_exact(8)
+            .map(|c| f64_of(c) as f32)
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let input = InputScaling {
+        mean: read_f64(tensors, "input.mean", &[1])?[0],
+        std: read_f64(tensors, "input.std", &[1])?[0],
+        mean_frame,
+    };
+    let targets = TargetScaling {
+        mean: read_f64(tensors, "target.mean", &[k])?,
+        std: read_f64(tensors, "target.std", &[k])?,
+    };
+    if !input.is_valid(h * w) || !targets.is_valid() {
+        return Err(corrupt("scalings are not usable numbers"));
+    }
+    Ok((input, targets))
+}
+
+fn f64_of(c: &[u8]) -> f64 {
+    f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]])
+}
+
+fn read_f64(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f64>, ConvError> {
+    Ok(read(tensors, name, Dtype::F64, shape)?
+        .chunks_exact(8)
+        .map(f64_of)
+        .collect())
+}
+
+fn read_f32(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f32>, ConvError> {
+    Ok(read(tensors, name, Dtype::F32, shape)?
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
+}
+
+/// The bytes of tensor `name`, which must be of `dtype` and `shape`.
+fn read<'a>(
+    tensors: &'a SafeTensors,
+    name: &str,
+    dtype: Dtype,
+    shape: &[usize],
+) -> Result<&'a [u8], ConvError> {
+    let view = tensors
+        .tensor(name)
+        .map_err(|e| corrupt(format!("tensor {name}: {e}")))?;
+    if view.dtype() != dtype || view.shape() != shape {
+        let dims = |s: &[usize]| {
+            let parts: Vec<String> = s.iter().map(usize::to_string).collect();
+            parts.join(" x ")
+        };
+        return Err(corrupt(format!(
+            "tensor {name}: expected {dtype} {}, found {} {}",
+            dims(shape),
+            view.dtype(),
+            dims(view.shape())
+        )));
+    }
+    Ok(view.data())
+}

@@ -1,0 +1,245 @@
+//! The training loop: each epoch a seeded shuffle, then batches of
+//! `batch_size` frames; a batch is split into chunks of `chunk_size`
+//! frames that run in parallel (rayon), each summing its frames' gradient
+//! (EP estimate or backprop) into its own buffer; the buffers are added in
+//! chunk order and Adam takes one step. Nothing is allocated inside the
+//! epoch loop, and the result does not depend on the number of threads.
+use crate::adam::Adam;
+use crate::config::{ConvConfig, ModelKind};
+use crate::data::{Frames, Targets};
+use crate::ep::{backprop_gradient, ep_gradient};
+use crate::error::ConvError;
+use crate::network::Network;
+use crate::predict::{predict_all, prediction_pool};
+use crate::scaling::{InputScaling, TargetScaling};
+use crate::workspace::Workspace;
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// A fit has diverged when its epoch loss exceeds this many times the loss
+/// of predicting the training mean (0.5 a standardised target).
+pub const DIVERGENCE_FACTOR: f64 = 1000.0;
+
+/// Added to the seed for the shuffling stream, so it differs from the
+/// initialisation's.
+const SHUFFLE_STREAM: u64 = 0x9e37_79b9_7f4a_7c15;
+
+/// Figures on held-out frames after an epoch.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Validation {
+    /// Mean `0.5 ||y - t||^2` in standardised target units.
+    pub loss: f64,
+    /// Mean absolute error per target, in the targets' units.
+    pub mae: Vec<f64>,
+}
+
+/// One epoch's figures (`epoch` counts from 0).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EpochReport {
+    pub epoch: usize,
+    /// Adam's step size during the epoch.
+    pub learning_rate: f64,
+    /// Mean over the epoch's frames of `0.5 ||y - t||^2` at the free
+    /// equilibrium before each update, standardised target units.
+    pub loss: f64,
+    /// On the validation frames given to the fit, after the epoch.
+    pub validation: Option<Validation>,
+}
+
+/// The per-epoch history of a fit.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TrainingHistory {
+    pub epochs: Vec<EpochReport>,
+}
+
+/// What a fit reads: frames, targets and their scalings.
+pub(crate) struct FitData<'a> {
+    /// The fit's seed (initialisation, shuffling, shifts).
+    pub seed: u64,
+    pub frames: Frames<'a>,
+    pub targets: Targets<'a>,
+    pub input: InputScaling,
+    pub scaling: TargetScaling,
+}
+
+/// Train `net` in place for `config.epochs` epochs.
+pub(crate) fn train(
+    net: &mut Network,
+    config: &ConvConfig,
+    seed: u64,
+    data: &FitData,
+    validation: Option<(Frames, Targets)>,
+    on_epoch: &mut dyn FnMut(&EpochReport),
+) -> Result<TrainingHistory, ConvError> {
+    let chunks = config.batch_size.div_ceil(config.chunk_size);
+    let mut pool: Vec<Workspace> = (0..chunks)
+        .map(|_| Workspace::for_training(&net.layout, config.chunk_size))
+        .collect();
+    let mut losses = vec![0.0f64; chunks];
+    let mut predict_pool = prediction_pool(net);
+    let mut predictions = vec![0.0; validation.map_or(0, |v| v.0.count() * data.scaling.dim())];
+    let mut adam = Adam::new(&net.layout);
+    let mut order: Vec<usize> = (0..data.frames.count()).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_add(SHUFFLE_STREAM));
+    let limit = DIVERGENCE_FACTOR * 0.5 * data.scaling.dim() as f64;
+    let mut history = TrainingHistory::default();
+    for epoch in 0..config.epochs {
+        order.shuffle(&mut rng);
+        let lr = config.learning_rate * config.lr_factor(epoch);
+        let mut total = 0.0;
+        for batch in order.chunks(config.batch_size) {
+            total += batch_step(
+                net,
+                config,
+                data,
+                batch,
+                (&mut pool, &mut losses),
+                &mut adam,
+                lr,
+                epoch,
+            );
+        }
+        let loss = total / order.len() as f64;
+        if loss.is_nan() || loss > limit || !net.params.is_finite() {
+            return Err(ConvError::Diverged {
+                epoch,
+                loss: if net.params.is_finite() {
+                    loss
+                } else {
+                    f64::NAN
+                },
+                limit,
+            });
+        }
+        let validation = validation.map(|(frames, targets)| {
+            let (input, scaling) = (&data.input, &data.scaling);
+            predict_all(
+                net,
+                input,
+                scaling,
+                &frames,
+                &mut predict_pool,
+                &mut predictions,
+            );
+            score(&predictions, &targets, scaling)
+        });
+        let report = EpochReport {
+            epoch,
+            learning_rate: lr,
+            loss,
+            validation,
+        };
+        on_epoch(&report);
+        history.epochs.push(report);
+    }
+    Ok(history)
+}
+
+/// One optimiser step on the frames `batch`; returns their summed loss.
+#[allow(clippy::too_many_arguments)]
+fn batch_step(
+    net: &mut Network,
+    config: &ConvConfig,
+    data: &FitData,
+    batch: &[usize],
+    (pool, losses): (&mut [Workspace], &mut [f64]),
+    adam: &mut Adam,
+    lr: f64,
+    epoch: usize,
+) -> f64 {
+    let used = batch.len().div_ceil(config.chunk_size);
+    {
+        let net: &Network = net;
+        pool[..used]
+            .par_iter_mut()
+            .zip(losses[..used].par_iter_mut())
+            .zip(batch.par_chunks(config.chunk_size))
+            .for_each(|((ws, loss), idx)| {
+                *loss = chunk_gradient(net, config, data, ws, idx, epoch);
+            });
+    }
+    let (first, rest) = pool.split_at_mut(1);
+    let Some(grad) = first[0].grad.as_mut() else {
+        return 0.0;
+    };
+    for ws in &rest[..used - 1] {
+        if let Some(g) = &ws.grad {
+            grad.add(g);
+        }
+    }
+    grad.scale(1.0 / batch.len() as f32);
+    adam.step(&mut net.params, grad, lr, config.weight_decay);
+    losses[..used].iter().sum()
+}
+
+/// The chunk `idx`'s gradient (the rule of `config.kind`) into a cleared
+/// `ws.grad`; returns the chunk's summed loss.
+fn chunk_gradient(
+    net: &Network,
+    config: &ConvConfig,
+    data: &FitData,
+    ws: &mut Workspace,
+    idx: &[usize],
+    epoch: usize,
+) -> f64 {
+    let nb = idx.len();
+    let (h, w) = data.frames.size();
+    let hw = h * w;
+    for (b, &i) in idx.iter().enumerate() {
+        let x = &mut ws.x[b * hw..(b + 1) * hw];
+        let frame = data.frames.frame(i);
+        match shift_of(config.shift_augment, data.seed, epoch, i) {
+            (0, 0) => data.input.apply(frame, x),
+            (dx, dy) => data.input.apply_shifted(frame, (h, w), (dx, dy), x),
+        }
+        for (j, &v) in data.targets.row(i).iter().enumerate() {
+            ws.t[j * nb + b] = data.scaling.scale(j, v);
+        }
+    }
+    if let Some(g) = ws.grad.as_mut() {
+        g.clear();
+    }
+    match config.kind {
+        ModelKind::ConvDennn => ep_gradient(net, ws, nb, &config.ep),
+        ModelKind::ConvMlp => backprop_gradient(net, ws, nb),
+    }
+}
+
+/// The shift `(dx, dy)`, each in `-max..=max` px, of frame `i` in
+/// `epoch`: a hash of the three numbers and the seed, so it does not
+/// depend on which thread loads the frame.
+fn shift_of(max: usize, seed: u64, epoch: usize, i: usize) -> (isize, isize) {
+    if max == 0 {
+        return (0, 0);
+    }
+    // SplitMix64's finaliser over the seed, the epoch and the frame.
+    let mut z = seed
+        .wrapping_add((epoch as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15))
+        .wrapping_add((i as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    let span = 2 * max as u64 + 1;
+    let dx = (z % span) as isize - max as isize;
+    let dy = ((z / span) % span) as isize - max as isize;
+    (dx, dy)
+}
+
+/// Mean loss (scaled units) and mean absolute error per target (the
+/// targets' units) of `predictions` (`count x dim`, unscaled).
+pub(crate) fn score(predictions: &[f64], targets: &Targets, scaling: &TargetScaling) -> Validation {
+    let (n, d) = (targets.count(), targets.dim());
+    let mut mae = vec![0.0; d];
+    let mut loss = 0.0;
+    for i in 0..n {
+        for (j, &t) in targets.row(i).iter().enumerate() {
+            let y = predictions[i * d + j];
+            mae[j] += (y - t).abs() / n as f64;
+            loss += 0.5 * ((y - t) / scaling.std[j]).powi(2) / n as f64;
+        }
+    }
+    Validation { loss, mae }
+}

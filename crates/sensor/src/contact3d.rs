@@ -50,34 +50,54 @@ impl ContactModel {
         }
         let place = Placement::new(tip);
         let max = self.mech.max_depth_mm;
-        // Eq. C1: the surface's height over each skin point's column.
-        let tops: Vec<f64> = self
+        // Eq. C1: the height of the object's (top) face over each skin
+        // point's column.
+        let faces: Vec<f64> = self
             .patch
             .iter()
             .map(|p| {
                 let foot = place.foot(p.horiz[0], p.horiz[1]);
-                object.column_top(foot, place.axis, max).min(max)
+                object.face_top(foot, place.axis, max).min(max)
             })
             .collect();
-        let reference = tops.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let reference = faces.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         if reference.is_nan() || reference <= 0.0 {
             return field;
         }
         let reach = self.patch.iter().map(|p| p.radius).fold(0.0, f64::max);
         let mut grid = LazyGrid::new(reach, self.mech.distance_grid_mm);
         let mut footprint = |a: f64, b: f64| footprint_at(object, &place, max, a, b);
-        // Eq. C2: the anti-aliased inside fraction of an edged top face.
         let h = self.mech.patch_grid_mm;
         let touches: Vec<Touch> = self
             .patch
             .iter()
-            .zip(&tops)
+            .zip(&faces)
             .enumerate()
-            .filter(|(_, (p, top))| **top > p.height)
-            .map(|(index, (p, top))| Touch {
-                index,
-                shifted: p.height - (top - reference),
-                inside: (0.5 - grid.interpolate(&mut footprint, p.horiz) / h).clamp(0.0, 1.0),
+            .filter(|(_, (p, face))| **face > p.height)
+            .map(|(index, (p, face))| {
+                // Eq. C2: the anti-aliased inside fraction of an edged
+                // face, or the wall below its rim where that presses more.
+                let edge = grid.interpolate(&mut footprint, p.horiz);
+                let inside = (0.5 - edge / h).clamp(0.0, 1.0);
+                let (top, inside) = if edge > 0.0 {
+                    let foot = place.foot(p.horiz[0], p.horiz[1]);
+                    let wall = object.column_top(foot, place.axis, max).min(max);
+                    // A column that meets the face after all (the
+                    // interpolated edge is off by the rim's curvature)
+                    // keeps the face's fraction.
+                    if wall < *face && wall - p.height > inside * (face - p.height) {
+                        (wall, 1.0)
+                    } else {
+                        (*face, inside)
+                    }
+                } else {
+                    (*face, inside)
+                };
+                Touch {
+                    index,
+                    shifted: p.height - (top - reference),
+                    inside,
+                }
             })
             .collect();
         let depth = self.settle_3d(&touches, reference);
@@ -128,10 +148,11 @@ impl ContactModel {
 
 /// The footprint's signed distance (mm, negative inside; -1e9 for an
 /// object without an edged top face) where the column through the
-/// sensor-plane point (a, b) meets the object's upper surface (eq. C2).
+/// sensor-plane point (a, b) meets the object's (extended) top face
+/// (eq. C2).
 fn footprint_at(object: &dyn Object3d, place: &Placement, max: f64, a: f64, b: f64) -> f64 {
     let foot = place.foot(a, b);
-    let top = object.column_top(foot, place.axis, max);
+    let top = object.face_top(foot, place.axis, max);
     let at = if top.is_finite() {
         foot + place.axis * top
     } else {

@@ -225,3 +225,99 @@ fn issue23_the_simulated_tactip_over_an_object_renders_the_3d_contact() {
         "the nuisance shows in the frame"
     );
 }
+
+/// A closed mesh of the box [-h, h]^2 x [0, top] (12 triangles, outward).
+fn box_mesh(h: f64, top: f64) -> tactrace_shape3d::TriangleMesh {
+    let v: Vec<Vec3> = (0..8)
+        .map(|k| {
+            Vec3::new(
+                if k & 1 == 0 { -h } else { h },
+                if k & 2 == 0 { -h } else { h },
+                if k & 4 == 0 { 0.0 } else { top },
+            )
+        })
+        .collect();
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [1, 3, 7, 5],
+        [3, 2, 6, 7],
+        [2, 0, 4, 6],
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    tactrace_shape3d::TriangleMesh::new(v, triangles).unwrap()
+}
+
+/// The edge_5d tap: the rim of an extruded box against the mesh of the
+/// same box (its exact columns, walls included, without the rim's
+/// anti-aliasing): at every tilt the fields agree within the patch's
+/// resolution, and moving into the object presses more.
+#[test]
+fn issue23_an_extruded_rim_presses_like_the_mesh_of_the_same_box_at_any_tilt() {
+    let model = TacTipModel::new(TacTipConfig::default()).unwrap();
+    let (h, top) = (40.0, 10.0);
+    let square = Contour::new(vec![
+        Vec2::new(-h, -h),
+        Vec2::new(h, -h),
+        Vec2::new(h, h),
+        Vec2::new(-h, h),
+    ])
+    .unwrap();
+    let prism = Extruded::new(square, top).unwrap();
+    let mesh = box_mesh(h, top);
+    // The sample of the rim in the middle of the side x = h.
+    let edge = prism.edge().unwrap();
+    let side = edge
+        .samples
+        .iter()
+        .min_by(|a, b| {
+            let d = |s: &tactrace_shape3d::EdgeSample| (s.point - Vec3::new(h, 0.0, top)).norm();
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap();
+    for (rx, ry, rz) in [
+        (0.0, 0.0, 30.0),
+        (0.0, 20.0, 0.0),
+        (0.0, -20.0, 90.0),
+        (15.0, 10.0, -45.0),
+    ] {
+        let mut last = 0.0;
+        for x in [4.0, 2.0, 0.0, -2.0, -4.0] {
+            let tip = side.pose(Pose::new(x, 0.0, -4.0, rx, ry, rz));
+            let a = model.pins_3d(&prism, tip, None);
+            let b = model.pins_3d(&mesh, tip, None);
+            let (ma, mb) = (mean_motion(&model, &a), mean_motion(&model, &b));
+            assert!(
+                (ma - mb).abs() <= 0.05 * mb + 0.02,
+                "tilt ({rx}, {ry}) x {x}: prism {ma} px, mesh {mb} px"
+            );
+            assert!(ma > last, "tilt ({rx}, {ry}): moving onto the object to x {x} must press more ({ma} <= {last})");
+            last = ma;
+        }
+    }
+}
+
+#[test]
+fn issue23_an_edge_tap_in_the_rim_frame_at_zero_tilt_is_the_planar_edge_tap() {
+    let model = TacTipModel::new(TacTipConfig::default()).unwrap();
+    let height = 8.0;
+    for shape in [BuiltinShape::Flower, BuiltinShape::Teardrop] {
+        let contour = builtin_shape(shape);
+        let prism = Extruded::new(contour.clone(), height).unwrap();
+        let edge = prism.edge().unwrap();
+        for sample in edge.samples.iter().step_by(97) {
+            for (x, depth, rz) in [(-3.0, 2.0, 0.0), (0.0, 5.0, 40.0), (2.0, 4.0, -75.0)] {
+                let tip = sample.pose(Pose::new(x, 0.0, -depth, 0.0, 0.0, rz));
+                let planar = Pose::planar(tip.x, tip.y, tip.z - height, tip.rz);
+                let want = model.pins(&contour, planar, SHEARS[1]);
+                let got = model.pins_3d(&prism, tip, SHEARS[1]);
+                let err = worst(&want, &got);
+                assert!(err < 1e-6, "{shape:?} x {x}: pins differ by {err} px");
+            }
+        }
+    }
+}

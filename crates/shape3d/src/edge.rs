@@ -1,6 +1,8 @@
 //! The edge curve of an edged object: points along it with the curve's
 //! tangent and the normals of the two faces that meet there.
 use crate::Vec3;
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion};
+use tactrace_geometry::Pose;
 
 /// One sample of an edge curve.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -12,6 +14,37 @@ pub struct EdgeSample {
     /// Unit outward normals of the two faces meeting at the edge (for an
     /// extruded shape: its top face, then its side wall).
     pub normals: [Vec3; 2],
+}
+
+impl EdgeSample {
+    /// The edge's own frame (the frame of the edge_3d / edge_5d tasks'
+    /// poses): origin at the edge point, z along the pressed face's
+    /// normal (`normals[0]`), x across the edge out of the object (the
+    /// other face's normal made perpendicular to z), y = z x x (along the
+    /// edge, the tangent's direction for an extruded rim).
+    pub fn frame(&self) -> Isometry3<f64> {
+        let z = self.normals[0].normalize();
+        let across = self.normals[1] - z * self.normals[1].dot(&z);
+        let x = if across.norm() > 1e-9 {
+            across.normalize()
+        } else {
+            self.tangent.cross(&z).normalize()
+        };
+        let y = z.cross(&x);
+        let rotation = Rotation3::from_matrix_unchecked(Matrix3::from_columns(&[x, y, z]));
+        Isometry3::from_parts(
+            Translation3::from(self.point),
+            UnitQuaternion::from_rotation_matrix(&rotation),
+        )
+    }
+
+    /// The world pose of a pose given in the edge's [`frame`](Self::frame)
+    /// (mm, deg: x across the edge, positive off the object; z along the
+    /// face normal, negative = into the object; rx, ry the tilt, rz the
+    /// turn about the face normal).
+    pub fn pose(&self, local: Pose) -> Pose {
+        Pose::from_isometry(&(self.frame() * local.to_isometry()))
+    }
 }
 
 /// A sampled edge curve, in order of travel.

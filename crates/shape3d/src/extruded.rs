@@ -129,10 +129,25 @@ impl Object3d for Extruded {
         })
     }
 
+    /// Where the column meets the top face when it does so inside the
+    /// rim, else where it enters the side wall below (sphere tracing; the
+    /// bottom face is never pressed from above).
+    fn column_top(&self, foot: Vec3, axis: Vec3, max_mm: f64) -> f64 {
+        let face = self.face_top(foot, axis, max_mm);
+        let hit = foot + axis * face;
+        if !face.is_finite() || self.contour.signed_distance(Vec2::new(hit.x, hit.y)) <= 0.0 {
+            return face;
+        }
+        if axis.x == 0.0 && axis.y == 0.0 {
+            return f64::NEG_INFINITY; // a plumb column outside stays outside
+        }
+        crate::object::sphere_trace(self, foot, axis, face, -max_mm)
+    }
+
     /// Exact: where the column meets the top face's plane (the face
     /// extended beyond the rim; [`Self::footprint_distance`] says where
-    /// the face ends). The side walls are not pressed (docs/3d.md).
-    fn column_top(&self, foot: Vec3, axis: Vec3, max_mm: f64) -> f64 {
+    /// the face ends).
+    fn face_top(&self, foot: Vec3, axis: Vec3, max_mm: f64) -> f64 {
         if axis.z <= 0.0 {
             return f64::NEG_INFINITY;
         }

@@ -120,9 +120,21 @@ impl Object3d for Foil {
         })
     }
 
+    /// Where the column meets the upper face inside the outline, else
+    /// where it enters the plate's edge below (sphere tracing).
+    fn column_top(&self, foot: Vec3, axis: Vec3, max_mm: f64) -> f64 {
+        let face = self.face_top(foot, axis, max_mm);
+        let hit = foot + axis * face;
+        if face.is_finite() && hit.x.hypot(hit.y) <= self.outline {
+            return face;
+        }
+        let start = if face.is_finite() { face } else { max_mm };
+        crate::object::sphere_trace(self, foot, axis, start, -max_mm)
+    }
+
     /// Exact: where the column meets the upper face (extended beyond the
     /// outline; [`Self::footprint_distance`] says where the foil ends).
-    fn column_top(&self, foot: Vec3, axis: Vec3, max_mm: f64) -> f64 {
+    fn face_top(&self, foot: Vec3, axis: Vec3, max_mm: f64) -> f64 {
         // |(fx + t ax, fz + bend + t az)| = top, the upper root.
         let top = self.bend + 0.5 * self.thickness;
         let (fx, fz) = (foot.x, foot.z + self.bend);

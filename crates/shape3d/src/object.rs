@@ -46,7 +46,15 @@ pub trait Object3d: Send + Sync + std::fmt::Debug {
     /// indentation of each skin point from it (docs/3d.md, eq. C1).
     /// Default: sphere tracing down from `max_mm`.
     fn column_top(&self, foot: Vec3, axis: Vec3, max_mm: f64) -> f64 {
-        sphere_trace(self, foot, axis, max_mm)
+        sphere_trace(self, foot, axis, max_mm, -max_mm)
+    }
+
+    /// As [`Self::column_top`] for the object's top face extended beyond
+    /// its rim (the face [`Self::footprint_distance`] bounds): where the
+    /// column meets the face's surface, inside the rim or not. Default:
+    /// the column top (objects without an edged face).
+    fn face_top(&self, foot: Vec3, axis: Vec3, max_mm: f64) -> f64 {
+        self.column_top(foot, axis, max_mm)
     }
 
     /// Signed distance (mm, negative inside) of `p`'s column from the
@@ -73,24 +81,25 @@ pub fn numeric_gradient<O: Object3d + ?Sized>(object: &O, p: Vec3) -> Vec3 {
 }
 
 /// The column top of [`Object3d::column_top`] by sphere tracing the signed
-/// distance down the column from `max_mm`, then bisection to 1e-9 mm.
+/// distance down the column from `start` to `floor` (mm along the axis),
+/// then bisection to 1e-9 mm; `start` when it is inside already.
 pub(crate) fn sphere_trace<O: Object3d + ?Sized>(
     object: &O,
     foot: Vec3,
     axis: Vec3,
-    max_mm: f64,
+    start: f64,
+    floor: f64,
 ) -> f64 {
     let at = |t: f64| object.signed_distance(foot + axis * t);
-    let mut t = max_mm;
+    let mut t = start;
     let mut d = at(t);
     if d <= 0.0 {
-        return max_mm;
+        return start;
     }
-    let floor = -max_mm;
     let mut above = t;
     while t > floor {
         above = t;
-        t -= d.max(1e-4);
+        t -= d.max(1e-3);
         d = at(t);
         if d <= 0.0 {
             break;

@@ -310,6 +310,29 @@ fn issue23_an_extruded_disk_has_a_flat_top_and_its_rim_is_the_circle() {
         );
         assert!((s.normals[0] - Vec3::z()).norm() < 1e-12, "top face normal");
         assert!((s.normals[1] - out).norm() < 0.01, "wall normal radial");
+        // The edge frame: x out of the disk, y along the rim, z up.
+        let f = s.frame();
+        let axes = [
+            f.rotation * Vec3::x(),
+            f.rotation * Vec3::y(),
+            f.rotation * Vec3::z(),
+        ];
+        assert!(
+            (axes[0] - s.normals[1]).norm() < 1e-9,
+            "frame x across the edge"
+        );
+        assert!(
+            (axes[1] - s.tangent).norm() < 1e-9,
+            "frame y along the edge"
+        );
+        assert!((axes[2] - Vec3::z()).norm() < 1e-9, "frame z up");
+        let p = s.pose(tactrace_geometry::Pose::new(2.0, 0.0, -3.0, 0.0, 0.0, 0.0));
+        let want = s.point + s.normals[1] * 2.0 - Vec3::z() * 3.0;
+        assert!(
+            (Vec3::new(p.x, p.y, p.z) - want).norm() < 1e-9,
+            "edge pose position"
+        );
+        assert!(p.rx.abs() < 1e-9 && p.ry.abs() < 1e-9, "level edge pose");
     }
 }
 

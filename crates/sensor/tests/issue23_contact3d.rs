@@ -321,3 +321,29 @@ fn issue23_an_edge_tap_in_the_rim_frame_at_zero_tilt_is_the_planar_edge_tap() {
         }
     }
 }
+
+#[test]
+fn issue23_the_mesh_of_a_surface_presses_like_the_surface() {
+    let model = TacTipModel::new(TacTipConfig::default()).unwrap();
+    for surface in [
+        HeightField::saddle(60.0).unwrap(),
+        HeightField::wave(1.5, 40.0, 20.0).unwrap(),
+    ] {
+        let mesh =
+            tactrace_shape3d::TriangleMesh::from_heights(30.0, 1.0, |x, y| surface.height(x, y))
+                .unwrap();
+        for (rx, ry) in [(0.0, 0.0), (-20.0, 15.0)] {
+            let tip = Pose::new(2.0, -1.0, -4.0, rx, ry, 30.0);
+            let want = model.pins_3d(&surface, tip, None);
+            let err = worst(&want, &model.pins_3d(&mesh, tip, None));
+            assert!(
+                mean_motion(&model, &want) > 1.0,
+                "{surface:?}: a real press"
+            );
+            assert!(
+                err < 0.02,
+                "{surface:?} tilt ({rx}, {ry}): mesh and formula differ by {err} px"
+            );
+        }
+    }
+}

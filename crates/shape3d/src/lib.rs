@@ -15,6 +15,7 @@
 //! Pure: no printing, no other files.
 
 mod bowl;
+mod bvh;
 mod config;
 mod edge;
 mod error;

@@ -2,6 +2,7 @@
 //! angle-weighted pseudo-normal of its nearest feature (face, edge or
 //! vertex), so the sign is right for closed meshes and for an open surface
 //! patch seen from near it (Baerentzen and Aanaes 2005).
+use crate::bvh::Bvh;
 use crate::{Object3d, Shape3dError, Vec3};
 use std::collections::HashMap;
 
@@ -23,6 +24,7 @@ pub struct TriangleMesh {
     face_normals: Vec<Vec3>,
     vertex_normals: Vec<Vec3>,
     edge_normals: HashMap<(usize, usize), Vec3>,
+    bvh: Bvh,
 }
 
 impl TriangleMesh {
@@ -68,7 +70,12 @@ impl TriangleMesh {
                 *edge_normals.entry((a.min(b), a.max(b))).or_default() += n;
             }
         }
+        let corners: Vec<[Vec3; 3]> = triangles
+            .iter()
+            .map(|t| [vertices[t[0]], vertices[t[1]], vertices[t[2]]])
+            .collect();
         Ok(Self {
+            bvh: Bvh::new(&corners),
             vertices,
             triangles,
             face_normals,
@@ -156,7 +163,8 @@ impl TriangleMesh {
     /// pseudo-normal of its feature.
     fn nearest(&self, p: Vec3) -> (Vec3, f64, Vec3) {
         let mut best = (p, f64::INFINITY, Vec3::z());
-        for (f, t) in self.triangles.iter().enumerate() {
+        self.bvh.nearest(p, |f| {
+            let t = &self.triangles[f];
             let corners = [
                 self.vertices[t[0]],
                 self.vertices[t[1]],
@@ -175,7 +183,8 @@ impl TriangleMesh {
                 };
                 best = (q, d2, normal);
             }
-        }
+            d2
+        });
         best
     }
 }
@@ -241,5 +250,40 @@ impl Object3d for TriangleMesh {
     /// edge or vertex), unit length.
     fn normal(&self, p: Vec3) -> Vec3 {
         self.nearest(p).2.normalize()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The hierarchy finds the same distance as visiting every triangle.
+    #[test]
+    fn issue23_the_bvh_finds_the_nearest_triangle() {
+        let mesh =
+            TriangleMesh::from_heights(20.0, 0.7, |x, y| 2.0 * (0.2 * x).sin() * (0.15 * y).cos())
+                .unwrap();
+        for k in 0..300 {
+            let a = k as f64;
+            let p = Vec3::new(
+                25.0 * (0.37 * a).sin(),
+                25.0 * (0.23 * a).cos(),
+                6.0 * (0.71 * a).sin(),
+            );
+            let brute = mesh
+                .triangles
+                .iter()
+                .map(|t| {
+                    let c = [
+                        mesh.vertices[t[0]],
+                        mesh.vertices[t[1]],
+                        mesh.vertices[t[2]],
+                    ];
+                    (p - closest_on_triangle(p, c).0).norm()
+                })
+                .fold(f64::INFINITY, f64::min);
+            let got = mesh.signed_distance(p).abs();
+            assert!((got - brute).abs() < 1e-12, "at {p}: {got} vs {brute}");
+        }
     }
 }

@@ -10,10 +10,10 @@ const LEAF: usize = 4;
 struct Node {
     min: Vec3,
     max: Vec3,
-    /// Leaf: `order[start..start + count]`; inner: children at
-    /// `start` and `start + 1`... stored as (left, right).
+    /// The node's triangles: `order[start..start + count]`.
     start: usize,
     count: usize,
+    /// An inner node's children (node indices); `None` for a leaf.
     children: Option<(usize, usize)>,
 }
 

@@ -75,7 +75,8 @@ impl Foil {
 
 impl Object3d for Foil {
     /// The box-like combination of the plate's and the outline's
-    /// distances: exact on and near the faces, a bound at the edge.
+    /// distances: exact on and near the faces, approximate by the angle
+    /// between the faces (a few degrees) beyond the edge.
     fn signed_distance(&self, p: Vec3) -> f64 {
         let (_, shell, disk) = self.parts(p);
         shell.max(disk).min(0.0) + shell.max(0.0).hypot(disk.max(0.0))

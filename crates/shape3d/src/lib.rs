@@ -1,4 +1,4 @@
-//! Objects in 3D for tactile surface and edge following (issue 23).
+//! Objects in 3D for tactile surface and edge following.
 //!
 //! Every object is a solid in the world frame (millimetres; z up) behind
 //! one trait, [`Object3d`]: signed distance (negative inside), closest

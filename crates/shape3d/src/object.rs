@@ -5,9 +5,10 @@ use crate::{EdgeCurve, Vec3};
 
 /// A solid in the world frame (mm, z up), seen through its surface.
 ///
-/// The signed distance must be a distance bound (1-Lipschitz) so that
-/// sphere tracing is safe; it is exact near the surface for every object
-/// here (docs/3d.md says where each is approximate).
+/// The signed distance should be exact near the surface and never much
+/// above the true distance elsewhere, as the default column top traces
+/// spheres of that radius (docs/3d.md says where each object's is
+/// approximate).
 pub trait Object3d: Send + Sync + std::fmt::Debug {
     /// Signed distance of `p` from the surface, mm: negative inside the solid.
     fn signed_distance(&self, p: Vec3) -> f64;

@@ -38,6 +38,15 @@ struct Touch {
     inside: f64,
 }
 
+/// A tip pose pressed into an object: the touching patch points, the
+/// highest column and the rim grid (eqs. C1, C2).
+struct Pressed {
+    touches: Vec<Touch>,
+    reference: f64,
+    grid: LazyGrid,
+    place: Placement,
+}
+
 impl ContactModel {
     /// Pin displacements for the tip at `tip` (world frame: the dome's
     /// lowest point, mm; the sensor's orientation, deg, its z axis along
@@ -45,8 +54,85 @@ impl ContactModel {
     /// `object`. Eqs. C1-C3, then S4a-S7f as [`Self::field`].
     pub fn field_3d(&self, object: &dyn Object3d, tip: Pose) -> ContactField {
         let mut field = self.no_contact();
-        if !tip.is_finite() {
+        let Some(mut pressed) = self.press(object, tip) else {
             return field;
+        };
+        let depth = self.settle_3d(&pressed.touches, pressed.reference);
+        let area = self.patch_area();
+        let (mut ux, mut uy) = (vec![0.0; field.disp.len()], vec![0.0; field.disp.len()]);
+        let cerruti = self.mech.slip_spread == crate::SlipSpread::Cerruti;
+        if cerruti {
+            field.cerruti = vec![[0.0; 4]; field.disp.len()];
+        }
+        let mut touch_reach: f64 = 0.0;
+        for t in &pressed.touches {
+            let pen = t.inside * (depth - t.shifted);
+            touch_reach = touch_reach.max(self.patch[t.index].radius);
+            if pen > 0.0 {
+                field.load_mm3 += pen * area;
+                self.accumulate(t.index, pen, [&mut ux, &mut uy, &mut field.smoothed]);
+                if cerruti {
+                    self.accumulate_cerruti(t.index, pen, &mut field.cerruti);
+                }
+            }
+        }
+        for ((d, x), y) in field.disp.iter_mut().zip(&ux).zip(&uy) {
+            *d = [*x, *y];
+        }
+        if field.load_mm3 > 0.0 {
+            let max = self.mech.max_depth_mm;
+            let place = &pressed.place;
+            let mut footprint = |a: f64, b: f64| footprint_at(object, place, max, a, b);
+            let grid = &mut pressed.grid;
+            let mut at = |x: f64, y: f64| grid.interpolate(&mut footprint, [x, y]);
+            field.edge_normal = edge_normal_of(&mut at, touch_reach);
+        }
+        field
+    }
+
+    /// The contact along a slide (eq. B1 in 3D): the slide `shear` in the
+    /// sensor's plane ending at `tip`, as planar poses in the tip's frame
+    /// (the brush law reads only their relative motion), and the
+    /// indentation of every patch point at each, all settled as the tip
+    /// (eq. C3).
+    pub fn path_contact_3d(
+        &self,
+        object: &dyn Object3d,
+        tip: Pose,
+        shear: crate::Shear,
+        steps: usize,
+    ) -> crate::contact::PathContact {
+        let path = crate::slide_path(Pose::default(), shear, steps);
+        let Some(last) = self.press(object, tip) else {
+            return Default::default();
+        };
+        let settled = self.settle_3d(&last.touches, last.reference);
+        let tip_iso = tip.to_isometry();
+        let pens = path
+            .iter()
+            .map(|rel| {
+                let mut pens = vec![0.0; self.patch.len()];
+                let pose = Pose::from_isometry(&(tip_iso * rel.to_isometry()));
+                if let Some(p) = self.press(object, pose) {
+                    for t in &p.touches {
+                        let shifted = t.shifted - (p.reference - last.reference);
+                        pens[t.index] = (t.inside * (settled - shifted)).max(0.0);
+                    }
+                }
+                pens
+            })
+            .collect();
+        crate::contact::PathContact {
+            horiz: self.patch.iter().map(|p| p.horiz).collect(),
+            pens,
+            path,
+        }
+    }
+
+    /// Eqs. C1, C2 at one tip pose: `None` when nothing touches.
+    fn press(&self, object: &dyn Object3d, tip: Pose) -> Option<Pressed> {
+        if !tip.is_finite() {
+            return None;
         }
         let place = Placement::new(tip);
         let max = self.mech.max_depth_mm;
@@ -62,7 +148,7 @@ impl ContactModel {
             .collect();
         let reference = faces.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         if reference.is_nan() || reference <= 0.0 {
-            return field;
+            return None;
         }
         let reach = self.patch.iter().map(|p| p.radius).fold(0.0, f64::max);
         let mut grid = LazyGrid::new(reach, self.mech.distance_grid_mm);
@@ -100,33 +186,12 @@ impl ContactModel {
                 }
             })
             .collect();
-        let depth = self.settle_3d(&touches, reference);
-        let area = self.patch_area();
-        let (mut ux, mut uy) = (vec![0.0; field.disp.len()], vec![0.0; field.disp.len()]);
-        let cerruti = self.mech.slip_spread == crate::SlipSpread::Cerruti;
-        if cerruti {
-            field.cerruti = vec![[0.0; 4]; field.disp.len()];
-        }
-        let mut touch_reach: f64 = 0.0;
-        for t in &touches {
-            let pen = t.inside * (depth - t.shifted);
-            touch_reach = touch_reach.max(self.patch[t.index].radius);
-            if pen > 0.0 {
-                field.load_mm3 += pen * area;
-                self.accumulate(t.index, pen, [&mut ux, &mut uy, &mut field.smoothed]);
-                if cerruti {
-                    self.accumulate_cerruti(t.index, pen, &mut field.cerruti);
-                }
-            }
-        }
-        for ((d, x), y) in field.disp.iter_mut().zip(&ux).zip(&uy) {
-            *d = [*x, *y];
-        }
-        if field.load_mm3 > 0.0 {
-            let mut at = |x: f64, y: f64| grid.interpolate(&mut footprint, [x, y]);
-            field.edge_normal = edge_normal_of(&mut at, touch_reach);
-        }
-        field
+        Some(Pressed {
+            touches,
+            reference,
+            grid,
+            place,
+        })
     }
 
     /// Eq. S4a along the axis: the settled depth of the highest column

@@ -24,15 +24,18 @@ fn mean_motion(model: &TacTipModel, pins: &[[f64; 2]]) -> f64 {
         / pins.len() as f64
 }
 
-/// The default sensor, one with a rigid mount and Cerruti spread, and a
-/// rings sensor: every path of the contact's arithmetic.
+/// The default sensor, one with a rigid mount and Cerruti spread, a
+/// rings sensor and one with the brush law: every path of the contact's
+/// arithmetic.
 fn models() -> Vec<TacTipModel> {
     let mut rigid = TacTipConfig::default();
     rigid.mechanics.compliance_mm = 0.0;
     rigid.mechanics.slip_spread = SlipSpread::Cerruti;
     let mut rings = TacTipConfig::default();
     rings.geometry.layout = tactrace_sensor::PinLayout::Rings;
-    [TacTipConfig::default(), rigid, rings]
+    let mut brush = TacTipConfig::default();
+    brush.mechanics.slip_law = tactrace_sensor::SlipLaw::Brush;
+    [TacTipConfig::default(), rigid, rings, brush]
         .into_iter()
         .map(|c| TacTipModel::new(c).unwrap())
         .collect()
@@ -127,30 +130,33 @@ fn issue23_a_tilted_sensor_on_a_plane_is_a_level_sensor_on_the_tilted_ramp() {
     // Turning the whole scene about the pole by the sensor's inverse
     // rotation: the plane z = 0 becomes the plane of normal n = R^-1 z
     // whose signed distance from the pole is still -depth.
-    let model = TacTipModel::new(TacTipConfig::default()).unwrap();
     let plane = HeightField::ramp(0.0, 0.0, 0.0).unwrap();
-    for (rx, ry, rz, depth) in [
-        (10.0, 0.0, 0.0, 3.0),
-        (-15.0, 20.0, 40.0, 4.0),
-        (5.0, -25.0, -110.0, 2.0),
-    ] {
-        let tip = Pose::new(3.0, -1.0, -depth, rx, ry, rz);
-        let n = tip.to_isometry().rotation.inverse() * Vec3::z();
-        let slope = n.z.acos().to_degrees();
-        let azimuth = (-n.y).atan2(-n.x).to_degrees();
-        let ramp = HeightField::ramp(depth / n.z, slope, azimuth).unwrap();
-        let tilted = model.pins_3d(&plane, tip, None);
-        let level = model.pins_3d(&ramp, Pose::default(), None);
-        let err = worst(&tilted, &level);
-        assert!(
-            err < 1e-6,
-            "tilt ({rx}, {ry}, {rz}): pins differ by {err} px"
-        );
-        let flat = model.pins_3d(&plane, Pose::planar(3.0, -1.0, -depth, rz), None);
-        assert!(
-            worst(&tilted, &flat) > 0.1,
-            "the tilt must change the field"
-        );
+    for model in models() {
+        for (rx, ry, rz, depth) in [
+            (10.0, 0.0, 0.0, 3.0),
+            (-15.0, 20.0, 40.0, 4.0),
+            (5.0, -25.0, -110.0, 2.0),
+        ] {
+            let tip = Pose::new(3.0, -1.0, -depth, rx, ry, rz);
+            let n = tip.to_isometry().rotation.inverse() * Vec3::z();
+            let slope = n.z.acos().to_degrees();
+            let azimuth = (-n.y).atan2(-n.x).to_degrees();
+            let ramp = HeightField::ramp(depth / n.z, slope, azimuth).unwrap();
+            for shear in SHEARS {
+                let tilted = model.pins_3d(&plane, tip, shear);
+                let level = model.pins_3d(&ramp, Pose::default(), shear);
+                let err = worst(&tilted, &level);
+                assert!(
+                    err < 1e-6,
+                    "tilt ({rx}, {ry}, {rz}): pins differ by {err} px"
+                );
+                let flat = model.pins_3d(&plane, Pose::planar(3.0, -1.0, -depth, rz), shear);
+                assert!(
+                    worst(&tilted, &flat) > 0.1,
+                    "the tilt must change the field"
+                );
+            }
+        }
     }
 }
 

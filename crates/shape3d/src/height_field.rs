@@ -3,9 +3,16 @@
 //! on the squared distance to the graph, so the signed distance is exact.
 use crate::{Object3d, Shape3dError, Vec3};
 
-/// A height-field surface z = f(x, y) (mm), solid below.
+/// A height-field surface z = f(x, y) (mm), solid below: built by
+/// [`HeightField::ramp`], [`HeightField::saddle`] or [`HeightField::wave`].
 #[derive(Debug, Clone, PartialEq)]
-pub enum HeightField {
+pub struct HeightField {
+    kind: Kind,
+}
+
+/// The surfaces, in the units their formulas use.
+#[derive(Debug, Clone, PartialEq)]
+enum Kind {
     /// The plane z = height + tan(slope) (x cos(azimuth) + y sin(azimuth)):
     /// rising by `slope` towards `azimuth` (a flat floor at slope 0).
     Ramp {
@@ -58,10 +65,12 @@ impl HeightField {
             "a ramp's slope must be within +-60 deg",
         )?;
         check("azimuth_deg", azimuth_deg, true, "must be finite")?;
-        Ok(Self::Ramp {
-            height: height_mm,
-            tan: slope_deg.to_radians().tan(),
-            dir: unit(azimuth_deg),
+        Ok(Self {
+            kind: Kind::Ramp {
+                height: height_mm,
+                tan: slope_deg.to_radians().tan(),
+                dir: unit(azimuth_deg),
+            },
         })
     }
 
@@ -73,7 +82,9 @@ impl HeightField {
             radius_mm >= 20.0,
             "a saddle's radius must be at least 20 mm",
         )?;
-        Ok(Self::Saddle { radius: radius_mm })
+        Ok(Self {
+            kind: Kind::Saddle { radius: radius_mm },
+        })
     }
 
     /// The wave of amplitude `amplitude_mm` and wavelength `wavelength_mm`
@@ -103,10 +114,12 @@ impl HeightField {
             "the wave's steepest slope 2 pi A / L must be below 1",
         )?;
         check("azimuth_deg", azimuth_deg, true, "must be finite")?;
-        Ok(Self::Wave {
-            amplitude: amplitude_mm,
-            wavenumber: k,
-            dir: unit(azimuth_deg),
+        Ok(Self {
+            kind: Kind::Wave {
+                amplitude: amplitude_mm,
+                wavenumber: k,
+                dir: unit(azimuth_deg),
+            },
         })
     }
 
@@ -115,20 +128,35 @@ impl HeightField {
         self.derivatives(x, y).0
     }
 
-    /// f, its gradient [f_x, f_y] and Hessian [f_xx, f_xy, f_yy].
+    /// The largest curvature of the surface, 1/mm (0 for the ramp, 1/R
+    /// for the saddle, A (2 pi / L)^2 for the wave).
+    pub fn max_curvature(&self) -> f64 {
+        match self.kind {
+            Kind::Ramp { .. } => 0.0,
+            Kind::Saddle { radius } => 1.0 / radius,
+            Kind::Wave {
+                amplitude,
+                wavenumber,
+                ..
+            } => amplitude * wavenumber * wavenumber,
+        }
+    }
+
+    /// f, its gradient [f_x, f_y] and Hessian [f_xx, f_xy, f_yy] (mm,
+    /// unitless, 1/mm).
     pub fn derivatives(&self, x: f64, y: f64) -> (f64, [f64; 2], [f64; 3]) {
-        match *self {
-            Self::Ramp { height, tan, dir } => (
+        match self.kind {
+            Kind::Ramp { height, tan, dir } => (
                 height + tan * (x * dir[0] + y * dir[1]),
                 [tan * dir[0], tan * dir[1]],
                 [0.0; 3],
             ),
-            Self::Saddle { radius } => (
+            Kind::Saddle { radius } => (
                 (x * x - y * y) / (2.0 * radius),
                 [x / radius, -y / radius],
                 [1.0 / radius, 0.0, -1.0 / radius],
             ),
-            Self::Wave {
+            Kind::Wave {
                 amplitude,
                 wavenumber: k,
                 dir,

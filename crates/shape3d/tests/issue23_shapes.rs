@@ -244,15 +244,7 @@ fn issue23_the_mesh_of_a_sampled_surface_agrees_with_its_formula_within_the_reso
         let mesh = TriangleMesh::from_heights(30.0, step, |x, y| hf.height(x, y)).unwrap();
         // A linear interpolant over a cell of side h misses a surface of
         // curvature k by at most about k h^2 (both triangle diagonals).
-        let curvature: f64 = match &hf {
-            HeightField::Saddle { radius } => 1.0 / radius,
-            HeightField::Wave {
-                amplitude,
-                wavenumber,
-                ..
-            } => amplitude * wavenumber * wavenumber,
-            HeightField::Ramp { .. } => 0.0,
-        };
+        let curvature = hf.max_curvature();
         let tol = curvature * step * step;
         let mut worst: f64 = 0.0;
         for i in -8..=8 {

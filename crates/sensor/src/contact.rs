@@ -24,13 +24,13 @@ pub struct Shear {
 
 /// One quadrature point of the skin.
 #[derive(Debug, Clone, Copy)]
-struct PatchPoint {
+pub(crate) struct PatchPoint {
     /// Horizontal position in the sensor frame, mm.
-    horiz: [f64; 2],
+    pub horiz: [f64; 2],
     /// Height above the dome's lowest point, mm.
-    height: f64,
+    pub height: f64,
     /// Horizontal distance from the axis, mm.
-    radius: f64,
+    pub radius: f64,
 }
 
 /// Pin displacements on the skin and the smoothed indentation under each pin.
@@ -67,7 +67,8 @@ impl ContactField {
 /// Precomputed elastic response of every pin to every patch point.
 #[derive(Debug, Clone)]
 pub(crate) struct ContactModel {
-    patch: Vec<PatchPoint>,
+    /// The quadrature patch, sorted by height.
+    pub(crate) patch: Vec<PatchPoint>,
     /// `kernel_x[j * pins + i]` = K_x of patch point j on pin i (eq. S6);
     /// likewise K_y and the smoothing weight G (eq. S5). Separate rows keep
     /// the per-tap accumulation a vectorisable pass.
@@ -79,7 +80,7 @@ pub(crate) struct ContactModel {
     /// (times dA); empty unless the slip spread is Cerruti.
     kernel_c: [Vec<f32>; 4],
     pins_g: Vec<[f64; 2]>,
-    mech: Mechanics,
+    pub(crate) mech: Mechanics,
 }
 
 impl ContactModel {
@@ -153,13 +154,7 @@ impl ContactModel {
     /// The slide's stick-slip (eq. S7) is added by the caller.
     pub fn field(&self, sd: &dyn Fn(Vec2) -> f64, tip: Pose) -> ContactField {
         let n = self.pins_g.len();
-        let mut field = ContactField {
-            disp: vec![[0.0; 2]; n],
-            smoothed: vec![0.0; n],
-            load_mm3: 0.0,
-            edge_normal: [0.0; 2],
-            cerruti: Vec::new(),
-        };
+        let mut field = self.no_contact();
         let depth = (-tip.z).min(self.mech.max_depth_mm);
         if depth.is_nan() || depth <= 0.0 {
             return field;
@@ -191,6 +186,18 @@ impl ContactModel {
             field.edge_normal = edge_normal(&mut grid, sd, reach);
         }
         field
+    }
+
+    /// The field of no contact: every pin at rest.
+    pub(crate) fn no_contact(&self) -> ContactField {
+        let n = self.pins_g.len();
+        ContactField {
+            disp: vec![[0.0; 2]; n],
+            smoothed: vec![0.0; n],
+            load_mm3: 0.0,
+            edge_normal: [0.0; 2],
+            cerruti: Vec::new(),
+        }
     }
 
     /// Patch points that can touch at indentation `depth` (the patch is
@@ -235,7 +242,7 @@ impl ContactModel {
             .collect()
     }
 
-    fn patch_area(&self) -> f64 {
+    pub(crate) fn patch_area(&self) -> f64 {
         let h = self.mech.patch_grid_mm;
         3f64.sqrt() / 2.0 * h * h
     }
@@ -325,7 +332,7 @@ impl ContactModel {
 
     /// Add patch point j's indentation `pen` to every pin's Cerruti sums
     /// (eq. S7h).
-    fn accumulate_cerruti(&self, j: usize, pen: f64, sums: &mut [[f64; 4]]) {
+    pub(crate) fn accumulate_cerruti(&self, j: usize, pen: f64, sums: &mut [[f64; 4]]) {
         let n = self.pins_g.len();
         for (c, kernel) in self.kernel_c.iter().enumerate() {
             for (s, k) in sums.iter_mut().zip(&kernel[j * n..(j + 1) * n]) {
@@ -335,7 +342,7 @@ impl ContactModel {
     }
 
     /// Add patch point j's indentation `pen` to every pin (eqs. S5, S6).
-    fn accumulate(&self, j: usize, pen: f64, [ux, uy, smoothed]: [&mut Vec<f64>; 3]) {
+    pub(crate) fn accumulate(&self, j: usize, pen: f64, [ux, uy, smoothed]: [&mut Vec<f64>; 3]) {
         let n = self.pins_g.len();
         let flow = 1.0 / self.mech.layer_thickness_mm * pen;
         let rows = j * n..(j + 1) * n;
@@ -388,11 +395,16 @@ pub(crate) fn settled_depth(commanded: f64, k: f64, points: &[(f64, f64)]) -> f6
 /// signed distance's gradient there, sensor frame), scaled by the edge's
 /// proximity clamp(1 - |sd| / reach, 0, 1) (eq. S7f).
 fn edge_normal(grid: &mut DistanceGrid, sd: &dyn Fn(Vec2) -> f64, reach: f64) -> [f64; 2] {
-    let at = |g: &mut DistanceGrid, x: f64, y: f64| g.interpolate(sd, [x, y]);
-    let gx = 0.5 * (at(grid, 1.0, 0.0) - at(grid, -1.0, 0.0));
-    let gy = 0.5 * (at(grid, 0.0, 1.0) - at(grid, 0.0, -1.0));
+    edge_normal_of(&mut |x, y| grid.interpolate(sd, [x, y]), reach)
+}
+
+/// [`edge_normal`] from any interpolated signed distance `at(x, y)` in the
+/// sensor's horizontal plane (mm).
+pub(crate) fn edge_normal_of(at: &mut dyn FnMut(f64, f64) -> f64, reach: f64) -> [f64; 2] {
+    let gx = 0.5 * (at(1.0, 0.0) - at(-1.0, 0.0));
+    let gy = 0.5 * (at(0.0, 1.0) - at(0.0, -1.0));
     let size = gx.hypot(gy);
-    let proximity = (1.0 - at(grid, 0.0, 0.0).abs() / reach.max(1e-9)).clamp(0.0, 1.0);
+    let proximity = (1.0 - at(0.0, 0.0).abs() / reach.max(1e-9)).clamp(0.0, 1.0);
     if size < 0.5 || !size.is_finite() {
         return [0.0; 2];
     }
@@ -447,39 +459,61 @@ fn cerruti_weights(gi: [f64; 2], gj: [f64; 2], core: f64, area: f64) -> [f32; 4]
 /// sensor's horizontal plane and interpolated bilinearly (exact for a
 /// straight edge).
 struct DistanceGrid {
-    spacing: f64,
-    half: i64,
-    values: Vec<f64>,
+    grid: LazyGrid,
     tip: Pose,
     rot: [f64; 2],
 }
 
 impl DistanceGrid {
     fn new(reach: f64, spacing: f64, tip: Pose) -> Self {
-        let half = (reach / spacing).ceil() as i64 + 1;
-        let side = (2 * half + 1) as usize;
         let r = tip.rz.to_radians();
         Self {
-            spacing,
-            half,
-            values: vec![f64::NAN; side * side],
+            grid: LazyGrid::new(reach, spacing),
             tip,
             rot: [r.cos(), r.sin()],
         }
     }
 
-    fn node(&mut self, sd: &dyn Fn(Vec2) -> f64, ia: i64, ib: i64) -> f64 {
+    fn interpolate(&mut self, sd: &dyn Fn(Vec2) -> f64, q: [f64; 2]) -> f64 {
+        let (tip, rot) = (self.tip, self.rot);
+        let mut value = |a: f64, b: f64| {
+            sd(Vec2::new(
+                tip.x + rot[0] * a - rot[1] * b,
+                tip.y + rot[1] * a + rot[0] * b,
+            ))
+        };
+        self.grid.interpolate(&mut value, q)
+    }
+}
+
+/// Values over the sensor's horizontal plane (mm) sampled lazily on a
+/// square grid and interpolated bilinearly; a non-finite value is kept as
+/// -+1e9 (inside / outside).
+pub(crate) struct LazyGrid {
+    spacing: f64,
+    half: i64,
+    values: Vec<f64>,
+}
+
+impl LazyGrid {
+    /// A grid of `spacing` mm covering the disk of radius `reach` mm.
+    pub(crate) fn new(reach: f64, spacing: f64) -> Self {
+        let half = (reach / spacing).ceil() as i64 + 1;
+        let side = (2 * half + 1) as usize;
+        Self {
+            spacing,
+            half,
+            values: vec![f64::NAN; side * side],
+        }
+    }
+
+    fn node(&mut self, value: &mut dyn FnMut(f64, f64) -> f64, ia: i64, ib: i64) -> f64 {
         let ia = ia.clamp(-self.half, self.half);
         let ib = ib.clamp(-self.half, self.half);
         let side = 2 * self.half + 1;
         let k = ((ib + self.half) * side + ia + self.half) as usize;
         if self.values[k].is_nan() {
-            let (a, b) = (ia as f64 * self.spacing, ib as f64 * self.spacing);
-            let world = Vec2::new(
-                self.tip.x + self.rot[0] * a - self.rot[1] * b,
-                self.tip.y + self.rot[1] * a + self.rot[0] * b,
-            );
-            let v = sd(world);
+            let v = value(ia as f64 * self.spacing, ib as f64 * self.spacing);
             self.values[k] = if v.is_finite() {
                 v
             } else if v < 0.0 {
@@ -491,14 +525,20 @@ impl DistanceGrid {
         self.values[k]
     }
 
-    fn interpolate(&mut self, sd: &dyn Fn(Vec2) -> f64, q: [f64; 2]) -> f64 {
+    /// The bilinear interpolation at `q` (mm) of `value(a, b)`, the value
+    /// at the node (a, b) of the sensor's plane (mm).
+    pub(crate) fn interpolate(
+        &mut self,
+        value: &mut dyn FnMut(f64, f64) -> f64,
+        q: [f64; 2],
+    ) -> f64 {
         let (u, v) = (q[0] / self.spacing, q[1] / self.spacing);
         let (ia, ib) = (floor_i64(u), floor_i64(v));
         let (fu, fv) = (u - ia as f64, v - ib as f64);
-        let v00 = self.node(sd, ia, ib);
-        let v10 = self.node(sd, ia + 1, ib);
-        let v01 = self.node(sd, ia, ib + 1);
-        let v11 = self.node(sd, ia + 1, ib + 1);
+        let v00 = self.node(value, ia, ib);
+        let v10 = self.node(value, ia + 1, ib);
+        let v01 = self.node(value, ia, ib + 1);
+        let v11 = self.node(value, ia + 1, ib + 1);
         let top = v00 + fu * (v10 - v00);
         let bottom = v01 + fu * (v11 - v01);
         top + fv * (bottom - top)

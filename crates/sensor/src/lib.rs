@@ -3,7 +3,8 @@
 //! A hemispherical skin seen by an internal camera: the pin layout (a
 //! hexagonal lattice, 127 pins by default, or concentric rings) and its
 //! projection, a contact-mechanics model of the dome pressed onto
-//! an extruded object (docs/sensor-model.md), fast anti-aliased rendering,
+//! an extruded object (docs/sensor-model.md) or into any 3D object at any
+//! tilt ([`TacTipModel::pins_3d`], docs/3d.md), fast anti-aliased rendering,
 //! the [`TactileSensor`] trait with a simulated implementation
 //! ([`SimTacTip`]), a replay implementation ([`ReplaySensor`]) and the
 //! real-frame world's [`NearestFrameSensor`] (the saved real frame whose
@@ -13,6 +14,7 @@
 mod brush;
 mod config;
 mod contact;
+mod contact3d;
 mod correction;
 mod edge_tap;
 mod error;

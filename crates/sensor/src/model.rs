@@ -170,6 +170,36 @@ impl TacTipModel {
         }
     }
 
+    /// True pin centres (px) for the sensor tip at the 6-DoF pose `tip`
+    /// pressed into the 3D `object` (docs/3d.md): position = the dome's
+    /// lowest point in the object's frame (mm), orientation (rx, ry, rz,
+    /// deg; extrinsic x, y, z) = the sensor frame, whose z axis runs along
+    /// the dome's axis from the skin into the sensor (at rx = ry = 0 the
+    /// planar model's frame, turned by rz). `shear` is a slide in the
+    /// sensor's plane made while in contact, felt through the configured
+    /// slip law (S7, or B1-B3 along the slide). Eqs. C1-C3, S4a-S8a. Over
+    /// an extruded contour at rx = ry = 0 this is [`Self::pins`] with z
+    /// measured from the top face.
+    pub fn pins_3d(
+        &self,
+        object: &dyn tactrace_shape3d::Object3d,
+        tip: Pose,
+        shear: Option<Shear>,
+    ) -> Vec<[f64; 2]> {
+        let field = self.contact.field_3d(object, tip);
+        let mech = &self.cfg.mechanics;
+        match (mech.slip_law, shear) {
+            (SlipLaw::Brush, Some(s)) => {
+                let path = self
+                    .contact
+                    .path_contact_3d(object, tip, s, mech.brush_steps);
+                let slip = self.brush_slip(&path, mech);
+                self.compose_slip(&field, Some(&slip))
+            }
+            _ => self.compose(&field, mech, shear),
+        }
+    }
+
     /// The contact along the slide `shear` that ends at `tip` (eq. B1).
     pub(crate) fn path_contact(
         &self,

@@ -18,18 +18,52 @@ pub struct TacTipConfig {
     pub calibration: Calibration,
 }
 
-/// The hemispherical skin and its pin lattice.
+/// The hemispherical skin and its pins (docs/sensor-model.md, eqs. S1
+/// and S1r).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SkinGeometry {
     /// Radius of the hemispherical dome, mm (the skin is ~40 mm across).
     pub dome_radius_mm: f64,
-    /// Pin spacing along the skin surface, mm (hexagonal lattice).
+    /// Pin spacing along the skin surface, mm: the lattice spacing, or
+    /// the step between rings.
     pub pin_spacing_mm: f64,
-    /// Hexagonal rings round the centre pin: 6 gives 127 pins.
+    /// Rings round the centre pin, 6n pins on ring n: 6 give 127 pins,
+    /// 10 give 331.
     pub rings: usize,
     /// Pin radius on the skin, mm (sets the rendered disc size).
     pub pin_radius_mm: f64,
+    /// How the pins are laid out: a hexagonal lattice (eq. S1) or
+    /// concentric circles (eq. S1r).
+    pub layout: PinLayout,
+    /// Concentric circles only: the angle of ring k's first pin from the
+    /// sensor's x axis, degrees, innermost ring first, one per ring
+    /// (empty: every ring starts on the x axis).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ring_phase_deg: Vec<f64>,
+}
+
+/// The pin layout of the skin.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PinLayout {
+    /// A hexagonal lattice, ring n a hexagon of 6n pins (eq. S1; the
+    /// 127-pin TacTip).
+    #[default]
+    Hex,
+    /// Concentric circles, ring k of radius k s holding 6k pins evenly
+    /// spaced and turned by its phase (eq. S1r; the 331-pin TacTip).
+    Rings,
+}
+
+impl PinLayout {
+    /// What the layout is, for messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            PinLayout::Hex => "hexagonal lattice",
+            PinLayout::Rings => "concentric rings",
+        }
+    }
 }
 
 impl Default for SkinGeometry {
@@ -39,6 +73,8 @@ impl Default for SkinGeometry {
             pin_spacing_mm: 4.243,
             rings: 6,
             pin_radius_mm: 0.8,
+            layout: PinLayout::Hex,
+            ring_phase_deg: Vec::new(),
         }
     }
 }
@@ -392,6 +428,7 @@ impl TacTipConfig {
                 reason: "must be between 1 and 20",
             });
         }
+        check_phases(g)?;
         let outer = g.rings as f64 * g.pin_spacing_mm / g.dome_radius_mm;
         if outer >= std::f64::consts::FRAC_PI_2 {
             return Err(SensorError::InvalidConfig {
@@ -493,6 +530,7 @@ impl TacTipConfig {
         // The patch's radius along the skin: the dome within
         // `max_depth_mm` of its lowest point; horizontal reaches are less.
         let reach = g.dome_radius_mm * (1.0 - m.max_depth_mm / g.dome_radius_mm).acos();
+        // Either layout holds 1 + 3n(n + 1) pins (eqs. S1, S1r).
         let rings = g.rings as f64;
         let pins = 3.0 * rings * rings + 3.0 * rings + 1.0;
         // ContactModel::new: a hexagonal lattice of ceil(reach / h) + 1 rings.
@@ -531,6 +569,33 @@ impl TacTipConfig {
         }
         Ok(())
     }
+}
+
+/// The ring phases: only for concentric rings, one per ring, finite.
+fn check_phases(g: &SkinGeometry) -> Result<(), SensorError> {
+    let field = "geometry.ring_phase_deg";
+    let count = g.ring_phase_deg.len();
+    if count == 0 {
+        return Ok(());
+    }
+    if g.layout != PinLayout::Rings {
+        return Err(SensorError::InvalidConfig {
+            field,
+            value: count as f64,
+            reason: "ring phases are for a rings layout (layout = \"rings\") only",
+        });
+    }
+    if count != g.rings {
+        return Err(SensorError::InvalidConfig {
+            field,
+            value: count as f64,
+            reason: "must give one phase per ring (as many as geometry.rings)",
+        });
+    }
+    for &v in &g.ring_phase_deg {
+        finite(field, v)?;
+    }
+    Ok(())
 }
 
 /// The largest dome radius accepted, mm.

@@ -30,6 +30,19 @@ pub enum SensorError {
         got: usize,
         reason: String,
     },
+    /// Measured rest pins that neither kind of layout fits: `source` says
+    /// where the closer fit fails.
+    #[error(
+        "no pin layout fits the {pins} rest pins ({hex_px:.2} px RMS from a hexagonal \
+         lattice, {rings_px:.2} px from concentric rings)"
+    )]
+    NoLayoutFits {
+        pins: usize,
+        hex_px: f64,
+        rings_px: f64,
+        #[source]
+        source: Box<SensorError>,
+    },
     /// A frame file that does not exist.
     #[error("frame file `{path}` does not exist")]
     FrameMissing { path: PathBuf },
@@ -61,6 +74,7 @@ impl SensorError {
                 | SensorError::TooLarge { .. }
                 | SensorError::Correction { .. }
                 | SensorError::RestPins { .. }
+                | SensorError::NoLayoutFits { .. }
                 | SensorError::Bank(_)
         )
     }

@@ -1,43 +1,170 @@
-//! The simulated TacTip's layout fitted to a user's undeformed frame
-//! (`tactrace calibrate`, docs/calibration.md "Any TacTip"): the ring count
-//! from the pin count, the frame size, the pin spacing that keeps the
-//! lattice's extent on the dome, and the camera (centre, focal length,
-//! rotation, mirror) that projects the lattice onto the measured pins.
-use crate::layout::{hex_lattice, pin_count, Projection};
+//! The simulated TacTip's layout fitted to a user's rest pins (`tactrace
+//! calibrate`, docs/calibration.md "Any TacTip"): the ring count from the
+//! pin count, the frame size, the pin spacing that keeps the layout's
+//! extent on the dome, then both kinds of layout fitted and the better one
+//! chosen: a hexagonal lattice (eq. S1) with the camera's centre, focal
+//! length, rotation and mirror, and concentric rings (eq. S1r) with the
+//! camera's centre, focal length and height and each ring's phase
+//! (`fit_rings.rs`).
+use crate::config::PinLayout;
+use crate::fit_rings::fit_rings_camera;
+use crate::layout::{hex_lattice, pin_count, skin_pins, Projection};
+use crate::model::match_rest_pins;
 use crate::nelder_mead::minimise;
-use crate::{SensorError, TacTipConfig, TacTipModel};
+use crate::{SensorError, TacTipConfig};
 
-/// Hexagonal rings a TacTip may have (1 + 3n(n+1) pins).
+/// Rings a TacTip may have (1 + 3n(n+1) pins).
 const MAX_RINGS: usize = 20;
 
+/// Both layouts fitted to one set of rest pins, and the better one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayoutFit {
+    /// The configuration of the better-fitting layout.
+    pub config: TacTipConfig,
+    /// The hexagonal lattice's fit.
+    pub hex: KindFit,
+    /// The concentric rings' fit.
+    pub rings: KindFit,
+}
+
+/// One kind of layout fitted to the rest pins.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KindFit {
+    /// The fitted configuration.
+    pub config: TacTipConfig,
+    /// Root mean square distance from each measured pin to the nearest
+    /// model pin and from each model pin to the nearest measured one
+    /// (both ways), px.
+    pub residual_px: f64,
+    /// Whether every measured pin pairs with its own model pin within
+    /// half a spacing (what [`crate::TacTipModel::with_rest_pins`] asks).
+    pub matched: bool,
+    /// Whether the base configuration already fitted and was kept as it
+    /// was (frame size apart).
+    pub kept: bool,
+}
+
+impl LayoutFit {
+    /// The kind chosen (the layout of [`Self::config`]).
+    pub fn layout(&self) -> PinLayout {
+        self.config.geometry.layout
+    }
+
+    /// The fit of `kind`.
+    pub fn of(&self, kind: PinLayout) -> &KindFit {
+        match kind {
+            PinLayout::Hex => &self.hex,
+            PinLayout::Rings => &self.rings,
+        }
+    }
+}
+
 /// `base` with the layout of the frame whose pins (px, any order) are
-/// `rest_px` and whose size is `frame` (width, height px). When `base`
-/// already fits those pins (same count, every pin within half a spacing of
-/// a model pin) only the frame size changes; otherwise the ring count, the
-/// spacing (the lattice keeps `base`'s extent on the dome, pins scaled with
-/// it) and the camera are fitted. The sensor frame's orientation is fixed
-/// up to the lattice's 60-degree symmetry by taking the rotation nearest
-/// `base`'s.
+/// `rest_px` and whose size is `frame` (width, height px): the better of
+/// the two kinds of layout ([`fit_layouts`]).
 pub fn fit_layout(
     base: &TacTipConfig,
     rest_px: &[[f64; 2]],
     frame: (u32, u32),
 ) -> Result<TacTipConfig, SensorError> {
+    fit_layouts(base, rest_px, frame).map(|fit| fit.config)
+}
+
+/// Both kinds of layout fitted to the rest pins `rest_px` (px, any order)
+/// of a frame of size `frame` (width, height px), and the better chosen:
+/// of the kinds whose every measured pin pairs with a model pin, the one
+/// with the smaller residual. For each kind: when `base` is of that kind
+/// and already fits those pins (same count, every pin within half a
+/// spacing of a model pin) only the frame size changes; otherwise the
+/// ring count comes from the pin count, the spacing keeps `base`'s extent
+/// on the dome (pins scaled with it), and the camera is fitted. A lattice
+/// keeps its orientation nearest `base`'s up to its 60-degree symmetry;
+/// rings keep `base`'s rotation and mirror and fit each ring's phase.
+pub fn fit_layouts(
+    base: &TacTipConfig,
+    rest_px: &[[f64; 2]],
+    frame: (u32, u32),
+) -> Result<LayoutFit, SensorError> {
     let rings = rings_for(rest_px.len())?;
     let mut cfg = base.clone();
     cfg.camera.width = frame.0;
     cfg.camera.height = frame.1;
-    if rings == base.geometry.rings
-        && TacTipModel::with_rest_pins(cfg.clone(), rest_px.to_vec()).is_ok()
-    {
-        return Ok(cfg);
+    let hex = fit_kind(base, &cfg, PinLayout::Hex, rings, rest_px);
+    let circles = fit_kind(base, &cfg, PinLayout::Rings, rings, rest_px);
+    let better = match (hex.matched, circles.matched) {
+        (true, true) if circles.residual_px < hex.residual_px => &circles,
+        (true, _) => &hex,
+        (false, true) => &circles,
+        (false, false) => {
+            let closer = if circles.residual_px < hex.residual_px {
+                &circles
+            } else {
+                &hex
+            };
+            let source =
+                check(&closer.config, rest_px)
+                    .err()
+                    .unwrap_or_else(|| SensorError::RestPins {
+                        expected: rest_px.len(),
+                        got: rest_px.len(),
+                        reason: "the fitted layout is not a valid sensor".into(),
+                    });
+            return Err(SensorError::NoLayoutFits {
+                pins: rest_px.len(),
+                hex_px: hex.residual_px,
+                rings_px: circles.residual_px,
+                source: Box::new(source),
+            });
+        }
+    };
+    Ok(LayoutFit {
+        config: better.config.clone(),
+        hex,
+        rings: circles,
+    })
+}
+
+/// `cfg` (`base` with the frame size) laid out as `kind` with `rings`
+/// rings and fitted to `rest_px`.
+fn fit_kind(
+    base: &TacTipConfig,
+    cfg: &TacTipConfig,
+    kind: PinLayout,
+    rings: usize,
+    rest_px: &[[f64; 2]],
+) -> KindFit {
+    let g = &base.geometry;
+    if g.layout == kind && g.rings == rings && check(cfg, rest_px).is_ok() {
+        return KindFit {
+            residual_px: residual(cfg, rest_px),
+            config: cfg.clone(),
+            matched: true,
+            kept: true,
+        };
     }
-    let scale = base.geometry.rings as f64 / rings as f64;
-    cfg.geometry.rings = rings;
-    cfg.geometry.pin_spacing_mm = base.geometry.pin_spacing_mm * scale;
-    cfg.geometry.pin_radius_mm = base.geometry.pin_radius_mm * scale;
+    let mut start = cfg.clone();
+    let scale = g.rings as f64 / rings as f64;
+    start.geometry.layout = kind;
+    start.geometry.ring_phase_deg.clear();
+    start.geometry.rings = rings;
+    start.geometry.pin_spacing_mm = g.pin_spacing_mm * scale;
+    start.geometry.pin_radius_mm = g.pin_radius_mm * scale;
+    let config = match kind {
+        PinLayout::Hex => fit_hex(&start, rest_px),
+        PinLayout::Rings => fit_rings_camera(&start, rest_px),
+    };
+    KindFit {
+        residual_px: residual(&config, rest_px),
+        matched: check(&config, rest_px).is_ok(),
+        config,
+        kept: false,
+    }
+}
+
+/// The lattice's camera fitted with either mirror, the better kept.
+fn fit_hex(cfg: &TacTipConfig, rest_px: &[[f64; 2]]) -> TacTipConfig {
     let mut best: Option<(f64, TacTipConfig)> = None;
-    for mirror in [base.camera.mirror, !base.camera.mirror] {
+    for mirror in [cfg.camera.mirror, !cfg.camera.mirror] {
         let mut trial = cfg.clone();
         trial.camera.mirror = mirror;
         let start = initial_camera(&trial, rest_px);
@@ -46,12 +173,29 @@ pub fn fit_layout(
             best = Some((cost, fitted));
         }
     }
-    let (_, fitted) = best.expect("two mirror choices tried");
-    TacTipModel::with_rest_pins(fitted.clone(), rest_px.to_vec())?;
-    Ok(fitted)
+    best.expect("two mirror choices tried").1
 }
 
-/// The ring count of a hexagonal lattice of `pins` pins.
+/// Whether `cfg` is valid and its model pins pair one to one with the
+/// measured pins (as [`crate::TacTipModel::with_rest_pins`] checks).
+fn check(cfg: &TacTipConfig, rest_px: &[[f64; 2]]) -> Result<(), SensorError> {
+    cfg.validate()?;
+    let proj = Projection::new(&cfg.geometry, &cfg.camera);
+    match_rest_pins(&proj, &skin_pins(&cfg.geometry), &cfg.geometry, rest_px).map(|_| ())
+}
+
+/// The fit's residual: root mean square nearest-pin distance both ways
+/// between the measured pins and the model's, px.
+fn residual(cfg: &TacTipConfig, rest_px: &[[f64; 2]]) -> f64 {
+    let proj = Projection::new(&cfg.geometry, &cfg.camera);
+    let model: Vec<[f64; 2]> = skin_pins(&cfg.geometry)
+        .iter()
+        .map(|g| proj.project(*g))
+        .collect();
+    (0.5 * chamfer(rest_px, &model)).sqrt()
+}
+
+/// The ring count of a layout of `pins` pins.
 fn rings_for(pins: usize) -> Result<usize, SensorError> {
     if let Some(n) = (1..=MAX_RINGS).find(|&n| pin_count(n) == pins) {
         return Ok(n);
@@ -65,11 +209,25 @@ fn rings_for(pins: usize) -> Result<usize, SensorError> {
         expected: nearest,
         got: pins,
         reason: format!(
-            "the simulated TacTip is a hexagonal lattice of 1 + 3n(n + 1) pins ({}, ...); \
-             check that the reference frame shows every pin once (blob parameters, --params)",
+            "the simulated TacTip lays 1 + 3n(n + 1) pins on n hexagonal or circular rings \
+             ({}, ...); check that the reference frame shows every pin once (blob parameters, \
+             --params)",
             counts.join(", ")
         ),
     })
+}
+
+/// The measured pin nearest the pins' centroid.
+pub(crate) fn central_pin(rest_px: &[[f64; 2]]) -> [f64; 2] {
+    let n = rest_px.len() as f64;
+    let mean = rest_px
+        .iter()
+        .fold([0.0, 0.0], |a, p| [a[0] + p[0] / n, a[1] + p[1] / n]);
+    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    *rest_px
+        .iter()
+        .min_by(|a, b| dist(**a, mean).total_cmp(&dist(**b, mean)))
+        .expect("at least one pin")
 }
 
 /// (centre x, centre y, focal px, rotation deg): centre at the pin nearest
@@ -78,15 +236,8 @@ fn rings_for(pins: usize) -> Result<usize, SensorError> {
 /// lattice's own first-neighbour direction (mirrored with the camera),
 /// taken nearest `cfg`'s rotation modulo 60 degrees.
 fn initial_camera(cfg: &TacTipConfig, rest_px: &[[f64; 2]]) -> [f64; 4] {
-    let n = rest_px.len() as f64;
-    let mean = rest_px
-        .iter()
-        .fold([0.0, 0.0], |a, p| [a[0] + p[0] / n, a[1] + p[1] / n]);
     let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-    let centre = *rest_px
-        .iter()
-        .min_by(|a, b| dist(**a, mean).total_cmp(&dist(**b, mean)))
-        .expect("at least one pin");
+    let centre = central_pin(rest_px);
     let neighbour = *rest_px
         .iter()
         .filter(|p| dist(**p, centre) > 1e-9)
@@ -134,7 +285,7 @@ fn fit_camera(cfg: &TacTipConfig, rest_px: &[[f64; 2]], start: [f64; 4]) -> (Tac
 
 /// Symmetric mean squared nearest-neighbour distance between two point
 /// sets, px^2.
-fn chamfer(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+pub(crate) fn chamfer(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
     let one_way = |from: &[[f64; 2]], to: &[[f64; 2]]| {
         from.iter()
             .map(|p| {
@@ -151,6 +302,7 @@ fn chamfer(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::TacTipModel;
 
     /// The rest pins of a sensor with `rings` rings seen by another camera.
     fn other_sensor(rings: usize) -> (TacTipConfig, Vec<[f64; 2]>) {

@@ -1,11 +1,51 @@
-//! Where the pins are: a hexagonal lattice laid on the hemispherical skin
-//! and its projection into the internal camera's image.
+//! Where the pins are: a hexagonal lattice or concentric rings laid on the
+//! hemispherical skin, and their projection into the internal camera's
+//! image.
 //!
 //! Skin points are addressed by *surface coordinates* `g` (mm): the
 //! azimuthal-equidistant map of the dome about its lowest point, so `|g|` is
 //! the geodesic distance from the pole and `g`'s direction is the azimuth in
-//! the sensor frame. Pins sit on a flat hexagonal lattice in `g` (eq. S1).
-use crate::config::{CameraConfig, SkinGeometry};
+//! the sensor frame. Pins sit on a flat hexagonal lattice in `g` (eq. S1)
+//! or on concentric circles about the pole (eq. S1r).
+use crate::config::{CameraConfig, PinLayout, SkinGeometry};
+
+/// Surface coordinates of the skin's pins (mm) in the configured layout,
+/// centre first, ring by ring, each ring counter-clockwise from the +x
+/// axis.
+pub fn skin_pins(g: &SkinGeometry) -> Vec<[f64; 2]> {
+    match g.layout {
+        PinLayout::Hex => hex_lattice(g.rings, g.pin_spacing_mm),
+        PinLayout::Rings => concentric_rings(g.rings, g.pin_spacing_mm, &g.ring_phase_deg),
+    }
+}
+
+/// Surface coordinates of pins on concentric circles, centre first, ring
+/// by ring, each ring counter-clockwise from the +x axis (eq. S1r: ring
+/// k = 1..=n has radius k s and 6k pins at angles phi_k + 60 j / k deg,
+/// j = 0..6k). `phase_deg` holds phi_k per ring, innermost first; rings
+/// beyond its end have phase 0.
+pub fn concentric_rings(rings: usize, spacing_mm: f64, phase_deg: &[f64]) -> Vec<[f64; 2]> {
+    let mut pins = Vec::with_capacity(pin_count(rings));
+    pins.push([0.0, 0.0]);
+    for k in 1..=rings {
+        let count = 6 * k;
+        let radius = k as f64 * spacing_mm;
+        let phase = phase_deg.get(k - 1).copied().unwrap_or(0.0);
+        let mut ring: Vec<(f64, [f64; 2])> = (0..count)
+            .map(|j| {
+                let a = (phase + 360.0 * j as f64 / count as f64).to_radians();
+                let (sin, cos) = a.sin_cos();
+                (
+                    a.rem_euclid(std::f64::consts::TAU),
+                    [radius * cos, radius * sin],
+                )
+            })
+            .collect();
+        ring.sort_by(|a, b| a.0.total_cmp(&b.0));
+        pins.extend(ring.into_iter().map(|(_, g)| g));
+    }
+    pins
+}
 
 /// Surface coordinates of the pins, ring by ring (centre first), each ring
 /// counter-clockwise from the +x axis; vertices of the hexagon point along
@@ -32,7 +72,8 @@ pub fn hex_lattice(rings: usize, spacing_mm: f64) -> Vec<[f64; 2]> {
     pins.into_iter().map(|(_, _, g)| g).collect()
 }
 
-/// Number of pins in a hexagonal layout with `rings` rings: 1 + 3 n (n + 1).
+/// Number of pins in a layout with `rings` rings (hexagonal or
+/// concentric, 6k pins on ring k): 1 + 3 n (n + 1).
 pub fn pin_count(rings: usize) -> usize {
     1 + 3 * rings * (rings + 1)
 }

@@ -1,7 +1,8 @@
 //! The TacTip optical tactile sensor, simulated and replayed.
 //!
-//! A 127-pin hemispherical skin seen by an internal camera: the pin layout
-//! and its projection, a contact-mechanics model of the dome pressed onto
+//! A hemispherical skin seen by an internal camera: the pin layout (a
+//! hexagonal lattice, 127 pins by default, or concentric rings) and its
+//! projection, a contact-mechanics model of the dome pressed onto
 //! an extruded object (docs/sensor-model.md), fast anti-aliased rendering,
 //! the [`TactileSensor`] trait with a simulated implementation
 //! ([`SimTacTip`]), a replay implementation ([`ReplaySensor`]) and the
@@ -19,6 +20,7 @@ mod fit;
 mod fit_brush;
 mod fit_joint;
 mod fit_layout;
+mod fit_rings;
 mod label_convention;
 mod layout;
 mod model;
@@ -32,7 +34,8 @@ mod slip;
 
 pub use brush::{bristles, brush_slip, slide_path, REFERENCE_AREA_MM2};
 pub use config::{
-    Calibration, CameraConfig, Mechanics, Nuisance, SkinGeometry, SlipLaw, SlipSpread, TacTipConfig,
+    Calibration, CameraConfig, Mechanics, Nuisance, PinLayout, SkinGeometry, SlipLaw, SlipSpread,
+    TacTipConfig,
 };
 pub use contact::Shear;
 pub use correction::FieldCorrection;
@@ -41,9 +44,9 @@ pub use error::SensorError;
 pub use fit::{field_misfit, fit_slip, FitSample, SlipFit, SlipParams};
 pub use fit_brush::{fit_brush, BrushFit, BRUSH_PARAMS};
 pub use fit_joint::{fit_joint, JointFit, JOINT_PARAMS};
-pub use fit_layout::fit_layout;
+pub use fit_layout::{fit_layout, fit_layouts, KindFit, LayoutFit};
 pub use label_convention::{wrap_deg, EdgeLabels, LabelConvention, ToolEdgePose};
-pub use layout::{hex_lattice, pin_count};
+pub use layout::{concentric_rings, hex_lattice, pin_count, skin_pins};
 pub use model::TacTipModel;
 pub use nearest::{edge_pose, Answer, FrameBank, LabelScales, LabelledFrame, NearestFrameSensor};
 pub use nelder_mead::minimise;

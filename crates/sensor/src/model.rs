@@ -2,9 +2,9 @@
 //! checked model, shared by simulated taps and (through measured rest pins)
 //! the real sensor's geometry.
 use crate::brush::{bristles, brush_slip, slide_path};
-use crate::config::{Mechanics, TacTipConfig};
+use crate::config::{Mechanics, SkinGeometry, TacTipConfig};
 use crate::contact::{ContactField, ContactModel, Shear};
-use crate::layout::{hex_lattice, pin_count, Projection};
+use crate::layout::{skin_pins, Projection};
 use crate::render::{add_noise, draw_disc, jitter};
 use crate::slip::{lag_profile, slip_field};
 use crate::SlipLaw;
@@ -35,24 +35,26 @@ pub struct TacTipModel {
 
 impl TacTipModel {
     /// Build the model from a configuration; rest pins are the projection of
-    /// the hexagonal skin lattice (eqs. S1-S3), centre first, ring by ring.
+    /// the skin's pin layout (eq. S1 or S1r, then S2-S3), centre first, ring
+    /// by ring.
     pub fn new(cfg: TacTipConfig) -> Result<Self, SensorError> {
         cfg.validate()?;
         let proj = Projection::new(&cfg.geometry, &cfg.camera);
-        let pins_g = hex_lattice(cfg.geometry.rings, cfg.geometry.pin_spacing_mm);
+        let pins_g = skin_pins(&cfg.geometry);
         let rest_px = pins_g.iter().map(|g| proj.project(*g)).collect();
         Ok(Self::assemble(cfg, proj, pins_g, rest_px))
     }
 
     /// Rest layout taken from pin centres measured on a real undeformed
     /// frame (px), so simulated and real frames share one geometry. Each
-    /// measured pin is matched to the nearest model pin; the output of
-    /// [`Self::pins`] keeps the order of `rest_px`.
+    /// measured pin is matched to the nearest model pin of the configured
+    /// layout (either kind); the output of [`Self::pins`] keeps the order
+    /// of `rest_px`.
     pub fn with_rest_pins(cfg: TacTipConfig, rest_px: Vec<[f64; 2]>) -> Result<Self, SensorError> {
         cfg.validate()?;
         let proj = Projection::new(&cfg.geometry, &cfg.camera);
-        let lattice = hex_lattice(cfg.geometry.rings, cfg.geometry.pin_spacing_mm);
-        let order = match_rest_pins(&proj, &lattice, &rest_px)?;
+        let lattice = skin_pins(&cfg.geometry);
+        let order = match_rest_pins(&proj, &lattice, &cfg.geometry, &rest_px)?;
         let pins_g = order.iter().map(|&k| lattice[k]).collect();
         Ok(Self::assemble(cfg, proj, pins_g, rest_px))
     }
@@ -290,21 +292,25 @@ impl TacTipModel {
     }
 }
 
-/// For each measured rest pin, the index of the model lattice pin it is
-/// (greedy nearest pairs in the image; every pair must be closer than half
-/// the local pin spacing).
-fn match_rest_pins(
+/// For each measured rest pin, the index of the model pin it is (greedy
+/// nearest pairs in the image; every pair must be closer than half the
+/// local pin spacing). Either layout: no two pins are closer on the skin
+/// than one spacing `s`, and each has a neighbour within 1.05 `s` (eq. S1:
+/// the lattice, exactly `s`; eq. S1r: rings `s` apart, and on ring k the
+/// chord 2 k s sin(30 / k deg) between `s` and pi `s` / 3).
+pub(crate) fn match_rest_pins(
     proj: &Projection,
-    lattice: &[[f64; 2]],
+    layout: &[[f64; 2]],
+    geometry: &SkinGeometry,
     rest_px: &[[f64; 2]],
 ) -> Result<Vec<usize>, SensorError> {
-    let expected = lattice.len();
+    let expected = layout.len();
     let mismatch = |reason: String| SensorError::RestPins {
         expected,
         got: rest_px.len(),
         reason,
     };
-    if rest_px.len() != expected || expected != pin_count_of(lattice) {
+    if rest_px.len() != expected {
         return Err(mismatch("wrong number of pins".into()));
     }
     if let Some(i) = rest_px
@@ -313,7 +319,7 @@ fn match_rest_pins(
     {
         return Err(mismatch(format!("pin {i} is not a finite position")));
     }
-    let model: Vec<[f64; 2]> = lattice.iter().map(|g| proj.project(*g)).collect();
+    let model: Vec<[f64; 2]> = layout.iter().map(|g| proj.project(*g)).collect();
     let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(expected * expected);
     for (i, p) in rest_px.iter().enumerate() {
         for (k, q) in model.iter().enumerate() {
@@ -327,26 +333,17 @@ fn match_rest_pins(
         if of_measured[i] != usize::MAX || taken[k] {
             continue;
         }
-        let limit = 0.5 * proj.scale(lattice[k]) * spacing_of(lattice);
+        let limit = 0.5 * proj.scale(layout[k]) * geometry.pin_spacing_mm;
         if d > limit {
             return Err(mismatch(format!(
-                "measured pin {i} at ({:.1}, {:.1}) px is {d:.1} px from its nearest free model pin (limit {limit:.1} px); check camera calibration",
-                rest_px[i][0], rest_px[i][1]
+                "measured pin {i} at ({:.1}, {:.1}) px is {d:.1} px from its nearest free model pin (limit {limit:.1} px); check the camera calibration and the pin layout (the model's is a {})",
+                rest_px[i][0],
+                rest_px[i][1],
+                geometry.layout.describe()
             )));
         }
         of_measured[i] = k;
         taken[k] = true;
     }
     Ok(of_measured)
-}
-
-fn spacing_of(lattice: &[[f64; 2]]) -> f64 {
-    lattice.get(1).map(|g| g[0].hypot(g[1])).unwrap_or(1.0)
-}
-
-fn pin_count_of(lattice: &[[f64; 2]]) -> usize {
-    let rings = (1..=20)
-        .find(|&n| pin_count(n) >= lattice.len())
-        .unwrap_or(0);
-    pin_count(rings)
 }

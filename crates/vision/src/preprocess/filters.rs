@@ -92,7 +92,7 @@ pub fn median_blur(frame: &Frame, k: u32) -> Frame {
 /// grey level, borders replicated. The box mean (`gaussian` false) is the
 /// exact block sum over the block's area, rounded (never a tie: the area
 /// is odd); the Gaussian mean is computed as OpenCV does, in `f32` with
-/// the kernel of [`gaussian_weights`], symmetric taps paired, rounded half
+/// the kernel of `gaussian_weights`, symmetric taps paired, rounded half
 /// to even. `block` odd and >= 3 (checked by the caller). On a constant
 /// frame `v - mean = 0`: all white when `c > 0`, else black.
 pub fn adaptive_threshold(frame: &Frame, block: u32, c: f64, gaussian: bool) -> Frame {

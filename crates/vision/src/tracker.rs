@@ -16,7 +16,10 @@ use crate::field::{smooth_field, Kernel, Observations};
 use crate::fold::FoldCheck;
 use crate::merged::Cluster;
 
+mod grid;
 mod repair;
+
+use grid::Grid;
 
 /// Fewest reference pins that define an affine field.
 const MIN_REFERENCE_PINS: usize = 3;
@@ -39,6 +42,9 @@ pub struct PinTracker {
     spacing: f64,
     stages: Vec<Stage>,
     folds: FoldCheck,
+    /// Whether the matching may start from nearest neighbours
+    /// (`tracker/grid.rs`).
+    nearest: bool,
 }
 
 /// Pins in reference order for one frame.
@@ -106,7 +112,17 @@ impl PinTracker {
             reference,
             spacing,
             stages,
+            nearest: true,
         })
+    }
+
+    /// This tracker with the nearest-neighbour start on (the default) or
+    /// off. Off, every frame runs all the coarse-to-fine stages from the
+    /// centroid shift: slower, the same result on the shared 127-pin frames
+    /// (`tests/real_frames.rs`), kept to check that.
+    pub fn with_nearest_start(mut self, on: bool) -> Self {
+        self.nearest = on;
+        self
     }
 
     /// The rest pin centres, px.
@@ -234,14 +250,41 @@ impl PinTracker {
         (tracked, matches)
     }
 
-    /// The coarse-to-fine stages and the fill of missing pins.
+    /// The coarse-to-fine stages and the fill of missing pins: from the
+    /// nearest-neighbour start where it holds (see `tracker/grid.rs`), else
+    /// every stage from the centroid shift.
     fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
-        let mut predicted = self.centroid_shift(points);
+        let grid = Grid::new(points, grid::CELL * self.spacing);
+        if let (true, Some(grid)) = (self.nearest, &grid) {
+            if let Some(start) = self.nearest_start(points, grid) {
+                let after = &self.stages[grid::NEAREST_STAGE + 1..];
+                let (tracked, matches) = self.run_stages(start, after, points, Some(grid));
+                if tracked.missing == 0 && !self.folds.any_turned(&tracked.pins) {
+                    return (tracked, matches);
+                }
+            }
+        }
+        let start = self.centroid_shift(points);
+        self.run_stages(start, &self.stages, points, grid.as_ref())
+    }
+
+    /// `stages` from the predictions `predicted`, then the fill.
+    fn run_stages(
+        &self,
+        mut predicted: Vec<[f64; 2]>,
+        stages: &[Stage],
+        points: &[[f64; 2]],
+        grid: Option<&Grid>,
+    ) -> (Tracked, Vec<Option<usize>>) {
         let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
         let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
-        let by_x = ByX::new(points);
-        for stage in &self.stages {
-            matches = self.match_points(&predicted, points, &by_x, stage.gate);
+        let mut by_x = None;
+        for stage in stages {
+            let source = match grid.filter(|_| self.uses_grid(stage)) {
+                Some(g) => Candidates::Grid(g),
+                None => Candidates::ByX(by_x.get_or_insert_with(|| ByX::new(points))),
+            };
+            matches = self.match_points(&predicted, points, source, stage.gate);
             observed = self.displacements(&matches, points);
             predicted = self.predict(&observed, &stage.kernel);
         }
@@ -263,13 +306,14 @@ impl PinTracker {
 
     /// Optimal one-to-one matching of predicted pins to points, squared
     /// distance cost, pairs farther than `gate` not allowed. Candidates come
-    /// from the x-window of each prediction and are listed by point index
+    /// from the x-window of each prediction (through the grid's cells or
+    /// the x-sorted points: the same edges) and are listed by point index
     /// (as a scan over all points would list them), through a bit set.
     fn match_points(
         &self,
         predicted: &[[f64; 2]],
         points: &[[f64; 2]],
-        by_x: &ByX,
+        source: Candidates,
         gate: f64,
     ) -> Vec<Option<usize>> {
         let gate2 = gate * gate;
@@ -283,21 +327,35 @@ impl PinTracker {
         let mut candidates = vec![0u64; points.len().div_ceil(64)];
         let mut costs = vec![0.0; points.len()];
         for p in predicted {
-            let from = by_x.xs.partition_point(|&x| x < p[0] - gate);
-            let window = by_x.xs[from..].iter().zip(&by_x.ys[from..]);
-            for ((&x, &y), &col) in window.zip(&by_x.order[from..]) {
-                if x > p[0] + gate {
-                    break;
-                }
+            let mut consider = |col: usize, x: f64, y: f64| {
                 let dy2 = (p[1] - y).powi(2);
                 if dy2 >= unassigned {
-                    continue; // the cost is at least dy2
+                    return; // the cost is at least dy2
                 }
                 let cost = (p[0] - x).powi(2) + dy2;
                 if cost < unassigned {
                     candidates[col / 64] |= 1 << (col % 64);
                     costs[col] = cost;
                 }
+            };
+            match source {
+                Candidates::ByX(by_x) => {
+                    let from = by_x.xs.partition_point(|&x| x < p[0] - gate);
+                    let window = by_x.xs[from..].iter().zip(&by_x.ys[from..]);
+                    for ((&x, &y), &col) in window.zip(&by_x.order[from..]) {
+                        if x > p[0] + gate {
+                            break;
+                        }
+                        consider(col, x, y);
+                    }
+                }
+                Candidates::Grid(grid) => grid.around(p, gate, |col| {
+                    let [x, y] = points[col];
+                    // The x-window's own test, so the edges are the same.
+                    if x >= p[0] - gate && x <= p[0] + gate {
+                        consider(col, x, y);
+                    }
+                }),
             }
             for (w, word) in candidates.iter_mut().enumerate() {
                 while *word != 0 {
@@ -365,6 +423,13 @@ impl PinTracker {
             extra: n_points - matched_count,
         }
     }
+}
+
+/// Where a matching stage finds its candidate points.
+#[derive(Clone, Copy)]
+enum Candidates<'a> {
+    ByX(&'a ByX),
+    Grid(&'a Grid),
 }
 
 /// Point indices sorted by x, with their x and y values.

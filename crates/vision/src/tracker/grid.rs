@@ -28,8 +28,9 @@ pub(super) const GRID_GATE: f64 = 1.5;
 const NEAREST_REACH: f64 = 0.5;
 /// Share of pins that must pair up for the nearest-neighbour start.
 const NEAREST_MIN_SHARE: f64 = 0.5;
-/// Stage whose kernel fits the field to the nearest-neighbour pairs; the
-/// stages after it are run.
+/// Stage whose kernel (2 spacings) fits the field to the
+/// nearest-neighbour pairs; the stages after it are run (a narrower
+/// kernel leaves more frames to the full path).
 pub(super) const NEAREST_STAGE: usize = 1;
 
 /// Points bucketed by cell, each cell's points in index order.
@@ -62,7 +63,7 @@ impl Grid {
         if !(hi[0] - lo[0]).is_finite() || !(hi[1] - lo[1]).is_finite() {
             return None;
         }
-        let most = 4 * points.len() + 16;
+        let most = 16 * points.len() + 64;
         let mut cell = if cell.is_finite() && cell > 0.0 {
             cell
         } else {
@@ -103,8 +104,12 @@ impl Grid {
     }
 
     /// The cell index of coordinate `v` along axis `a` (may be outside).
+    /// Any non-decreasing map does (a point between two query bounds
+    /// falls between their cells); this one is the floor except at
+    /// negative integers, without a call to libm's `floor`.
     fn index(&self, v: f64, a: usize) -> i64 {
-        ((v - self.origin[a]) / self.cell).floor() as i64
+        let t = (v - self.origin[a]) / self.cell;
+        t as i64 - i64::from(t < 0.0)
     }
 
     /// Calls `visit(k)` for every point `k` whose cell meets the box of

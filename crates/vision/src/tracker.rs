@@ -47,6 +47,27 @@ pub struct PinTracker {
     nearest: bool,
 }
 
+/// The first pass of the ordering on one frame's keypoints
+/// ([`PinTracker::first_pass`]).
+pub struct FirstPass {
+    points: Vec<[f64; 2]>,
+    tracked: Tracked,
+    /// Per pin, the index of its point.
+    sources: Vec<Option<usize>>,
+}
+
+impl FirstPass {
+    /// The pins as [`PinTracker::order`] gives them.
+    pub fn tracked(&self) -> &Tracked {
+        &self.tracked
+    }
+
+    /// The pins, as [`FirstPass::tracked`].
+    pub fn into_tracked(self) -> Tracked {
+        self.tracked
+    }
+}
+
 /// Pins in reference order for one frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tracked {
@@ -161,8 +182,42 @@ impl PinTracker {
     /// If the kept result has a turned-over triangle, the clusters around it
     /// are split anew (see `tracker/repair.rs`).
     pub fn order_with_clusters(&self, keypoints: &[KeyPoint], clusters: &[Cluster]) -> Tracked {
+        self.split_pass(self.first_pass(keypoints), clusters)
+    }
+
+    /// [`PinTracker::order`] on a detection's points, then, if pins are
+    /// missing and it has clusters, [`PinTracker::order_with_clusters`]
+    /// (the first pass run once).
+    pub fn track(&self, detection: &Detection) -> Tracked {
+        let first = self.first_pass(&detection.points);
+        if first.tracked.missing == 0 || detection.clusters.is_empty() {
+            return first.tracked;
+        }
+        self.split_pass(first, &detection.clusters)
+    }
+
+    /// The first pass of [`PinTracker::order_with_clusters`]: its
+    /// [`FirstPass::tracked`] is what [`PinTracker::order`] gives. When
+    /// pins are missing, [`PinTracker::split_pass`] goes on from it without
+    /// running it again.
+    pub fn first_pass(&self, keypoints: &[KeyPoint]) -> FirstPass {
         let points = finite_centres(keypoints);
-        let (first, sources) = self.order_points(&points);
+        let (tracked, sources) = self.order_points(&points);
+        FirstPass {
+            points,
+            tracked,
+            sources,
+        }
+    }
+
+    /// The rest of [`PinTracker::order_with_clusters`] after `first` (on
+    /// the same keypoints): the same result.
+    pub fn split_pass(&self, first: FirstPass, clusters: &[Cluster]) -> Tracked {
+        let FirstPass {
+            points,
+            tracked: first,
+            sources,
+        } = first;
         if first.missing == 0 || clusters.is_empty() {
             return first;
         }
@@ -202,16 +257,6 @@ impl PinTracker {
             return self.resplit(kept, &kept_points, &points, clusters);
         }
         kept
-    }
-
-    /// [`PinTracker::order`] on a detection's points, then, if pins are
-    /// missing and it has clusters, [`PinTracker::order_with_clusters`].
-    pub fn track(&self, detection: &Detection) -> Tracked {
-        let first = self.order(&detection.points);
-        if first.missing == 0 || detection.clusters.is_empty() {
-            return first;
-        }
-        self.order_with_clusters(&detection.points, &detection.clusters)
     }
 
     /// For each cluster, how many missing pins are predicted on or next to

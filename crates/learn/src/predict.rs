@@ -137,18 +137,22 @@ fn rows_fma(p: &Predictor, model: &PoseModel, flat: &[f32], out: &mut Vec<[f64; 
     rows::<true>(p, model, flat, out);
 }
 
-/// Working rows of a block of up to [`BLOCK`] rows, kept between blocks.
+/// Working rows of a block of up to `rows` (at most [`BLOCK`]) rows,
+/// kept between blocks.
 pub(crate) struct Scratch {
-    /// The block's inputs, f64, `BLOCK x dim`.
+    /// The block's inputs, f64, `rows x dim`.
     pub x: Vec<f64>,
-    /// Each input map's values, f32, `BLOCK x width`.
+    /// Each input map's values, f32, `rows x width`.
     pub maps: Vec<Vec<f32>>,
     /// Two activation buffers a layer reads from and writes to.
     pub act: [Vec<f32>; 2],
 }
 
 impl Scratch {
-    pub fn new(p: &Predictor, model: &PoseModel) -> Self {
+    /// Buffers for blocks of `rows` rows: one for a single prediction (a
+    /// block's worth is 80 KB to zero for the report's nets, more than
+    /// the prediction costs).
+    pub fn new(p: &Predictor, model: &PoseModel, rows: usize) -> Self {
         let widest = model
             .nets
             .iter()
@@ -156,13 +160,9 @@ impl Scratch {
             .max()
             .unwrap_or(0);
         Self {
-            x: vec![0.0; BLOCK * p.dim],
-            maps: p
-                .maps
-                .iter()
-                .map(|m| vec![0.0; BLOCK * m.width()])
-                .collect(),
-            act: [vec![0.0; BLOCK * widest], vec![0.0; BLOCK * widest]],
+            x: vec![0.0; rows * p.dim],
+            maps: p.maps.iter().map(|m| vec![0.0; rows * m.width()]).collect(),
+            act: [vec![0.0; rows * widest], vec![0.0; rows * widest]],
         }
     }
 }
@@ -171,7 +171,7 @@ impl Scratch {
 /// `F`).
 #[inline(always)]
 fn rows<const F: bool>(p: &Predictor, model: &PoseModel, flat: &[f32], out: &mut Vec<[f64; 2]>) {
-    let mut s = Scratch::new(p, model);
+    let mut s = Scratch::new(p, model, 1);
     for row in flat.chunks_exact(p.dim) {
         for (x, &v) in s.x.iter_mut().zip(row) {
             *x = f64::from(v);

@@ -20,8 +20,9 @@ pub(super) fn available() -> bool {
 /// Predicts every row of `flat` into `out` (see `Predictor::predict_rows`).
 #[target_feature(enable = "avx512f,avx2,fma")]
 pub(super) fn rows(p: &Predictor, model: &PoseModel, flat: &[f32], out: &mut Vec<[f64; 2]>) {
-    let mut s = Scratch::new(p, model);
     let dim = p.dim();
+    let rows = if flat.len() > dim { BLOCK } else { 1 };
+    let mut s = Scratch::new(p, model, rows);
     for block in flat.chunks(BLOCK * dim) {
         for (x, &v) in s.x.iter_mut().zip(block) {
             *x = f64::from(v);

@@ -10,8 +10,9 @@ use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareCo
 use tactrace_lab::render::{TapPose, TapRenderer};
 use tactrace_lab::{import as imp, LabError};
 use tactrace_servo::RigConfig;
+use tactrace_store::collection::{bristol, CollectionEdits};
 use tactrace_store::frame_file::png_bytes;
-use tactrace_store::{dataset, fsutil, load_config, load_shape};
+use tactrace_store::{dataset, fsutil, load_config, load_shape, LabelledCollection};
 use tactrace_vision::BlobParams;
 
 #[derive(Args)]
@@ -148,8 +149,9 @@ pub struct ImportArgs {
     force: bool,
 }
 
-/// A labels CSV, its columns and the reference frame (`import`, `twin`;
-/// the Bristol layout's column names by default).
+/// A labels CSV, its columns and the reference frame of a labelled
+/// collection (`import`, `twin`, `calibrate`, `sim-fit`; the Bristol
+/// layout's column names by default).
 #[derive(Args)]
 pub struct LabelArgs {
     /// CSV of labels, one row per frame.
@@ -160,14 +162,35 @@ pub struct LabelArgs {
     #[arg(long)]
     pub reference: PathBuf,
     /// Column of --targets naming each row's frame file.
-    #[arg(long, default_value = "image_name")]
+    #[arg(long, default_value = bristol::IMAGE_COLUMN)]
     pub image_column: String,
     /// Column of --targets with the edge position r, mm.
-    #[arg(long, default_value = "pose_2")]
+    #[arg(long, default_value = bristol::R_COLUMN)]
     pub r_column: String,
     /// Column of --targets with the edge angle theta, degrees.
-    #[arg(long, default_value = "pose_6")]
+    #[arg(long, default_value = bristol::THETA_COLUMN)]
     pub theta_column: String,
+}
+
+impl LabelArgs {
+    /// The collection of the frames in `frames` these flags describe,
+    /// with `edits` (rows, blob detector, tap columns) made.
+    pub fn collection(&self, frames: &Path, edits: CollectionEdits) -> Result<LabelledCollection> {
+        let edits = CollectionEdits {
+            image_column: Some(self.image_column.clone()),
+            r_column: Some(self.r_column.clone()),
+            theta_column: Some(self.theta_column.clone()),
+            ..edits
+        };
+        let base = LabelledCollection::new(
+            frames.to_path_buf(),
+            self.targets.clone(),
+            self.reference.clone(),
+        );
+        Ok(base
+            .edited(&edits)
+            .map_err(tactrace_store::StoreError::from)?)
+    }
 }
 
 /// Blob parameters from a file, or a named preset.
@@ -190,20 +213,22 @@ pub fn import(a: ImportArgs) -> Result<()> {
         .add("--reference", &a.labels.reference)
         .opt("--params", a.params.as_deref())
         .check_apart("--out", &a.out)?;
-    let blob = blob_params(a.params.as_deref(), "real256")?;
+    let blob = blob_params(a.params.as_deref(), bristol::BLOB_PRESET)?;
+    // Import reads the targets only: no tap columns asked for.
+    let collection = a.labels.collection(
+        &a.frames,
+        CollectionEdits {
+            depth_column: Some("none".into()),
+            shear_columns: Some("none".into()),
+            limit: a.limit,
+            blob: Some(blob),
+            ..CollectionEdits::default()
+        },
+    )?;
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
-    let cfg = imp::ImportConfig {
-        frames: a.frames,
-        targets: a.labels.targets,
-        reference: a.labels.reference,
-        image_column: a.labels.image_column,
-        r_column: a.labels.r_column,
-        theta_column: a.labels.theta_column,
-        limit: a.limit,
-    };
     let pb = bar(0, "import");
     let tick = || pb.inc(1);
-    let got = imp::import(&cfg, &blob, &tick)?;
+    let got = imp::import(&collection, &tick)?;
     pb.finish_and_clear();
     let dir = dataset::write_dataset(&a.out, &got.data, &[], a.force)?;
     let n = got.data.len();

@@ -4,15 +4,15 @@ use crate::progress::bar;
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
+use tactrace_geometry::Contour;
 use tactrace_geometry::ShapeSpec;
-use tactrace_lab::follow::{
-    follow_simulated, size_warning, tactip_diameter_mm, FollowOutcome, SimFollowConfig,
-};
-use tactrace_lab::hardware::{follow_hardware as follow_on_hardware, HardwareConfig, StopFlag};
-use tactrace_lab::replay_world::{follow_replay, ReplayOptions, ReplayWorld};
+use tactrace_lab::follow::{FollowOutcome, RunHooks, SimFollowConfig};
+use tactrace_lab::hardware::{HardwareConfig, StopFlag};
 use tactrace_lab::reproduce::{reproduce as run_reproduce, ReproduceConfig};
+use tactrace_lab::world::{OpenWorld, ReplayBank, World};
 use tactrace_lab::LabError;
-use tactrace_servo::LoopConfig;
+use tactrace_servo::{LoopConfig, StepRecord};
+use tactrace_store::collection::{bristol, CollectionEdits};
 use tactrace_store::{fsutil, load_config, load_shape, StoredModel};
 
 #[derive(Args)]
@@ -80,17 +80,17 @@ pub struct ReplayArgs {
     #[arg(long, requires = "replay")]
     reference: Option<PathBuf>,
     /// Column of the labels naming each row's frame file.
-    #[arg(long, requires = "replay", default_value = "image_name")]
+    #[arg(long, requires = "replay", default_value = bristol::IMAGE_COLUMN)]
     image_column: String,
     /// Column of the labels with the edge position r, mm.
-    #[arg(long, requires = "replay", default_value = "pose_2")]
+    #[arg(long, requires = "replay", default_value = bristol::R_COLUMN)]
     r_column: String,
     /// Column of the labels with the edge angle theta, degrees.
-    #[arg(long, requires = "replay", default_value = "pose_6")]
+    #[arg(long, requires = "replay", default_value = bristol::THETA_COLUMN)]
     theta_column: String,
     /// Column of the labels with the tap's vertical offset, mm; `none`:
     /// depth does not count in choosing a frame.
-    #[arg(long, requires = "replay", default_value = "pose_3")]
+    #[arg(long, requires = "replay", default_value = bristol::DEPTH_COLUMN)]
     dz_column: String,
     /// Blob detector parameters (TOML) for the real frames; default: the
     /// real256 preset, as `import`.
@@ -99,22 +99,23 @@ pub struct ReplayArgs {
 }
 
 impl ReplayArgs {
-    /// The world these flags describe.
-    fn world(&self, dir: &std::path::Path) -> Result<ReplayWorld> {
-        let options = ReplayOptions {
+    /// The bank these flags describe: the collection in `dir` with them.
+    fn bank(&self, dir: &std::path::Path) -> Result<ReplayBank> {
+        let edits = CollectionEdits {
             targets: self.targets.clone(),
             reference: self.reference.clone(),
             image_column: Some(self.image_column.clone()),
             r_column: Some(self.r_column.clone()),
             theta_column: Some(self.theta_column.clone()),
-            dz_column: Some(self.dz_column.clone()),
+            depth_column: Some(self.dz_column.clone()),
             keep: self.replay_keep.clone(),
             blob: Some(crate::cmd_data::blob_params(
                 self.params.as_deref(),
-                "real256",
+                bristol::BLOB_PRESET,
             )?),
+            ..CollectionEdits::default()
         };
-        Ok(ReplayWorld::with_options(dir, &options)?)
+        Ok(ReplayBank::from_dir(dir, &edits)?)
     }
 }
 
@@ -128,75 +129,57 @@ pub fn follow(a: FollowArgs) -> Result<()> {
         cfg.calibrated_sensor = a.sensor.clone();
     }
     if let Some(dir) = &a.replay.replay {
-        cfg.replay = Some(a.replay.world(dir)?);
+        cfg.replay = Some(a.replay.bank(dir)?);
     }
-    let world = cfg.replay.as_ref();
+    let bank = cfg.replay.as_ref().map(ReplayBank::collection);
     Inputs::new()
         .add("--model", &a.model)
         .file_arg("--shape", a.shape.as_deref().unwrap_or_default())
         .opt("--config", a.config.as_deref())
         .opt("--sensor", cfg.calibrated_sensor.as_deref())
         .opt("--replay", a.replay.replay.as_deref())
-        .opt("--replay", world.map(|w| w.frames.as_path()))
-        .opt("--targets", world.map(|w| w.targets.as_path()))
-        .opt("--reference", world.map(|w| w.reference.as_path()))
+        .opt("--replay", bank.map(|c| c.frames()))
+        .opt("--targets", bank.map(|c| c.targets()))
+        .opt("--reference", bank.map(|c| c.reference().path()))
         .opt("--params", a.replay.params.as_deref())
         .check_apart("--out", &a.out)?;
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
-    if let Some(world) = cfg.replay.take() {
-        return follow_replay_world(a, cfg, &world);
-    }
-    let calibrated = tactrace_lab::follow::read_calibrated(&cfg)?;
+    let world = cfg.world().open()?;
     let spec =
         ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default()).map_err(LabError::from)?;
-    let contour = load_shape(&spec)?;
-    let geometry = match &calibrated {
-        Some(s) => &s.spec.sensor.geometry,
-        None => &cfg.rig.sensor.geometry,
-    };
-    let diameter = 2.0 * geometry.dome_radius_mm;
-    if let Some(w) = size_warning(&spec.name(), &contour, diameter) {
-        eprintln!("warning: {w}");
-    }
+    let shape = (spec.name(), load_shape(&spec)?);
     let model = StoredModel::load(&a.model)?;
-    let pb = bar(cfg.follow.step_limit() as u64, "follow");
-    let res = follow_simulated(
-        &cfg,
-        &model,
-        (&spec.name(), &contour),
-        (&a.out, a.force),
-        &mut |r| pb.set_position(r.step as u64 + 1),
-    );
-    pb.finish_and_clear();
-    report_run(&spec.name(), &res?)
+    follow_in(world, &model, Some(&shape), (&a.out, a.force), None)
 }
 
-/// `follow --replay` (or a configuration with a `[replay]` table): the
-/// loop in the real-frame world.
-fn follow_replay_world(a: FollowArgs, cfg: SimFollowConfig, world: &ReplayWorld) -> Result<()> {
-    let spec =
-        ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default()).map_err(LabError::from)?;
-    let contour = load_shape(&spec)?;
-    if let Some(w) = size_warning(&spec.name(), &contour, tactip_diameter_mm()) {
-        eprintln!("warning: {w}");
-    }
-    let model = StoredModel::load(&a.model)?;
-    let pb = bar(cfg.follow.step_limit() as u64, "follow");
-    let res = follow_replay(
-        &cfg,
-        world,
-        &model,
-        (&spec.name(), &contour),
-        (&a.out, a.force),
-        &mut |r| pb.set_position(r.step as u64 + 1),
-    );
+/// Run `world` with `model` on `shape` into `out` with a progress bar,
+/// then print the run's summary ([`report_run`]); `stop` stops a real rig.
+fn follow_in(
+    world: OpenWorld,
+    model: &StoredModel,
+    shape: Option<&(String, Contour)>,
+    out: (&std::path::Path, bool),
+    stop: Option<&StopFlag>,
+) -> Result<()> {
+    let pb = bar(world.settings().follow().step_limit() as u64, "follow");
+    let mut progress = |r: &StepRecord| pb.set_position(r.step as u64 + 1);
+    let mut warn = |w: &str| pb.suspend(|| eprintln!("warning: {w}"));
+    let hooks = RunHooks {
+        progress: Some(&mut progress),
+        warn: Some(&mut warn),
+        stop,
+    };
+    let named = shape.map(|(n, c)| (n.as_str(), c));
+    let res = tactrace_lab::follow::run(world, model, named, out, hooks);
     pb.finish_and_clear();
     let res = res?;
-    crate::say!("{}", res.stats.summary());
-    if let Some(w) = res.stats.warning() {
-        eprintln!("warning: {w}");
+    if let Some(stats) = &res.replay {
+        crate::say!("{}", stats.summary());
+        if let Some(w) = stats.warning() {
+            eprintln!("warning: {w}");
+        }
     }
-    report_run(&spec.name(), &res.run)
+    report_run(named.map_or("rig", |s| s.0), &res)
 }
 
 /// Print a finished run's summary; a run that did not do what was asked
@@ -480,7 +463,7 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
     let text = fsutil::read_text(path)?;
     let mut cfg = HardwareConfig::from_toml(&text, &path.display().to_string())?;
     overrides(&a, &mut cfg.follow);
-    cfg.validate()?;
+    let world = World::Hardware(cfg).open()?;
     let shape = match &a.shape {
         Some(s) => {
             let spec = ShapeSpec::parse(s);
@@ -492,16 +475,11 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
     // From here on SIGINT / SIGTERM stop the arm (stopl) instead of the
     // process; the run keeps its steps and exits 130 / 143.
     let stop = StopFlag::on_signals().map_err(LabError::from)?;
-    let pb = bar(cfg.follow.step_limit() as u64, "follow");
-    let res = follow_on_hardware(
-        &cfg,
+    follow_in(
+        world,
         &model,
-        shape.as_ref().map(|(n, c)| (n.as_str(), c)),
+        shape.as_ref(),
         (&a.out, a.force),
-        &stop,
-        &mut |r| pb.set_position(r.step as u64 + 1),
-    );
-    pb.finish_and_clear();
-    let name = shape.as_ref().map_or("rig", |(n, _)| n.as_str());
-    report_run(name, &res?)
+        Some(&stop),
+    )
 }

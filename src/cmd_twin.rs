@@ -7,23 +7,45 @@ use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::Result;
 use clap::Args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use tactrace_lab::calibrate::{calibrate_sensor, write_calibrated, CalibrateConfig};
 use tactrace_lab::import::Imported;
-use tactrace_lab::twin::{simulate_twin, simulate_twin_calibrated, TwinConfig};
+use tactrace_lab::twin::{simulate_twin, simulate_twin_calibrated};
 use tactrace_lab::LabError;
-use tactrace_store::{dataset, fsutil, SensorFolder};
+use tactrace_store::collection::{bristol, CollectionEdits};
+use tactrace_store::{dataset, fsutil, LabelledCollection, SensorFolder};
 
-/// The columns of a tap's depth and shear (`twin`, `calibrate`).
+/// The columns of a tap's depth and shear (`twin`, `calibrate`, `sim-fit`).
 #[derive(Args)]
 pub struct TapColumnArgs {
     /// Vertical offset of each tap, mm; `none`: all taps at the nominal depth.
-    #[arg(long, default_value = "pose_3")]
+    #[arg(long, default_value = bristol::DEPTH_COLUMN)]
     dz_column: String,
     /// Shear columns x,y (mm) and rotation (deg), comma-separated; `none`:
     /// taps without shear.
-    #[arg(long, default_value = "move_1,move_2,move_6")]
+    #[arg(long, default_value_t = bristol::SHEAR_COLUMNS.join(","))]
     shear_columns: String,
+}
+
+impl TapColumnArgs {
+    /// The collection of `labels` (its frames in `frames`) with these tap
+    /// columns, the first `limit` rows and the blob detector `blob`
+    /// (default: the Bristol preset).
+    fn collection(
+        &self,
+        labels: &LabelArgs,
+        frames: &Path,
+        (limit, blob): (Option<usize>, Option<tactrace_vision::BlobParams>),
+    ) -> Result<LabelledCollection> {
+        let edits = CollectionEdits {
+            depth_column: Some(self.dz_column.clone()),
+            shear_columns: Some(self.shear_columns.clone()),
+            limit,
+            blob,
+            ..CollectionEdits::default()
+        };
+        labels.collection(frames, edits)
+    }
 }
 
 #[derive(Args)]
@@ -62,44 +84,6 @@ pub struct TwinArgs {
     force: bool,
 }
 
-/// `none` (any case) or empty means no column.
-fn optional(name: &str) -> Option<String> {
-    let name = name.trim();
-    (!name.is_empty() && !name.eq_ignore_ascii_case("none")).then(|| name.to_string())
-}
-
-/// The twin configuration of labels, columns, row limit and seed.
-fn twin_config(
-    labels: LabelArgs,
-    columns: &TapColumnArgs,
-    limit: Option<usize>,
-    seed: u64,
-) -> Result<TwinConfig> {
-    let shear_columns = match optional(&columns.shear_columns) {
-        None => None,
-        Some(list) => {
-            let cols: Vec<String> = list.split(',').map(|c| c.trim().to_string()).collect();
-            let n = cols.len();
-            Some(<[String; 3]>::try_from(cols).map_err(|_| {
-                LabError::Config(format!(
-                    "--shear-columns wants three columns (x, y, rotation) or `none`, got {n}"
-                ))
-            })?)
-        }
-    };
-    Ok(TwinConfig {
-        targets: labels.targets,
-        reference: labels.reference,
-        image_column: labels.image_column,
-        r_column: labels.r_column,
-        theta_column: labels.theta_column,
-        dz_column: optional(&columns.dz_column),
-        shear_columns,
-        limit,
-        seed,
-    })
-}
-
 pub fn twin(a: TwinArgs) -> Result<()> {
     Inputs::new()
         .add("--targets", &a.labels.targets)
@@ -108,19 +92,24 @@ pub fn twin(a: TwinArgs) -> Result<()> {
         .opt("--config", a.config.as_deref())
         .opt("--params", a.params.as_deref())
         .check_apart("--out", &a.out)?;
-    let cfg = twin_config(a.labels, &a.columns, a.limit, a.seed)?;
+    // The twin reads no frames: its collection's are the reference's folder.
+    let frames = a.labels.reference.parent().unwrap_or(Path::new(""));
+    let blob = match &a.params {
+        Some(p) => Some(blob_params(Some(p), bristol::BLOB_PRESET)?),
+        None => None,
+    };
+    let collection = a.columns.collection(&a.labels, frames, (a.limit, blob))?;
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "twin");
     let tick = || pb.inc(1);
     let got = match &a.sensor {
         Some(dir) => {
             let sensor = SensorFolder::read(dir)?;
-            simulate_twin_calibrated(&cfg, &sensor, !a.no_real_taps, &tick)
+            simulate_twin_calibrated(&collection, &sensor, a.seed, !a.no_real_taps, &tick)
         }
         None => {
             let rig = rig_config(a.config.as_deref())?;
-            let blob = blob_params(a.params.as_deref(), "real256")?;
-            simulate_twin(&cfg, &rig.sensor, &blob, &tick)
+            simulate_twin(&collection, &rig.sensor, a.seed, &tick)
         }
     };
     pb.finish_and_clear();
@@ -204,21 +193,15 @@ impl RealTapArgs {
         Ok(())
     }
 
-    /// The frames folder, the twin configuration (rendering seed `seed`),
-    /// the starting simulator and the blob detector.
-    fn resolve(
-        self,
-        seed: u64,
-    ) -> Result<(
-        PathBuf,
-        TwinConfig,
-        tactrace_sensor::TacTipConfig,
-        tactrace_vision::BlobParams,
-    )> {
-        let twin = twin_config(self.labels, &self.columns, self.limit, seed)?;
+    /// The labelled collection and the simulator to start from.
+    fn resolve(&self) -> Result<(LabelledCollection, tactrace_sensor::TacTipConfig)> {
+        let blob = blob_params(self.params.as_deref(), bristol::BLOB_PRESET)?;
+        let limits = (self.limit, Some(blob));
+        let collection = self
+            .columns
+            .collection(&self.labels, &self.frames, limits)?;
         let rig = rig_config(self.config.as_deref())?;
-        let blob = blob_params(self.params.as_deref(), "real256")?;
-        Ok((self.frames, twin, rig.sensor, blob))
+        Ok((collection, rig.sensor))
     }
 }
 
@@ -251,10 +234,10 @@ pub struct CalibrateArgs {
 
 pub fn calibrate(a: CalibrateArgs) -> Result<()> {
     a.taps.check_apart(&a.out)?;
-    let (frames, twin, sensor, blob) = a.taps.resolve(a.seed)?;
+    let (collection, sensor) = a.taps.resolve()?;
     let cfg = CalibrateConfig {
-        frames,
-        twin,
+        collection,
+        render_seed: a.seed,
         samples: (a.samples > 0).then_some(a.samples),
         seed: a.seed,
         allowed_rows: None,
@@ -265,7 +248,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
     let t0 = std::time::Instant::now();
     let pb = bar(0, "calibrate");
     let tick = || pb.inc(1);
-    let got = calibrate_sensor(&cfg, &sensor, &blob, &tick);
+    let got = calibrate_sensor(&cfg, &sensor, &tick);
     pb.finish_and_clear();
     let got = got?;
     let dir = write_calibrated(&got, &a.out, a.force)?;
@@ -347,12 +330,12 @@ pub fn sim_fit(a: SimFitArgs) -> Result<()> {
         return Err(LabError::Config("--renders must be at least 1".into()).into());
     }
     a.taps.check_apart(&a.out)?;
-    let (frames, twin, sensor, blob) = a.taps.resolve(1)?;
+    let (collection, sensor) = a.taps.resolve()?;
     let cfg = TransferFitConfig {
         renders: a.renders,
         deg_per_mm: a.deg_per_mm,
-        frames,
-        twin,
+        collection,
+        render_seed: 1,
         generations: a.generations,
         population: a.population,
         sigma: a.sigma,
@@ -382,7 +365,7 @@ pub fn sim_fit(a: SimFitArgs) -> Result<()> {
             pb.println(line);
         }
     };
-    let fit = fit_transfer(&cfg, &sensor, &blob, &mut report);
+    let fit = fit_transfer(&cfg, &sensor, &mut report);
     pb.finish_and_clear();
     let fit = fit?;
     for w in &fit.warnings {

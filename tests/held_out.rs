@@ -311,7 +311,7 @@ fn issue20_follow_replay_warns_when_the_bank_holds_training_frames() {
         lines
             .filter(|l| {
                 let name = l.split(',').next().unwrap_or_default();
-                tactrace_lab::replay_world::frame_number(name).is_some_and(|n| n % 5 != 0)
+                tactrace_store::collection::frame_number(name).is_some_and(|n| n % 5 != 0)
             })
             .take(250)
             .map(str::to_string),

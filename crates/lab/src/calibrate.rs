@@ -10,7 +10,7 @@
 //! command that simulates taps.
 use crate::error::{LabError, Result};
 use crate::import::{import_rows, Imported};
-use crate::twin::{simulate_twin_rows, twin_rows, TwinConfig};
+use crate::twin::{simulate_twin_rows, twin_rows};
 use std::collections::HashSet;
 use std::path::PathBuf;
 use tactrace_calib::{
@@ -21,17 +21,17 @@ use tactrace_sensor::TacTipConfig;
 use tactrace_store::sensor_file::{
     LabelColumnNames, SensorSpec, TrainingRecipe, SENSOR_FORMAT, SENSOR_FORMAT_VERSION,
 };
-use tactrace_store::SensorFolder;
+use tactrace_store::{LabelledCollection, LabelledRow, SensorFolder};
 use tactrace_vision::BlobParams;
 
 /// What to calibrate on.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct CalibrateConfig {
-    /// Folder of the real frames named in the labels file.
-    pub frames: PathBuf,
-    /// The labels file, its columns, the reference frame, and the seed of
-    /// the replayed taps' rendering noise.
-    pub twin: TwinConfig,
+    /// The real taps: frames, labels (the edge task's two targets, depth
+    /// and shear columns), reference frame and blob detector.
+    pub collection: LabelledCollection,
+    /// Seed of the replayed taps' rendering noise.
+    pub render_seed: u64,
     /// Calibration taps to pick (`None`: all, nothing held out).
     pub samples: Option<usize>,
     /// Seed of the tap selection.
@@ -78,17 +78,22 @@ pub struct ExampleTap {
 pub const SCORE_TAPS: usize = 400;
 
 /// Calibrate `sensor` (the simulator's parameters) to the real taps of
-/// `cfg`, detecting pins with `blob`: the calibration taps are picked from
+/// `cfg` (pins found by its collection's blob detector): the calibration
+/// taps are picked from
 /// the labels alone (seeded rule spanning r and theta), then only they and
 /// up to [`SCORE_TAPS`] other taps (seeded) are imported and replayed;
 /// `progress` ticks once per frame imported and once per tap replayed.
 pub fn calibrate_sensor(
     cfg: &CalibrateConfig,
     sensor: &TacTipConfig,
-    blob: &BlobParams,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Calibrated> {
-    let t = &cfg.twin;
+    let c = &cfg.collection;
+    let blob = c.blob();
+    let [r_column, theta_column] = c
+        .spec()
+        .edge_columns()
+        .map_err(tactrace_store::StoreError::from)?;
     if let Some(got) = cfg.samples.filter(|&n| n < MIN_TAPS) {
         return Err(CalibError::TooFewTaps {
             got,
@@ -97,12 +102,12 @@ pub fn calibrate_sensor(
         }
         .into());
     }
-    let fitted_layout = layout_for(sensor, &t.reference, blob)?;
+    let fitted_layout = layout_for(sensor, c.reference().path(), blob)?;
     let sensor = &fitted_layout;
-    let rows = twin_rows(t)?;
+    let rows = twin_rows(c)?;
     let labels: Vec<Label> = rows
         .iter()
-        .map(|r| (f64::from(r.r), f64::from(r.theta)))
+        .map(|r| (f64::from(r.targets[0]), f64::from(r.targets[1])))
         .collect();
     check_labels(&labels)?;
     let pool: Vec<usize> = match &cfg.allowed_rows {
@@ -132,15 +137,14 @@ pub fn calibrate_sensor(
         None => held_out_rows(&pool, &chosen, cfg.seed),
     };
     let keep: Vec<usize> = chosen.iter().chain(&held).copied().collect();
-    let icfg = t.import_config(cfg.frames.clone());
-    let real = import_rows(&icfg, blob, Some(&keep), progress)?;
+    let real = import_rows(c, Some(&keep), progress)?;
     let physics = if cfg.fit_physics {
-        fit_physics(sensor, &real, &rows, &chosen, t)?
+        fit_physics(sensor, &real, &rows, &chosen)?
     } else {
         sensor.clone()
     };
     let sensor = &physics;
-    let twin = simulate_twin_rows(t, sensor, blob, Some(&keep), progress)?;
+    let twin = simulate_twin_rows(c, sensor, cfg.render_seed, Some(&keep), progress)?;
     let chosen_names: HashSet<&str> = chosen.iter().map(|&i| rows[i].image.as_str()).collect();
     let pairs = paired(&real, &twin)?;
     let (fit_part, held_part) = pairs.split(|name| chosen_names.contains(name));
@@ -171,7 +175,7 @@ pub fn calibrate_sensor(
             corrected: corrected.row(k),
         });
     }
-    let reference = tactrace_sensor::read_frame(&t.reference)?;
+    let reference = tactrace_sensor::read_frame(c.reference().path())?;
     let spec = SensorSpec {
         format: SENSOR_FORMAT.into(),
         format_version: SENSOR_FORMAT_VERSION,
@@ -179,11 +183,11 @@ pub fn calibrate_sensor(
         sensor: sensor.clone(),
         blob: blob.clone(),
         labels: LabelColumnNames {
-            image: t.image_column.clone(),
-            r: t.r_column.clone(),
-            theta: t.theta_column.clone(),
-            dz: t.dz_column.clone(),
-            shear: t.shear_columns.clone(),
+            image: c.spec().image_column().into(),
+            r: r_column.into(),
+            theta: theta_column.into(),
+            dz: c.tap().depth.clone(),
+            shear: c.tap().shear.clone(),
         },
         training: TrainingRecipe::default(),
         reference_pins: real.data.meta.reference_pins.clone(),
@@ -218,9 +222,8 @@ const PHYSICS_FIT: (usize, usize) = (2, 150);
 fn fit_physics(
     sensor: &TacTipConfig,
     real: &Imported,
-    rows: &[crate::import::Row],
+    rows: &[LabelledRow],
     chosen: &[usize],
-    t: &TwinConfig,
 ) -> Result<TacTipConfig> {
     let data = &real.data;
     let p = data.dim() / 2;
@@ -234,7 +237,7 @@ fn fit_physics(
                 .map(|j| Some([f64::from(x[j]), f64::from(x[p + j])]))
                 .collect();
             Some(tactrace_sensor::FitSample {
-                tap: crate::twin::edge_tap(t, &rows[i]),
+                tap: crate::twin::edge_tap(&rows[i]),
                 disp,
             })
         })

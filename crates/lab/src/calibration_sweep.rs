@@ -8,13 +8,13 @@
 use crate::calibrate::{calibrate_sensor, write_calibrated, CalibrateConfig};
 use crate::error::Result;
 use crate::reproduce::{rows_not_in, train_and_score, ReproduceConfig};
-use crate::twin::{simulate_twin_calibrated, twin_rows, TwinConfig};
+use crate::twin::{simulate_twin_calibrated, twin_rows};
 use rayon::prelude::*;
 use std::collections::HashSet;
 use std::path::Path;
 use tactrace_learn::ModelKind;
 use tactrace_report::{CalibrationRow, NetRow};
-use tactrace_store::TapData;
+use tactrace_store::{LabelledCollection, TapData};
 
 /// Which labels a part keeps: (r mm, theta deg) -> kept.
 type LabelFilter = fn(f32, f32) -> bool;
@@ -71,12 +71,13 @@ impl Case {
     }
 }
 
-/// The real split and where the twin's labels come from.
+/// The real split, the collection it was imported from (whose labels the
+/// twins replay) and the twins' rendering seed.
 pub(crate) struct Split<'a> {
-    pub frames: &'a Path,
+    pub collection: &'a LabelledCollection,
+    pub render_seed: u64,
     pub training: &'a TapData,
     pub validation: &'a TapData,
-    pub twin: &'a TwinConfig,
 }
 
 /// Every case of [`cases`], in parallel; returns the table's rows and the
@@ -109,9 +110,9 @@ pub(crate) fn calibration_rows(
 /// whose labels `keep` accepts.
 fn rows_in(split: &Split, part: &TapData, keep: LabelFilter) -> Result<Vec<usize>> {
     let names: HashSet<&str> = part.meta.images.iter().map(String::as_str).collect();
-    Ok(twin_rows(split.twin)?
+    Ok(twin_rows(split.collection)?
         .iter()
-        .filter(|row| names.contains(row.image.as_str()) && keep(row.r, row.theta))
+        .filter(|row| names.contains(row.image.as_str()) && keep(row.targets[0], row.targets[1]))
         .map(|row| row.index)
         .collect())
 }
@@ -131,16 +132,15 @@ fn run_case(
     out: &Path,
 ) -> Result<(CalibrationRow, NetRow)> {
     let ccfg = CalibrateConfig {
-        frames: split.frames.to_path_buf(),
-        twin: split.twin.clone(),
+        collection: split.collection.clone(),
+        render_seed: split.render_seed,
         samples: case.taps,
         seed: cfg.seed,
         allowed_rows: Some(rows_in(split, split.training, case.pool.1)?),
         score_rows: Some(rows_in(split, split.validation, case.scored.1)?),
         fit_physics: false,
     };
-    let blob = tactrace_vision::BlobParams::preset("real256")?;
-    let got = calibrate_sensor(&ccfg, &cfg.follow.rig.sensor, &blob, &|| {})?;
+    let got = calibrate_sensor(&ccfg, &cfg.follow.rig.sensor, &|| {})?;
     let dir = out.join("calibration").join(case.folder);
     let sensor_dir = if case.is_headline() {
         out.join("sensor")
@@ -148,7 +148,13 @@ fn run_case(
         dir.join("sensor")
     };
     write_calibrated(&got, &sensor_dir, true)?;
-    let twin = simulate_twin_calibrated(split.twin, &got.sensor, true, &|| {})?;
+    let twin = simulate_twin_calibrated(
+        split.collection,
+        &got.sensor,
+        split.render_seed,
+        true,
+        &|| {},
+    )?;
     let training = rows_not_in(&twin.data, split.validation);
     let scored = part_where(split.validation, case.scored.1);
     let name = if case.is_headline() {

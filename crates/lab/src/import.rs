@@ -1,44 +1,16 @@
-//! Import real TacTip frames (Bristol layout) into the dataset format,
-//! through the same pin extraction as simulated taps.
+//! Import a labelled collection of real TacTip frames
+//! ([`LabelledCollection`]) into the dataset format, through the same pin
+//! extraction as simulated taps.
 use crate::error::{LabError, Result};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::read_frame;
-use tactrace_store::{DatasetMeta, TapData};
+use tactrace_store::{DatasetMeta, LabelledCollection, LabelledRow, TapData, TapFields};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// One frame's displacement and whether pins were missing, or why it was
 /// rejected.
 pub(crate) type FrameOutcome = std::result::Result<(Vec<f32>, bool), String>;
-
-/// Where the real frames and their labels are.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct ImportConfig {
-    pub frames: PathBuf,
-    pub targets: PathBuf,
-    pub reference: PathBuf,
-    pub image_column: String,
-    pub r_column: String,
-    pub theta_column: String,
-    /// Import at most this many rows (all when `None`).
-    pub limit: Option<usize>,
-}
-
-impl ImportConfig {
-    /// The Bristol edge set's layout in `dir` (frames/, targets.csv,
-    /// frames/init_0.png; r = pose_2, theta = pose_6), every row.
-    pub fn bristol(dir: &Path) -> Self {
-        ImportConfig {
-            frames: dir.join("frames"),
-            targets: dir.join("targets.csv"),
-            reference: dir.join("frames/init_0.png"),
-            image_column: "image_name".into(),
-            r_column: "pose_2".into(),
-            theta_column: "pose_6".into(),
-            limit: None,
-        }
-    }
-}
 
 /// Result of an import: the dataset and a summary.
 pub struct Imported {
@@ -65,93 +37,6 @@ pub struct TwinComposition {
     pub renders: usize,
     pub real_taps: usize,
     pub real_tap_repeats: usize,
-}
-
-/// One labelled row of the targets CSV.
-pub(crate) struct Row {
-    /// Index among the CSV's data rows (0 = the first after the header).
-    pub index: usize,
-    pub image: String,
-    pub r: f32,
-    pub theta: f32,
-    /// The values of the `extra` columns asked of [`read_rows`], in order.
-    pub extra: Vec<f32>,
-}
-
-/// The label columns of a targets CSV, by header name.
-pub(crate) struct LabelColumns<'a> {
-    pub image: &'a str,
-    pub r: &'a str,
-    pub theta: &'a str,
-    /// Further numeric columns, returned in [`Row::extra`].
-    pub extra: &'a [&'a str],
-}
-
-impl<'a> LabelColumns<'a> {
-    pub fn of(cfg: &'a ImportConfig) -> Self {
-        LabelColumns {
-            image: &cfg.image_column,
-            r: &cfg.r_column,
-            theta: &cfg.theta_column,
-            extra: &[],
-        }
-    }
-}
-
-/// Read the labels of the first `limit` rows (all when `None`).
-pub(crate) fn read_rows(
-    path: &Path,
-    cols: &LabelColumns,
-    limit: Option<usize>,
-) -> Result<Vec<Row>> {
-    let path = &path.to_path_buf();
-    let fmt = |reason: String| LabError::Format {
-        path: path.clone(),
-        reason,
-    };
-    // A regular file only: a FIFO would block the import for ever.
-    let (file, _) = tactrace_store::open_regular(path)?;
-    let mut rdr = csv::Reader::from_reader(std::io::BufReader::new(file));
-    let headers = rdr.headers().map_err(|e| fmt(e.to_string()))?.clone();
-    let names: Vec<&str> = [cols.image, cols.r, cols.theta]
-        .into_iter()
-        .chain(cols.extra.iter().copied())
-        .collect();
-    let at = crate::labels::column_indices(&headers, &names).map_err(fmt)?;
-    let (ci, cr, ct) = (at[0], at[1], at[2]);
-    let extra_cols = &at[3..];
-    let mut rows = Vec::new();
-    for (k, rec) in rdr.records().enumerate() {
-        let rec = rec.map_err(|e| fmt(e.to_string()))?;
-        let num = |c: usize| -> Result<f32> {
-            let v: f32 = rec.get(c).unwrap_or("").trim().parse().map_err(|_| {
-                fmt(format!(
-                    "row {}: `{}` is not a number",
-                    k + 2,
-                    rec.get(c).unwrap_or("")
-                ))
-            })?;
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(fmt(format!("row {}: non-finite value", k + 2)))
-            }
-        };
-        rows.push(Row {
-            index: k,
-            image: rec.get(ci).unwrap_or("").trim().to_string(),
-            r: num(cr)?,
-            theta: num(ct)?,
-            extra: extra_cols.iter().map(|&c| num(c)).collect::<Result<_>>()?,
-        });
-        if limit.is_some_and(|l| rows.len() >= l) {
-            break;
-        }
-    }
-    if rows.is_empty() {
-        return Err(fmt("no data rows".into()));
-    }
-    Ok(rows)
 }
 
 /// How many of the first rows must all fail for too few pins before the
@@ -194,44 +79,45 @@ pub(crate) fn check_reference(
     }
 }
 
-/// Import real frames. `progress` is called once per frame processed.
-pub fn import(
-    cfg: &ImportConfig,
-    blob: &BlobParams,
-    progress: &(dyn Fn() + Sync),
-) -> Result<Imported> {
-    import_rows(cfg, blob, None, progress)
+/// Import the frames of `collection` (its rows, its blob detector, pins
+/// ordered by its reference frame). `progress` is called once per frame
+/// processed.
+pub fn import(collection: &LabelledCollection, progress: &(dyn Fn() + Sync)) -> Result<Imported> {
+    import_rows(collection, None, progress)
 }
 
 /// As [`import`], only the label rows at `keep` (indices of the CSV's data
 /// rows, in that order) when given.
 pub(crate) fn import_rows(
-    cfg: &ImportConfig,
-    blob: &BlobParams,
+    collection: &LabelledCollection,
     keep: Option<&[usize]>,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
-    let rows = keep_rows(
-        read_rows(&cfg.targets, &LabelColumns::of(cfg), cfg.limit)?,
-        keep,
-    );
+    let names = collection
+        .spec()
+        .edge_names()
+        .map_err(tactrace_store::StoreError::from)?;
+    let rows = keep_rows(collection.read_rows(TapFields::NONE)?, keep);
+    let frames = collection.frames();
     if let Some(err) = rows
         .first()
-        .and_then(|r| crate::import_checks::frames_folder(&cfg.frames, &r.image))
+        .and_then(|r| crate::import_checks::frames_folder(frames, &r.image))
     {
         return Err(err);
     }
-    let extractor = reference_extractor(&cfg.reference, blob)?;
+    let reference = collection.reference().path();
+    let blob = collection.blob();
+    let extractor = reference_extractor(reference, blob)?;
     let first: Vec<PathBuf> = rows
         .iter()
         .take(REFERENCE_PROBE_ROWS)
-        .map(|r| cfg.frames.join(&r.image))
+        .map(|r| frames.join(&r.image))
         .collect();
-    check_reference(&extractor, &cfg.reference, &first)?;
+    check_reference(&extractor, reference, &first)?;
     let outcomes: Vec<FrameOutcome> = rows
         .par_iter()
         .map(|row| {
-            let out = extract_one(&extractor, &cfg.frames.join(&row.image));
+            let out = extract_one(&extractor, &frames.join(&row.image));
             progress();
             out.map_err(|e| e.to_string())
         })
@@ -243,28 +129,28 @@ pub(crate) fn import_rows(
     });
     if let Some((row, reason)) = unreadable {
         return Err(LabError::Format {
-            path: cfg.frames.join(&row.image),
+            path: frames.join(&row.image),
             reason: reason.clone(),
         });
     }
     let meta = DatasetMeta {
         source: "real".into(),
-        origin: cfg.frames.display().to_string(),
+        origin: frames.display().to_string(),
         seed: None,
         samples: 0,
         pins: extractor.tracker.reference().len(),
-        targets: target_names(&cfg.r_column, &cfg.theta_column),
+        targets: names,
         frames_with_missing_pins: 0,
         reference_pins: extractor.tracker.reference().to_vec(),
-        settings: serde_json::json!({ "import": cfg, "blob": blob }),
+        settings: serde_json::json!({ "import": collection }),
         tactrace_version: crate::VERSION.into(),
         input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
         images: Vec::new(),
     };
-    let mut got = gather(&rows, outcomes, meta, &cfg.frames)?;
+    let mut got = gather(&rows, outcomes, meta, frames)?;
     let d = &got.data;
     got.warnings.extend(crate::import_checks::pressed_reference(
-        &cfg.reference,
+        reference,
         &d.meta.reference_pins,
         &d.inputs,
         d.len(),
@@ -273,22 +159,14 @@ pub(crate) fn import_rows(
 }
 
 /// The rows at `keep` (all when `None`; indices past the end are ignored).
-pub(crate) fn keep_rows(rows: Vec<Row>, keep: Option<&[usize]>) -> Vec<Row> {
+pub(crate) fn keep_rows(rows: Vec<LabelledRow>, keep: Option<&[usize]>) -> Vec<LabelledRow> {
     let Some(keep) = keep else {
         return rows;
     };
-    let mut slots: Vec<Option<Row>> = rows.into_iter().map(Some).collect();
+    let mut slots: Vec<Option<LabelledRow>> = rows.into_iter().map(Some).collect();
     keep.iter()
         .filter_map(|&i| slots.get_mut(i).and_then(Option::take))
         .collect()
-}
-
-/// The dataset's target descriptions for the label columns used.
-pub(crate) fn target_names(r_column: &str, theta_column: &str) -> [String; 2] {
-    [
-        format!("r_mm ({r_column})"),
-        format!("theta_deg ({theta_column})"),
-    ]
 }
 
 /// The rows' outcomes (in row order) gathered into the dataset `meta`
@@ -296,7 +174,7 @@ pub(crate) fn target_names(r_column: &str, theta_column: &str) -> [String; 2] {
 /// filled in here. Rejected rows keep their image name and reason. An error
 /// naming `origin` when no row gave a sample.
 pub(crate) fn gather(
-    rows: &[Row],
+    rows: &[LabelledRow],
     outcomes: Vec<FrameOutcome>,
     mut meta: DatasetMeta,
     origin: &Path,
@@ -309,7 +187,7 @@ pub(crate) fn gather(
         match outcome {
             Ok((disp, had_missing)) => {
                 inputs.extend(disp);
-                targets.extend([row.r, row.theta]);
+                targets.extend_from_slice(&row.targets);
                 meta.images.push(row.image.clone());
                 missing += usize::from(had_missing);
             }

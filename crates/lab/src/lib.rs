@@ -3,12 +3,12 @@
 //!
 //! [`calibrate`] fits the simulator to a user's real taps,
 //! [`collect`] taps on an edge (the simulated rig of `tactrace-servo`),
-//! [`import`] turns real frames into the same dataset format, [`twin`]
-//! replays a real set's labels on the simulator, [`train`] fits and
-//! validates pose models, [`follow`] runs the servo loop round an object
-//! into a run folder, [`replay_world`] in the real-frame world (a simulated
-//! arm whose taps are answered by real frames), [`hardware`] does the same
-//! on a real rig,
+//! [`import`] turns a labelled collection of real frames
+//! (`tactrace_store::LabelledCollection`) into the same dataset format,
+//! [`twin`] replays a real set's labels on the simulator, [`train`] fits
+//! and validates pose models, [`follow`] runs the servo loop round an
+//! object into a run folder in any [`world`] (the simulated TacTip, a
+//! calibrated sensor, the real-frame world, the real rig of [`hardware`]),
 //! [`reproduce`] regenerates the report, [`mod@bench`] times it, [`render`]
 //! draws one simulated tap, [`mod@tune`] tunes the controller in simulation
 //! (CMA-ES). Algorithms
@@ -25,16 +25,15 @@ pub mod follow;
 pub mod hardware;
 pub mod import;
 pub mod import_checks;
-mod labels;
 pub mod numbers;
 pub mod render;
-pub mod replay_world;
 pub mod reproduce;
 pub mod train;
 pub mod trajectory_csv;
 pub mod transfer_fit;
 pub mod tune;
 pub mod twin;
+pub mod world;
 
 pub use error::{LabError, Result};
 

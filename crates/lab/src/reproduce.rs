@@ -5,12 +5,11 @@
 //! with the PDenNN, and write report.md, report.html and metrics.json with
 //! the report's numbers side by side. With real frames (`--real`), the
 //! networks on real frames and the simulator's twin, and the four shapes
-//! in the real-frame world ([`crate::replay_world`]): the PDenNN trained on
-//! the real 80 %, every tap answered by the held-out 20 %.
+//! in the real-frame world ([`crate::world::ReplayWorld`]): the PDenNN
+//! trained on the real 80 %, every tap answered by the held-out 20 %.
 use crate::collect::{collect, CollectConfig};
 use crate::error::{LabError, Result};
-use crate::follow::{follow_simulated, SimFollowConfig};
-use crate::replay_world::{follow_replay, ReplayWorld};
+use crate::follow::{FollowOutcome, RunHooks, SimFollowConfig};
 use crate::train::{resolve_config, save_model, train, validate_net, Validation};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -21,8 +20,10 @@ use tactrace_report::figures::{self, Predicted};
 use tactrace_report::results::slug;
 use tactrace_report::{NetRow, ReplayShapeRow, ReproduceResults, ShapeRow};
 use tactrace_servo::pose_at_edge;
+use tactrace_store::collection::CollectionEdits;
 use tactrace_store::{
-    write_atomic, write_dataset, StagedDir, StoredModel, TapData, TrainingRecord,
+    write_atomic, write_dataset, LabelledCollection, SensorFolder, StagedDir, StoredModel, TapData,
+    TrainingRecord,
 };
 use tactrace_vision::PinExtractor;
 /// The report's contour-following mean L2 errors, mm (ch. 5.3).
@@ -158,7 +159,12 @@ fn reproduce_into(
         seed: cfg.seed + 1000,
         ..CollectConfig::default()
     };
-    let calibrated = crate::follow::read_calibrated(&cfg.follow)?;
+    let calibrated = cfg
+        .follow
+        .calibrated_sensor
+        .as_deref()
+        .map(SensorFolder::read)
+        .transpose()?;
     let collect_on_disk = |c: &CollectConfig| match &calibrated {
         Some(s) => crate::collect::collect_calibrated(rig, s, &disk, c, "disk", |_| {}),
         None => collect(rig, &disk, c, "disk", |_| {}),
@@ -239,7 +245,7 @@ fn follow_report_shapes(
             let contour = builtin_shape(*shape);
             let run = runs.join(shape.name());
             let named = (shape.name(), &contour);
-            let res = follow_simulated(&fcfg, &model, named, (&run, true), &mut |_| {})?;
+            let res = follow_quietly(&fcfg, &model, named, &run)?;
             let traj: Vec<(f64, f64)> = res.records.iter().map(|r| (r.pose.x, r.pose.y)).collect();
             let name = shape.name();
             figures::trajectory(
@@ -266,6 +272,18 @@ fn follow_report_shapes(
     shapes.into_iter().collect()
 }
 
+/// Follow `shape` in the world of `fcfg` with `model` into `run`
+/// (replaced), telling no one.
+fn follow_quietly(
+    fcfg: &SimFollowConfig,
+    model: &StoredModel,
+    shape: (&str, &Contour),
+    run: &Path,
+) -> Result<FollowOutcome> {
+    let hooks = RunHooks::default();
+    crate::follow::run(fcfg.world().open()?, model, Some(shape), (run, true), hooks)
+}
+
 /// What `--real` adds to the report.
 #[derive(Default)]
 struct RealRows {
@@ -289,25 +307,24 @@ fn real_rows(
     out: &Path,
     log: &(dyn Fn(&str) + Sync),
 ) -> Result<RealRows> {
-    let icfg = crate::import::ImportConfig::bristol(dir);
-    let blob = tactrace_vision::BlobParams::preset("real256")?;
-    fig_4_1_real(dir, &blob, &out.join("figures/fig4_1_real"))?;
-    let imported = crate::import::import(&icfg, &blob, &|| {})?;
+    let collection = LabelledCollection::bristol(dir);
+    fig_4_1_real(&collection, &out.join("figures/fig4_1_real"))?;
+    let imported = crate::import::import(&collection, &|| {})?;
     for w in &imported.warnings {
         log(&format!("warning: {w}"));
     }
     let (tr, va) = imported.data.split(0.8, cfg.seed);
     let real = train_rows(cfg, &NETS, "real", &tr, &va, &out.join("real"))?;
-    let twin_cfg = crate::twin::TwinConfig::bristol(dir, cfg.seed);
-    let twin = crate::twin::simulate_twin(&twin_cfg, &cfg.follow.rig.sensor, &blob, &|| {})?;
+    let sensor = &cfg.follow.rig.sensor;
+    let twin = crate::twin::simulate_twin(&collection, sensor, cfg.seed, &|| {})?;
     let twin_tr = rows_not_in(&twin.data, &va);
     let nets = [NETS[2], NETS[3]];
     let mut transfer = train_rows(cfg, &nets, "twin", &twin_tr, &va, &out.join("twin"))?;
     let split = crate::calibration_sweep::Split {
-        frames: &dir.join("frames"),
+        collection: &collection,
+        render_seed: cfg.seed,
         training: &tr,
         validation: &va,
-        twin: &twin_cfg,
     };
     let (calibration, headline) = crate::calibration_sweep::calibration_rows(cfg, &split, out)?;
     transfer.push(headline);
@@ -385,11 +402,11 @@ fn fig_4_1_simulated(rig: &tactrace_servo::RigConfig, disk: &Contour, stem: &Pat
     Ok(())
 }
 
-/// Fig. 4.1 on a real frame of the Bristol set in `dir`.
-fn fig_4_1_real(dir: &Path, blob: &tactrace_vision::BlobParams, stem: &Path) -> Result<()> {
-    let reference = tactrace_sensor::read_frame(&dir.join("frames/init_0.png"))?;
-    let frame = tactrace_sensor::read_frame(&dir.join("frames/frame_0_0.png"))?;
-    let extractor = PinExtractor::from_reference_frame(&reference, blob.clone())?;
+/// Fig. 4.1 on a real frame of the Bristol set `collection`.
+fn fig_4_1_real(collection: &LabelledCollection, stem: &Path) -> Result<()> {
+    let reference = tactrace_sensor::read_frame(collection.reference().path())?;
+    let frame = tactrace_sensor::read_frame(&collection.frames().join("frame_0_0.png"))?;
+    let extractor = PinExtractor::from_reference_frame(&reference, collection.blob().clone())?;
     figures::frame_pins_displacements(stem, &frame, &extractor, 3.0)?;
     Ok(())
 }
@@ -404,15 +421,11 @@ fn real_world_shapes(
     held_out: &TapData,
     dir: &Path,
 ) -> Result<Vec<ReplayShapeRow>> {
-    let mut world = ReplayWorld::bristol(real)?;
-    let bank = dir.join("bank.csv");
-    write_rows_of(
-        &world.targets,
-        &world.image_column,
-        &held_out.meta.images,
-        &bank,
-    )?;
-    world.targets = bank;
+    let bank = crate::world::ReplayBank::from_dir(real, &CollectionEdits::default())?;
+    let part = bank
+        .collection()
+        .with_images(&held_out.meta.images, &dir.join("bank.csv"))?;
+    let bank = bank.with_collection(part)?;
     let rows: Vec<Result<ReplayShapeRow>> = REPORT_L2
         .par_iter()
         .map(|(shape, report_l2, steps)| {
@@ -424,55 +437,22 @@ fn real_world_shapes(
             fcfg.follow.seed = cfg.seed;
             let contour = builtin_shape(*shape);
             let run = dir.join("follow").join(shape.name());
+            fcfg.replay = Some(bank.clone());
             let named = (shape.name(), &contour);
-            let res = follow_replay(&fcfg, &world, &model, named, (&run, true), &mut |_| {})?;
-            let metrics = res.run.metrics.expect("scored against the known contour");
+            let res = follow_quietly(&fcfg, &model, named, &run)?;
+            let metrics = res.metrics.expect("scored against the known contour");
+            let stats = res.replay.expect("the real-frame world's statistics");
             Ok(ReplayShapeRow {
                 shape: shape.name().into(),
                 metrics,
-                ending: res.run.summary.ending,
+                ending: res.summary.ending,
                 report_l2_mm: *report_l2,
-                bank_frames: res.stats.bank_frames,
-                label_distance_mean: res.stats.distance_mean,
-                label_distance_p95: res.stats.distance_p95,
-                label_distance_max: res.stats.distance_max,
+                bank_frames: stats.bank_frames,
+                label_distance_mean: stats.distance_mean,
+                label_distance_p95: stats.distance_p95,
+                label_distance_max: stats.distance_max,
             })
         })
         .collect();
     rows.into_iter().collect()
-}
-
-/// Copy the rows of the labels CSV `targets` whose `image_column` names one
-/// of `images` into `out`.
-fn write_rows_of(targets: &Path, image_column: &str, images: &[String], out: &Path) -> Result<()> {
-    let keep: std::collections::HashSet<&str> = images.iter().map(String::as_str).collect();
-    let fmt = |e: csv::Error| LabError::Format {
-        path: targets.to_path_buf(),
-        reason: e.to_string(),
-    };
-    let (file, _) = tactrace_store::open_regular(targets)?;
-    let mut rdr = csv::Reader::from_reader(std::io::BufReader::new(file));
-    let headers = rdr.headers().map_err(fmt)?.clone();
-    let col = headers
-        .iter()
-        .position(|h| h.trim() == image_column)
-        .ok_or_else(|| LabError::Format {
-            path: targets.to_path_buf(),
-            reason: format!("no column `{image_column}`"),
-        })?;
-    let mut w = csv::Writer::from_writer(Vec::new());
-    let werr = |e: csv::Error| tactrace_store::StoreError::Write {
-        path: out.to_path_buf(),
-        source: std::io::Error::other(e),
-    };
-    w.write_record(&headers).map_err(werr)?;
-    for rec in rdr.records() {
-        let rec = rec.map_err(fmt)?;
-        if rec.get(col).is_some_and(|v| keep.contains(v.trim())) {
-            w.write_record(&rec).map_err(werr)?;
-        }
-    }
-    let bytes = w.into_inner().map_err(|e| werr(e.into_error().into()))?;
-    write_atomic(out, &bytes)?;
-    Ok(())
 }

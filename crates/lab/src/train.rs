@@ -185,31 +185,38 @@ pub fn trial_summary(t: &Trial) -> String {
 
 /// The trials as CSV (best first).
 pub fn trials_csv(trials: &[Trial]) -> String {
-    let mut out = String::from(
-        "rank,learning_rate,output_learning_rate,beta,hidden,n_components,position_mae_mm,angle_mae_deg,score\n",
-    );
+    let mut csv = tactrace_store::CsvText::new();
+    csv.row([
+        "rank",
+        "learning_rate",
+        "output_learning_rate",
+        "beta",
+        "hidden",
+        "n_components",
+        "position_mae_mm",
+        "angle_mae_deg",
+        "score",
+    ]);
     for (k, t) in trials.iter().enumerate() {
         let c = &t.config;
         if let Some(net) = c.pose.as_ref().or(c.angle.as_ref()) {
-            out.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{}\n",
-                k + 1,
-                net.learning_rate,
-                net.output_learning_rate.unwrap_or(net.learning_rate),
-                net.beta,
-                net.hidden
-                    .iter()
-                    .map(|h| h.to_string())
-                    .collect::<Vec<_>>()
-                    .join(" "),
+            let hidden: Vec<String> = net.hidden.iter().map(|h| h.to_string()).collect();
+            csv.row([
+                (k + 1).to_string(),
+                net.learning_rate.to_string(),
+                net.output_learning_rate
+                    .unwrap_or(net.learning_rate)
+                    .to_string(),
+                net.beta.to_string(),
+                hidden.join(" "),
                 net.n_components.map(|k| k.to_string()).unwrap_or_default(),
-                t.val_mae[0],
-                t.val_mae[1],
-                t.score
-            ));
+                t.val_mae[0].to_string(),
+                t.val_mae[1].to_string(),
+                t.score.to_string(),
+            ]);
         }
     }
-    out
+    csv.into_string()
 }
 
 fn check_dim(expected: usize, got: usize) -> Result<()> {

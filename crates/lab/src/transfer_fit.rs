@@ -17,14 +17,13 @@
 use crate::error::{LabError, Result};
 use crate::import::import;
 use crate::train::{holdout, resolve_config, train_with_validation, validate_net};
-use crate::twin::{simulate_twin, TwinConfig};
+use crate::twin::simulate_twin;
 use std::path::{Path, PathBuf};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_optim::{Cmaes, CmaesConfig};
 use tactrace_sensor::TacTipConfig;
 use tactrace_store::fsutil::{write_atomic, StagedDir};
-use tactrace_store::TapData;
-use tactrace_vision::BlobParams;
+use tactrace_store::{CsvText, LabelledCollection, TapData};
 
 /// A parameter the transfer fit moves: its rig-file key (under
 /// `[sensor]`), getter, setter, search scale (one unit of the search) and
@@ -86,11 +85,11 @@ pub const TRANSFER_PARAMS: [TransferParam; 24] = [
 /// What to fit on and how long to search.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TransferFitConfig {
-    /// Folder of the real frames named in the labels file.
-    pub frames: PathBuf,
-    /// The labels file (every row is a cost tap), columns, reference frame
-    /// and the twin's rendering seed.
-    pub twin: TwinConfig,
+    /// The real taps (every row is a cost tap): frames, labels, depth and
+    /// shear columns, reference frame and blob detector.
+    pub collection: LabelledCollection,
+    /// The twins' first rendering seed.
+    pub render_seed: u64,
     /// CMA-ES generations.
     pub generations: usize,
     /// Candidates per generation (`None`: CMA-ES's default, 4 + 3 ln n).
@@ -105,8 +104,8 @@ pub struct TransferFitConfig {
     /// Degrees of angle error that cost as much as 1 mm of position error
     /// (the targets: 5).
     pub deg_per_mm: f64,
-    /// Twins per candidate, rendered with seeds `twin.seed`,
-    /// `twin.seed + 1`, ...: the cost is their mean, so that no candidate
+    /// Twins per candidate, rendered with seeds `render_seed`,
+    /// `render_seed + 1`, ...: the cost is their mean, so that no candidate
     /// wins by one render's noise.
     pub renders: usize,
 }
@@ -165,17 +164,15 @@ pub fn with_values(base: &TacTipConfig, values: &[f64]) -> TacTipConfig {
 pub fn fit_transfer(
     cfg: &TransferFitConfig,
     base: &TacTipConfig,
-    blob: &BlobParams,
     progress: &mut dyn FnMut(&Candidate, &Candidate),
 ) -> Result<TransferFit> {
-    let t = &cfg.twin;
-    let imported = import(&t.import_config(cfg.frames.clone()), blob, &|| {})?;
+    let imported = import(&cfg.collection, &|| {})?;
     let (real, warnings) = (imported.data, imported.warnings);
     let start_values: Vec<f64> = TRANSFER_PARAMS.iter().map(|p| (p.get)(base)).collect();
     let score = |values: &[f64], generation: usize| -> Result<Candidate> {
         let sensor = with_values(base, values);
         let mae = match sensor.validate() {
-            Ok(()) => Some(transfer_mae(cfg, &sensor, blob, &real)?),
+            Ok(()) => Some(transfer_mae(cfg, &sensor, &real)?),
             Err(_) => None,
         };
         Ok(Candidate {
@@ -225,17 +222,13 @@ pub fn fit_transfer(
 fn transfer_mae(
     cfg: &TransferFitConfig,
     sensor: &TacTipConfig,
-    blob: &BlobParams,
     real: &TapData,
 ) -> Result<[f64; 2]> {
     let renders = cfg.renders.max(1);
     let mut sum = [0.0; 2];
     for k in 0..renders {
-        let twin_cfg = TwinConfig {
-            seed: cfg.twin.seed + k as u64,
-            ..cfg.twin.clone()
-        };
-        let twin = simulate_twin(&twin_cfg, sensor, blob, &|| {})?.data;
+        let seed = cfg.render_seed + k as u64;
+        let twin = simulate_twin(&cfg.collection, sensor, seed, &|| {})?.data;
         let (train, val) = holdout(&twin, cfg.val_fraction, 1)?;
         let model_cfg = resolve_config(ModelKind::PDenNN, Preset::Default, None, None)?;
         let (model, _) = train_with_validation(&model_cfg, &train, Some(&val), &mut |_| {})?;
@@ -275,10 +268,7 @@ pub fn write_transfer_fit(
     );
     let body = toml::to_string(&rig).map_err(|e| LabError::Config(e.to_string()))?;
     write_atomic(&dir.join("sensor.toml"), (head + &body).as_bytes())?;
-    write_atomic(
-        &dir.join("search.csv"),
-        search_csv(&fit.candidates).as_bytes(),
-    )?;
+    search_csv(&fit.candidates).write(&dir.join("search.csv"))?;
     tactrace_report::figures::convergence(
         &dir.join("convergence"),
         ("sim-fit: CMA-ES over the simulator's physics", "candidates"),
@@ -334,27 +324,23 @@ fn fmt_mae(c: &Candidate, k: usize) -> String {
 
 /// One row per candidate: generation, cost, position and angle MAE, then
 /// the parameters by key.
-fn search_csv(candidates: &[Candidate]) -> String {
-    let mut s = String::from("generation,cost,position_mae_mm,angle_mae_deg");
-    for p in &TRANSFER_PARAMS {
-        s.push(',');
-        s.push_str(p.key);
-    }
-    s.push('\n');
+fn search_csv(candidates: &[Candidate]) -> CsvText {
+    let mut csv = CsvText::new();
+    let head = ["generation", "cost", "position_mae_mm", "angle_mae_deg"];
+    csv.row(
+        head.into_iter()
+            .chain(TRANSFER_PARAMS.iter().map(|p| p.key)),
+    );
     for c in candidates {
-        s.push_str(&format!(
-            "{},{},{},{}",
-            c.generation,
-            c.cost,
+        let lead = [
+            c.generation.to_string(),
+            c.cost.to_string(),
             fmt_mae(c, 0),
-            fmt_mae(c, 1)
-        ));
-        for v in &c.values {
-            s.push_str(&format!(",{v}"));
-        }
-        s.push('\n');
+            fmt_mae(c, 1),
+        ];
+        csv.row(lead.into_iter().chain(c.values.iter().map(f64::to_string)));
     }
-    s
+    csv
 }
 
 #[cfg(test)]

@@ -8,7 +8,6 @@ use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
 use tactrace_lab::twin::simulate_twin_calibrated;
 use tactrace_sensor::TacTipConfig;
 use tactrace_store::SensorFolder;
-use tactrace_vision::BlobParams;
 
 mod common;
 use common::{distorted_sensor_set, PINS};
@@ -18,16 +17,15 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
     let root = tempfile::tempdir().unwrap();
     let twin = distorted_sensor_set(root.path(), 160);
     let cfg = CalibrateConfig {
-        frames: root.path().join("frames"),
-        twin: twin.clone(),
+        collection: twin.clone(),
+        render_seed: 1,
         samples: Some(100),
         seed: 3,
         allowed_rows: None,
         score_rows: None,
         fit_physics: false,
     };
-    let blob = BlobParams::preset("sim").unwrap();
-    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     let record = &got.sensor.spec.calibration;
     let (before, after) = (
         record.held_out_before.unwrap(),
@@ -81,8 +79,8 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
         got.sensor.field_correction().unwrap()
     );
     assert_eq!(back.real_fields, got.sensor.real_fields);
-    let a = simulate_twin_calibrated(&twin, &got.sensor, true, &|| {}).unwrap();
-    let b = simulate_twin_calibrated(&twin, &back, true, &|| {}).unwrap();
+    let a = simulate_twin_calibrated(&twin, &got.sensor, 1, true, &|| {}).unwrap();
+    let b = simulate_twin_calibrated(&twin, &back, 1, true, &|| {}).unwrap();
     assert_eq!(a.data.inputs, b.data.inputs);
     assert_eq!(a.data.meta.reference_pins, got.sensor.spec.reference_pins);
     // Three renders of the 160 labels plus the 100 real taps, repeated.
@@ -105,27 +103,29 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
     let root = tempfile::tempdir().unwrap();
     let twin = distorted_sensor_set(root.path(), 8);
     let cfg = CalibrateConfig {
-        frames: root.path().join("frames"),
-        twin,
+        collection: twin,
+        render_seed: 1,
         samples: None,
         seed: 1,
         allowed_rows: None,
         score_rows: None,
         fit_physics: false,
     };
-    let blob = BlobParams::preset("sim").unwrap();
-    let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {})
+    let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {})
         .err()
         .expect("8 taps are too few");
     assert!(err.is_bad_input(), "{err}");
     assert!(err.to_string().contains("10"), "{err}");
     // Asking for fewer taps than needed is refused before any frame is read.
     let cfg = CalibrateConfig {
-        frames: root.path().join("no-such-folder"),
+        collection: cfg
+            .collection
+            .clone()
+            .with_frames(root.path().join("no-such-folder")),
         samples: Some(5),
         ..cfg
     };
-    let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {})
+    let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {})
         .err()
         .expect("5 taps are too few");
     assert!(
@@ -140,18 +140,8 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
 #[test]
 fn issue20_an_unknown_key_anywhere_in_sensor_toml_is_refused() {
     let root = tempfile::tempdir().unwrap();
-    let twin = distorted_sensor_set(root.path(), 40);
-    let cfg = CalibrateConfig {
-        frames: root.path().join("frames"),
-        twin,
-        samples: Some(20),
-        seed: 1,
-        allowed_rows: None,
-        score_rows: None,
-        fit_physics: false,
-    };
-    let blob = BlobParams::preset("sim").unwrap();
-    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let cfg = common::calibration(distorted_sensor_set(root.path(), 40), 20);
+    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     let dir = root.path().join("sensor");
     got.sensor.write(&dir, false).unwrap();
     let toml = dir.join("sensor.toml");

@@ -9,14 +9,12 @@ use common::{distorted_sensor_set, sensor_set};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
 use tactrace_lab::collect::{collect_calibrated, CollectConfig};
-use tactrace_lab::follow::{follow_simulated, SimFollowConfig};
+use tactrace_lab::follow::{RunHooks, SimFollowConfig};
 use tactrace_lab::train::{resolve_config, train};
-use tactrace_lab::twin::TwinConfig;
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_sensor::TacTipConfig;
 use tactrace_servo::{Ending, RigConfig};
-use tactrace_store::{SensorFolder, StoredModel};
-use tactrace_vision::BlobParams;
+use tactrace_store::{LabelledCollection, SensorFolder, StoredModel};
 
 /// A synthetic sensor labelled in the real edge set's convention (its
 /// label angle zero is 74 deg from the loop's, its r offset 2.3 mm),
@@ -24,16 +22,15 @@ use tactrace_vision::BlobParams;
 fn calibrated_sensor(dir: &std::path::Path) -> SensorFolder {
     let twin = distorted_sensor_set(dir, 140);
     let cfg = CalibrateConfig {
-        frames: dir.join("frames"),
-        twin,
+        collection: twin,
+        render_seed: 1,
         samples: Some(100),
         seed: 2,
         allowed_rows: None,
         score_rows: None,
         fit_physics: false,
     };
-    let blob = BlobParams::preset("sim").unwrap();
-    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     got.sensor.write(&dir.join("sensor"), false).unwrap();
     SensorFolder::read(&dir.join("sensor")).unwrap()
 }
@@ -79,8 +76,10 @@ fn a_model_of_the_calibrated_sensor_follows_the_disk_in_its_world() {
         ..SimFollowConfig::default()
     };
     let out = root.path().join("run");
-    let res =
-        follow_simulated(&fcfg, &stored, ("disk", &disk), (&out, false), &mut |_| {}).unwrap();
+    let world = fcfg.world().open().unwrap();
+    let shape = Some(("disk", &disk));
+    let res = tactrace_lab::follow::run(world, &stored, shape, (&out, false), RunHooks::default())
+        .unwrap();
     let m = res.metrics.unwrap();
     assert_eq!(
         res.summary.ending,
@@ -93,11 +92,11 @@ fn a_model_of_the_calibrated_sensor_follows_the_disk_in_its_world() {
 
 /// A TacTip with 61 pins seen in a 320 x 240 frame by another camera:
 /// calibrate lays the simulator out like it, and its world works.
-/// Calibration of the synthetic set in `root` with 80 taps, seed 1.
-fn calibrate_80(root: &std::path::Path, twin: TwinConfig, fit_physics: bool) -> CalibrateConfig {
+/// Calibration of the synthetic set `twin` with 80 taps, seed 1.
+fn calibrate_80(twin: LabelledCollection, fit_physics: bool) -> CalibrateConfig {
     CalibrateConfig {
-        frames: root.join("frames"),
-        twin,
+        collection: twin,
+        render_seed: 1,
         samples: Some(80),
         seed: 1,
         allowed_rows: None,
@@ -119,9 +118,8 @@ fn a_sensor_with_another_pin_count_and_frame_size_is_calibrated() {
     other.camera.focal_px = 72.0;
     other.camera.rotation_deg = 165.0;
     let twin = sensor_set(root.path(), 120, other.clone());
-    let cfg = calibrate_80(root.path(), twin, false);
-    let blob = BlobParams::preset("sim").unwrap();
-    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let cfg = calibrate_80(twin, false);
+    let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     let spec = &got.sensor.spec;
     assert_eq!(spec.reference_pins.len(), 61);
     assert_eq!(spec.sensor.geometry.rings, 4);
@@ -164,10 +162,9 @@ fn the_physics_fit_finds_another_label_convention() {
     other.calibration.edge_offset_mm = 1.2;
     other.calibration.edge_scale = 1.25;
     let twin = sensor_set(root.path(), 120, other.clone());
-    let blob = BlobParams::preset("sim").unwrap();
     let run = |fit_physics| {
-        let cfg = calibrate_80(root.path(), twin.clone(), fit_physics);
-        calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap()
+        let cfg = calibrate_80(twin.clone(), fit_physics);
+        calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap()
     };
     let (plain, fitted) = (run(false), run(true));
     let cal = &fitted.sensor.spec.sensor.calibration;
@@ -193,9 +190,8 @@ fn the_physics_fit_finds_the_object_on_the_other_side() {
     let mut other = TacTipConfig::default();
     other.calibration.object_side = -other.calibration.object_side;
     let twin = sensor_set(root.path(), 120, other.clone());
-    let blob = BlobParams::preset("sim").unwrap();
-    let cfg = calibrate_80(root.path(), twin, true);
-    let fitted = calibrate_sensor(&cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
+    let cfg = calibrate_80(twin, true);
+    let fitted = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     let cal = &fitted.sensor.spec.sensor.calibration;
     assert_eq!(cal.object_side, other.calibration.object_side, "{cal:?}");
     let held_out = fitted

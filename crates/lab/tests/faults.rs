@@ -22,8 +22,9 @@ use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{
     follow_on_rig, perception_for, write_results, RunFolder, SimFollowConfig,
 };
-use tactrace_lab::hardware::{follow_hardware, FrameSourceConfig, HardwareConfig, HardwareStart};
+use tactrace_lab::hardware::{FrameSourceConfig, HardwareConfig, HardwareStart};
 use tactrace_lab::train::{resolve_config, train};
+use tactrace_lab::world::World;
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_sensor::{Frame, SensorError, TactileSensor};
 use tactrace_servo::{start_pose, Ending, LoopSummary, SimRig};
@@ -71,8 +72,9 @@ fn fixture() -> &'static Fixture {
         let _ = std::fs::remove_dir_all(&frames);
         std::fs::create_dir_all(&frames).unwrap();
         let mut rig = SimRig::new(&sim.rig, disk.clone(), start, sim.follow.seed).unwrap();
-        let mut settings = sim.servo_settings();
-        settings.follow.steps = Some(10);
+        let mut ten = sim.clone();
+        ten.follow.steps = Some(10);
+        let settings = ten.servo_settings().unwrap();
         let reference = rig.reference_frame();
         let perception = perception_for(&reference, &model, &settings).unwrap();
         let scratch = tempfile::tempdir().unwrap();
@@ -195,13 +197,13 @@ fn mode(f: &Frame) -> u8 {
 }
 
 /// A simulated run of at most 10 steps with `injection` at capture `at`,
-/// into a run folder, as `follow_simulated` does it.
+/// into a run folder, as `follow::run` does it.
 fn sim_run(model: &StoredModel, injection: Injection, at: usize) -> (LoopSummary, Run) {
     let f = fixture();
     let mut sim = SimFollowConfig::default();
     sim.follow.steps = Some(10);
     let mut rig = SimRig::new(&sim.rig, f.disk.clone(), f.start, sim.follow.seed).unwrap();
-    let settings = sim.servo_settings();
+    let settings = sim.servo_settings().unwrap();
     let reference = rig.reference_frame();
     let perception = perception_for(&reference, model, &settings).unwrap();
     let run = Run::new();
@@ -380,15 +382,10 @@ fn hardware_run_on(
     let f = fixture();
     let fake = fake_near(f.start, behaviour, normal_moves, state);
     let run = Run::new();
-    let res = follow_hardware(
-        &rig_file(&fake, frames),
-        &f.model,
-        Some(("disk", &f.disk)),
-        (&run.out, false),
-        &tactrace_lab::hardware::StopFlag::new(),
-        &mut |_| {},
-    )
-    .unwrap();
+    let world = World::Hardware(rig_file(&fake, frames)).open().unwrap();
+    let shape = Some(("disk", &f.disk));
+    let hooks = tactrace_lab::follow::RunHooks::default();
+    let res = tactrace_lab::follow::run(world, &f.model, shape, (&run.out, false), hooks).unwrap();
     // The driver has hung up: wait (bounded) until the fake has read all.
     let deadline = std::time::Instant::now() + Duration::from_secs(3);
     while !fake.finished() && std::time::Instant::now() < deadline {
@@ -517,7 +514,7 @@ fn a_v4l2_camera_unplugged_mid_run_stops_safely_and_keeps_the_steps_before() {
     let source = V4l2Source::new(device, 0, Duration::from_secs(1)).unwrap();
     let mut sensor = CameraSensor::new(source, cfg.preprocess.validate().unwrap());
     let reference = sensor.capture().unwrap();
-    let settings = cfg.servo_settings();
+    let settings = cfg.servo_settings().unwrap();
     let perception = perception_for(&reference, &f.model, &settings).unwrap();
     let run = Run::new();
     let folder = RunFolder::start(&run.out, false, &cfg).unwrap();

@@ -12,12 +12,12 @@ use tactrace_hw::{
     StateInterface,
 };
 use tactrace_lab::collect::{collect, CollectConfig};
-use tactrace_lab::follow::{follow_on_rig, perception_for, SimFollowConfig};
+use tactrace_lab::follow::{follow_on_rig, perception_for, RunHooks, SimFollowConfig};
 use tactrace_lab::hardware::{
-    collect_hardware, follow_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart,
-    StopFlag,
+    collect_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart, StopFlag,
 };
 use tactrace_lab::train::{resolve_config, train};
+use tactrace_lab::world::World;
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_sensor::{Frame, SensorError, TactileSensor};
 use tactrace_servo::{pose_at_edge, start_pose, SimRig};
@@ -130,9 +130,10 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
 
     // The simulated run, recording its frames (reference first).
     let start = start_pose(&disk, &sim.start, sim.rig.tap.height_mm).unwrap();
-    let mut settings = sim.servo_settings();
-    settings.follow.steps = Some(STEPS);
-    let follow = settings.follow.clone();
+    let mut steps = sim.clone();
+    steps.follow.steps = Some(STEPS);
+    let settings = steps.servo_settings().unwrap();
+    let follow = settings.follow().clone();
     let frames = scratch(&root, "frames");
     let sim_out = scratch(&root, "sim");
     let mut rig = SimRig::new(&sim.rig, disk.clone(), start, follow.seed).unwrap();
@@ -166,15 +167,14 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
         };
         assert_eq!(hw.arm.state, state);
         let hw_out = root.path().join(format!("hw-{state:?}"));
-        let res = follow_hardware(
-            &hw,
-            &model,
-            Some(("disk", &disk)),
-            (&hw_out, false),
-            &StopFlag::new(),
-            &mut |_| {},
-        )
-        .unwrap();
+        let stop = StopFlag::new();
+        let hooks = RunHooks {
+            stop: Some(&stop),
+            ..RunHooks::default()
+        };
+        let world = World::Hardware(hw).open().unwrap();
+        let shape = Some(("disk", &disk));
+        let res = tactrace_lab::follow::run(world, &model, shape, (&hw_out, false), hooks).unwrap();
         assert_eq!(
             res.summary.steps, STEPS,
             "{state:?}: {}",

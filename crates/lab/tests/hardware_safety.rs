@@ -16,11 +16,13 @@ use tactrace_hw::{
 };
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::SimFollowConfig;
+use tactrace_lab::follow::{run, RunHooks};
 use tactrace_lab::hardware::{
-    collect_hardware, follow_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart,
-    StopFlag, StopSignal,
+    collect_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart, StopFlag,
+    StopSignal,
 };
 use tactrace_lab::train::{resolve_config, train};
+use tactrace_lab::world::World;
 use tactrace_lab::LabError;
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_servo::pose_at_edge;
@@ -152,12 +154,20 @@ fn follow_on(cfg: &HardwareConfig, stop: &StopFlag, at_step: Option<usize>) -> F
     let root = tempfile::tempdir().unwrap();
     let out = root.path().join("run");
     let asker = stop.clone();
-    let result = follow_hardware(cfg, &fixture().model, None, (&out, false), stop, &mut |r| {
+    let mut progress = |r: &tactrace_servo::StepRecord| {
         if Some(r.step) == at_step {
             asker.request(StopSignal::Interrupt);
         }
-    })
-    .map(|_| ());
+    };
+    let hooks = RunHooks {
+        progress: Some(&mut progress),
+        stop: Some(stop),
+        ..RunHooks::default()
+    };
+    let result = World::Hardware(cfg.clone())
+        .open()
+        .and_then(|world| run(world, &fixture().model, None, (&out, false), hooks))
+        .map(|_| ());
     FollowTry {
         result,
         out,

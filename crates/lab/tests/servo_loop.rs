@@ -4,11 +4,22 @@
 use std::sync::OnceLock;
 use tactrace_geometry::{builtin_shape, parse_contour_csv, BuiltinShape, Contour};
 use tactrace_lab::collect::{collect, CollectConfig};
-use tactrace_lab::follow::{follow_simulated, FollowOutcome, SimFollowConfig};
+use tactrace_lab::follow::{FollowOutcome, RunHooks, SimFollowConfig};
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_servo::{Ending, FollowMetrics};
 use tactrace_store::StoredModel;
+
+/// Follow `shape` in the world of `cfg` into `dir`, as `tactrace follow` does.
+fn follow_simulated(
+    cfg: &SimFollowConfig,
+    model: &StoredModel,
+    shape: (&str, &Contour),
+    dir: &std::path::Path,
+) -> tactrace_lab::Result<FollowOutcome> {
+    let world = cfg.world().open()?;
+    tactrace_lab::follow::run(world, model, Some(shape), (dir, false), RunHooks::default())
+}
 
 /// Training taps on the disk, collected once for every test here.
 fn training_data() -> &'static tactrace_store::TapData {
@@ -38,7 +49,7 @@ fn run(model: &StoredModel, shape: &Contour) -> (FollowOutcome, FollowMetrics) {
     cfg.follow.max_steps = 1500;
     let root = tempfile::tempdir().unwrap();
     let dir = root.path().join("run");
-    let out = follow_simulated(&cfg, model, ("shape", shape), (&dir, false), &mut |_| {}).unwrap();
+    let out = follow_simulated(&cfg, model, ("shape", shape), &dir).unwrap();
     assert!(dir.join("trajectory.csv").exists() && dir.join("metrics.json").exists());
     let metrics = out.metrics.clone().expect("scored");
     (out, metrics)
@@ -54,7 +65,7 @@ fn a_model_trained_on_pins_in_another_order_is_refused_before_the_loop() {
     let root = tempfile::tempdir().unwrap();
     let dir = root.path().join("run");
     let disk = builtin_shape(BuiltinShape::Disk);
-    let err = follow_simulated(&cfg, &swapped, ("disk", &disk), (&dir, false), &mut |_| {})
+    let err = follow_simulated(&cfg, &swapped, ("disk", &disk), &dir)
         .err()
         .expect("pins in another order");
     let chain = format!("{:?}", anyhow_chain(&err));

@@ -2,9 +2,11 @@
 //! rest layout of the reference frame, reproducible, clear errors; on the
 //! real Bristol set (when present) the twin's fields agree with the real ones.
 use std::path::{Path, PathBuf};
-use tactrace_lab::import::{import, ImportConfig};
-use tactrace_lab::twin::{simulate_twin, TwinConfig};
+use tactrace_lab::import::import;
+use tactrace_lab::twin::simulate_twin;
 use tactrace_sensor::{TacTipConfig, TacTipModel};
+use tactrace_store::collection::{RowSelection, TapColumns};
+use tactrace_store::LabelledCollection;
 use tactrace_vision::BlobParams;
 
 fn temp_dir(tag: &str) -> PathBuf {
@@ -16,7 +18,7 @@ fn temp_dir(tag: &str) -> PathBuf {
 }
 
 /// A rendered rest frame and a labels CSV (r, theta, dz, shear x, y, rz).
-fn synthetic_set(dir: &Path, rows: &[[f32; 6]]) -> TwinConfig {
+fn synthetic_set(dir: &Path, rows: &[[f32; 6]]) -> LabelledCollection {
     let model = TacTipModel::new(TacTipConfig::default()).unwrap();
     let rest = model.render(model.rest_pins(), None);
     let reference = dir.join("init_0.png");
@@ -32,7 +34,9 @@ fn synthetic_set(dir: &Path, rows: &[[f32; 6]]) -> TwinConfig {
     }
     let targets = dir.join("targets.csv");
     std::fs::write(&targets, csv).unwrap();
-    TwinConfig::bristol(dir, 3).with_paths(targets, reference)
+    LabelledCollection::new(dir.to_path_buf(), targets, reference)
+        .with_blob(BlobParams::preset("sim").unwrap())
+        .unwrap()
 }
 
 const ROWS: [[f32; 6]; 3] = [
@@ -45,12 +49,11 @@ const ROWS: [[f32; 6]; 3] = [
 fn the_twin_keeps_labels_and_order_and_is_reproducible() {
     let dir = temp_dir("synthetic");
     let cfg = synthetic_set(&dir, &ROWS);
-    let blob = BlobParams::preset("sim").unwrap();
     // Pin jitter on (the fitted default is 0), so that seeds differ below.
     let mut sensor = TacTipConfig::default();
     sensor.nuisance.pin_jitter_px = 0.2;
-    let a = simulate_twin(&cfg, &sensor, &blob, &|| {}).unwrap();
-    let b = simulate_twin(&cfg, &sensor, &blob, &|| {}).unwrap();
+    let a = simulate_twin(&cfg, &sensor, 3, &|| {}).unwrap();
+    let b = simulate_twin(&cfg, &sensor, 3, &|| {}).unwrap();
     assert_eq!(a.data.len(), 3);
     assert_eq!(a.data.meta.pins, 127);
     assert_eq!(a.frames_with_missing_pins, 0);
@@ -62,9 +65,7 @@ fn the_twin_keeps_labels_and_order_and_is_reproducible() {
     let diff: f32 = row(1).iter().zip(row(2)).map(|(x, y)| (x - y).abs()).sum();
     assert!(diff / 254.0 > 1.0, "mean difference {}", diff / 254.0);
     // Another seed draws other pin jitter.
-    let mut other = cfg.clone();
-    other.seed = 4;
-    let c = simulate_twin(&other, &sensor, &blob, &|| {}).unwrap();
+    let c = simulate_twin(&cfg, &sensor, 4, &|| {}).unwrap();
     assert_ne!(a.data.inputs, c.data.inputs);
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -72,10 +73,12 @@ fn the_twin_keeps_labels_and_order_and_is_reproducible() {
 #[test]
 fn a_missing_label_column_is_named_in_the_error() {
     let dir = temp_dir("column");
-    let mut cfg = synthetic_set(&dir, &ROWS);
-    cfg.dz_column = Some("depth_mm".into());
-    let blob = BlobParams::preset("sim").unwrap();
-    let err = simulate_twin(&cfg, &TacTipConfig::default(), &blob, &|| {})
+    let set = synthetic_set(&dir, &ROWS);
+    let cfg = set.clone().with_tap(TapColumns {
+        depth: Some("depth_mm".into()),
+        ..set.tap().clone()
+    });
+    let err = simulate_twin(&cfg, &TacTipConfig::default(), 3, &|| {})
         .err()
         .expect("no such column");
     assert!(err.to_string().contains("depth_mm"), "{err}");
@@ -100,15 +103,12 @@ fn cosine(a: &[f32], b: &[f32]) -> f64 {
 #[test]
 fn the_twin_of_real_frames_shares_their_pin_order_and_agrees_with_them() {
     let Some(dir) = real_dir() else { return };
-    let blob = BlobParams::preset("real256").unwrap();
-    let mut twin_cfg = TwinConfig::bristol(&dir, 1);
-    twin_cfg.limit = Some(80);
-    let twin = simulate_twin(&twin_cfg, &TacTipConfig::default(), &blob, &|| {}).unwrap();
-    let real_cfg = ImportConfig {
+    let collection = LabelledCollection::bristol(&dir).with_rows(RowSelection {
         limit: Some(80),
-        ..ImportConfig::bristol(&dir)
-    };
-    let real = import(&real_cfg, &blob, &|| {}).unwrap();
+        keep: None,
+    });
+    let twin = simulate_twin(&collection, &TacTipConfig::default(), 1, &|| {}).unwrap();
+    let real = import(&collection, &|| {}).unwrap();
     assert_eq!(twin.data.len(), real.data.len());
     assert_eq!(twin.data.targets, real.data.targets);
     assert_eq!(twin.data.meta.reference_pins, real.data.meta.reference_pins);

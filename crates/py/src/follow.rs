@@ -1,9 +1,9 @@
-//! Contour following in the simulated worlds: `follow` over
-//! `tactrace_lab::follow::follow_simulated` (the simulated TacTip or a
-//! calibrated sensor) and `tactrace_lab::replay_world::follow_replay` (the
-//! real-frame world), as `tactrace follow` runs them,
-//! and what `follow_rig` shares with it (model, shape and configuration
-//! arguments, the result dict).
+//! Contour following in the simulated worlds: `follow` builds the world
+//! (`tactrace_lab::world::World`: the simulated TacTip, a calibrated
+//! sensor or the real-frame world) and runs it by
+//! `tactrace_lab::follow::run`, as `tactrace follow` does; and what
+//! `follow_rig` shares with it (model, shape and configuration arguments,
+//! running a world with the GIL released, the result dict).
 use crate::arrays::{matrix, py_to_json};
 use crate::errors::{input, lab, store};
 use crate::interrupt::{checkpoint, run_detached};
@@ -13,11 +13,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 use std::path::PathBuf;
 use tactrace_geometry::{Contour, ShapeSpec, Vec2};
-use tactrace_lab::follow::{
-    follow_simulated, read_calibrated, size_warning, tactip_diameter_mm, FollowOutcome,
-    SimFollowConfig,
-};
-use tactrace_lab::replay_world::{follow_replay, ReplayOptions, ReplayWorld};
+use tactrace_lab::follow::{FollowOutcome, RunHooks, SimFollowConfig};
+use tactrace_lab::world::{OpenWorld, ReplayBank};
+use tactrace_store::collection::CollectionEdits;
 use tactrace_store::StoredModel;
 
 /// A model argument: a `Model` or the path of a model folder.
@@ -145,47 +143,65 @@ pub fn follow<'py>(
         cfg.calibrated_sensor = sensor;
     }
     if let Some(r) = replay {
-        cfg.replay = Some(replay_world(r)?);
+        cfg.replay = Some(replay_bank(r)?);
     }
     let (name, contour) = shape_contour(shape)?;
     let model = stored_model(model)?;
-    let keep = out.is_some();
-    let (dir, _tmp) = run_dir(out)?;
-    if let Some(world) = cfg.replay.take() {
-        if let Some(w) = size_warning(&name, &contour, tactip_diameter_mm()) {
-            warn(py, &w)?;
-        }
-        let res = run_detached(py, || {
-            follow_replay(
-                &cfg,
-                &world,
-                &model,
-                (&name, &contour),
-                (&dir, force),
-                &mut |_| checkpoint(),
-            )
-        })?
-        .map_err(lab)?;
-        if let Some(w) = res.stats.warning() {
-            warn(py, &w)?;
-        }
-        return outcome_dict(py, &res.run, keep, check);
-    }
-    let calibrated = read_calibrated(&cfg).map_err(lab)?;
-    let geometry = match &calibrated {
-        Some(s) => &s.spec.sensor.geometry,
-        None => &cfg.rig.sensor.geometry,
-    };
-    if let Some(w) = size_warning(&name, &contour, 2.0 * geometry.dome_radius_mm) {
+    let world = cfg.world().open().map_err(lab)?;
+    let res = run_world(py, world, &model, Some((&name, &contour)), (out, force))?.map_err(lab)?;
+    if let Some(w) = res.replay.as_ref().and_then(|s| s.warning()) {
         warn(py, &w)?;
     }
+    outcome_dict(py, &res, check)
+}
+
+/// A finished run and whether its folder is the caller's (`out` given) or
+/// a temporary one, removed with it.
+pub struct Finished {
+    pub outcome: FollowOutcome,
+    pub keep: bool,
+    _tmp: Option<tempfile::TempDir>,
+}
+
+impl std::ops::Deref for Finished {
+    type Target = FollowOutcome;
+
+    fn deref(&self) -> &FollowOutcome {
+        &self.outcome
+    }
+}
+
+/// Run `world` with `model` on `shape` into `out` (or a temporary folder)
+/// with the GIL released, stopping on Ctrl-C; the run's warnings become
+/// `UserWarning`s (also when the run fails, whose error is returned).
+pub fn run_world(
+    py: Python<'_>,
+    world: OpenWorld,
+    model: &StoredModel,
+    shape: Option<(&str, &Contour)>,
+    (out, force): (Option<PathBuf>, bool),
+) -> PyResult<tactrace_lab::Result<Finished>> {
+    let keep = out.is_some();
+    let (dir, tmp) = run_dir(out)?;
+    let mut warnings = Vec::new();
     let res = run_detached(py, || {
-        follow_simulated(&cfg, &model, (&name, &contour), (&dir, force), &mut |_| {
-            checkpoint()
-        })
-    })?
-    .map_err(lab)?;
-    outcome_dict(py, &res, keep, check)
+        let mut warn = |w: &str| warnings.push(w.to_string());
+        let mut progress = |_: &tactrace_servo::StepRecord| checkpoint();
+        let hooks = RunHooks {
+            progress: Some(&mut progress),
+            warn: Some(&mut warn),
+            ..RunHooks::default()
+        };
+        tactrace_lab::follow::run(world, model, shape, (&dir, force), hooks)
+    })?;
+    for w in &warnings {
+        warn(py, w)?;
+    }
+    Ok(res.map(|outcome| Finished {
+        outcome,
+        keep,
+        _tmp: tmp,
+    }))
 }
 
 /// The keys a `replay` dict may have besides `dir`.
@@ -194,15 +210,15 @@ const REPLAY_KEYS: &str =
 
 /// A `replay` argument: a collection folder, or a dict with `dir` and the
 /// CLI's `--replay` options.
-fn replay_world(obj: &Bound<'_, PyAny>) -> PyResult<ReplayWorld> {
+fn replay_bank(obj: &Bound<'_, PyAny>) -> PyResult<ReplayBank> {
     let Ok(dict) = obj.cast::<PyDict>() else {
         let dir: PathBuf = obj.extract().map_err(|_| {
             input("replay must be the folder of a labelled collection or a dict with `dir`")
         })?;
-        return ReplayWorld::with_options(&dir, &ReplayOptions::default()).map_err(lab);
+        return ReplayBank::from_dir(&dir, &CollectionEdits::default()).map_err(lab);
     };
     let mut dir = None;
-    let mut o = ReplayOptions::default();
+    let mut e = CollectionEdits::default();
     for (k, v) in dict.iter() {
         let key: String = k.extract()?;
         let text = || -> PyResult<String> {
@@ -212,14 +228,14 @@ fn replay_world(obj: &Bound<'_, PyAny>) -> PyResult<ReplayWorld> {
         };
         match key.as_str() {
             "dir" => dir = Some(PathBuf::from(text()?)),
-            "keep" => o.keep = Some(text()?),
-            "targets" => o.targets = Some(text()?.into()),
-            "reference" => o.reference = Some(text()?.into()),
-            "image_column" => o.image_column = Some(text()?),
-            "r_column" => o.r_column = Some(text()?),
-            "theta_column" => o.theta_column = Some(text()?),
-            "dz_column" => o.dz_column = Some(text()?),
-            "params" => o.blob = Some(crate::vision::blob_params(Some(text()?.into()), "real256")?),
+            "keep" => e.keep = Some(text()?),
+            "targets" => e.targets = Some(text()?.into()),
+            "reference" => e.reference = Some(text()?.into()),
+            "image_column" => e.image_column = Some(text()?),
+            "r_column" => e.r_column = Some(text()?),
+            "theta_column" => e.theta_column = Some(text()?),
+            "dz_column" => e.depth_column = Some(text()?),
+            "params" => e.blob = Some(crate::vision::blob_params(Some(text()?.into()), "real256")?),
             _ => {
                 return Err(input(format!(
                     "replay: unknown key `{key}`: give dir and any of {REPLAY_KEYS}"
@@ -228,7 +244,7 @@ fn replay_world(obj: &Bound<'_, PyAny>) -> PyResult<ReplayWorld> {
         }
     }
     let dir = dir.ok_or_else(|| input("replay: the dict needs `dir`, the collection's folder"))?;
-    ReplayWorld::with_options(&dir, &o).map_err(lab)
+    ReplayBank::from_dir(&dir, &e).map_err(lab)
 }
 
 /// Issue a Python `UserWarning`.
@@ -246,10 +262,10 @@ pub fn warn(py: Python<'_>, msg: &str) -> PyResult<()> {
 /// failed run when `check`.
 pub fn outcome_dict<'py>(
     py: Python<'py>,
-    res: &FollowOutcome,
-    keep: bool,
+    res: &Finished,
     check: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let keep = res.keep;
     if check && !res.summary.ending.succeeded() {
         let where_ = if keep {
             format!(

@@ -1,8 +1,10 @@
 //! A user's own robot and camera drive the Rust servo loop: duck-typed
 //! Python objects wrapped into types implementing `tactrace_arm::Arm` and
-//! `tactrace_sensor::TactileSensor`, run by `follow_rig` through
-//! `tactrace_lab::follow::follow_on_rig`, as `tactrace follow --hardware`
-//! runs the UR5.
+//! `tactrace_sensor::TactileSensor`, opened as a world of their own
+//! (`tactrace_lab::world::OpenWorld::own_rig`, the arm behind the
+//! workspace limiter) and run by `follow_rig` through
+//! `tactrace_lab::follow::run`, as `tactrace follow --hardware` runs the
+//! UR5.
 //!
 //! The loop runs with the GIL released; each call into the Python objects
 //! takes it for the call. An `Exception` raised by them is a fault of the
@@ -10,19 +12,17 @@
 //! the exception becomes the cause of the `RunFailedError`. Other
 //! exceptions (KeyboardInterrupt, SystemExit) stop the call at once.
 use crate::errors::{lab, RunFailedError};
-use crate::follow::{follow_config, outcome_dict, run_dir, shape_contour, stored_model, warn};
-use crate::interrupt::{raise, run_detached};
+use crate::follow::{follow_config, outcome_dict, run_world, shape_contour, stored_model};
+use crate::interrupt::raise;
 use crate::vision::to_frame;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
-use tactrace_arm::{Arm, ArmError, LimitMode, LimitedArm};
+use tactrace_arm::{Arm, ArmError};
 use tactrace_geometry::Pose;
-use tactrace_lab::follow::{
-    follow_on_rig, perception_for, write_results, FollowOutcome, RunFolder,
-};
+use tactrace_lab::world::OpenWorld;
 use tactrace_sensor::{Frame, SensorError, TactileSensor};
 
 /// The first `Exception` a Python object raised during the run.
@@ -197,55 +197,25 @@ pub fn follow_rig<'py>(
     check: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = follow_config(config, steps, seed)?;
-    let settings = cfg.servo_settings();
     let model = stored_model(model)?;
     let shape = shape.map(shape_contour).transpose()?;
-    let diameter = 2.0 * cfg.rig.sensor.geometry.dome_radius_mm;
-    if let Some((name, c)) = &shape {
-        if let Some(w) = tactrace_lab::follow::size_warning(name, c, diameter) {
-            warn(py, &w)?;
-        }
-    }
     let reference = to_frame(
         &sensor.bind(py).call_method0("capture")?,
         "sensor.capture()",
     )?;
-    let perception = perception_for(&reference, &model, &settings).map_err(lab)?;
     let faults: Fault = Arc::default();
     let py_arm = PyArm {
         obj: arm,
         last: Mutex::new(Pose::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)),
         fault: faults.clone(),
     };
-    let mut arm = LimitedArm::new(py_arm, cfg.rig.workspace.clone(), LimitMode::Refuse);
-    let mut sensor = PySensor {
+    let py_sensor = PySensor {
         obj: sensor,
         fault: faults.clone(),
     };
-    let keep = out.is_some();
-    let (dir, _tmp) = run_dir(out)?;
-    let res = run_detached(py, || -> tactrace_lab::Result<FollowOutcome> {
-        let run = RunFolder::start(&dir, force, &cfg)?;
-        let (summary, records) = follow_on_rig(
-            &mut arm,
-            &mut sensor,
-            &perception,
-            &settings,
-            run.path(),
-            &mut |_| crate::interrupt::checkpoint(),
-        )?;
-        let named = shape.as_ref().map(|(n, c)| (n.as_str(), c));
-        let (metrics, l2_curve) =
-            write_results(named, &records, &summary, &cfg.follow, diameter, run.path())?;
-        let dir = run.finish()?;
-        Ok(FollowOutcome {
-            summary,
-            records,
-            metrics,
-            l2_curve,
-            dir,
-        })
-    })?;
+    let world = OpenWorld::own_rig(py_arm, py_sensor, reference, &cfg).map_err(lab)?;
+    let named = shape.as_ref().map(|(n, c)| (n.as_str(), c));
+    let res = run_world(py, world, &model, named, (out, force))?;
     let cause = faults.lock().ok().and_then(|mut s| s.take());
     let res = match res {
         Ok(r) => r,
@@ -255,7 +225,7 @@ pub fn follow_rig<'py>(
             return Err(err);
         }
     };
-    outcome_dict(py, &res, keep, check).inspect_err(|e| {
+    outcome_dict(py, &res, check).inspect_err(|e| {
         if e.is_instance_of::<RunFailedError>(py) {
             e.set_cause(py, cause.as_ref().map(|c| c.clone_ref(py)));
         }

@@ -65,6 +65,9 @@ pub enum StoreError {
         in_flag: &'static str,
         input: PathBuf,
     },
+    /// A labelled collection's description that cannot be used.
+    #[error(transparent)]
+    Collection(#[from] crate::collection::CollectionError),
     /// Data whose pins are ordered against other reference pins than the
     /// model's training data.
     #[error("{path}: not ordered like the model's training data")]

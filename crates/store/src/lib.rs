@@ -1,5 +1,7 @@
 //! tactrace's files, one format a module, and the one configuration loader.
 //!
+//! - [`collection`]: a labelled collection of real frames (frames,
+//!   detector, reference, target spec) and the one reader of its labels;
 //! - [`dataset`]: `inputs.npy` / `targets.npy` / `meta.json` folders;
 //! - [`model_dir`]: a trained model with the reference pins of its training
 //!   data, loaded as one [`StoredModel`] so the pin-order check
@@ -14,12 +16,15 @@
 //! - [`input_file`], [`npy_file`]: inputs read within bounds (regular files
 //!   only, declared sizes checked against the file's); [`overlap`]: no
 //!   output in or around an input;
-//! - [`row_file`]: CSV files appended a whole row at a time.
+//! - [`row_file`]: CSV files appended a whole row at a time; [`csv_text`]:
+//!   whole CSV files through the csv crate.
 //! - [`folder_kind`]: what a folder given in the wrong place is.
 //!
 //! Every error names the file at fault ([`StoreError`]).
 
+pub mod collection;
 pub mod config_file;
+pub mod csv_text;
 pub mod dataset;
 pub mod error;
 pub mod folder_kind;
@@ -36,7 +41,9 @@ pub mod sensor_file;
 pub mod shape_file;
 pub mod training_record;
 
+pub use collection::{LabelledCollection, LabelledRow, TapFields, TargetSpec};
 pub use config_file::{load_config, overlay, resolved_config_toml};
+pub use csv_text::CsvText;
 pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData};
 pub use error::{read_err, write_err, Result, StoreError};
 pub use fsutil::{

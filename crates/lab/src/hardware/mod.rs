@@ -1,6 +1,8 @@
-//! The contour-following experiment on a real rig (report ch. 5.2): a UR5
-//! arm and a TacTip camera from `tactrace-hw`, behind the same `Arm` and
-//! `TactileSensor` traits and the same servo loop as the simulation.
+//! The real rig (report ch. 5.2): a UR5 arm and a TacTip camera from
+//! `tactrace-hw`, behind the same `Arm` and `TactileSensor` traits and the
+//! same servo loop as the simulation. Its rig file ([`HardwareConfig`]) is
+//! the real world of a follow run ([`crate::world::World::Hardware`], run
+//! by [`crate::follow::run`]); the collection on the rig is here.
 //!
 //! The arm is always wrapped in a [`LimitedArm`] that refuses any move
 //! outside the configured workspace box or larger than its step limits, so
@@ -10,7 +12,7 @@
 //! the set-up.
 //!
 //! A run stops on a [`StopFlag`] (SIGINT/SIGTERM in the binary): the
-//! driver sends `stopl`, the follow run keeps its steps in `OUT.partial`,
+//! driver sends `stopl`, a follow run keeps its steps in `OUT.partial`,
 //! and the error is [`LabError::Interrupted`]. A failure on the way to the
 //! start is [`LabError::StartMove`]: the limiter's refusal (too far from
 //! the start) apart from a fault of the arm. `tactrace rig check` is in
@@ -22,21 +24,18 @@ pub use tactrace_hw::{StopFlag, StopSignal};
 
 use crate::collect::{check_samples, collect_on, CollectConfig, Collected, EdgeRig};
 use crate::error::{LabError, Result};
-use crate::follow::{
-    follow_on_rig, perception_for, write_results, FollowOutcome, RunFolder, ServoSettings,
-};
+use crate::follow::ServoSettings;
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
 use tactrace_control::PbtsConfig;
-use tactrace_geometry::{Contour, Vec2};
+use tactrace_geometry::Vec2;
 use tactrace_hw::{
     open_v4l2, CameraSensor, CommandSource, CommandSourceConfig, FolderSource, FrameSource,
     HwError, PreprocessConfig, Ur5Arm, Ur5Config, V4l2Config,
 };
 use tactrace_sensor::{Frame, TactileSensor};
-use tactrace_servo::{pose_at_edge, LoopConfig, StepRecord, TapConfig};
-use tactrace_store::StoredModel;
+use tactrace_servo::{pose_at_edge, LoopConfig, TapConfig};
 use tactrace_vision::BlobParams;
 
 /// Where the real rig's frames come from: the `[camera]` table of a rig
@@ -128,14 +127,14 @@ impl HardwareConfig {
         )?)
     }
 
-    /// The loop settings of this rig.
-    pub fn servo_settings(&self) -> ServoSettings {
-        ServoSettings {
-            blob: self.blob.clone(),
-            controller: self.controller.clone(),
-            follow: self.follow.clone(),
-            tap: self.tap,
-        }
+    /// The loop settings of this rig, checked.
+    pub fn servo_settings(&self) -> Result<ServoSettings> {
+        ServoSettings::new(
+            self.blob.clone(),
+            self.controller.clone(),
+            self.follow.clone(),
+            self.tap,
+        )
     }
 
     /// The start pose at tap height.
@@ -205,71 +204,6 @@ fn boxed<S: FrameSource + 'static>(
     Box::new(CameraSensor::new(source, preprocess))
 }
 
-/// Follow an edge on the real rig: connect, move to the start at tap
-/// height, capture the undeformed reference frame there, check it against
-/// the model's pins, then run the servo loop into the run folder `out`.
-/// `shape`, if given, is the object's true contour in the work frame (and
-/// its name) and is used only to score the finished run. When `stop` is
-/// set the arm is sent `stopl`, the loop ends, its results are written
-/// into `OUT.partial` (kept, not renamed) and the error is
-/// [`LabError::Interrupted`].
-pub fn follow_hardware(
-    cfg: &HardwareConfig,
-    model: &StoredModel,
-    shape: Option<(&str, &Contour)>,
-    (out, force): (&Path, bool),
-    stop: &StopFlag,
-    progress: &mut dyn FnMut(&StepRecord),
-) -> Result<FollowOutcome> {
-    cfg.validate()?;
-    let _out = tactrace_store::check_output_dir(out, force)?;
-    let (mut arm, mut sensor, reference) = connect_at(cfg, cfg.start_pose(), stop)?;
-    let settings = cfg.servo_settings();
-    let perception = perception_for(&reference, model, &settings)?;
-    let run = RunFolder::start(out, force, cfg)?;
-    let looped = follow_on_rig(
-        &mut arm,
-        sensor.as_mut(),
-        &perception,
-        &settings,
-        run.path(),
-        progress,
-    );
-    if let Some(signal) = stop.requested() {
-        let err = stopped(signal, stop, Some(&mut arm));
-        if !matches!(err, LabError::Interrupted { .. }) {
-            return Err(err);
-        }
-        // The steps so far and how the run ended, in the kept OUT.partial.
-        if let Ok((summary, records)) = &looped {
-            let diameter = crate::follow::tactip_diameter_mm();
-            write_results(shape, records, summary, &cfg.follow, diameter, run.path())?;
-        }
-        return Err(LabError::Interrupted {
-            signal,
-            arm_stopped: true,
-            kept: Some(run.path().to_path_buf()),
-        });
-    }
-    let (summary, records) = looped?;
-    let (metrics, l2_curve) = write_results(
-        shape,
-        &records,
-        &summary,
-        &cfg.follow,
-        crate::follow::tactip_diameter_mm(),
-        run.path(),
-    )?;
-    let dir = run.finish()?;
-    Ok(FollowOutcome {
-        summary,
-        records,
-        metrics,
-        l2_curve,
-        dir,
-    })
-}
-
 /// Sends `stopl` after a stop request: [`LabError::Hardware`] with
 /// [`HwError::StopFailed`] when it cannot be sent.
 fn halt(arm: &mut LimitedArm<Ur5Arm>, signal: StopSignal) -> Result<()> {
@@ -283,7 +217,11 @@ fn halt(arm: &mut LimitedArm<Ur5Arm>, signal: StopSignal) -> Result<()> {
 
 /// The error of a run stopped by `signal`: the arm, if connected, sent
 /// `stopl` first (if that fails, the run's error says so instead).
-fn stopped(signal: StopSignal, stop: &StopFlag, arm: Option<&mut LimitedArm<Ur5Arm>>) -> LabError {
+pub(crate) fn stopped(
+    signal: StopSignal,
+    stop: &StopFlag,
+    arm: Option<&mut LimitedArm<Ur5Arm>>,
+) -> LabError {
     let arm_stopped = arm.is_some();
     match arm.map_or(Ok(()), |a| halt(a, signal)) {
         Ok(()) => {
@@ -314,7 +252,7 @@ fn unless_interrupted(
 /// (tap height, sensor in the air) and capture the undeformed reference
 /// frame there. A move refused or failed on the way is
 /// [`LabError::StartMove`] (a stop request: [`LabError::Interrupted`]).
-fn connect_at(
+pub(crate) fn connect_at(
     cfg: &HardwareConfig,
     first: Pose,
     stop: &StopFlag,

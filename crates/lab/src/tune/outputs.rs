@@ -94,14 +94,17 @@ impl Outputs {
             self.seed
         );
         write_atomic(&dir.join("tuned.toml"), text.as_bytes())?;
-        let mut csv = String::from("generation,runs,generation_best,best_so_far\n");
+        let mut csv = tactrace_store::CsvText::new();
+        csv.row(["generation", "runs", "generation_best", "best_so_far"]);
         for (g, h) in history.iter().enumerate() {
-            csv.push_str(&format!(
-                "{g},{},{:.6},{:.6}\n",
-                h.evaluations, h.generation_best, h.best_so_far
-            ));
+            csv.row([
+                g.to_string(),
+                h.evaluations.to_string(),
+                format!("{:.6}", h.generation_best),
+                format!("{:.6}", h.best_so_far),
+            ]);
         }
-        write_atomic(&dir.join("history.csv"), csv.as_bytes())?;
+        csv.write(&dir.join("history.csv"))?;
         figures::convergence(
             &dir.join("convergence"),
             ("CMA-ES tuning", "simulated runs"),

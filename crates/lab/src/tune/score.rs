@@ -26,11 +26,9 @@ pub fn simulate(
     model: &StoredModel,
     (name, contour): (&str, &Contour),
 ) -> Result<RunScore> {
-    cfg.follow.validate()?;
-    cfg.controller.validate()?;
+    let settings = cfg.servo_settings()?;
     let start = start_pose(contour, &cfg.start, cfg.rig.tap.height_mm)?;
     let mut rig = SimRig::new(&cfg.rig, contour.clone(), start, cfg.follow.seed)?;
-    let settings = cfg.servo_settings();
     let perception = perception_for(&rig.reference_frame(), model, &settings)?;
     let mut controller = PbtsController::new(cfg.controller.clone());
     let mut records: Vec<StepRecord> = Vec::new();
@@ -40,8 +38,8 @@ pub fn simulate(
         sensor,
         &perception,
         &mut controller,
-        &settings.follow,
-        &settings.tap,
+        settings.follow(),
+        settings.tap(),
         &mut [&mut records],
     )?;
     let traj: Vec<Vec2> = records

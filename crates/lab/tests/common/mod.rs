@@ -4,8 +4,9 @@
 #![allow(dead_code)]
 use rand::{Rng, SeedableRng};
 use std::path::Path;
-use tactrace_lab::twin::TwinConfig;
 use tactrace_sensor::{EdgeTap, FieldCorrection, TacTipConfig, TacTipModel};
+use tactrace_store::collection::TapColumns;
+use tactrace_store::LabelledCollection;
 
 pub const PINS: usize = 127;
 
@@ -29,13 +30,13 @@ pub fn distortion_of(pins: usize) -> FieldCorrection {
 
 /// `n` labelled taps of the distorted sensor in `dir` (frames/, targets.csv,
 /// frames/init_0.png), labels spread over r in [-5, 5] mm and theta in
-/// [-45, 45] deg.
-pub fn distorted_sensor_set(dir: &Path, n: usize) -> TwinConfig {
+/// [-45, 45] deg, as a collection without depth or shear columns.
+pub fn distorted_sensor_set(dir: &Path, n: usize) -> LabelledCollection {
     sensor_set(dir, n, TacTipConfig::default())
 }
 
 /// As [`distorted_sensor_set`] for the sensor `sensor` (any layout).
-pub fn sensor_set(dir: &Path, n: usize, sensor: TacTipConfig) -> TwinConfig {
+pub fn sensor_set(dir: &Path, n: usize, sensor: TacTipConfig) -> LabelledCollection {
     let plain = TacTipModel::new(sensor.clone()).unwrap();
     let pins = plain.rest_pins().len();
     let real = TacTipModel::with_rest_pins(sensor, plain.rest_pins().to_vec())
@@ -66,9 +67,22 @@ pub fn sensor_set(dir: &Path, n: usize, sensor: TacTipConfig) -> TwinConfig {
     }
     let targets = dir.join("targets.csv");
     std::fs::write(&targets, csv).unwrap();
-    TwinConfig {
-        dz_column: None,
-        shear_columns: None,
-        ..TwinConfig::bristol(dir, 1).with_paths(targets, reference)
+    LabelledCollection::new(frames, targets, reference).with_tap(TapColumns::default())
+}
+
+/// A calibration of `collection` on `samples` taps, seed 1 (replayed taps
+/// rendered with seed 1), nothing else asked.
+pub fn calibration(
+    collection: LabelledCollection,
+    samples: usize,
+) -> tactrace_lab::calibrate::CalibrateConfig {
+    tactrace_lab::calibrate::CalibrateConfig {
+        collection,
+        render_seed: 1,
+        samples: Some(samples),
+        seed: 1,
+        allowed_rows: None,
+        score_rows: None,
+        fit_physics: false,
     }
 }

@@ -1,5 +1,5 @@
-//! The label columns of a targets CSV (`import`, `twin`, `calibrate`,
-//! `follow --replay`), found by header name with messages a newcomer can
+//! The label columns of a collection's labels file (`import`, `twin`,
+//! `calibrate`, `sim-fit`, `follow --replay`), found by header name with messages a newcomer can
 //! act on: a column named twice is refused (which one holds the labels is
 //! ambiguous), and a column that is missing is reported with every column
 //! of the header, wrapped, and the closest names to the one asked for.

@@ -139,8 +139,8 @@ impl PinTracker {
 
     /// This tracker with the nearest-neighbour start on (the default) or
     /// off. Off, every frame runs all the coarse-to-fine stages from the
-    /// centroid shift: slower, the same result on the shared 127-pin frames
-    /// (`tests/real_frames.rs`), kept to check that.
+    /// centroid shift: slower, the same result on the shared sets
+    /// (`tests/speed.rs`), kept to check that.
     pub fn with_nearest_start(mut self, on: bool) -> Self {
         self.nearest = on;
         self

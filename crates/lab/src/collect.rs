@@ -12,7 +12,8 @@
 //! (its label draws, the arm's repeatability noise, the camera's
 //! nuisance), and starts from its own approach pose, so the dataset is the
 //! same, bit for bit, whatever the number of threads
-//! (`RAYON_NUM_THREADS`). A real rig ([`collect_on`]) taps in turn.
+//! (`RAYON_NUM_THREADS`). A real rig ([`collect_on`]) taps in turn, each
+//! tap drawing its labels from the same generator as here.
 use crate::error::{LabError, Result};
 use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -222,12 +223,9 @@ fn simulated_tap(
     cfg: &CollectConfig,
     i: usize,
 ) -> Result<TapRow> {
-    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-    rng.set_stream(i as u64);
     let tap_cfg = &world.rig.tap;
-    let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
+    let (mut rng, r, depth) = tap_draws(cfg, tap_cfg, i);
     let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
-    let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
     let (edge, normal) = world.shape.at_arc_length(cfg.edge_arc_mm);
     let labels = world.labels.as_ref().map(|(c, _)| c);
     let at = LabelConvention::edge_pose_of(labels, r, theta);
@@ -252,6 +250,18 @@ fn simulated_tap(
         missing: tracked.missing > 0,
         frame: cfg.save_frames.then_some(frame),
     })
+}
+
+/// Tap `i`'s generator (stream `i` of the collection's seed) after it
+/// drew the tap's edge position r (mm) and depth (mm): the same on every
+/// rig, so a real rig replaying a simulated collection's frames gets its
+/// labels.
+fn tap_draws(cfg: &CollectConfig, tap_cfg: &TapConfig, i: usize) -> (ChaCha8Rng, f64, f64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    rng.set_stream(i as u64);
+    let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
+    let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
+    (rng, r, depth)
 }
 
 /// The simulated TacTip of one tap over the shared model: what
@@ -332,7 +342,6 @@ pub fn collect_on(
         labels,
     } = on;
     let extractor = PinExtractor::from_reference_frame(reference, blob.clone())?;
-    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let dim = 2 * extractor.tracker.reference().len();
     // Reserved for at most PRESIZED_ROWS: a huge --samples grows the
     // buffers as taps come instead of aborting on one giant allocation.
@@ -342,9 +351,8 @@ pub fn collect_on(
     let mut frames = Vec::new();
     let mut with_missing = 0;
     for i in 0..cfg.samples {
-        let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
+        let (_, r, depth) = tap_draws(cfg, tap_cfg, i);
         let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
-        let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
         let at = LabelConvention::edge_pose_of(labels.as_ref().map(|(c, _)| c), r, theta);
         arm.move_to(pose_at_edge(edge, normal, at.0, at.1, tap_cfg.height_mm))?;
         let frame = tap(arm, sensor, depth)?;

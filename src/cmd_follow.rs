@@ -401,6 +401,8 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             obj.insert("real_control_latency_us".into(), r.mean_us.into());
             obj.insert("real_control_latency_median_us".into(), r.median_us.into());
             obj.insert("real_control_latency_p95_us".into(), r.p95_us.into());
+            obj.insert("real_detect_median_us".into(), r.detect_median_us.into());
+            obj.insert("real_predict_median_us".into(), r.predict_median_us.into());
         }
         crate::say!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
@@ -419,10 +421,23 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             stat(f.control_latency_p95_us)
         );
     }
+    if let Some(p) = &f.prediction {
+        crate::say!(
+            "predict (both nets): {:.2} us a sample one at a time, {:.2} us in a batch; \
+             {} + {} multiply-adds (f64 + f32), {:.2} us at the measured peak (batch {:.1}x that)",
+            p.one_us,
+            p.batch_us,
+            p.multiply_adds_f64,
+            p.multiply_adds_f32,
+            p.fma_bound_us,
+            p.batch_us / p.fma_bound_us
+        );
+    }
     if let Some(r) = real {
         crate::say!(
-            "control loop on real frames, frame -> command: mean {:.1} us, median {:.1} us, p95 {:.1} us",
-            r.mean_us, r.median_us, r.p95_us
+            "control loop on real frames, frame -> command: mean {:.1} us, median {:.1} us, p95 {:.1} us \
+             (medians of the parts: detect {:.1} us, predict {:.1} us)",
+            r.mean_us, r.median_us, r.p95_us, r.detect_median_us, r.predict_median_us
         );
     }
     Ok(())

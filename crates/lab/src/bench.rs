@@ -1,18 +1,20 @@
 //! Throughput and latency figures (`tactrace bench`): simulated taps per
-//! second (render + detect + order) and the control-loop latency from frame
+//! second (render + detect + order), the control-loop latency from frame
 //! to command (detect, order, PCA, both nets, controller), as the mean and
-//! the per-frame median and 95th percentile. Timings are
-//! measured here, never asserted in tests.
+//! the per-frame median and 95th percentile with the median of each part,
+//! and the prediction's time against its multiply-adds at the machine's
+//! measured fused multiply-add rate (`Prediction`). Timings are measured
+//! here, never asserted in tests.
 use crate::error::Result;
 use serde::Serialize;
 use std::time::Instant;
 use tactrace_control::{PbtsConfig, PbtsController, SensedPose};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
-use tactrace_learn::PoseModel;
+use tactrace_learn::{measure_fma_peak, PoseModel};
 use tactrace_sensor::{LabelConvention, TacTipModel};
 use tactrace_servo::{pose_at_edge, RigConfig};
 use tactrace_store::SensorFolder;
-use tactrace_vision::PinExtractor;
+use tactrace_vision::{detect_blobs, PinExtractor};
 
 /// Figures from one benchmark run (single thread).
 #[derive(Debug, Clone, Serialize)]
@@ -31,6 +33,61 @@ pub struct BenchFigures {
     pub control_latency_median_us: Option<f64>,
     /// 95th percentile (nearest rank) of the per-frame time, microseconds.
     pub control_latency_p95_us: Option<f64>,
+    /// The model's prediction on the taps' displacements; None without a
+    /// model.
+    pub prediction: Option<Prediction>,
+}
+
+/// A model's prediction time against its bound, microseconds a sample.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Prediction {
+    /// One sample a call (`PoseModel::predict`), best of five passes.
+    pub one_us: f64,
+    /// A batch of all samples (`PoseModel::predict_rows`), per sample,
+    /// best of five passes.
+    pub batch_us: f64,
+    /// Multiply-adds of one prediction in f64 (the projections) and f32
+    /// (the nets' layers).
+    pub multiply_adds_f64: usize,
+    pub multiply_adds_f32: usize,
+    /// The time of those multiply-adds at the measured peak rate (best of
+    /// 20 runs): no prediction can be faster.
+    pub fma_bound_us: f64,
+}
+
+impl Prediction {
+    /// Times `model` on `rows` (row-major, the model's input length).
+    pub fn measure(model: &PoseModel, rows: &[f32]) -> Result<Self> {
+        let dim = model.input_dim();
+        let n = (rows.len() / dim.max(1)).max(1) as f64;
+        let best = |f: &mut dyn FnMut() -> Result<()>| -> Result<f64> {
+            let mut best = f64::INFINITY;
+            for _ in 0..5 {
+                let t = Instant::now();
+                f()?;
+                best = best.min(t.elapsed().as_secs_f64() * 1e6 / n);
+            }
+            Ok(best)
+        };
+        let one_us = best(&mut || {
+            for row in rows.chunks_exact(dim) {
+                std::hint::black_box(model.predict(row)?);
+            }
+            Ok(())
+        })?;
+        let batch_us = best(&mut || {
+            std::hint::black_box(model.predict_rows(rows)?);
+            Ok(())
+        })?;
+        let ops = model.multiply_adds();
+        Ok(Self {
+            one_us,
+            batch_us,
+            multiply_adds_f64: ops.0,
+            multiply_adds_f32: ops.1,
+            fma_bound_us: measure_fma_peak(20).seconds(ops) * 1e6,
+        })
+    }
 }
 
 /// Frame -> command latency over a set of frames, microseconds.
@@ -43,28 +100,45 @@ pub struct Latency {
     pub median_us: f64,
     /// 95th percentile of the per-frame times, nearest rank.
     pub p95_us: f64,
+    /// Median over frames of blob detection alone (timed in a pass of its
+    /// own).
+    pub detect_median_us: f64,
+    /// Median over frames of the prediction (both nets) alone.
+    pub predict_median_us: f64,
 }
 
 impl Latency {
     /// Statistics of the per-frame times `samples` (any order), with the
-    /// loop's mean given; all zero without samples.
+    /// loop's mean given; all zero without samples. The parts' medians are
+    /// zero (see [`median`]).
     pub fn from_samples(mean_us: f64, mut samples: Vec<f64>) -> Self {
         samples.sort_unstable_by(f64::total_cmp);
         let n = samples.len();
-        if n == 0 {
-            return Self {
-                mean_us,
-                median_us: 0.0,
-                p95_us: 0.0,
-            };
-        }
         let rank = (0.95 * n as f64).ceil() as usize;
         Self {
             mean_us,
-            median_us: (samples[(n - 1) / 2] + samples[n / 2]) / 2.0,
-            p95_us: samples[rank.clamp(1, n) - 1],
+            median_us: median(&samples),
+            p95_us: if n == 0 {
+                0.0
+            } else {
+                samples[rank.clamp(1, n) - 1]
+            },
+            detect_median_us: 0.0,
+            predict_median_us: 0.0,
         }
     }
+}
+
+/// Median of `samples` (any order; mean of the two middle ones for an even
+/// count), 0 without samples.
+pub fn median(samples: &[f64]) -> f64 {
+    let mut s = samples.to_vec();
+    s.sort_unstable_by(f64::total_cmp);
+    let n = s.len();
+    if n == 0 {
+        return 0.0;
+    }
+    (s[(n - 1) / 2] + s[n / 2]) / 2.0
 }
 
 /// Time `taps` simulated taps on the disk edge, and the control loop when a
@@ -136,6 +210,9 @@ fn bench_with(
     let latency = model
         .map(|m| control_loop(extractor, m, &frames))
         .transpose()?;
+    let prediction = model
+        .map(|m| Prediction::measure(m, &disps.concat()))
+        .transpose()?;
     let n = taps.max(1) as f64;
     Ok(BenchFigures {
         taps,
@@ -145,6 +222,7 @@ fn bench_with(
         control_latency_us: latency.map(|l| l.mean_us),
         control_latency_median_us: latency.map(|l| l.median_us),
         control_latency_p95_us: latency.map(|l| l.p95_us),
+        prediction,
     })
 }
 
@@ -178,7 +256,8 @@ pub fn real_control_latency_stats(
 /// Time from frame to command over `frames`, microseconds: extract and
 /// order the pins, predict (r, theta), one controller step. Every frame is
 /// timed on its own (for the median and 95th percentile) as well as the
-/// whole loop (for the mean).
+/// whole loop (for the mean); the prediction within it, and blob detection
+/// in a pass of its own (its median; ordering is the rest).
 fn control_loop(
     extractor: &PinExtractor,
     model: &PoseModel,
@@ -186,11 +265,15 @@ fn control_loop(
 ) -> Result<Latency> {
     let mut ctl = PbtsController::new(PbtsConfig::default());
     let mut per_frame = Vec::with_capacity(frames.len());
+    let mut predict = Vec::with_capacity(frames.len());
     let t0 = Instant::now();
     for f in frames {
         let t = Instant::now();
         let tracked = extractor.extract(f)?;
-        let [r, theta] = model.predict(&tracked.displacement(extractor.tracker.reference()))?;
+        let displacement = tracked.displacement(extractor.tracker.reference());
+        let tp = Instant::now();
+        let [r, theta] = model.predict(&displacement)?;
+        predict.push(tp.elapsed().as_secs_f64() * 1e6);
         std::hint::black_box(ctl.step(SensedPose {
             r_mm: r,
             theta_deg: theta,
@@ -198,7 +281,19 @@ fn control_loop(
         per_frame.push(t.elapsed().as_secs_f64() * 1e6);
     }
     let mean = t0.elapsed().as_secs_f64() * 1e6 / frames.len().max(1) as f64;
-    Ok(Latency::from_samples(mean, per_frame))
+    let detect: Vec<f64> = frames
+        .iter()
+        .map(|f| {
+            let t = Instant::now();
+            std::hint::black_box(detect_blobs(f, &extractor.params));
+            t.elapsed().as_secs_f64() * 1e6
+        })
+        .collect();
+    Ok(Latency {
+        detect_median_us: median(&detect),
+        predict_median_us: median(&predict),
+        ..Latency::from_samples(mean, per_frame)
+    })
 }
 
 #[cfg(test)]
@@ -214,5 +309,44 @@ mod tests {
         assert_eq!((l.median_us, l.p95_us), (50.5, 95.0));
         let l = Latency::from_samples(0.0, Vec::new());
         assert_eq!((l.median_us, l.p95_us), (0.0, 0.0));
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
+    }
+
+    /// A PDenNN (two nets on one 35-component projection of 254 inputs,
+    /// 50 hidden units) on a few random rows.
+    fn small_pdennn() -> PoseModel {
+        use rand::{Rng, SeedableRng};
+        use tactrace_learn::{Dataset, ModelConfig, ModelKind, Preset};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+        let (n, dim) = (200, 254);
+        let x = (0..n * dim).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let y = (0..2 * n).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let data = Dataset::new(x, y, n, dim, 2).expect("data");
+        let mut cfg = ModelConfig::preset(ModelKind::PDenNN, Preset::Default);
+        cfg.set_epochs(1);
+        for net in [&mut cfg.position, &mut cfg.angle].into_iter().flatten() {
+            net.hidden = vec![50];
+            net.n_components = Some(35);
+        }
+        PoseModel::fit(&cfg, &data, &mut |_| {}).expect("fit").0
+    }
+
+    /// `bench` with a model times its prediction against the multiply-adds
+    /// it counts: the projection once (both nets share it), every layer of
+    /// both nets.
+    #[test]
+    fn issue21_bench_times_the_prediction_against_its_multiply_adds() {
+        let model = small_pdennn();
+        let f = bench(&RigConfig::default(), 3, Some(&model)).expect("bench");
+        let p = f.prediction.expect("prediction figures with a model");
+        assert_eq!(p.multiply_adds_f64, 35 * 254);
+        assert_eq!(p.multiply_adds_f32, 2 * (35 * 50 + 50));
+        for t in [p.one_us, p.batch_us, p.fma_bound_us] {
+            assert!(t.is_finite() && t > 0.0, "{p:?}");
+        }
+        assert!(bench(&RigConfig::default(), 3, None)
+            .expect("bench")
+            .prediction
+            .is_none());
     }
 }

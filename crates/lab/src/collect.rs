@@ -6,19 +6,30 @@
 //!    over the run.
 //! 3. Tap and capture.
 //! 4. Extract the pins and their displacement from the undeformed frame.
+//!
+//! On the simulated rig the taps run on all cores: every tap has its own
+//! generators, seeded from the collection's seed and the tap's number
+//! (its label draws, the arm's repeatability noise, the camera's
+//! nuisance), and starts from its own approach pose, so the dataset is the
+//! same, bit for bit, whatever the number of threads
+//! (`RAYON_NUM_THREADS`). A real rig ([`collect_on`]) taps in turn, each
+//! tap drawing its labels from the same generator as here.
 use crate::error::{LabError, Result};
-use rand::{Rng, SeedableRng};
+use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use tactrace_arm::Arm;
+use tactrace_arm::{Arm, LimitMode, LimitedArm, PoseProbe, SimArm, SimArmConfig};
 use tactrace_geometry::{Contour, Vec2};
-use tactrace_sensor::{EdgeLabels, Frame, LabelConvention, TactileSensor};
-use tactrace_servo::{pose_at_edge, tap, RigConfig, SimRig, TapConfig};
+use tactrace_sensor::{Frame, LabelConvention, SensorError, TacTipModel, TactileSensor};
+use tactrace_servo::{pose_at_edge, tap, RigConfig, TapConfig};
 use tactrace_store::frame_file::png_bytes;
 use tactrace_store::{DatasetMeta, SensorFolder, TapData};
 
 /// Rows whose buffers are reserved up front; more grow as they come.
 const PRESIZED_ROWS: usize = 1 << 16;
+/// Taps handed to the threads at a time (progress is reported between).
+const TAPS_PER_BATCH: usize = 256;
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// What to collect.
@@ -65,29 +76,20 @@ pub fn collect(
     origin: &str,
     progress: impl FnMut(usize),
 ) -> Result<Collected> {
-    let (edge, normal) = shape.at_arc_length(cfg.edge_arc_mm);
-    let start = pose_at_edge(
-        edge,
-        normal,
-        0.0,
-        -cfg.theta_range_deg,
-        rig_cfg.tap.height_mm,
-    );
-    let mut rig = SimRig::new(rig_cfg, shape.clone(), start, cfg.seed)?;
-    let reference = rig.reference_frame();
-    let (arm, sensor) = rig.parts();
-    let on = EdgeRig {
-        arm,
-        sensor,
+    rig_cfg.validate()?;
+    let model = TacTipModel::new(rig_cfg.sensor.clone())?;
+    let reference = model.render(model.rest_pins(), None);
+    let world = SimWorld {
+        rig: rig_cfg,
+        model: &model,
+        mount_yaw_deg: 0.0,
+        shape,
         reference: &reference,
         blob: &rig_cfg.blob,
-        tap: &rig_cfg.tap,
-        edge,
-        normal,
         labels: None,
     };
     let settings = serde_json::json!({ "rig": rig_cfg, "collect": cfg });
-    collect_on(on, cfg, "simulated", origin, settings, progress)
+    collect_simulated(world, cfg, "simulated", origin, settings, progress)
 }
 
 /// As [`collect`] with a calibrated sensor (`--sensor`): its taps, pins
@@ -103,50 +105,183 @@ pub fn collect_calibrated(
     origin: &str,
     progress: impl FnMut(usize),
 ) -> Result<Collected> {
-    let (edge, normal) = shape.at_arc_length(cfg.edge_arc_mm);
     let spec = &sensor.spec;
     let convention = sensor.label_convention();
-    let first = convention.to_pose(EdgeLabels {
-        theta_deg: -cfg.theta_range_deg,
-        ..EdgeLabels::default()
-    });
-    let start = pose_at_edge(
-        edge,
-        normal,
-        first.r_mm,
-        first.theta_deg,
-        rig_cfg.tap.height_mm,
-    );
-    let mount = convention.mount_yaw_deg;
     let model = sensor.model()?;
     rig_cfg.validate()?;
-    let mut rig = SimRig::with_model(rig_cfg, model, mount, shape.clone(), start, cfg.seed);
-    let (arm, sensor_part) = rig.parts();
     let names = [
         format!("r_mm ({})", spec.labels.r),
         format!("theta_deg ({})", spec.labels.theta),
     ];
-    let on = EdgeRig {
-        arm,
-        sensor: sensor_part,
+    let world = SimWorld {
+        rig: rig_cfg,
+        model: &model,
+        mount_yaw_deg: convention.mount_yaw_deg,
+        shape,
         reference: &sensor.reference,
         blob: &spec.blob,
-        tap: &rig_cfg.tap,
-        edge,
-        normal,
         labels: Some((convention, names)),
     };
     let settings = serde_json::json!({
         "rig": rig_cfg, "collect": cfg, "calibrated_sensor": sensor.source,
     });
-    collect_on(
-        on,
+    collect_simulated(
+        world,
         cfg,
         "simulated (calibrated sensor)",
         origin,
         settings,
         progress,
     )
+}
+
+/// The simulated rig of a collection, shared by every thread: the arm's
+/// and workspace's settings, the TacTip model (mounted turned by
+/// `mount_yaw_deg`), the object, the reference frame and blob settings,
+/// and the label convention with its target names (as [`EdgeRig`]).
+struct SimWorld<'a> {
+    rig: &'a RigConfig,
+    model: &'a TacTipModel,
+    mount_yaw_deg: f64,
+    shape: &'a Contour,
+    reference: &'a Frame,
+    blob: &'a BlobParams,
+    labels: Option<(LabelConvention, [String; 2])>,
+}
+
+/// One simulated tap's displacement vector, its labels and its frame.
+struct TapRow {
+    inputs: Vec<f32>,
+    targets: [f32; 2],
+    missing: bool,
+    frame: Option<Frame>,
+}
+
+/// [`collect_on`] on the simulated rig, taps on all cores (see the module
+/// docs); `progress` hears the number of taps done after every batch.
+fn collect_simulated(
+    world: SimWorld,
+    cfg: &CollectConfig,
+    source: &str,
+    origin: &str,
+    settings: serde_json::Value,
+    mut progress: impl FnMut(usize),
+) -> Result<Collected> {
+    check_samples(cfg)?;
+    let extractor = PinExtractor::from_reference_frame(world.reference, world.blob.clone())?;
+    let dim = 2 * extractor.tracker.reference().len();
+    let rows = cfg.samples.min(PRESIZED_ROWS);
+    let mut inputs = Vec::with_capacity(rows * dim);
+    let mut targets = Vec::with_capacity(rows * 2);
+    let mut frames = Vec::new();
+    let mut with_missing = 0;
+    for first in (0..cfg.samples).step_by(TAPS_PER_BATCH) {
+        let last = (first + TAPS_PER_BATCH).min(cfg.samples);
+        let batch: Vec<TapRow> = (first..last)
+            .into_par_iter()
+            .map(|i| simulated_tap(&world, &extractor, cfg, i))
+            .collect::<Result<_>>()?;
+        for (i, row) in (first..).zip(batch) {
+            with_missing += usize::from(row.missing);
+            inputs.extend(row.inputs);
+            targets.extend(row.targets);
+            if let Some(frame) = row.frame {
+                frames.push((format!("frame_{i:05}.png"), png_bytes(&frame, "frame")?));
+            }
+        }
+        progress(last);
+    }
+    if cfg.save_frames {
+        frames.push((
+            "reference.png".into(),
+            png_bytes(world.reference, "reference")?,
+        ));
+    }
+    let meta = dataset_meta(cfg, (source, origin), settings, &extractor, with_missing);
+    let names = world.labels.map(|(_, n)| n);
+    Ok(Collected {
+        data: TapData {
+            inputs,
+            targets,
+            meta: DatasetMeta {
+                targets: names.unwrap_or(meta.targets),
+                ..meta
+            },
+        },
+        frames,
+    })
+}
+
+/// Tap `i` of the collection on the simulated rig, with generators of its
+/// own: stream `i` of the collection's seed draws its labels and depth,
+/// then seeds the arm's noise and the camera's nuisance. The arm starts at
+/// the tap's approach pose (checked by the limiter), taps down, and the
+/// sensor renders the pins at the pose physically reached.
+fn simulated_tap(
+    world: &SimWorld,
+    extractor: &PinExtractor,
+    cfg: &CollectConfig,
+    i: usize,
+) -> Result<TapRow> {
+    let tap_cfg = &world.rig.tap;
+    let (mut rng, r, depth) = tap_draws(cfg, tap_cfg, i);
+    let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
+    let (edge, normal) = world.shape.at_arc_length(cfg.edge_arc_mm);
+    let labels = world.labels.as_ref().map(|(c, _)| c);
+    let at = LabelConvention::edge_pose_of(labels, r, theta);
+    let approach = pose_at_edge(edge, normal, at.0, at.1, tap_cfg.height_mm);
+    let arm_cfg = SimArmConfig {
+        seed: rng.next_u64(),
+        ..world.rig.arm.clone()
+    };
+    let (sim_arm, probe) = SimArm::with_probe(arm_cfg, approach);
+    let mut arm = LimitedArm::new(sim_arm, world.rig.workspace.clone(), LimitMode::Refuse);
+    let mut sensor = TapCamera {
+        world,
+        probe,
+        nuisance: ChaCha8Rng::seed_from_u64(rng.next_u64()),
+    };
+    arm.move_to(approach)?;
+    let frame = tap(&mut arm, &mut sensor, depth)?;
+    let tracked = extractor.extract(&frame)?;
+    Ok(TapRow {
+        inputs: tracked.displacement(extractor.tracker.reference()),
+        targets: [r as f32, theta as f32],
+        missing: tracked.missing > 0,
+        frame: cfg.save_frames.then_some(frame),
+    })
+}
+
+/// Tap `i`'s generator (stream `i` of the collection's seed) after it
+/// drew the tap's edge position r (mm) and depth (mm): the same on every
+/// rig, so a real rig replaying a simulated collection's frames gets its
+/// labels.
+fn tap_draws(cfg: &CollectConfig, tap_cfg: &TapConfig, i: usize) -> (ChaCha8Rng, f64, f64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    rng.set_stream(i as u64);
+    let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
+    let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
+    (rng, r, depth)
+}
+
+/// The simulated TacTip of one tap over the shared model: what
+/// `tactrace_sensor::SimTacTip` captures (the pins at the physically
+/// reached pose, as the camera sees them, rendered with nuisance), without
+/// a copy of the model per tap.
+struct TapCamera<'a> {
+    world: &'a SimWorld<'a>,
+    probe: PoseProbe,
+    nuisance: ChaCha8Rng,
+}
+
+impl TactileSensor for TapCamera<'_> {
+    fn capture(&mut self) -> std::result::Result<Frame, SensorError> {
+        let mut tip = self.probe.actual();
+        tip.rz += self.world.mount_yaw_deg;
+        let model = self.world.model;
+        let pins = model.seen_pins(model.pins(self.world.shape, tip, None));
+        Ok(model.render(&pins, Some(&mut self.nuisance)))
+    }
 }
 
 /// `--samples` must be positive.
@@ -207,7 +342,6 @@ pub fn collect_on(
         labels,
     } = on;
     let extractor = PinExtractor::from_reference_frame(reference, blob.clone())?;
-    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let dim = 2 * extractor.tracker.reference().len();
     // Reserved for at most PRESIZED_ROWS: a huge --samples grows the
     // buffers as taps come instead of aborting on one giant allocation.
@@ -217,9 +351,8 @@ pub fn collect_on(
     let mut frames = Vec::new();
     let mut with_missing = 0;
     for i in 0..cfg.samples {
-        let r = rng.random_range(-cfg.r_range_mm..=cfg.r_range_mm);
+        let (_, r, depth) = tap_draws(cfg, tap_cfg, i);
         let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
-        let depth = tap_cfg.depth_mm + rng.random_range(-1.0..=1.0) * tap_cfg.depth_jitter_mm;
         let at = LabelConvention::edge_pose_of(labels.as_ref().map(|(c, _)| c), r, theta);
         arm.move_to(pose_at_edge(edge, normal, at.0, at.1, tap_cfg.height_mm))?;
         let frame = tap(arm, sensor, depth)?;
@@ -237,19 +370,11 @@ pub fn collect_on(
     if cfg.save_frames {
         frames.push(("reference.png".into(), png_bytes(reference, "reference")?));
     }
+    let meta = dataset_meta(cfg, (source, origin), settings, &extractor, with_missing);
+    let names = labels.map(|(_, n)| n);
     let meta = DatasetMeta {
-        source: source.into(),
-        origin: origin.into(),
-        seed: Some(cfg.seed),
-        samples: cfg.samples,
-        pins: dim / 2,
-        targets: labels.map_or(["r_mm".into(), "theta_deg".into()], |(_, n)| n),
-        frames_with_missing_pins: with_missing,
-        reference_pins: extractor.tracker.reference().to_vec(),
-        settings,
-        tactrace_version: crate::VERSION.into(),
-        input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
-        images: Vec::new(),
+        targets: names.unwrap_or(meta.targets),
+        ..meta
     };
     Ok(Collected {
         data: TapData {
@@ -261,10 +386,95 @@ pub fn collect_on(
     })
 }
 
+/// A collection's metadata (targets named `r_mm`, `theta_deg`).
+fn dataset_meta(
+    cfg: &CollectConfig,
+    (source, origin): (&str, &str),
+    settings: serde_json::Value,
+    extractor: &PinExtractor,
+    with_missing: usize,
+) -> DatasetMeta {
+    let reference_pins = extractor.tracker.reference().to_vec();
+    DatasetMeta {
+        source: source.into(),
+        origin: origin.into(),
+        seed: Some(cfg.seed),
+        samples: cfg.samples,
+        pins: reference_pins.len(),
+        targets: ["r_mm".into(), "theta_deg".into()],
+        frames_with_missing_pins: with_missing,
+        reference_pins,
+        settings,
+        tactrace_version: crate::VERSION.into(),
+        input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
+        images: Vec::new(),
+    }
+}
+
 /// theta for sample `i` of `n`, sweeping linearly from -range to +range.
 fn sweep(i: usize, n: usize, range: f64) -> f64 {
     if n <= 1 {
         return 0.0;
     }
     -range + 2.0 * range * i as f64 / (n - 1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tactrace_geometry::{builtin_shape, BuiltinShape};
+
+    fn collect_with_threads(threads: usize, cfg: &CollectConfig) -> Collected {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let (rig, disk) = (RigConfig::default(), builtin_shape(BuiltinShape::Disk));
+        pool.install(|| collect(&rig, &disk, cfg, "disk", |_| {}))
+            .expect("collect")
+    }
+
+    /// Taps on all cores give the dataset of one thread, bit for bit
+    /// (more taps than a batch, frames kept).
+    #[test]
+    fn issue21_collect_on_two_threads_equals_one_thread_bit_for_bit() {
+        let cfg = CollectConfig {
+            samples: TAPS_PER_BATCH + 9,
+            seed: 5,
+            save_frames: true,
+            ..CollectConfig::default()
+        };
+        let (one, two) = (collect_with_threads(1, &cfg), collect_with_threads(2, &cfg));
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&one.data.inputs), bits(&two.data.inputs));
+        assert_eq!(bits(&one.data.targets), bits(&two.data.targets));
+        assert_eq!(one.frames, two.frames);
+        assert_eq!(one.frames.len(), cfg.samples + 1);
+        let (a, b) = (&one.data.meta, &two.data.meta);
+        assert_eq!(a.frames_with_missing_pins, b.frames_with_missing_pins);
+        // Every tap drew its own labels, and the sweep still runs in order.
+        let r: Vec<f32> = one.data.targets.iter().step_by(2).copied().collect();
+        let distinct = r
+            .iter()
+            .map(|v| v.to_bits())
+            .collect::<std::collections::HashSet<_>>();
+        assert_eq!(distinct.len(), r.len());
+        let theta: Vec<f32> = one
+            .data
+            .targets
+            .iter()
+            .skip(1)
+            .step_by(2)
+            .copied()
+            .collect();
+        assert!(theta.windows(2).all(|w| w[0] < w[1]));
+        let other = collect_with_threads(
+            2,
+            &CollectConfig {
+                seed: 6,
+                ..cfg.clone()
+            },
+        );
+        assert_ne!(bits(&other.data.inputs), bits(&one.data.inputs));
+    }
 }

@@ -136,6 +136,16 @@ impl Pca {
         self.scaling
     }
 
+    /// Mean of the fitted data, subtracted before projecting.
+    pub(crate) fn mean(&self) -> &[f64] {
+        &self.mean
+    }
+
+    /// The factor applied to each projection.
+    pub(crate) fn scales(&self) -> &[f64] {
+        &self.scales
+    }
+
     /// Project one sample (length [`Self::dim`]) into `out` (length k).
     pub fn transform_into(&self, x: &[f64], out: &mut [f64]) {
         let dim = self.dim();

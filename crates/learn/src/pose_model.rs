@@ -5,10 +5,12 @@ use crate::config::{ModelConfig, ModelKind, TargetScaling};
 use crate::dataset::Dataset;
 use crate::error::LearnError;
 use crate::pca::{Components, Pca};
+use crate::predict::Predictor;
 use crate::standardise::Standardiser;
 use crate::trainer::{train_nets, NetData, Trainer};
 pub use crate::trainer::{EpochReport, NetEpoch, TrainingHistory};
 use crate::Layers;
+use std::sync::OnceLock;
 
 /// One fitted network with its input projection and target columns.
 #[derive(Debug, Clone)]
@@ -29,6 +31,8 @@ pub struct PoseModel {
     /// Target scaling (mean 0 / std 1 identity when `TargetScaling::None`).
     pub(crate) targets: Standardiser,
     pub(crate) nets: Vec<FittedNet>,
+    /// The prediction path, laid out at the first prediction.
+    pub(crate) predictor: OnceLock<Predictor>,
 }
 
 impl PoseModel {
@@ -144,6 +148,7 @@ impl PoseModel {
                 standardiser,
                 targets,
                 nets: fitted,
+                predictor: OnceLock::new(),
             },
             history,
         ))
@@ -157,36 +162,63 @@ impl PoseModel {
                 got: displacement.len(),
             });
         }
-        if let Some(j) = displacement.iter().position(|v| !v.is_finite()) {
-            return Err(LearnError::NonFinite {
-                what: "input",
-                row: 0,
-                column: j,
-                value: displacement[j],
+        let mut out = Vec::with_capacity(1);
+        self.predict_into(displacement, &mut out)?;
+        Ok(out[0])
+    }
+
+    /// Predict every row of `rows` (row-major, [`Self::input_dim`] values
+    /// a row): `[r mm, theta deg]` per row, as [`Self::predict`] gives them
+    /// one at a time, computed a block of rows at a time (faster).
+    pub fn predict_rows(&self, rows: &[f32]) -> Result<Vec<[f64; 2]>, LearnError> {
+        let dim = self.input_dim();
+        if !rows.len().is_multiple_of(dim) {
+            return Err(LearnError::DimensionMismatch {
+                expected: dim,
+                got: rows.len(),
             });
         }
-        let mut z = vec![0.0f64; self.input_dim()];
-        self.standardiser.transform_into(displacement, &mut z);
-        let mut scaled = [0.0f64; 2];
-        for net in &self.nets {
-            let input: Vec<f32> = net_inputs(net.pca.as_ref(), &z)
-                .into_iter()
-                .map(|v| v as f32)
-                .collect();
-            let mut out = vec![0.0f32; net.targets.len()];
-            net.layers.predict(&input, &mut out)?;
-            for (&col, &o) in net.targets.iter().zip(&out) {
-                scaled[col] = o as f64;
-            }
-        }
-        let mut pose = [0.0f64; 2];
-        self.targets.inverse_into(&scaled, &mut pose);
-        Ok(pose)
+        let mut out = Vec::with_capacity(rows.len() / dim);
+        self.predict_into(rows, &mut out)?;
+        Ok(out)
     }
 
     /// Predict every sample of `ds`.
     pub fn predict_batch(&self, ds: &Dataset) -> Result<Vec<[f64; 2]>, LearnError> {
-        (0..ds.n).map(|i| self.predict(ds.x_row(i))).collect()
+        if ds.dim_x != self.input_dim() {
+            return Err(LearnError::DimensionMismatch {
+                expected: self.input_dim(),
+                got: ds.dim_x,
+            });
+        }
+        self.predict_rows(&ds.x)
+    }
+
+    /// Multiply-adds of one prediction, `(f64, f32)`: the projections onto
+    /// the principal components (once for nets that share them), then
+    /// every layer's weights (the sigmoids not counted).
+    pub fn multiply_adds(&self) -> (usize, usize) {
+        self.predictor().multiply_adds(self)
+    }
+
+    fn predictor(&self) -> &Predictor {
+        self.predictor.get_or_init(|| Predictor::new(self))
+    }
+
+    /// Checks that `rows` are finite (the error names the first value that
+    /// is not) and appends their predictions to `out`.
+    fn predict_into(&self, rows: &[f32], out: &mut Vec<[f64; 2]>) -> Result<(), LearnError> {
+        let dim = self.input_dim();
+        if let Some(k) = rows.iter().position(|v| !v.is_finite()) {
+            return Err(LearnError::NonFinite {
+                what: "input",
+                row: k / dim,
+                column: k % dim,
+                value: rows[k],
+            });
+        }
+        self.predictor().predict_rows(self, rows, out);
+        Ok(())
     }
 
     /// Displacement-vector length the model expects.

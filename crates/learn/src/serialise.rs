@@ -149,6 +149,7 @@ impl PoseModel {
             standardiser,
             targets,
             nets,
+            predictor: Default::default(),
         })
     }
 }

@@ -237,18 +237,36 @@ impl Model {
     }
 }
 
-/// Predict every row of `flat` (rows of `cols`), checking for Ctrl-C.
+/// Predict every row of `flat` (rows of `cols`), a block of
+/// [`ROWS_PER_CHECK`] rows at a time through the batched path, checking
+/// for Ctrl-C between blocks; a non-finite value is named by its row in
+/// `flat`.
 fn predict_rows(
     net: &PoseModel,
     flat: &[f32],
     cols: usize,
 ) -> Result<Vec<f64>, tactrace_learn::LearnError> {
+    use tactrace_learn::LearnError;
     let mut out = Vec::with_capacity(flat.len() / cols.max(1) * 2);
-    for (i, row) in flat.chunks_exact(cols).enumerate() {
-        if i % ROWS_PER_CHECK == ROWS_PER_CHECK - 1 {
+    for (b, block) in flat.chunks(ROWS_PER_CHECK * cols.max(1)).enumerate() {
+        if b > 0 {
             checkpoint();
         }
-        out.extend(net.predict(row)?);
+        let rows = net.predict_rows(block).map_err(|e| match e {
+            LearnError::NonFinite {
+                what,
+                row,
+                column,
+                value,
+            } => LearnError::NonFinite {
+                what,
+                row: row + b * ROWS_PER_CHECK,
+                column,
+                value,
+            },
+            e => e,
+        })?;
+        out.extend(rows.into_iter().flatten());
     }
     Ok(out)
 }

@@ -1,10 +1,16 @@
 //! Frame -> (r, theta): pin extraction against the undeformed frame, then
 //! the pose model (report ch. 4: the displacement vector, then the network).
+//!
+//! A follow run that keeps every tap's displacement vector asks for it
+//! ([`Perception::displacement`]) before the loop perceives the same
+//! frame: the pins of the frame last asked for are kept, so that frame is
+//! extracted once, not twice (the extraction is most of a step's cost).
 use crate::error::{Result, ServoError};
 use serde::Serialize;
+use std::sync::{Mutex, PoisonError};
 use tactrace_learn::PoseModel;
 use tactrace_sensor::{Frame, LabelConvention};
-use tactrace_vision::PinExtractor;
+use tactrace_vision::{PinExtractor, Tracked};
 
 /// Pin extraction and the pose model, with the contact rule.
 pub struct Perception {
@@ -15,6 +21,12 @@ pub struct Perception {
     /// The model predicts in this collection's labels; the percept is in
     /// the controller's frame (`None`: the model's are the controller's).
     labels: Option<LabelConvention>,
+    /// The frame [`Perception::displacement`] last extracted, with its
+    /// pins, until [`Perception::perceive`] takes them.
+    last: Mutex<Option<(Frame, Tracked)>>,
+    /// Frames extracted so far (tests count them).
+    #[cfg(test)]
+    extractions: std::sync::atomic::AtomicUsize,
 }
 
 /// What one tap told the controller.
@@ -48,6 +60,9 @@ impl Perception {
             model,
             contact_threshold_px,
             labels: None,
+            last: Mutex::new(None),
+            #[cfg(test)]
+            extractions: Default::default(),
         })
     }
 
@@ -68,14 +83,38 @@ impl Perception {
 
     /// The displacement vector of one frame (x of every pin, then y, px,
     /// in the reference frame's pin order), as the model sees it.
+    /// Its pins are kept for a [`Perception::perceive`] of the same frame.
     pub fn displacement(&self, frame: &Frame) -> Result<Vec<f32>> {
-        let tracked = self.extractor.extract(frame)?;
-        Ok(tracked.displacement(self.extractor.tracker.reference()))
+        let tracked = self.extract(frame)?;
+        let disp = tracked.displacement(self.extractor.tracker.reference());
+        *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some((frame.clone(), tracked));
+        Ok(disp)
+    }
+
+    /// The pins of `frame`: those [`Perception::displacement`] kept when it
+    /// was the frame last asked for (equal pixels), else extracted now.
+    fn pins(&self, frame: &Frame) -> Result<Tracked> {
+        let kept = self
+            .last
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .take();
+        match kept {
+            Some((seen, tracked)) if seen == *frame => Ok(tracked),
+            _ => self.extract(frame),
+        }
+    }
+
+    fn extract(&self, frame: &Frame) -> Result<Tracked> {
+        #[cfg(test)]
+        self.extractions
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Ok(self.extractor.extract(frame)?)
     }
 
     /// Extract pins and predict the edge pose from one frame.
     pub fn perceive(&self, frame: &Frame) -> Result<Percept> {
-        let tracked = self.extractor.extract(frame)?;
+        let tracked = self.pins(frame)?;
         let disp = tracked.displacement(self.extractor.tracker.reference());
         let p = disp.len() / 2;
         let mean = (0..p)
@@ -91,5 +130,68 @@ impl Perception {
             contact: mean >= self.contact_threshold_px,
             missing_pins: tracked.missing,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{pose_at_edge, RigConfig};
+    use std::sync::atomic::Ordering;
+    use tactrace_geometry::{builtin_shape, BuiltinShape};
+    use tactrace_learn::{Dataset, ModelConfig, ModelKind, Preset};
+    use tactrace_sensor::TacTipModel;
+
+    /// A perception of the default simulated sensor (an untrained small
+    /// net: only the extraction matters here) and two tapped frames.
+    fn perception_and_frames() -> (Perception, [Frame; 2]) {
+        let rig = RigConfig::default();
+        let sensor = TacTipModel::new(rig.sensor.clone()).expect("sensor");
+        let reference = sensor.render(sensor.rest_pins(), None);
+        let extractor = PinExtractor::from_reference_frame(&reference, rig.blob).expect("pins");
+        let disk = builtin_shape(BuiltinShape::Disk);
+        let (edge, normal) = disk.at_arc_length(0.0);
+        let depth = -rig.tap.nominal_indentation_mm();
+        let frames = [(1.0, 10.0), (-2.0, -20.0)].map(|(r, t)| {
+            sensor.render(
+                &sensor.pins(&disk, pose_at_edge(edge, normal, r, t, depth), None),
+                None,
+            )
+        });
+        let dim = 2 * extractor.tracker.reference().len();
+        let n = 8;
+        let x = (0..n * dim).map(|k| (k % 7) as f32 - 3.0).collect();
+        let y = (0..2 * n).map(|k| k as f32).collect();
+        let data = Dataset::new(x, y, n, dim, 2).expect("data");
+        let mut cfg = ModelConfig::preset(ModelKind::DisDenNN, Preset::Default);
+        cfg.set_epochs(1);
+        if let Some(net) = cfg.pose.as_mut() {
+            net.hidden = vec![4];
+        }
+        let (model, _) = PoseModel::fit(&cfg, &data, &mut |_| {}).expect("model");
+        (
+            Perception::new(extractor, model, 0.5).expect("perception"),
+            frames,
+        )
+    }
+
+    /// A follow run's field recorder asks for a frame's displacement, then
+    /// the loop perceives it: one extraction, the same percept as without
+    /// the recorder; another frame is never answered with the kept pins.
+    #[test]
+    fn issue21_a_frame_recorded_then_perceived_is_extracted_once() {
+        let (p, [a, b]) = perception_and_frames();
+        let alone = p.perceive(&a).expect("percept");
+        assert_eq!(p.extractions.load(Ordering::Relaxed), 1);
+        let field = p.displacement(&a).expect("field");
+        let again = p.perceive(&a).expect("percept");
+        assert_eq!(p.extractions.load(Ordering::Relaxed), 2, "extracted twice");
+        assert_eq!(format!("{alone:?}"), format!("{again:?}"));
+        assert_eq!(field, p.displacement(&a).expect("field"));
+        let other = p.perceive(&b).expect("percept");
+        assert_eq!(p.extractions.load(Ordering::Relaxed), 4);
+        assert_ne!(other.mean_displacement_px, alone.mean_displacement_px);
+        let fresh = perception_and_frames().0.perceive(&b).expect("percept");
+        assert_eq!(format!("{other:?}"), format!("{fresh:?}"));
     }
 }

@@ -43,11 +43,13 @@ impl PinExtractor {
     pub fn extract(&self, frame: &Frame) -> Result<Tracked, VisionError> {
         let required = self.required_matches()?;
         let keypoints = detect_blobs(frame, &self.params);
-        let mut tracked = self.tracker.order(&keypoints);
-        if tracked.missing > 0 {
+        let first = self.tracker.first_pass(&keypoints);
+        let tracked = if first.tracked().missing > 0 {
             let clusters = find_clusters(frame, &self.params);
-            tracked = self.tracker.order_with_clusters(&keypoints, &clusters);
-        }
+            self.tracker.split_pass(first, &clusters)
+        } else {
+            first.into_tracked()
+        };
         let matched = tracked.matched_count();
         if matched < required {
             return Err(VisionError::TooFewPins {

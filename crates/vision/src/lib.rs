@@ -46,4 +46,4 @@ pub use preprocess::{
 pub use reader::{FrameDetector, PinReader, Reading, SightParams, TrackCounts};
 pub use rest::{estimate_rest, RestEstimate, RestParams};
 pub use spots::{Connectivity, Spot, SpotDetector, SpotParams, Spots};
-pub use tracker::{median_spacing, PinTracker, Tracked};
+pub use tracker::{median_spacing, FirstPass, PinTracker, Tracked};

@@ -165,13 +165,13 @@ impl PinReader {
     pub fn read_preprocessed(&self, frame: &Frame) -> Result<Reading, VisionError> {
         let detector = &self.frames.detector;
         let mut detection = detector.detect(frame);
-        let mut tracked = self.tracker.order(&detection.points);
-        if tracked.missing > 0 {
+        let first = self.tracker.first_pass(&detection.points);
+        let tracked = if first.tracked().missing > 0 {
             detector.add_clusters(frame, &mut detection);
-            tracked = self
-                .tracker
-                .order_with_clusters(&detection.points, &detection.clusters);
-        }
+            self.tracker.split_pass(first, &detection.clusters)
+        } else {
+            first.into_tracked()
+        };
         let counts = TrackCounts::of(&tracked, &detection);
         let f = self.min_found_fraction;
         if !(0.0..=1.0).contains(&f) {

@@ -16,7 +16,10 @@ use crate::field::{smooth_field, Kernel, Observations};
 use crate::fold::FoldCheck;
 use crate::merged::Cluster;
 
+mod grid;
 mod repair;
+
+use grid::Grid;
 
 /// Fewest reference pins that define an affine field.
 const MIN_REFERENCE_PINS: usize = 3;
@@ -39,6 +42,30 @@ pub struct PinTracker {
     spacing: f64,
     stages: Vec<Stage>,
     folds: FoldCheck,
+    /// Whether the matching may start from nearest neighbours
+    /// (`tracker/grid.rs`).
+    nearest: bool,
+}
+
+/// The first pass of the ordering on one frame's keypoints
+/// ([`PinTracker::first_pass`]).
+pub struct FirstPass {
+    points: Vec<[f64; 2]>,
+    tracked: Tracked,
+    /// Per pin, the index of its point.
+    sources: Vec<Option<usize>>,
+}
+
+impl FirstPass {
+    /// The pins as [`PinTracker::order`] gives them.
+    pub fn tracked(&self) -> &Tracked {
+        &self.tracked
+    }
+
+    /// The pins, as [`FirstPass::tracked`].
+    pub fn into_tracked(self) -> Tracked {
+        self.tracked
+    }
 }
 
 /// Pins in reference order for one frame.
@@ -106,7 +133,17 @@ impl PinTracker {
             reference,
             spacing,
             stages,
+            nearest: true,
         })
+    }
+
+    /// This tracker with the nearest-neighbour start on (the default) or
+    /// off. Off, every frame runs all the coarse-to-fine stages from the
+    /// centroid shift: slower, the same result on the shared sets
+    /// (`tests/speed.rs`), kept to check that.
+    pub fn with_nearest_start(mut self, on: bool) -> Self {
+        self.nearest = on;
+        self
     }
 
     /// The rest pin centres, px.
@@ -145,8 +182,42 @@ impl PinTracker {
     /// If the kept result has a turned-over triangle, the clusters around it
     /// are split anew (see `tracker/repair.rs`).
     pub fn order_with_clusters(&self, keypoints: &[KeyPoint], clusters: &[Cluster]) -> Tracked {
+        self.split_pass(self.first_pass(keypoints), clusters)
+    }
+
+    /// [`PinTracker::order`] on a detection's points, then, if pins are
+    /// missing and it has clusters, [`PinTracker::order_with_clusters`]
+    /// (the first pass run once).
+    pub fn track(&self, detection: &Detection) -> Tracked {
+        let first = self.first_pass(&detection.points);
+        if first.tracked.missing == 0 || detection.clusters.is_empty() {
+            return first.tracked;
+        }
+        self.split_pass(first, &detection.clusters)
+    }
+
+    /// The first pass of [`PinTracker::order_with_clusters`]: its
+    /// [`FirstPass::tracked`] is what [`PinTracker::order`] gives. When
+    /// pins are missing, [`PinTracker::split_pass`] goes on from it without
+    /// running it again.
+    pub fn first_pass(&self, keypoints: &[KeyPoint]) -> FirstPass {
         let points = finite_centres(keypoints);
-        let (first, sources) = self.order_points(&points);
+        let (tracked, sources) = self.order_points(&points);
+        FirstPass {
+            points,
+            tracked,
+            sources,
+        }
+    }
+
+    /// The rest of [`PinTracker::order_with_clusters`] after `first` (on
+    /// the same keypoints): the same result.
+    pub fn split_pass(&self, first: FirstPass, clusters: &[Cluster]) -> Tracked {
+        let FirstPass {
+            points,
+            tracked: first,
+            sources,
+        } = first;
         if first.missing == 0 || clusters.is_empty() {
             return first;
         }
@@ -188,16 +259,6 @@ impl PinTracker {
         kept
     }
 
-    /// [`PinTracker::order`] on a detection's points, then, if pins are
-    /// missing and it has clusters, [`PinTracker::order_with_clusters`].
-    pub fn track(&self, detection: &Detection) -> Tracked {
-        let first = self.order(&detection.points);
-        if first.missing == 0 || detection.clusters.is_empty() {
-            return first;
-        }
-        self.order_with_clusters(&detection.points, &detection.clusters)
-    }
-
     /// For each cluster, how many missing pins are predicted on or next to
     /// it (each missing pin counts for its nearest cluster only).
     fn missing_per_cluster(&self, tracked: &Tracked, clusters: &[Cluster]) -> Vec<usize> {
@@ -234,14 +295,41 @@ impl PinTracker {
         (tracked, matches)
     }
 
-    /// The coarse-to-fine stages and the fill of missing pins.
+    /// The coarse-to-fine stages and the fill of missing pins: from the
+    /// nearest-neighbour start where it holds (see `tracker/grid.rs`), else
+    /// every stage from the centroid shift.
     fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
-        let mut predicted = self.centroid_shift(points);
+        let grid = Grid::new(points, grid::CELL * self.spacing);
+        if let (true, Some(grid)) = (self.nearest, &grid) {
+            if let Some(start) = self.nearest_start(points, grid) {
+                let after = &self.stages[grid::NEAREST_STAGE + 1..];
+                let (tracked, matches) = self.run_stages(start, after, points, Some(grid));
+                if tracked.missing == 0 && !self.folds.any_turned(&tracked.pins) {
+                    return (tracked, matches);
+                }
+            }
+        }
+        let start = self.centroid_shift(points);
+        self.run_stages(start, &self.stages, points, grid.as_ref())
+    }
+
+    /// `stages` from the predictions `predicted`, then the fill.
+    fn run_stages(
+        &self,
+        mut predicted: Vec<[f64; 2]>,
+        stages: &[Stage],
+        points: &[[f64; 2]],
+        grid: Option<&Grid>,
+    ) -> (Tracked, Vec<Option<usize>>) {
         let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
         let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
-        let by_x = ByX::new(points);
-        for stage in &self.stages {
-            matches = self.match_points(&predicted, points, &by_x, stage.gate);
+        let mut by_x = None;
+        for stage in stages {
+            let source = match grid.filter(|_| self.uses_grid(stage)) {
+                Some(g) => Candidates::Grid(g),
+                None => Candidates::ByX(by_x.get_or_insert_with(|| ByX::new(points))),
+            };
+            matches = self.match_points(&predicted, points, source, stage.gate);
             observed = self.displacements(&matches, points);
             predicted = self.predict(&observed, &stage.kernel);
         }
@@ -263,13 +351,14 @@ impl PinTracker {
 
     /// Optimal one-to-one matching of predicted pins to points, squared
     /// distance cost, pairs farther than `gate` not allowed. Candidates come
-    /// from the x-window of each prediction and are listed by point index
+    /// from the x-window of each prediction (through the grid's cells or
+    /// the x-sorted points: the same edges) and are listed by point index
     /// (as a scan over all points would list them), through a bit set.
     fn match_points(
         &self,
         predicted: &[[f64; 2]],
         points: &[[f64; 2]],
-        by_x: &ByX,
+        source: Candidates,
         gate: f64,
     ) -> Vec<Option<usize>> {
         let gate2 = gate * gate;
@@ -283,21 +372,35 @@ impl PinTracker {
         let mut candidates = vec![0u64; points.len().div_ceil(64)];
         let mut costs = vec![0.0; points.len()];
         for p in predicted {
-            let from = by_x.xs.partition_point(|&x| x < p[0] - gate);
-            let window = by_x.xs[from..].iter().zip(&by_x.ys[from..]);
-            for ((&x, &y), &col) in window.zip(&by_x.order[from..]) {
-                if x > p[0] + gate {
-                    break;
-                }
+            let mut consider = |col: usize, x: f64, y: f64| {
                 let dy2 = (p[1] - y).powi(2);
                 if dy2 >= unassigned {
-                    continue; // the cost is at least dy2
+                    return; // the cost is at least dy2
                 }
                 let cost = (p[0] - x).powi(2) + dy2;
                 if cost < unassigned {
                     candidates[col / 64] |= 1 << (col % 64);
                     costs[col] = cost;
                 }
+            };
+            match source {
+                Candidates::ByX(by_x) => {
+                    let from = by_x.xs.partition_point(|&x| x < p[0] - gate);
+                    let window = by_x.xs[from..].iter().zip(&by_x.ys[from..]);
+                    for ((&x, &y), &col) in window.zip(&by_x.order[from..]) {
+                        if x > p[0] + gate {
+                            break;
+                        }
+                        consider(col, x, y);
+                    }
+                }
+                Candidates::Grid(grid) => grid.around(p, gate, |col| {
+                    let [x, y] = points[col];
+                    // The x-window's own test, so the edges are the same.
+                    if x >= p[0] - gate && x <= p[0] + gate {
+                        consider(col, x, y);
+                    }
+                }),
             }
             for (w, word) in candidates.iter_mut().enumerate() {
                 while *word != 0 {
@@ -365,6 +468,13 @@ impl PinTracker {
             extra: n_points - matched_count,
         }
     }
+}
+
+/// Where a matching stage finds its candidate points.
+#[derive(Clone, Copy)]
+enum Candidates<'a> {
+    ByX(&'a ByX),
+    Grid(&'a Grid),
 }
 
 /// Point indices sorted by x, with their x and y values.

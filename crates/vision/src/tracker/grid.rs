@@ -1,0 +1,221 @@
+//! Where the tracker finds its candidates fast (issue 21, item 6): a
+//! bucket grid over a frame's points, and the nearest-neighbour start of
+//! the coarse-to-fine matching.
+//!
+//! The grid lists, for a predicted pin, the points of the cells its gate
+//! box touches; the matching then applies the same tests as the scan over
+//! the x-sorted points, so the edges handed to the assignment solver are
+//! the same, in the same order (point index).
+//!
+//! The nearest-neighbour start replaces the wide first stages (gates of 3
+//! and 1.5 spacings, about 30 candidates a pin) where the tap moves the
+//! pins little: each pin shifted by the centroids' difference takes its
+//! nearest point within [`NEAREST_REACH`] when that point's nearest pin is
+//! it too; the field fitted to those pairs predicts every pin, and the
+//! narrow stages run from there. It is used only when at least
+//! [`NEAREST_MIN_SHARE`] of the pins pair up and the result turns no
+//! triangle over; otherwise the tracker runs every stage from the centroid
+//! shift, as it always did.
+
+use super::{PinTracker, Stage};
+
+/// Grid cell side, in reference spacings.
+pub(super) const CELL: f64 = 0.5;
+/// Widest gate (spacings) matched through the grid; wider gates scan the
+/// x-sorted points (a wide gate box covers many cells).
+pub(super) const GRID_GATE: f64 = 1.5;
+/// Radius (spacings) within which a pin and a point are nearest neighbours.
+const NEAREST_REACH: f64 = 0.5;
+/// Share of pins that must pair up for the nearest-neighbour start.
+const NEAREST_MIN_SHARE: f64 = 0.5;
+/// Stage whose kernel (2 spacings) fits the field to the
+/// nearest-neighbour pairs; the stages after it are run (a narrower
+/// kernel leaves more frames to the full path).
+pub(super) const NEAREST_STAGE: usize = 1;
+
+/// Points bucketed by cell, each cell's points in index order.
+pub(super) struct Grid {
+    cell: f64,
+    origin: [f64; 2],
+    cols: usize,
+    rows: usize,
+    /// Per cell, where its points start in `members` (one more entry).
+    starts: Vec<u32>,
+    /// Point indices, grouped by cell.
+    members: Vec<u32>,
+}
+
+impl Grid {
+    /// The grid of `points` (finite) with cells of side `cell` px (widened
+    /// so there are at most a few cells a point); `None` when their extent
+    /// overflows.
+    pub fn new(points: &[[f64; 2]], cell: f64) -> Option<Self> {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in points {
+            for a in 0..2 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        if points.is_empty() {
+            (lo, hi) = ([0.0; 2], [0.0; 2]);
+        }
+        if !(hi[0] - lo[0]).is_finite() || !(hi[1] - lo[1]).is_finite() {
+            return None;
+        }
+        let most = 16 * points.len() + 64;
+        let mut cell = if cell.is_finite() && cell > 0.0 {
+            cell
+        } else {
+            1.0
+        };
+        let count = |c: f64, a: usize| ((hi[a] - lo[a]) / c).floor() + 1.0;
+        while count(cell, 0) * count(cell, 1) > most as f64 {
+            cell *= 2.0;
+        }
+        let (cols, rows) = (count(cell, 0) as usize, count(cell, 1) as usize);
+        let mut grid = Self {
+            cell,
+            origin: lo,
+            cols,
+            rows,
+            starts: vec![0; cols * rows + 1],
+            members: vec![0; points.len()],
+        };
+        let cells: Vec<usize> = points.iter().map(|p| grid.cell_of(p)).collect();
+        for &c in &cells {
+            grid.starts[c + 1] += 1;
+        }
+        for c in 0..cols * rows {
+            grid.starts[c + 1] += grid.starts[c];
+        }
+        let mut next = grid.starts.clone();
+        for (k, &c) in cells.iter().enumerate() {
+            grid.members[next[c] as usize] = k as u32;
+            next[c] += 1;
+        }
+        Some(grid)
+    }
+
+    fn cell_of(&self, p: &[f64; 2]) -> usize {
+        let col = self.index(p[0], 0).clamp(0, self.cols as i64 - 1) as usize;
+        let row = self.index(p[1], 1).clamp(0, self.rows as i64 - 1) as usize;
+        row * self.cols + col
+    }
+
+    /// The cell index of coordinate `v` along axis `a` (may be outside).
+    /// Any non-decreasing map does (a point between two query bounds
+    /// falls between their cells); this one is the floor except at
+    /// negative integers, without a call to libm's `floor`.
+    fn index(&self, v: f64, a: usize) -> i64 {
+        let t = (v - self.origin[a]) / self.cell;
+        t as i64 - i64::from(t < 0.0)
+    }
+
+    /// Calls `visit(k)` for every point `k` whose cell meets the box of
+    /// half-width `reach` around `p` (a superset of the points within it).
+    pub fn around(&self, p: &[f64; 2], reach: f64, mut visit: impl FnMut(usize)) {
+        // A margin far above rounding, so a point at the box's edge is kept.
+        let margin = 1e-9 * (1.0 + reach + p[0].abs() + p[1].abs());
+        let span = |a: usize, n: usize| {
+            let lo = self.index(p[a] - reach - margin, a).max(0);
+            let hi = self.index(p[a] + reach + margin, a).min(n as i64 - 1);
+            lo..=hi
+        };
+        let (xs, ys) = (span(0, self.cols), span(1, self.rows));
+        if xs.is_empty() {
+            return;
+        }
+        for row in ys {
+            let first = row as usize * self.cols;
+            let (a, b) = (first + *xs.start() as usize, first + *xs.end() as usize);
+            for &k in &self.members[self.starts[a] as usize..self.starts[b + 1] as usize] {
+                visit(k as usize);
+            }
+        }
+    }
+}
+
+impl PinTracker {
+    /// Every pin's prediction from the nearest-neighbour pairs (see the
+    /// module docs), or `None` when too few pins pair up.
+    pub(super) fn nearest_start(&self, points: &[[f64; 2]], grid: &Grid) -> Option<Vec<[f64; 2]>> {
+        let shifted = self.centroid_shift(points);
+        let reach = NEAREST_REACH * self.spacing;
+        let reach2 = reach * reach;
+        // Per point, its nearest pin; per pin, its nearest point.
+        let mut pin_of = vec![(f64::INFINITY, usize::MAX); points.len()];
+        let mut point_of = vec![(f64::INFINITY, usize::MAX); shifted.len()];
+        for (i, p) in shifted.iter().enumerate() {
+            grid.around(p, reach, |k| {
+                let d2 = (p[0] - points[k][0]).powi(2) + (p[1] - points[k][1]).powi(2);
+                if d2 < reach2 {
+                    if d2 < point_of[i].0 {
+                        point_of[i] = (d2, k);
+                    }
+                    if d2 < pin_of[k].0 {
+                        pin_of[k] = (d2, i);
+                    }
+                }
+            });
+        }
+        let mut paired = 0;
+        let observed: Vec<Option<[f64; 2]>> = point_of
+            .iter()
+            .zip(&self.reference)
+            .enumerate()
+            .map(|(i, (&(_, k), r))| {
+                (k != usize::MAX && pin_of[k].1 == i).then(|| {
+                    paired += 1;
+                    [points[k][0] - r[0], points[k][1] - r[1]]
+                })
+            })
+            .collect();
+        if (paired as f64) < NEAREST_MIN_SHARE * self.reference.len() as f64 {
+            return None;
+        }
+        Some(self.predict(&observed, &self.stages[NEAREST_STAGE].kernel))
+    }
+
+    /// Whether `stage` matches through the grid (see [`GRID_GATE`]).
+    pub(super) fn uses_grid(&self, stage: &Stage) -> bool {
+        stage.gate <= GRID_GATE * self.spacing
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The grid visits every point within the reach (and each once).
+    #[test]
+    fn issue21_grid_visits_every_point_within_reach_once() {
+        let points: Vec<[f64; 2]> = (0..200)
+            .map(|k| {
+                let t = k as f64;
+                [(t * 7.31) % 97.0, (t * 3.17) % 61.0]
+            })
+            .collect();
+        for cell in [0.7, 3.0, 50.0, 1e-6] {
+            let grid = Grid::new(&points, cell).expect("finite extent");
+            for p in [
+                [10.0, 10.0],
+                [0.0, 0.0],
+                [96.9, 60.9],
+                [-5.0, 30.0],
+                [200.0, 5.0],
+            ] {
+                for reach in [0.5, 2.0, 9.0] {
+                    let mut seen = vec![0; points.len()];
+                    grid.around(&p, reach, |k| seen[k] += 1);
+                    for (k, q) in points.iter().enumerate() {
+                        assert!(seen[k] <= 1);
+                        let inside = (q[0] - p[0]).abs() <= reach && (q[1] - p[1]).abs() <= reach;
+                        assert!(!inside || seen[k] == 1, "{cell} {p:?} {reach} {q:?}");
+                    }
+                }
+            }
+        }
+        assert!(Grid::new(&[[-1e308, 0.0], [1e308, 0.0]], 1.0).is_none());
+    }
+}

@@ -20,6 +20,6 @@ pub use error::{ArmError, DriverError};
 pub use finite::FinitePose;
 pub use limiter::{LimitMode, LimitedArm, Workspace};
 pub use sim::{PoseProbe, SimArm, SimArmConfig};
-pub use tilt::{level_to, tilt_deg};
 pub use tactrace_geometry::Pose;
+pub use tilt::{level_to, tilt_deg};
 pub use traits::Arm;

@@ -63,14 +63,15 @@ fn issue23_tilted_poses_compose_and_relate() {
 #[test]
 fn issue23_rotation_step_is_the_relative_rotation_angle() {
     let ws = workspace();
-    let check = |a: Pose, b: Pose| {
-        ws.check_move(FinitePose::new(a).unwrap(), FinitePose::new(b).unwrap())
-    };
+    let check =
+        |a: Pose, b: Pose| ws.check_move(FinitePose::new(a).unwrap(), FinitePose::new(b).unwrap());
     // A yaw of 25 deg about the work z axis at 40 deg of tilt is 25 deg.
     let tilted = Pose::new(0.0, 0.0, 0.0, 40.0, 0.0, 0.0);
     check(tilted, Pose { rz: 25.0, ..tilted }).unwrap();
     let err = check(tilted, Pose { rz: 35.0, ..tilted }).unwrap_err();
-    assert!(matches!(err, ArmError::RotationTooLarge { step_deg, .. } if (step_deg - 35.0).abs() < 1e-9));
+    assert!(
+        matches!(err, ArmError::RotationTooLarge { step_deg, .. } if (step_deg - 35.0).abs() < 1e-9)
+    );
     // Across the +-180 seam of roll: 20 deg, not 340.
     let a = Pose::new(0.0, 0.0, 0.0, 170.0, 10.0, 0.0);
     check(a, Pose { rx: -170.0, ..a }).unwrap();
@@ -105,7 +106,10 @@ fn issue23_clamp_turns_along_the_shortest_rotation() {
             assert!(same(got, target));
         } else {
             // On the geodesic: 30 deg from the start, the rest to go.
-            assert!((start.angle_to(got) - 30.0).abs() < 1e-6, "{start} {target} {got}");
+            assert!(
+                (start.angle_to(got) - 30.0).abs() < 1e-6,
+                "{start} {target} {got}"
+            );
             assert!((got.angle_to(target) - (total - 30.0)).abs() < 1e-6);
         }
     }
@@ -115,7 +119,9 @@ fn issue23_clamp_turns_along_the_shortest_rotation() {
 fn issue23_tilt_is_bounded_when_asked() {
     assert_eq!(tilt_deg(Pose::planar(1.0, 2.0, 3.0, 123.0)), 0.0);
     assert!((tilt_deg(Pose::new(0.0, 0.0, 0.0, 30.0, 0.0, 77.0)) - 30.0).abs() < 1e-9);
-    let both = (30f64.to_radians().cos() * 40f64.to_radians().cos()).acos().to_degrees();
+    let both = (30f64.to_radians().cos() * 40f64.to_radians().cos())
+        .acos()
+        .to_degrees();
     assert!((tilt_deg(Pose::new(0.0, 0.0, 0.0, 30.0, 40.0, 0.0)) - both).abs() < 1e-9);
     let levelled = level_to(Pose::new(1.0, 2.0, 3.0, 0.0, 50.0, 20.0), 25.0);
     assert!((tilt_deg(levelled) - 25.0).abs() < 1e-9, "{levelled}");
@@ -135,7 +141,16 @@ fn issue23_tilt_is_bounded_when_asked() {
         let mut arm = LimitedArm::new(SimArm::new(exact(), start), workspace(), LimitMode::Refuse)
             .with_max_tilt_deg(bad);
         let err = arm.move_to(start).unwrap_err();
-        assert!(matches!(err, ArmError::InvalidConfig { field: "max_tilt_deg", .. }), "{err}");
+        assert!(
+            matches!(
+                err,
+                ArmError::InvalidConfig {
+                    field: "max_tilt_deg",
+                    ..
+                }
+            ),
+            "{err}"
+        );
     }
     // Clamping levels the target and keeps within the step limits.
     let mut rng = ChaCha8Rng::seed_from_u64(7);

@@ -51,7 +51,10 @@ impl Task {
     /// The names of the sensed components, e.g. `["z", "rx", "ry"]`.
     pub fn sensed_names(self) -> Vec<&'static str> {
         let sensed = self.sensed();
-        (0..6).filter(|&k| sensed[k]).map(|k| COMPONENTS[k]).collect()
+        (0..6)
+            .filter(|&k| sensed[k])
+            .map(|k| COMPONENTS[k])
+            .collect()
     }
 
     /// A full six-component pose from a prediction: the sensed components

@@ -35,8 +35,14 @@ fn assert_same_steps(pbts: PbtsConfig, sequence: &[SensedPose]) {
         let delta = old.step(*s).to_array();
         let u = new.step([s.r_mm, 0.0, 0.0, 0.0, 0.0, s.theta_deg]).unwrap();
         assert!(close(delta, u, 1e-9), "step {i}: {delta:?} vs {u:?}");
-        let (a, b) = (next_pose(pose, Pose::from_array(delta)), apply_servo(pose, u));
-        assert!(close(a.to_array(), b.to_array(), 1e-9), "pose {i}: {a} vs {b}");
+        let (a, b) = (
+            next_pose(pose, Pose::from_array(delta)),
+            apply_servo(pose, u),
+        );
+        assert!(
+            close(a.to_array(), b.to_array(), 1e-9),
+            "pose {i}: {a} vs {b}"
+        );
         pose = a;
     }
     assert!(close(old.integral(), new.integral(), 1e-9));
@@ -63,7 +69,10 @@ fn issue23_planar_case_gives_the_report_controllers_steps() {
         ..PbtsConfig::tuned()
     };
     assert_same_steps(tuned, &sequence);
-    assert_eq!(Se3Config::edge_2d(), Se3Config::planar(&PbtsConfig::report()).unwrap());
+    assert_eq!(
+        Se3Config::edge_2d(),
+        Se3Config::planar(&PbtsConfig::report()).unwrap()
+    );
 }
 
 #[test]
@@ -81,7 +90,10 @@ fn issue23_planar_closed_loop_round_the_disk_is_unchanged() {
         b = new
             .next_pose(b, [sb.r_mm, 0.0, 0.0, 0.0, 0.0, sb.theta_deg])
             .unwrap();
-        assert!(close(a.to_array(), b.to_array(), 1e-9), "step {i}: {a} vs {b}");
+        assert!(
+            close(a.to_array(), b.to_array(), 1e-9),
+            "step {i}: {a} vs {b}"
+        );
     }
 }
 
@@ -99,7 +111,9 @@ fn issue23_error_is_the_relative_transform() {
     // not the Euler angles (rx = ry = 20 deg is not a rotation of 20 deg
     // about each axis).
     let e = se3_error(reference, [0.0, 1.0, 3.0, 20.0, 20.0, 0.0]);
-    let r = Pose::new(0.0, 0.0, 0.0, 20.0, 20.0, 0.0).to_isometry().rotation;
+    let r = Pose::new(0.0, 0.0, 0.0, 20.0, 20.0, 0.0)
+        .to_isometry()
+        .rotation;
     let v = r.scaled_axis().map(f64::to_degrees);
     assert!(close(e, [0.0, 0.0, 0.0, -v.x, -v.y, -v.z], 1e-9), "{e:?}");
     assert!(v.z.abs() > 0.5, "the Euler pair has a yaw part {v}");
@@ -113,7 +127,11 @@ fn issue23_error_is_the_relative_transform() {
     let e = se3_error(reference, s);
     let s_pose = Pose::new(s[0], s[1], -s[2], s[3], s[4], s[5]);
     let reached = apply_servo(s_pose, e);
-    assert!(close(reached.to_array(), [0.0, 1.0, -3.0, 0.0, 0.0, 0.0], 1e-9));
+    assert!(close(
+        reached.to_array(),
+        [0.0, 1.0, -3.0, 0.0, 0.0, 0.0],
+        1e-9
+    ));
 }
 
 #[test]
@@ -133,7 +151,10 @@ fn issue23_tasks_sense_their_components_only() {
     let mut c = Se3Controller::try_new(Se3Config::surface_3d()).unwrap();
     let err = c.step([0.0, 0.0, f64::NAN, 0.0, 0.0, 0.0]).unwrap_err();
     assert!(
-        matches!(err, ControlError::NonFinitePrediction { component: "z", .. }),
+        matches!(
+            err,
+            ControlError::NonFinitePrediction { component: "z", .. }
+        ),
         "{err}"
     );
     assert_eq!(c.integral(), [0.0; 6], "a refused step changes nothing");
@@ -169,8 +190,8 @@ fn issue23_configs_are_checked() {
     }
     let base = "task = \"edge_5d\"\nreference = [0, 1, 3, 0, 0, 0]\n\
                 kp = [0.5, 1, 0.5, 0.5, 0.5, 0.5]\nki = [0.3, 0, 0.3, 0.1, 0.1, 0.1]\n";
-    let ok: Se3Config = toml::from_str(&format!("{base}integral_clip = [5, 5, 5, 45, 45, 45]\n"))
-        .unwrap();
+    let ok: Se3Config =
+        toml::from_str(&format!("{base}integral_clip = [5, 5, 5, 45, 45, 45]\n")).unwrap();
     assert_eq!(ok, Se3Config::edge_5d());
     let negative = format!("{base}integral_clip = [5, 5, -5, 45, 45, 45]\n");
     let err = toml::from_str::<Se3Config>(&negative).unwrap_err();

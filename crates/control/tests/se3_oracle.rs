@@ -61,22 +61,45 @@ fn issue23_oracle_loop_settles_on_a_tilted_plane() {
         "ramp (oracle): depth error {:.2e} mm, tilt {:.2e} deg, step {:.4} mm",
         run.worst_depth_error_mm, run.worst_tilt_deg, run.mean_step_mm
     );
-    assert!(run.worst_depth_error_mm < 1e-3, "depth {}", run.worst_depth_error_mm);
+    assert!(
+        run.worst_depth_error_mm < 1e-3,
+        "depth {}",
+        run.worst_depth_error_mm
+    );
     assert!(run.worst_tilt_deg < 1e-2, "tilt {}", run.worst_tilt_deg);
-    assert!((run.mean_step_mm - 1.0).abs() < 1e-3, "step {}", run.mean_step_mm);
+    assert!(
+        (run.mean_step_mm - 1.0).abs() < 1e-3,
+        "step {}",
+        run.mean_step_mm
+    );
 }
 
 #[test]
 fn issue23_oracle_loop_follows_the_saddle() {
     let saddle = HeightField::saddle(40.0).unwrap();
     // Start off the surface and tilted 10 deg against it, heading diagonally.
-    let start = Pose::new(-20.0, -25.0, saddle.height(-20.0, -25.0) + 1.0, 10.0, -5.0, -30.0);
+    let start = Pose::new(
+        -20.0,
+        -25.0,
+        saddle.height(-20.0, -25.0) + 1.0,
+        10.0,
+        -5.0,
+        -30.0,
+    );
     let run = follow(&saddle, start, 60, 20);
     eprintln!(
         "saddle (oracle): depth error {:.3} mm, tilt {:.3} deg, step {:.4} mm",
         run.worst_depth_error_mm, run.worst_tilt_deg, run.mean_step_mm
     );
-    assert!(run.worst_depth_error_mm < 0.02, "depth {}", run.worst_depth_error_mm);
+    assert!(
+        run.worst_depth_error_mm < 0.02,
+        "depth {}",
+        run.worst_depth_error_mm
+    );
     assert!(run.worst_tilt_deg < 1.0, "tilt {}", run.worst_tilt_deg);
-    assert!((run.mean_step_mm - 1.0).abs() < 0.05, "step {}", run.mean_step_mm);
+    assert!(
+        (run.mean_step_mm - 1.0).abs() < 0.05,
+        "step {}",
+        run.mean_step_mm
+    );
 }

@@ -53,8 +53,13 @@ fn issue23_tool_vector_round_trips_tilted_poses() {
     for pose in tilted_poses() {
         let v = pose_to_tool_vector(pose);
         // The rotation vector's length is the angle of the rotation.
-        let angle = (v[3] * v[3] + v[4] * v[4] + v[5] * v[5]).sqrt().to_degrees();
-        assert!((angle - Pose::default().angle_to(pose)).abs() < 1e-7, "{pose}");
+        let angle = (v[3] * v[3] + v[4] * v[4] + v[5] * v[5])
+            .sqrt()
+            .to_degrees();
+        assert!(
+            (angle - Pose::default().angle_to(pose)).abs() < 1e-7,
+            "{pose}"
+        );
         let back = tool_vector_to_pose(v);
         assert_same(back, pose, 1e-9, 1e-7);
         // Away from gimbal lock the Euler angles come back themselves.

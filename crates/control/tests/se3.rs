@@ -121,6 +121,11 @@ fn issue23_error_is_the_relative_transform() {
     let rotated = [0.0, 0.0, 0.0, 0.0, 0.0, 90.0];
     let e = se3_error(rotated, [1.0, 0.0, 0.0, 0.0, 0.0, 90.0]);
     assert!(close(e, [0.0, 1.0, 0.0, 0.0, 0.0, 0.0], 1e-9), "{e:?}");
+    // The offset is measured in the reference's frame, not the
+    // prediction's: a sensor 1 mm out and turned 90 deg is moved 1 mm
+    // back along x (T(s)^-1 T(s*) would say 1 mm along y).
+    let e = se3_error([0.0; 6], [1.0, 0.0, 0.0, 0.0, 0.0, 90.0]);
+    assert!(close(e, [-1.0, 0.0, 0.0, 0.0, 0.0, -90.0], 1e-9), "{e:?}");
     // Applying the move of gain 1 to the predicted pose reaches the
     // reference exactly (single rotation about z and a translation).
     let s = [2.0, -1.0, 3.0, 0.0, 0.0, 0.0];

@@ -23,6 +23,10 @@ pub enum ArmError {
     /// The move turns the tool by more than the largest allowed rotation.
     #[error("rotation step of {step_deg:.3} deg exceeds the maximum of {max_deg} deg")]
     RotationTooLarge { step_deg: f64, max_deg: f64 },
+    /// The target tilts the tool (its z axis from the work frame's) by more
+    /// than the largest allowed tilt.
+    #[error("tilt of {tilt_deg:.3} deg exceeds the maximum of {max_deg} deg")]
+    TiltTooLarge { tilt_deg: f64, max_deg: f64 },
     /// A pose with a NaN or infinite component.
     #[error("pose {} has a non-finite component", plain(.pose))]
     NonFinitePose { pose: Pose },

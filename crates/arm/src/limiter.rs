@@ -11,6 +11,13 @@
 //! failed (also false for NaN). Both the target and the arm's current pose
 //! must be finite ([`FinitePose`]) before anything is compared: a NaN in
 //! either is an error, never a move.
+//!
+//! Poses are 6-DoF: the rotation step is the angle of the relative
+//! rotation (any tilt), and the clamp turns along the shortest rotation.
+//! An optional largest tilt ([`LimitedArm::with_max_tilt_deg`]) bounds
+//! the angle of the tool's z axis from the work frame's ([`tilt_deg`]):
+//! refused, or levelled the least way ([`level_to`]) when clamping.
+use crate::tilt::{level_to, tilt_deg};
 use crate::{Arm, ArmError, FinitePose};
 use nalgebra::UnitQuaternion;
 use serde::{Deserialize, Serialize};
@@ -147,6 +154,7 @@ pub struct LimitedArm<A: Arm> {
     inner: A,
     workspace: Workspace,
     mode: LimitMode,
+    max_tilt_deg: Option<f64>,
 }
 
 impl<A: Arm> LimitedArm<A> {
@@ -157,7 +165,18 @@ impl<A: Arm> LimitedArm<A> {
             inner,
             workspace,
             mode,
+            max_tilt_deg: None,
         }
+    }
+    /// Also bound the tool's tilt to `max_deg` (in (0, 180]; checked on
+    /// every move as the workspace is). Without it any tilt is allowed.
+    pub fn with_max_tilt_deg(mut self, max_deg: f64) -> Self {
+        self.max_tilt_deg = Some(max_deg);
+        self
+    }
+    /// The largest tilt allowed, if bounded.
+    pub fn max_tilt_deg(&self) -> Option<f64> {
+        self.max_tilt_deg
     }
     /// The wrapped arm.
     pub fn inner(&self) -> &A {
@@ -189,21 +208,47 @@ impl<A: Arm> LimitedArm<A> {
         let now = self.inner.pose();
         let current =
             FinitePose::new(now).map_err(|_| ArmError::CurrentPoseNotFinite { pose: now })?;
+        let max_tilt = self.checked_max_tilt()?;
         match self.mode {
             LimitMode::Refuse => {
                 self.workspace.check_move(current, target)?;
+                check_tilt(*target, max_tilt)?;
                 Ok(target)
             }
-            LimitMode::Clamp => self.clamp(current, target),
+            LimitMode::Clamp => {
+                let levelled = FinitePose::new(level_to(*target, max_tilt))?;
+                let moved = self.clamp(current, levelled, max_tilt)?;
+                check_tilt(*moved, max_tilt)?;
+                Ok(moved)
+            }
         }
     }
 
-    /// Project into the box, then shorten the translation and the rotation.
+    /// The tilt bound in force (180 deg when unbounded), checked.
+    fn checked_max_tilt(&self) -> Result<f64, ArmError> {
+        match self.max_tilt_deg {
+            None => Ok(180.0),
+            Some(value) if value > 0.0 && value <= 180.0 => Ok(value),
+            Some(value) => Err(ArmError::InvalidConfig {
+                field: "max_tilt_deg",
+                value,
+                reason: "must be in (0, 180]",
+            }),
+        }
+    }
+
+    /// Project into the box, then shorten the translation and the rotation
+    /// (the turn stopped earlier where it would tilt beyond `max_tilt`).
     /// With `current` inside the box the result stays inside (the box is
     /// convex and the shortened step lies on the segment to the clamped
     /// target); a result outside the box (the arm was outside it), or a
     /// step too long to measure (overflow to infinity), is refused.
-    fn clamp(&self, current: FinitePose, target: FinitePose) -> Result<FinitePose, ArmError> {
+    fn clamp(
+        &self,
+        current: FinitePose,
+        target: FinitePose,
+        max_tilt: f64,
+    ) -> Result<FinitePose, ArmError> {
         let boxed = self.workspace.clamp(*target);
         let step_mm = current.distance(boxed);
         if !step_mm.is_finite() {
@@ -224,13 +269,12 @@ impl<A: Arm> LimitedArm<A> {
         ];
         let step_deg = current.angle_to(boxed);
         let orientation = if step_deg > self.workspace.max_step_deg {
-            let (from, to) = (rotation(*current), rotation(boxed));
             let t = self.workspace.max_step_deg / step_deg;
-            let q = from.try_slerp(&to, t, 1e-12).unwrap_or(to);
-            let (rx, ry, rz) = q.euler_angles();
-            [rx.to_degrees(), ry.to_degrees(), rz.to_degrees()]
-        } else {
+            turn_within_tilt(*current, boxed, t, max_tilt)
+        } else if tilt_deg(boxed) <= max_tilt + SLACK {
             [boxed.rx, boxed.ry, boxed.rz]
+        } else {
+            turn_within_tilt(*current, boxed, 1.0, max_tilt)
         };
         let moved = FinitePose::new(Pose::new(
             position[0],
@@ -242,6 +286,50 @@ impl<A: Arm> LimitedArm<A> {
         ))?;
         self.workspace.check_inside(*moved)?;
         Ok(moved)
+    }
+}
+
+/// Refuses a pose tilted by more than `max_deg` (a NaN tilt refuses).
+fn check_tilt(pose: Pose, max_deg: f64) -> Result<(), ArmError> {
+    let tilt = tilt_deg(pose);
+    if tilt <= max_deg + SLACK {
+        Ok(())
+    } else {
+        Err(ArmError::TiltTooLarge {
+            tilt_deg: tilt,
+            max_deg,
+        })
+    }
+}
+
+/// The orientation (Euler degrees) a fraction `t` of the shortest turn
+/// from `from` to `to`, or, when that tilts beyond `max_tilt`, the
+/// furthest fraction of it found by bisection that does not (the start
+/// itself when it is already beyond: the move is then refused).
+fn turn_within_tilt(from: Pose, to: Pose, t: f64, max_tilt: f64) -> [f64; 3] {
+    let (q0, q1) = (rotation(from), rotation(to));
+    let at = |t: f64| {
+        let (rx, ry, rz) = q0.try_slerp(&q1, t, 1e-12).unwrap_or(q1).euler_angles();
+        [rx.to_degrees(), ry.to_degrees(), rz.to_degrees()]
+    };
+    let tilt = |o: [f64; 3]| tilt_deg(Pose::new(0.0, 0.0, 0.0, o[0], o[1], o[2]));
+    let end = at(t);
+    if tilt(end) <= max_tilt + SLACK {
+        return end;
+    }
+    let (mut lo, mut hi) = (0.0, t);
+    for _ in 0..50 {
+        let mid = 0.5 * (lo + hi);
+        if tilt(at(mid)) <= max_tilt {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    if lo == 0.0 {
+        [from.rx, from.ry, from.rz]
+    } else {
+        at(lo)
     }
 }
 

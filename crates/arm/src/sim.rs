@@ -19,7 +19,9 @@ pub struct SimArmConfig {
     /// Standard deviation of the isotropic position error of each move, mm
     /// (applied independently to x, y and z).
     pub repeatability_mm: f64,
-    /// Standard deviation of the yaw (rz) error of each move, degrees.
+    /// Standard deviation of the yaw (rz) error of each move, degrees: a
+    /// turn about the work frame's z axis, so a tilted (6-DoF) pose keeps
+    /// its tilt exactly and its orientation is off by this angle.
     pub repeatability_deg: f64,
     /// Seed of the noise generator.
     pub seed: u64,
@@ -117,7 +119,9 @@ impl SimArm {
         &self.config
     }
 
-    /// `pose` perturbed by the repeatability error (x, y, z and rz).
+    /// `pose` perturbed by the repeatability error (x, y, z and rz; rz is
+    /// the last extrinsic angle, so the turn is about the work z axis at
+    /// any tilt).
     fn perturb(&mut self, pose: Pose) -> Pose {
         let mut gauss = |sd: f64| sd * self.rng.sample::<f64, _>(StandardNormal);
         let (sd_mm, sd_deg) = (self.config.repeatability_mm, self.config.repeatability_deg);

@@ -15,4 +15,7 @@ pub enum ControlError {
     /// A pose prediction that is NaN or infinite.
     #[error("sensed pose r = {r_mm} mm, theta = {theta_deg} deg is not finite")]
     NonFiniteInput { r_mm: f64, theta_deg: f64 },
+    /// A component of a 6-DoF pose prediction that is NaN or infinite.
+    #[error("predicted pose component {component} = {value} is not finite")]
+    NonFinitePrediction { component: &'static str, value: f64 },
 }

@@ -5,12 +5,20 @@
 //! term from the report's further work), anti-windup F clipping the integral,
 //! and the move applied in the robot frame by quaternion composition
 //! (eq. 5.7-5.8). Frames and sign conventions: see [`pbts`].
+//!
+//! [`se3`] is the same controller in SE(3) for the field's surface and
+//! edge tasks ([`Task`]): an error on the relative transform between the
+//! reference and the predicted pose, the planar loop its special case.
 
 mod error;
 pub mod pbts;
 pub mod policy;
+pub mod se3;
+mod task;
 
 pub use error::ControlError;
 
 pub use pbts::{next_pose, PbtsConfig, PbtsController, SensedPose};
 pub use policy::{CurvatureEstimate, PolicyConfig};
+pub use se3::{apply_servo, se3_error, Se3Config, Se3Controller};
+pub use task::{Task, COMPONENTS};

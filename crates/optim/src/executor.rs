@@ -57,7 +57,7 @@ mod tests {
     }
 
     #[test]
-    fn local_keeps_the_order_of_the_batch() {
+    fn issue24_local_executor_keeps_the_order_of_the_batch() {
         let configs: Vec<(f64, u64)> = (0..50).map(|k| (k as f64, k % 3)).collect();
         let got = Local.run(&Square, &configs);
         let want: Vec<f64> = configs.iter().map(|c| Square.evaluate(c)).collect();

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 
 /// One parameter's domain. Values are passed as `f64`: a float, an
 /// integer's value, or a choice's index.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Domain {
     /// A real number in `[low, high]`, spaced logarithmically when `log`.
     Float { low: f64, high: f64, log: bool },

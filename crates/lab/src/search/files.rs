@@ -19,12 +19,32 @@ pub struct TrialRecord {
     pub trial: usize,
     /// The settings tried, by name.
     pub settings: Vec<(String, f64)>,
-    /// The optimiser's values (a choice's index).
+    /// The optimiser's values (a choice's index), written as decimal
+    /// strings that parse back to the same bits (serde_json's default
+    /// float parsing can be one ulp off, and a resumed search must see
+    /// exactly the values the stopped one saw).
+    #[serde(with = "exact_floats")]
     pub values: Vec<f64>,
     pub score: TrialScore,
     /// Wall time of its training and scoring (a batch's time shared
     /// among its trials).
     pub seconds: f64,
+}
+
+/// `Vec<f64>` as a list of shortest round-trip decimal strings.
+mod exact_floats {
+    use serde::{de::Error, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(v.iter().map(|x| x.to_string()))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        let text = Vec::<String>::deserialize(d)?;
+        text.iter()
+            .map(|t| t.parse::<f64>().map_err(D::Error::custom))
+            .collect()
+    }
 }
 
 const TRIALS: &str = "trials.jsonl";

@@ -14,11 +14,12 @@
 mod files;
 mod space;
 
+pub use files::TrialRecord;
 pub use space::{ParamSpec, SpaceFile};
 
 use crate::error::{LabError, Result};
 use crate::train::holdout_rows;
-use files::{SearchFolder, TrialRecord};
+use files::SearchFolder;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use tactrace_learn::{

@@ -169,10 +169,12 @@ pub fn search(
         ));
     }
     let (fit_rows, val_rows) = holdout_rows(data, settings.val_fraction, settings.seed)?;
-    let fit = data.subset(&fit_rows).to_learn()?;
     let val = data.subset(&val_rows).to_learn()?;
-    crate::train::check_trainable(&settings.base, &data.subset(&fit_rows), val_rows.len())?;
-    let trial = PoseTrial::new(fit, val)?;
+    let fit_data = data.subset(&fit_rows);
+    for cfg in settings.space.corners(&settings.base, tpe.domains())? {
+        crate::train::check_trainable(&cfg, &fit_data, val_rows.len())?;
+    }
+    let trial = PoseTrial::new(fit_data.to_learn()?, val)?;
     let mut folder = SearchFolder::open(out, settings, force, resume)?;
     let mut history: Vec<Observation> = folder
         .trials()

@@ -140,11 +140,20 @@ impl SpaceFile {
             .iter()
             .map(ParamSpec::domain)
             .collect::<Result<Vec<_>>>()?;
-        for end in [Corner::Low, Corner::High] {
-            let values: Vec<f64> = domains.iter().map(|d| corner(d, end)).collect();
-            self.apply(base, &values)?;
-        }
+        self.corners(base, &domains)?;
         Ok(domains)
+    }
+
+    /// The configurations at the ranges' low ends and at their high ends
+    /// (the first and the last choice), validated.
+    pub fn corners(&self, base: &ModelConfig, domains: &[Domain]) -> Result<Vec<ModelConfig>> {
+        [Corner::Low, Corner::High]
+            .into_iter()
+            .map(|end| {
+                let values: Vec<f64> = domains.iter().map(|d| corner(d, end)).collect();
+                self.apply(base, &values)
+            })
+            .collect()
     }
 
     /// `base` with the optimiser's `values` (one per setting) set,

@@ -51,8 +51,8 @@ impl Domain {
     }
 
     /// A value of the domain from a point of its interval.
-    fn from_internal(&self, z: f64) -> f64 {
-        match *self {
+    fn value_at(self, z: f64) -> f64 {
+        match self {
             Domain::Float { low, high, log } => (if log { z.exp() } else { z }).clamp(low, high),
             Domain::Int { low, high, log } => {
                 let v = if log { z.exp() } else { z };
@@ -63,8 +63,8 @@ impl Domain {
     }
 
     /// The point of the interval a value stands for.
-    fn to_internal(&self, v: f64) -> f64 {
-        match *self {
+    fn point_of(self, v: f64) -> f64 {
+        match self {
             Domain::Float { log: true, .. } | Domain::Int { log: true, .. } => v.max(1e-300).ln(),
             _ => v,
         }
@@ -74,9 +74,7 @@ impl Domain {
         let (lo, hi, log) = match *self {
             Domain::Float { low, high, log } => (low, high, log),
             Domain::Int { low, high, log } => (low as f64, high as f64, log),
-            Domain::Choice { n } if n == 0 => {
-                return Err("a choice needs at least one value".into())
-            }
+            Domain::Choice { n: 0 } => return Err("a choice needs at least one value".into()),
             Domain::Choice { .. } => return Ok(()),
         };
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
@@ -186,7 +184,7 @@ impl Tpe {
             .iter()
             .map(|d| {
                 let (lo, hi) = d.interval();
-                d.from_internal(lo + (hi - lo) * rng.random::<f64>())
+                d.value_at(lo + (hi - lo) * rng.random::<f64>())
             })
             .collect()
     }
@@ -234,7 +232,7 @@ impl Tpe {
             return best.unwrap_or(0) as f64;
         }
         let (lo, hi) = d.interval();
-        let internal = |v: &[f64]| v.iter().map(|&x| d.to_internal(x)).collect::<Vec<_>>();
+        let internal = |v: &[f64]| v.iter().map(|&x| d.point_of(x)).collect::<Vec<_>>();
         let l = Parzen::fit(&internal(good), lo, hi);
         let g = Parzen::fit(&internal(bad), lo, hi);
         let mut best = (f64::NEG_INFINITY, lo);
@@ -245,7 +243,7 @@ impl Tpe {
                 best = (ei, z);
             }
         }
-        d.from_internal(best.1)
+        d.value_at(best.1)
     }
 }
 

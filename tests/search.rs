@@ -166,24 +166,24 @@ fn issue24_search_killed_and_resumed_gives_the_uninterrupted_trials() {
     dataset(&t.0);
     let space = space();
     expect_code(
-        &tactrace(&t.0, &search_args(&space, "full", "12", "30")),
+        &tactrace(&t.0, &search_args(&space, "full", "16", "80")),
         0,
         "search",
     );
-    let args = search_args(&space, "k", "12", "30");
-    kill_after_trials(&t.0, &args, 5);
+    let args = search_args(&space, "k", "16", "80");
+    kill_after_trials(&t.0, &args, 4);
     assert!(
         !t.join("k").exists(),
         "the killed search finished: make trials slower"
     );
     let kept = trials(&t.join("k.partial")).len();
-    assert!((5..12).contains(&kept), "{kept} trials kept");
+    assert!((4..16).contains(&kept), "{kept} trials kept");
     // Without --resume (or --force) the stopped search's trials are kept.
     let r = tactrace(&t.0, &args);
     expect_code(&r, 2, "a fresh start over a stopped search");
     assert!(r.stderr.contains("--resume"), "{}", r.stderr);
     // Other settings are refused.
-    let mut other = search_args(&space, "k", "12", "30");
+    let mut other = search_args(&space, "k", "16", "80");
     other.extend(["--seed", "9", "--resume"]);
     expect_code(&tactrace(&t.0, &other), 2, "resume with another seed");
     let mut resume = args.clone();

@@ -11,6 +11,7 @@ mod cmd_data;
 mod cmd_follow;
 mod cmd_learn;
 mod cmd_rig;
+mod cmd_search;
 mod cmd_tune;
 mod cmd_twin;
 #[cfg(test)]
@@ -54,6 +55,8 @@ enum Command {
     SimFit(cmd_twin::SimFitArgs),
     /// Train a pose model (report ch. 4.2).
     Train(cmd_learn::TrainArgs),
+    /// Bayesian search (TPE) of a pose model's settings on an inner validation part of the training data.
+    Search(cmd_search::SearchArgs),
     /// Mean absolute errors of a model on a dataset (report ch. 4.3).
     Validate(cmd_learn::ValidateArgs),
     /// Predict edge position and angle for one frame or a dataset.
@@ -90,6 +93,7 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => cmd_twin::calibrate(a),
         Command::SimFit(a) => cmd_twin::sim_fit(a),
         Command::Train(a) => cmd_learn::train(a),
+        Command::Search(a) => cmd_search::search(a),
         Command::Validate(a) => cmd_learn::validate(a),
         Command::Predict(a) => cmd_learn::predict(a),
         Command::Follow(a) => cmd_follow::follow(a),

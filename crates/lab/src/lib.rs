@@ -28,6 +28,7 @@ pub mod import_checks;
 pub mod numbers;
 pub mod render;
 pub mod reproduce;
+pub mod search;
 pub mod train;
 pub mod trajectory_csv;
 pub mod transfer_fit;

@@ -10,4 +10,7 @@ pub enum OptimError {
     /// `tell` got a different number of costs than `ask` gave points.
     #[error("CMA-ES: {got} costs for a generation of {expected} points")]
     Generation { expected: usize, got: usize },
+    /// A TPE search space or setting that cannot work.
+    #[error("TPE: {0}")]
+    Tpe(String),
 }

@@ -106,6 +106,24 @@ impl StagedDir {
         })
     }
 
+    /// As [`StagedDir::new_keeping_partial`], but a leftover
+    /// `<target>.partial` is kept with its files (created when absent): a
+    /// run resuming what a stopped run wrote there (a search's trials).
+    pub fn resume_partial(target: &Path, force: bool) -> Result<Self> {
+        let lock = check_output_dir(target, force)?;
+        let staging = partial_path(target);
+        let partial_lock = check_output_dir(&staging, true)?;
+        fs::create_dir_all(&staging).map_err(write_err(&staging))?;
+        Ok(Self {
+            staging,
+            target: target.to_path_buf(),
+            keep_partial: true,
+            force,
+            committed: false,
+            _locks: vec![lock, partial_lock],
+        })
+    }
+
     /// Where to write files now.
     pub fn path(&self) -> &Path {
         &self.staging

@@ -1,0 +1,227 @@
+//! `tactrace search`: Bayesian optimisation (TPE, `tactrace_optim::Tpe`)
+//! of a pose model's settings. Each trial trains on the fit part of the
+//! training data and is scored on an inner validation part of the same
+//! data (a seeded split, recorded; nothing given for scoring is read).
+//! Trials run in batches through an [`Executor`]; trial `k` depends only
+//! on the seed, `k` and the trials finished before its batch, so a search
+//! resumed from its trials file gives the trials an uninterrupted one
+//! gives.
+//!
+//! The output folder is built in `<out>.partial` (the trials appended one
+//! whole line at a time) and renamed into place at the end: `config.toml`
+//! (the settings, seed and version), `trials.jsonl`, `trials.csv`,
+//! `best.toml` (a `train --config` file) and `convergence.{png,svg}`.
+mod files;
+mod space;
+
+pub use files::TrialRecord;
+pub use space::{ParamSpec, SpaceFile};
+
+use crate::error::{LabError, Result};
+use crate::train::holdout_rows;
+use files::SearchFolder;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use tactrace_learn::{
+    mean_absolute_error, Dataset, LearnError, ModelConfig, PoseModel, Standardiser,
+};
+use tactrace_optim::{Evaluation, Executor, Observation, Tpe, TpeConfig};
+use tactrace_store::{TapData, TrainingRecord};
+
+/// Everything a search was asked (`config.toml`); a resumed search must
+/// be asked the same.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SearchSettings {
+    /// Trials in all (a resumed search may raise it).
+    pub trials: usize,
+    /// Seed of the TPE's draws and of the inner split.
+    pub seed: u64,
+    /// Fraction of the training data held out as the inner validation part
+    /// (`train --val-fraction F --split-seed SEED` holds out the same rows).
+    pub val_fraction: f64,
+    /// Trials evaluated together (each batch's suggestions see the trials
+    /// before it).
+    pub batch: usize,
+    /// Random trials before the TPE's model is used.
+    pub startup: usize,
+    /// The training data's content hash and rows.
+    pub data_sha256: String,
+    pub data_rows: usize,
+    /// The configuration each trial's settings are laid over.
+    pub base: ModelConfig,
+    /// The settings searched.
+    pub space: SpaceFile,
+}
+
+impl SearchSettings {
+    /// The TPE over `space`, checked against `base`.
+    fn tpe(&self) -> Result<Tpe> {
+        let domains = self.space.domains(&self.base)?;
+        let config = TpeConfig {
+            seed: self.seed,
+            startup: self.startup,
+            ..TpeConfig::default()
+        };
+        Tpe::new(domains, config).map_err(|e| LabError::Config(e.to_string()))
+    }
+}
+
+/// The content hash and size of `data` (as `training.json` records them).
+pub fn data_id(data: &TapData) -> (String, usize) {
+    let id = TrainingRecord::all_rows(data, None).dataset;
+    (id.sha256, id.rows)
+}
+
+/// What one trial gave: validation mean absolute errors `[r mm, theta
+/// deg]` and the score (`mae_r / std_r + mae_theta / std_theta`, the
+/// training targets' stds; lower is better); a diverged training scores
+/// +inf.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialScore {
+    pub val_mae: [f64; 2],
+    pub score: f64,
+    /// Why the training failed, other than by diverging.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+}
+
+/// One trial as an evaluation: train a pose model on the fit part, score
+/// it on the inner validation part. Pure: the model's seed is in its
+/// configuration.
+pub struct PoseTrial {
+    fit: Dataset,
+    val: Dataset,
+    /// The training targets' standard deviations.
+    std: [f64; 2],
+}
+
+impl PoseTrial {
+    /// The evaluation over the fit and validation parts.
+    pub fn new(fit: Dataset, val: Dataset) -> Result<Self> {
+        let scale = Standardiser::fit(&fit.y, fit.n, fit.dim_y)?;
+        let std = [scale.std()[0], scale.std()[1]];
+        Ok(PoseTrial { fit, val, std })
+    }
+}
+
+impl Evaluation for PoseTrial {
+    const NAME: &'static str = "tactrace.search.pose_model";
+    type Config = ModelConfig;
+    type Score = TrialScore;
+
+    fn evaluate(&self, config: &ModelConfig) -> TrialScore {
+        let failed = |failure: Option<String>| TrialScore {
+            val_mae: [f64::INFINITY; 2],
+            score: f64::INFINITY,
+            failure,
+        };
+        let model = match PoseModel::fit(config, &self.fit, &mut |_| {}) {
+            Ok((model, _)) => model,
+            Err(LearnError::Diverged { .. }) => return failed(None),
+            Err(e) => return failed(Some(e.to_string())),
+        };
+        match model.predict_batch(&self.val) {
+            Ok(pred) => {
+                let mae = mean_absolute_error(&pred, &self.val);
+                let score = mae[0] / self.std[0] + mae[1] / self.std[1];
+                let score = if score.is_finite() {
+                    score
+                } else {
+                    f64::INFINITY
+                };
+                TrialScore {
+                    val_mae: mae,
+                    score,
+                    failure: None,
+                }
+            }
+            Err(e) => failed(Some(e.to_string())),
+        }
+    }
+}
+
+/// How a search ended.
+#[derive(Debug, Clone)]
+pub struct SearchOutcome {
+    /// Every trial, in order.
+    pub trials: Vec<TrialRecord>,
+    /// The best trial's index.
+    pub best: usize,
+    /// The finished folder.
+    pub dir: std::path::PathBuf,
+}
+
+/// Run (or with `resume`, continue) the search of `settings` on `data`
+/// into `out`, calling `progress` after each trial.
+pub fn search(
+    settings: &SearchSettings,
+    data: &TapData,
+    out: &Path,
+    (force, resume): (bool, bool),
+    executor: &impl Executor,
+    progress: &mut dyn FnMut(&TrialRecord),
+) -> Result<SearchOutcome> {
+    let tpe = settings.tpe()?;
+    if settings.trials == 0 || settings.batch == 0 {
+        return Err(LabError::Config(
+            "--trials and --batch must be at least 1".into(),
+        ));
+    }
+    let (fit_rows, val_rows) = holdout_rows(data, settings.val_fraction, settings.seed)?;
+    let val = data.subset(&val_rows).to_learn()?;
+    let fit_data = data.subset(&fit_rows);
+    for cfg in settings.space.corners(&settings.base, tpe.domains())? {
+        crate::train::check_trainable(&cfg, &fit_data, val_rows.len())?;
+    }
+    let trial = PoseTrial::new(fit_data.to_learn()?, val)?;
+    let mut folder = SearchFolder::open(out, settings, force, resume)?;
+    let mut history: Vec<Observation> = folder
+        .trials()
+        .iter()
+        .map(|t| Observation {
+            values: t.values.clone(),
+            score: t.score.score,
+        })
+        .collect();
+    while history.len() < settings.trials {
+        let start = history.len() - history.len() % settings.batch;
+        let end = (start + settings.batch).min(settings.trials);
+        let ks: Vec<usize> = (history.len()..end).collect();
+        let values: Vec<Vec<f64>> = ks
+            .iter()
+            .map(|&k| tpe.suggest(k, &history[..start]))
+            .collect();
+        let configs = values
+            .iter()
+            .map(|v| settings.space.apply(&settings.base, v))
+            .collect::<Result<Vec<_>>>()?;
+        let t0 = std::time::Instant::now();
+        let scores = executor.run(&trial, &configs);
+        let seconds = t0.elapsed().as_secs_f64() / ks.len() as f64;
+        for ((k, v), score) in ks.into_iter().zip(values).zip(scores) {
+            if let Some(reason) = &score.failure {
+                return Err(LabError::Config(format!("search trial {k}: {reason}")));
+            }
+            let record = TrialRecord {
+                trial: k,
+                settings: settings.space.named(&v),
+                values: v.clone(),
+                score: score.clone(),
+                seconds,
+            };
+            folder.append(&record)?;
+            progress(&record);
+            history.push(Observation {
+                values: v,
+                score: score.score,
+            });
+        }
+    }
+    let best = folder.best().ok_or_else(|| {
+        LabError::Config("every search trial diverged: lower the learning rates' ranges".into())
+    })?;
+    let trials = folder.trials().to_vec();
+    let dir = folder.finish(settings, best)?;
+    Ok(SearchOutcome { trials, best, dir })
+}

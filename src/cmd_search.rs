@@ -1,0 +1,125 @@
+//! `tactrace search`: Bayesian hyper-parameter search (TPE) of a pose
+//! model on an inner validation part of the training data.
+use crate::cmd_learn::{ModelArg, PresetArg};
+use crate::inputs::Inputs;
+use anyhow::{Context, Result};
+use clap::Args;
+use std::path::PathBuf;
+use tactrace_lab::search::{self, SearchSettings, SpaceFile};
+use tactrace_lab::train as tr;
+use tactrace_optim::Local;
+use tactrace_store::{fsutil, read_dataset};
+
+#[derive(Args)]
+pub struct SearchArgs {
+    /// Kind of pose model.
+    #[arg(long, value_enum, default_value = "pdennn")]
+    model: ModelArg,
+    /// Training dataset directory: each trial fits on part of it and is
+    /// scored on the rest (--val-fraction); nothing else is read.
+    #[arg(long)]
+    train: PathBuf,
+    /// TOML listing the settings to search (`[[param]]` tables;
+    /// configs/search/*.toml).
+    #[arg(long)]
+    space: PathBuf,
+    /// Trials in all (a resumed search may be given more).
+    #[arg(long, default_value_t = 30)]
+    trials: usize,
+    /// Output folder (built in <out>.partial until the search ends).
+    #[arg(long)]
+    out: PathBuf,
+    /// Seed of the search and of the inner split.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Continue the search stopped in <out>.partial from its trials.
+    #[arg(long)]
+    resume: bool,
+    /// Fraction of --train held out as the inner validation part.
+    #[arg(long, default_value_t = 0.25)]
+    val_fraction: f64,
+    /// Trials trained at once (in parallel); each batch sees the trials before it.
+    #[arg(long, default_value_t = 1)]
+    batch: usize,
+    /// Random trials before the TPE's model is used.
+    #[arg(long, default_value_t = 10)]
+    startup: usize,
+    /// Hyper-parameter preset the trials' settings are laid over.
+    #[arg(long, value_enum, default_value = "default")]
+    preset: PresetArg,
+    /// TOML overriding any hyper-parameter of the preset (as `train --config`).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Training epochs of every trial (default: the preset's).
+    #[arg(long)]
+    epochs: Option<usize>,
+    /// Replace an existing output folder (or a stopped search's trials).
+    #[arg(long)]
+    force: bool,
+}
+
+pub fn search(a: SearchArgs) -> Result<()> {
+    let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
+    let base = tr::resolve_config(a.model.into(), a.preset.into(), text.as_deref(), a.epochs)
+        .with_context(|| {
+            a.config
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        })?;
+    let space_text = fsutil::read_text(&a.space)?;
+    let space: SpaceFile = toml::from_str(&space_text)
+        .with_context(|| format!("search space {}", a.space.display()))?;
+    Inputs::new()
+        .add("--train", &a.train)
+        .add("--space", &a.space)
+        .opt("--config", a.config.as_deref())
+        .check_apart("--out", &a.out)?;
+    let data = read_dataset(&a.train)?;
+    let (data_sha256, data_rows) = search::data_id(&data);
+    let settings = SearchSettings {
+        trials: a.trials,
+        seed: a.seed,
+        val_fraction: a.val_fraction,
+        batch: a.batch,
+        startup: a.startup,
+        data_sha256,
+        data_rows,
+        base,
+        space,
+    };
+    let t0 = std::time::Instant::now();
+    let outcome = search::search(
+        &settings,
+        &data,
+        &a.out,
+        (a.force, a.resume),
+        &Local,
+        &mut |t| {
+            let named: Vec<String> = t
+                .settings
+                .iter()
+                .map(|(n, v)| format!("{n} {v:.4}"))
+                .collect();
+            eprintln!(
+                "trial {}: {} -> {:.4} mm, {:.3} deg, score {:.4} ({:.0} s so far)",
+                t.trial,
+                named.join(", "),
+                t.score.val_mae[0],
+                t.score.val_mae[1],
+                t.score.score,
+                t0.elapsed().as_secs_f64()
+            );
+        },
+    )?;
+    let best = &outcome.trials[outcome.best];
+    crate::say!(
+        "best: trial {} of {}, inner validation {:.4} mm, {:.3} deg; {}",
+        best.trial,
+        outcome.trials.len(),
+        best.score.val_mae[0],
+        best.score.val_mae[1],
+        outcome.dir.join("best.toml").display()
+    );
+    Ok(())
+}

@@ -1,0 +1,240 @@
+//! `tactrace search` end to end (issue 24): the outputs, `best.toml` taken
+//! by `train --config`, seeded reproducibility, a search killed with -9
+//! and resumed giving the uninterrupted search's trials, and refusals.
+mod util;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+use util::{tactrace, Run, TempDir};
+
+fn expect_code(r: &Run, code: i32, what: &str) {
+    assert_eq!(
+        r.code, code,
+        "{what}: exit code {} (expected {code})\nstdout: {}\nstderr: {}",
+        r.code, r.stdout, r.stderr
+    );
+}
+
+/// The shipped PDenNN space, as an absolute path.
+fn space() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs/search/pdennn.toml")
+        .display()
+        .to_string()
+}
+
+/// A small simulated dataset `ds` in `dir`.
+fn dataset(dir: &Path) {
+    let r = tactrace(
+        dir,
+        &["collect", "--samples", "120", "--seed", "3", "--out", "ds"],
+    );
+    expect_code(&r, 0, "collect");
+}
+
+fn search_args<'a>(space: &'a str, out: &'a str, trials: &'a str, epochs: &'a str) -> Vec<&'a str> {
+    vec![
+        "search",
+        "--train",
+        "ds",
+        "--space",
+        space,
+        "--trials",
+        trials,
+        "--epochs",
+        epochs,
+        "--startup",
+        "3",
+        "--batch",
+        "2",
+        "--out",
+        out,
+    ]
+}
+
+/// The trials of a finished search, without their timings.
+fn trials(dir: &Path) -> Vec<serde_json::Value> {
+    let text = std::fs::read_to_string(dir.join("trials.jsonl")).unwrap();
+    text.lines()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v.as_object_mut().unwrap().remove("seconds");
+            v
+        })
+        .collect()
+}
+
+#[test]
+fn issue24_search_writes_its_outputs_and_a_config_train_accepts() {
+    let t = TempDir::new("search-out");
+    dataset(&t.0);
+    let space = space();
+    let r = tactrace(&t.0, &search_args(&space, "s", "6", "3"));
+    expect_code(&r, 0, "search");
+    assert!(r.stdout.contains("best: trial"), "{}", r.stdout);
+    for f in [
+        "config.toml",
+        "trials.jsonl",
+        "trials.csv",
+        "best.toml",
+        "convergence.png",
+        "convergence.svg",
+    ] {
+        assert!(t.join("s").join(f).is_file(), "no {f}");
+    }
+    assert!(!t.join("s.partial").exists());
+    assert_eq!(trials(&t.join("s")).len(), 6);
+    // The table: a header and one row per trial, the settings by name.
+    let csv = std::fs::read_to_string(t.join("s/trials.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(
+        lines[0].split(',').any(|h| h == "angle.n_components"),
+        "{}",
+        lines[0]
+    );
+    assert_eq!(lines.len(), 7, "{csv}");
+    // The seed and split are recorded.
+    let config = std::fs::read_to_string(t.join("s/config.toml")).unwrap();
+    assert!(
+        config.contains("val_fraction = 0.25") && config.contains("seed = 0"),
+        "{config}"
+    );
+    let r = tactrace(
+        &t.0,
+        &[
+            "train",
+            "--train",
+            "ds",
+            "--config",
+            "s/best.toml",
+            "--out",
+            "m",
+        ],
+    );
+    expect_code(&r, 0, "train --config best.toml");
+    // An existing output is refused without --force.
+    let r = tactrace(&t.0, &search_args(&space, "s", "6", "3"));
+    expect_code(&r, 2, "search into an existing output");
+}
+
+#[test]
+fn issue24_search_is_seeded() {
+    let t = TempDir::new("search-seed");
+    dataset(&t.0);
+    let space = space();
+    for out in ["a", "b"] {
+        expect_code(
+            &tactrace(&t.0, &search_args(&space, out, "7", "2")),
+            0,
+            "search",
+        );
+    }
+    let mut c = search_args(&space, "c", "7", "2");
+    c.extend(["--seed", "5"]);
+    expect_code(&tactrace(&t.0, &c), 0, "search --seed 5");
+    assert_eq!(trials(&t.join("a")), trials(&t.join("b")));
+    assert_ne!(trials(&t.join("a")), trials(&t.join("c")));
+}
+
+/// Start a search and kill -9 it once `<out>.partial/trials.jsonl` holds
+/// at least `lines` trials (or the search ended).
+fn kill_after_trials(dir: &Path, args: &[&str], lines: usize) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tactrace"))
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("binary starts");
+    let log = dir.join("k.partial/trials.jsonl");
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(120) {
+        let n = std::fs::read_to_string(&log).map_or(0, |s| s.lines().count());
+        if n >= lines || child.try_wait().unwrap().is_some() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let _ = child.kill();
+    child.wait().unwrap();
+}
+
+#[test]
+fn issue24_search_killed_and_resumed_gives_the_uninterrupted_trials() {
+    let t = TempDir::new("search-resume");
+    dataset(&t.0);
+    let space = space();
+    expect_code(
+        &tactrace(&t.0, &search_args(&space, "full", "16", "80")),
+        0,
+        "search",
+    );
+    let args = search_args(&space, "k", "16", "80");
+    kill_after_trials(&t.0, &args, 4);
+    assert!(
+        !t.join("k").exists(),
+        "the killed search finished: make trials slower"
+    );
+    let kept = trials(&t.join("k.partial")).len();
+    assert!((4..16).contains(&kept), "{kept} trials kept");
+    // Without --resume (or --force) the stopped search's trials are kept.
+    let r = tactrace(&t.0, &args);
+    expect_code(&r, 2, "a fresh start over a stopped search");
+    assert!(r.stderr.contains("--resume"), "{}", r.stderr);
+    // Other settings are refused.
+    let mut other = search_args(&space, "k", "16", "80");
+    other.extend(["--seed", "9", "--resume"]);
+    expect_code(&tactrace(&t.0, &other), 2, "resume with another seed");
+    let mut resume = args.clone();
+    resume.push("--resume");
+    expect_code(&tactrace(&t.0, &resume), 0, "search --resume");
+    assert_eq!(trials(&t.join("k")), trials(&t.join("full")));
+    // Nothing to resume.
+    let mut none = search_args(&space, "none", "3", "2");
+    none.push("--resume");
+    expect_code(&tactrace(&t.0, &none), 2, "resume with no stopped search");
+}
+
+#[test]
+fn issue24_a_bad_space_is_refused_before_any_work() {
+    let t = TempDir::new("search-bad");
+    dataset(&t.0);
+    for (name, body) in [
+        (
+            "unknown.toml",
+            "[[param]]\nname = \"gamma\"\nlow = 1.0\nhigh = 2.0\n",
+        ),
+        (
+            "log0.toml",
+            "[[param]]\nname = \"beta\"\nlow = 0.0\nhigh = 2.0\nlog = true\n",
+        ),
+        (
+            "frac.toml",
+            "[[param]]\nname = \"hidden\"\nlow = 10\nhigh = 20\n",
+        ),
+        (
+            "net.toml",
+            "[[param]]\nname = \"pose.beta\"\nlow = 0.5\nhigh = 2.0\n",
+        ),
+        (
+            "both.toml",
+            "[[param]]\nname = \"beta\"\nlow = 0.5\nhigh = 2.0\nchoices = [1.0]\n",
+        ),
+        (
+            "key.toml",
+            "[[param]]\nname = \"beta\"\nlow = 0.5\nhigh = 2.0\nstep = 1\n",
+        ),
+    ] {
+        std::fs::write(t.join(name), body).unwrap();
+        let r = tactrace(
+            &t.0,
+            &["search", "--train", "ds", "--space", name, "--out", "o"],
+        );
+        expect_code(&r, 2, name);
+        assert!(
+            !t.join("o").exists() && !t.join("o.partial").exists(),
+            "{name}"
+        );
+    }
+}

@@ -212,12 +212,24 @@ pub fn train(a: TrainArgs) -> Result<()> {
     }
     if let Some(val) = val {
         let v = tr::validate(&model, &val, a.val.as_deref().unwrap_or(&a.train))?;
-        crate::say!(
-            "validation: position {:.3} mm, angle {:.3} deg over {} samples",
-            v.position_mae_mm,
-            v.angle_mae_deg,
-            v.samples
-        );
+        if v.predictions.is_empty() {
+            let parts: Vec<String> = v
+                .targets
+                .iter()
+                .map(|t| {
+                    let s = &v.per_target[&t.name];
+                    format!("{} {:.3} {}", t.name, s.mae, s.unit.as_str())
+                })
+                .collect();
+            crate::say!("validation: {} over {} samples", parts.join(", "), v.samples);
+        } else {
+            crate::say!(
+                "validation: position {:.3} mm, angle {:.3} deg over {} samples",
+                v.position_mae_mm,
+                v.angle_mae_deg,
+                v.samples
+            );
+        }
         if let Some(w) = v.seen_warning() {
             eprintln!("warning: {w}");
         }
@@ -335,13 +347,37 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
     }
     if a.json {
         crate::say!("{}", serde_json::to_string(&v)?);
-    } else {
+    } else if !v.predictions.is_empty() && v.targets.iter().all(|t| !t.circular) {
         crate::say!(
             "position MAE {:.3} mm, angle MAE {:.3} deg, {} samples",
             v.position_mae_mm,
             v.angle_mae_deg,
             v.samples
         );
+    } else {
+        crate::say!("{} samples; mean absolute error per target:", v.samples);
+        for t in &v.targets {
+            let s = &v.per_target[&t.name];
+            let wrapped = if s.circular { " (circular, wrapped)" } else { "" };
+            crate::say!("  {}: {:.3} {}{wrapped}", t.name, s.mae, s.unit.as_str());
+        }
+    }
+    Ok(())
+}
+
+/// `predict --data` of a model of other targets than the edge pose: one
+/// CSV row a sample, every target predicted then true.
+fn say_target_rows(v: &tr::Validation) -> Result<()> {
+    let names: Vec<String> = v
+        .targets
+        .iter()
+        .map(|t| format!("{}_{}", t.name, t.unit.as_str()))
+        .collect();
+    let truth: Vec<String> = names.iter().map(|n| format!("true_{n}")).collect();
+    crate::say!("{},{}", names.join(","), truth.join(","));
+    for (p, t) in v.target_predictions.iter().zip(&v.target_truth) {
+        let cells: Vec<String> = p.iter().chain(t).map(|x| format!("{x:.4}")).collect();
+        crate::say!("{}", cells.join(","));
     }
     Ok(())
 }
@@ -401,9 +437,14 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         (None, None, Some(dir)) => {
             let data = read_dataset(&dir)?;
             let v = tr::validate(&model, &data, &dir)?;
-            crate::say!("r_mm,theta_deg,true_r_mm,true_theta_deg");
-            for (p, t) in v.predictions.iter().zip(&v.truth) {
-                crate::say!("{:.4},{:.4},{:.4},{:.4}", p[0], p[1], t[0], t[1]);
+            if v.predictions.is_empty() {
+                // Not an edge model: every target, by its column and unit.
+                say_target_rows(&v)?;
+            } else {
+                crate::say!("r_mm,theta_deg,true_r_mm,true_theta_deg");
+                for (p, t) in v.predictions.iter().zip(&v.truth) {
+                    crate::say!("{:.4},{:.4},{:.4},{:.4}", p[0], p[1], t[0], t[1]);
+                }
             }
         }
         _ => {

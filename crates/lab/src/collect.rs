@@ -243,7 +243,10 @@ pub fn collect_on(
         seed: Some(cfg.seed),
         samples: cfg.samples,
         pins: dim / 2,
-        targets: labels.map_or(["r_mm".into(), "theta_deg".into()], |(_, n)| n),
+        targets: labels
+            .map_or(["r_mm".into(), "theta_deg".into()], |(_, n)| n)
+            .into(),
+        target_columns: Default::default(),
         frames_with_missing_pins: with_missing,
         reference_pins: extractor.tracker.reference().to_vec(),
         settings,

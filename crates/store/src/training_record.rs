@@ -91,7 +91,7 @@ impl TrainingRecord {
             .map(|&r| {
                 row_hash(
                     &data.inputs[r * d..(r + 1) * d],
-                    &data.targets[2 * r..2 * r + 2],
+                    data.target_row(r),
                 )
             })
             .collect();
@@ -200,7 +200,7 @@ pub fn row_hashes(data: &TapData) -> Vec<String> {
         .map(|r| {
             row_hash(
                 &data.inputs[r * d..(r + 1) * d],
-                &data.targets[2 * r..2 * r + 2],
+                data.target_row(r),
             )
         })
         .collect()

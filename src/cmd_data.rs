@@ -208,8 +208,7 @@ impl LabelArgs {
     pub fn reference(&self) -> Result<&Path, LabError> {
         self.reference.as_deref().ok_or_else(|| {
             LabError::Config(
-                "--reference is required: the undeformed frame whose pins define the order"
-                    .into(),
+                "--reference is required: the undeformed frame whose pins define the order".into(),
             )
         })
     }

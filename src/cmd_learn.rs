@@ -221,7 +221,11 @@ pub fn train(a: TrainArgs) -> Result<()> {
                     format!("{} {:.3} {}", t.name, s.mae, s.unit.as_str())
                 })
                 .collect();
-            crate::say!("validation: {} over {} samples", parts.join(", "), v.samples);
+            crate::say!(
+                "validation: {} over {} samples",
+                parts.join(", "),
+                v.samples
+            );
         } else {
             crate::say!(
                 "validation: position {:.3} mm, angle {:.3} deg over {} samples",
@@ -358,7 +362,11 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
         crate::say!("{} samples; mean absolute error per target:", v.samples);
         for t in &v.targets {
             let s = &v.per_target[&t.name];
-            let wrapped = if s.circular { " (circular, wrapped)" } else { "" };
+            let wrapped = if s.circular {
+                " (circular, wrapped)"
+            } else {
+                ""
+            };
             crate::say!("  {}: {:.3} {}{wrapped}", t.name, s.mae, s.unit.as_str());
         }
     }

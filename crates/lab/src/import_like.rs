@@ -38,12 +38,15 @@ pub fn like_collection(
         .with_rows(RowSelection::default()))
 }
 
-/// Error unless `got` (the new split) has `like`'s reference pins and
-/// targets, as an import `--like` must.
+/// Error unless `got` (the new split) has `like`'s reference pins (in the
+/// same order: [`tactrace_store::pin_order_mismatch`]) and targets, as an
+/// import `--like` must.
 pub fn check_like(got: &TapData, like: &TapData, dir: &Path) -> Result<()> {
     let same_targets = got.meta.targets == like.meta.targets
         && got.meta.target_columns == like.meta.target_columns;
-    if got.meta.reference_pins != like.meta.reference_pins || !same_targets {
+    let moved =
+        tactrace_store::pin_order_mismatch(&like.meta.reference_pins, &got.meta.reference_pins);
+    if moved.is_some() || !same_targets {
         return Err(LabError::Format {
             path: dir.to_path_buf(),
             reason: "the new split's reference pins or targets differ from this dataset's \

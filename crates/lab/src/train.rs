@@ -1,8 +1,8 @@
 //! Training and validation of pose models (report ch. 4.2-4.3).
 use crate::error::{LabError, Result};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
 use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 use tactrace_learn::{
     hyperparameter_search, target_mae, ModelConfig, ModelKind, ModelTarget, PoseModel, Preset,
     SearchSpace, TrainingHistory, Trial, Unit,
@@ -450,7 +450,11 @@ pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
         .collect();
     let predicted = model.predict_targets_batch(&ds)?;
     for (k, p) in predicted.iter().enumerate() {
-        let values: Vec<(&str, f64)> = targets.iter().map(|t| t.name.as_str()).zip(p.iter().copied()).collect();
+        let values: Vec<(&str, f64)> = targets
+            .iter()
+            .map(|t| t.name.as_str())
+            .zip(p.iter().copied())
+            .collect();
         crate::numbers::require_finite(
             &format!("the model's prediction for row {k} of the dataset"),
             &values,

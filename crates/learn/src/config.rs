@@ -211,7 +211,11 @@ impl ModelConfig {
                 Unit::Deg => ("angle", &self.angle),
             };
             if let Some(net) = net {
-                let name = if edge { role.to_string() } else { t.name.clone() };
+                let name = if edge {
+                    role.to_string()
+                } else {
+                    t.name.clone()
+                };
                 out.push((name, vec![k], net));
             }
         }

@@ -234,7 +234,9 @@ impl PoseModel {
     /// Predict every target of every sample of `ds`
     /// ([`Self::predict_targets`]).
     pub fn predict_targets_batch(&self, ds: &Dataset) -> Result<Vec<Vec<f64>>, LearnError> {
-        (0..ds.n).map(|i| self.predict_targets(ds.x_row(i))).collect()
+        (0..ds.n)
+            .map(|i| self.predict_targets(ds.x_row(i)))
+            .collect()
     }
 
     /// What the model predicts, in order.

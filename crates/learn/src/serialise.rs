@@ -253,8 +253,6 @@ fn check_targets(nets: &[FittedNet], width: usize) -> Result<(), LearnError> {
     if seen.iter().all(|&k| k == 1) {
         Ok(())
     } else {
-        Err(corrupt(
-            "each target column must come from exactly one net",
-        ))
+        Err(corrupt("each target column must come from exactly one net"))
     }
 }

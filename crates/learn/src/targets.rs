@@ -199,7 +199,10 @@ mod tests {
             let enc: Vec<f64> = enc.iter().map(|&v| f64::from(v)).collect();
             let back = decode(&targets, &enc);
             assert!((back[0] - 1.5).abs() < 1e-6);
-            assert!(targets[1].abs_error(back[1], f64::from(deg)) < 1e-4, "{deg} -> {back:?}");
+            assert!(
+                targets[1].abs_error(back[1], f64::from(deg)) < 1e-4,
+                "{deg} -> {back:?}"
+            );
             assert!(back[1] > -180.0 && back[1] <= 180.0);
         }
     }
@@ -226,7 +229,10 @@ mod tests {
     #[test]
     fn issue21_target_lists_are_checked() {
         assert!(check_targets(&[]).is_err());
-        let twice = [ModelTarget::new("a", Unit::Mm), ModelTarget::new("a", Unit::Deg)];
+        let twice = [
+            ModelTarget::new("a", Unit::Mm),
+            ModelTarget::new("a", Unit::Deg),
+        ];
         assert!(check_targets(&twice).is_err());
         let mut mm = ModelTarget::new("a", Unit::Mm);
         mm.circular = true;

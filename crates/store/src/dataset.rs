@@ -261,9 +261,11 @@ pub fn write_dataset(
             reason: format!("inputs shape: {e}"),
         })?;
     let targets =
-        Array2::from_shape_vec((n, data.n_targets()), data.targets.clone()).map_err(|e| StoreError::Format {
-            path: dir.join("targets.npy"),
-            reason: format!("targets shape: {e}"),
+        Array2::from_shape_vec((n, data.n_targets()), data.targets.clone()).map_err(|e| {
+            StoreError::Format {
+                path: dir.join("targets.npy"),
+                reason: format!("targets shape: {e}"),
+            }
         })?;
     let p = stage.path().join("inputs.npy");
     ndarray_npy::write_npy(&p, &inputs).map_err(|e| StoreError::Write {

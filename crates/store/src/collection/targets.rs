@@ -216,9 +216,15 @@ mod tests {
     #[test]
     fn issue21_targets_parse_as_the_cli_writes_them() {
         let t = Target::parse("pose_6:deg:circular").unwrap();
-        assert_eq!((t.column.as_str(), t.unit, t.circular), ("pose_6", Unit::Deg, true));
+        assert_eq!(
+            (t.column.as_str(), t.unit, t.circular),
+            ("pose_6", Unit::Deg, true)
+        );
         assert_eq!(t.text(), "pose_6:deg:circular");
-        assert_eq!(Target::parse("pose_2:mm").unwrap(), Target::new("pose_2", Unit::Mm));
+        assert_eq!(
+            Target::parse("pose_2:mm").unwrap(),
+            Target::new("pose_2", Unit::Mm)
+        );
         for bad in ["pose_2", "pose_2:cm", "pose_2:mm:round", "a:mm:circular:x"] {
             let err = Target::parse(bad).unwrap_err().to_string();
             assert!(err.contains(bad), "{err}");

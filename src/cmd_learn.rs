@@ -336,18 +336,23 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
         std::fs::create_dir_all(dir)
             .map_err(tactrace_store::write_err(dir.as_path()))
             .map_err(LabError::from)?;
-        let predicted = Predicted {
-            truth: &v.truth,
-            predictions: &v.predictions,
-            mae: [v.position_mae_mm, v.angle_mae_deg],
-        };
         let kind = model
             .for_data(&data, &a.data)
             .map_err(LabError::from)?
             .kind();
         let title = figures::model_on_data_title(kind, &a.model, &a.data);
-        figures::predicted_vs_true(&dir.join(PLOTS_STEM), &title, &predicted)
-            .map_err(LabError::from)?;
+        let stem = dir.join(PLOTS_STEM);
+        if v.predictions.is_empty() || v.targets.iter().any(|t| t.circular) {
+            figures::predicted_vs_true_targets(&stem, &title, &target_panels(&v))
+                .map_err(LabError::from)?;
+        } else {
+            let predicted = Predicted {
+                truth: &v.truth,
+                predictions: &v.predictions,
+                mae: [v.position_mae_mm, v.angle_mae_deg],
+            };
+            figures::predicted_vs_true(&stem, &title, &predicted).map_err(LabError::from)?;
+        }
     }
     if a.json {
         crate::say!("{}", serde_json::to_string(&v)?);
@@ -371,6 +376,25 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// One panel a target of `v` for the per-target figure.
+fn target_panels(v: &tr::Validation) -> Vec<figures::TargetPanel> {
+    v.targets
+        .iter()
+        .enumerate()
+        .map(|(k, t)| figures::TargetPanel {
+            name: t.name.clone(),
+            unit: t.unit.as_str().to_string(),
+            points: v
+                .target_truth
+                .iter()
+                .zip(&v.target_predictions)
+                .map(|(tr, p)| (tr[k], p[k]))
+                .collect(),
+            mae: v.per_target[&t.name].mae,
+        })
+        .collect()
 }
 
 /// `predict --data` of a model of other targets than the edge pose: one

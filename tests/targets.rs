@@ -173,9 +173,19 @@ fn issue21_three_targets_import_train_validate_and_import_like() {
         );
         assert_eq!(v["angle_mae_deg"], per["pose_6"]["mae"]);
         assert_eq!(v["samples"], 30);
-        // The printed report names every target.
-        let r = tactrace(&t.0, &["validate", "--model", &out, "--data", "score"]);
-        ok(&r, "validate");
+        // The printed report names every target; the figure has a panel each.
+        let plots = format!("plots-{kind}");
+        let r = tactrace(
+            &t.0,
+            &[
+                "validate", "--model", &out, "--data", "score", "--plots", &plots,
+            ],
+        );
+        ok(&r, "validate --plots");
+        let svg = std::fs::read_to_string(t.join(&plots).join("predicted_vs_true.svg")).unwrap();
+        for name in ["true pose_2 (mm)", "true pose_6 (deg)", "true pose_3 (mm)"] {
+            assert!(svg.contains(name), "{name} not in the figure");
+        }
         for name in ["pose_2: ", "pose_6: ", "pose_3: ", "(circular, wrapped)"] {
             assert!(r.stdout.contains(name), "{}", r.stdout);
         }

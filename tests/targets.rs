@@ -196,6 +196,26 @@ fn issue21_three_targets_import_train_validate_and_import_like() {
             "pose_2_mm,pose_6_deg,pose_3_mm,true_pose_2_mm,true_pose_6_deg,true_pose_3_mm\n"
         ));
     }
+    // The servo loop takes an edge pose: a model of other targets is refused.
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow",
+            "--model",
+            "m-pdennn",
+            "--shape",
+            "disk",
+            "--replay",
+            &s(&data),
+            "--steps",
+            "3",
+            "--out",
+            "run",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("not an edge pose"), "{}", r.stderr);
+    assert!(!t.join("run").exists());
     // A model of other targets is scored on a dataset of the same targets only.
     let r = tactrace(
         &t.0,

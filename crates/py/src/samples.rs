@@ -100,9 +100,11 @@ impl Samples {
     ) -> PyResult<Self> {
         let (x, rows, cols) = matrix::<f32>(inputs, "float32", "inputs", None, true)?;
         let one_row = x.ndim() == 1;
+        // A dataset's meta says how many targets a row has; arrays: r, theta.
+        let width = meta.as_ref().map_or(2, |m| m.targets.len());
         let targets = match targets {
             Some(t) => {
-                let (y, m, _) = matrix::<f32>(t, "float32", "targets", Some(2), false)?;
+                let (y, m, _) = matrix::<f32>(t, "float32", "targets", Some(width), false)?;
                 if m != rows {
                     return Err(input(format!(
                         "inputs has {rows} rows but targets has {m}: one target row per sample"

@@ -67,10 +67,10 @@ pub enum CollectionError {
     /// One column named for two labels.
     #[error("the column `{column}` is named for two labels: each needs its own column")]
     ColumnTwice { column: String },
-    /// A spec that is not the edge task's two targets where a dataset is
-    /// made (datasets and models hold r and theta for now).
+    /// A spec that is not the edge task's two targets where an edge is
+    /// replayed or simulated (twin, calibrate, the real-frame world).
     #[error(
-        "the targets are {targets}: this command makes datasets of an edge task's two \
+        "the targets are {targets}: this command replays or simulates an edge task's two \
          targets, an edge position (mm) then an angle (deg)"
     )]
     NotAnEdgeTask { targets: String },

@@ -168,8 +168,9 @@ impl TargetSpec {
     }
 
     /// The columns of an edge task's two targets, position (mm) then
-    /// angle (deg): datasets and models hold these two targets for now,
-    /// so any other spec is refused by the commands that make them.
+    /// angle (deg): the commands that replay or simulate an edge (`twin`,
+    /// `calibrate`, `follow --replay`) refuse any other spec; `import` and
+    /// the models take any.
     pub fn edge_columns(&self) -> Result<[&str; 2], CollectionError> {
         match self.targets.as_slice() {
             [r, theta] if r.unit == Unit::Mm && theta.unit == Unit::Deg => {

@@ -141,6 +141,12 @@ pub struct ImportArgs {
     /// Import only the first N rows.
     #[arg(long)]
     limit: Option<usize>,
+    /// Another split of a collection: import --frames and --targets with
+    /// the blob detector, reference and targets this dataset was imported
+    /// with (its meta.json's settings).
+    #[arg(long, value_name = "DATASET", conflicts_with_all = [
+        "params", "reference", "target_list", "r_column", "theta_column", "image_column"])]
+    like: Option<PathBuf>,
     /// Output dataset directory.
     #[arg(long)]
     out: PathBuf,
@@ -158,38 +164,64 @@ pub struct LabelArgs {
     #[arg(long)]
     pub targets: PathBuf,
     /// The undeformed frame whose pins define the order (for `twin` also
-    /// the simulated sensor's rest layout).
+    /// the simulated sensor's rest layout); required, except by `import
+    /// --like`.
     #[arg(long)]
-    pub reference: PathBuf,
-    /// Column of --targets naming each row's frame file.
-    #[arg(long, default_value = bristol::IMAGE_COLUMN)]
-    pub image_column: String,
-    /// Column of --targets with the edge position r, mm.
-    #[arg(long, default_value = bristol::R_COLUMN)]
-    pub r_column: String,
-    /// Column of --targets with the edge angle theta, degrees.
-    #[arg(long, default_value = bristol::THETA_COLUMN)]
-    pub theta_column: String,
+    pub reference: Option<PathBuf>,
+    /// Column of --targets naming each row's frame file [default: image_name].
+    #[arg(long)]
+    pub image_column: Option<String>,
+    /// Column of --targets with the edge position r, mm (shorthand for
+    /// --target COLUMN:mm first) [default: pose_2].
+    #[arg(long)]
+    pub r_column: Option<String>,
+    /// Column of --targets with the edge angle theta, degrees (shorthand
+    /// for --target COLUMN:deg second) [default: pose_6].
+    #[arg(long)]
+    pub theta_column: Option<String>,
+    /// A target column as COLUMN:UNIT or COLUMN:UNIT:circular, unit mm or
+    /// deg (repeatable, in order; e.g. --target pose_2:mm --target
+    /// pose_6:deg:circular); replaces --r-column/--theta-column.
+    #[arg(long = "target", value_name = "COLUMN:UNIT[:circular]",
+          conflicts_with_all = ["r_column", "theta_column"])]
+    pub target_list: Vec<String>,
 }
 
 impl LabelArgs {
     /// The collection of the frames in `frames` these flags describe,
     /// with `edits` (rows, blob detector, tap columns) made.
     pub fn collection(&self, frames: &Path, edits: CollectionEdits) -> Result<LabelledCollection> {
-        let edits = CollectionEdits {
-            image_column: Some(self.image_column.clone()),
-            r_column: Some(self.r_column.clone()),
-            theta_column: Some(self.theta_column.clone()),
-            ..edits
-        };
+        let edits = self.edits(edits);
         let base = LabelledCollection::new(
             frames.to_path_buf(),
             self.targets.clone(),
-            self.reference.clone(),
+            self.reference()?.to_path_buf(),
         );
         Ok(base
             .edited(&edits)
             .map_err(tactrace_store::StoreError::from)?)
+    }
+}
+
+impl LabelArgs {
+    /// The reference frame, required here.
+    pub fn reference(&self) -> Result<&Path, LabError> {
+        self.reference.as_deref().ok_or_else(|| {
+            LabError::Config(
+                "--reference is required: the undeformed frame whose pins define the order".into(),
+            )
+        })
+    }
+
+    /// `edits` with the label columns these flags give.
+    fn edits(&self, edits: CollectionEdits) -> CollectionEdits {
+        CollectionEdits {
+            image_column: self.image_column.clone(),
+            r_column: self.r_column.clone(),
+            theta_column: self.theta_column.clone(),
+            target_list: self.target_list.clone(),
+            ..edits
+        }
     }
 }
 
@@ -210,26 +242,48 @@ pub fn import(a: ImportArgs) -> Result<()> {
     Inputs::new()
         .add("--frames", &a.frames)
         .add("--targets", &a.labels.targets)
-        .add("--reference", &a.labels.reference)
+        .opt("--reference", a.labels.reference.as_deref())
         .opt("--params", a.params.as_deref())
+        .opt("--like", a.like.as_deref())
         .check_apart("--out", &a.out)?;
-    let blob = blob_params(a.params.as_deref(), bristol::BLOB_PRESET)?;
-    // Import reads the targets only: no tap columns asked for.
-    let collection = a.labels.collection(
-        &a.frames,
-        CollectionEdits {
-            depth_column: Some("none".into()),
-            shear_columns: Some("none".into()),
-            limit: a.limit,
-            blob: Some(blob),
-            ..CollectionEdits::default()
-        },
-    )?;
+    let like = a.like.as_deref().map(read_dataset_at).transpose()?;
+    let collection = match (&like, &a.like) {
+        (Some(like), Some(dir)) => {
+            let c = tactrace_lab::import_like::like_collection(
+                like,
+                dir,
+                a.frames.clone(),
+                a.labels.targets.clone(),
+            )?;
+            c.edited(&CollectionEdits {
+                limit: a.limit,
+                ..CollectionEdits::default()
+            })
+            .map_err(tactrace_store::StoreError::from)?
+        }
+        _ => {
+            let blob = blob_params(a.params.as_deref(), bristol::BLOB_PRESET)?;
+            // Import reads the targets only: no tap columns asked for.
+            a.labels.collection(
+                &a.frames,
+                CollectionEdits {
+                    depth_column: Some("none".into()),
+                    shear_columns: Some("none".into()),
+                    limit: a.limit,
+                    blob: Some(blob),
+                    ..CollectionEdits::default()
+                },
+            )?
+        }
+    };
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "import");
     let tick = || pb.inc(1);
     let got = imp::import(&collection, &tick)?;
     pb.finish_and_clear();
+    if let (Some(like), Some(dir)) = (&like, &a.like) {
+        tactrace_lab::import_like::check_like(&got.data, like, dir)?;
+    }
     let dir = dataset::write_dataset(&a.out, &got.data, &[], a.force)?;
     let n = got.data.len();
     eprintln!(
@@ -247,6 +301,11 @@ pub fn import(a: ImportArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     Ok(())
+}
+
+/// A dataset folder (`--like`).
+fn read_dataset_at(dir: &Path) -> Result<tactrace_store::TapData> {
+    Ok(dataset::read_dataset(dir)?)
 }
 
 /// `sensor render --sensor`: one tap of a calibrated sensor on a straight

@@ -212,12 +212,28 @@ pub fn train(a: TrainArgs) -> Result<()> {
     }
     if let Some(val) = val {
         let v = tr::validate(&model, &val, a.val.as_deref().unwrap_or(&a.train))?;
-        crate::say!(
-            "validation: position {:.3} mm, angle {:.3} deg over {} samples",
-            v.position_mae_mm,
-            v.angle_mae_deg,
-            v.samples
-        );
+        if v.predictions.is_empty() {
+            let parts: Vec<String> = v
+                .targets
+                .iter()
+                .map(|t| {
+                    let s = &v.per_target[&t.name];
+                    format!("{} {:.3} {}", t.name, s.mae, s.unit.as_str())
+                })
+                .collect();
+            crate::say!(
+                "validation: {} over {} samples",
+                parts.join(", "),
+                v.samples
+            );
+        } else {
+            crate::say!(
+                "validation: position {:.3} mm, angle {:.3} deg over {} samples",
+                v.position_mae_mm,
+                v.angle_mae_deg,
+                v.samples
+            );
+        }
         if let Some(w) = v.seen_warning() {
             eprintln!("warning: {w}");
         }
@@ -320,28 +336,80 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
         std::fs::create_dir_all(dir)
             .map_err(tactrace_store::write_err(dir.as_path()))
             .map_err(LabError::from)?;
-        let predicted = Predicted {
-            truth: &v.truth,
-            predictions: &v.predictions,
-            mae: [v.position_mae_mm, v.angle_mae_deg],
-        };
         let kind = model
             .for_data(&data, &a.data)
             .map_err(LabError::from)?
             .kind();
         let title = figures::model_on_data_title(kind, &a.model, &a.data);
-        figures::predicted_vs_true(&dir.join(PLOTS_STEM), &title, &predicted)
-            .map_err(LabError::from)?;
+        let stem = dir.join(PLOTS_STEM);
+        if v.predictions.is_empty() || v.targets.iter().any(|t| t.circular) {
+            figures::predicted_vs_true_targets(&stem, &title, &target_panels(&v))
+                .map_err(LabError::from)?;
+        } else {
+            let predicted = Predicted {
+                truth: &v.truth,
+                predictions: &v.predictions,
+                mae: [v.position_mae_mm, v.angle_mae_deg],
+            };
+            figures::predicted_vs_true(&stem, &title, &predicted).map_err(LabError::from)?;
+        }
     }
     if a.json {
         crate::say!("{}", serde_json::to_string(&v)?);
-    } else {
+    } else if !v.predictions.is_empty() && v.targets.iter().all(|t| !t.circular) {
         crate::say!(
             "position MAE {:.3} mm, angle MAE {:.3} deg, {} samples",
             v.position_mae_mm,
             v.angle_mae_deg,
             v.samples
         );
+    } else {
+        crate::say!("{} samples; mean absolute error per target:", v.samples);
+        for t in &v.targets {
+            let s = &v.per_target[&t.name];
+            let wrapped = if s.circular {
+                " (circular, wrapped)"
+            } else {
+                ""
+            };
+            crate::say!("  {}: {:.3} {}{wrapped}", t.name, s.mae, s.unit.as_str());
+        }
+    }
+    Ok(())
+}
+
+/// One panel a target of `v` for the per-target figure.
+fn target_panels(v: &tr::Validation) -> Vec<figures::TargetPanel> {
+    v.targets
+        .iter()
+        .enumerate()
+        .map(|(k, t)| figures::TargetPanel {
+            name: t.name.clone(),
+            unit: t.unit.as_str().to_string(),
+            points: v
+                .target_truth
+                .iter()
+                .zip(&v.target_predictions)
+                .map(|(tr, p)| (tr[k], p[k]))
+                .collect(),
+            mae: v.per_target[&t.name].mae,
+        })
+        .collect()
+}
+
+/// `predict --data` of a model of other targets than the edge pose: one
+/// CSV row a sample, every target predicted then true.
+fn say_target_rows(v: &tr::Validation) -> Result<()> {
+    let names: Vec<String> = v
+        .targets
+        .iter()
+        .map(|t| format!("{}_{}", t.name, t.unit.as_str()))
+        .collect();
+    let truth: Vec<String> = names.iter().map(|n| format!("true_{n}")).collect();
+    crate::say!("{},{}", names.join(","), truth.join(","));
+    for (p, t) in v.target_predictions.iter().zip(&v.target_truth) {
+        let cells: Vec<String> = p.iter().chain(t).map(|x| format!("{x:.4}")).collect();
+        crate::say!("{}", cells.join(","));
     }
     Ok(())
 }
@@ -401,9 +469,14 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         (None, None, Some(dir)) => {
             let data = read_dataset(&dir)?;
             let v = tr::validate(&model, &data, &dir)?;
-            crate::say!("r_mm,theta_deg,true_r_mm,true_theta_deg");
-            for (p, t) in v.predictions.iter().zip(&v.truth) {
-                crate::say!("{:.4},{:.4},{:.4},{:.4}", p[0], p[1], t[0], t[1]);
+            if v.predictions.is_empty() {
+                // Not an edge model: every target, by its column and unit.
+                say_target_rows(&v)?;
+            } else {
+                crate::say!("r_mm,theta_deg,true_r_mm,true_theta_deg");
+                for (p, t) in v.predictions.iter().zip(&v.truth) {
+                    crate::say!("{:.4},{:.4},{:.4},{:.4}", p[0], p[1], t[0], t[1]);
+                }
             }
         }
         _ => {

@@ -204,7 +204,7 @@ fn collect_simulated(
             inputs,
             targets,
             meta: DatasetMeta {
-                targets: names.unwrap_or(meta.targets),
+                targets: names.map_or(meta.targets, |n| n.into()),
                 ..meta
             },
         },
@@ -373,7 +373,7 @@ pub fn collect_on(
     let meta = dataset_meta(cfg, (source, origin), settings, &extractor, with_missing);
     let names = labels.map(|(_, n)| n);
     let meta = DatasetMeta {
-        targets: names.unwrap_or(meta.targets),
+        targets: names.map_or(meta.targets, |n| n.into()),
         ..meta
     };
     Ok(Collected {
@@ -401,7 +401,8 @@ fn dataset_meta(
         seed: Some(cfg.seed),
         samples: cfg.samples,
         pins: reference_pins.len(),
-        targets: ["r_mm".into(), "theta_deg".into()],
+        targets: vec!["r_mm".into(), "theta_deg".into()],
+        target_columns: Default::default(),
         frames_with_missing_pins: with_missing,
         reference_pins,
         settings,

@@ -5,7 +5,9 @@ use crate::error::{LabError, Result};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::read_frame;
-use tactrace_store::{DatasetMeta, LabelledCollection, LabelledRow, TapData, TapFields};
+use tactrace_store::{
+    DatasetMeta, LabelledCollection, LabelledRow, TapData, TapFields, TargetColumns,
+};
 use tactrace_vision::{BlobParams, PinExtractor};
 
 /// One frame's displacement and whether pins were missing, or why it was
@@ -93,10 +95,13 @@ pub(crate) fn import_rows(
     keep: Option<&[usize]>,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
-    let names = collection
-        .spec()
-        .edge_names()
-        .map_err(tactrace_store::StoreError::from)?;
+    let spec = collection.spec();
+    let outputs = spec.model_targets();
+    // The edge task's datasets keep their names (`r_mm (pose_2)`).
+    let names = match spec.edge_names() {
+        Ok(edge) => edge.to_vec(),
+        Err(_) => TargetColumns::display(&outputs),
+    };
     let rows = keep_rows(collection.read_rows(TapFields::NONE)?, keep);
     let frames = collection.frames();
     if let Some(err) = rows
@@ -140,6 +145,7 @@ pub(crate) fn import_rows(
         samples: 0,
         pins: extractor.tracker.reference().len(),
         targets: names,
+        target_columns: TargetColumns::of(&outputs),
         frames_with_missing_pins: 0,
         reference_pins: extractor.tracker.reference().to_vec(),
         settings: serde_json::json!({ "import": collection }),
@@ -194,7 +200,7 @@ pub(crate) fn gather(
             Err(reason) => rejected.push((row.image.clone(), reason)),
         }
     }
-    meta.samples = targets.len() / 2;
+    meta.samples = targets.len() / meta.targets.len().max(1);
     if meta.samples == 0 {
         return Err(LabError::Format {
             path: origin.to_path_buf(),

@@ -25,6 +25,7 @@ pub mod follow;
 pub mod hardware;
 pub mod import;
 pub mod import_checks;
+pub mod import_like;
 pub mod numbers;
 pub mod render;
 pub mod reproduce;

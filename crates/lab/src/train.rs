@@ -1,10 +1,11 @@
 //! Training and validation of pose models (report ch. 4.2-4.3).
 use crate::error::{LabError, Result};
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use tactrace_learn::{
-    hyperparameter_search, mean_absolute_error, ModelConfig, ModelKind, PoseModel, Preset,
-    SearchSpace, TrainingHistory, Trial,
+    hyperparameter_search, target_mae, ModelConfig, ModelKind, ModelTarget, PoseModel, Preset,
+    SearchSpace, TrainingHistory, Trial, Unit,
 };
 use tactrace_store::{stage_model, HeldOut, StoredModel, TapData, TrainingRecord};
 
@@ -54,9 +55,14 @@ pub fn train(
     data: &TapData,
     progress: &mut dyn FnMut(usize),
 ) -> Result<(PoseModel, TrainingHistory)> {
-    let ds = data.to_learn()?;
-    let mut cb = |r: &tactrace_learn::EpochReport| progress(r.epoch + 1);
-    Ok(PoseModel::fit(cfg, &ds, &mut cb)?)
+    train_with_validation(cfg, data, None, progress)
+}
+
+/// The targets of `data`'s columns ([`tactrace_store::DatasetMeta::model_targets`]).
+pub fn data_targets(data: &TapData) -> Result<Vec<ModelTarget>> {
+    data.meta
+        .model_targets()
+        .map_err(|reason| LabError::Learn(tactrace_learn::LearnError::Targets { reason }))
 }
 
 /// As [`train`], also recording each net's loss on `val` per epoch in the
@@ -72,9 +78,14 @@ pub fn train_with_validation(
     if let Some(v) = &vs {
         check_dim(ds.dim_x, v.dim_x)?;
     }
+    let outputs = data_targets(data)?;
+    if let Some(v) = val {
+        check_same_targets(&outputs, &data_targets(v)?)?;
+    }
     let mut cb = |r: &tactrace_learn::EpochReport| progress(r.epoch + 1);
-    Ok(PoseModel::fit_with_validation(
+    Ok(PoseModel::fit_targets(
         cfg,
+        &outputs,
         &ds,
         vs.as_ref(),
         &mut cb,
@@ -229,19 +240,46 @@ fn check_dim(expected: usize, got: usize) -> Result<()> {
     }
 }
 
+/// One target's score: its mean absolute error (wrapped when circular)
+/// in its unit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TargetScore {
+    pub mae: f64,
+    pub unit: Unit,
+    pub circular: bool,
+}
+
 /// Mean absolute errors of a model on a dataset, with the predictions.
 #[derive(Debug, Clone, Serialize)]
 pub struct Validation {
+    /// The mean MAE of the targets in mm (the edge task's position); null
+    /// in JSON (NaN) when no target is in mm.
     pub position_mae_mm: f64,
+    /// The mean MAE of the targets in deg, circular ones wrapped (the edge
+    /// task's angle); null in JSON (NaN) when no target is in deg.
     pub angle_mae_deg: f64,
+    /// Every target's MAE by its label column.
+    pub per_target: BTreeMap<String, TargetScore>,
     pub samples: usize,
     /// How many of the samples the model was trained on (by row hash);
     /// `None` (null) when the model folder does not record it.
     pub rows_seen_in_training: Option<usize>,
+    /// The edge pose predicted for each sample (empty unless the model is
+    /// an edge model).
     #[serde(skip)]
     pub predictions: Vec<[f64; 2]>,
+    /// The edge pose of each sample (as `predictions`).
     #[serde(skip)]
     pub truth: Vec<[f64; 2]>,
+    /// The targets, in the model's order (named by the data's columns).
+    #[serde(skip)]
+    pub targets: Vec<ModelTarget>,
+    /// Every target predicted for each sample.
+    #[serde(skip)]
+    pub target_predictions: Vec<Vec<f64>>,
+    /// Every target of each sample.
+    #[serde(skip)]
+    pub target_truth: Vec<Vec<f64>>,
 }
 
 impl Validation {
@@ -359,41 +397,112 @@ fn check_held_out(
     Ok(())
 }
 
+/// Error unless `data`'s targets are the model's: as many, in the same
+/// units, in order.
+fn check_same_targets(model: &[ModelTarget], data: &[ModelTarget]) -> Result<()> {
+    let units = |t: &[ModelTarget]| t.iter().map(|t| t.unit).collect::<Vec<_>>();
+    if units(model) == units(data) {
+        return Ok(());
+    }
+    let list = |t: &[ModelTarget]| {
+        t.iter()
+            .map(|t| format!("{} ({})", t.name, t.unit.as_str()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    Err(LabError::Learn(tactrace_learn::LearnError::Targets {
+        reason: format!(
+            "the model predicts {}, the dataset's targets are {}",
+            list(model),
+            list(data)
+        ),
+    }))
+}
+
+/// The mean of the MAEs of the targets in `unit` (NaN when none is).
+fn unit_mean(targets: &[ModelTarget], mae: &[f64], unit: Unit) -> f64 {
+    let of: Vec<f64> = targets
+        .iter()
+        .zip(mae)
+        .filter(|(t, _)| t.unit == unit)
+        .map(|(_, &m)| m)
+        .collect();
+    of.iter().sum::<f64>() / of.len() as f64
+}
+
 /// Validate a network just trained on data ordered like `data` (what it
 /// was trained on is not known here: `rows_seen_in_training` is `None`).
+/// Every target is scored (circular ones wrapped) and named by the data's
+/// column; the edge pose is kept for an edge model's figures.
 pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
     let ds = data.to_learn()?;
     check_dim(model.input_dim(), data.dim())?;
-    let predictions = model.predict_batch(&ds)?;
-    let [position_mae_mm, angle_mae_deg] = mean_absolute_error(&predictions, &ds);
-    for (k, p) in predictions.iter().enumerate() {
+    let named = data_targets(data)?;
+    check_same_targets(model.outputs(), &named)?;
+    let targets: Vec<ModelTarget> = model
+        .outputs()
+        .iter()
+        .zip(&named)
+        .map(|(m, d)| ModelTarget {
+            name: d.name.clone(),
+            ..m.clone()
+        })
+        .collect();
+    let predicted = model.predict_targets_batch(&ds)?;
+    for (k, p) in predicted.iter().enumerate() {
+        let values: Vec<(&str, f64)> = targets
+            .iter()
+            .map(|t| t.name.as_str())
+            .zip(p.iter().copied())
+            .collect();
         crate::numbers::require_finite(
             &format!("the model's prediction for row {k} of the dataset"),
-            &[("r", p[0]), ("theta", p[1])],
+            &values,
             "the row's inputs lie far outside the training data's, or the model is \
              degenerate (trained on too few samples?)",
         )?;
     }
-    crate::numbers::require_finite(
-        "the validation",
-        &[
-            ("the position MAE", position_mae_mm),
-            ("the angle MAE", angle_mae_deg),
-        ],
-        "",
-    )?;
-    let truth = data
-        .targets
-        .chunks(2)
-        .map(|t| [t[0] as f64, t[1] as f64])
+    let truth: Vec<Vec<f64>> = (0..data.len())
+        .map(|i| data.target_row(i).iter().map(|&v| f64::from(v)).collect())
+        .collect();
+    let mae = target_mae(&targets, &predicted, &truth);
+    let maes: Vec<(String, f64)> = targets
+        .iter()
+        .zip(&mae)
+        .map(|(t, &m)| (format!("the {} MAE", t.name), m))
+        .collect();
+    let refs: Vec<(&str, f64)> = maes.iter().map(|(n, m)| (n.as_str(), *m)).collect();
+    crate::numbers::require_finite("the validation", &refs, "")?;
+    let (predictions, edge_truth) = match model.edge_roles() {
+        Ok([r, theta]) => (
+            predicted.iter().map(|p| [p[r], p[theta]]).collect(),
+            truth.iter().map(|t| [t[r], t[theta]]).collect(),
+        ),
+        Err(_) => (Vec::new(), Vec::new()),
+    };
+    let per_target = targets
+        .iter()
+        .zip(&mae)
+        .map(|(t, &m)| {
+            let score = TargetScore {
+                mae: m,
+                unit: t.unit,
+                circular: t.circular,
+            };
+            (t.name.clone(), score)
+        })
         .collect();
     Ok(Validation {
-        position_mae_mm,
-        angle_mae_deg,
+        position_mae_mm: unit_mean(&targets, &mae, Unit::Mm),
+        angle_mae_deg: unit_mean(&targets, &mae, Unit::Deg),
+        per_target,
         samples: data.len(),
         rows_seen_in_training: None,
         predictions,
-        truth,
+        truth: edge_truth,
+        targets,
+        target_predictions: predicted,
+        target_truth: truth,
     })
 }
 

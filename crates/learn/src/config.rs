@@ -4,6 +4,7 @@
 use crate::dennn::{ClampedPhase, FreePhase, LrScaling};
 use crate::error::LearnError;
 use crate::pca::PcScaling;
+use crate::targets::{ModelTarget, Unit};
 use serde::{Deserialize, Serialize};
 
 /// The model families of report ch. 4.2, plus the backprop baseline.
@@ -187,6 +188,36 @@ impl ModelConfig {
         }
         if let Some(n) = &self.angle {
             out.push(("angle", vec![1], n));
+        }
+        out
+    }
+
+    /// The nets to train for `targets` (of a checked list):
+    /// `(name, target indices, config)`. DisDenNN and PCADenNN: one net
+    /// `pose` for every target; PDenNN and the MLP: one net a target, the
+    /// `position` settings for a target in mm and the `angle` settings for
+    /// one in degrees, named `position` and `angle` when the targets are
+    /// one of each (the edge task), else by the target's name.
+    pub fn nets_for(&self, targets: &[ModelTarget]) -> Vec<(String, Vec<usize>, &NetConfig)> {
+        if let Some(n) = &self.pose {
+            return vec![("pose".to_string(), (0..targets.len()).collect(), n)];
+        }
+        let count = |u: Unit| targets.iter().filter(|t| t.unit == u).count();
+        let edge = count(Unit::Mm) == 1 && count(Unit::Deg) == 1;
+        let mut out = Vec::new();
+        for (k, t) in targets.iter().enumerate() {
+            let (role, net) = match t.unit {
+                Unit::Mm => ("position", &self.position),
+                Unit::Deg => ("angle", &self.angle),
+            };
+            if let Some(net) = net {
+                let name = if edge {
+                    role.to_string()
+                } else {
+                    t.name.clone()
+                };
+                out.push((name, vec![k], net));
+            }
         }
         out
     }

@@ -54,6 +54,17 @@ pub enum LearnError {
         "model format version {found} is not supported (this build reads version {supported})"
     )]
     Version { found: u32, supported: u32 },
+    /// A target list a model cannot have (none, a name twice, a circular
+    /// target not in degrees), or data whose targets are not the model's.
+    #[error("targets: {reason}")]
+    Targets { reason: String },
+    /// A model asked for the edge pose `[r, theta]` whose targets are not
+    /// one position (mm) and one angle (deg).
+    #[error(
+        "the model predicts {targets}, not an edge pose (one position in mm and one angle \
+         in deg)"
+    )]
+    NotAnEdgeModel { targets: String },
     /// A serialised model could not be parsed or is inconsistent.
     #[error("corrupt model data: {reason}")]
     Corrupt { reason: String },

@@ -1,7 +1,8 @@
 //! The brain of tactrace (report ch. 3 and 4.2-4.3): standardisation and PCA
 //! of pin displacements, dendritic neural networks trained by equilibrium
 //! propagation, a backprop twin for comparison, and pose models that map one
-//! displacement vector to the edge pose `[r mm, theta deg]`.
+//! displacement vector to N named targets in mm or degrees (circular angles
+//! learnt as sine and cosine), the edge pose `[r mm, theta deg]` among them.
 //!
 //! Everything here is pure: no files, no printing. Models serialise to a JSON
 //! string plus safetensors bytes; the lab crate writes them.
@@ -21,6 +22,7 @@ mod predict;
 mod search;
 mod serialise;
 mod standardise;
+mod targets;
 mod trainer;
 
 pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling};
@@ -35,3 +37,7 @@ pub use pose_model::{EpochReport, NetEpoch, PoseModel, TrainingHistory};
 pub use search::{hyperparameter_search, SearchSpace, Trial, MAX_GRID_POINTS};
 pub use serialise::FORMAT_VERSION;
 pub use standardise::Standardiser;
+pub use targets::{
+    check_targets, decode, edge_targets, encode_into, encoded_columns, target_mae, wrap_deg,
+    ModelTarget, Unit,
+};

@@ -1,12 +1,15 @@
-//! Pose models (report ch. 4.2): standardiser, PCA per net, one or two nets
-//! and target scaling, fitted together and predicting `[r mm, theta deg]`
-//! from one pin-displacement vector.
+//! Pose models (report ch. 4.2): standardiser, PCA per net, one or more
+//! nets and target scaling, fitted together and predicting N named targets
+//! ([`ModelTarget`]: mm or deg, circular angles as sine and cosine) from one
+//! pin-displacement vector; the edge pose `[r mm, theta deg]` for a model of
+//! one position and one angle.
 use crate::config::{ModelConfig, ModelKind, TargetScaling};
 use crate::dataset::Dataset;
 use crate::error::LearnError;
 use crate::pca::{Components, Pca};
 use crate::predict::Predictor;
 use crate::standardise::Standardiser;
+use crate::targets::{self, ModelTarget, Unit};
 use crate::trainer::{train_nets, NetData, Trainer};
 pub use crate::trainer::{EpochReport, NetEpoch, TrainingHistory};
 use crate::Layers;
@@ -16,7 +19,8 @@ use std::sync::OnceLock;
 #[derive(Debug, Clone)]
 pub(crate) struct FittedNet {
     pub name: String,
-    /// Target columns this net predicts (0 = r, 1 = theta).
+    /// Encoded target columns this net predicts (for the edge task 0 = r,
+    /// 1 = theta; a circular target takes two, its sine and cosine).
     pub targets: Vec<usize>,
     /// `None` feeds the standardised displacements directly.
     pub pca: Option<Pca>,
@@ -28,16 +32,20 @@ pub(crate) struct FittedNet {
 pub struct PoseModel {
     pub(crate) config: ModelConfig,
     pub(crate) standardiser: Standardiser,
-    /// Target scaling (mean 0 / std 1 identity when `TargetScaling::None`).
+    /// Scaling of the encoded target columns (mean 0 / std 1 identity when
+    /// `TargetScaling::None`).
     pub(crate) targets: Standardiser,
     pub(crate) nets: Vec<FittedNet>,
-    /// The prediction path, laid out at the first prediction.
+    /// What it predicts, in order.
+    pub(crate) outputs: Vec<ModelTarget>,
+    /// The fast prediction path of an edge model (`[r mm, theta deg]`,
+    /// neither circular), laid out at the first prediction.
     pub(crate) predictor: OnceLock<Predictor>,
 }
 
 impl PoseModel {
-    /// Fit on `train` (inputs: displacements; targets: `[r, theta]`),
-    /// calling `progress` after every epoch.
+    /// Fit on `train` (inputs: displacements; targets: `[r mm, theta
+    /// deg]`, the edge task), calling `progress` after every epoch.
     pub fn fit(
         cfg: &ModelConfig,
         train: &Dataset,
@@ -47,19 +55,52 @@ impl PoseModel {
     }
 
     /// As [`Self::fit`], also reporting each net's loss on `val` per epoch
-    /// (never used for fitting). A divergence restarts the fit with halved
-    /// learning rates up to `cfg.divergence_retries` times (the history
-    /// counts the halvings; the model's config holds the rates used).
+    /// (never used for fitting), for the edge task's two targets.
     pub fn fit_with_validation(
         cfg: &ModelConfig,
         train: &Dataset,
         val: Option<&Dataset>,
         progress: &mut dyn FnMut(&EpochReport),
     ) -> Result<(PoseModel, TrainingHistory), LearnError> {
+        Self::fit_targets(cfg, &targets::edge_targets(), train, val, progress)
+    }
+
+    /// Fit a model of `outputs` (the columns of `train`'s targets, in
+    /// order), reporting each net's loss on `val` per epoch (never used for
+    /// fitting). A divergence restarts the fit with halved learning rates
+    /// up to `cfg.divergence_retries` times (the history counts the
+    /// halvings; the model's config holds the rates used).
+    pub fn fit_targets(
+        cfg: &ModelConfig,
+        outputs: &[ModelTarget],
+        train: &Dataset,
+        val: Option<&Dataset>,
+        progress: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(PoseModel, TrainingHistory), LearnError> {
+        targets::check_targets(outputs)?;
+        for d in std::iter::once(train).chain(val) {
+            if d.dim_y != outputs.len() {
+                return Err(LearnError::Shape {
+                    what: "targets per sample",
+                    expected: outputs.len(),
+                    got: d.dim_y,
+                });
+            }
+        }
+        if let Some(v) = val {
+            if v.dim_x != train.dim_x {
+                return Err(LearnError::DimensionMismatch {
+                    expected: train.dim_x,
+                    got: v.dim_x,
+                });
+            }
+        }
+        let train = encode(outputs, train)?;
+        let val = val.map(|v| encode(outputs, v)).transpose()?;
         let mut cfg = cfg.clone();
         let mut halvings = 0;
         loop {
-            match Self::fit_once(&cfg, train, val, progress) {
+            match Self::fit_once(&cfg, outputs, &train, val.as_ref(), progress) {
                 Err(LearnError::Diverged { .. }) if halvings < cfg.divergence_retries => {
                     cfg.scale_learning_rates(0.5);
                     halvings += 1;
@@ -73,36 +114,25 @@ impl PoseModel {
         }
     }
 
+    /// One fit on the encoded targets `train` (and `val`).
     fn fit_once(
         cfg: &ModelConfig,
+        outputs: &[ModelTarget],
         train: &Dataset,
         val: Option<&Dataset>,
         progress: &mut dyn FnMut(&EpochReport),
     ) -> Result<(PoseModel, TrainingHistory), LearnError> {
         cfg.validate()?;
         cfg.check_samples(train.n, train.dim_x)?;
-        if train.dim_y != 2 {
-            return Err(LearnError::Shape {
-                what: "targets per sample",
-                expected: 2,
-                got: train.dim_y,
-            });
-        }
-        if let Some(v) = val {
-            if v.dim_x != train.dim_x || v.dim_y != 2 {
-                return Err(LearnError::DimensionMismatch {
-                    expected: train.dim_x,
-                    got: v.dim_x,
-                });
-            }
-        }
+        let encoded = targets::encoded_columns(outputs);
         let standardiser = Standardiser::fit(&train.x, train.n, train.dim_x)?;
         let targets = fit_target_scaling(cfg.target_scaling, train)?;
         let z = standardiser.transform(&train.x);
         let z_val = val.map(|v| standardiser.transform(&v.x));
         let mut trainers = Vec::new();
         let mut fitted = Vec::new();
-        for (k, (name, cols, net_cfg)) in cfg.nets().into_iter().enumerate() {
+        for (k, (name, which, net_cfg)) in cfg.nets_for(outputs).into_iter().enumerate() {
+            let cols: Vec<usize> = which.iter().flat_map(|&t| encoded[t].clone()).collect();
             let pca = match net_cfg.n_components {
                 Some(c) => Some(Pca::fit(
                     &z,
@@ -129,10 +159,10 @@ impl PoseModel {
             sizes.push(cols.len());
             let layers = Layers::new(&sizes, cfg.seed.wrapping_add(k as u64))?;
             trainers.push(Trainer::new(
-                name, layers, cfg, net_cfg, data, val_data, k as u64,
+                &name, layers, cfg, net_cfg, data, val_data, k as u64,
             ));
             fitted.push(FittedNet {
-                name: name.to_string(),
+                name,
                 targets: cols,
                 pca,
                 layers: Layers::new(&sizes, 0)?,
@@ -148,28 +178,60 @@ impl PoseModel {
                 standardiser,
                 targets,
                 nets: fitted,
+                outputs: outputs.to_vec(),
                 predictor: OnceLock::new(),
             },
             history,
         ))
     }
 
-    /// Predict `[r mm, theta deg]` from one displacement vector.
+    /// Predict the edge pose `[r mm, theta deg]` from one displacement
+    /// vector: the model's position (mm) and angle (deg) targets, refused
+    /// ([`LearnError::NotAnEdgeModel`]) for a model of other targets.
     pub fn predict(&self, displacement: &[f32]) -> Result<[f64; 2], LearnError> {
-        if displacement.len() != self.input_dim() {
-            return Err(LearnError::DimensionMismatch {
-                expected: self.input_dim(),
-                got: displacement.len(),
-            });
+        if self.is_plain_edge() {
+            self.check_dim(displacement.len())?;
+            let mut out = Vec::with_capacity(1);
+            self.predict_into(displacement, &mut out)?;
+            return Ok(out[0]);
         }
-        let mut out = Vec::with_capacity(1);
-        self.predict_into(displacement, &mut out)?;
-        Ok(out[0])
+        let [r, theta] = self.edge_roles()?;
+        let values = self.predict_targets(displacement)?;
+        Ok([values[r], values[theta]])
+    }
+
+    /// Predict every target, in [`Self::outputs`]' order and units
+    /// (circular angles within (-180, 180] deg), from one displacement
+    /// vector.
+    pub fn predict_targets(&self, displacement: &[f32]) -> Result<Vec<f64>, LearnError> {
+        self.check_dim(displacement.len())?;
+        if self.is_plain_edge() {
+            return self.predict(displacement).map(|p| p.to_vec());
+        }
+        let mut z = vec![0.0f64; self.input_dim()];
+        self.standardiser.transform_into(displacement, &mut z);
+        let width = self.targets.dim();
+        let mut scaled = vec![0.0f64; width];
+        for net in &self.nets {
+            let input: Vec<f32> = net_inputs(net.pca.as_ref(), &z)
+                .into_iter()
+                .map(|v| v as f32)
+                .collect();
+            let mut out = vec![0.0f32; net.targets.len()];
+            net.layers.predict(&input, &mut out)?;
+            for (&col, &o) in net.targets.iter().zip(&out) {
+                scaled[col] = o as f64;
+            }
+        }
+        let mut encoded = vec![0.0f64; width];
+        self.targets.inverse_into(&scaled, &mut encoded);
+        Ok(targets::decode(&self.outputs, &encoded))
     }
 
     /// Predict every row of `rows` (row-major, [`Self::input_dim`] values
     /// a row): `[r mm, theta deg]` per row, as [`Self::predict`] gives them
-    /// one at a time, computed a block of rows at a time (faster).
+    /// one at a time; for a plain edge model a block of rows at a time
+    /// (faster).
     pub fn predict_rows(&self, rows: &[f32]) -> Result<Vec<[f64; 2]>, LearnError> {
         let dim = self.input_dim();
         if !rows.len().is_multiple_of(dim) {
@@ -178,12 +240,33 @@ impl PoseModel {
                 got: rows.len(),
             });
         }
-        let mut out = Vec::with_capacity(rows.len() / dim);
-        self.predict_into(rows, &mut out)?;
-        Ok(out)
+        if self.is_plain_edge() {
+            let mut out = Vec::with_capacity(rows.len() / dim);
+            self.predict_into(rows, &mut out)?;
+            return Ok(out);
+        }
+        rows.chunks(dim).map(|row| self.predict(row)).collect()
     }
 
-    /// Predict every sample of `ds`.
+    /// An edge model whose targets are `[r mm, theta deg]` in that order,
+    /// neither circular: the one the fast path ([`Predictor`]) serves.
+    fn is_plain_edge(&self) -> bool {
+        matches!(self.outputs.as_slice(), [r, t]
+            if r.unit == Unit::Mm && t.unit == Unit::Deg && !r.circular && !t.circular)
+            && self.targets.dim() == 2
+    }
+
+    fn check_dim(&self, got: usize) -> Result<(), LearnError> {
+        if got != self.input_dim() {
+            return Err(LearnError::DimensionMismatch {
+                expected: self.input_dim(),
+                got,
+            });
+        }
+        Ok(())
+    }
+
+    /// Predict the edge pose of every sample of `ds` ([`Self::predict`]).
     pub fn predict_batch(&self, ds: &Dataset) -> Result<Vec<[f64; 2]>, LearnError> {
         if ds.dim_x != self.input_dim() {
             return Err(LearnError::DimensionMismatch {
@@ -221,6 +304,42 @@ impl PoseModel {
         Ok(())
     }
 
+    /// Predict every target of every sample of `ds`
+    /// ([`Self::predict_targets`]).
+    pub fn predict_targets_batch(&self, ds: &Dataset) -> Result<Vec<Vec<f64>>, LearnError> {
+        (0..ds.n)
+            .map(|i| self.predict_targets(ds.x_row(i)))
+            .collect()
+    }
+
+    /// What the model predicts, in order.
+    pub fn outputs(&self) -> &[ModelTarget] {
+        &self.outputs
+    }
+
+    /// The indices of the position (mm) and angle (deg) targets of an edge
+    /// model: exactly one of each.
+    pub fn edge_roles(&self) -> Result<[usize; 2], LearnError> {
+        let find = |u: Unit| {
+            let mut it = self.outputs.iter().enumerate().filter(|(_, t)| t.unit == u);
+            match (it.next(), it.next()) {
+                (Some((k, _)), None) => Some(k),
+                _ => None,
+            }
+        };
+        match (self.outputs.len(), find(Unit::Mm), find(Unit::Deg)) {
+            (2, Some(r), Some(theta)) => Ok([r, theta]),
+            _ => Err(LearnError::NotAnEdgeModel {
+                targets: self
+                    .outputs
+                    .iter()
+                    .map(|t| format!("{} ({})", t.name, t.unit.as_str()))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            }),
+        }
+    }
+
     /// Displacement-vector length the model expects.
     pub fn input_dim(&self) -> usize {
         self.standardiser.dim()
@@ -251,6 +370,20 @@ fn net_inputs(pca: Option<&Pca>, z: &[f64]) -> Vec<f64> {
         Some(p) => p.transform(z),
         None => z.to_vec(),
     }
+}
+
+/// `data` with its targets encoded for the networks (a circular target as
+/// its sine and cosine); the same data when no target is circular.
+fn encode(outputs: &[ModelTarget], data: &Dataset) -> Result<Dataset, LearnError> {
+    if outputs.iter().all(|t| !t.circular) {
+        return Ok(data.clone());
+    }
+    let width: usize = outputs.iter().map(ModelTarget::width).sum();
+    let mut y = Vec::with_capacity(data.n * width);
+    for i in 0..data.n {
+        targets::encode_into(outputs, data.y_row(i), &mut y);
+    }
+    Dataset::new(data.x.clone(), y, data.n, data.dim_x, width)
 }
 
 fn fit_target_scaling(scaling: TargetScaling, train: &Dataset) -> Result<Standardiser, LearnError> {

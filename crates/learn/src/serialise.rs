@@ -1,5 +1,6 @@
 //! Model (de)serialisation to a JSON string (format version, kind, config,
-//! architecture, standardiser, PCA, target scaling) plus safetensors bytes
+//! architecture, standardiser, PCA, target scaling, the targets predicted:
+//! names, units, circular flags) plus safetensors bytes
 //! (the weights, in the report's `W(l)` orientation `d(l-1) x d(l)`). Pure:
 //! the lab crate writes the files.
 use crate::config::{ModelConfig, ModelKind};
@@ -8,14 +9,19 @@ use crate::net::Layers;
 use crate::pca::Pca;
 use crate::pose_model::{FittedNet, PoseModel};
 use crate::standardise::Standardiser;
+use crate::targets::{check_targets as check_outputs, edge_targets, ModelTarget};
 use safetensors::tensor::TensorView;
 use safetensors::{Dtype, SafeTensors};
 use serde::{Deserialize, Serialize};
 
 /// Identifies our model files.
 const FORMAT: &str = "tactrace-pose-model";
-/// Bumped on any incompatible change.
-pub const FORMAT_VERSION: u32 = 2;
+/// Bumped on any incompatible change. Version 3 names the targets
+/// (`outputs`); version 2 files, written before, are the edge task's
+/// `r` (mm) and `theta` (deg) and still load.
+pub const FORMAT_VERSION: u32 = 3;
+/// The oldest version read.
+const OLDEST_VERSION: u32 = 2;
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -28,6 +34,9 @@ struct ModelFile {
     standardiser: Standardiser,
     target_scaling: Standardiser,
     nets: Vec<NetFile>,
+    /// The targets predicted (absent in version 2: the edge task's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    outputs: Option<Vec<ModelTarget>>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -74,6 +83,7 @@ impl PoseModel {
                     pca: n.pca.clone(),
                 })
                 .collect(),
+            outputs: Some(self.outputs.clone()),
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
         let mut buffers = Vec::new();
@@ -115,7 +125,7 @@ impl PoseModel {
             .get("version")
             .and_then(|v| v.as_u64())
             .ok_or_else(|| corrupt("model json has no version"))?;
-        if version != FORMAT_VERSION as u64 {
+        if !(OLDEST_VERSION as u64..=FORMAT_VERSION as u64).contains(&version) {
             return Err(LearnError::Version {
                 found: version.min(u32::MAX as u64) as u32,
                 supported: FORMAT_VERSION,
@@ -132,7 +142,10 @@ impl PoseModel {
             file.target_scaling.mean().to_vec(),
             file.target_scaling.std().to_vec(),
         )?;
-        if standardiser.dim() != file.input_dim || targets.dim() != 2 {
+        let outputs = file.outputs.unwrap_or_else(edge_targets);
+        check_outputs(&outputs).map_err(|e| corrupt(format!("model json: {e}")))?;
+        let width: usize = outputs.iter().map(ModelTarget::width).sum();
+        if standardiser.dim() != file.input_dim || targets.dim() != width {
             return Err(corrupt("standardiser dimensions disagree with the model"));
         }
         let tensors =
@@ -143,12 +156,13 @@ impl PoseModel {
             .enumerate()
             .map(|(k, n)| load_net(k, n, &tensors, file.input_dim))
             .collect::<Result<Vec<_>, _>>()?;
-        check_targets(&nets)?;
+        check_targets(&nets, width)?;
         Ok(PoseModel {
             config: file.config,
             standardiser,
             targets,
             nets,
+            outputs,
             predictor: Default::default(),
         })
     }
@@ -229,19 +243,17 @@ fn read_f32(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f3
         .collect())
 }
 
-/// Every target column (0 and 1) is predicted by exactly one net.
-fn check_targets(nets: &[FittedNet]) -> Result<(), LearnError> {
-    let mut seen = [0usize; 2];
+/// Every encoded target column (`0..width`) is predicted by exactly one net.
+fn check_targets(nets: &[FittedNet], width: usize) -> Result<(), LearnError> {
+    let mut seen = vec![0usize; width];
     for &t in nets.iter().flat_map(|n| &n.targets) {
         *seen
             .get_mut(t)
             .ok_or_else(|| corrupt(format!("target column {t} out of range")))? += 1;
     }
-    if seen == [1, 1] {
+    if seen.iter().all(|&k| k == 1) {
         Ok(())
     } else {
-        Err(corrupt(
-            "each of r and theta must come from exactly one net",
-        ))
+        Err(corrupt("each target column must come from exactly one net"))
     }
 }

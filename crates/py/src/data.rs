@@ -12,9 +12,10 @@ use tactrace_store::{DatasetMeta, TapData};
 ///
 /// Returns ``(inputs, targets, meta)``: inputs an N x 2P float32 array of
 /// pin displacements in pixels (the P x-displacements, then the P
-/// y-displacements, pins in ``meta["reference_pins"]`` order), targets N x 2
-/// float32 (edge position r in mm, angle theta in degrees), meta the
-/// ``meta.json`` dict. Raises ``InputError`` naming the file at fault.
+/// y-displacements, pins in ``meta["reference_pins"]`` order), targets N x T
+/// float32 (the targets ``meta["target_names"]``, ``meta["target_units"]``
+/// and ``meta["target_circular"]`` list, in order; the edge task's r in mm
+/// and theta in degrees when meta names none), meta the ``meta.json`` dict. Raises ``InputError`` naming the file at fault.
 #[pyfunction]
 #[allow(clippy::type_complexity)]
 pub fn load_dataset<'py>(
@@ -28,11 +29,11 @@ pub fn load_dataset<'py>(
     let data = py
         .detach(|| tactrace_store::read_dataset(&dir))
         .map_err(store)?;
-    let (n, d) = (data.len(), data.dim());
+    let (n, d, t) = (data.len(), data.dim(), data.n_targets());
     let meta = serde_json::to_value(&data.meta).map_err(|e| input(e.to_string()))?;
     Ok((
         to_matrix(py, data.inputs, n, d)?,
-        to_matrix(py, data.targets, n, 2)?,
+        to_matrix(py, data.targets, n, t)?,
         json_to_py(py, &meta)?,
     ))
 }
@@ -40,9 +41,11 @@ pub fn load_dataset<'py>(
 /// Write a dataset folder that tactrace (and ``load_dataset``) reads.
 ///
 /// ``inputs`` is N x 2P (pixels; the x-displacements, then the
-/// y-displacements), ``targets`` N x 2 (r mm, theta deg), any dtype (stored
-/// as float32). ``meta`` must hold ``reference_pins`` (P x 2, px: the order
-/// of the inputs); missing keys get defaults (source "python"), and
+/// y-displacements), ``targets`` N x T, any dtype (stored as float32): the
+/// edge task's r mm and theta deg (T = 2), or the targets ``meta`` names in
+/// ``target_names`` and ``target_units`` (``"mm"``/``"deg"``; optional
+/// ``target_circular``). ``meta`` must hold ``reference_pins`` (P x 2, px:
+/// the order of the inputs); missing keys get defaults (source "python"), and
 /// ``samples`` / ``pins`` are set from the arrays. The folder appears only
 /// when complete; an existing non-empty folder is refused unless
 /// ``force=True``. Returns the folder's path.
@@ -57,13 +60,21 @@ pub fn save_dataset(
     force: bool,
 ) -> PyResult<PathBuf> {
     let (x, n, d) = matrix::<f32>(inputs, "float32", "inputs", None, false)?;
-    let (y, m, _) = matrix::<f32>(targets, "float32", "targets", Some(2), false)?;
+    let (y, m, t) = matrix::<f32>(targets, "float32", "targets", None, false)?;
     if n != m {
         return Err(input(format!(
             "inputs has {n} rows but targets has {m}: one target row per sample"
         )));
     }
     let meta = dataset_meta(meta, n, d)?;
+    if meta.targets.len() != t {
+        return Err(input(format!(
+            "targets has {t} columns, meta names {} targets ({}): name each target \
+             (target_names, target_units)",
+            meta.targets.len(),
+            meta.targets.join(", ")
+        )));
+    }
     let data = TapData {
         inputs: x.readonly().as_slice()?.to_vec(),
         targets: y.readonly().as_slice()?.to_vec(),
@@ -95,6 +106,19 @@ fn dataset_meta(meta: &Bound<'_, PyDict>, n: usize, d: usize) -> PyResult<Datase
     doc_map.insert("pins".into(), (d / 2).into());
     let meta: DatasetMeta = serde_json::from_value(doc)
         .map_err(|e| input(format!("meta: {e} (reference_pins, P x 2 px, is required)")))?;
+    // Named targets: shown as `name (unit)` unless meta shows them itself.
+    let mut meta = meta;
+    if !meta.target_columns.target_names.is_empty() {
+        let targets = meta.model_targets().or_else(|_| {
+            let mut named = meta.clone();
+            named.targets = named.target_columns.target_names.clone();
+            named.model_targets()
+        });
+        let targets = targets.map_err(|e| input(format!("meta: {e}")))?;
+        if meta.targets.len() != targets.len() {
+            meta.targets = tactrace_store::TargetColumns::display(&targets);
+        }
+    }
     if 2 * meta.reference_pins.len() != d {
         return Err(input(format!(
             "meta has {} reference pins, but inputs has {d} columns (2 x pins)",

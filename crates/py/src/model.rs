@@ -120,9 +120,62 @@ impl Model {
         Ok(arr)
     }
 
+    /// Predict every target of the model (``Model.targets``: names, units,
+    /// circular flags) for each sample of ``data`` (as ``predict``): an N
+    /// x T float64 array in the targets' units (circular angles within
+    /// (-180, 180] deg), or (T,) for a single row.
+    #[pyo3(signature = (data, *, reference_pins = None))]
+    fn predict_targets<'py>(
+        &self,
+        py: Python<'py>,
+        data: &Bound<'py, PyAny>,
+        reference_pins: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let samples = Samples::read(data, None, reference_pins, false)?;
+        let net = self.net_for(&samples)?;
+        let cols = samples.cols;
+        if cols != net.input_dim() {
+            return Err(input(format!(
+                "the model takes {} inputs per sample (2 x {} pins), inputs has {cols}",
+                net.input_dim(),
+                net.input_dim() / 2
+            )));
+        }
+        let t = net.outputs().len();
+        let flat = &samples.inputs;
+        let out = run_detached(py, || {
+            let mut out = Vec::with_capacity(samples.rows * t);
+            for (i, row) in flat.chunks_exact(cols).enumerate() {
+                if i % ROWS_PER_CHECK == ROWS_PER_CHECK - 1 {
+                    checkpoint();
+                }
+                out.extend(net.predict_targets(row)?);
+            }
+            Ok::<_, tactrace_learn::LearnError>(out)
+        })?
+        .map_err(core)?;
+        let arr = to_matrix(py, out, samples.rows, t)?;
+        if samples.one_row {
+            return arr.reshape(vec![t]);
+        }
+        Ok(arr)
+    }
+
+    /// What the model predicts, in order: a list of dicts with ``name``
+    /// (the label column), ``unit`` (``"mm"`` or ``"deg"``) and
+    /// ``circular`` (an angle over the full circle, learnt as sine and
+    /// cosine, its errors wrapped).
+    #[getter]
+    fn targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let value =
+            serde_json::to_value(self.own_net().outputs()).map_err(|e| input(e.to_string()))?;
+        json_to_py(py, &value)
+    }
+
     /// Mean absolute errors on ``data`` as ``tactrace validate --json``
     /// gives them: a dict with ``position_mae_mm``, ``angle_mae_deg``,
-    /// ``samples`` and ``rows_seen_in_training`` (how many samples the
+    /// ``per_target`` (every target's ``mae``, ``unit``, ``circular``, by
+    /// its column; circular errors wrapped), ``samples`` and ``rows_seen_in_training`` (how many samples the
     /// model was trained on; None when its folder does not say). ``data``
     /// is a dataset folder, ``load_dataset``'s tuple, or an N x 2P array
     /// with ``targets`` (N x 2: r mm, theta deg) and ``reference_pins``

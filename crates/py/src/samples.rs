@@ -100,9 +100,11 @@ impl Samples {
     ) -> PyResult<Self> {
         let (x, rows, cols) = matrix::<f32>(inputs, "float32", "inputs", None, true)?;
         let one_row = x.ndim() == 1;
+        // A dataset's meta says how many targets a row has; arrays: r, theta.
+        let width = meta.as_ref().map_or(2, |m| m.targets.len());
         let targets = match targets {
             Some(t) => {
-                let (y, m, _) = matrix::<f32>(t, "float32", "targets", Some(2), false)?;
+                let (y, m, _) = matrix::<f32>(t, "float32", "targets", Some(width), false)?;
                 if m != rows {
                     return Err(input(format!(
                         "inputs has {rows} rows but targets has {m}: one target row per sample"
@@ -204,7 +206,8 @@ pub fn python_meta(pins: &[[f64; 2]]) -> DatasetMeta {
         seed: None,
         samples: 0,
         pins: pins.len(),
-        targets: ["r_mm".into(), "theta_deg".into()],
+        targets: vec!["r_mm".into(), "theta_deg".into()],
+        target_columns: Default::default(),
         frames_with_missing_pins: 0,
         reference_pins: pins.to_vec(),
         settings: serde_json::Value::Null,

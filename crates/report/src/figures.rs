@@ -117,6 +117,58 @@ pub fn predicted_vs_true(stem: &Path, name: &str, v: &Predicted) -> Result<Vec<P
     .map_err(Into::into)
 }
 
+/// One target's predictions for [`predicted_vs_true_targets`]: its name,
+/// unit, `(true, predicted)` points and mean absolute error (wrapped for a
+/// circular target, as `validate` reports it).
+pub struct TargetPanel {
+    pub name: String,
+    pub unit: String,
+    pub points: Vec<(f64, f64)>,
+    pub mae: f64,
+}
+
+/// Fig. 4.4 for any targets: one panel a target, predicted against true,
+/// titled `name`, the target and its mean absolute error; three panels a
+/// row.
+pub fn predicted_vs_true_targets(
+    stem: &Path,
+    name: &str,
+    targets: &[TargetPanel],
+) -> Result<Vec<PathBuf>> {
+    let panels: Vec<_> = targets
+        .iter()
+        .map(|t| {
+            let lo = t.points.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+            let hi = t
+                .points
+                .iter()
+                .map(|p| p.0)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let a = axes(
+                &format!("{name}: {}, MAE {:.3} {}", t.name, t.mae, t.unit),
+                &format!("true {} ({})", t.name, t.unit),
+                &format!("predicted {} ({})", t.name, t.unit),
+            );
+            let series = vec![
+                Series {
+                    name: "prediction".into(),
+                    points: t.points.clone(),
+                    style: Style::Points,
+                },
+                Series {
+                    name: "ideal".into(),
+                    points: vec![(lo, lo), (hi, hi)],
+                    style: Style::Dashed,
+                },
+            ];
+            (a, series)
+        })
+        .collect();
+    let cols = targets.len().clamp(1, 3);
+    let rows = targets.len().div_ceil(cols).max(1) as u32;
+    grid(stem, cols, &panels, (600 * cols as u32, 480 * rows)).map_err(Into::into)
+}
+
 /// Fig. 5.3: the trajectory, with the true contour dashed on top of it.
 pub fn trajectory(
     stem: &Path,

@@ -2,7 +2,10 @@
 //!
 //! A dataset directory holds
 //! - `inputs.npy`: N x 2P float32 pin displacements in pixels (all x, then all y);
-//! - `targets.npy`: N x 2 float32, edge position r (mm) and angle theta (deg);
+//! - `targets.npy`: N x T float32, the T targets in `meta.json`'s order and
+//!   units (`target_names`, `target_units`, `target_circular`); for the edge
+//!   task (and every dataset written before targets were named) T = 2, the
+//!   edge position r (mm) and angle theta (deg);
 //! - `meta.json`: how it was made ([`DatasetMeta`]): the layout of the
 //!   inputs, the reference pins they are ordered by, and for imported or
 //!   twinned real sets the image name of every row;
@@ -12,6 +15,7 @@ use crate::fsutil::StagedDir;
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use tactrace_learn::{ModelTarget, Unit};
 
 /// Provenance of a dataset, written as `meta.json`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -24,8 +28,13 @@ pub struct DatasetMeta {
     pub seed: Option<u64>,
     pub samples: usize,
     pub pins: usize,
-    /// Target column names and units.
-    pub targets: [String; 2],
+    /// Target column names and units, one per column of `targets.npy`
+    /// (for display: `r_mm (pose_2)`, `pose_3 (mm)`).
+    pub targets: Vec<String>,
+    /// The targets' label columns, units and circular flags (absent in
+    /// datasets of the edge task written before: r mm, theta deg).
+    #[serde(flatten)]
+    pub target_columns: TargetColumns,
     /// Frames on which some pin was not matched (filled from its neighbours).
     pub frames_with_missing_pins: usize,
     /// Reference (undeformed) pin centres, px.
@@ -42,6 +51,89 @@ pub struct DatasetMeta {
     pub images: Vec<String>,
 }
 
+/// What each column of `targets.npy` is: its label column, unit and
+/// whether it is circular (three lists of T, written into `meta.json` as
+/// `target_names`, `target_units`, `target_circular`). Empty in datasets
+/// of the edge task written before targets were named.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TargetColumns {
+    /// The label columns.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub target_names: Vec<String>,
+    /// Their units.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub target_units: Vec<Unit>,
+    /// Whether each is circular (an angle over the full circle).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub target_circular: Vec<bool>,
+}
+
+impl TargetColumns {
+    /// The columns of `targets`, in order.
+    pub fn of(targets: &[ModelTarget]) -> Self {
+        Self {
+            target_names: targets.iter().map(|t| t.name.clone()).collect(),
+            target_units: targets.iter().map(|t| t.unit).collect(),
+            target_circular: targets.iter().map(|t| t.circular).collect(),
+        }
+    }
+
+    /// The display names of `targets` (`pose_3 (mm)`), for `meta.targets`.
+    pub fn display(targets: &[ModelTarget]) -> Vec<String> {
+        targets
+            .iter()
+            .map(|t| format!("{} ({})", t.name, t.unit.as_str()))
+            .collect()
+    }
+}
+
+impl DatasetMeta {
+    /// The targets of the dataset's columns, in order: as `meta.json`
+    /// names them, or for a dataset written before targets were named,
+    /// the edge task's r (mm) and theta (deg), named by the label column
+    /// its display name gives (`r_mm (pose_2)` -> `pose_2`) or as shown.
+    pub fn model_targets(&self) -> std::result::Result<Vec<ModelTarget>, String> {
+        let c = &self.target_columns;
+        if c.target_names.is_empty() {
+            if self.targets.len() != 2 {
+                return Err(format!(
+                    "{} targets without target_names: name each target (target_names, \
+                     target_units)",
+                    self.targets.len()
+                ));
+            }
+            let name = |s: &str| match (s.find('('), s.rfind(')')) {
+                (Some(a), Some(b)) if a < b => s[a + 1..b].trim().to_string(),
+                _ => s.to_string(),
+            };
+            return Ok(vec![
+                ModelTarget::new(name(&self.targets[0]), Unit::Mm),
+                ModelTarget::new(name(&self.targets[1]), Unit::Deg),
+            ]);
+        }
+        let t = c.target_names.len();
+        let circular_ok = c.target_circular.is_empty() || c.target_circular.len() == t;
+        if c.target_units.len() != t || !circular_ok || self.targets.len() != t {
+            return Err(format!(
+                "{t} target_names, {} target_units, {} target_circular and {} targets: \
+                 each lists every target",
+                c.target_units.len(),
+                c.target_circular.len(),
+                self.targets.len()
+            ));
+        }
+        let out: Vec<ModelTarget> = (0..t)
+            .map(|k| ModelTarget {
+                name: c.target_names[k].clone(),
+                unit: c.target_units[k],
+                circular: c.target_circular.get(k).copied().unwrap_or(false),
+            })
+            .collect();
+        tactrace_learn::check_targets(&out).map_err(|e| e.to_string())?;
+        Ok(out)
+    }
+}
+
 /// The layout of `inputs.npy`, as written into `meta.json`.
 pub const INPUT_LAYOUT: &str =
     "N x 2P float32, pixels: the P pin x-displacements, then the P y-displacements, pins in reference_pins order";
@@ -55,7 +147,8 @@ fn input_layout() -> String {
 pub struct TapData {
     /// N x 2P displacements, row-major.
     pub inputs: Vec<f32>,
-    /// N x 2 targets (r mm, theta deg), row-major.
+    /// N x T targets (the meta's targets, in order; the edge task's r mm
+    /// and theta deg), row-major.
     pub targets: Vec<f32>,
     pub meta: DatasetMeta,
 }
@@ -76,6 +169,20 @@ impl TapData {
             .checked_div(self.meta.samples)
             .unwrap_or(0)
     }
+    /// Targets per sample (T).
+    pub fn n_targets(&self) -> usize {
+        self.targets
+            .len()
+            .checked_div(self.meta.samples)
+            .unwrap_or(self.meta.targets.len())
+    }
+
+    /// Targets of sample `i`.
+    pub fn target_row(&self, i: usize) -> &[f32] {
+        let t = self.n_targets();
+        &self.targets[i * t..(i + 1) * t]
+    }
+
     /// Split into (first, second) with `frac` of the samples in the first,
     /// after a seeded shuffle; metadata is copied with the counts updated.
     pub fn split(&self, frac: f64, seed: u64) -> (TapData, TapData) {
@@ -107,12 +214,12 @@ impl TapData {
 
     /// The samples at `rows`, in that order.
     pub fn subset(&self, rows: &[usize]) -> TapData {
-        let d = self.dim();
+        let (d, t) = (self.dim(), self.n_targets());
         let mut inputs = Vec::with_capacity(rows.len() * d);
-        let mut targets = Vec::with_capacity(rows.len() * 2);
+        let mut targets = Vec::with_capacity(rows.len() * t);
         for &r in rows {
             inputs.extend_from_slice(&self.inputs[r * d..(r + 1) * d]);
-            targets.extend_from_slice(&self.targets[r * 2..r * 2 + 2]);
+            targets.extend_from_slice(self.target_row(r));
         }
         let mut meta = self.meta.clone();
         meta.samples = rows.len();
@@ -133,7 +240,7 @@ impl TapData {
             self.targets.clone(),
             self.len(),
             self.dim(),
-            2,
+            self.n_targets(),
         )
     }
 }
@@ -154,9 +261,11 @@ pub fn write_dataset(
             reason: format!("inputs shape: {e}"),
         })?;
     let targets =
-        Array2::from_shape_vec((n, 2), data.targets.clone()).map_err(|e| StoreError::Format {
-            path: dir.join("targets.npy"),
-            reason: format!("targets shape: {e}"),
+        Array2::from_shape_vec((n, data.n_targets()), data.targets.clone()).map_err(|e| {
+            StoreError::Format {
+                path: dir.join("targets.npy"),
+                reason: format!("targets shape: {e}"),
+            }
         })?;
     let p = stage.path().join("inputs.npy");
     ndarray_npy::write_npy(&p, &inputs).map_err(|e| StoreError::Write {
@@ -200,11 +309,18 @@ pub fn read_dataset(dir: &Path) -> Result<TapData> {
     let inputs: Array2<f32> = read_npy(&dir.join("inputs.npy"))?;
     let targets: Array2<f32> = read_npy(&dir.join("targets.npy"))?;
     let (n, dim) = inputs.dim();
-    if targets.dim() != (n, 2) {
+    let t = meta.targets.len();
+    if let Err(reason) = meta.model_targets() {
+        return Err(StoreError::Format {
+            path: meta_path,
+            reason,
+        });
+    }
+    if targets.dim() != (n, t) {
         return Err(StoreError::Format {
             path: dir.join("targets.npy"),
             reason: format!(
-                "expected {n} x 2 targets to match inputs.npy, found {} x {}",
+                "expected {n} x {t} targets to match inputs.npy and meta.json, found {} x {}",
                 targets.dim().0,
                 targets.dim().1
             ),

@@ -44,7 +44,7 @@ pub mod training_record;
 pub use collection::{LabelledCollection, LabelledRow, TapFields, TargetSpec};
 pub use config_file::{load_config, overlay, resolved_config_toml};
 pub use csv_text::CsvText;
-pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData};
+pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData, TargetColumns};
 pub use error::{read_err, write_err, Result, StoreError};
 pub use fsutil::{
     check_output_dir, check_output_file, read_text, write_atomic, write_output_file, StagedDir,

@@ -88,12 +88,7 @@ impl TrainingRecord {
         let d = data.dim();
         let row_hashes = train_rows
             .iter()
-            .map(|&r| {
-                row_hash(
-                    &data.inputs[r * d..(r + 1) * d],
-                    &data.targets[2 * r..2 * r + 2],
-                )
-            })
+            .map(|&r| row_hash(&data.inputs[r * d..(r + 1) * d], data.target_row(r)))
             .collect();
         let real = data.meta.source == "real" && data.meta.images.len() == data.len();
         let images = if real {
@@ -197,12 +192,7 @@ pub fn row_hash(inputs: &[f32], targets: &[f32]) -> String {
 pub fn row_hashes(data: &TapData) -> Vec<String> {
     let d = data.dim();
     (0..data.len())
-        .map(|r| {
-            row_hash(
-                &data.inputs[r * d..(r + 1) * d],
-                &data.targets[2 * r..2 * r + 2],
-            )
-        })
+        .map(|r| row_hash(&data.inputs[r * d..(r + 1) * d], data.target_row(r)))
         .collect()
 }
 

@@ -131,7 +131,8 @@ pub fn run(
 
 /// The perception of a rig whose undeformed frame is `reference`: refused
 /// (before anything moves) when the frame lists its pins otherwise than the
-/// model's training data.
+/// model's training data, or when the model predicts no edge pose (one
+/// target in mm, one in deg: the controller's r and theta).
 pub fn perception_for(
     reference: &Frame,
     model: &StoredModel,
@@ -142,6 +143,7 @@ pub fn perception_for(
         extractor.tracker.reference(),
         Path::new("the rig's reference frame"),
     )?;
+    net.edge_roles()?;
     Ok(Perception::new(
         extractor,
         net.clone(),

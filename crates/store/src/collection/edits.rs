@@ -1,7 +1,9 @@
 //! Changes to a collection as the CLI's flags and the Python package's
 //! keyword arguments give them (text, `none` for no column), turned into
 //! a checked collection in one place.
-use super::{CollectionError, KeepRule, LabelledCollection, RowSelection, TapColumns, TargetSpec};
+use super::{
+    CollectionError, KeepRule, LabelledCollection, RowSelection, TapColumns, Target, TargetSpec,
+};
 use std::path::PathBuf;
 use tactrace_vision::BlobParams;
 
@@ -18,6 +20,10 @@ pub struct CollectionEdits {
     pub r_column: Option<String>,
     /// The edge angle column, deg.
     pub theta_column: Option<String>,
+    /// Every target as `COLUMN:UNIT[:circular]` (`--target`, repeatable),
+    /// in order; empty keeps the collection's (or the r and theta columns
+    /// above). Given with `r_column` or `theta_column`, refused.
+    pub target_list: Vec<String>,
     /// The tap's vertical offset column; `none` or empty: no column.
     pub depth_column: Option<String>,
     /// The shear columns `x,y,rotation`; `none` or empty: no shear.
@@ -41,7 +47,19 @@ impl LabelledCollection {
         if let Some(r) = e.reference {
             c = c.with_reference_frame(r);
         }
-        if e.image_column.is_some() || e.r_column.is_some() || e.theta_column.is_some() {
+        if !e.target_list.is_empty() {
+            if e.r_column.is_some() || e.theta_column.is_some() {
+                return Err(CollectionError::TargetsAndEdgeColumns);
+            }
+            let targets = e
+                .target_list
+                .iter()
+                .map(|t| Target::parse(t))
+                .collect::<Result<Vec<_>, _>>()?;
+            let image = e.image_column.as_deref().unwrap_or(c.spec().image_column());
+            let spec = TargetSpec::new(image, targets)?;
+            c = c.with_spec(spec);
+        } else if e.image_column.is_some() || e.r_column.is_some() || e.theta_column.is_some() {
             let [r, theta] = c.spec().edge_columns()?;
             let spec = TargetSpec::edge(
                 e.image_column.as_deref().unwrap_or(c.spec().image_column()),

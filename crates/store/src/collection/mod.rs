@@ -67,13 +67,28 @@ pub enum CollectionError {
     /// One column named for two labels.
     #[error("the column `{column}` is named for two labels: each needs its own column")]
     ColumnTwice { column: String },
-    /// A spec that is not the edge task's two targets where a dataset is
-    /// made (datasets and models hold r and theta for now).
+    /// A spec that is not the edge task's two targets where an edge is
+    /// replayed or simulated (twin, calibrate, the real-frame world).
     #[error(
-        "the targets are {targets}: this command makes datasets of an edge task's two \
+        "the targets are {targets}: this command replays or simulates an edge task's two \
          targets, an edge position (mm) then an angle (deg)"
     )]
     NotAnEdgeTask { targets: String },
+    /// A `--target` that is not `COLUMN:UNIT[:circular]`.
+    #[error(
+        "the target `{text}`: expected COLUMN:UNIT or COLUMN:UNIT:circular with unit mm or \
+         deg (e.g. pose_6:deg:circular)"
+    )]
+    TargetText { text: String },
+    /// `--target` given with `--r-column` / `--theta-column`.
+    #[error(
+        "--target names every target: give the position and angle columns as --target \
+         COLUMN:mm --target COLUMN:deg, not with --r-column/--theta-column"
+    )]
+    TargetsAndEdgeColumns,
+    /// A circular target not in degrees.
+    #[error("the target `{column}` is circular but not in degrees: only an angle wraps")]
+    CircularNotDegrees { column: String },
     /// A row rule that is not `N%M==K` with `0 <= K < M`.
     #[error(
         "the row rule `{text}` (--replay-keep): expected `N%M==K` with 0 <= K < M (frame \

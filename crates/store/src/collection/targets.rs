@@ -6,25 +6,8 @@ use super::CollectionError;
 use serde::{Deserialize, Serialize};
 
 /// The unit of a target column (millimetres and degrees at every public
-/// boundary).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Unit {
-    /// Millimetres: a position or a depth.
-    Mm,
-    /// Degrees: an angle.
-    Deg,
-}
-
-impl Unit {
-    /// Its name as written in files (`mm`, `deg`).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Unit::Mm => "mm",
-            Unit::Deg => "deg",
-        }
-    }
-}
+/// boundary): the models' own, so a spec and a model name units alike.
+pub use tactrace_learn::Unit;
 
 /// One target: a label column, its unit, and whether it is circular.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -46,6 +29,45 @@ impl Target {
             unit,
             circular: false,
         }
+    }
+
+    /// A target as the CLI writes it: `COLUMN:UNIT[:circular]`, unit `mm`
+    /// or `deg` (e.g. `pose_6:deg:circular`).
+    pub fn parse(text: &str) -> Result<Self, CollectionError> {
+        let bad = || CollectionError::TargetText {
+            text: text.to_string(),
+        };
+        let parts: Vec<&str> = text.split(':').map(str::trim).collect();
+        let (column, unit, circular) = match parts.as_slice() {
+            [c, u] => (c, u, false),
+            [c, u, "circular"] => (c, u, true),
+            _ => return Err(bad()),
+        };
+        let unit = match *unit {
+            "mm" => Unit::Mm,
+            "deg" => Unit::Deg,
+            _ => return Err(bad()),
+        };
+        Ok(Self {
+            column: column.to_string(),
+            unit,
+            circular,
+        })
+    }
+
+    /// The target as a model names it.
+    pub fn model_target(&self) -> tactrace_learn::ModelTarget {
+        tactrace_learn::ModelTarget {
+            name: self.column.clone(),
+            unit: self.unit,
+            circular: self.circular,
+        }
+    }
+
+    /// `COLUMN:UNIT[:circular]`, as [`Target::parse`] reads it.
+    pub fn text(&self) -> String {
+        let circular = if self.circular { ":circular" } else { "" };
+        format!("{}:{}{circular}", self.column, self.unit.as_str())
     }
 }
 
@@ -110,6 +132,11 @@ impl TargetSpec {
                 });
             }
         }
+        if let Some(t) = targets.iter().find(|t| t.circular && t.unit != Unit::Deg) {
+            return Err(CollectionError::CircularNotDegrees {
+                column: t.column.clone(),
+            });
+        }
         Ok(Self {
             image_column,
             targets,
@@ -135,9 +162,15 @@ impl TargetSpec {
         &self.targets
     }
 
+    /// The targets as a model names them, in order.
+    pub fn model_targets(&self) -> Vec<tactrace_learn::ModelTarget> {
+        self.targets.iter().map(Target::model_target).collect()
+    }
+
     /// The columns of an edge task's two targets, position (mm) then
-    /// angle (deg): datasets and models hold these two targets for now,
-    /// so any other spec is refused by the commands that make them.
+    /// angle (deg): the commands that replay or simulate an edge (`twin`,
+    /// `calibrate`, `follow --replay`) refuse any other spec; `import` and
+    /// the models take any.
     pub fn edge_columns(&self) -> Result<[&str; 2], CollectionError> {
         match self.targets.as_slice() {
             [r, theta] if r.unit == Unit::Mm && theta.unit == Unit::Deg => {
@@ -179,6 +212,29 @@ mod tests {
         // Read from a file, the same checks.
         let text = "image_column = \"image_name\"\ntargets = []\n";
         assert!(toml::from_str::<TargetSpec>(text).is_err());
+    }
+
+    #[test]
+    fn issue21_targets_parse_as_the_cli_writes_them() {
+        let t = Target::parse("pose_6:deg:circular").unwrap();
+        assert_eq!(
+            (t.column.as_str(), t.unit, t.circular),
+            ("pose_6", Unit::Deg, true)
+        );
+        assert_eq!(t.text(), "pose_6:deg:circular");
+        assert_eq!(
+            Target::parse("pose_2:mm").unwrap(),
+            Target::new("pose_2", Unit::Mm)
+        );
+        for bad in ["pose_2", "pose_2:cm", "pose_2:mm:round", "a:mm:circular:x"] {
+            let err = Target::parse(bad).unwrap_err().to_string();
+            assert!(err.contains(bad), "{err}");
+        }
+        // Only an angle wraps.
+        let err = TargetSpec::new("image", vec![Target::parse("d:mm:circular").unwrap()])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("`d`"), "{err}");
     }
 
     #[test]

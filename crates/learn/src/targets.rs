@@ -1,0 +1,242 @@
+//! What a pose model predicts: N named targets, each in millimetres or
+//! degrees, an angle possibly circular (over the full circle, its errors
+//! wrapping at +-180 deg). A circular target reaches the networks as two
+//! columns, its sine and cosine, and is read back by `atan2`, so a net
+//! never has to jump from +180 to -180; every other target is one column.
+//! The encoded columns are then scaled by their spread (the model's target
+//! standardiser), so mm and degrees weigh alike.
+use crate::error::LearnError;
+use serde::{Deserialize, Serialize};
+
+/// The unit of a target (millimetres and degrees at every public boundary).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Unit {
+    /// Millimetres: a position or a depth.
+    Mm,
+    /// Degrees: an angle.
+    Deg,
+}
+
+impl Unit {
+    /// Its name as written in files (`mm`, `deg`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Unit::Mm => "mm",
+            Unit::Deg => "deg",
+        }
+    }
+}
+
+/// One target a model predicts: its name (the labels column), unit and
+/// whether it is circular.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelTarget {
+    /// The target's name (its column in the labels file).
+    pub name: String,
+    /// Millimetres or degrees.
+    pub unit: Unit,
+    /// An angle over the full circle: learnt as (sin, cos), errors wrapped.
+    #[serde(default)]
+    pub circular: bool,
+}
+
+impl ModelTarget {
+    /// A target that is not circular.
+    pub fn new(name: impl Into<String>, unit: Unit) -> Self {
+        Self {
+            name: name.into(),
+            unit,
+            circular: false,
+        }
+    }
+
+    /// A circular angle (degrees).
+    pub fn circular(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            unit: Unit::Deg,
+            circular: true,
+        }
+    }
+
+    /// Columns it takes at the networks: 2 (sin, cos) when circular, else 1.
+    pub fn width(&self) -> usize {
+        if self.circular {
+            2
+        } else {
+            1
+        }
+    }
+
+    /// The absolute error of `predicted` against `truth`, wrapped into
+    /// [0, 180] deg when circular (179 against -179 is 2 deg).
+    pub fn abs_error(&self, predicted: f64, truth: f64) -> f64 {
+        let d = predicted - truth;
+        if self.circular {
+            wrap_deg(d).abs()
+        } else {
+            d.abs()
+        }
+    }
+}
+
+/// `deg` wrapped into (-180, 180].
+pub fn wrap_deg(deg: f64) -> f64 {
+    let w = (deg + 180.0).rem_euclid(360.0) - 180.0;
+    if w == -180.0 {
+        180.0
+    } else {
+        w
+    }
+}
+
+/// The edge task's two targets, as every model before named targets had:
+/// `r` (mm) and `theta` (deg, not circular).
+pub fn edge_targets() -> Vec<ModelTarget> {
+    vec![
+        ModelTarget::new("r", Unit::Mm),
+        ModelTarget::new("theta", Unit::Deg),
+    ]
+}
+
+/// Error unless `targets` names at least one target, each name once, and
+/// only angles are circular.
+pub fn check_targets(targets: &[ModelTarget]) -> Result<(), LearnError> {
+    if targets.is_empty() {
+        return Err(LearnError::Targets {
+            reason: "a model needs at least one target".into(),
+        });
+    }
+    for (k, t) in targets.iter().enumerate() {
+        if targets[..k].iter().any(|o| o.name == t.name) {
+            return Err(LearnError::Targets {
+                reason: format!("the target `{}` is named twice", t.name),
+            });
+        }
+        if t.circular && t.unit != Unit::Deg {
+            return Err(LearnError::Targets {
+                reason: format!("the target `{}` is circular but not in degrees", t.name),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The encoded columns of each target, in order (`[k]` for a plain target,
+/// `[k, k + 1]` for a circular one's sine and cosine).
+pub fn encoded_columns(targets: &[ModelTarget]) -> Vec<Vec<usize>> {
+    let mut next = 0;
+    targets
+        .iter()
+        .map(|t| {
+            let cols: Vec<usize> = (next..next + t.width()).collect();
+            next += t.width();
+            cols
+        })
+        .collect()
+}
+
+/// One sample's targets (`values`, in the targets' units) as the networks'
+/// columns, appended to `out`.
+pub fn encode_into(targets: &[ModelTarget], values: &[f32], out: &mut Vec<f32>) {
+    for (t, &v) in targets.iter().zip(values) {
+        if t.circular {
+            let a = f64::from(v).to_radians();
+            out.push(a.sin() as f32);
+            out.push(a.cos() as f32);
+        } else {
+            out.push(v);
+        }
+    }
+}
+
+/// The networks' columns (unscaled) back to the targets' values: a
+/// circular target by `atan2(sin, cos)`, in degrees within (-180, 180].
+pub fn decode(targets: &[ModelTarget], encoded: &[f64]) -> Vec<f64> {
+    let mut k = 0;
+    targets
+        .iter()
+        .map(|t| {
+            let v = if t.circular {
+                wrap_deg(encoded[k].atan2(encoded[k + 1]).to_degrees())
+            } else {
+                encoded[k]
+            };
+            k += t.width();
+            v
+        })
+        .collect()
+}
+
+/// Mean absolute error of each target over the rows of `pred` and
+/// `truth` (rows of N values each, in the targets' units), circular ones
+/// wrapped. Rows beyond the shorter input are ignored; none gives NaN.
+pub fn target_mae(targets: &[ModelTarget], pred: &[Vec<f64>], truth: &[Vec<f64>]) -> Vec<f64> {
+    let n = pred.len().min(truth.len());
+    let mut sum = vec![0.0; targets.len()];
+    for (p, t) in pred.iter().zip(truth).take(n) {
+        for (j, target) in targets.iter().enumerate() {
+            sum[j] += target.abs_error(p[j], t[j]);
+        }
+    }
+    sum.into_iter().map(|s| s / n as f64).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn issue21_a_circular_target_round_trips_through_sin_and_cos() {
+        let targets = vec![ModelTarget::new("d", Unit::Mm), ModelTarget::circular("a")];
+        assert_eq!(encoded_columns(&targets), vec![vec![0], vec![1, 2]]);
+        for deg in [-179.5f32, -90.0, 0.0, 45.0, 179.9, 180.0] {
+            let mut enc = Vec::new();
+            encode_into(&targets, &[1.5, deg], &mut enc);
+            assert_eq!(enc.len(), 3);
+            let enc: Vec<f64> = enc.iter().map(|&v| f64::from(v)).collect();
+            let back = decode(&targets, &enc);
+            assert!((back[0] - 1.5).abs() < 1e-6);
+            assert!(
+                targets[1].abs_error(back[1], f64::from(deg)) < 1e-4,
+                "{deg} -> {back:?}"
+            );
+            assert!(back[1] > -180.0 && back[1] <= 180.0);
+        }
+    }
+
+    #[test]
+    fn issue21_wrapped_errors_of_circular_targets() {
+        let a = ModelTarget::circular("a");
+        assert!((a.abs_error(179.0, -179.0) - 2.0).abs() < 1e-12);
+        assert!((a.abs_error(-170.0, 170.0) - 20.0).abs() < 1e-12);
+        assert!((a.abs_error(10.0, 370.0)).abs() < 1e-12);
+        assert_eq!(a.abs_error(90.0, -90.0), 180.0);
+        let plain = ModelTarget::new("t", Unit::Deg);
+        assert_eq!(plain.abs_error(179.0, -179.0), 358.0);
+        let mae = target_mae(
+            &[a, plain],
+            &[vec![179.0, 1.0], vec![0.0, 3.0]],
+            &[vec![-179.0, 0.0], vec![4.0, 0.0]],
+        );
+        assert_eq!(mae, vec![3.0, 2.0]);
+        assert_eq!(wrap_deg(-180.0), 180.0);
+        assert_eq!(wrap_deg(540.0), 180.0);
+    }
+
+    #[test]
+    fn issue21_target_lists_are_checked() {
+        assert!(check_targets(&[]).is_err());
+        let twice = [
+            ModelTarget::new("a", Unit::Mm),
+            ModelTarget::new("a", Unit::Deg),
+        ];
+        assert!(check_targets(&twice).is_err());
+        let mut mm = ModelTarget::new("a", Unit::Mm);
+        mm.circular = true;
+        assert!(check_targets(&[mm]).is_err());
+        assert!(check_targets(&edge_targets()).is_ok());
+    }
+}

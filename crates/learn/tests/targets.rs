@@ -1,0 +1,164 @@
+//! Models of N named targets (issue 21, item 4): every kind fits and
+//! round-trips three targets, a circular angle learnt as (sin, cos) is
+//! learnt over the full circle where a scalar fails at the wrap, and a
+//! model file written before the targets were named (version 2) still
+//! loads as the edge task's r and theta.
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use tactrace_learn::{
+    target_mae, Dataset, LearnError, ModelConfig, ModelKind, ModelTarget, PoseModel, Preset, Unit,
+};
+
+/// Features of a tap with a depth (mm), a tilt (deg) and an angle over
+/// the full circle (deg): smooth functions of the depth, the tilt and the
+/// angle's direction (so the angle is observable everywhere).
+fn three_targets(n: usize, seed: u64) -> Dataset {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut mix = ChaCha8Rng::seed_from_u64(7);
+    let dim = 16;
+    let coef: Vec<[f32; 4]> = (0..dim)
+        .map(|_| std::array::from_fn(|_| mix.random_range(-1.5..1.5)))
+        .collect();
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    for _ in 0..n {
+        let depth: f32 = rng.random_range(0.0..2.0);
+        let tilt: f32 = rng.random_range(-10.0..10.0);
+        let angle: f32 = rng.random_range(-180.0..180.0);
+        let (s, c) = angle.to_radians().sin_cos();
+        for k in &coef {
+            x.push(
+                2.0 * (k[0] * depth + k[1] * tilt / 10.0 + k[2] * s + k[3] * c).tanh()
+                    + 0.005 * rng.random_range(-1.0..1.0),
+            );
+        }
+        y.extend([depth, tilt, angle]);
+    }
+    Dataset::new(x, y, n, dim, 3).unwrap()
+}
+
+fn targets(circular: bool) -> Vec<ModelTarget> {
+    let mut angle = ModelTarget::new("pose_6", Unit::Deg);
+    angle.circular = circular;
+    vec![
+        ModelTarget::new("pose_3", Unit::Mm),
+        ModelTarget::new("pose_4", Unit::Deg),
+        angle,
+    ]
+}
+
+fn small(kind: ModelKind, epochs: usize) -> ModelConfig {
+    let mut cfg = ModelConfig::preset(kind, Preset::Default);
+    cfg.epochs = epochs;
+    for net in [&mut cfg.pose, &mut cfg.position, &mut cfg.angle]
+        .into_iter()
+        .flatten()
+    {
+        net.hidden = vec![48];
+        if net.n_components.is_some() {
+            net.n_components = Some(10);
+        }
+    }
+    cfg
+}
+
+fn truth(ds: &Dataset) -> Vec<Vec<f64>> {
+    (0..ds.n)
+        .map(|i| ds.y_row(i).iter().map(|&v| f64::from(v)).collect())
+        .collect()
+}
+
+#[test]
+fn issue21_every_kind_fits_three_targets_and_round_trips_them() {
+    let data = three_targets(300, 1);
+    let outputs = targets(true);
+    for kind in [
+        ModelKind::DisDenNN,
+        ModelKind::PcaDenNN,
+        ModelKind::PDenNN,
+        ModelKind::Mlp,
+    ] {
+        let (model, history) =
+            PoseModel::fit_targets(&small(kind, 5), &outputs, &data, None, &mut |_| {}).unwrap();
+        assert_eq!(model.outputs(), outputs.as_slice());
+        let nets = model.architecture();
+        if matches!(kind, ModelKind::PDenNN | ModelKind::Mlp) {
+            // One net a target, named by it; the circular one has 2 outputs.
+            let names: Vec<&str> = nets.iter().map(|(n, _)| n.as_str()).collect();
+            assert_eq!(names, ["pose_3", "pose_4", "pose_6"], "{kind}");
+            assert_eq!(nets[2].1.last(), Some(&2));
+        } else {
+            assert_eq!(nets[0].1.last(), Some(&4), "{kind}: 1 + 1 + 2 outputs");
+        }
+        assert!(history.epochs.len() == 5);
+        let pred = model.predict_targets(data.x_row(3)).unwrap();
+        assert_eq!(pred.len(), 3);
+        assert!(pred[2] > -180.0 && pred[2] <= 180.0);
+        // Not an edge model: the edge pose is refused, by type.
+        assert!(matches!(
+            model.predict(data.x_row(3)),
+            Err(LearnError::NotAnEdgeModel { .. })
+        ));
+        let (json, weights) = model.to_bytes().unwrap();
+        assert!(json.contains("\"circular\": true"), "{json}");
+        let back = PoseModel::from_bytes(&json, &weights).unwrap();
+        assert_eq!(back.outputs(), outputs.as_slice());
+        assert_eq!(back.predict_targets(data.x_row(3)).unwrap(), pred);
+    }
+}
+
+#[test]
+fn issue21_a_full_circle_angle_is_learnt_as_sin_cos_where_a_scalar_fails() {
+    let train = three_targets(1500, 2);
+    let test = three_targets(400, 3);
+    let mae = |circular: bool| {
+        let outputs = targets(circular);
+        let (model, _) = PoseModel::fit_targets(
+            &small(ModelKind::PDenNN, 30),
+            &outputs,
+            &train,
+            None,
+            &mut |_| {},
+        )
+        .unwrap();
+        let pred = model.predict_targets_batch(&test).unwrap();
+        // Both scored wrapped: the scalar's failure is not the metric's.
+        target_mae(&targets(true), &pred, &truth(&test))
+    };
+    let circular = mae(true);
+    let scalar = mae(false);
+    assert!(circular[2] < 2.0, "sin/cos angle MAE {circular:?}");
+    assert!(
+        scalar[2] > 3.0 * circular[2],
+        "a scalar angle should fail at the wrap: {scalar:?} vs {circular:?}"
+    );
+    // The other targets are learnt either way.
+    assert!(circular[0] < 0.25 && circular[1] < 1.5, "{circular:?}");
+}
+
+#[test]
+fn issue21_a_version_2_model_file_loads_as_the_edge_task() {
+    let data = {
+        let three = three_targets(120, 4);
+        let y: Vec<f32> = (0..three.n)
+            .flat_map(|i| [three.y_row(i)[0], three.y_row(i)[1]])
+            .collect();
+        Dataset::new(three.x.clone(), y, three.n, three.dim_x, 2).unwrap()
+    };
+    let (model, _) = PoseModel::fit(&small(ModelKind::PDenNN, 2), &data, &mut |_| {}).unwrap();
+    let (json, weights) = model.to_bytes().unwrap();
+    // A file as version 2 wrote it: no `outputs`.
+    let mut value: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let obj = value.as_object_mut().unwrap();
+    assert!(obj.remove("outputs").is_some());
+    obj.insert("version".into(), 2.into());
+    let old = serde_json::to_string(&value).unwrap();
+    let back = PoseModel::from_bytes(&old, &weights).unwrap();
+    let names: Vec<&str> = back.outputs().iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(names, ["r", "theta"]);
+    assert_eq!(
+        back.predict(data.x_row(0)).unwrap(),
+        model.predict(data.x_row(0)).unwrap()
+    );
+    let nets: Vec<String> = back.architecture().into_iter().map(|(n, _)| n).collect();
+    assert_eq!(nets, ["position", "angle"]);
+}

@@ -1,0 +1,300 @@
+//! Named targets end to end (issue 21, item 4): `import --target` of three
+//! targets (one circular), `train` and `validate --json` with
+//! `per_target`, `import --like` for another split, and a model folder of
+//! the edge task written before targets were named (model format 2).
+mod util;
+use std::path::Path;
+use util::{real_data, tactrace, Run, TempDir};
+
+fn ok(r: &Run, what: &str) {
+    assert_eq!(r.code, 0, "{what}: {}", r.stderr);
+}
+
+/// The header and the first `n` rows of the real set's labels whose frame
+/// number N has `N % 5` in `parts`, into `out`.
+fn part_csv(data: &Path, out: &Path, parts: &[u64], n: usize) {
+    let text = std::fs::read_to_string(data.join("targets.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut rows = vec![lines.next().unwrap().to_string()];
+    rows.extend(
+        lines
+            .filter(|l| {
+                let name = l.split(',').next().unwrap_or_default();
+                tactrace_store::collection::frame_number(name)
+                    .is_some_and(|k| parts.contains(&(k % 5)))
+            })
+            .take(n)
+            .map(str::to_string),
+    );
+    std::fs::write(out, rows.join("\n") + "\n").unwrap();
+}
+
+/// A small, fast model: 3 epochs of small nets.
+const SMALL: &str = "[position]\nn_components = 10\nhidden = [32]\nlearning_rate = 18.0\n\
+    output_learning_rate = 5.0\nbeta = 1.0\n\n[angle]\nn_components = 10\nhidden = [32]\n\
+    learning_rate = 18.0\noutput_learning_rate = 5.0\nbeta = 1.0\n";
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"))
+}
+
+#[test]
+fn issue21_three_targets_import_train_validate_and_import_like() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("targets3");
+    part_csv(&data, &t.join("fit.csv"), &[2, 3, 4], 60);
+    part_csv(&data, &t.join("score.csv"), &[0], 30);
+    std::fs::write(t.join("small.toml"), SMALL).unwrap();
+    let s = |p: &Path| p.display().to_string();
+    let (frames, init) = (s(&data.join("frames")), s(&data.join("frames/init_0.png")));
+    let r = tactrace(
+        &t.0,
+        &[
+            "import",
+            "--frames",
+            &frames,
+            "--targets",
+            "fit.csv",
+            "--reference",
+            &init,
+            "--target",
+            "pose_2:mm",
+            "--target",
+            "pose_6:deg:circular",
+            "--target",
+            "pose_3:mm",
+            "--out",
+            "fit",
+        ],
+    );
+    ok(&r, "import --target");
+    let meta = json(&std::fs::read_to_string(t.join("fit/meta.json")).unwrap());
+    assert_eq!(
+        meta["target_names"],
+        json(r#"["pose_2", "pose_6", "pose_3"]"#)
+    );
+    assert_eq!(meta["target_units"], json(r#"["mm", "deg", "mm"]"#));
+    assert_eq!(meta["target_circular"], json("[false, true, false]"));
+    let fit = tactrace_store::read_dataset(&t.join("fit")).unwrap();
+    assert_eq!(fit.n_targets(), 3);
+    assert_eq!(fit.len(), 60);
+
+    // Another split with the same reference, detector and targets.
+    let r = tactrace(
+        &t.0,
+        &[
+            "import",
+            "--frames",
+            &frames,
+            "--targets",
+            "score.csv",
+            "--like",
+            "fit",
+            "--out",
+            "score",
+        ],
+    );
+    ok(&r, "import --like");
+    let score = tactrace_store::read_dataset(&t.join("score")).unwrap();
+    assert_eq!(score.meta.target_columns, fit.meta.target_columns);
+    assert_eq!(score.meta.reference_pins, fit.meta.reference_pins);
+    assert_eq!(
+        score.meta.settings["import"]["spec"],
+        fit.meta.settings["import"]["spec"]
+    );
+    assert_eq!(
+        score.meta.settings["import"]["blob"],
+        fit.meta.settings["import"]["blob"]
+    );
+    assert_eq!(score.len(), 30);
+    // --like takes the reference and targets from the dataset: not both.
+    let r = tactrace(
+        &t.0,
+        &[
+            "import",
+            "--frames",
+            &frames,
+            "--targets",
+            "score.csv",
+            "--like",
+            "fit",
+            "--target",
+            "pose_2:mm",
+            "--out",
+            "x",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+
+    for kind in ["pdennn", "mlp"] {
+        let out = format!("m-{kind}");
+        let r = tactrace(
+            &t.0,
+            &[
+                "train",
+                "--train",
+                "fit",
+                "--model",
+                kind,
+                "--config",
+                "small.toml",
+                "--epochs",
+                "3",
+                "--out",
+                &out,
+            ],
+        );
+        ok(&r, "train");
+        let r = tactrace(
+            &t.0,
+            &["validate", "--model", &out, "--data", "score", "--json"],
+        );
+        ok(&r, "validate --json");
+        let v = json(&r.stdout);
+        let per = &v["per_target"];
+        for (name, unit, circular) in [
+            ("pose_2", "mm", false),
+            ("pose_6", "deg", true),
+            ("pose_3", "mm", false),
+        ] {
+            assert_eq!(per[name]["unit"], unit, "{v}");
+            assert_eq!(per[name]["circular"], circular, "{v}");
+            let mae = per[name]["mae"].as_f64().unwrap();
+            assert!(mae.is_finite() && mae >= 0.0, "{v}");
+        }
+        // A wrapped angle error is at most 180 deg.
+        assert!(per["pose_6"]["mae"].as_f64().unwrap() <= 180.0);
+        // Today's keys stay: the mm targets' mean, the deg target's.
+        let mm =
+            (per["pose_2"]["mae"].as_f64().unwrap() + per["pose_3"]["mae"].as_f64().unwrap()) / 2.0;
+        assert!(
+            (v["position_mae_mm"].as_f64().unwrap() - mm).abs() < 1e-9,
+            "{v}"
+        );
+        assert_eq!(v["angle_mae_deg"], per["pose_6"]["mae"]);
+        assert_eq!(v["samples"], 30);
+        // The printed report names every target; the figure has a panel each.
+        let plots = format!("plots-{kind}");
+        let r = tactrace(
+            &t.0,
+            &[
+                "validate", "--model", &out, "--data", "score", "--plots", &plots,
+            ],
+        );
+        ok(&r, "validate --plots");
+        let svg = std::fs::read_to_string(t.join(&plots).join("predicted_vs_true.svg")).unwrap();
+        for name in ["true pose_2 (mm)", "true pose_6 (deg)", "true pose_3 (mm)"] {
+            assert!(svg.contains(name), "{name} not in the figure");
+        }
+        for name in ["pose_2: ", "pose_6: ", "pose_3: ", "(circular, wrapped)"] {
+            assert!(r.stdout.contains(name), "{}", r.stdout);
+        }
+        // predict --data: every target, predicted then true.
+        let r = tactrace(&t.0, &["predict", "--model", &out, "--data", "score"]);
+        ok(&r, "predict --data");
+        assert!(r.stdout.starts_with(
+            "pose_2_mm,pose_6_deg,pose_3_mm,true_pose_2_mm,true_pose_6_deg,true_pose_3_mm\n"
+        ));
+    }
+    // The servo loop takes an edge pose: a model of other targets is refused.
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow",
+            "--model",
+            "m-pdennn",
+            "--shape",
+            "disk",
+            "--replay",
+            &s(&data),
+            "--steps",
+            "3",
+            "--out",
+            "run",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("not an edge pose"), "{}", r.stderr);
+    assert!(!t.join("run").exists());
+    // A model of other targets is scored on a dataset of the same targets only.
+    let r = tactrace(
+        &t.0,
+        &[
+            "import",
+            "--frames",
+            &frames,
+            "--targets",
+            "score.csv",
+            "--reference",
+            &init,
+            "--out",
+            "edge",
+        ],
+    );
+    ok(&r, "import (edge)");
+    let r = tactrace(&t.0, &["validate", "--model", "m-pdennn", "--data", "edge"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("pose_3 (mm)"), "{}", r.stderr);
+}
+
+#[test]
+fn issue21_an_edge_model_folder_of_format_2_loads_and_scores_the_same() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("format2");
+    part_csv(&data, &t.join("fit.csv"), &[2, 3, 4], 50);
+    std::fs::write(t.join("small.toml"), SMALL).unwrap();
+    let s = |p: &Path| p.display().to_string();
+    let (frames, init) = (s(&data.join("frames")), s(&data.join("frames/init_0.png")));
+    let r = tactrace(
+        &t.0,
+        &[
+            "import",
+            "--frames",
+            &frames,
+            "--targets",
+            "fit.csv",
+            "--reference",
+            &init,
+            "--out",
+            "fit",
+        ],
+    );
+    ok(&r, "import");
+    let r = tactrace(
+        &t.0,
+        &[
+            "train",
+            "--train",
+            "fit",
+            "--config",
+            "small.toml",
+            "--epochs",
+            "2",
+            "--out",
+            "m",
+        ],
+    );
+    ok(&r, "train");
+    let validate = || {
+        let r = tactrace(
+            &t.0,
+            &["validate", "--model", "m", "--data", "fit", "--json"],
+        );
+        ok(&r, "validate");
+        json(&r.stdout)
+    };
+    let now = validate();
+    assert!(now["per_target"]["pose_2"]["mae"].is_number(), "{now}");
+    // The model as format 2 wrote it: no targets named.
+    let path = t.join("m/model.json");
+    let mut model = json(&std::fs::read_to_string(&path).unwrap());
+    let obj = model.as_object_mut().unwrap();
+    assert_eq!(obj["version"], 3);
+    assert!(obj.remove("outputs").is_some());
+    obj.insert("version".into(), 2.into());
+    std::fs::write(&path, serde_json::to_string_pretty(&model).unwrap()).unwrap();
+    let old = validate();
+    assert_eq!(old["position_mae_mm"], now["position_mae_mm"]);
+    assert_eq!(old["angle_mae_deg"], now["angle_mae_deg"]);
+    assert_eq!(old["per_target"], now["per_target"]);
+}

@@ -1,4 +1,5 @@
-//! Data commands: `collect`, `import`, `sensor render`, `sensor pins`.
+//! Data commands: `collect`, `import`, `sensor render`, `sensor pins`
+//! (`sensor inspect` in cmd_inspect.rs).
 use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::{Context, Result};
@@ -10,9 +11,9 @@ use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareCo
 use tactrace_lab::render::{TapPose, TapRenderer};
 use tactrace_lab::{import as imp, LabError};
 use tactrace_servo::RigConfig;
-use tactrace_store::collection::{bristol, CollectionEdits};
+use tactrace_store::collection::{bristol, CollectionEdits, Reference};
 use tactrace_store::frame_file::png_bytes;
-use tactrace_store::{dataset, fsutil, load_config, load_shape, LabelledCollection};
+use tactrace_store::{dataset, fsutil, load_config, load_shape, LabelledCollection, SightFile};
 use tactrace_vision::BlobParams;
 
 #[derive(Args)]
@@ -136,8 +137,12 @@ pub struct ImportArgs {
     #[command(flatten)]
     labels: LabelArgs,
     /// Blob detector parameters (TOML, OpenCV key names); default: the real256 preset.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sensor")]
     params: Option<PathBuf>,
+    /// Sensor settings (`tactrace sensor inspect`): how to read the frames
+    /// (grey, crop, dome mask, threshold, resize; the detector).
+    #[arg(long)]
+    sensor: Option<PathBuf>,
     /// Import only the first N rows.
     #[arg(long)]
     limit: Option<usize>,
@@ -158,9 +163,10 @@ pub struct LabelArgs {
     #[arg(long)]
     pub targets: PathBuf,
     /// The undeformed frame whose pins define the order (for `twin` also
-    /// the simulated sensor's rest layout).
+    /// the simulated sensor's rest layout). `import` without it estimates
+    /// the rest layout from the taps and records it in the dataset.
     #[arg(long)]
-    pub reference: PathBuf,
+    pub reference: Option<PathBuf>,
     /// Column of --targets naming each row's frame file.
     #[arg(long, default_value = bristol::IMAGE_COLUMN)]
     pub image_column: String,
@@ -173,6 +179,14 @@ pub struct LabelArgs {
 }
 
 impl LabelArgs {
+    /// The undeformed frame; an error when it was not given (commands
+    /// other than `import` need it).
+    pub fn reference_frame(&self) -> Result<&Path> {
+        self.reference.as_deref().ok_or_else(|| {
+            LabError::from(tactrace_store::collection::CollectionError::NoReferenceFrame).into()
+        })
+    }
+
     /// The collection of the frames in `frames` these flags describe,
     /// with `edits` (rows, blob detector, tap columns) made.
     pub fn collection(&self, frames: &Path, edits: CollectionEdits) -> Result<LabelledCollection> {
@@ -182,11 +196,11 @@ impl LabelArgs {
             theta_column: Some(self.theta_column.clone()),
             ..edits
         };
-        let base = LabelledCollection::new(
-            frames.to_path_buf(),
-            self.targets.clone(),
-            self.reference.clone(),
-        );
+        let frame = self.reference.clone().unwrap_or_default();
+        let mut base = LabelledCollection::new(frames.to_path_buf(), self.targets.clone(), frame);
+        if self.reference.is_none() {
+            base = base.with_reference(Reference::Estimate { pins: None });
+        }
         Ok(base
             .edited(&edits)
             .map_err(tactrace_store::StoreError::from)?)
@@ -210,33 +224,53 @@ pub fn import(a: ImportArgs) -> Result<()> {
     Inputs::new()
         .add("--frames", &a.frames)
         .add("--targets", &a.labels.targets)
-        .add("--reference", &a.labels.reference)
+        .opt("--reference", a.labels.reference.as_deref())
         .opt("--params", a.params.as_deref())
+        .opt("--sensor", a.sensor.as_deref())
         .check_apart("--out", &a.out)?;
     let blob = blob_params(a.params.as_deref(), bristol::BLOB_PRESET)?;
+    let sensor = a.sensor.as_deref().map(SightFile::read).transpose()?;
     // Import reads the targets only: no tap columns asked for.
-    let collection = a.labels.collection(
-        &a.frames,
-        CollectionEdits {
-            depth_column: Some("none".into()),
-            shear_columns: Some("none".into()),
-            limit: a.limit,
-            blob: Some(blob),
-            ..CollectionEdits::default()
-        },
-    )?;
+    let mut collection = a
+        .labels
+        .collection(
+            &a.frames,
+            CollectionEdits {
+                depth_column: Some("none".into()),
+                shear_columns: Some("none".into()),
+                limit: a.limit,
+                blob: Some(blob),
+                ..CollectionEdits::default()
+            },
+        )?
+        .with_sight(sensor.as_ref().map(SightFile::sight));
+    if a.labels.reference.is_none() {
+        let pins = sensor.as_ref().map(|s| s.sensor.pins);
+        collection = collection.with_reference(Reference::Estimate { pins });
+    }
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "import");
     let tick = || pb.inc(1);
     let got = imp::import(&collection, &tick)?;
     pb.finish_and_clear();
+    if let Some(e) = &got.estimated_rest {
+        eprintln!(
+            "no --reference: estimated the rest layout ({} pins) from {} taps, residual {:.3} px \
+             (recorded in the dataset)",
+            e.pins.len(),
+            e.frames,
+            e.residual_px
+        );
+    }
     let dir = dataset::write_dataset(&a.out, &got.data, &[], a.force)?;
     let n = got.data.len();
+    let t = got.data.meta.tracking;
     eprintln!(
-        "imported {n} frames into {}: all pins matched on {} ({:.2}%), {} with missing pins, {} rejected (too few pins)",
+        "imported {n} frames into {}: fully tracked {} of {} ({:.2}%), {} with missing pins, {} rejected (too few pins)",
         dir.display(),
-        n - got.frames_with_missing_pins,
-        100.0 * (n - got.frames_with_missing_pins) as f64 / n as f64,
+        t.frames_fully_tracked,
+        t.frames_total,
+        100.0 * t.frames_fully_tracked as f64 / t.frames_total.max(1) as f64,
         got.frames_with_missing_pins,
         got.rejected.len()
     );
@@ -272,6 +306,10 @@ fn render_calibrated(
 
 #[derive(Subcommand)]
 pub enum SensorCommand {
+    /// Inspect an unknown TacTip's frames: propose how to read them (grey,
+    /// crop, dome mask, threshold, detector), its pin count and layout
+    /// kind, and write them as a sensor file for `--sensor`.
+    Inspect(crate::cmd_inspect::InspectArgs),
     /// Render one simulated tap as a PNG (r, theta relative to the edge).
     Render {
         /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points (mm).
@@ -329,6 +367,7 @@ pub enum SensorCommand {
 
 pub fn sensor(c: SensorCommand) -> Result<()> {
     match c {
+        SensorCommand::Inspect(a) => crate::cmd_inspect::inspect(a),
         SensorCommand::Render {
             shape,
             r,

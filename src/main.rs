@@ -8,6 +8,7 @@
 
 mod cmd_completions;
 mod cmd_data;
+mod cmd_inspect;
 mod cmd_follow;
 mod cmd_learn;
 mod cmd_rig;

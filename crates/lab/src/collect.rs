@@ -250,6 +250,7 @@ pub fn collect_on(
         tactrace_version: crate::VERSION.into(),
         input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
         images: Vec::new(),
+        tracking: tactrace_store::TrackTotals::frames(cfg.samples, with_missing),
     };
     Ok(Collected {
         data: TapData {

@@ -25,6 +25,8 @@ pub mod follow;
 pub mod hardware;
 pub mod import;
 pub mod import_checks;
+mod import_reader;
+pub mod sensor_inspect;
 pub mod numbers;
 pub mod render;
 pub mod reproduce;

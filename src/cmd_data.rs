@@ -164,7 +164,9 @@ pub struct LabelArgs {
     pub targets: PathBuf,
     /// The undeformed frame whose pins define the order (for `twin` also
     /// the simulated sensor's rest layout). `import` without it estimates
-    /// the rest layout from the taps and records it in the dataset.
+    /// the rest layout from the taps and records it in the dataset; `import
+    /// --reference DATASET` reads against that dataset's rest pins (and
+    /// sensor settings, when no --sensor).
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Column of --targets naming each row's frame file.
@@ -230,6 +232,12 @@ pub fn import(a: ImportArgs) -> Result<()> {
         .check_apart("--out", &a.out)?;
     let blob = blob_params(a.params.as_deref(), bristol::BLOB_PRESET)?;
     let sensor = a.sensor.as_deref().map(SightFile::read).transpose()?;
+    // `--reference DATASET`: the rest pins (and sensor settings) of an
+    // earlier import of the same sensor.
+    let recorded = match a.labels.reference.as_deref() {
+        Some(p) if p.is_dir() => Some(imp::recorded_reference(p)?),
+        _ => None,
+    };
     // Import reads the targets only: no tap columns asked for.
     let mut collection = a
         .labels
@@ -244,7 +252,12 @@ pub fn import(a: ImportArgs) -> Result<()> {
             },
         )?
         .with_sight(sensor.as_ref().map(SightFile::sight));
-    if a.labels.reference.is_none() {
+    if let Some((rest, sight)) = recorded {
+        let sight = collection.sight().cloned().or(sight);
+        collection = collection
+            .with_reference(Reference::Estimated(rest))
+            .with_sight(sight);
+    } else if a.labels.reference.is_none() {
         let pins = sensor.as_ref().map(|s| s.sensor.pins);
         collection = collection.with_reference(Reference::Estimate { pins });
     }

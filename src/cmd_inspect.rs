@@ -69,7 +69,11 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
         got.frames.len(),
         f.sensor.frame_size[0],
         f.sensor.frame_size[1],
-        if got.inspection.binary { ", binary" } else { "" },
+        if got.inspection.binary {
+            ", binary"
+        } else {
+            ""
+        },
         f.sensor.pins,
         f.sensor.spacing_px,
         f.sensor.pin_pixels,
@@ -83,8 +87,11 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
     if let Some(p) = &a.picture {
         let img = image::DynamicImage::ImageRgb8(got.picture);
         let mut bytes = Vec::new();
-        img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
-            .map_err(|e| LabError::Config(format!("cannot encode the picture: {e}")))?;
+        img.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| LabError::Config(format!("cannot encode the picture: {e}")))?;
         fsutil::write_output_file(p, &bytes, a.force, "--picture")?;
         eprintln!("wrote {}", p.display());
     }

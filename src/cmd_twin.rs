@@ -93,7 +93,11 @@ pub fn twin(a: TwinArgs) -> Result<()> {
         .opt("--params", a.params.as_deref())
         .check_apart("--out", &a.out)?;
     // The twin reads no frames: its collection's are the reference's folder.
-    let frames = a.labels.reference_frame()?.parent().unwrap_or(Path::new(""));
+    let frames = a
+        .labels
+        .reference_frame()?
+        .parent()
+        .unwrap_or(Path::new(""));
     let blob = match &a.params {
         Some(p) => Some(blob_params(Some(p), bristol::BLOB_PRESET)?),
         None => None,

@@ -8,8 +8,8 @@
 
 mod cmd_completions;
 mod cmd_data;
-mod cmd_inspect;
 mod cmd_follow;
+mod cmd_inspect;
 mod cmd_learn;
 mod cmd_rig;
 mod cmd_tune;

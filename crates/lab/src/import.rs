@@ -2,15 +2,15 @@
 //! ([`LabelledCollection`]) into the dataset format, through the same pin
 //! extraction as simulated taps.
 use crate::error::{LabError, Result};
+use crate::import_reader;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::read_frame;
-use crate::import_reader;
-use tactrace_store::collection::EstimatedRest;
+use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::{
     DatasetMeta, LabelledCollection, LabelledRow, TapData, TapFields, TrackTotals,
 };
-use tactrace_vision::{BlobParams, PinExtractor, PinReader, TrackCounts, VisionError};
+use tactrace_vision::{BlobParams, PinExtractor, PinReader, SightParams, TrackCounts, VisionError};
 
 /// One frame's displacement and whether pins were missing, or why it was
 /// rejected.
@@ -112,7 +112,11 @@ pub(crate) fn import_rows(
     let opened = import_reader::open(collection, &paths)?;
     let reader = &opened.reader;
     if let Some(reference) = opened.reference.frame() {
-        check_reference(reader, reference, &paths[..paths.len().min(REFERENCE_PROBE_ROWS)])?;
+        check_reference(
+            reader,
+            reference,
+            &paths[..paths.len().min(REFERENCE_PROBE_ROWS)],
+        )?;
     }
     let read: Vec<Result<(Vec<f32>, TrackCounts)>> = paths
         .par_iter()
@@ -253,4 +257,32 @@ pub(crate) fn reference_extractor(path: &Path, blob: &BlobParams) -> Result<PinE
         path: path.to_path_buf(),
         reason: e.to_string(),
     })
+}
+
+/// The rest layout (and the sensor settings, when it had some) of a
+/// dataset imported earlier, so that another split of the same sensor is
+/// read against the same pins: `import --reference DATASET`.
+pub fn recorded_reference(dir: &Path) -> Result<(EstimatedRest, Option<SightParams>)> {
+    let data = tactrace_store::read_dataset(dir)?;
+    let meta = data.meta;
+    let recorded: Option<LabelledCollection> = meta
+        .settings
+        .get("import")
+        .and_then(|c| serde_json::from_value(c.clone()).ok());
+    let sight = recorded.as_ref().and_then(|c| c.sight().cloned());
+    let rest = match recorded.as_ref().map(LabelledCollection::reference) {
+        Some(Reference::Estimated(e)) if e.pins == meta.reference_pins => e.clone(),
+        _ => EstimatedRest {
+            pins: meta.reference_pins,
+            residual_px: 0.0,
+            frames: 0,
+        },
+    };
+    if rest.pins.len() < 3 {
+        return Err(LabError::Format {
+            path: dir.to_path_buf(),
+            reason: "the dataset records no reference pins to read other frames against".into(),
+        });
+    }
+    Ok((rest, sight))
 }

@@ -14,8 +14,8 @@ use tactrace_sensor::read_image;
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::LabelledCollection;
 use tactrace_vision::{
-    estimate_rest, Detection, DetectorParams, FrameDetector, PinReader, Reading, RestParams,
-    SightParams, TrackCounts, VisionError,
+    estimate_rest, BlobParams, Detection, DetectorParams, FrameDetector, PinReader, Reading,
+    RestParams, SightParams, TrackCounts, VisionError,
 };
 
 /// Most taps the rest layout is estimated from (spread over the rows).
@@ -30,12 +30,12 @@ pub(crate) struct FrameReader {
     pub estimated: Option<EstimatedRest>,
 }
 
-/// The settings that read `collection`'s frames: its sensor file's, or the
-/// blob detector on frames as they are.
-fn sight_of(collection: &LabelledCollection) -> SightParams {
-    collection.sight().cloned().unwrap_or_else(|| SightParams {
+/// The settings that read frames: a sensor file's, or the blob detector
+/// `blob` on frames as they are.
+fn sight_of(sight: Option<&SightParams>, blob: &BlobParams) -> SightParams {
+    sight.cloned().unwrap_or_else(|| SightParams {
         preprocess: Default::default(),
-        detect: DetectorParams::Blobs(collection.blob().clone()),
+        detect: DetectorParams::Blobs(blob.clone()),
     })
 }
 
@@ -53,15 +53,20 @@ pub fn raw_frame_error(path: &Path, image: &image::DynamicImage) -> LabError {
     }
 }
 
-/// The frame detector of `collection` for frames like `first` (read
-/// here): fails early on a raw colour frame with no sensor settings, and
-/// on settings made for another frame size.
-pub(crate) fn frame_detector(collection: &LabelledCollection, first: &Path) -> Result<FrameDetector> {
+/// The frame detector for frames like `first` (read here): the sensor
+/// settings `sight`, else the blob detector `blob` on frames as they are.
+/// Fails early on a raw colour frame with no sensor settings, and on
+/// settings made for another frame size.
+pub fn frame_detector(
+    sight: Option<&SightParams>,
+    blob: &BlobParams,
+    first: &Path,
+) -> Result<FrameDetector> {
     let image = read_image(first)?;
-    if collection.sight().is_none() && image.color().has_color() {
+    if sight.is_none() && image.color().has_color() {
         return Err(raw_frame_error(first, &image));
     }
-    sight_of(collection)
+    sight_of(sight, blob)
         .check(image.width(), image.height())
         .map_err(|e| LabError::Format {
             path: first.to_path_buf(),
@@ -73,6 +78,24 @@ pub(crate) fn frame_detector(collection: &LabelledCollection, first: &Path) -> R
         })
 }
 
+/// The pins `detector` finds in the undeformed frame at `path` (a colour
+/// one refused unless `sight_given`).
+pub fn frame_pins(
+    detector: &FrameDetector,
+    sight_given: bool,
+    path: &Path,
+) -> Result<Vec<[f64; 2]>> {
+    let image = read_image(path)?;
+    if !sight_given && image.color().has_color() {
+        return Err(raw_frame_error(path, &image));
+    }
+    let seen = detector.detect(&image).map_err(|e| LabError::Format {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    Ok(points(&seen))
+}
+
 /// The reader of `collection`'s `frames` (every row's file, in order):
 /// its detector and its rest layout, estimated from up to
 /// [`REST_FRAMES`] of the frames when the reference says so.
@@ -81,27 +104,18 @@ pub(crate) fn open(collection: &LabelledCollection, frames: &[PathBuf]) -> Resul
         path: collection.targets().to_path_buf(),
         reason: "no labelled rows".into(),
     })?;
-    let detector = frame_detector(collection, first)?;
+    let sight = collection.sight();
+    let detector = frame_detector(sight, collection.blob(), first)?;
     let (rest, reference, estimated) = match collection.reference() {
-        Reference::Frame(path) => {
-            let image = read_image(path)?;
-            if collection.sight().is_none() && image.color().has_color() {
-                return Err(raw_frame_error(path, &image));
-            }
-            let seen = detector.detect(&image).map_err(|e| LabError::Format {
-                path: path.clone(),
-                reason: e.to_string(),
-            })?;
-            (points(&seen), collection.reference().clone(), None)
-        }
+        Reference::Frame(path) => (
+            frame_pins(&detector, sight.is_some(), path)?,
+            collection.reference().clone(),
+            None,
+        ),
         Reference::Estimated(e) => (e.pins.clone(), collection.reference().clone(), None),
         Reference::Estimate { pins } => {
             let e = estimate(&detector, frames, *pins)?;
-            (
-                e.pins.clone(),
-                Reference::Estimated(e.clone()),
-                Some(e),
-            )
+            (e.pins.clone(), Reference::Estimated(e.clone()), Some(e))
         }
     };
     let reader = PinReader::new(detector, rest).map_err(|e| LabError::Format {
@@ -121,7 +135,11 @@ fn points(d: &Detection) -> Vec<[f64; 2]> {
 
 /// The rest layout of `pins` pins (default: the count most frames show)
 /// from up to [`REST_FRAMES`] of `frames`, spread evenly.
-fn estimate(detector: &FrameDetector, frames: &[PathBuf], pins: Option<usize>) -> Result<EstimatedRest> {
+fn estimate(
+    detector: &FrameDetector,
+    frames: &[PathBuf],
+    pins: Option<usize>,
+) -> Result<EstimatedRest> {
     let step = frames.len().div_ceil(REST_FRAMES).max(1);
     let chosen: Vec<&PathBuf> = frames.iter().step_by(step).collect();
     let detections: Vec<Detection> = chosen
@@ -135,8 +153,8 @@ fn estimate(detector: &FrameDetector, frames: &[PathBuf], pins: Option<usize>) -
         })
         .collect::<Result<_>>()?;
     let pins = pins.unwrap_or_else(|| most_common(detections.iter().map(|d| d.points.len())));
-    let est = estimate_rest(&detections, pins, &RestParams::default()).map_err(|e| {
-        LabError::Format {
+    let est =
+        estimate_rest(&detections, pins, &RestParams::default()).map_err(|e| LabError::Format {
             path: frames[0].parent().unwrap_or(Path::new(".")).to_path_buf(),
             reason: format!(
                 "no rest layout of {pins} pins could be estimated from {} taps: {e}; give the \
@@ -144,8 +162,7 @@ fn estimate(detector: &FrameDetector, frames: &[PathBuf], pins: Option<usize>) -
                  settings find the pins",
                 detections.len()
             ),
-        }
-    })?;
+        })?;
     Ok(EstimatedRest {
         pins: est.pins,
         residual_px: est.residual,
@@ -166,7 +183,7 @@ fn most_common(values: impl Iterator<Item = usize>) -> usize {
 }
 
 /// One frame read: its displacement from the rest pins and its counts.
-pub(crate) fn read_one(reader: &PinReader, path: &Path) -> Result<(Vec<f32>, TrackCounts)> {
+pub fn read_one(reader: &PinReader, path: &Path) -> Result<(Vec<f32>, TrackCounts)> {
     let image = read_image(path)?;
     let Reading { tracked, counts } = reader.read(&image)?;
     Ok((tracked.displacement(reader.tracker().reference()), counts))

@@ -387,7 +387,10 @@ mod tests {
         let c = LabelledCollection::bristol(Path::new("set"));
         assert_eq!(c.frames(), Path::new("set/frames"));
         assert_eq!(c.targets(), Path::new("set/targets.csv"));
-        assert_eq!(c.reference().path().unwrap(), Path::new("set/frames/init_0.png"));
+        assert_eq!(
+            c.reference().path().unwrap(),
+            Path::new("set/frames/init_0.png")
+        );
         assert_eq!(c.spec().image_column(), "image_name");
         assert_eq!(c.spec().edge_columns().unwrap(), ["pose_2", "pose_6"]);
         let units: Vec<Unit> = c.spec().targets().iter().map(|t| t.unit).collect();

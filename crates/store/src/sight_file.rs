@@ -126,7 +126,9 @@ mod tests {
         let unknown = text.replacen("pins = 331", "pins = 331\npin_count = 3", 1);
         let err = SightFile::from_toml(&unknown, p).unwrap_err().to_string();
         assert!(err.contains("pin_count"), "{err}");
-        let crop = text.replacen("[preprocess]", "[preprocess]\ncrop = [0, 0, 400, 400]", 1);
+        let mut cropped = f.clone();
+        cropped.preprocess.crop = Some([0, 0, 400, 400]);
+        let crop = cropped.to_toml();
         let err = SightFile::from_toml(&crop, p).unwrap_err().to_string();
         assert!(err.contains("cannot be used"), "{err}");
     }

@@ -79,7 +79,7 @@ impl SightFile {
         let body = toml::to_string(self).expect("sensor settings serialise");
         format!(
             "# TacTip sensor settings (tactrace sensor inspect): how to read its frames.\n\
-             # Pass to import, predict --image and the camera source as --sensor FILE.\n\n{}\n",
+             # Pass to import and predict --image as --sensor FILE.\n\n{}\n",
             body.trim_end()
         )
     }

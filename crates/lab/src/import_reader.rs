@@ -8,14 +8,16 @@
 //! A raw colour camera frame read with no sensor file fails here, before
 //! any frame is imported, with the command that proposes the settings.
 use crate::error::{LabError, Result};
+use image::DynamicImage;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::read_image;
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::LabelledCollection;
 use tactrace_vision::{
-    estimate_rest, BlobParams, Detection, DetectorParams, FrameDetector, PinReader, Reading,
-    RestParams, SightParams, TrackCounts, VisionError,
+    estimate_rest, preprocess::grey_of, BlobParams, Detection, DetectorParams, Frame,
+    FrameDetector, PinReader, PreprocessParams, Reading, RestParams, SightParams, TrackCounts,
+    VisionError,
 };
 
 /// Most taps the rest layout is estimated from (spread over the rows).
@@ -89,11 +91,22 @@ pub fn frame_pins(
     if !sight_given && image.color().has_color() {
         return Err(raw_frame_error(path, &image));
     }
-    let seen = detector.detect(&image).map_err(|e| LabError::Format {
+    let frame = seen(detector, &image).map_err(|e| LabError::Format {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;
-    Ok(points(&seen))
+    Ok(points(&detector.detector().detect(&frame)))
+}
+
+/// The frame the detector sees: through the sensor settings' stage, or,
+/// with no preprocessing (no sensor file), the image in grey whatever its
+/// size (as the blob detector always read frames).
+fn seen(detector: &FrameDetector, image: &DynamicImage) -> std::result::Result<Frame, VisionError> {
+    if *detector.stage().params() == PreprocessParams::default() {
+        Ok(grey_of(image))
+    } else {
+        detector.preprocess(image)
+    }
 }
 
 /// The reader of `collection`'s `frames` (every row's file, in order):
@@ -146,10 +159,14 @@ fn estimate(
         .par_iter()
         .map(|p| {
             let image = read_image(p)?;
-            detector.detect(&image).map_err(|e| LabError::Format {
+            let bad = |e: VisionError| LabError::Format {
                 path: p.to_path_buf(),
                 reason: e.to_string(),
-            })
+            };
+            let frame = seen(detector, &image).map_err(bad)?;
+            let mut d = detector.detector().detect(&frame);
+            detector.detector().add_clusters(&frame, &mut d);
+            Ok(d)
         })
         .collect::<Result<_>>()?;
     let pins = pins.unwrap_or_else(|| most_common(detections.iter().map(|d| d.points.len())));
@@ -185,7 +202,7 @@ fn most_common(values: impl Iterator<Item = usize>) -> usize {
 /// One frame read: its displacement from the rest pins and its counts.
 pub fn read_one(reader: &PinReader, path: &Path) -> Result<(Vec<f32>, TrackCounts)> {
     let image = read_image(path)?;
-    let Reading { tracked, counts } = reader.read(&image)?;
+    let Reading { tracked, counts } = reader.read_preprocessed(&seen(reader.frames(), &image)?)?;
     Ok((tracked.displacement(reader.tracker().reference()), counts))
 }
 
@@ -198,6 +215,43 @@ pub(crate) fn too_few_pins(e: &LabError) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Without a sensor file, import reads the 127-pin set as before the
+    /// reader (the blob detector's `PinExtractor`), bit for bit.
+    #[test]
+    fn issue21_import_without_a_sensor_file_reads_frames_as_the_pin_extractor_did() {
+        let Some(set) = tactrace_testdata::real_edge_set() else {
+            return;
+        };
+        let reference = set.join("frames/init_0.png");
+        let blob = BlobParams::preset("real256").unwrap();
+        let detector = frame_detector(None, &blob, &reference).unwrap();
+        let rest = frame_pins(&detector, false, &reference).unwrap();
+        let reader = PinReader::new(detector, rest).unwrap();
+        let frame = tactrace_sensor::read_frame(&reference).unwrap();
+        let extractor = tactrace_vision::PinExtractor::from_reference_frame(&frame, blob).unwrap();
+        assert_eq!(reader.tracker().reference(), extractor.tracker.reference());
+        let mut frames: Vec<PathBuf> = std::fs::read_dir(set.join("frames"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.to_string_lossy().ends_with("_0.png"))
+            .collect();
+        frames.sort();
+        assert!(frames.len() > 3000, "{}", frames.len());
+        for path in frames.iter().step_by(150) {
+            let n = path.display();
+            let (got, counts) = read_one(&reader, &path).unwrap();
+            let tracked = extractor
+                .extract(&tactrace_sensor::read_frame(&path).unwrap())
+                .unwrap();
+            assert_eq!(
+                got,
+                tracked.displacement(extractor.tracker.reference()),
+                "{n}"
+            );
+            assert_eq!(counts.filled, tracked.missing, "{n}");
+        }
+    }
 
     #[test]
     fn most_common_takes_the_smallest_of_ties() {

@@ -85,7 +85,7 @@ fn tap(s: &Sensor, rng: &mut Lcg, k: usize) -> (Vec<[f64; 2]>, [f64; 2]) {
     let (r, t) = (rng.range(0.0, 0.5 * s.rim[0]), rng.range(-3.1, 3.1));
     let at = [s.centre[0] + r * t.cos(), s.centre[1] + r * t.sin()];
     let width = scale * rng.range(10.0, 16.0);
-    let push = if k % 4 == 0 { 0.1 } else { 1.0 } * scale * rng.range(0.0, 3.0);
+    let push = if k.is_multiple_of(4) { 0.1 } else { 1.0 } * scale * rng.range(0.0, 3.0);
     let pins = s
         .rest
         .iter()

@@ -240,9 +240,9 @@ mod tests {
         assert!(frames.len() > 3000, "{}", frames.len());
         for path in frames.iter().step_by(150) {
             let n = path.display();
-            let (got, counts) = read_one(&reader, &path).unwrap();
+            let (got, counts) = read_one(&reader, path).unwrap();
             let tracked = extractor
-                .extract(&tactrace_sensor::read_frame(&path).unwrap())
+                .extract(&tactrace_sensor::read_frame(path).unwrap())
                 .unwrap();
             assert_eq!(
                 got,

@@ -1,4 +1,5 @@
-//! Data commands: `collect`, `import`, `sensor render`, `sensor pins`.
+//! Data commands: `collect`, `import`, `sensor render`, `sensor pins`
+//! (`sensor inspect` in cmd_inspect.rs).
 use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::{Context, Result};
@@ -10,9 +11,9 @@ use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareCo
 use tactrace_lab::render::{TapPose, TapRenderer};
 use tactrace_lab::{import as imp, LabError};
 use tactrace_servo::RigConfig;
-use tactrace_store::collection::{bristol, CollectionEdits};
+use tactrace_store::collection::{bristol, CollectionEdits, Reference};
 use tactrace_store::frame_file::png_bytes;
-use tactrace_store::{dataset, fsutil, load_config, load_shape, LabelledCollection};
+use tactrace_store::{dataset, fsutil, load_config, load_shape, LabelledCollection, SightFile};
 use tactrace_vision::BlobParams;
 
 #[derive(Args)]
@@ -136,8 +137,12 @@ pub struct ImportArgs {
     #[command(flatten)]
     labels: LabelArgs,
     /// Blob detector parameters (TOML, OpenCV key names); default: the real256 preset.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sensor")]
     params: Option<PathBuf>,
+    /// Sensor settings (`tactrace sensor inspect`): how to read the frames
+    /// (grey, crop, dome mask, threshold, resize; the detector).
+    #[arg(long)]
+    sensor: Option<PathBuf>,
     /// Import only the first N rows.
     #[arg(long)]
     limit: Option<usize>,
@@ -145,7 +150,7 @@ pub struct ImportArgs {
     /// the blob detector, reference and targets this dataset was imported
     /// with (its meta.json's settings).
     #[arg(long, value_name = "DATASET", conflicts_with_all = [
-        "params", "reference", "target_list", "r_column", "theta_column", "image_column"])]
+        "params", "sensor", "reference", "target_list", "r_column", "theta_column", "image_column"])]
     like: Option<PathBuf>,
     /// Output dataset directory.
     #[arg(long)]
@@ -164,8 +169,10 @@ pub struct LabelArgs {
     #[arg(long)]
     pub targets: PathBuf,
     /// The undeformed frame whose pins define the order (for `twin` also
-    /// the simulated sensor's rest layout); required, except by `import
-    /// --like`.
+    /// the simulated sensor's rest layout). `import` without it estimates
+    /// the rest layout from the taps and records it in the dataset; `import
+    /// --reference DATASET` reads against that dataset's rest pins (and
+    /// sensor settings, when no --sensor).
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Column of --targets naming each row's frame file [default: image_name].
@@ -188,15 +195,23 @@ pub struct LabelArgs {
 }
 
 impl LabelArgs {
+    /// The undeformed frame; an error when it was not given (commands
+    /// other than `import` need it).
+    pub fn reference_frame(&self) -> Result<&Path> {
+        self.reference.as_deref().ok_or_else(|| {
+            LabError::from(tactrace_store::collection::CollectionError::NoReferenceFrame).into()
+        })
+    }
+
     /// The collection of the frames in `frames` these flags describe,
     /// with `edits` (rows, blob detector, tap columns) made.
     pub fn collection(&self, frames: &Path, edits: CollectionEdits) -> Result<LabelledCollection> {
         let edits = self.edits(edits);
-        let base = LabelledCollection::new(
-            frames.to_path_buf(),
-            self.targets.clone(),
-            self.reference()?.to_path_buf(),
-        );
+        let frame = self.reference.clone().unwrap_or_default();
+        let mut base = LabelledCollection::new(frames.to_path_buf(), self.targets.clone(), frame);
+        if self.reference.is_none() {
+            base = base.with_reference(Reference::Estimate { pins: None });
+        }
         Ok(base
             .edited(&edits)
             .map_err(tactrace_store::StoreError::from)?)
@@ -204,15 +219,6 @@ impl LabelArgs {
 }
 
 impl LabelArgs {
-    /// The reference frame, required here.
-    pub fn reference(&self) -> Result<&Path, LabError> {
-        self.reference.as_deref().ok_or_else(|| {
-            LabError::Config(
-                "--reference is required: the undeformed frame whose pins define the order".into(),
-            )
-        })
-    }
-
     /// `edits` with the label columns these flags give.
     fn edits(&self, edits: CollectionEdits) -> CollectionEdits {
         CollectionEdits {
@@ -245,6 +251,7 @@ pub fn import(a: ImportArgs) -> Result<()> {
         .opt("--reference", a.labels.reference.as_deref())
         .opt("--params", a.params.as_deref())
         .opt("--like", a.like.as_deref())
+        .opt("--sensor", a.sensor.as_deref())
         .check_apart("--out", &a.out)?;
     let like = a.like.as_deref().map(read_dataset_at).transpose()?;
     let collection = match (&like, &a.like) {
@@ -261,20 +268,7 @@ pub fn import(a: ImportArgs) -> Result<()> {
             })
             .map_err(tactrace_store::StoreError::from)?
         }
-        _ => {
-            let blob = blob_params(a.params.as_deref(), bristol::BLOB_PRESET)?;
-            // Import reads the targets only: no tap columns asked for.
-            a.labels.collection(
-                &a.frames,
-                CollectionEdits {
-                    depth_column: Some("none".into()),
-                    shear_columns: Some("none".into()),
-                    limit: a.limit,
-                    blob: Some(blob),
-                    ..CollectionEdits::default()
-                },
-            )?
-        }
+        _ => new_collection(&a)?,
     };
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "import");
@@ -284,13 +278,24 @@ pub fn import(a: ImportArgs) -> Result<()> {
     if let (Some(like), Some(dir)) = (&like, &a.like) {
         tactrace_lab::import_like::check_like(&got.data, like, dir)?;
     }
+    if let Some(e) = &got.estimated_rest {
+        eprintln!(
+            "no --reference: estimated the rest layout ({} pins) from {} taps, residual {:.3} px \
+             (recorded in the dataset)",
+            e.pins.len(),
+            e.frames,
+            e.residual_px
+        );
+    }
     let dir = dataset::write_dataset(&a.out, &got.data, &[], a.force)?;
     let n = got.data.len();
+    let t = got.data.meta.tracking;
     eprintln!(
-        "imported {n} frames into {}: all pins matched on {} ({:.2}%), {} with missing pins, {} rejected (too few pins)",
+        "imported {n} frames into {}: fully tracked {} of {} ({:.2}%), {} with missing pins, {} rejected (too few pins)",
         dir.display(),
-        n - got.frames_with_missing_pins,
-        100.0 * (n - got.frames_with_missing_pins) as f64 / n as f64,
+        t.frames_fully_tracked,
+        t.frames_total,
+        100.0 * t.frames_fully_tracked as f64 / t.frames_total.max(1) as f64,
         got.frames_with_missing_pins,
         got.rejected.len()
     );
@@ -301,6 +306,43 @@ pub fn import(a: ImportArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     Ok(())
+}
+
+/// The collection `import` reads when not `--like`: the labels' flags,
+/// the blob detector or `--sensor` settings, and the reference: a frame,
+/// a dataset's recorded rest pins (`--reference DATASET`), or estimated
+/// from the taps (no `--reference`).
+fn new_collection(a: &ImportArgs) -> Result<LabelledCollection> {
+    let blob = blob_params(a.params.as_deref(), bristol::BLOB_PRESET)?;
+    let sensor = a.sensor.as_deref().map(SightFile::read).transpose()?;
+    let recorded = match a.labels.reference.as_deref() {
+        Some(p) if p.is_dir() => Some(imp::recorded_reference(p)?),
+        _ => None,
+    };
+    // Import reads the targets only: no tap columns asked for.
+    let mut collection = a
+        .labels
+        .collection(
+            &a.frames,
+            CollectionEdits {
+                depth_column: Some("none".into()),
+                shear_columns: Some("none".into()),
+                limit: a.limit,
+                blob: Some(blob),
+                ..CollectionEdits::default()
+            },
+        )?
+        .with_sight(sensor.as_ref().map(SightFile::sight));
+    if let Some((rest, sight)) = recorded {
+        let sight = collection.sight().cloned().or(sight);
+        collection = collection
+            .with_reference(Reference::Estimated(rest))
+            .with_sight(sight);
+    } else if a.labels.reference.is_none() {
+        let pins = sensor.as_ref().map(|s| s.sensor.pins);
+        collection = collection.with_reference(Reference::Estimate { pins });
+    }
+    Ok(collection)
 }
 
 /// A dataset folder (`--like`).
@@ -331,6 +373,10 @@ fn render_calibrated(
 
 #[derive(Subcommand)]
 pub enum SensorCommand {
+    /// Inspect an unknown TacTip's frames: propose how to read them (grey,
+    /// crop, dome mask, threshold, detector), its pin count and layout
+    /// kind, and write them as a sensor file for `--sensor`.
+    Inspect(crate::cmd_inspect::InspectArgs),
     /// Render one simulated tap as a PNG (r, theta relative to the edge).
     Render {
         /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points (mm).
@@ -388,6 +434,7 @@ pub enum SensorCommand {
 
 pub fn sensor(c: SensorCommand) -> Result<()> {
     match c {
+        SensorCommand::Inspect(a) => crate::cmd_inspect::inspect(a),
         SensorCommand::Render {
             shape,
             r,

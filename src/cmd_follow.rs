@@ -140,7 +140,7 @@ pub fn follow(a: FollowArgs) -> Result<()> {
         .opt("--replay", a.replay.replay.as_deref())
         .opt("--replay", bank.map(|c| c.frames()))
         .opt("--targets", bank.map(|c| c.targets()))
-        .opt("--reference", bank.map(|c| c.reference().path()))
+        .opt("--reference", bank.and_then(|c| c.reference().frame()))
         .opt("--params", a.replay.params.as_deref())
         .check_apart("--out", &a.out)?;
     let _out = fsutil::check_output_dir(&a.out, a.force)?;

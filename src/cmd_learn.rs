@@ -4,10 +4,10 @@ use crate::progress::bar;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
-use tactrace_lab::{train as tr, LabError};
+use tactrace_lab::{import_reader, train as tr, LabError};
 use tactrace_learn::{ModelKind, Preset, SearchSpace};
 use tactrace_report::figures::{self, Predicted};
-use tactrace_store::{check_output_dir, fsutil, read_dataset, StoredModel};
+use tactrace_store::{check_output_dir, fsutil, read_dataset, SightFile, StoredModel};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ModelArg {
@@ -419,12 +419,16 @@ pub struct PredictArgs {
     /// Model directory (from `tactrace train`).
     #[arg(long)]
     model: PathBuf,
-    /// One frame (needs --reference).
+    /// One frame (needs --reference, or --sensor).
     #[arg(long, conflicts_with = "data")]
     image: Option<PathBuf>,
-    /// The undeformed frame of the same sensor.
+    /// The undeformed frame of the same sensor; default with --sensor: the
+    /// model's own rest pins (those its training data was read against).
     #[arg(long, requires = "image")]
     reference: Option<PathBuf>,
+    /// Sensor settings (`tactrace sensor inspect`): how to read the frame.
+    #[arg(long, requires = "image", conflicts_with = "params")]
+    sensor: Option<PathBuf>,
     /// A dataset directory: prints one CSV row per sample.
     #[arg(long)]
     data: Option<PathBuf>,
@@ -436,29 +440,31 @@ pub struct PredictArgs {
 pub fn predict(a: PredictArgs) -> Result<()> {
     let model = StoredModel::load(&a.model)?;
     match (a.image, a.reference, a.data) {
-        (Some(image), Some(reference), None) => {
+        (Some(image), reference, None) if reference.is_some() || a.sensor.is_some() => {
+            let sensor = a.sensor.as_deref().map(SightFile::read).transpose()?;
+            let sight = sensor.as_ref().map(SightFile::sight);
             let blob = crate::cmd_data::blob_params(a.params.as_deref(), "real256")?;
-            let refr = tactrace_sensor::read_frame(&reference).map_err(LabError::from)?;
-            let ex = tactrace_vision::PinExtractor::from_reference_frame(&refr, blob)
-                .map_err(LabError::from)?;
+            let detector = import_reader::frame_detector(sight.as_ref(), &blob, &image)?;
+            let (rest, what) = match &reference {
+                Some(r) => (
+                    import_reader::frame_pins(&detector, sight.is_some(), r)?,
+                    r.clone(),
+                ),
+                None => (model.reference_pins().to_vec(), a.model.clone()),
+            };
+            let reader = tactrace_vision::PinReader::new(detector, rest).map_err(LabError::from)?;
             let net = model
-                .for_pins(ex.tracker.reference(), &reference)
+                .for_pins(reader.tracker().reference(), &what)
                 .map_err(LabError::from)?;
-            let frame = tactrace_sensor::read_frame(&image).map_err(LabError::from)?;
-            let tracked = ex
-                .extract(&frame)
-                .map_err(LabError::from)
-                .with_context(|| {
-                    format!(
-                        "{}: not a frame of the sensor whose undeformed frame is {} \
-                     (or other blob parameters are needed: --params)",
-                        image.display(),
-                        reference.display()
-                    )
-                })?;
-            let [r, t] = net
-                .predict(&tracked.displacement(ex.tracker.reference()))
-                .map_err(LabError::from)?;
+            let (disp, _) = import_reader::read_one(&reader, &image).with_context(|| {
+                format!(
+                    "{}: not a frame of the sensor whose rest pins are {}'s (or other \
+                     settings are needed: --sensor, --params)",
+                    image.display(),
+                    what.display()
+                )
+            })?;
+            let [r, t] = net.predict(&disp).map_err(LabError::from)?;
             tactrace_lab::numbers::require_finite(
                 &format!("the model's prediction for {}", image.display()),
                 &[("r", r), ("theta", t)],
@@ -481,7 +487,7 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         }
         _ => {
             return Err(LabError::Config(
-                "give either --image FRAME --reference FRAME, or --data DIR".into(),
+                "give either --image FRAME with --reference FRAME or --sensor SENSOR.toml, or --data DIR".into(),
             )
             .into())
         }

@@ -87,13 +87,17 @@ pub struct TwinArgs {
 pub fn twin(a: TwinArgs) -> Result<()> {
     Inputs::new()
         .add("--targets", &a.labels.targets)
-        .add("--reference", a.labels.reference()?)
+        .add("--reference", a.labels.reference_frame()?)
         .opt("--sensor", a.sensor.as_deref())
         .opt("--config", a.config.as_deref())
         .opt("--params", a.params.as_deref())
         .check_apart("--out", &a.out)?;
     // The twin reads no frames: its collection's are the reference's folder.
-    let frames = a.labels.reference()?.parent().unwrap_or(Path::new(""));
+    let frames = a
+        .labels
+        .reference_frame()?
+        .parent()
+        .unwrap_or(Path::new(""));
     let blob = match &a.params {
         Some(p) => Some(blob_params(Some(p), bristol::BLOB_PRESET)?),
         None => None,
@@ -186,7 +190,7 @@ impl RealTapArgs {
         Inputs::new()
             .add("--frames", &self.frames)
             .add("--targets", &self.labels.targets)
-            .add("--reference", self.labels.reference()?)
+            .opt("--reference", self.labels.reference.as_deref())
             .opt("--config", self.config.as_deref())
             .opt("--params", self.params.as_deref())
             .check_apart("--out", out)?;

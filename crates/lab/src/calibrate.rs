@@ -102,7 +102,7 @@ pub fn calibrate_sensor(
         }
         .into());
     }
-    let fitted_layout = layout_for(sensor, c.reference().path(), blob)?;
+    let fitted_layout = layout_for(sensor, c.reference().path()?, blob)?;
     let sensor = &fitted_layout;
     let rows = twin_rows(c)?;
     let labels: Vec<Label> = rows
@@ -175,7 +175,7 @@ pub fn calibrate_sensor(
             corrected: corrected.row(k),
         });
     }
-    let reference = tactrace_sensor::read_frame(c.reference().path())?;
+    let reference = tactrace_sensor::read_frame(c.reference().path()?)?;
     let spec = SensorSpec {
         format: SENSOR_FORMAT.into(),
         format_version: SENSOR_FORMAT_VERSION,

@@ -409,6 +409,7 @@ fn dataset_meta(
         tactrace_version: crate::VERSION.into(),
         input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
         images: Vec::new(),
+        tracking: tactrace_store::TrackTotals::frames(cfg.samples, with_missing),
     }
 }
 

@@ -208,3 +208,9 @@ fn hint_suffix(hint: &str) -> String {
 
 /// Result with [`LabError`].
 pub type Result<T, E = LabError> = std::result::Result<T, E>;
+
+impl From<tactrace_store::collection::CollectionError> for LabError {
+    fn from(e: tactrace_store::collection::CollectionError) -> Self {
+        LabError::Store(e.into())
+    }
+}

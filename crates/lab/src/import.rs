@@ -2,13 +2,15 @@
 //! ([`LabelledCollection`]) into the dataset format, through the same pin
 //! extraction as simulated taps.
 use crate::error::{LabError, Result};
+use crate::import_reader;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::read_frame;
+use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::{
-    DatasetMeta, LabelledCollection, LabelledRow, TapData, TapFields, TargetColumns,
+    DatasetMeta, LabelledCollection, LabelledRow, TapData, TapFields, TargetColumns, TrackTotals,
 };
-use tactrace_vision::{BlobParams, PinExtractor};
+use tactrace_vision::{BlobParams, PinExtractor, PinReader, SightParams, TrackCounts, VisionError};
 
 /// One frame's displacement and whether pins were missing, or why it was
 /// rejected.
@@ -27,6 +29,9 @@ pub struct Imported {
     /// How a twin's taps were made from the labelled rows, when several
     /// renders or the real calibration taps make them more than the rows.
     pub composition: Option<TwinComposition>,
+    /// The rest layout this import estimated from the taps (no
+    /// `--reference`), with its residual.
+    pub estimated_rest: Option<EstimatedRest>,
 }
 
 /// Where the taps of a calibrated sensor's twin come from
@@ -49,18 +54,13 @@ const REFERENCE_PROBE_ROWS: usize = 5;
 /// took the frames (noise, another sensor, other blob parameters): when the
 /// first few frames all match too few of its pins, the reference is named
 /// before the whole set is read.
-pub(crate) fn check_reference(
-    extractor: &PinExtractor,
-    reference: &Path,
-    first_frames: &[PathBuf],
-) -> Result<()> {
+fn check_reference(reader: &PinReader, reference: &Path, first_frames: &[PathBuf]) -> Result<()> {
     let mut last = None;
     for path in first_frames.iter().take(REFERENCE_PROBE_ROWS) {
-        let frame = read_frame(path)?;
-        match extractor.extract(&frame) {
+        match import_reader::read_one(reader, path) {
             Ok(_) => return Ok(()),
-            Err(e @ tactrace_vision::VisionError::TooFewPins { .. }) => last = Some((path, e)),
-            Err(e) => return Err(e.into()),
+            Err(LabError::Vision(e @ VisionError::TooFewPins { .. })) => last = Some((path, e)),
+            Err(e) => return Err(e),
         }
     }
     match last {
@@ -70,8 +70,8 @@ pub(crate) fn check_reference(
                 "not an undeformed frame of the sensor that took the frames: it gives {} pins, \
                  and the first {} frames (up to {}) match too few of them; give the \
                  sensor's frame taken without contact as --reference, or blob parameters \
-                 that suit both (--params)",
-                extractor.tracker.reference().len(),
+                 that suit both (--params) or a sensor file (--sensor)",
+                reader.tracker().reference().len(),
                 first_frames.len().min(REFERENCE_PROBE_ROWS),
                 path.display()
             ),
@@ -81,9 +81,10 @@ pub(crate) fn check_reference(
     }
 }
 
-/// Import the frames of `collection` (its rows, its blob detector, pins
-/// ordered by its reference frame). `progress` is called once per frame
-/// processed.
+/// Import the frames of `collection` (its rows, read by its sensor
+/// settings or blob detector, pins ordered by its reference: an undeformed
+/// frame, or a rest layout estimated from the taps). `progress` is called
+/// once per frame processed.
 pub fn import(collection: &LabelledCollection, progress: &(dyn Fn() + Sync)) -> Result<Imported> {
     import_rows(collection, None, progress)
 }
@@ -110,58 +111,85 @@ pub(crate) fn import_rows(
     {
         return Err(err);
     }
-    let reference = collection.reference().path();
-    let blob = collection.blob();
-    let extractor = reference_extractor(reference, blob)?;
-    let first: Vec<PathBuf> = rows
-        .iter()
-        .take(REFERENCE_PROBE_ROWS)
-        .map(|r| frames.join(&r.image))
-        .collect();
-    check_reference(&extractor, reference, &first)?;
-    let outcomes: Vec<FrameOutcome> = rows
+    let paths: Vec<PathBuf> = rows.iter().map(|r| frames.join(&r.image)).collect();
+    let opened = import_reader::open(collection, &paths)?;
+    let reader = &opened.reader;
+    if let Some(reference) = opened.reference.frame() {
+        check_reference(
+            reader,
+            reference,
+            &paths[..paths.len().min(REFERENCE_PROBE_ROWS)],
+        )?;
+    }
+    let read: Vec<Result<(Vec<f32>, TrackCounts)>> = paths
         .par_iter()
-        .map(|row| {
-            let out = extract_one(&extractor, &frames.join(&row.image));
+        .map(|path| {
+            let out = import_reader::read_one(reader, path);
             progress();
-            out.map_err(|e| e.to_string())
+            out
         })
         .collect();
     // An unreadable file is an error of the whole import: nothing is lost silently.
-    let unreadable = rows.iter().zip(&outcomes).find_map(|(row, o)| match o {
-        Err(reason) if !reason.contains("pins") => Some((row, reason)),
-        _ => None,
-    });
-    if let Some((row, reason)) = unreadable {
-        return Err(LabError::Format {
-            path: frames.join(&row.image),
-            reason: reason.clone(),
-        });
+    let mut outcomes: Vec<FrameOutcome> = Vec::with_capacity(read.len());
+    let mut counts = Vec::with_capacity(read.len());
+    for (path, r) in paths.iter().zip(read) {
+        match r {
+            Ok((disp, c)) => {
+                outcomes.push(Ok((disp, !c.fully_tracked())));
+                counts.push(c);
+            }
+            Err(e) if import_reader::too_few_pins(&e) => outcomes.push(Err(e.to_string())),
+            Err(e) => {
+                return Err(LabError::Format {
+                    path: path.clone(),
+                    reason: e.to_string(),
+                })
+            }
+        }
     }
+    let resolved = collection.clone().with_reference(opened.reference.clone());
     let meta = DatasetMeta {
         source: "real".into(),
         origin: frames.display().to_string(),
         seed: None,
         samples: 0,
-        pins: extractor.tracker.reference().len(),
+        pins: reader.tracker().reference().len(),
         targets: names,
         target_columns: TargetColumns::of(&outputs),
         frames_with_missing_pins: 0,
-        reference_pins: extractor.tracker.reference().to_vec(),
-        settings: serde_json::json!({ "import": collection }),
+        reference_pins: reader.tracker().reference().to_vec(),
+        settings: serde_json::json!({ "import": resolved }),
         tactrace_version: crate::VERSION.into(),
         input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
         images: Vec::new(),
+        tracking: TrackTotals::default(),
     };
     let mut got = gather(&rows, outcomes, meta, frames)?;
+    got.data.meta.tracking = totals(paths.len(), &counts);
+    got.estimated_rest = opened.estimated;
     let d = &got.data;
-    got.warnings.extend(crate::import_checks::pressed_reference(
-        reference,
-        &d.meta.reference_pins,
-        &d.inputs,
-        d.len(),
-    ));
+    if let Some(reference) = opened.reference.frame() {
+        got.warnings.extend(crate::import_checks::pressed_reference(
+            reference,
+            &d.meta.reference_pins,
+            &d.inputs,
+            d.len(),
+        ));
+    }
     Ok(got)
+}
+
+/// The tracking totals of `total` frames read, `counts` those of the frames
+/// kept.
+fn totals(total: usize, counts: &[TrackCounts]) -> TrackTotals {
+    let sum = |f: fn(&TrackCounts) -> usize| Some(counts.iter().map(f).sum());
+    TrackTotals {
+        frames_total: total,
+        frames_fully_tracked: counts.iter().filter(|c| c.fully_tracked()).count(),
+        pins_matched: sum(|c| c.matched),
+        pins_split: sum(|c| c.split),
+        pins_filled: sum(|c| c.filled),
+    }
 }
 
 /// The rows at `keep` (all when `None`; indices past the end are ignored).
@@ -208,6 +236,7 @@ pub(crate) fn gather(
         });
     }
     meta.frames_with_missing_pins = missing;
+    meta.tracking = TrackTotals::frames(rows.len(), missing + rejected.len());
     if let Some(settings) = meta.settings.as_object_mut() {
         settings.insert("rejected".into(), rejected.len().into());
     }
@@ -221,6 +250,7 @@ pub(crate) fn gather(
         rejected,
         warnings: Vec::new(),
         composition: None,
+        estimated_rest: None,
     })
 }
 
@@ -233,11 +263,30 @@ pub(crate) fn reference_extractor(path: &Path, blob: &BlobParams) -> Result<PinE
     })
 }
 
-fn extract_one(extractor: &PinExtractor, path: &Path) -> Result<(Vec<f32>, bool)> {
-    let frame = read_frame(path)?;
-    let tracked = extractor.extract(&frame)?;
-    Ok((
-        tracked.displacement(extractor.tracker.reference()),
-        tracked.missing > 0,
-    ))
+/// The rest layout (and the sensor settings, when it had some) of a
+/// dataset imported earlier, so that another split of the same sensor is
+/// read against the same pins: `import --reference DATASET`.
+pub fn recorded_reference(dir: &Path) -> Result<(EstimatedRest, Option<SightParams>)> {
+    let data = tactrace_store::read_dataset(dir)?;
+    let meta = data.meta;
+    let recorded: Option<LabelledCollection> = meta
+        .settings
+        .get("import")
+        .and_then(|c| serde_json::from_value(c.clone()).ok());
+    let sight = recorded.as_ref().and_then(|c| c.sight().cloned());
+    let rest = match recorded.as_ref().map(LabelledCollection::reference) {
+        Some(Reference::Estimated(e)) if e.pins == meta.reference_pins => e.clone(),
+        _ => EstimatedRest {
+            pins: meta.reference_pins,
+            residual_px: 0.0,
+            frames: 0,
+        },
+    };
+    if rest.pins.len() < 3 {
+        return Err(LabError::Format {
+            path: dir.to_path_buf(),
+            reason: "the dataset records no reference pins to read other frames against".into(),
+        });
+    }
+    Ok((rest, sight))
 }

@@ -404,7 +404,7 @@ fn fig_4_1_simulated(rig: &tactrace_servo::RigConfig, disk: &Contour, stem: &Pat
 
 /// Fig. 4.1 on a real frame of the Bristol set `collection`.
 fn fig_4_1_real(collection: &LabelledCollection, stem: &Path) -> Result<()> {
-    let reference = tactrace_sensor::read_frame(collection.reference().path())?;
+    let reference = tactrace_sensor::read_frame(collection.reference().path()?)?;
     let frame = tactrace_sensor::read_frame(&collection.frames().join("frame_0_0.png"))?;
     let extractor = PinExtractor::from_reference_frame(&reference, collection.blob().clone())?;
     figures::frame_pins_displacements(stem, &frame, &extractor, 3.0)?;

@@ -47,7 +47,7 @@ pub(crate) fn simulate_twin_rows(
 ) -> Result<Imported> {
     let names = edge_names(collection)?;
     let rows = keep_rows(twin_rows(collection)?, keep);
-    let reference = collection.reference().path();
+    let reference = collection.reference().path()?;
     let extractor = reference_extractor(reference, collection.blob())?;
     let rest = extractor.tracker.reference().to_vec();
     let model = twin_model(reference, sensor, &rest)?;
@@ -75,7 +75,7 @@ pub fn simulate_twin_calibrated(
     let spec = &sensor.spec;
     let names = edge_names(collection)?;
     let rows = twin_rows(collection)?;
-    let reference = collection.reference().path();
+    let reference = collection.reference().path()?;
     let extractor = reference_extractor(reference, &spec.blob)?;
     let rest = extractor.tracker.reference().to_vec();
     if let Some(source) = pin_order_mismatch(&spec.reference_pins, &rest) {
@@ -167,6 +167,7 @@ fn twin_meta(
         tactrace_version: crate::VERSION.into(),
         input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
         images: Vec::new(),
+        tracking: tactrace_store::TrackTotals::default(),
     }
 }
 
@@ -199,6 +200,9 @@ fn concatenate(parts: Vec<Imported>) -> Imported {
         first.data.meta.images.extend(p.data.meta.images);
         first.data.meta.frames_with_missing_pins += p.data.meta.frames_with_missing_pins;
         first.frames_with_missing_pins += p.frames_with_missing_pins;
+        let (t, u) = (&mut first.data.meta.tracking, p.data.meta.tracking);
+        t.frames_total += u.frames_total;
+        t.frames_fully_tracked += u.frames_fully_tracked;
         first.rejected.extend(p.rejected);
     }
     first

@@ -214,5 +214,6 @@ pub fn python_meta(pins: &[[f64; 2]]) -> DatasetMeta {
         tactrace_version: tactrace_lab::VERSION.into(),
         input_layout: tactrace_store::dataset::INPUT_LAYOUT.into(),
         images: Vec::new(),
+        tracking: tactrace_store::TrackTotals::default(),
     }
 }

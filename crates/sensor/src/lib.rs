@@ -52,7 +52,7 @@ pub use layout::{concentric_rings, hex_lattice, pin_count, skin_pins};
 pub use model::TacTipModel;
 pub use nearest::{edge_pose, Answer, FrameBank, LabelScales, LabelledFrame, NearestFrameSensor};
 pub use nelder_mead::minimise;
-pub use replay::{read_frame, ReplaySensor};
+pub use replay::{read_frame, read_image, ReplaySensor};
 pub use sensor::{Frame, TactileSensor};
 pub use sim::{PoseSource, SimTacTip};
 pub use slip::{

@@ -47,6 +47,12 @@ pub const MAX_FRAME_BYTES: u64 = 256 << 20;
 /// image or corrupt. Only a regular file of at most `MAX_FRAME_BYTES` (256 MiB)
 /// is read: a FIFO named like a frame would block the reader for ever.
 pub fn read_frame(path: &Path) -> Result<Frame, SensorError> {
+    Ok(read_image(path)?.into_luma8())
+}
+
+/// A camera image file decoded as it is (grey or colour), with the checks
+/// of [`read_frame`]; for preprocessing stages that read colour.
+pub fn read_image(path: &Path) -> Result<image::DynamicImage, SensorError> {
     if !path.exists() {
         return Err(SensorError::FrameMissing {
             path: path.to_path_buf(),
@@ -81,7 +87,7 @@ pub fn read_frame(path: &Path) -> Result<Frame, SensorError> {
     })?;
     let image = image::load_from_memory_with_format(&bytes, format)
         .map_err(|e| classify_decode_error(path, e))?;
-    Ok(image.into_luma8())
+    Ok(image)
 }
 
 fn classify_decode_error(path: &Path, err: image::ImageError) -> SensorError {

@@ -49,6 +49,45 @@ pub struct DatasetMeta {
     /// datasets of the same frames; empty for simulated collections.
     #[serde(default)]
     pub images: Vec<String>,
+    /// How the frames' pins were tracked (`frames_total`,
+    /// `frames_fully_tracked`, pin totals), at the top level of meta.json.
+    #[serde(flatten)]
+    pub tracking: TrackTotals,
+}
+
+/// Per-dataset tracking counts: how many frames were read, how many had
+/// every pin found (none filled in from its neighbours), and, where known,
+/// the pins matched to a detection of their own, split from a cluster of
+/// touching pins, and filled in, summed over the frames kept.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TrackTotals {
+    /// Frames read (kept and rejected).
+    #[serde(default)]
+    pub frames_total: usize,
+    /// Frames kept with no pin filled in.
+    #[serde(default)]
+    pub frames_fully_tracked: usize,
+    /// Pins matched to a detected pin of their own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pins_matched: Option<usize>,
+    /// Pins matched to a centre split from a cluster of touching pins.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pins_split: Option<usize>,
+    /// Pins filled in from their neighbours' field (missing).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pins_filled: Option<usize>,
+}
+
+impl TrackTotals {
+    /// Frame counts only: `total` frames, `missing` of them with some pin
+    /// filled in.
+    pub fn frames(total: usize, missing: usize) -> Self {
+        Self {
+            frames_total: total,
+            frames_fully_tracked: total.saturating_sub(missing),
+            ..Self::default()
+        }
+    }
 }
 
 /// What each column of `targets.npy` is: its label column, unit and

@@ -10,6 +10,8 @@
 //!   on (content hashes), so scores on training rows are told apart;
 //! - [`frame_file`], [`shape_file`]: frames (PNG) and contours (CSV);
 //! - [`sensor_file`]: calibrated sensor folders (`tactrace calibrate`);
+//! - [`sight_file`]: sensor settings files (`tactrace sensor inspect`):
+//!   how to read a TacTip's frames;
 //! - [`config_file`]: defaults, then the file, unknown keys rejected;
 //! - [`fsutil`]: outputs that appear only when complete; [`lock`]: one
 //!   writer per output;
@@ -39,12 +41,13 @@ pub mod pin_order;
 pub mod row_file;
 pub mod sensor_file;
 pub mod shape_file;
+pub mod sight_file;
 pub mod training_record;
 
 pub use collection::{LabelledCollection, LabelledRow, TapFields, TargetSpec};
 pub use config_file::{load_config, overlay, resolved_config_toml};
 pub use csv_text::CsvText;
-pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData, TargetColumns};
+pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData, TargetColumns, TrackTotals};
 pub use error::{read_err, write_err, Result, StoreError};
 pub use fsutil::{
     check_output_dir, check_output_file, read_text, write_atomic, write_output_file, StagedDir,
@@ -56,4 +59,5 @@ pub use overlap::{check_output_apart, check_output_outside};
 pub use pin_order::{pin_order_mismatch, PinOrderError};
 pub use sensor_file::SensorFolder;
 pub use shape_file::load_shape;
+pub use sight_file::{SensorSummary, SightFile};
 pub use training_record::{HeldOut, TrainingRecord};

@@ -173,7 +173,7 @@ fn open_replay(w: &ReplayWorld) -> Result<OpenWorld> {
     let collection = w.bank.collection();
     let settings = sim_settings(&w.sim)?.with_blob(collection.blob().clone())?;
     let bank = load_bank(&w.bank)?;
-    let reference = read_frame(collection.reference().path())?;
+    let reference = read_frame(collection.reference().path()?)?;
     let calibration = match &w.sensor {
         Some(dir) => SensorFolder::read(dir)?.spec.sensor.calibration,
         None => w.sim.rig.sensor.calibration.clone(),

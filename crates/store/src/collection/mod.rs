@@ -28,7 +28,7 @@ pub use targets::{Target, TargetSpec, Unit};
 
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use tactrace_vision::BlobParams;
+use tactrace_vision::{BlobParams, SightParams};
 
 /// The layout of the Bristol tactile robotics group's collections (the
 /// shared 2D edge set): its files and label columns. The defaults of every
@@ -101,23 +101,63 @@ pub enum CollectionError {
     /// Blob parameters the detector refuses.
     #[error("the collection's blob parameters")]
     Blob(#[source] tactrace_vision::VisionError),
+    /// A command that needs an undeformed frame, given a collection whose
+    /// rest layout is estimated from taps.
+    #[error(
+        "this command needs the sensor's undeformed frame (--reference): the rest layout \
+         estimated from taps is used by import, predict and follow only"
+    )]
+    NoReferenceFrame,
 }
 
-/// The frame every pin displacement is measured from: its pins are the
-/// rest layout and define the pin order.
+/// What every pin displacement is measured from: the rest layout, which
+/// also defines the pin order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Reference {
     /// An undeformed frame (taken without contact), by its file.
     Frame(PathBuf),
+    /// No undeformed frame: the rest layout is to be estimated from the
+    /// taps themselves when the collection is read (`import` without
+    /// `--reference`), looking for `pins` pins (the sensor file's count;
+    /// `None`: the count most frames show).
+    Estimate {
+        /// The sensor's pin count.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        pins: Option<usize>,
+    },
+    /// A rest layout estimated from the taps (what [`Reference::Estimate`]
+    /// becomes once done, recorded in the dataset so another split or a
+    /// model reads the same pins).
+    Estimated(EstimatedRest),
+}
+
+/// A rest layout estimated from taps, and how well the taps agree with it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EstimatedRest {
+    /// The pins, px in the preprocessed frame, in the order every dataset
+    /// made from it uses.
+    pub pins: Vec<[f64; 2]>,
+    /// RMS distance of the least pressed taps' pins to the layout, px.
+    pub residual_px: f64,
+    /// Taps it was estimated from.
+    pub frames: usize,
 }
 
 impl Reference {
-    /// The reference frame's file.
-    pub fn path(&self) -> &Path {
+    /// The undeformed frame's file, when the reference is one.
+    pub fn frame(&self) -> Option<&Path> {
         match self {
-            Reference::Frame(p) => p,
+            Reference::Frame(p) => Some(p),
+            Reference::Estimate { .. } | Reference::Estimated(_) => None,
         }
+    }
+
+    /// The undeformed frame's file; an error for commands that need one
+    /// when the rest layout is (to be) estimated from taps.
+    pub fn path(&self) -> Result<&Path, CollectionError> {
+        self.frame().ok_or(CollectionError::NoReferenceFrame)
     }
 }
 
@@ -172,6 +212,7 @@ pub struct LabelledCollection {
     tap: TapColumns,
     rows: RowSelection,
     blob: BlobParams,
+    sight: Option<SightParams>,
 }
 
 /// The file form of a [`LabelledCollection`], before its checks.
@@ -187,6 +228,9 @@ struct CollectionFile {
     rows: RowSelection,
     spec: TargetSpec,
     blob: BlobParams,
+    /// The sensor file's preprocessing and detector (they replace `blob`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sight: Option<SightParams>,
 }
 
 impl TryFrom<CollectionFile> for LabelledCollection {
@@ -202,6 +246,7 @@ impl TryFrom<CollectionFile> for LabelledCollection {
             tap: f.tap,
             rows: f.rows,
             blob: f.blob,
+            sight: f.sight,
         })
     }
 }
@@ -216,6 +261,7 @@ impl From<LabelledCollection> for CollectionFile {
             rows: c.rows,
             spec: c.spec,
             blob: c.blob,
+            sight: c.sight,
         }
     }
 }
@@ -240,6 +286,7 @@ impl LabelledCollection {
             tap: TapColumns::bristol(),
             rows: RowSelection::default(),
             blob: BlobParams::preset(bristol::BLOB_PRESET).expect("built-in preset"),
+            sight: None,
         }
     }
 
@@ -286,6 +333,24 @@ impl LabelledCollection {
     /// The blob detector that finds the frames' pins.
     pub fn blob(&self) -> &BlobParams {
         &self.blob
+    }
+
+    /// The preprocessing and detector of a sensor file, when one was given
+    /// (they replace [`LabelledCollection::blob`]).
+    pub fn sight(&self) -> Option<&SightParams> {
+        self.sight.as_ref()
+    }
+
+    /// The sensor file's preprocessing and detector (checked against the
+    /// frames when they are read).
+    pub fn with_sight(self, sight: Option<SightParams>) -> Self {
+        Self { sight, ..self }
+    }
+
+    /// Another reference (an undeformed frame, or a rest layout estimated
+    /// from the taps).
+    pub fn with_reference(self, reference: Reference) -> Self {
+        Self { reference, ..self }
     }
 
     /// Another frames folder.
@@ -337,7 +402,10 @@ mod tests {
         let c = LabelledCollection::bristol(Path::new("set"));
         assert_eq!(c.frames(), Path::new("set/frames"));
         assert_eq!(c.targets(), Path::new("set/targets.csv"));
-        assert_eq!(c.reference().path(), Path::new("set/frames/init_0.png"));
+        assert_eq!(
+            c.reference().path().unwrap(),
+            Path::new("set/frames/init_0.png")
+        );
         assert_eq!(c.spec().image_column(), "image_name");
         assert_eq!(c.spec().edge_columns().unwrap(), ["pose_2", "pose_6"]);
         let units: Vec<Unit> = c.spec().targets().iter().map(|t| t.unit).collect();

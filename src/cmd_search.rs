@@ -26,13 +26,13 @@ pub struct SearchArgs {
     /// Trials in all (a resumed search may be given more).
     #[arg(long, default_value_t = 30)]
     trials: usize,
-    /// Output folder (built in <out>.partial until the search ends).
+    /// Output folder (built in OUT.partial until the search ends).
     #[arg(long)]
     out: PathBuf,
     /// Seed of the search and of the inner split.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Continue the search stopped in <out>.partial from its trials.
+    /// Continue the search stopped in OUT.partial from its trials.
     #[arg(long)]
     resume: bool,
     /// Fraction of --train held out as the inner validation part.

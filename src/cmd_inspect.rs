@@ -57,7 +57,19 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
     let f = &got.file;
     let layout = match f.sensor.layout {
         LayoutKind::Hexagonal => "a hexagonal lattice".to_string(),
-        LayoutKind::Rings => format!("concentric rings {:?}", got.inspection.layout.rings),
+        LayoutKind::Rings => {
+            let per_ring: Vec<String> = got
+                .inspection
+                .layout
+                .rings
+                .iter()
+                .map(|n| n.to_string())
+                .collect();
+            format!(
+                "concentric rings of {} pins (innermost first)",
+                per_ring.join(", ")
+            )
+        }
     };
     let detector = match &f.detect {
         DetectorParams::Spots(_) => "the small-pin detector (spots)",

@@ -307,6 +307,10 @@ impl PoseModel {
     /// Predict every target of every sample of `ds`
     /// ([`Self::predict_targets`]).
     pub fn predict_targets_batch(&self, ds: &Dataset) -> Result<Vec<Vec<f64>>, LearnError> {
+        if self.is_plain_edge() {
+            let rows = self.predict_batch(ds)?;
+            return Ok(rows.into_iter().map(|p| p.to_vec()).collect());
+        }
         (0..ds.n)
             .map(|i| self.predict_targets(ds.x_row(i)))
             .collect()

@@ -65,6 +65,6 @@ def test_bad_datasets_are_input_errors_naming_the_problem(sim_set, tmp_path):
         tactrace.save_dataset(tmp_path / "b", inputs[:10, :100], targets[:10], meta)
     with pytest.raises(ValueError, match="reference_pins"):
         tactrace.save_dataset(tmp_path / "c", inputs[:10], targets[:10], {})
-    with pytest.raises(ValueError, match="targets must have 2 columns"):
+    with pytest.raises(ValueError, match="targets has 254 columns, meta names 2 targets"):
         tactrace.save_dataset(tmp_path / "e", inputs[:10], inputs[:10], meta)
     assert not any(tmp_path.iterdir()), "nothing written"

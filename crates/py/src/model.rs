@@ -55,6 +55,21 @@ impl Model {
 
     /// The network, for samples ordered against `samples.pins`: refused
     /// when they are ordered otherwise than the model's training data.
+    /// The model's net for `samples` (as [`Self::net_for`]) and the
+    /// samples' width, refused unless it is the net's input width.
+    fn net_taking(&self, samples: &Samples) -> PyResult<(&PoseModel, usize)> {
+        let net = self.net_for(samples)?;
+        let cols = samples.cols;
+        if cols != net.input_dim() {
+            return Err(input(format!(
+                "the model takes {} inputs per sample (2 x {} pins), inputs has {cols}",
+                net.input_dim(),
+                net.input_dim() / 2
+            )));
+        }
+        Ok((net, cols))
+    }
+
     fn net_for(&self, samples: &Samples) -> PyResult<&PoseModel> {
         let mut accepted = self.accepted.lock().unwrap_or_else(|e| e.into_inner());
         if *accepted != samples.pins {
@@ -102,15 +117,7 @@ impl Model {
         reference_pins: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let samples = Samples::read(data, None, reference_pins, false)?;
-        let net = self.net_for(&samples)?;
-        let cols = samples.cols;
-        if cols != net.input_dim() {
-            return Err(input(format!(
-                "the model takes {} inputs per sample (2 x {} pins), inputs has {cols}",
-                net.input_dim(),
-                net.input_dim() / 2
-            )));
-        }
+        let (net, cols) = self.net_taking(&samples)?;
         let flat = &samples.inputs;
         let out = run_detached(py, || predict_rows(net, flat, cols))?.map_err(core)?;
         let arr = to_matrix(py, out, samples.rows, 2)?;
@@ -132,15 +139,7 @@ impl Model {
         reference_pins: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let samples = Samples::read(data, None, reference_pins, false)?;
-        let net = self.net_for(&samples)?;
-        let cols = samples.cols;
-        if cols != net.input_dim() {
-            return Err(input(format!(
-                "the model takes {} inputs per sample (2 x {} pins), inputs has {cols}",
-                net.input_dim(),
-                net.input_dim() / 2
-            )));
-        }
+        let (net, cols) = self.net_taking(&samples)?;
         let t = net.outputs().len();
         let flat = &samples.inputs;
         let out = run_detached(py, || {

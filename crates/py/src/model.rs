@@ -284,7 +284,7 @@ impl Model {
             "Model(kind='{}', pins={}, source='{}')",
             kind_name(net.kind()),
             self.stored.reference_pins().len(),
-            self.stored.source().display().to_string()
+            self.stored.source().display()
         ))
     }
 }

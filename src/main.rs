@@ -46,7 +46,7 @@ struct Cli {
 enum Command {
     /// Collect taps on an edge with the simulated rig (report ch. 4.1).
     Collect(cmd_data::CollectArgs),
-    /// Turn real TacTip frames (Bristol layout) into a dataset.
+    /// Turn real TacTip frames (any TacTip; Bristol column defaults) into a dataset.
     Import(cmd_data::ImportArgs),
     /// Simulate a real labelled data set's taps (the simulator judged by real frames).
     Twin(cmd_twin::TwinArgs),
@@ -60,7 +60,7 @@ enum Command {
     Search(cmd_search::SearchArgs),
     /// Mean absolute errors of a model on a dataset (report ch. 4.3).
     Validate(cmd_learn::ValidateArgs),
-    /// Predict edge position and angle for one frame or a dataset.
+    /// Predict a model's targets (the edge pose by default) for one frame or a dataset.
     Predict(cmd_learn::PredictArgs),
     /// Follow a contour with the simulated rig, on real frames (--replay) or a real rig (report ch. 5).
     Follow(cmd_follow::FollowArgs),

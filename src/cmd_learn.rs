@@ -101,15 +101,21 @@ pub struct TrainArgs {
     force: bool,
 }
 
+/// The model configuration `--model`, `--preset`, `--config FILE` and
+/// `--epochs` resolve to (errors name the file).
+pub fn model_config(
+    model: ModelArg,
+    preset: PresetArg,
+    config: Option<&Path>,
+    epochs: Option<usize>,
+) -> Result<tactrace_learn::ModelConfig> {
+    let text = config.map(fsutil::read_text).transpose()?;
+    tr::resolve_config(model.into(), preset.into(), text.as_deref(), epochs)
+        .with_context(|| config.map(|p| p.display().to_string()).unwrap_or_default())
+}
+
 pub fn train(a: TrainArgs) -> Result<()> {
-    let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
-    let cfg = tr::resolve_config(a.model.into(), a.preset.into(), text.as_deref(), a.epochs)
-        .with_context(|| {
-            a.config
-                .as_ref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default()
-        })?;
+    let cfg = model_config(a.model, a.preset, a.config.as_deref(), a.epochs)?;
     if a.print_config {
         crate::say!("{}", toml::to_string(&cfg)?.trim_end());
         return Ok(());

@@ -6,7 +6,6 @@ use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 use tactrace_lab::search::{self, SearchSettings, SpaceFile};
-use tactrace_lab::train as tr;
 use tactrace_optim::Local;
 use tactrace_store::{fsutil, read_dataset};
 
@@ -59,14 +58,7 @@ pub struct SearchArgs {
 }
 
 pub fn search(a: SearchArgs) -> Result<()> {
-    let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
-    let base = tr::resolve_config(a.model.into(), a.preset.into(), text.as_deref(), a.epochs)
-        .with_context(|| {
-            a.config
-                .as_ref()
-                .map(|p| p.display().to_string())
-                .unwrap_or_default()
-        })?;
+    let base = crate::cmd_learn::model_config(a.model, a.preset, a.config.as_deref(), a.epochs)?;
     let space_text = fsutil::read_text(&a.space)?;
     let space: SpaceFile = toml::from_str(&space_text)
         .with_context(|| format!("search space {}", a.space.display()))?;

@@ -47,24 +47,16 @@ fn issue21_three_targets_import_train_validate_and_import_like() {
     std::fs::write(t.join("small.toml"), SMALL).unwrap();
     let s = |p: &Path| p.display().to_string();
     let (frames, init) = (s(&data.join("frames")), s(&data.join("frames/init_0.png")));
-    let r = tactrace(
-        &t.0,
+    let r = import_fit(
+        &t,
+        &data,
         &[
-            "import",
-            "--frames",
-            &frames,
-            "--targets",
-            "fit.csv",
-            "--reference",
-            &init,
             "--target",
             "pose_2:mm",
             "--target",
             "pose_6:deg:circular",
             "--target",
             "pose_3:mm",
-            "--out",
-            "fit",
         ],
     );
     ok(&r, "import --target");
@@ -243,22 +235,7 @@ fn issue21_an_edge_model_folder_of_format_2_loads_and_scores_the_same() {
     let t = TempDir::new("format2");
     part_csv(&data, &t.join("fit.csv"), &[2, 3, 4], 50);
     std::fs::write(t.join("small.toml"), SMALL).unwrap();
-    let s = |p: &Path| p.display().to_string();
-    let (frames, init) = (s(&data.join("frames")), s(&data.join("frames/init_0.png")));
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            &frames,
-            "--targets",
-            "fit.csv",
-            "--reference",
-            &init,
-            "--out",
-            "fit",
-        ],
-    );
+    let r = import_fit(&t, &data, &[]);
     ok(&r, "import");
     let r = tactrace(
         &t.0,
@@ -297,4 +274,16 @@ fn issue21_an_edge_model_folder_of_format_2_loads_and_scores_the_same() {
     assert_eq!(old["position_mae_mm"], now["position_mae_mm"]);
     assert_eq!(old["angle_mae_deg"], now["angle_mae_deg"]);
     assert_eq!(old["per_target"], now["per_target"]);
+}
+
+/// `import` of `fit.csv` in `t` (frames and reference frame of the real
+/// set `data`) into `fit`, with `extra` arguments.
+fn import_fit(t: &TempDir, data: &Path, extra: &[&str]) -> Run {
+    let frames = data.join("frames").display().to_string();
+    let init = data.join("frames/init_0.png").display().to_string();
+    let mut args = vec!["import", "--frames", &frames, "--targets", "fit.csv"];
+    args.extend(["--reference", &init]);
+    args.extend(extra);
+    args.extend(["--out", "fit"]);
+    tactrace(&t.0, &args)
 }

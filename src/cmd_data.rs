@@ -50,6 +50,8 @@ pub struct CollectArgs {
     /// Replace an existing output directory.
     #[arg(long)]
     force: bool,
+    #[command(flatten)]
+    task: crate::cmd_task3d::CollectTaskArgs,
 }
 
 /// The simulated rig's configuration: the defaults, then the file.
@@ -62,6 +64,16 @@ pub fn rig_config(path: Option<&Path>) -> Result<RigConfig> {
 pub fn collect(a: CollectArgs) -> Result<()> {
     if let Some(path) = &a.hardware {
         return collect_hardware(&a, path);
+    }
+    if a.task.is_3d() {
+        let (samples, seed, frames) = (a.samples, a.seed, a.save_frames);
+        let out = (a.out.as_path(), a.force);
+        return crate::cmd_task3d::collect(
+            &a.task,
+            (samples, seed, frames),
+            a.config.as_deref(),
+            out,
+        );
     }
     Inputs::new()
         .file_arg("--shape", &a.shape)

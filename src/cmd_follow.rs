@@ -24,7 +24,7 @@ pub struct FollowArgs {
     /// (square:S, rect:W,H, star:R,A,K for r = R + A cos(K phi), each with an
     /// optional last value: rotation, deg) or a CSV of x,y points (mm). With --hardware: optional, the object's true contour in the
     /// work frame, used only to score the run.
-    #[arg(long, required_unless_present = "hardware")]
+    #[arg(long, required_unless_present_any = ["hardware", "task"])]
     shape: Option<String>,
     /// Run on a real rig (UR5 + TacTip camera) described by this TOML
     /// (docs/hardware.md) instead of the simulated world.
@@ -55,6 +55,8 @@ pub struct FollowArgs {
     force: bool,
     #[command(flatten)]
     replay: ReplayArgs,
+    #[command(flatten)]
+    task3d: crate::cmd_task3d::FollowTaskArgs,
 }
 
 /// The real-frame world (`follow --replay`).
@@ -122,6 +124,10 @@ impl ReplayArgs {
 pub fn follow(a: FollowArgs) -> Result<()> {
     if let Some(hw) = a.hardware.clone() {
         return follow_hardware(a, &hw);
+    }
+    if a.task3d.is_3d() {
+        let out = (a.out.as_path(), a.force);
+        return crate::cmd_task3d::follow(&a.task3d, &a.model, a.config.as_deref(), a.seed, out);
     }
     let mut cfg: SimFollowConfig = load_config(a.config.as_deref(), "follow configuration")?;
     overrides(&a, &mut cfg.follow);

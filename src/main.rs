@@ -13,6 +13,7 @@ mod cmd_inspect;
 mod cmd_learn;
 mod cmd_rig;
 mod cmd_search;
+mod cmd_task3d;
 mod cmd_tune;
 mod cmd_twin;
 #[cfg(test)]

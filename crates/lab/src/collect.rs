@@ -387,7 +387,7 @@ pub fn collect_on(
 }
 
 /// A collection's metadata (targets named `r_mm`, `theta_deg`).
-fn dataset_meta(
+pub(crate) fn dataset_meta(
     cfg: &CollectConfig,
     (source, origin): (&str, &str),
     settings: serde_json::Value,

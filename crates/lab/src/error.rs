@@ -66,6 +66,9 @@ pub enum LabError {
     Servo(#[from] tactrace_servo::ServoError),
     #[error(transparent)]
     Geometry(#[from] tactrace_geometry::GeometryError),
+    /// A 3D object that cannot be built (its settings or its mesh file).
+    #[error(transparent)]
+    Shape3d(#[from] tactrace_shape3d::Shape3dError),
     #[error(transparent)]
     Sensor(#[from] tactrace_sensor::SensorError),
     #[error(transparent)]
@@ -112,6 +115,7 @@ fn refused(e: &tactrace_arm::ArmError) -> bool {
         A::OutsideWorkspace { .. }
             | A::StepTooLarge { .. }
             | A::RotationTooLarge { .. }
+            | A::TiltTooLarge { .. }
             | A::NonFinitePose { .. }
             | A::InvalidConfig { .. }
     )
@@ -146,6 +150,7 @@ impl LabError {
             | LabError::Reference { .. }
             | LabError::Config(_)
             | LabError::Geometry(_)
+            | LabError::Shape3d(_)
             | LabError::TooFewSamples { .. }
             | LabError::Calib(_) => true,
             LabError::Control(e) => {

@@ -19,6 +19,7 @@ pub mod bench;
 pub mod calibrate;
 mod calibration_sweep;
 pub mod collect;
+pub mod collect3d;
 pub mod error;
 pub mod follow;
 #[cfg(feature = "hardware")]

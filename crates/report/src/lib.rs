@@ -11,6 +11,7 @@ pub mod error;
 pub mod figures;
 pub mod html;
 pub mod plot;
+pub mod replay_3d;
 pub mod replay_html;
 pub mod results;
 

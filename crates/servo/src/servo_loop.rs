@@ -182,7 +182,7 @@ pub struct LoopSummary {
 }
 
 impl LoopSummary {
-    fn new(steps: usize, ending: Ending, message: String) -> Self {
+    pub(crate) fn new(steps: usize, ending: Ending, message: String) -> Self {
         Self {
             steps,
             ending,
@@ -273,6 +273,7 @@ pub fn servo_loop(
                     e @ (ArmError::OutsideWorkspace { .. }
                     | ArmError::StepTooLarge { .. }
                     | ArmError::RotationTooLarge { .. }
+                    | ArmError::TiltTooLarge { .. }
                     | ArmError::NonFinitePose { .. }),
                 ) => {
                     let message = format!("stopped safely at step {step}: {e}");

@@ -86,3 +86,86 @@ impl ObjectConfig {
         })
     }
 }
+
+/// The names [`ObjectConfig::named`] knows, for help and error messages.
+pub const OBJECT_NAMES: &str =
+    "plane, ramp, saddle, bowl, wave, foil, disk, flower, trine, teardrop";
+
+impl ObjectConfig {
+    /// A built-in object by name (case-insensitive): `plane` (a flat floor
+    /// at z = 0), `ramp` (20 deg towards +x), `saddle` (radius 60 mm),
+    /// `bowl` (sphere 80 mm, rim 60 mm), `wave` (4 mm high, 60 mm long,
+    /// along x), `foil` (outline 40 mm, bent to 80 mm, 3 mm thick) or one
+    /// of the report's shapes extruded 20 mm high; `None` for any other.
+    /// The surfaces are gentle enough for the 40 mm dome to follow them
+    /// (slopes of at most about 35 deg over their middle 80 mm).
+    pub fn named(name: &str) -> Option<Self> {
+        let name = name.trim().to_ascii_lowercase();
+        Some(match name.as_str() {
+            "plane" => Self::Ramp {
+                height_mm: 0.0,
+                slope_deg: 0.0,
+                azimuth_deg: 0.0,
+            },
+            "ramp" => Self::Ramp {
+                height_mm: 0.0,
+                slope_deg: 20.0,
+                azimuth_deg: 0.0,
+            },
+            "saddle" => Self::Saddle { radius_mm: 60.0 },
+            "bowl" => Self::Bowl {
+                sphere_radius_mm: 80.0,
+                rim_radius_mm: 60.0,
+            },
+            "wave" => Self::Wave {
+                amplitude_mm: 4.0,
+                wavelength_mm: 60.0,
+                azimuth_deg: 0.0,
+            },
+            "foil" => Self::Foil {
+                outline_radius_mm: 40.0,
+                bend_radius_mm: 80.0,
+                thickness_mm: 3.0,
+            },
+            other => Self::Extruded {
+                shape: BuiltinShape::from_name(other)?,
+                height_mm: 20.0,
+            },
+        })
+    }
+
+    /// A command line's object: a built-in name ([`ObjectConfig::named`])
+    /// or a mesh file (`.stl`, `.obj`); `None` when it is neither.
+    pub fn from_arg(arg: &str) -> Option<Self> {
+        if let Some(named) = Self::named(arg) {
+            return Some(named);
+        }
+        let path = PathBuf::from(arg);
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        matches!(ext.as_str(), "stl" | "obj").then_some(Self::Mesh { path })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every built-in name builds; a mesh file is known by its extension;
+    /// anything else is no object.
+    #[test]
+    fn issue23_named_objects_and_mesh_files() {
+        for name in OBJECT_NAMES.split(", ") {
+            let cfg = ObjectConfig::named(name).unwrap_or_else(|| panic!("{name}"));
+            cfg.build().unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+        assert!(ObjectConfig::named(" Saddle ").is_some());
+        assert_eq!(
+            ObjectConfig::from_arg("part.STL"),
+            Some(ObjectConfig::Mesh {
+                path: "part.STL".into()
+            })
+        );
+        assert_eq!(ObjectConfig::from_arg("teapot"), None);
+        assert_eq!(ObjectConfig::from_arg("part.ply"), None);
+    }
+}

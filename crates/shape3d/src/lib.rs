@@ -20,6 +20,7 @@ mod config;
 mod edge;
 mod error;
 mod extruded;
+mod feature_frame;
 mod foil;
 mod height_field;
 mod mesh;
@@ -27,10 +28,13 @@ mod mesh_io;
 mod object;
 
 pub use bowl::Bowl;
-pub use config::{ObjectConfig, Surface};
+pub use config::{ObjectConfig, Surface, OBJECT_NAMES};
 pub use edge::{EdgeCurve, EdgeSample};
 pub use error::Shape3dError;
 pub use extruded::Extruded;
+pub use feature_frame::{
+    feature_frame, normal_error_deg, pose_of_label, surface_point, true_label,
+};
 pub use foil::Foil;
 pub use height_field::HeightField;
 pub use mesh::TriangleMesh;

@@ -14,6 +14,8 @@
 //! `OUT.partial`, which the next run into `OUT` replaces.
 mod config;
 mod results;
+pub mod task3d;
+pub mod task3d_results;
 
 pub use config::{ServoSettings, SimFollowConfig};
 pub use results::{size_warning, tactip_diameter_mm, write_results, write_results_with, RunExtras};

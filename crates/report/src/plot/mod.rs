@@ -15,6 +15,7 @@
 
 mod arrows;
 mod chart;
+mod chart3d;
 mod font;
 mod legend;
 mod palette;
@@ -31,6 +32,7 @@ mod tests_clip;
 use std::path::PathBuf;
 
 pub use chart::{chart, grid};
+pub use chart3d::{chart_3d, Chart3d};
 pub use pins::{pins_figure, quiver_pair};
 
 /// How a [`Series`] is drawn.

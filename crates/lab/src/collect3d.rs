@@ -1,0 +1,252 @@
+//! Data collection for the 3D tasks (`collect --task surface_3d`): taps
+//! on a 3D object at poses drawn in the anchors' ranges, labelled by
+//! their pose relative to the surface.
+//!
+//! 1. The feature frame F at the object's surface point over `at_mm`
+//!    (z the outward normal; x, y the work frame's turned the least way).
+//! 2. Tap i draws its label s: surface_3d: depth z uniform in
+//!    [`depth_range_mm`], tilts rx, ry uniform in +-`tilt_range_deg`
+//!    (x = y = rz = 0).
+//! 3. The simulated arm moves to the tap's approach (the pose lifted
+//!    `tap.height_mm` along the sensor's own axis), then presses along
+//!    the axis to the pose F T(s) (z = -depth); the simulated TacTip
+//!    renders the pins at the pose the arm physically reached
+//!    (`TacTipModel::pins_3d`), with nuisance.
+//! 4. The pins' displacements are the inputs, s's sensed components the
+//!    named targets (`z` mm, `rx` deg, `ry` deg).
+//!
+//! Every tap has generators of its own (stream i of the seed), so the set
+//! is the same whatever the number of threads.
+//!
+//! [`depth_range_mm`]: Collect3dConfig::depth_range_mm
+use crate::collect::{check_samples, dataset_meta, CollectConfig, Collected};
+use crate::error::{LabError, Result};
+use rand::{Rng, RngCore, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use tactrace_arm::{Arm, LimitMode, LimitedArm, SimArm, SimArmConfig};
+use tactrace_control::Task;
+use tactrace_learn::{ModelTarget, Unit};
+use tactrace_sensor::{Frame, TacTipModel};
+use tactrace_servo::{lifted, RigConfig};
+use tactrace_shape3d::{feature_frame, pose_of_label, surface_point, Surface};
+use tactrace_store::dataset::TargetColumns;
+use tactrace_store::frame_file::png_bytes;
+use tactrace_store::{DatasetMeta, TapData};
+use tactrace_vision::PinExtractor;
+
+/// What a 3D collection draws (the anchors' surface_3d ranges by default).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Collect3dConfig {
+    pub samples: usize,
+    pub seed: u64,
+    /// The task whose components are drawn and named.
+    pub task: Task,
+    /// The surface point tapped: the object's top over this (x, y), mm.
+    pub at_mm: [f64; 2],
+    /// Depths are uniform in [min, max], mm.
+    pub depth_range_mm: [f64; 2],
+    /// rx and ry are uniform in +-this, deg.
+    pub tilt_range_deg: f64,
+    /// Keep the PNG of every tap.
+    pub save_frames: bool,
+}
+
+impl Default for Collect3dConfig {
+    fn default() -> Self {
+        Self {
+            samples: 1000,
+            seed: 1,
+            task: Task::Surface3d,
+            at_mm: [0.0, 0.0],
+            depth_range_mm: [1.0, 5.0],
+            tilt_range_deg: 25.0,
+            save_frames: false,
+        }
+    }
+}
+
+impl Collect3dConfig {
+    /// Refuse a task this collection cannot draw and ranges that cannot work.
+    pub fn validate(&self) -> Result<()> {
+        if self.task != Task::Surface3d {
+            return Err(LabError::Config(format!(
+                "collect --task {} is not built yet (surface_3d is)",
+                self.task
+            )));
+        }
+        let [lo, hi] = self.depth_range_mm;
+        let ok = lo.is_finite()
+            && hi.is_finite()
+            && 0.0 <= lo
+            && lo <= hi
+            && self.tilt_range_deg.is_finite()
+            && (0.0..90.0).contains(&self.tilt_range_deg)
+            && self.at_mm.iter().all(|v| v.is_finite());
+        if !ok {
+            return Err(LabError::Config(
+                "depth_range_mm must be 0 <= min <= max, tilt_range_deg in [0, 90), at_mm finite"
+                    .into(),
+            ));
+        }
+        check_samples(&CollectConfig {
+            samples: self.samples,
+            ..CollectConfig::default()
+        })
+    }
+}
+
+/// The named targets of `task`'s sensed components (x, y, z in mm; rx, ry,
+/// rz in deg, rz circular), as a 3D collection writes them.
+pub fn task_targets(task: Task) -> Vec<ModelTarget> {
+    task.sensed_names()
+        .into_iter()
+        .map(|name| match name {
+            "rz" => ModelTarget::circular(name),
+            "rx" | "ry" => ModelTarget::new(name, Unit::Deg),
+            _ => ModelTarget::new(name, Unit::Mm),
+        })
+        .collect()
+}
+
+/// One tap: its displacement vector, labels and frame.
+struct Row {
+    inputs: Vec<f32>,
+    targets: Vec<f32>,
+    missing: bool,
+    frame: Option<Frame>,
+}
+
+/// Collect `cfg.samples` taps on `object` (named `origin`) with the
+/// simulated rig `rig_cfg` (its sensor, arm noise, workspace, tap height
+/// and blob settings); `progress` hears the taps done after each batch.
+pub fn collect_3d(
+    rig_cfg: &RigConfig,
+    object: &Surface,
+    cfg: &Collect3dConfig,
+    origin: &str,
+    mut progress: impl FnMut(usize),
+) -> Result<Collected> {
+    cfg.validate()?;
+    rig_cfg.validate()?;
+    let model = TacTipModel::new(rig_cfg.sensor.clone())?;
+    let reference = model.render(model.rest_pins(), None);
+    let extractor = PinExtractor::from_reference_frame(&reference, rig_cfg.blob.clone())?;
+    let [x, y] = cfg.at_mm;
+    let q = surface_point(object.as_ref(), x, y).ok_or_else(|| {
+        LabError::Config(format!(
+            "the object {origin} has no surface over ({x}, {y}) mm"
+        ))
+    })?;
+    let frame = feature_frame(object.as_ref(), q, nalgebra::UnitQuaternion::identity())
+        .ok_or_else(|| LabError::Config(format!("the surface of {origin} faces down there")))?;
+    let world = World {
+        rig: rig_cfg,
+        model: &model,
+        object,
+        frame,
+        extractor: &extractor,
+    };
+    let targets = task_targets(cfg.task);
+    let mut data = TapData {
+        inputs: Vec::new(),
+        targets: Vec::new(),
+        meta: meta(cfg, origin, rig_cfg, &extractor, &targets),
+    };
+    let mut frames = Vec::new();
+    let mut missing = 0;
+    for first in (0..cfg.samples).step_by(256) {
+        let last = (first + 256).min(cfg.samples);
+        let batch: Vec<Row> = (first..last)
+            .into_par_iter()
+            .map(|i| world.tap(cfg, i))
+            .collect::<Result<_>>()?;
+        for (i, row) in (first..).zip(batch) {
+            missing += usize::from(row.missing);
+            data.inputs.extend(row.inputs);
+            data.targets.extend(row.targets);
+            if let Some(f) = row.frame {
+                frames.push((format!("frame_{i:05}.png"), png_bytes(&f, "frame")?));
+            }
+        }
+        progress(last);
+    }
+    if cfg.save_frames {
+        frames.push(("reference.png".into(), png_bytes(&reference, "reference")?));
+    }
+    data.meta.frames_with_missing_pins = missing;
+    data.meta.tracking = tactrace_store::TrackTotals::frames(cfg.samples, missing);
+    Ok(Collected { data, frames })
+}
+
+/// The metadata of a 3D collection: its named targets and settings.
+fn meta(
+    cfg: &Collect3dConfig,
+    origin: &str,
+    rig_cfg: &RigConfig,
+    extractor: &PinExtractor,
+    targets: &[ModelTarget],
+) -> DatasetMeta {
+    let edge = CollectConfig {
+        samples: cfg.samples,
+        seed: cfg.seed,
+        ..CollectConfig::default()
+    };
+    let settings = serde_json::json!({ "rig": rig_cfg, "collect_3d": cfg });
+    let base = dataset_meta(&edge, ("simulated", origin), settings, extractor, 0);
+    DatasetMeta {
+        targets: TargetColumns::display(targets),
+        target_columns: TargetColumns::of(targets),
+        ..base
+    }
+}
+
+/// The simulated rig of a 3D collection, shared by every thread.
+struct World<'a> {
+    rig: &'a RigConfig,
+    model: &'a TacTipModel,
+    object: &'a Surface,
+    /// The feature frame of the tapped surface point (object frame).
+    frame: nalgebra::Isometry3<f64>,
+    extractor: &'a PinExtractor,
+}
+
+impl World<'_> {
+    /// Tap `i`: its own generator draws the label, then seeds the arm's
+    /// noise and the camera's nuisance.
+    fn tap(&self, cfg: &Collect3dConfig, i: usize) -> Result<Row> {
+        let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+        rng.set_stream(i as u64);
+        let [lo, hi] = cfg.depth_range_mm;
+        let t = cfg.tilt_range_deg;
+        let z = rng.random_range(lo..=hi);
+        let rx = rng.random_range(-t..=t);
+        let ry = rng.random_range(-t..=t);
+        let pose = pose_of_label(&self.frame, [0.0, 0.0, z, rx, ry, 0.0]);
+        let approach = lifted(pose, self.rig.tap.height_mm);
+        let arm_cfg = SimArmConfig {
+            seed: rng.next_u64(),
+            ..self.rig.arm.clone()
+        };
+        let (sim_arm, probe) = SimArm::with_probe(arm_cfg, approach);
+        let mut arm = LimitedArm::new(sim_arm, self.rig.workspace.clone(), LimitMode::Refuse);
+        arm.move_to(approach)?;
+        arm.move_to(pose)?;
+        let mut nuisance = ChaCha8Rng::seed_from_u64(rng.next_u64());
+        let pins = self
+            .model
+            .pins_3d(self.object.as_ref(), probe.actual(), None);
+        let frame = self
+            .model
+            .render(&self.model.seen_pins(pins), Some(&mut nuisance));
+        arm.move_to(approach)?;
+        let tracked = self.extractor.extract(&frame)?;
+        Ok(Row {
+            inputs: tracked.displacement(self.extractor.tracker.reference()),
+            targets: vec![z as f32, rx as f32, ry as f32],
+            missing: tracked.missing > 0,
+            frame: cfg.save_frames.then_some(frame),
+        })
+    }
+}

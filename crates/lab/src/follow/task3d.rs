@@ -1,0 +1,259 @@
+//! Surface following in 3D (`follow --task surface_3d --object ...`): the
+//! servo loop of `tactrace_servo::servo_3d` with the SE(3) controller, in
+//! the simulated world of a 3D object, into a run folder.
+//!
+//! The path: the sensor starts level (its axis vertical) over the surface
+//! point `path.start_mm`, pressed to the reference depth along the
+//! vertical, turned so that its y axis points along `path.heading_deg`;
+//! the controller's constant 1 mm step along the sensor's y axis then
+//! carries it across the surface for `path.length_mm`, the tilt and depth
+//! corrections keeping it on the surface and normal to it. The arm bounds
+//! the tilt (`max_tilt_deg`: a larger tilt is refused and ends the run).
+//! The model sees only the pins; the run is scored against the object
+//! afterwards ([`super::task3d_results`]).
+use super::task3d_results::{write_surface_results, Surface3dMetrics, TruthCsv};
+use super::RunFolder;
+use crate::error::{LabError, Result};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig};
+use tactrace_control::{Se3Config, Se3Controller, Task};
+use tactrace_sensor::{SimTacTip, TacTipModel};
+use tactrace_servo::{servo_loop_3d, Loop3dConfig, LoopSummary, Perception3d, RigConfig, Step3d};
+use tactrace_shape3d::{surface_point, Surface};
+use tactrace_store::StoredModel;
+use tactrace_vision::PinExtractor;
+
+/// The path across the surface.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PathConfig {
+    /// The start: the surface point over this (x, y), mm.
+    pub start_mm: [f64; 2],
+    /// The direction of travel in the work frame's xy plane, deg from +x.
+    pub heading_deg: f64,
+    /// The path's length, mm (one step per mm of the reference's y step).
+    pub length_mm: f64,
+}
+
+impl Default for PathConfig {
+    fn default() -> Self {
+        Self {
+            start_mm: [-40.0, 0.0],
+            heading_deg: 0.0,
+            length_mm: 80.0,
+        }
+    }
+}
+
+impl PathConfig {
+    /// The path the built-in objects are followed along: 80 mm across the
+    /// middle (the saddle's off its flat diagonal, at y = 10 mm), 40 mm
+    /// over the plane and the ramp.
+    pub fn for_object(name: &str) -> Self {
+        match name {
+            "saddle" => Self {
+                start_mm: [-40.0, 10.0],
+                ..Self::default()
+            },
+            "plane" | "ramp" => Self {
+                start_mm: [-20.0, 0.0],
+                length_mm: 40.0,
+                ..Self::default()
+            },
+            _ => Self::default(),
+        }
+    }
+}
+
+/// A surface_3d run in simulation (the run folder's `config.toml`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Surface3dConfig {
+    /// The simulated sensor, arm noise, workspace, tap (its `height_mm`
+    /// is the lift between taps, along the sensor's axis) and detector.
+    pub rig: RigConfig,
+    /// The SE(3) controller (the anchors' surface_3d preset).
+    pub controller: Se3Config,
+    pub path: PathConfig,
+    /// The arm refuses a tilt of the tool beyond this, deg.
+    pub max_tilt_deg: f64,
+    /// Below this mean pin displacement (px) a tap counts as no contact.
+    pub contact_threshold_px: f64,
+    /// Taps in a row without contact before the run stops.
+    pub max_no_contact: usize,
+    /// Steps left out of the metrics at the start (the approach).
+    pub settle_steps: usize,
+    /// Seed of the arm's and the camera's noise.
+    pub seed: u64,
+}
+
+impl Default for Surface3dConfig {
+    fn default() -> Self {
+        Self {
+            rig: RigConfig::default(),
+            controller: Se3Config::surface_3d(),
+            path: PathConfig::default(),
+            max_tilt_deg: 45.0,
+            contact_threshold_px: 0.5,
+            max_no_contact: 3,
+            settle_steps: 5,
+            seed: 1,
+        }
+    }
+}
+
+impl Surface3dConfig {
+    /// Check the settings before anything runs.
+    pub fn validate(&self) -> Result<()> {
+        self.rig.validate()?;
+        self.controller.validate()?;
+        if self.controller.task != Task::Surface3d {
+            return Err(LabError::Config(format!(
+                "controller.task is {}: a surface run needs surface_3d",
+                self.controller.task
+            )));
+        }
+        let p = &self.path;
+        let finite = p
+            .start_mm
+            .iter()
+            .chain([&p.heading_deg])
+            .all(|v| v.is_finite());
+        let step = self.controller.reference[1].abs();
+        let ok = finite
+            && p.length_mm.is_finite()
+            && p.length_mm >= step
+            && step > 0.0
+            && (0.0..=90.0).contains(&self.max_tilt_deg)
+            && self.contact_threshold_px.is_finite()
+            && self.max_no_contact > 0;
+        if !ok {
+            return Err(LabError::Config(
+                "path: finite start and heading, length_mm at least one step (the reference's y, \
+                 not 0); max_tilt_deg in [0, 90]; max_no_contact >= 1"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Steps of the path: its length over the reference's step.
+    pub fn steps(&self) -> usize {
+        (self.path.length_mm / self.controller.reference[1].abs()).round() as usize + 1
+    }
+}
+
+/// A finished surface run.
+pub struct Surface3dOutcome {
+    pub summary: LoopSummary,
+    pub metrics: Surface3dMetrics,
+    pub dir: PathBuf,
+}
+
+/// The start pose: level over the surface point at the path's start,
+/// pressed the reference depth below it, its y axis along the heading.
+pub fn start_pose(object: &Surface, cfg: &Surface3dConfig) -> Result<Pose> {
+    let [x, y] = cfg.path.start_mm;
+    let q = surface_point(object.as_ref(), x, y)
+        .ok_or_else(|| LabError::Config(format!("no surface over the start ({x}, {y}) mm")))?;
+    let depth = cfg.controller.reference[2];
+    Ok(Pose::new(
+        q.x,
+        q.y,
+        q.z - depth,
+        0.0,
+        0.0,
+        cfg.path.heading_deg - 90.0,
+    ))
+}
+
+/// Follow `object` (named `name`) with `model` in simulation into the run
+/// folder `out` (refused when it exists, unless `force`); `progress`
+/// hears every step. A run that did not finish its path is still written
+/// (its metrics say how it ended).
+pub fn run_surface(
+    cfg: &Surface3dConfig,
+    object: &Surface,
+    name: &str,
+    model: &StoredModel,
+    (out, force): (&Path, bool),
+    progress: &mut dyn FnMut(&Step3d),
+) -> Result<Surface3dOutcome> {
+    cfg.validate()?;
+    let _claim = tactrace_store::check_output_dir(out, force)?;
+    let start = start_pose(object, cfg)?;
+    let arm_cfg = SimArmConfig {
+        seed: cfg.seed,
+        ..cfg.rig.arm.clone()
+    };
+    let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
+    let mut arm = LimitedArm::new(sim_arm, cfg.rig.workspace.clone(), LimitMode::Refuse)
+        .with_max_tilt_deg(cfg.max_tilt_deg);
+    arm.move_to(start)?;
+    let sensor_model = TacTipModel::new(cfg.rig.sensor.clone())?;
+    let pose_source = Box::new(move || probe.actual());
+    let mut sensor = SimTacTip::over_object(
+        sensor_model,
+        object.clone(),
+        pose_source,
+        cfg.seed.wrapping_add(1),
+    );
+    let reference = sensor.reference_frame();
+    let extractor = PinExtractor::from_reference_frame(&reference, cfg.rig.blob.clone())?;
+    let net = model.for_pins(
+        extractor.tracker.reference(),
+        Path::new("the simulated sensor's reference frame"),
+    )?;
+    let perception = Perception3d::new(
+        extractor,
+        net.clone(),
+        Task::Surface3d.sensed(),
+        cfg.contact_threshold_px,
+    )?;
+    let reference_pins = perception.reference_pins().to_vec();
+    let run = RunFolder::start(out, force, cfg)?;
+    let mut controller = Se3Controller::try_new(cfg.controller.clone())?;
+    let loop_cfg = Loop3dConfig {
+        steps: cfg.steps(),
+        max_no_contact: cfg.max_no_contact,
+        lift_mm: cfg.rig.tap.height_mm,
+    };
+    let mut csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
+    let mut steps = Vec::new();
+    let mut fields = Vec::new();
+    let summary = {
+        let mut sink = |s: &Step3d, field: &[f32]| -> tactrace_servo::Result<()> {
+            csv.write(s).map_err(|e| tactrace_servo::ServoError::Sink {
+                step: s.step,
+                source: Box::new(e),
+            })?;
+            progress(s);
+            steps.push(s.clone());
+            fields.push(field.to_vec());
+            Ok(())
+        };
+        servo_loop_3d(
+            &mut arm,
+            &mut sensor,
+            &perception,
+            &mut controller,
+            &loop_cfg,
+            &mut sink,
+        )?
+    };
+    let metrics = write_surface_results(
+        run.path(),
+        (name, object),
+        cfg,
+        &steps,
+        &summary,
+        (&reference_pins, &fields),
+    )?;
+    let dir = run.finish()?;
+    Ok(Surface3dOutcome {
+        summary,
+        metrics,
+        dir,
+    })
+}

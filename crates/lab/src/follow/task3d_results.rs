@@ -1,0 +1,295 @@
+//! What a surface run writes and how it is scored against the object
+//! (which the loop never sees): `trajectory.csv` row by row with the true
+//! depth and normal error beside the prediction, then `metrics.json`, the
+//! 3D figure (`trajectory_3d.svg/.png`), the error curves
+//! (`errors.svg/.png`) and `replay.html` (a view the mouse turns).
+//!
+//! Metrics, over the steps after `settle_steps` (the commanded poses):
+//! - `mean_distance_mm`, `max_distance_mm`: |true depth - reference
+//!   depth|, the true depth being the pole's distance below the surface
+//!   (minus its signed distance);
+//! - `mean_normal_error_deg`, `max_normal_error_deg`: the angle between
+//!   the sensor's axis and the surface normal at the point nearest the pole;
+//! - `coverage`: the path's length over the surface (its nearest surface
+//!   points, step to step, all steps) over the planned length, at most 1;
+//! - `closed`: false (a path across a surface has no loop to close);
+//! - `mean_abs_error`: the model's error on each sensed component against
+//!   the true label (the pose in the feature frame at the nearest point).
+use super::task3d::Surface3dConfig;
+use crate::error::Result;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+use tactrace_arm::Pose;
+use tactrace_control::Task;
+use tactrace_report::plot::{chart, chart_3d, Axes, Chart3d, Series, Style};
+use tactrace_report::replay_3d::{replay_3d_html, Replay3dPage, Replay3dStep};
+use tactrace_report::ReportError;
+use tactrace_servo::{Ending, LoopSummary, Step3d};
+use tactrace_shape3d::{normal_error_deg, surface_point, true_label, Surface, Vec3};
+use tactrace_store::row_file::RowFile;
+use tactrace_store::write_atomic;
+
+/// A surface run's scores (see the module header).
+#[derive(Debug, Clone, Serialize)]
+pub struct Surface3dMetrics {
+    pub task: &'static str,
+    pub object: String,
+    pub steps: usize,
+    pub settle_steps: usize,
+    pub mean_distance_mm: f64,
+    pub max_distance_mm: f64,
+    pub mean_normal_error_deg: f64,
+    pub max_normal_error_deg: f64,
+    pub coverage: f64,
+    pub closed: bool,
+    pub path_length_mm: f64,
+    pub planned_length_mm: f64,
+    /// The model's mean absolute error per sensed component (mm, deg).
+    pub mean_abs_error: BTreeMap<&'static str, f64>,
+}
+
+#[derive(Serialize)]
+struct MetricsDocument<'a> {
+    #[serde(flatten)]
+    metrics: &'a Surface3dMetrics,
+    ending: Ending,
+    succeeded: bool,
+    message: &'a str,
+}
+
+/// The truth at one commanded pose.
+struct Truth {
+    depth_error_mm: f64,
+    normal_error_deg: f64,
+    label: Option<[f64; 6]>,
+    surface: Vec3,
+}
+
+fn truth(object: &Surface, pose: Pose, depth_mm: f64) -> Truth {
+    let p = Vec3::new(pose.x, pose.y, pose.z);
+    Truth {
+        depth_error_mm: -object.signed_distance(p) - depth_mm,
+        normal_error_deg: normal_error_deg(object.as_ref(), pose),
+        label: true_label(object.as_ref(), pose),
+        surface: object.closest_point(p),
+    }
+}
+
+/// `trajectory.csv` of a surface run, a whole row flushed per step.
+pub struct TruthCsv {
+    rows: RowFile<std::fs::File>,
+    object: Surface,
+    depth_mm: f64,
+}
+
+/// The trajectory's columns.
+const HEADER: [&str; 14] = [
+    "step",
+    "x_mm",
+    "y_mm",
+    "z_mm",
+    "rx_deg",
+    "ry_deg",
+    "rz_deg",
+    "z_pred_mm",
+    "rx_pred_deg",
+    "ry_pred_deg",
+    "mean_displacement_px",
+    "contact",
+    "depth_error_mm",
+    "normal_error_deg",
+];
+
+impl TruthCsv {
+    /// `dir/trajectory.csv` with its header.
+    pub fn create(dir: &Path, object: Surface, depth_mm: f64) -> Result<Self> {
+        let mut rows = RowFile::create(&dir.join("trajectory.csv"))?;
+        rows.write_row(HEADER)?;
+        Ok(Self {
+            rows,
+            object,
+            depth_mm,
+        })
+    }
+
+    /// One step's row.
+    pub fn write(&mut self, s: &Step3d) -> tactrace_store::Result<()> {
+        let t = truth(&self.object, s.pose, self.depth_mm);
+        let p = s.pose;
+        let nums = [
+            p.x, p.y, p.z, p.rx, p.ry, p.rz, s.label[2], s.label[3], s.label[4],
+        ];
+        let mut row = vec![s.step.to_string()];
+        row.extend(nums.iter().map(|v| format!("{v:.4}")));
+        row.push(format!("{:.4}", s.mean_displacement_px));
+        row.push(s.contact.to_string());
+        row.push(format!("{:.4}", t.depth_error_mm));
+        row.push(format!("{:.4}", t.normal_error_deg));
+        self.rows.write_row(row)
+    }
+}
+
+/// Score the run and write `metrics.json`, the figures and `replay.html`
+/// into `dir`; the reference pins and each tap's field are kept for
+/// later pages (unused by the 3D page).
+pub fn write_surface_results(
+    dir: &Path,
+    (name, object): (&str, &Surface),
+    cfg: &Surface3dConfig,
+    steps: &[Step3d],
+    summary: &LoopSummary,
+    _fields: (&[[f64; 2]], &[Vec<f32>]),
+) -> Result<Surface3dMetrics> {
+    let depth = cfg.controller.reference[2];
+    let truths: Vec<Truth> = steps.iter().map(|s| truth(object, s.pose, depth)).collect();
+    let metrics = score(name, cfg, steps, &truths);
+    let doc = MetricsDocument {
+        metrics: &metrics,
+        ending: summary.ending,
+        succeeded: summary.ending.succeeded(),
+        message: &summary.message,
+    };
+    let json = serde_json::to_string_pretty(&doc).expect("metrics serialise");
+    write_atomic(&dir.join("metrics.json"), json.as_bytes())?;
+    let wire = wire_mesh(object, steps);
+    let path: Vec<[f64; 3]> = steps
+        .iter()
+        .map(|s| [s.pose.x, s.pose.y, s.pose.z])
+        .collect();
+    if !steps.is_empty() {
+        let title = format!("surface_3d over the {name}");
+        let paths = [("sensor tip (dome pole)", path)];
+        chart_3d(
+            &dir.join("trajectory_3d"),
+            &Chart3d {
+                title: &title,
+                wire: &wire,
+                paths: &paths,
+            },
+        )
+        .map_err(ReportError::from)?;
+        error_figure(dir, name, &truths)?;
+    }
+    let page_steps: Vec<Replay3dStep> = steps
+        .iter()
+        .zip(&truths)
+        .map(|(s, t)| {
+            let axis = s.pose.to_isometry().rotation * Vec3::z();
+            Replay3dStep {
+                pose: [s.pose.x, s.pose.y, s.pose.z, axis.x, axis.y, axis.z],
+                label: s.label,
+                depth_error_mm: t.depth_error_mm,
+                normal_error_deg: t.normal_error_deg,
+            }
+        })
+        .collect();
+    let title = format!("surface_3d over the {name}: {}", summary.message);
+    let html = replay_3d_html(&Replay3dPage {
+        title: &title,
+        wire: &wire,
+        steps: &page_steps,
+    });
+    write_atomic(&dir.join("replay.html"), html.as_bytes())?;
+    Ok(metrics)
+}
+
+fn score(
+    name: &str,
+    cfg: &Surface3dConfig,
+    steps: &[Step3d],
+    truths: &[Truth],
+) -> Surface3dMetrics {
+    let settle = cfg.settle_steps.min(truths.len().saturating_sub(1));
+    let scored = &truths[settle..];
+    let n = scored.len().max(1) as f64;
+    let mean = |f: &dyn Fn(&Truth) -> f64| scored.iter().map(f).sum::<f64>() / n;
+    let max = |f: &dyn Fn(&Truth) -> f64| scored.iter().map(f).fold(0.0, f64::max);
+    let path_length_mm: f64 = truths
+        .windows(2)
+        .map(|w| (w[1].surface - w[0].surface).norm())
+        .sum();
+    let planned = cfg.path.length_mm;
+    let mut mean_abs_error = BTreeMap::new();
+    let sensed = Task::Surface3d.sensed();
+    for k in (0..6).filter(|k| sensed[*k]) {
+        let errs: Vec<f64> = steps[settle.min(steps.len())..]
+            .iter()
+            .zip(scored)
+            .filter_map(|(s, t)| t.label.map(|l| (s.label[k] - l[k]).abs()))
+            .collect();
+        let m = errs.iter().sum::<f64>() / errs.len().max(1) as f64;
+        mean_abs_error.insert(tactrace_control::COMPONENTS[k], m);
+    }
+    Surface3dMetrics {
+        task: "surface_3d",
+        object: name.to_string(),
+        steps: steps.len(),
+        settle_steps: settle,
+        mean_distance_mm: mean(&|t| t.depth_error_mm.abs()),
+        max_distance_mm: max(&|t| t.depth_error_mm.abs()),
+        mean_normal_error_deg: mean(&|t| t.normal_error_deg),
+        max_normal_error_deg: max(&|t| t.normal_error_deg),
+        coverage: (path_length_mm / planned).min(1.0),
+        closed: false,
+        path_length_mm,
+        planned_length_mm: planned,
+        mean_abs_error,
+    }
+}
+
+/// Lines of the surface every 5 mm over the path's box widened by 20 mm.
+fn wire_mesh(object: &Surface, steps: &[Step3d]) -> Vec<Vec<[f64; 3]>> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for s in steps {
+        for (k, v) in [s.pose.x, s.pose.y].into_iter().enumerate() {
+            lo[k] = lo[k].min(v - 20.0);
+            hi[k] = hi[k].max(v + 20.0);
+        }
+    }
+    if !(lo[0].is_finite() && hi[0].is_finite()) {
+        return Vec::new();
+    }
+    let ticks = |k: usize| {
+        let n = ((hi[k] - lo[k]) / 5.0).ceil() as usize;
+        (0..=n).map(move |i| lo[k] + i as f64 * 5.0)
+    };
+    let at = |x: f64, y: f64| surface_point(object.as_ref(), x, y).map(|q| [q.x, q.y, q.z]);
+    let mut lines: Vec<Vec<[f64; 3]>> = Vec::new();
+    for x in ticks(0) {
+        lines.push(ticks(1).filter_map(|y| at(x, y)).collect());
+    }
+    for y in ticks(1) {
+        lines.push(ticks(0).filter_map(|x| at(x, y)).collect());
+    }
+    lines.retain(|l| l.len() > 1);
+    lines
+}
+
+/// The true depth error (mm) and normal error (deg) at every step.
+fn error_figure(dir: &Path, name: &str, truths: &[Truth]) -> Result<()> {
+    let series = |label: &str, f: &dyn Fn(&Truth) -> f64| Series {
+        name: label.into(),
+        points: truths
+            .iter()
+            .enumerate()
+            .map(|(i, t)| (i as f64, f(t)))
+            .collect(),
+        style: Style::Line,
+    };
+    let axes = Axes::new(
+        &format!("surface_3d over the {name}: true errors"),
+        "step",
+        "mm / deg",
+    );
+    chart(
+        &dir.join("errors"),
+        &axes,
+        &[
+            series("depth error (mm)", &|t| t.depth_error_mm),
+            series("normal error (deg)", &|t| t.normal_error_deg),
+        ],
+    )
+    .map_err(ReportError::from)?;
+    Ok(())
+}

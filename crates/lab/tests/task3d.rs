@@ -1,0 +1,141 @@
+//! The surface_3d task end to end in simulation (issue 23 items 4-5): a
+//! collection on a 3D object with named targets, a small model trained on
+//! it, and a follow run over a flat floor scored into metrics.json.
+use std::sync::OnceLock;
+use tactrace_control::Task;
+use tactrace_lab::collect3d::{collect_3d, Collect3dConfig};
+use tactrace_lab::follow::task3d::{run_surface, PathConfig, Surface3dConfig};
+use tactrace_lab::train::{resolve_config, train};
+use tactrace_learn::{ModelKind, Preset, Unit};
+use tactrace_servo::{Ending, RigConfig};
+use tactrace_shape3d::{ObjectConfig, Surface};
+use tactrace_store::{StoredModel, TapData};
+
+fn object(name: &str) -> Surface {
+    ObjectConfig::named(name).unwrap().build().unwrap()
+}
+
+/// 120 taps on the flat floor, collected once for the tests here.
+fn data() -> &'static TapData {
+    static DATA: OnceLock<TapData> = OnceLock::new();
+    DATA.get_or_init(|| {
+        let cfg = Collect3dConfig {
+            samples: 120,
+            seed: 3,
+            ..Collect3dConfig::default()
+        };
+        collect_3d(
+            &RigConfig::default(),
+            &object("plane"),
+            &cfg,
+            "plane",
+            |_| {},
+        )
+        .unwrap()
+        .data
+    })
+}
+
+#[test]
+fn issue23_collect_surface_3d_writes_named_targets_in_the_anchors_ranges() {
+    let d = data();
+    let c = &d.meta.target_columns;
+    assert_eq!(c.target_names, ["z", "rx", "ry"]);
+    assert_eq!(c.target_units, [Unit::Mm, Unit::Deg, Unit::Deg]);
+    assert_eq!(c.target_circular, [false; 3]);
+    assert_eq!(d.meta.targets, ["z (mm)", "rx (deg)", "ry (deg)"]);
+    assert_eq!(d.targets.len(), 3 * 120);
+    assert_eq!(d.inputs.len(), 120 * 2 * d.meta.pins);
+    let targets = d.meta.model_targets().unwrap();
+    assert_eq!(targets.len(), 3);
+    for row in d.targets.chunks(3) {
+        assert!((1.0..=5.0).contains(&row[0]), "{row:?}");
+        assert!(row[1].abs() <= 25.0 && row[2].abs() <= 25.0, "{row:?}");
+    }
+    // The taps feel the depth: a deeper press moves the pins further.
+    let p = d.meta.pins;
+    let mean_disp = |i: usize| {
+        let r = &d.inputs[i * 2 * p..(i + 1) * 2 * p];
+        (0..p).map(|k| f32::hypot(r[k], r[p + k])).sum::<f32>() / p as f32
+    };
+    let (shallow, deep): (Vec<usize>, Vec<usize>) = (0..120)
+        .filter(|&i| d.targets[3 * i] < 2.0 || d.targets[3 * i] > 4.0)
+        .partition(|&i| d.targets[3 * i] < 2.0);
+    let avg = |v: &[usize]| v.iter().map(|&i| mean_disp(i)).sum::<f32>() / v.len() as f32;
+    assert!(
+        avg(&deep) > avg(&shallow) * 1.3,
+        "{} {}",
+        avg(&deep),
+        avg(&shallow)
+    );
+    // Other tasks are refused until built.
+    let edge = Collect3dConfig {
+        task: Task::Edge5d,
+        ..Collect3dConfig::default()
+    };
+    assert!(edge.validate().is_err());
+}
+
+#[test]
+fn issue23_follow_surface_3d_on_a_plane_writes_metrics_and_figures() {
+    let cfg = resolve_config(
+        ModelKind::DisDenNN,
+        Preset::Default,
+        Some("[pose]\nhidden = [16]\n"),
+        Some(3),
+    )
+    .unwrap();
+    let (net, _) = train(&cfg, data(), &mut |_| {}).unwrap();
+    let model = StoredModel::new(net, data().meta.reference_pins.clone());
+    let run_cfg = Surface3dConfig {
+        path: PathConfig {
+            length_mm: 6.0,
+            ..PathConfig::for_object("plane")
+        },
+        settle_steps: 2,
+        ..Surface3dConfig::default()
+    };
+    let root = tempfile::tempdir().unwrap();
+    let out = root.path().join("run");
+    let mut seen = 0;
+    let res = run_surface(
+        &run_cfg,
+        &object("plane"),
+        "plane",
+        &model,
+        (&out, false),
+        &mut |_| seen += 1,
+    )
+    .unwrap();
+    assert_eq!(res.dir, out);
+    assert!(seen >= 1);
+    let text = std::fs::read_to_string(out.join("metrics.json")).unwrap();
+    let m: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for key in [
+        "mean_distance_mm",
+        "max_distance_mm",
+        "mean_normal_error_deg",
+        "coverage",
+        "closed",
+        "ending",
+    ] {
+        assert!(m.get(key).is_some(), "{key} missing: {text}");
+    }
+    assert_eq!(m["closed"], false);
+    if res.summary.ending == Ending::StepsDone {
+        assert_eq!(m["steps"], 7);
+    }
+    for f in [
+        "config.toml",
+        "trajectory.csv",
+        "replay.html",
+        "trajectory_3d.png",
+        "trajectory_3d.svg",
+        "errors.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    assert!(csv.starts_with("step,x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg,z_pred_mm"));
+    assert_eq!(csv.lines().count(), 1 + res.metrics.steps);
+}

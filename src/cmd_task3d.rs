@@ -1,0 +1,200 @@
+//! The 3D tasks on the command line: `collect --task surface_3d --object
+//! NAME_OR_FILE` and `follow --task surface_3d --object ...`.
+use crate::progress::bar;
+use anyhow::Result;
+use clap::{Args, ValueEnum};
+use std::path::Path;
+use tactrace_control::Task;
+use tactrace_lab::collect3d::{collect_3d, Collect3dConfig};
+use tactrace_lab::LabError;
+use tactrace_shape3d::{ObjectConfig, Surface, OBJECT_NAMES};
+use tactrace_store::{dataset, fsutil};
+
+/// The servo task (`--task`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TaskArg {
+    /// An edge in the plane (r, theta): the report's task, on `--shape`.
+    #[value(name = "edge_2d")]
+    Edge2d,
+    /// A surface in 3D (depth z; tilts rx, ry), on `--object`.
+    #[value(name = "surface_3d")]
+    Surface3d,
+}
+
+impl From<TaskArg> for Task {
+    fn from(t: TaskArg) -> Self {
+        match t {
+            TaskArg::Edge2d => Task::Edge2d,
+            TaskArg::Surface3d => Task::Surface3d,
+        }
+    }
+}
+
+/// `--task` and `--object` of `collect`.
+#[derive(Args)]
+pub struct CollectTaskArgs {
+    /// The task whose poses are collected: edge_2d (the report's, on
+    /// --shape) or surface_3d (depth 1-5 mm, tilts +-25 deg, on --object;
+    /// targets z mm, rx deg, ry deg).
+    #[arg(long, value_enum, default_value = "edge_2d", conflicts_with_all = ["hardware", "sensor"])]
+    task: TaskArg,
+    /// The 3D object of a 3D task: plane, ramp, saddle, bowl, wave, foil,
+    /// an extruded report shape (disk, ...), or an .stl / .obj mesh (mm).
+    #[arg(long, default_value = "plane")]
+    object: String,
+    /// The surface point tapped: the object's top over this X,Y (mm).
+    #[arg(long, value_delimiter = ',', num_args = 2, default_value = "0,0")]
+    at: Vec<f64>,
+}
+
+impl CollectTaskArgs {
+    /// Whether a 3D task was asked for.
+    pub fn is_3d(&self) -> bool {
+        self.task != TaskArg::Edge2d
+    }
+}
+
+/// The object `arg` names, built (a mesh is read); bad input otherwise.
+pub fn object(arg: &str) -> Result<Surface> {
+    let cfg = ObjectConfig::from_arg(arg).ok_or_else(|| {
+        LabError::Config(format!(
+            "--object {arg}: not a built-in object ({OBJECT_NAMES}) nor an .stl / .obj file"
+        ))
+    })?;
+    Ok(cfg.build().map_err(LabError::from)?)
+}
+
+/// `collect --task surface_3d`: (samples, seed, save_frames), the rig
+/// configuration file, and the output folder with `--force`.
+pub fn collect(
+    a: &CollectTaskArgs,
+    (samples, seed, save_frames): (usize, u64, bool),
+    config: Option<&Path>,
+    (out, force): (&Path, bool),
+) -> Result<()> {
+    crate::inputs::Inputs::new()
+        .opt("--config", config)
+        .file_arg("--object", &a.object)
+        .check_apart("--out", out)?;
+    let rig = crate::cmd_data::rig_config(config)?;
+    let cfg = Collect3dConfig {
+        samples,
+        seed,
+        task: a.task.into(),
+        at_mm: [a.at[0], a.at[1]],
+        save_frames,
+        ..Collect3dConfig::default()
+    };
+    cfg.validate()?;
+    let surface = object(&a.object)?;
+    let _out = fsutil::check_output_dir(out, force)?;
+    let pb = bar(samples as u64, "collect");
+    let got = collect_3d(&rig, &surface, &cfg, &a.object, |i| {
+        pb.set_position(i as u64)
+    });
+    pb.finish_and_clear();
+    let got = got?;
+    let dir = dataset::write_dataset(out, &got.data, &got.frames, force)?;
+    eprintln!(
+        "collected {} {} taps on {} into {} ({} with missing pins)",
+        got.data.len(),
+        cfg.task,
+        a.object,
+        dir.display(),
+        got.data.meta.frames_with_missing_pins
+    );
+    Ok(())
+}
+
+/// `--task`, `--object` and the path of `follow`.
+#[derive(Args)]
+pub struct FollowTaskArgs {
+    /// The task: edge_2d (the report's, on --shape; the default) or
+    /// surface_3d (on --object, with a model of the targets z, rx, ry).
+    #[arg(long, value_enum, conflicts_with_all = ["hardware", "sensor", "replay"])]
+    task: Option<TaskArg>,
+    /// The 3D object of a 3D task: plane, ramp, saddle, bowl, wave, foil,
+    /// an extruded report shape, or an .stl / .obj mesh (mm).
+    #[arg(long, requires = "task")]
+    object: Option<String>,
+    /// The path's start: the surface point over X,Y (mm); default: the
+    /// object's (-40,0; the saddle -40,10; plane and ramp -20,0).
+    #[arg(long, value_delimiter = ',', num_args = 2, requires = "task")]
+    start: Option<Vec<f64>>,
+    /// The path's heading in the xy plane, deg from +x (default 0).
+    #[arg(long, requires = "task", allow_negative_numbers = true)]
+    heading: Option<f64>,
+    /// The path's length, mm (default 80; plane and ramp 40).
+    #[arg(long, requires = "task")]
+    length: Option<f64>,
+}
+
+impl FollowTaskArgs {
+    /// Whether a 3D task was asked for.
+    pub fn is_3d(&self) -> bool {
+        self.task.is_some_and(|t| t != TaskArg::Edge2d)
+    }
+}
+
+/// `follow --task surface_3d`: the model, the run configuration file, the
+/// seed, and the run folder with `--force`.
+pub fn follow(
+    a: &FollowTaskArgs,
+    model: &Path,
+    config: Option<&Path>,
+    seed: Option<u64>,
+    (out, force): (&Path, bool),
+) -> Result<()> {
+    use tactrace_lab::follow::task3d::{run_surface, PathConfig, Surface3dConfig};
+    let name = a.object.as_deref().unwrap_or("plane");
+    crate::inputs::Inputs::new()
+        .add("--model", model)
+        .opt("--config", config)
+        .file_arg("--object", name)
+        .check_apart("--out", out)?;
+    let mut cfg: Surface3dConfig =
+        tactrace_store::load_config(config, "surface follow configuration")?;
+    if config.is_none() {
+        cfg.path = PathConfig::for_object(name);
+    }
+    if let Some(s) = &a.start {
+        cfg.path.start_mm = [s[0], s[1]];
+    }
+    cfg.path.heading_deg = a.heading.unwrap_or(cfg.path.heading_deg);
+    cfg.path.length_mm = a.length.unwrap_or(cfg.path.length_mm);
+    cfg.seed = seed.unwrap_or(cfg.seed);
+    cfg.validate()?;
+    let surface = object(name)?;
+    let _out = fsutil::check_output_dir(out, force)?;
+    let model = tactrace_store::StoredModel::load(model)?;
+    let pb = bar(cfg.steps() as u64, "follow");
+    let mut progress = |s: &tactrace_servo::Step3d| pb.set_position(s.step as u64 + 1);
+    let res = run_surface(&cfg, &surface, name, &model, (out, force), &mut progress);
+    pb.finish_and_clear();
+    let res = res?;
+    let m = &res.metrics;
+    crate::say!(
+        "{name}: {} steps, {}; depth error mean {:.3} / max {:.3} mm, normal error mean {:.2} / \
+         max {:.2} deg, coverage {:.0}%",
+        m.steps,
+        res.summary.ending,
+        m.mean_distance_mm,
+        m.max_distance_mm,
+        m.mean_normal_error_deg,
+        m.max_normal_error_deg,
+        100.0 * m.coverage
+    );
+    if !res.summary.ending.succeeded() {
+        eprintln!(
+            "the run and its trajectory so far are in {}",
+            res.dir.display()
+        );
+        return Err(LabError::RunFailed {
+            ending: res.summary.ending,
+            message: res.summary.message.clone(),
+        }
+        .into());
+    }
+    eprintln!("{} (run folder {})", res.summary.message, res.dir.display());
+    Ok(())
+}

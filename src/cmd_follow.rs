@@ -249,6 +249,11 @@ pub struct ReproduceArgs {
     /// convention, training, following).
     #[arg(long)]
     sensor: Option<PathBuf>,
+    /// Add surface following in 3D: a surface_3d model trained on
+    /// simulated taps, following the saddle, bowl and wave (a section of
+    /// report.html, run folders under follow-3d/).
+    #[arg(long = "3d")]
+    three_d: bool,
     /// Reproduce TOML overlaying the defaults (keys: seed, train_samples,
     /// val_samples, epochs, preset, report_steps, real, and the follow
     /// tables rig, controller, follow, start).
@@ -261,6 +266,7 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     cfg.seed = a.seed.unwrap_or(cfg.seed);
     cfg.epochs = a.epochs.or(cfg.epochs);
     cfg.report_steps |= a.report_steps;
+    cfg.three_d |= a.three_d;
     cfg.real = a.real.or(cfg.real);
     if a.sensor.is_some() {
         cfg.follow.calibrated_sensor = a.sensor.clone();

@@ -31,6 +31,7 @@ pub mod import_reader;
 pub mod numbers;
 pub mod render;
 pub mod reproduce;
+pub mod reproduce3d;
 pub mod search;
 pub mod sensor_inspect;
 pub mod train;

@@ -50,6 +50,9 @@ pub struct ReproduceConfig {
     pub follow: SimFollowConfig,
     /// Folder of real frames (Bristol layout) to add the real-data results.
     pub real: Option<PathBuf>,
+    /// Add surface following in 3D (`--3d`: [`crate::reproduce3d`]).
+    #[serde(default, rename = "3d", skip_serializing_if = "std::ops::Not::not")]
+    pub three_d: bool,
 }
 
 impl Default for ReproduceConfig {
@@ -63,6 +66,7 @@ impl Default for ReproduceConfig {
             report_steps: false,
             follow: SimFollowConfig::report(),
             real: None,
+            three_d: false,
         }
     }
 }
@@ -203,6 +207,11 @@ fn reproduce_into(
         }
         None => (RealRows::default(), Vec::new()),
     };
+    let surface_3d = if cfg.three_d {
+        Some(crate::reproduce3d::surface_section(cfg, out, log)?)
+    } else {
+        None
+    };
     let results = ReproduceResults {
         networks,
         real_networks: real_rows.real,
@@ -216,6 +225,7 @@ fn reproduce_into(
             .map(|p| p.display().to_string()),
         shapes,
         real_shapes,
+        surface_3d,
         seconds: t0.elapsed().as_secs_f64(),
         seed: cfg.seed,
         tactrace_version: crate::VERSION.into(),

@@ -163,6 +163,9 @@ pub fn report_markdown(r: &ReproduceResults) -> String {
         let shapes = r.real_model_shapes.iter().map(|s| s.shape.as_str());
         replay_links(&mut md, shapes, "follow-calibrated");
     }
+    if let Some(s) = &r.surface_3d {
+        crate::document3d::surface_markdown(&mut md, s);
+    }
     md
 }
 

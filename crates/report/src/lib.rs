@@ -7,6 +7,7 @@
 //! follow run's interactive, self-contained replay page.
 
 pub mod document;
+pub mod document3d;
 pub mod error;
 pub mod figures;
 pub mod html;

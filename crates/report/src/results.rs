@@ -95,6 +95,9 @@ pub struct ReproduceResults {
     pub shapes: Vec<ShapeRow>,
     /// The four shapes in the real-frame world (`--real`).
     pub real_shapes: Vec<ReplayShapeRow>,
+    /// Surface following in 3D (`--3d`); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_3d: Option<crate::document3d::Surface3dSection>,
     pub seconds: f64,
     pub seed: u64,
     pub tactrace_version: String,

@@ -19,6 +19,10 @@ pub enum TaskArg {
     /// A surface in 3D (depth z; tilts rx, ry), on `--object`.
     #[value(name = "surface_3d")]
     Surface3d,
+    /// An edge in 3D (x, z; rx, ry, rz), on an edged `--object`
+    /// (collection only so far).
+    #[value(name = "edge_5d")]
+    Edge5d,
 }
 
 impl From<TaskArg> for Task {
@@ -26,6 +30,7 @@ impl From<TaskArg> for Task {
         match t {
             TaskArg::Edge2d => Task::Edge2d,
             TaskArg::Surface3d => Task::Surface3d,
+            TaskArg::Edge5d => Task::Edge5d,
         }
     }
 }
@@ -34,15 +39,17 @@ impl From<TaskArg> for Task {
 #[derive(Args)]
 pub struct CollectTaskArgs {
     /// The task whose poses are collected: edge_2d (the report's, on
-    /// --shape) or surface_3d (depth 1-5 mm, tilts +-25 deg, on --object;
-    /// targets z mm, rx deg, ry deg).
+    /// --shape), surface_3d (depth 1-5 mm, tilts +-25 deg, on --object;
+    /// targets z mm, rx deg, ry deg) or edge_5d (also x +-5 mm across
+    /// the edge and rz +-180 deg, circular; on an edged --object).
     #[arg(long, value_enum, default_value = "edge_2d", conflicts_with_all = ["hardware", "sensor"])]
     task: TaskArg,
     /// The 3D object of a 3D task: plane, ramp, saddle, bowl, wave, foil,
     /// an extruded report shape (disk, ...), or an .stl / .obj mesh (mm).
     #[arg(long, default_value = "plane")]
     object: String,
-    /// The surface point tapped: the object's top over this X,Y (mm).
+    /// The point tapped: the object's top over this X,Y (mm); edge_5d:
+    /// the edge point nearest it.
     #[arg(long, value_delimiter = ',', num_args = 2, default_value = "0,0")]
     at: Vec<f64>,
 }
@@ -146,6 +153,12 @@ pub fn follow(
     (out, force): (&Path, bool),
 ) -> Result<()> {
     use tactrace_lab::follow::task3d::{run_surface, PathConfig, Surface3dConfig};
+    if a.task != Some(TaskArg::Surface3d) {
+        return Err(LabError::Config(
+            "follow --task edge_5d is not built yet (surface_3d is)".into(),
+        )
+        .into());
+    }
     let name = a.object.as_deref().unwrap_or("plane");
     crate::inputs::Inputs::new()
         .add("--model", model)

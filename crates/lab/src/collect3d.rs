@@ -4,16 +4,19 @@
 //!
 //! 1. The feature frame F at the object's surface point over `at_mm`
 //!    (z the outward normal; x, y the work frame's turned the least way).
-//! 2. Tap i draws its label s: surface_3d: depth z uniform in
-//!    [`depth_range_mm`], tilts rx, ry uniform in +-`tilt_range_deg`
-//!    (x = y = rz = 0).
+//!    edge_5d: the edge's own frame at the edge sample nearest `at_mm`
+//!    (z the pressed face's normal, x across the edge out of the object).
+//! 2. Tap i draws its label s: depth z uniform in [`depth_range_mm`],
+//!    tilts rx, ry uniform in +-`tilt_range_deg`; edge_5d also x uniform
+//!    in +-`x_range_mm` and rz in +-`rz_range_deg` (the others 0).
 //! 3. The simulated arm moves to the tap's approach (the pose lifted
 //!    `tap.height_mm` along the sensor's own axis), then presses along
 //!    the axis to the pose F T(s) (z = -depth); the simulated TacTip
 //!    renders the pins at the pose the arm physically reached
 //!    (`TacTipModel::pins_3d`), with nuisance.
 //! 4. The pins' displacements are the inputs, s's sensed components the
-//!    named targets (`z` mm, `rx` deg, `ry` deg).
+//!    named targets (surface_3d `z` mm, `rx`, `ry` deg; edge_5d `x`, `z`
+//!    mm, `rx`, `ry` deg, `rz` deg circular).
 //!
 //! Every tap has generators of its own (stream i of the seed), so the set
 //! is the same whatever the number of threads.
@@ -49,6 +52,10 @@ pub struct Collect3dConfig {
     pub depth_range_mm: [f64; 2],
     /// rx and ry are uniform in +-this, deg.
     pub tilt_range_deg: f64,
+    /// edge_5d: x (across the edge) is uniform in +-this, mm.
+    pub x_range_mm: f64,
+    /// edge_5d: rz is uniform in +-this, deg.
+    pub rz_range_deg: f64,
     /// Keep the PNG of every tap.
     pub save_frames: bool,
 }
@@ -62,6 +69,8 @@ impl Default for Collect3dConfig {
             at_mm: [0.0, 0.0],
             depth_range_mm: [1.0, 5.0],
             tilt_range_deg: 25.0,
+            x_range_mm: 5.0,
+            rz_range_deg: 180.0,
             save_frames: false,
         }
     }
@@ -70,9 +79,9 @@ impl Default for Collect3dConfig {
 impl Collect3dConfig {
     /// Refuse a task this collection cannot draw and ranges that cannot work.
     pub fn validate(&self) -> Result<()> {
-        if self.task != Task::Surface3d {
+        if !matches!(self.task, Task::Surface3d | Task::Edge5d) {
             return Err(LabError::Config(format!(
-                "collect --task {} is not built yet (surface_3d is)",
+                "collect --task {} is not built yet (surface_3d and edge_5d are)",
                 self.task
             )));
         }
@@ -83,10 +92,14 @@ impl Collect3dConfig {
             && lo <= hi
             && self.tilt_range_deg.is_finite()
             && (0.0..90.0).contains(&self.tilt_range_deg)
+            && self.x_range_mm.is_finite()
+            && self.x_range_mm >= 0.0
+            && (0.0..=180.0).contains(&self.rz_range_deg)
             && self.at_mm.iter().all(|v| v.is_finite());
         if !ok {
             return Err(LabError::Config(
-                "depth_range_mm must be 0 <= min <= max, tilt_range_deg in [0, 90), at_mm finite"
+                "depth_range_mm must be 0 <= min <= max, tilt_range_deg in [0, 90), x_range_mm >= 0, \
+                 rz_range_deg in [0, 180], at_mm finite"
                     .into(),
             ));
         }
@@ -133,14 +146,7 @@ pub fn collect_3d(
     let model = TacTipModel::new(rig_cfg.sensor.clone())?;
     let reference = model.render(model.rest_pins(), None);
     let extractor = PinExtractor::from_reference_frame(&reference, rig_cfg.blob.clone())?;
-    let [x, y] = cfg.at_mm;
-    let q = surface_point(object.as_ref(), x, y).ok_or_else(|| {
-        LabError::Config(format!(
-            "the object {origin} has no surface over ({x}, {y}) mm"
-        ))
-    })?;
-    let frame = feature_frame(object.as_ref(), q, nalgebra::UnitQuaternion::identity())
-        .ok_or_else(|| LabError::Config(format!("the surface of {origin} faces down there")))?;
+    let frame = task_frame(object, cfg, origin)?;
     let world = World {
         rig: rig_cfg,
         model: &model,
@@ -178,6 +184,38 @@ pub fn collect_3d(
     data.meta.frames_with_missing_pins = missing;
     data.meta.tracking = tactrace_store::TrackTotals::frames(cfg.samples, missing);
     Ok(Collected { data, frames })
+}
+
+/// The frame the labels are placed in: surface_3d the feature frame at
+/// the surface over `at_mm`, edge_5d the edge's own frame at the edge
+/// sample nearest `at_mm` (in x, y).
+fn task_frame(
+    object: &Surface,
+    cfg: &Collect3dConfig,
+    origin: &str,
+) -> Result<nalgebra::Isometry3<f64>> {
+    let [x, y] = cfg.at_mm;
+    if cfg.task == Task::Edge5d {
+        let edge = object.edge().ok_or_else(|| {
+            LabError::Config(format!(
+                "the object {origin} has no edge (edge_5d needs one)"
+            ))
+        })?;
+        let near = |p: &tactrace_shape3d::Vec3| (p.x - x).hypot(p.y - y);
+        let sample = edge
+            .samples
+            .iter()
+            .min_by(|a, b| near(&a.point).total_cmp(&near(&b.point)))
+            .ok_or_else(|| LabError::Config(format!("the edge of {origin} has no sample")))?;
+        return Ok(sample.frame());
+    }
+    let q = surface_point(object.as_ref(), x, y).ok_or_else(|| {
+        LabError::Config(format!(
+            "the object {origin} has no surface over ({x}, {y}) mm"
+        ))
+    })?;
+    feature_frame(object.as_ref(), q, nalgebra::UnitQuaternion::identity())
+        .ok_or_else(|| LabError::Config(format!("the surface of {origin} faces down there")))
 }
 
 /// The metadata of a 3D collection: its named targets and settings.
@@ -223,7 +261,14 @@ impl World<'_> {
         let z = rng.random_range(lo..=hi);
         let rx = rng.random_range(-t..=t);
         let ry = rng.random_range(-t..=t);
-        let pose = pose_of_label(&self.frame, [0.0, 0.0, z, rx, ry, 0.0]);
+        let label = if cfg.task == Task::Edge5d {
+            let (xr, rzr) = (cfg.x_range_mm, cfg.rz_range_deg);
+            let x = rng.random_range(-xr..=xr);
+            [x, 0.0, z, rx, ry, rng.random_range(-rzr..=rzr)]
+        } else {
+            [0.0, 0.0, z, rx, ry, 0.0]
+        };
+        let pose = pose_of_label(&self.frame, label);
         let approach = lifted(pose, self.rig.tap.height_mm);
         let arm_cfg = SimArmConfig {
             seed: rng.next_u64(),
@@ -244,7 +289,10 @@ impl World<'_> {
         let tracked = self.extractor.extract(&frame)?;
         Ok(Row {
             inputs: tracked.displacement(self.extractor.tracker.reference()),
-            targets: vec![z as f32, rx as f32, ry as f32],
+            targets: (0..6)
+                .filter(|k| cfg.task.sensed()[*k])
+                .map(|k| label[k] as f32)
+                .collect(),
             missing: tracked.missing > 0,
             frame: cfg.save_frames.then_some(frame),
         })

@@ -68,12 +68,48 @@ fn issue23_collect_surface_3d_writes_named_targets_in_the_anchors_ranges() {
         avg(&deep),
         avg(&shallow)
     );
-    // Other tasks are refused until built.
+    // Tasks not built yet are refused.
     let edge = Collect3dConfig {
-        task: Task::Edge5d,
+        task: Task::Edge3d,
         ..Collect3dConfig::default()
     };
     assert!(edge.validate().is_err());
+}
+
+#[test]
+fn issue23_collect_edge_5d_on_the_foil_writes_five_targets_rz_circular() {
+    let cfg = Collect3dConfig {
+        samples: 40,
+        seed: 4,
+        task: Task::Edge5d,
+        ..Collect3dConfig::default()
+    };
+    let d = collect_3d(&RigConfig::default(), &object("foil"), &cfg, "foil", |_| {})
+        .unwrap()
+        .data;
+    let c = &d.meta.target_columns;
+    assert_eq!(c.target_names, ["x", "z", "rx", "ry", "rz"]);
+    assert_eq!(c.target_circular, [false, false, false, false, true]);
+    assert_eq!(d.meta.model_targets().unwrap().len(), 5);
+    for row in d.targets.chunks(5) {
+        assert!(
+            row[0].abs() <= 5.0 && (1.0..=5.0).contains(&row[1]),
+            "{row:?}"
+        );
+        assert!(row[2].abs() <= 25.0 && row[3].abs() <= 25.0, "{row:?}");
+        assert!(row[4].abs() <= 180.0, "{row:?}");
+    }
+    let rz: Vec<f32> = d.targets.chunks(5).map(|r| r[4]).collect();
+    assert!(rz.iter().any(|v| *v > 90.0) && rz.iter().any(|v| *v < -90.0));
+    // An object without an edge cannot give edge_5d taps.
+    let err = collect_3d(
+        &RigConfig::default(),
+        &object("saddle"),
+        &cfg,
+        "saddle",
+        |_| {},
+    );
+    assert!(err.is_err_and(|e| e.is_bad_input() && e.to_string().contains("no edge")));
 }
 
 #[test]

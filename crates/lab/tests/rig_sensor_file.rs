@@ -116,6 +116,11 @@ fn issue21_the_rig_camera_reads_a_raw_colour_frame_through_a_sensor_file() {
 
     let frame = cfg.camera().unwrap().capture().unwrap();
     assert_eq!(frame.dimensions(), (160, 160), "cropped");
+    // A run folder's copy of the rig (config.toml) reads back as it is.
+    let copy = toml::to_string(&cfg).unwrap();
+    let again = HardwareConfig::from_toml(&copy, "config.toml").unwrap();
+    assert_eq!(again.sensor, cfg.sensor);
+    again.validate().unwrap();
     let found: Vec<[f64; 2]> = detect_blobs(&frame, settings.blob())
         .iter()
         .map(|k| [k.x, k.y])

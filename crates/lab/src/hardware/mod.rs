@@ -88,8 +88,10 @@ pub struct HardwareConfig {
     /// file's folder ([`HardwareConfig::read`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensor: Option<PathBuf>,
-    /// The camera preprocessing of older rig files (without `sensor`).
-    #[serde(default)]
+    /// The camera preprocessing of older rig files (without `sensor`);
+    /// left out of a written file when it is the default, so that a run
+    /// folder's copy of a rig with a sensor file reads back.
+    #[serde(default, skip_serializing_if = "is_default_preprocess")]
     pub preprocess: PreprocessConfig,
     pub workspace: Workspace,
     pub start: HardwareStart,
@@ -97,7 +99,7 @@ pub struct HardwareConfig {
     pub tap: TapConfig,
     /// Blob detection without `sensor` (default: the `real256` preset for
     /// 256 x 256 preprocessed frames).
-    #[serde(default = "real_blob")]
+    #[serde(default = "real_blob", skip_serializing_if = "is_real_blob")]
     pub blob: BlobParams,
     #[serde(default)]
     pub controller: PbtsConfig,
@@ -107,6 +109,14 @@ pub struct HardwareConfig {
 
 pub(crate) fn real_blob() -> BlobParams {
     BlobParams::preset("real256").expect("built-in preset")
+}
+
+fn is_real_blob(blob: &BlobParams) -> bool {
+    *blob == real_blob()
+}
+
+fn is_default_preprocess(p: &PreprocessConfig) -> bool {
+    *p == PreprocessConfig::default()
 }
 
 impl HardwareConfig {

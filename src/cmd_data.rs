@@ -8,12 +8,13 @@ use std::path::{Path, PathBuf};
 use tactrace_geometry::ShapeSpec;
 use tactrace_lab::collect::{collect as run_collect, collect_calibrated, CollectConfig};
 use tactrace_lab::hardware::{collect_hardware as collect_hardware_on, HardwareConfig, StopFlag};
+use tactrace_lab::import_request::ImportRequest;
 use tactrace_lab::render::{TapPose, TapRenderer};
 use tactrace_lab::{import as imp, LabError};
 use tactrace_servo::RigConfig;
 use tactrace_store::collection::{bristol, CollectionEdits, Reference};
 use tactrace_store::frame_file::png_bytes;
-use tactrace_store::{dataset, fsutil, load_config, load_shape, LabelledCollection, SightFile};
+use tactrace_store::{dataset, fsutil, load_config, load_shape, LabelledCollection};
 use tactrace_vision::BlobParams;
 
 #[derive(Args)]
@@ -117,8 +118,7 @@ fn collect_hardware(a: &CollectArgs, path: &Path) -> Result<()> {
     Inputs::new()
         .add("--hardware", path)
         .check_apart("--out", &a.out)?;
-    let text = fsutil::read_text(path)?;
-    let hw = HardwareConfig::from_toml(&text, &path.display().to_string())?;
+    let hw = HardwareConfig::read(path)?;
     let cfg = CollectConfig {
         samples: a.samples,
         seed: a.seed,
@@ -265,31 +265,13 @@ pub fn import(a: ImportArgs) -> Result<()> {
         .opt("--like", a.like.as_deref())
         .opt("--sensor", a.sensor.as_deref())
         .check_apart("--out", &a.out)?;
-    let like = a.like.as_deref().map(read_dataset_at).transpose()?;
-    let collection = match (&like, &a.like) {
-        (Some(like), Some(dir)) => {
-            let c = tactrace_lab::import_like::like_collection(
-                like,
-                dir,
-                a.frames.clone(),
-                a.labels.targets.clone(),
-            )?;
-            c.edited(&CollectionEdits {
-                limit: a.limit,
-                ..CollectionEdits::default()
-            })
-            .map_err(tactrace_store::StoreError::from)?
-        }
-        _ => new_collection(&a)?,
-    };
+    let plan = import_request(&a)?.plan()?;
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "import");
     let tick = || pb.inc(1);
-    let got = imp::import(&collection, &tick)?;
+    let got = imp::import(&plan.collection, &tick)?;
     pb.finish_and_clear();
-    if let (Some(like), Some(dir)) = (&like, &a.like) {
-        tactrace_lab::import_like::check_like(&got.data, like, dir)?;
-    }
+    plan.check(&got.data)?;
     if let Some(e) = &got.estimated_rest {
         eprintln!(
             "no --reference: estimated the rest layout ({} pins) from {} taps, residual {:.3} px \
@@ -320,46 +302,24 @@ pub fn import(a: ImportArgs) -> Result<()> {
     Ok(())
 }
 
-/// The collection `import` reads when not `--like`: the labels' flags,
-/// the blob detector or `--sensor` settings, and the reference: a frame,
-/// a dataset's recorded rest pins (`--reference DATASET`), or estimated
-/// from the taps (no `--reference`).
-fn new_collection(a: &ImportArgs) -> Result<LabelledCollection> {
+/// What `import`'s flags ask: the same request Python's `import_dataset`
+/// makes (the blob detector `--params` or the real256 preset; the label
+/// columns; `--sensor`, `--reference`, `--like`).
+fn import_request(a: &ImportArgs) -> Result<ImportRequest> {
     let blob = blob_params(a.params.as_deref(), bristol::BLOB_PRESET)?;
-    let sensor = a.sensor.as_deref().map(SightFile::read).transpose()?;
-    let recorded = match a.labels.reference.as_deref() {
-        Some(p) if p.is_dir() => Some(imp::recorded_reference(p)?),
-        _ => None,
-    };
-    // Import reads the targets only: no tap columns asked for.
-    let mut collection = a
-        .labels
-        .collection(
-            &a.frames,
-            CollectionEdits {
-                depth_column: Some("none".into()),
-                shear_columns: Some("none".into()),
-                limit: a.limit,
-                blob: Some(blob),
-                ..CollectionEdits::default()
-            },
-        )?
-        .with_sight(sensor.as_ref().map(SightFile::sight));
-    if let Some((rest, sight)) = recorded {
-        let sight = collection.sight().cloned().or(sight);
-        collection = collection
-            .with_reference(Reference::Estimated(rest))
-            .with_sight(sight);
-    } else if a.labels.reference.is_none() {
-        let pins = sensor.as_ref().map(|s| s.sensor.pins);
-        collection = collection.with_reference(Reference::Estimate { pins });
-    }
-    Ok(collection)
-}
-
-/// A dataset folder (`--like`).
-fn read_dataset_at(dir: &Path) -> Result<tactrace_store::TapData> {
-    Ok(dataset::read_dataset(dir)?)
+    let l = &a.labels;
+    Ok(ImportRequest {
+        frames: a.frames.clone(),
+        targets: l.targets.clone(),
+        reference: l.reference.clone(),
+        sensor: a.sensor.clone(),
+        like: a.like.clone(),
+        edits: l.edits(CollectionEdits {
+            limit: a.limit,
+            blob: Some(blob),
+            ..CollectionEdits::default()
+        }),
+    })
 }
 
 /// `sensor render --sensor`: one tap of a calibrated sensor on a straight
@@ -389,6 +349,9 @@ pub enum SensorCommand {
     /// crop, dome mask, threshold, detector), its pin count and layout
     /// kind, and write them as a sensor file for `--sensor`.
     Inspect(crate::cmd_inspect::InspectArgs),
+    /// Preprocess one camera frame as a sensor file says (grey, crop, dome
+    /// mask, threshold, resize) into a PNG: the frame its detector sees.
+    Preprocess(crate::cmd_inspect::PreprocessArgs),
     /// Render one simulated tap as a PNG (r, theta relative to the edge).
     Render {
         /// Built-in shape (disk, flower, trine, teardrop) or a CSV of x,y points (mm).
@@ -447,6 +410,7 @@ pub enum SensorCommand {
 pub fn sensor(c: SensorCommand) -> Result<()> {
     match c {
         SensorCommand::Inspect(a) => crate::cmd_inspect::inspect(a),
+        SensorCommand::Preprocess(a) => crate::cmd_inspect::preprocess(a),
         SensorCommand::Render {
             shape,
             r,

@@ -472,8 +472,7 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
         .add("--model", &a.model)
         .file_arg("--shape", a.shape.as_deref().unwrap_or_default())
         .check_apart("--out", &a.out)?;
-    let text = fsutil::read_text(path)?;
-    let mut cfg = HardwareConfig::from_toml(&text, &path.display().to_string())?;
+    let mut cfg = HardwareConfig::read(path)?;
     overrides(&a, &mut cfg.follow);
     let world = World::Hardware(cfg).open()?;
     let shape = match &a.shape {

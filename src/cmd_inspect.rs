@@ -1,5 +1,7 @@
 //! `tactrace sensor inspect FRAMES... --out SENSOR.toml [--picture PNG]`:
-//! an unknown TacTip's frames in, its sensor settings file out.
+//! an unknown TacTip's frames in, its sensor settings file out; `tactrace
+//! sensor preprocess FRAME --sensor SENSOR.toml --out PNG`: one frame as
+//! the detector sees it.
 use crate::inputs::Inputs;
 use anyhow::Result;
 use clap::Args;
@@ -107,5 +109,50 @@ pub fn inspect(a: InspectArgs) -> Result<()> {
         fsutil::write_output_file(p, &bytes, a.force, "--picture")?;
         eprintln!("wrote {}", p.display());
     }
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct PreprocessArgs {
+    /// The camera frame (grey or colour, the size the sensor file records).
+    frame: PathBuf,
+    /// The sensor file (`tactrace sensor inspect --out`).
+    #[arg(long)]
+    sensor: PathBuf,
+    /// The preprocessed frame to write (PNG).
+    #[arg(long)]
+    out: PathBuf,
+    /// Replace an existing --out file.
+    #[arg(long)]
+    force: bool,
+}
+
+/// `sensor preprocess`: the frame through the sensor file's stage.
+pub fn preprocess(a: PreprocessArgs) -> Result<()> {
+    Inputs::new()
+        .add("FRAME", &a.frame)
+        .add("--sensor", &a.sensor)
+        .check_outside("--out", &a.out)?;
+    fsutil::check_output_file(&a.out, a.force, "--out")?;
+    let sensor = tactrace_store::SightFile::read(&a.sensor)?;
+    let image = tactrace_sensor::read_image(&a.frame).map_err(LabError::from)?;
+    let [w, h] = sensor.sensor.frame_size;
+    let stage = sensor
+        .preprocess
+        .check()
+        .and_then(|p| p.stage(w, h))
+        .map_err(LabError::from)?;
+    let frame = stage.apply(&image).map_err(|e| LabError::Format {
+        path: a.frame.clone(),
+        reason: e.to_string(),
+    })?;
+    let png = tactrace_store::frame_file::png_bytes(&frame, "the preprocessed frame")?;
+    fsutil::write_output_file(&a.out, &png, a.force, "--out")?;
+    eprintln!(
+        "wrote {} ({} x {} px)",
+        a.out.display(),
+        frame.width(),
+        frame.height()
+    );
     Ok(())
 }

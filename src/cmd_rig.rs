@@ -38,8 +38,7 @@ pub fn rig(command: RigCommand) -> Result<()> {
 }
 
 fn check(a: CheckArgs) -> Result<()> {
-    let text = fsutil::read_text(&a.rig)?;
-    let cfg = HardwareConfig::from_toml(&text, &a.rig.display().to_string())?;
+    let cfg = HardwareConfig::read(&a.rig)?;
     let model = a.model.as_deref().map(StoredModel::load).transpose()?;
     let report = rig_check(&cfg, model.as_ref(), a.pins)?;
     print_check(&a.rig.display().to_string(), &report)?;
@@ -117,13 +116,7 @@ fn grab(a: GrabArgs) -> Result<()> {
         .check_outside("--out", &a.out)?;
     fsutil::check_output_file(&a.out, a.force, "--out")?;
     let rig = match &a.rig {
-        Some(path) => {
-            let text = fsutil::read_text(path)?;
-            Some(HardwareConfig::from_toml(
-                &text,
-                &path.display().to_string(),
-            )?)
-        }
+        Some(path) => Some(HardwareConfig::read(path)?),
         None => None,
     };
     let frame = grab_camera_frame(&a.device, rig.as_ref())?;

@@ -106,6 +106,7 @@ fn write_rig(dir: &Path, fake: &FakeUrController) {
             looping: true,
             preprocessed: true,
         },
+        sensor: None,
         preprocess: PreprocessConfig::default(),
         workspace: Workspace {
             min: [x - 150.0, y - 150.0, -15.0],

@@ -51,6 +51,7 @@ fn write_rig(
             looping: true,
             preprocessed: false,
         },
+        sensor: None,
         preprocess: PreprocessConfig::default(),
         workspace: tactrace_arm::Workspace {
             min: [START.0 - 50.0, START.1 - 50.0, -15.0],
@@ -404,4 +405,70 @@ fn issue20_camera_grab_on_a_non_camera_path_exits_2() {
         std::fs::read(dir.join("notes.txt")).unwrap(),
         b"not a camera"
     );
+}
+
+/// The rig file of `write_rig` in `dir` as a TOML table.
+fn rig_table(dir: &TempDir) -> toml::Table {
+    let text = std::fs::read_to_string(dir.join("rig.toml")).unwrap();
+    text.parse().unwrap()
+}
+
+/// The rig's camera read through a sensor file holding the Bristol
+/// settings of the `[preprocess]` and `[blob]` tables finds the same pins
+/// as the tables do; a rig file giving both ways exits 2 before anything
+/// is touched.
+#[test]
+fn issue21_rig_check_reads_the_camera_through_a_sensor_file() {
+    let dir = TempDir::new("rig-check-sensor");
+    let frames = reference_frame(&dir);
+    let ur = fake_ur();
+    let dash =
+        FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();
+    write_rig(&dir, &ur, &dash, &frames);
+    let tables = tactrace(&dir.0, &["rig", "check", "rig.toml"]);
+    assert_eq!(tables.code, 0, "{}\n{}", tables.stdout, tables.stderr);
+
+    let sight = tactrace_store::SightFile {
+        sensor: tactrace_store::SensorSummary {
+            pins: 127,
+            layout: tactrace_vision::LayoutKind::Hexagonal,
+            spacing_px: 20.0,
+            pin_pixels: 30.0,
+            frame_size: [640, 480],
+        },
+        preprocess: PreprocessConfig::default().to_params(),
+        detect: tactrace_vision::DetectorParams::Blobs(
+            tactrace_vision::BlobParams::preset("real256").unwrap(),
+        ),
+    };
+    std::fs::create_dir_all(dir.join("rigs")).unwrap();
+    std::fs::write(dir.join("rigs/sensor.toml"), sight.to_toml()).unwrap();
+    // A fake serves one check: fresh ones for the sensor file's.
+    let ur = fake_ur();
+    let dash =
+        FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();
+    write_rig(&dir, &ur, &dash, &frames);
+    let mut table = rig_table(&dir);
+    table.remove("preprocess");
+    table.remove("blob");
+    table.insert("sensor".into(), "sensor.toml".into());
+    std::fs::write(dir.join("rigs/rig.toml"), toml::to_string(&table).unwrap()).unwrap();
+    let file = tactrace(&dir.0, &["rig", "check", "rigs/rig.toml"]);
+    assert_eq!(file.code, 0, "{}\n{}", file.stdout, file.stderr);
+    for name in ["camera", "reference"] {
+        assert_eq!(line(&file, name), line(&tables, name), "{}", file.stdout);
+    }
+    let count: usize = line(&file, "reference")
+        .split_whitespace()
+        .nth(2)
+        .and_then(|n| n.parse().ok())
+        .unwrap();
+    assert!(count > 100, "{}", file.stdout);
+
+    let preprocess = toml::Value::try_from(PreprocessConfig::default()).unwrap();
+    table.insert("preprocess".into(), preprocess);
+    std::fs::write(dir.join("rigs/both.toml"), toml::to_string(&table).unwrap()).unwrap();
+    let both = tactrace(&dir.0, &["rig", "check", "rigs/both.toml"]);
+    assert_eq!(both.code, 2, "{}\n{}", both.stdout, both.stderr);
+    assert!(both.stderr.contains("keep one way"), "{}", both.stderr);
 }

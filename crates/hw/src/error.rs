@@ -72,15 +72,13 @@ pub enum HwError {
     /// A configuration value is out of range.
     #[error("invalid configuration `{field}`: {reason}")]
     Config { field: &'static str, reason: String },
-    /// The crop box does not fit in the camera image.
-    #[error(
-        "crop box [{}, {}, {}, {}] does not fit a {width}x{height} image",
-        crop[0], crop[1], crop[2], crop[3]
-    )]
-    Crop {
-        crop: [u32; 4],
-        width: u32,
-        height: u32,
+    /// The preprocessing cannot take a camera image (its settings are
+    /// invalid, its crop box does not fit, the image is not the size a
+    /// sensor file was made for).
+    #[error("camera image preprocessing: {source}")]
+    Preprocess {
+        #[source]
+        source: tactrace_vision::VisionError,
     },
     /// An image file could not be decoded.
     #[error("cannot decode image {path}: {source}")]

@@ -14,9 +14,10 @@
 //! - [`CameraSensor`] implements `tactrace_sensor::TactileSensor` over any
 //!   [`FrameSource`] (`camera::v4l2::V4l2Source` keeps a V4L2 camera
 //!   open, [`CommandSource`] runs an external capture program,
-//!   [`FolderSource`] replays a folder), with the Bristol TacTip
-//!   preprocessing (grayscale, crop, median blur, adaptive threshold,
-//!   resize) in [`Preprocess`].
+//!   [`FolderSource`] replays a folder), through the preprocessing stage
+//!   every command shares ([`Preprocess`], `tactrace_vision`: grey, crop,
+//!   dome mask, median blur, threshold, resize), set by a sensor file or
+//!   the rig file's `[preprocess]` table ([`PreprocessConfig`]).
 //!
 //! See docs/hardware.md for running on a real rig.
 
@@ -27,8 +28,8 @@ pub mod ur5;
 
 pub use camera::v4l2::{list_cameras, open_v4l2, CameraInfo, V4l2Config};
 pub use camera::{
-    adaptive_threshold, CameraSensor, CommandSource, CommandSourceConfig, FolderSource,
-    FrameSource, Preprocess, PreprocessConfig, ThresholdMethod,
+    CameraSensor, CommandSource, CommandSourceConfig, FolderSource, FrameSource, Preprocess,
+    PreprocessConfig, ThresholdMethod,
 };
 pub use error::HwError;
 pub use stop::{StopFlag, StopSignal};

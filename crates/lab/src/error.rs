@@ -168,7 +168,7 @@ impl LabError {
             LabError::Hardware(e) => matches!(
                 e,
                 tactrace_hw::HwError::Config { .. }
-                    | tactrace_hw::HwError::Crop { .. }
+                    | tactrace_hw::HwError::Preprocess { .. }
                     | tactrace_hw::HwError::CameraMissing { .. }
                     | tactrace_hw::HwError::NotACamera { .. }
             ),

@@ -202,8 +202,14 @@ fn most_common(values: impl Iterator<Item = usize>) -> usize {
 /// One frame read: its displacement from the rest pins and its counts.
 pub fn read_one(reader: &PinReader, path: &Path) -> Result<(Vec<f32>, TrackCounts)> {
     let image = read_image(path)?;
-    let Reading { tracked, counts } = reader.read_preprocessed(&seen(reader.frames(), &image)?)?;
+    let Reading { tracked, counts } = reading_of(reader, &image)?;
     Ok((tracked.displacement(reader.tracker().reference()), counts))
+}
+
+/// A camera image (decoded) read into ordered pins as [`read_one`] reads
+/// a frame file (Python's `PinReader`).
+pub fn reading_of(reader: &PinReader, image: &DynamicImage) -> Result<Reading> {
+    Ok(reader.read_preprocessed(&seen(reader.frames(), image)?)?)
 }
 
 /// True for the error of a frame that was read but showed too few pins

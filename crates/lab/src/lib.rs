@@ -28,6 +28,7 @@ pub mod import;
 pub mod import_checks;
 pub mod import_like;
 pub mod import_reader;
+pub mod import_request;
 pub mod numbers;
 pub mod render;
 pub mod reproduce;

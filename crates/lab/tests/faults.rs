@@ -342,6 +342,7 @@ fn rig_file(fake: &FakeUrController, frames: &Path) -> HardwareConfig {
             looping: false,
             preprocessed: false,
         },
+        sensor: None,
         preprocess: PreprocessConfig::grayscale_only(),
         workspace: Workspace {
             min: [x - 60.0, y - 60.0, -15.0],

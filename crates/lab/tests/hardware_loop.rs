@@ -87,6 +87,7 @@ fn rig_file(fake: &FakeUrController, frames: &Path, x: f64, y: f64, angle: f64) 
             looping: false,
             preprocessed: false,
         },
+        sensor: None,
         preprocess: PreprocessConfig::grayscale_only(),
         workspace: Workspace {
             min: [x - 60.0, y - 60.0, -15.0],

@@ -108,6 +108,7 @@ fn rig_file(fake: &FakeUrController) -> HardwareConfig {
             looping: true,
             preprocessed: false,
         },
+        sensor: None,
         preprocess: PreprocessConfig::grayscale_only(),
         workspace: Workspace {
             min: [x - 80.0, y - 80.0, -15.0],

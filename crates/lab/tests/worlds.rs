@@ -215,6 +215,7 @@ fn issue21_the_hardware_world_runs_on_the_fake_ur5_and_a_folder_camera() {
             looping: true,
             preprocessed: false,
         },
+        sensor: None,
         preprocess: PreprocessConfig::grayscale_only(),
         workspace: Workspace {
             min: [edge.x - 80.0, edge.y - 80.0, -15.0],

@@ -1,11 +1,16 @@
 //! Datasets: `load_dataset` / `save_dataset` over `tactrace_store::dataset`
-//! (the folders `tactrace collect`, `import` and `twin` write).
+//! (the folders `tactrace collect`, `import` and `twin` write), and
+//! `import_dataset` (`tactrace import`: real frames with named targets).
 use crate::arrays::{json_to_py, matrix, py_to_json, to_matrix};
-use crate::errors::{input, store};
+use crate::errors::{input, lab, store};
+use crate::interrupt::{checkpoint, run_detached};
 use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
+use tactrace_lab::import_request::ImportRequest;
+use tactrace_store::collection::CollectionEdits;
+use tactrace_store::fsutil;
 use tactrace_store::{DatasetMeta, TapData};
 
 /// Read a dataset folder (`inputs.npy`, `targets.npy`, `meta.json`).
@@ -126,4 +131,108 @@ fn dataset_meta(meta: &Bound<'_, PyDict>, n: usize, d: usize) -> PyResult<Datase
         )));
     }
     Ok(meta)
+}
+
+/// Import a labelled collection of real frames into a dataset folder, as
+/// ``tactrace import`` does (the same request, the same reading).
+///
+/// ``frames`` is the frames folder, ``labels`` the labels CSV (one row a
+/// frame), ``out`` the dataset folder to write (appears only when
+/// complete; an existing one is refused unless ``force=True``).
+/// ``target`` lists the targets as ``"COLUMN:UNIT"`` or
+/// ``"COLUMN:UNIT:circular"`` (unit ``mm`` or ``deg``; ``--target``), in
+/// order; or ``r_column`` / ``theta_column`` name the edge task's two
+/// (default ``pose_2``, ``pose_6``). ``image_column`` names the frame file
+/// column. ``sensor`` is a sensor file (``inspect_sensor(out=...)``);
+/// ``reference`` an undeformed frame or a dataset folder (its rest pins
+/// and sensor settings); with neither the rest layout is estimated from
+/// the taps and recorded. ``params`` a blob detector TOML file (default:
+/// the real256 preset); ``like`` a dataset folder whose preprocessing,
+/// reference and targets to use for another split (excludes the
+/// others); ``limit`` the first N rows. Returns a dict: ``dir``,
+/// ``samples``, ``frames_total``, ``frames_fully_tracked``,
+/// ``frames_with_missing_pins``, ``rejected`` (frame names and why),
+/// ``estimated_rest`` (``pins``, ``residual_px``, ``frames``, or None);
+/// what the CLI warns about is a ``UserWarning``.
+#[pyfunction]
+#[pyo3(signature = (frames, labels, out, *, target = vec![], image_column = None,
+    r_column = None, theta_column = None, sensor = None, reference = None, params = None,
+    like = None, limit = None, force = false))]
+#[allow(clippy::too_many_arguments)]
+pub fn import_dataset<'py>(
+    py: Python<'py>,
+    frames: PathBuf,
+    labels: PathBuf,
+    out: PathBuf,
+    target: Vec<String>,
+    image_column: Option<String>,
+    r_column: Option<String>,
+    theta_column: Option<String>,
+    sensor: Option<PathBuf>,
+    reference: Option<PathBuf>,
+    params: Option<PathBuf>,
+    like: Option<PathBuf>,
+    limit: Option<usize>,
+    force: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let others = !target.is_empty()
+        || [&image_column, &r_column, &theta_column]
+            .iter()
+            .any(|c| c.is_some())
+        || sensor.is_some()
+        || reference.is_some()
+        || params.is_some();
+    if like.is_some() && others {
+        return Err(input(
+            "like takes the targets, image column, sensor settings, reference and blob \
+             detector of its dataset: give only frames, labels, out and limit with it",
+        ));
+    }
+    if sensor.is_some() && params.is_some() {
+        return Err(input(
+            "give either sensor or params: the sensor file has its detector",
+        ));
+    }
+    let blob =
+        crate::vision::blob_params(params, tactrace_store::collection::bristol::BLOB_PRESET)?;
+    let request = ImportRequest {
+        frames,
+        targets: labels,
+        reference,
+        sensor,
+        like,
+        edits: CollectionEdits {
+            image_column,
+            r_column,
+            theta_column,
+            target_list: target,
+            limit,
+            blob: Some(blob),
+            ..CollectionEdits::default()
+        },
+    };
+    let got = run_detached(py, || -> Result<_, tactrace_lab::LabError> {
+        let _lock = fsutil::check_output_dir(&out, force)?;
+        let plan = request.plan()?;
+        let got = tactrace_lab::import::import(&plan.collection, &checkpoint)?;
+        plan.check(&got.data)?;
+        let dir = tactrace_store::write_dataset(&out, &got.data, &[], force)?;
+        Ok((dir, got))
+    })?
+    .map_err(lab)?;
+    let (dir, got) = got;
+    for w in &got.warnings {
+        crate::follow::warn(py, w)?;
+    }
+    let t = got.data.meta.tracking;
+    let summary = serde_json::json!({
+        "dir": dir.display().to_string(),
+        "samples": got.data.len(),
+        "frames_total": t.frames_total,
+        "frames_fully_tracked": t.frames_fully_tracked,
+        "frames_with_missing_pins": got.frames_with_missing_pins,
+        "rejected": got.rejected,
+        "estimated_rest": got.estimated_rest,
+    });
+    json_to_py(py, &summary)
 }

@@ -15,6 +15,7 @@ mod interrupt;
 mod model;
 mod rig;
 mod samples;
+mod sight;
 mod sim;
 mod vision;
 
@@ -30,11 +31,15 @@ fn _tactrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RunFailedError", py.get_type::<errors::RunFailedError>())?;
     m.add_function(wrap_pyfunction!(data::load_dataset, m)?)?;
     m.add_function(wrap_pyfunction!(data::save_dataset, m)?)?;
+    m.add_function(wrap_pyfunction!(data::import_dataset, m)?)?;
     m.add_class::<model::Model>()?;
     m.add_function(wrap_pyfunction!(model::load_model, m)?)?;
     m.add_function(wrap_pyfunction!(model::train, m)?)?;
     m.add_function(wrap_pyfunction!(vision::read_frame, m)?)?;
     m.add_class::<vision::PinExtractor>()?;
+    m.add_function(wrap_pyfunction!(sight::preprocess, m)?)?;
+    m.add_function(wrap_pyfunction!(sight::inspect_sensor, m)?)?;
+    m.add_class::<sight::PinReader>()?;
     m.add_class::<sim::SimTacTip>()?;
     m.add_function(wrap_pyfunction!(follow::follow, m)?)?;
     m.add_function(wrap_pyfunction!(rig::follow_rig, m)?)?;

@@ -5,7 +5,7 @@ use crate::arrays::{json_to_py, points_array, py_to_json, to_matrix};
 use crate::errors::{core, input, lab, store};
 use crate::interrupt::{checkpoint, run_detached};
 use crate::samples::Samples;
-use numpy::{PyArrayDyn, PyArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -81,6 +81,35 @@ impl Model {
         Ok(&self.net)
     }
 
+    /// Every target for each sample of `data` (N x T, or (T,) for one row).
+    fn predict_all<'py>(
+        &self,
+        py: Python<'py>,
+        data: &Bound<'py, PyAny>,
+        reference_pins: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let samples = Samples::read(data, None, reference_pins, false)?;
+        let (net, cols) = self.net_taking(&samples)?;
+        let t = net.outputs().len();
+        let flat = &samples.inputs;
+        let out = run_detached(py, || {
+            let mut out = Vec::with_capacity(samples.rows * t);
+            for (i, row) in flat.chunks_exact(cols).enumerate() {
+                if i % ROWS_PER_CHECK == ROWS_PER_CHECK - 1 {
+                    checkpoint();
+                }
+                out.extend(net.predict_targets(row)?);
+            }
+            Ok::<_, tactrace_learn::LearnError>(out)
+        })?
+        .map_err(core)?;
+        let arr = to_matrix(py, out, samples.rows, t)?;
+        if samples.one_row {
+            return arr.reshape(vec![t]);
+        }
+        Ok(arr)
+    }
+
     /// The network, for the model's own pins (configuration, kind).
     fn own_net(&self) -> &PoseModel {
         &self.net
@@ -130,34 +159,31 @@ impl Model {
     /// Predict every target of the model (``Model.targets``: names, units,
     /// circular flags) for each sample of ``data`` (as ``predict``): an N
     /// x T float64 array in the targets' units (circular angles within
-    /// (-180, 180] deg), or (T,) for a single row.
-    #[pyo3(signature = (data, *, reference_pins = None))]
+    /// (-180, 180] deg), or (T,) for a single row. With ``named=True`` a
+    /// dict instead: each target's column name -> its (N,) array (a float
+    /// for a single row), in the model's order.
+    #[pyo3(signature = (data, *, reference_pins = None, named = false))]
     fn predict_targets<'py>(
         &self,
         py: Python<'py>,
         data: &Bound<'py, PyAny>,
         reference_pins: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let samples = Samples::read(data, None, reference_pins, false)?;
-        let (net, cols) = self.net_taking(&samples)?;
-        let t = net.outputs().len();
-        let flat = &samples.inputs;
-        let out = run_detached(py, || {
-            let mut out = Vec::with_capacity(samples.rows * t);
-            for (i, row) in flat.chunks_exact(cols).enumerate() {
-                if i % ROWS_PER_CHECK == ROWS_PER_CHECK - 1 {
-                    checkpoint();
-                }
-                out.extend(net.predict_targets(row)?);
-            }
-            Ok::<_, tactrace_learn::LearnError>(out)
-        })?
-        .map_err(core)?;
-        let arr = to_matrix(py, out, samples.rows, t)?;
-        if samples.one_row {
-            return arr.reshape(vec![t]);
+        named: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let arr = self.predict_all(py, data, reference_pins)?;
+        if !named {
+            return Ok(arr.into_any());
         }
-        Ok(arr)
+        let dict = pyo3::types::PyDict::new(py);
+        let one_row = arr.ndim() == 1;
+        for (k, target) in self.own_net().outputs().iter().enumerate() {
+            let column = match one_row {
+                true => arr.get_item(k)?,
+                false => arr.get_item((pyo3::types::PySlice::full(py), k))?,
+            };
+            dict.set_item(&target.name, column)?;
+        }
+        Ok(dict.into_any())
     }
 
     /// What the model predicts, in order: a list of dicts with ``name``

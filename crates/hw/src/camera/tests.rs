@@ -23,6 +23,22 @@ fn pin_centres() -> Vec<(f64, f64)> {
     pins
 }
 
+/// `image` through the rig's default (Bristol) preprocessing.
+fn bristol(image: &DynamicImage) -> Result<GrayImage, HwError> {
+    apply(&PreprocessConfig::default(), image)
+}
+
+/// `image` through `config`, laid out for its size.
+fn apply(config: &PreprocessConfig, image: &DynamicImage) -> Result<GrayImage, HwError> {
+    let stage = config
+        .validate()?
+        .stage(image.width(), image.height())
+        .map_err(|source| HwError::Preprocess { source })?;
+    stage
+        .apply(image)
+        .map_err(|source| HwError::Preprocess { source })
+}
+
 /// A 640x480 colour "camera" image: bright round pins (radius 4 px) on a
 /// dark skin lit unevenly (a left-to-right ramp of 40 grey levels).
 fn synthetic_camera_image() -> RgbImage {
@@ -39,9 +55,8 @@ fn synthetic_camera_image() -> RgbImage {
 
 #[test]
 fn default_preprocessing_gives_white_pins_on_black() {
-    let preprocess = PreprocessConfig::default().validate().unwrap();
     let image = DynamicImage::ImageRgb8(synthetic_camera_image());
-    let frame = preprocess.apply(&image).unwrap();
+    let frame = bristol(&image).unwrap();
     assert_eq!(frame.dimensions(), (256, 256));
     let pins = pin_centres();
     for &(px, py) in &pins {
@@ -63,16 +78,12 @@ fn default_preprocessing_gives_white_pins_on_black() {
 #[test]
 fn mean_method_agrees_with_gaussian_on_clean_pins() {
     let image = DynamicImage::ImageRgb8(synthetic_camera_image());
-    let gaussian = PreprocessConfig::default()
-        .validate()
-        .unwrap()
-        .apply(&image)
-        .unwrap();
+    let gaussian = bristol(&image).unwrap();
     let config = PreprocessConfig {
         threshold_method: ThresholdMethod::Mean,
         ..PreprocessConfig::default()
     };
-    let mean = config.validate().unwrap().apply(&image).unwrap();
+    let mean = apply(&config, &image).unwrap();
     let differ = gaussian
         .pixels()
         .zip(mean.pixels())
@@ -83,16 +94,17 @@ fn mean_method_agrees_with_gaussian_on_clean_pins() {
 
 #[test]
 fn crop_outside_the_image_is_an_error() {
-    let preprocess = PreprocessConfig::default().validate().unwrap();
     let small = DynamicImage::ImageLuma8(GrayImage::new(320, 240));
-    let err = preprocess.apply(&small).unwrap_err();
+    let err = bristol(&small).unwrap_err();
     assert!(
         matches!(
             err,
-            HwError::Crop {
-                width: 320,
-                height: 240,
-                ..
+            HwError::Preprocess {
+                source: tactrace_vision::VisionError::Crop {
+                    width: 320,
+                    height: 240,
+                    ..
+                }
             }
         ),
         "{err}"
@@ -105,13 +117,11 @@ fn invalid_settings_are_rejected() {
         threshold: Some((60, -5.0)),
         ..PreprocessConfig::default()
     };
-    assert!(matches!(
-        even_block.validate(),
-        Err(HwError::Config {
-            field: "threshold",
-            ..
-        })
-    ));
+    let err = even_block.validate().unwrap_err();
+    assert!(
+        matches!(err, HwError::Preprocess { .. }) && err.to_string().contains("threshold"),
+        "{err}"
+    );
     let empty_crop = PreprocessConfig {
         crop: Some([10, 10, 10, 20]),
         ..PreprocessConfig::default()
@@ -122,35 +132,19 @@ fn invalid_settings_are_rejected() {
 }
 
 #[test]
-fn opencv_gray_weights() {
-    let rgb = RgbImage::from_fn(3, 1, |x, _| match x {
-        0 => Rgb([255, 0, 0]),
-        1 => Rgb([0, 255, 0]),
-        _ => Rgb([0, 0, 255]),
-    });
-    let gray = opencv_gray(&DynamicImage::ImageRgb8(rgb));
-    // 0.299, 0.587 and 0.114 of 255.
+fn the_rig_table_reads_into_the_shared_preprocessing() {
+    let params = PreprocessConfig::default().to_params();
+    assert_eq!(params.crop, Some([190, 132, 446, 388]));
+    assert_eq!(params.median_blur, Some(5));
     assert_eq!(
-        [
-            gray.get_pixel(0, 0)[0],
-            gray.get_pixel(1, 0)[0],
-            gray.get_pixel(2, 0)[0]
-        ],
-        [76, 150, 29]
+        params.threshold,
+        Some(tactrace_vision::Threshold::AdaptiveGaussian { block: 61, c: -5.0 })
     );
-}
-
-#[test]
-fn area_resize_averages_blocks() {
-    let image = GrayImage::from_fn(4, 4, |x, y| {
-        image::Luma([if (x + y) % 2 == 0 { 200 } else { 0 }])
-    });
-    let half = resize_area(&image, 2, 2);
-    assert!(half.pixels().all(|p| p[0] == 100), "{half:?}");
-    // 3 -> 2 along x: output 0 covers source 0 and half of 1.
-    let row = GrayImage::from_raw(3, 1, vec![0, 90, 180]).unwrap();
-    let two = resize_area(&row, 2, 1);
-    assert_eq!((two.get_pixel(0, 0)[0], two.get_pixel(1, 0)[0]), (30, 150));
+    assert_eq!(params.resize.map(|r| r.size), Some([256, 256]));
+    assert_eq!(
+        PreprocessConfig::grayscale_only().to_params(),
+        tactrace_vision::PreprocessParams::default()
+    );
 }
 
 #[test]
@@ -222,10 +216,8 @@ fn camera_sensor_round_trip_through_a_folder() {
     synthetic_camera_image()
         .save(dir.path().join("cam_0.png"))
         .unwrap();
+    let direct = bristol(&DynamicImage::ImageRgb8(synthetic_camera_image())).unwrap();
     let preprocess = PreprocessConfig::default().validate().unwrap();
-    let direct = preprocess
-        .apply(&DynamicImage::ImageRgb8(synthetic_camera_image()))
-        .unwrap();
     let mut sensor = CameraSensor::new(FolderSource::new(dir.path()).unwrap(), preprocess);
     let frame = sensor.capture().unwrap();
     assert_eq!(frame, direct);
@@ -308,9 +300,8 @@ fn real_frame_survives_the_camera_round_trip() {
     let original = image::open(data.join("frames/init_0.png")).unwrap();
     let original = original.to_luma8();
     let camera = DynamicImage::ImageLuma8(camera_image_from_frame(&original, 11));
-    let preprocess = PreprocessConfig::default().validate().unwrap();
     let start = std::time::Instant::now();
-    let frame = preprocess.apply(&camera).unwrap();
+    let frame = bristol(&camera).unwrap();
     eprintln!("preprocessing one 640x480 frame: {:?}", start.elapsed());
     let white = |p: &image::Luma<u8>| p[0] > 127;
     let both = original

@@ -65,6 +65,7 @@ pub fn rig_check(
     pins: Option<usize>,
 ) -> Result<RigCheck> {
     cfg.validate()?;
+    let blob = cfg.sight()?.blob;
     let mut arm = cfg.arm.clone();
     arm.timeout_s = arm.timeout_s.min(CHECK_TIMEOUT_S);
     let mut check = RigCheck::default();
@@ -86,7 +87,7 @@ pub fn rig_check(
         }
     };
     match frame {
-        Some(frame) => check_reference(cfg, &frame, (model, pins), &mut check),
+        Some(frame) => check_reference(&blob, &frame, (model, pins), &mut check),
         None => check.push("reference", false, "not checked: no camera frame"),
     }
     Ok(check)
@@ -220,12 +221,12 @@ fn check_state(
 
 /// The reference row: pins in the frame, and the model's pins.
 fn check_reference(
-    cfg: &HardwareConfig,
+    blob: &tactrace_vision::BlobParams,
     frame: &Frame,
     (model, expected): (Option<&StoredModel>, Option<usize>),
     check: &mut RigCheck,
 ) {
-    let pins = match tactrace_vision::PinExtractor::from_reference_frame(frame, cfg.blob.clone()) {
+    let pins = match tactrace_vision::PinExtractor::from_reference_frame(frame, blob.clone()) {
         Ok(extractor) => extractor.tracker.reference().to_vec(),
         Err(e) => {
             let detail =

@@ -18,8 +18,10 @@
 //! the start) apart from a fault of the arm. `tactrace rig check` is in
 //! [`rig_check`] (module `check`).
 mod check;
+mod sight;
 
 pub use check::{rig_check, RigCheck, RigCheckItem};
+pub use sight::RigSight;
 pub use tactrace_hw::{StopFlag, StopSignal};
 
 use crate::collect::{check_samples, collect_on, CollectConfig, Collected, EdgeRig};
@@ -50,7 +52,7 @@ pub enum FrameSourceConfig {
     /// Replay the images of a folder in natural order (`[camera.folder]`):
     /// dry runs and tests without a camera. With `preprocessed = true` the
     /// images are taken as already preprocessed frames (a dataset's
-    /// `frames/`) and `[preprocess]` is not applied to them.
+    /// `frames/`) and the rig's preprocessing is not applied to them.
     Folder {
         path: PathBuf,
         #[serde(default)]
@@ -79,15 +81,25 @@ pub struct HardwareStart {
 pub struct HardwareConfig {
     pub arm: Ur5Config,
     pub camera: FrameSourceConfig,
-    #[serde(default)]
+    /// The sensor file (`tactrace sensor inspect --out`) saying how to
+    /// read the camera's images: its preprocessing and blob detector
+    /// replace `preprocess` and `blob`, which must then be left out
+    /// ([`HardwareConfig::sight`]). A relative path is taken from the rig
+    /// file's folder ([`HardwareConfig::read`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensor: Option<PathBuf>,
+    /// The camera preprocessing of older rig files (without `sensor`);
+    /// left out of a written file when it is the default, so that a run
+    /// folder's copy of a rig with a sensor file reads back.
+    #[serde(default, skip_serializing_if = "is_default_preprocess")]
     pub preprocess: PreprocessConfig,
     pub workspace: Workspace,
     pub start: HardwareStart,
     #[serde(default)]
     pub tap: TapConfig,
-    /// Blob detection (default: the `real256` preset for 256 x 256
-    /// preprocessed frames).
-    #[serde(default = "real_blob")]
+    /// Blob detection without `sensor` (default: the `real256` preset for
+    /// 256 x 256 preprocessed frames).
+    #[serde(default = "real_blob", skip_serializing_if = "is_real_blob")]
     pub blob: BlobParams,
     #[serde(default)]
     pub controller: PbtsConfig,
@@ -95,8 +107,16 @@ pub struct HardwareConfig {
     pub follow: LoopConfig,
 }
 
-fn real_blob() -> BlobParams {
+pub(crate) fn real_blob() -> BlobParams {
     BlobParams::preset("real256").expect("built-in preset")
+}
+
+fn is_real_blob(blob: &BlobParams) -> bool {
+    *blob == real_blob()
+}
+
+fn is_default_preprocess(p: &PreprocessConfig) -> bool {
+    *p == PreprocessConfig::default()
 }
 
 impl HardwareConfig {
@@ -104,8 +124,11 @@ impl HardwareConfig {
     /// blob, controller, follow) start from their defaults and the file
     /// overlays them key by key, as every configuration does; `arm`,
     /// `camera`, `workspace` and `start` must be given. Unknown keys are
-    /// errors.
+    /// errors, and so is a `sensor` file given with a `[preprocess]` or
+    /// `[blob]` table. A relative `sensor` is kept as written
+    /// ([`HardwareConfig::read`] resolves it).
     pub fn from_toml(text: &str, what: &str) -> Result<Self> {
+        sight::check_one_way(text, what)?;
         #[derive(Serialize)]
         struct Defaults {
             preprocess: PreprocessConfig,
@@ -127,10 +150,11 @@ impl HardwareConfig {
         )?)
     }
 
-    /// The loop settings of this rig, checked.
+    /// The loop settings of this rig, checked (a sensor file is read for
+    /// its blob detector).
     pub fn servo_settings(&self) -> Result<ServoSettings> {
         ServoSettings::new(
-            self.blob.clone(),
+            self.sight()?.blob,
             self.controller.clone(),
             self.follow.clone(),
             self.tap,
@@ -154,7 +178,7 @@ impl HardwareConfig {
         if let FrameSourceConfig::V4l2(c) = &self.camera {
             c.validate()?;
         }
-        self.preprocess.validate()?;
+        self.sight()?;
         self.workspace.validate()?;
         self.follow.validate()?;
         let start = self.start_pose();
@@ -177,21 +201,25 @@ impl HardwareConfig {
         Ok(())
     }
 
-    fn camera(&self) -> Result<Box<dyn TactileSensor>> {
-        let preprocess = self.preprocess.validate()?;
+    /// The camera as a tactile sensor: its source through the rig's
+    /// preprocessing ([`HardwareConfig::sight`]; a sensor file's only for
+    /// images of the size it was made for).
+    pub fn camera(&self) -> Result<Box<dyn TactileSensor>> {
+        let sight = self.sight()?;
+        let seen = (sight.preprocess, sight.frame_size);
         Ok(match &self.camera {
-            FrameSourceConfig::V4l2(c) => boxed(open_v4l2(c)?, preprocess),
-            FrameSourceConfig::Command(c) => boxed(CommandSource::from_config(c)?, preprocess),
+            FrameSourceConfig::V4l2(c) => boxed(open_v4l2(c)?, seen)?,
+            FrameSourceConfig::Command(c) => boxed(CommandSource::from_config(c)?, seen)?,
             FrameSourceConfig::Folder {
                 path,
                 looping,
                 preprocessed,
             } => {
-                let preprocess = match preprocessed {
-                    true => PreprocessConfig::grayscale_only().validate()?,
-                    false => preprocess,
+                let seen = match preprocessed {
+                    true => (PreprocessConfig::grayscale_only().validate()?, None),
+                    false => seen,
                 };
-                boxed(FolderSource::new(path)?.looping(*looping), preprocess)
+                boxed(FolderSource::new(path)?.looping(*looping), seen)?
             }
         })
     }
@@ -199,9 +227,13 @@ impl HardwareConfig {
 
 fn boxed<S: FrameSource + 'static>(
     source: S,
-    preprocess: tactrace_hw::Preprocess,
-) -> Box<dyn TactileSensor> {
-    Box::new(CameraSensor::new(source, preprocess))
+    (preprocess, size): (tactrace_hw::Preprocess, Option<[u32; 2]>),
+) -> Result<Box<dyn TactileSensor>> {
+    let sensor = CameraSensor::new(source, preprocess);
+    Ok(match size {
+        Some(size) => Box::new(sensor.for_size(size)?),
+        None => Box::new(sensor),
+    })
 }
 
 /// Sends `stopl` after a stop request: [`LabError::Hardware`] with
@@ -315,12 +347,13 @@ pub fn collect_hardware(
         }
     }
     let first = pose_at_edge(edge, normal, 0.0, -collect.theta_range_deg, t.height_mm);
+    let blob = cfg.sight()?.blob;
     let (mut arm, mut sensor, reference) = connect_at(cfg, first, stop)?;
     let on = EdgeRig {
         arm: &mut arm,
         sensor: sensor.as_mut(),
         reference: &reference,
-        blob: &cfg.blob,
+        blob: &blob,
         tap: &cfg.tap,
         edge,
         normal,

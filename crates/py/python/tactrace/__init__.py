@@ -22,20 +22,28 @@ or what ``load_dataset`` returns) or arrays with ``reference_pins``.
 (254,)
 >>> run = tactrace.follow(model, "flower")   # or sensor=FOLDER, replay=DIR
 >>> run["closed"], run["mean_l2_mm"]
+
+Any TacTip's raw frames: ``inspect_sensor`` proposes a sensor file,
+``preprocess`` and ``PinReader`` read frames through it, and
+``import_dataset`` imports a collection with named targets, as the CLI.
 """
 
 from ._tactrace import (
     InputError,
     Model,
     PinExtractor,
+    PinReader,
     RunFailedError,
     SimTacTip,
     TactraceError,
     __version__,
     follow,
     follow_rig,
+    import_dataset,
+    inspect_sensor,
     load_dataset,
     load_model,
+    preprocess,
     read_frame,
     save_dataset,
     train,
@@ -47,6 +55,7 @@ __all__ = [
     "InputError",
     "Model",
     "PinExtractor",
+    "PinReader",
     "RunFailedError",
     "SimTacTip",
     "TactileSensor",
@@ -54,8 +63,11 @@ __all__ = [
     "__version__",
     "follow",
     "follow_rig",
+    "import_dataset",
+    "inspect_sensor",
     "load_dataset",
     "load_model",
+    "preprocess",
     "read_frame",
     "save_dataset",
     "train",

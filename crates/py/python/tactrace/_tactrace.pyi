@@ -1,7 +1,7 @@
 """Type stubs of the extension module (see the docstrings for units)."""
 
 from os import PathLike
-from typing import Any, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -29,6 +29,23 @@ def save_dataset(
     force: bool = False,
 ) -> str: ...
 
+def import_dataset(
+    frames: StrPath,
+    labels: StrPath,
+    out: StrPath,
+    *,
+    target: Sequence[str] = (),
+    image_column: Optional[str] = None,
+    r_column: Optional[str] = None,
+    theta_column: Optional[str] = None,
+    sensor: Optional[StrPath] = None,
+    reference: Optional[StrPath] = None,
+    params: Optional[StrPath] = None,
+    like: Optional[StrPath] = None,
+    limit: Optional[int] = None,
+    force: bool = False,
+) -> Dict[str, Any]: ...
+
 Samples = Union[StrPath, Tuple[ArrayLike, ArrayLike, dict], ArrayLike]
 """A dataset folder, the (inputs, targets, meta) of load_dataset, or an
 N x 2P array of inputs (then reference_pins is required)."""
@@ -48,9 +65,27 @@ class Model:
     def validation(self) -> Optional[dict]: ...
     @property
     def training(self) -> Optional[dict]: ...
+    @property
+    def targets(self) -> List[Dict[str, Any]]: ...
     def predict(
         self, data: Samples, *, reference_pins: Optional[ArrayLike] = None
     ) -> npt.NDArray[np.float64]: ...
+    @overload
+    def predict_targets(
+        self,
+        data: Samples,
+        *,
+        reference_pins: Optional[ArrayLike] = None,
+        named: Literal[False] = False,
+    ) -> npt.NDArray[np.float64]: ...
+    @overload
+    def predict_targets(
+        self,
+        data: Samples,
+        *,
+        reference_pins: Optional[ArrayLike] = None,
+        named: Literal[True],
+    ) -> Dict[str, Any]: ...
     def validate(
         self,
         data: Samples,
@@ -90,6 +125,26 @@ class PinExtractor:
     def displacement(
         self, frame: Union[ArrayLike, StrPath]
     ) -> npt.NDArray[np.float32]: ...
+
+Image = Union[ArrayLike, StrPath]
+"""A camera image: (H, W) grey, (H, W, 3) RGB or (H, W, 4) RGBA, or an image file."""
+
+def preprocess(frame: Image, sensor: Union[StrPath, dict]) -> npt.NDArray[np.uint8]: ...
+def inspect_sensor(
+    frames: Union[StrPath, Sequence[StrPath]],
+    *,
+    crop: Optional[Tuple[int, int, int, int]] = None,
+    out: Optional[StrPath] = None,
+    picture: Optional[StrPath] = None,
+    force: bool = False,
+) -> Dict[str, Any]: ...
+
+class PinReader:
+    def __init__(self, sensor: Union[StrPath, dict], reference_pins: ArrayLike) -> None: ...
+    @property
+    def reference_pins(self) -> npt.NDArray[np.float64]: ...
+    def read(self, frame: Image) -> Tuple[npt.NDArray[np.float64], Dict[str, int]]: ...
+    def displacement(self, frame: Image) -> npt.NDArray[np.float32]: ...
 
 class SimTacTip:
     def __init__(

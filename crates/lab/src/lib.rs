@@ -32,6 +32,7 @@ pub mod render;
 pub mod reproduce;
 pub mod search;
 pub mod sensor_inspect;
+pub mod sim_sight;
 pub mod train;
 pub mod trajectory_csv;
 pub mod transfer_fit;

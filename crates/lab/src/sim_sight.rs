@@ -168,11 +168,17 @@ fn first_frame(dir: &Path) -> Result<PathBuf> {
 /// concentric rings both fitted, the better kept), with both fits.
 pub fn lay_out(sensor: &TacTipConfig, sight: &SimSight) -> Result<(TacTipConfig, LayoutReport)> {
     let rest = sight.rest();
+    let what = if sight.origin.is_file() {
+        "not an undeformed frame of a TacTip"
+    } else {
+        "not the rest layout of a TacTip"
+    };
     let fit = fit_layouts(sensor, rest, sight.frame).map_err(|e| LabError::Reference {
         path: sight.origin.clone(),
         reason: format!(
-            "its {} rest pins cannot be laid out as a simulated TacTip (a hexagonal lattice \
-             or concentric rings)",
+            "{what}: its {} pins cannot be laid out as a hexagonal lattice or concentric \
+             rings; give the sensor's frame taken without contact or an imported dataset as \
+             --reference, or settings that find its pins (--params, --sensor)",
             rest.len()
         ),
         source: Box::new(e),

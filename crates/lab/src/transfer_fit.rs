@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_optim::{Cmaes, CmaesConfig};
 use tactrace_sensor::TacTipConfig;
+use tactrace_store::collection::Reference;
 use tactrace_store::fsutil::{write_atomic, StagedDir};
 use tactrace_store::{CsvText, LabelledCollection, TapData};
 
@@ -133,7 +134,7 @@ pub struct TransferFit {
     /// What the import of those frames warned of (a pressed reference, ...).
     pub warnings: Vec<String>,
     /// Both pin layouts' fits to the rest pins (the start is laid out as
-    /// the better one).
+    /// the better one when the rest pins were estimated from taps).
     pub layout: LayoutReport,
 }
 
@@ -164,9 +165,10 @@ pub fn with_values(base: &TacTipConfig, values: &[f64]) -> TacTipConfig {
 }
 
 /// Fit [`TRANSFER_PARAMS`] of `base` (module docs), laid out first like
-/// the collection's rest pins (an undeformed frame's or estimated from the
-/// taps: [`crate::sim_sight`]); `progress` is told of every candidate as
-/// it is scored.
+/// the collection's rest pins when they were estimated from taps
+/// ([`crate::sim_sight`]; an undeformed frame's pins must fit `base` as it
+/// is, so a pressed frame is refused); `progress` is told of every
+/// candidate as it is scored.
 pub fn fit_transfer(
     cfg: &TransferFitConfig,
     base: &TacTipConfig,
@@ -176,8 +178,14 @@ pub fn fit_transfer(
     let imported = import(&collection, &|| {})?;
     let (real, warnings) = (imported.data, imported.warnings);
     let sight = sim_sight(&collection)?;
+    // An undeformed frame's pins must fit `base` as it is (a frame pressed
+    // out of its layout is refused by the twin); a rest layout estimated
+    // from taps lays `base` out first.
     let (laid_out, layout) = lay_out(base, &sight)?;
-    let base = &laid_out;
+    let base = match collection.reference() {
+        Reference::Frame(_) => base,
+        _ => &laid_out,
+    };
     let start_values: Vec<f64> = TRANSFER_PARAMS.iter().map(|p| (p.get)(base)).collect();
     let score = |values: &[f64], generation: usize| -> Result<Candidate> {
         let sensor = with_values(base, values);

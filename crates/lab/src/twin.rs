@@ -35,8 +35,9 @@ pub fn simulate_twin(
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
+    let rows = twin_rows(collection)?;
     let sight = sim_sight(collection)?;
-    simulate_twin_rows(collection, &sight, sensor, seed, (None, progress))
+    simulate_read_rows(collection, rows, &sight, sensor, (seed, progress))
 }
 
 /// As [`simulate_twin`] with `sensor` first laid out like the
@@ -49,9 +50,11 @@ pub fn simulate_twin_laid_out(
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Result<(Imported, LayoutReport)> {
+    // The labels are read (and checked) before the reference.
+    let rows = twin_rows(collection)?;
     let sight = sim_sight(collection)?;
     let (laid_out, layout) = lay_out(sensor, &sight)?;
-    let got = simulate_twin_rows(collection, &sight, &laid_out, seed, (None, progress))?;
+    let got = simulate_read_rows(collection, rows, &sight, &laid_out, (seed, progress))?;
     Ok((got, layout))
 }
 
@@ -64,8 +67,19 @@ pub(crate) fn simulate_twin_rows(
     seed: u64,
     (keep, progress): (Option<&[usize]>, &(dyn Fn() + Sync)),
 ) -> Result<Imported> {
-    let names = edge_names(collection)?;
     let rows = keep_rows(twin_rows(collection)?, keep);
+    simulate_read_rows(collection, rows, sight, sensor, (seed, progress))
+}
+
+/// The twin of the labelled `rows` of `collection`, read already.
+fn simulate_read_rows(
+    collection: &LabelledCollection,
+    rows: Vec<LabelledRow>,
+    sight: &SimSight,
+    sensor: &TacTipConfig,
+    (seed, progress): (u64, &(dyn Fn() + Sync)),
+) -> Result<Imported> {
+    let names = edge_names(collection)?;
     let rest = sight.rest().to_vec();
     let model = twin_model(&sight.origin, sensor, &rest)?;
     let outcomes = simulate_rows(&model, &sight.reader, &rows, seed, progress);
@@ -204,9 +218,9 @@ fn edge_names(collection: &LabelledCollection) -> Result<[String; 2]> {
 fn twin_model(reference: &Path, sensor: &TacTipConfig, rest: &[[f64; 2]]) -> Result<TacTipModel> {
     TacTipModel::with_rest_pins(sensor.clone(), rest.to_vec()).map_err(|e| LabError::Reference {
         path: reference.to_path_buf(),
-        reason: "its rest pins are not the simulated sensor's layout; give the sensor's \
-                 frame taken without contact (or an imported dataset) as --reference, or \
-                 settings that find its pins (--params, --sensor)"
+        reason: "not an undeformed frame (or rest layout) of the simulated sensor's layout; \
+                 give the sensor's frame taken without contact (or an imported dataset) as \
+                 --reference, or settings that find its pins (--params, --sensor)"
             .into(),
         source: Box::new(e),
     })

@@ -180,11 +180,12 @@ pub struct LabelArgs {
     /// CSV of labels, one row per frame.
     #[arg(long)]
     pub targets: PathBuf,
-    /// The undeformed frame whose pins define the order (for `twin` also
-    /// the simulated sensor's rest layout). `import` without it estimates
-    /// the rest layout from the taps and records it in the dataset; `import
-    /// --reference DATASET` reads against that dataset's rest pins (and
-    /// sensor settings, when no --sensor).
+    /// The undeformed frame whose pins define the order (for `twin`,
+    /// `calibrate` and `sim-fit` also the simulated sensor's rest layout),
+    /// or an imported dataset (DATASET: its rest pins and sensor settings,
+    /// when no --sensor). Without it, `import`, `calibrate` and `sim-fit`
+    /// estimate the rest layout from the taps (`import` records it in the
+    /// dataset).
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Column of --targets naming each row's frame file [default: image_name].
@@ -207,14 +208,6 @@ pub struct LabelArgs {
 }
 
 impl LabelArgs {
-    /// The undeformed frame; an error when it was not given (commands
-    /// other than `import` need it).
-    pub fn reference_frame(&self) -> Result<&Path> {
-        self.reference.as_deref().ok_or_else(|| {
-            LabError::from(tactrace_store::collection::CollectionError::NoReferenceFrame).into()
-        })
-    }
-
     /// The collection of the frames in `frames` these flags describe,
     /// with `edits` (rows, blob detector, tap columns) made.
     pub fn collection(&self, frames: &Path, edits: CollectionEdits) -> Result<LabelledCollection> {

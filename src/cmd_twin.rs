@@ -10,10 +10,10 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use tactrace_lab::calibrate::{calibrate_sensor, write_calibrated, CalibrateConfig};
 use tactrace_lab::import::Imported;
-use tactrace_lab::twin::{simulate_twin, simulate_twin_calibrated};
+use tactrace_lab::twin::{simulate_twin_calibrated, simulate_twin_laid_out};
 use tactrace_lab::LabError;
-use tactrace_store::collection::{bristol, CollectionEdits};
-use tactrace_store::{dataset, fsutil, LabelledCollection, SensorFolder};
+use tactrace_store::collection::{bristol, CollectionEdits, Reference};
+use tactrace_store::{dataset, fsutil, LabelledCollection, SensorFolder, SightFile};
 
 /// The columns of a tap's depth and shear (`twin`, `calibrate`, `sim-fit`).
 #[derive(Args)]
@@ -55,8 +55,9 @@ pub struct TwinArgs {
     #[command(flatten)]
     columns: TapColumnArgs,
     /// A calibrated sensor folder (`tactrace calibrate`): its parameters,
-    /// field correction and training recipe (several renders of every row,
-    /// plus its real calibration taps).
+    /// detector, field correction and training recipe (several renders of
+    /// every row, plus its real calibration taps); without --reference its
+    /// own rest pins order the taps.
     #[arg(long, conflicts_with_all = ["config", "params"])]
     sensor: Option<PathBuf>,
     /// With --sensor: leave the sensor's real calibration taps out (a set
@@ -87,22 +88,32 @@ pub struct TwinArgs {
 pub fn twin(a: TwinArgs) -> Result<()> {
     Inputs::new()
         .add("--targets", &a.labels.targets)
-        .add("--reference", a.labels.reference_frame()?)
+        .opt("--reference", a.labels.reference.as_deref())
         .opt("--sensor", a.sensor.as_deref())
         .opt("--config", a.config.as_deref())
         .opt("--params", a.params.as_deref())
         .check_apart("--out", &a.out)?;
-    // The twin reads no frames: its collection's are the reference's folder.
-    let frames = a
-        .labels
-        .reference_frame()?
-        .parent()
-        .unwrap_or(Path::new(""));
     let blob = match &a.params {
         Some(p) => Some(blob_params(Some(p), bristol::BLOB_PRESET)?),
         None => None,
     };
-    let collection = a.columns.collection(&a.labels, frames, (a.limit, blob))?;
+    let given = blob.is_some();
+    let reference = a.labels.reference.as_deref();
+    // The twin reads no frames but the one that gives the frame size: its
+    // collection's are the reference frame's folder, or those of the
+    // dataset whose rest pins it takes.
+    let (frames, recorded) = match (reference, &a.sensor) {
+        (Some(dir), _) if dir.is_dir() => {
+            let recorded = tactrace_lab::import::recorded(dir)?;
+            let frames = recorded.frames.clone().unwrap_or_else(|| dir.to_path_buf());
+            (frames, Some(recorded))
+        }
+        (Some(frame), _) => (frame.parent().unwrap_or(Path::new("")).to_path_buf(), None),
+        (None, Some(sensor)) => (sensor.clone(), None),
+        (None, None) => return Err(twin_needs_reference().into()),
+    };
+    let collection = a.columns.collection(&a.labels, &frames, (a.limit, blob))?;
+    let collection = with_recorded(collection, recorded, None, given)?;
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "twin");
     let tick = || pb.inc(1);
@@ -113,7 +124,10 @@ pub fn twin(a: TwinArgs) -> Result<()> {
         }
         None => {
             let rig = rig_config(a.config.as_deref())?;
-            simulate_twin(&collection, &rig.sensor, a.seed, &tick)
+            simulate_twin_laid_out(&collection, &rig.sensor, a.seed, &tick).map(|(got, layout)| {
+                pb.suspend(|| eprintln!("{}", layout.describe()));
+                got
+            })
         }
     };
     pb.finish_and_clear();
@@ -121,6 +135,50 @@ pub fn twin(a: TwinArgs) -> Result<()> {
     let dir = dataset::write_dataset(&a.out, &got.data, &[], a.force)?;
     summary("simulated", "labelled taps", &got, &dir);
     Ok(())
+}
+
+/// The error of a twin given neither a reference nor a calibrated sensor.
+fn twin_needs_reference() -> LabError {
+    LabError::Config(
+        "twin needs the sensor's rest pins: --reference FRAME (an undeformed frame), \
+         --reference DATASET (an imported dataset's rest pins, e.g. estimated from its taps) \
+         or --sensor SENSOR (a calibrated sensor folder)"
+            .into(),
+    )
+}
+
+/// `collection` read against a reference: the dataset `recorded` when
+/// given (its rest pins, its sensor settings unless `sight` is given, its
+/// blob detector unless `blob_given`), else as it is, with `sight` (a
+/// sensor file's settings) when given; a reference still to be estimated
+/// looks for the sensor file's pin count.
+fn with_recorded(
+    collection: LabelledCollection,
+    recorded: Option<tactrace_lab::import::RecordedReference>,
+    sight: Option<&SightFile>,
+    blob_given: bool,
+) -> Result<LabelledCollection> {
+    let mut c = collection;
+    let own = sight.map(SightFile::sight);
+    if let Some(r) = recorded {
+        c = c
+            .with_reference(Reference::Estimated(r.rest))
+            .with_sight(own.or(r.sight));
+        if let (Some(blob), false) = (r.blob, blob_given) {
+            c = c
+                .with_blob(blob)
+                .map_err(tactrace_store::StoreError::from)?;
+        }
+        return Ok(c);
+    }
+    if let (Reference::Estimate { .. }, Some(s)) = (c.reference(), sight) {
+        let pins = Some(s.sensor.pins);
+        c = c.with_reference(Reference::Estimate { pins });
+    }
+    Ok(match own {
+        Some(own) => c.with_sight(Some(own)),
+        None => c,
+    })
 }
 
 fn summary(verb: &str, what: &str, got: &Imported, dir: &std::path::Path) {
@@ -177,8 +235,13 @@ pub struct RealTapArgs {
     #[arg(long)]
     config: Option<PathBuf>,
     /// Blob detector parameters (TOML); default: the real256 preset.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sensor")]
     params: Option<PathBuf>,
+    /// Sensor settings (`tactrace sensor inspect`): how to read the frames
+    /// (grey, crop, dome mask, threshold; the detector, which also reads
+    /// the simulated taps).
+    #[arg(long)]
+    sensor: Option<PathBuf>,
     /// Use only the first N rows of --targets.
     #[arg(long)]
     limit: Option<usize>,
@@ -193,17 +256,28 @@ impl RealTapArgs {
             .opt("--reference", self.labels.reference.as_deref())
             .opt("--config", self.config.as_deref())
             .opt("--params", self.params.as_deref())
+            .opt("--sensor", self.sensor.as_deref())
             .check_apart("--out", out)?;
         Ok(())
     }
 
-    /// The labelled collection and the simulator to start from.
+    /// The labelled collection and the simulator to start from. Its
+    /// reference: the undeformed frame `--reference FRAME`, the rest pins
+    /// (and sensor settings, blob detector) of `--reference DATASET`, or,
+    /// without --reference, a rest layout estimated from the taps.
     fn resolve(&self) -> Result<(LabelledCollection, tactrace_sensor::TacTipConfig)> {
         let blob = blob_params(self.params.as_deref(), bristol::BLOB_PRESET)?;
         let limits = (self.limit, Some(blob));
         let collection = self
             .columns
             .collection(&self.labels, &self.frames, limits)?;
+        let sight = self.sensor.as_deref().map(SightFile::read).transpose()?;
+        let recorded = match self.labels.reference.as_deref() {
+            Some(dir) if dir.is_dir() => Some(tactrace_lab::import::recorded(dir)?),
+            _ => None,
+        };
+        let given = self.params.is_some();
+        let collection = with_recorded(collection, recorded, sight.as_ref(), given)?;
         let rig = rig_config(self.config.as_deref())?;
         Ok((collection, rig.sensor))
     }
@@ -256,6 +330,15 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
     pb.finish_and_clear();
     let got = got?;
     let dir = write_calibrated(&got, &a.out, a.force)?;
+    if let Some(e) = &got.estimated {
+        eprintln!(
+            "no --reference: estimated the rest layout ({} pins) from {} taps, residual {:.3} px",
+            e.pins.len(),
+            e.frames,
+            e.residual_px
+        );
+    }
+    eprintln!("{}", got.layout.describe());
     let c = &got.sensor.spec.calibration;
     eprintln!(
         "calibrated on {} of {} labelled taps ({} frames rejected) in {:.1} s into {}",
@@ -372,6 +455,7 @@ pub fn sim_fit(a: SimFitArgs) -> Result<()> {
     let fit = fit_transfer(&cfg, &sensor, &mut report);
     pb.finish_and_clear();
     let fit = fit?;
+    eprintln!("{}", fit.layout.describe());
     for w in &fit.warnings {
         eprintln!("warning: {w}");
     }

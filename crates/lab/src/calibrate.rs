@@ -1,6 +1,9 @@
 //! `tactrace calibrate`: fit the simulated TacTip to a user's own labelled
 //! taps on a straight edge (docs/calibration.md).
 //!
+//! The simulator is first laid out like the sensor's rest pins (an
+//! undeformed frame's, or a rest layout estimated from the taps:
+//! [`crate::sim_sight`], both pin layouts fitted and the better kept).
 //! The real frames are imported, their labels replayed on the simulator
 //! ([`crate::twin`]: same pin order, the real reference's rest layout),
 //! the two joined on the image name, and `tactrace_calib::calibrate` picks
@@ -10,6 +13,7 @@
 //! command that simulates taps.
 use crate::error::{LabError, Result};
 use crate::import::{import_rows, Imported};
+use crate::sim_sight::{lay_out, resolve_reference, sim_sight, LayoutReport};
 use crate::twin::{simulate_twin_rows, twin_rows};
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -17,18 +21,20 @@ use tactrace_calib::{
     calibrate, check_labels, field_stats, select_taps, CalibError, CalibrationPlan, Fields, Label,
     Selection, MIN_TAPS, RECOMMENDED_TAPS,
 };
-use tactrace_sensor::TacTipConfig;
+use tactrace_sensor::{TacTipConfig, TacTipModel};
+use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::sensor_file::{
     LabelColumnNames, SensorSpec, TrainingRecipe, SENSOR_FORMAT, SENSOR_FORMAT_VERSION,
 };
 use tactrace_store::{LabelledCollection, LabelledRow, SensorFolder};
-use tactrace_vision::BlobParams;
 
 /// What to calibrate on.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct CalibrateConfig {
     /// The real taps: frames, labels (the edge task's two targets, depth
-    /// and shear columns), reference frame and blob detector.
+    /// and shear columns), reference (an undeformed frame, a recorded rest
+    /// layout, or one to estimate from the taps) and sensor settings or
+    /// blob detector.
     pub collection: LabelledCollection,
     /// Seed of the replayed taps' rendering noise.
     pub render_seed: u64,
@@ -62,6 +68,10 @@ pub struct Calibrated {
     /// What the user should know (the real frames' import warnings: a
     /// reference that looks pressed).
     pub warnings: Vec<String>,
+    /// Both pin layouts' fits to the rest pins, and the one kept.
+    pub layout: LayoutReport,
+    /// The rest layout estimated here from the taps (no reference given).
+    pub estimated: Option<EstimatedRest>,
 }
 
 /// A held-out tap's fields before and after calibration (the tap of
@@ -89,7 +99,6 @@ pub fn calibrate_sensor(
     progress: &(dyn Fn() + Sync),
 ) -> Result<Calibrated> {
     let c = &cfg.collection;
-    let blob = c.blob();
     let [r_column, theta_column] = c
         .spec()
         .edge_columns()
@@ -102,7 +111,10 @@ pub fn calibrate_sensor(
         }
         .into());
     }
-    let fitted_layout = layout_for(sensor, c.reference().path()?, blob)?;
+    let (resolved, estimated) = resolve_reference(c.clone())?;
+    let c = &resolved;
+    let sight = sim_sight(c)?;
+    let (fitted_layout, layout) = lay_out(sensor, &sight)?;
     let sensor = &fitted_layout;
     let rows = twin_rows(c)?;
     let labels: Vec<Label> = rows
@@ -144,7 +156,7 @@ pub fn calibrate_sensor(
         sensor.clone()
     };
     let sensor = &physics;
-    let twin = simulate_twin_rows(c, sensor, cfg.render_seed, Some(&keep), progress)?;
+    let twin = simulate_twin_rows(c, &sight, sensor, cfg.render_seed, (Some(&keep), progress))?;
     let chosen_names: HashSet<&str> = chosen.iter().map(|&i| rows[i].image.as_str()).collect();
     let pairs = paired(&real, &twin)?;
     let (fit_part, held_part) = pairs.split(|name| chosen_names.contains(name));
@@ -175,13 +187,22 @@ pub fn calibrate_sensor(
             corrected: corrected.row(k),
         });
     }
-    let reference = tactrace_sensor::read_frame(c.reference().path()?)?;
+    let reference = match c.reference() {
+        Reference::Frame(path) => tactrace_sensor::read_frame(path)?,
+        // No undeformed frame: the calibrated simulator's own rest frame.
+        _ => {
+            let rest = sight.rest().to_vec();
+            let model = TacTipModel::with_rest_pins(sensor.clone(), rest)?;
+            model.render(model.rest_pins(), None)
+        }
+    };
     let spec = SensorSpec {
         format: SENSOR_FORMAT.into(),
         format_version: SENSOR_FORMAT_VERSION,
         tactrace_version: crate::VERSION.into(),
         sensor: sensor.clone(),
-        blob: blob.clone(),
+        blob: c.blob().clone(),
+        sight: c.sight().cloned(),
         labels: LabelColumnNames {
             image: c.spec().image_column().into(),
             r: r_column.into(),
@@ -211,6 +232,8 @@ pub fn calibrate_sensor(
         rejected: real.rejected.len(),
         example,
         warnings: real.warnings.clone(),
+        layout,
+        estimated,
     })
 }
 
@@ -290,26 +313,6 @@ fn discrete_conventions(
             })
         })
         .collect()
-}
-
-/// `sensor` with the layout of the reference frame at `path`
-/// (`tactrace_sensor::fit_layout`): any hexagonal pin count and frame size.
-fn layout_for(
-    sensor: &TacTipConfig,
-    path: &std::path::Path,
-    blob: &BlobParams,
-) -> Result<TacTipConfig> {
-    let frame = tactrace_sensor::read_frame(path)?;
-    let extractor = tactrace_vision::PinExtractor::from_reference_frame(&frame, blob.clone())?;
-    let pins = extractor.tracker.reference();
-    tactrace_sensor::fit_layout(sensor, pins, frame.dimensions()).map_err(|e| LabError::Reference {
-        path: path.to_path_buf(),
-        reason: format!(
-            "its {} pins cannot be laid out as the simulated TacTip's lattice",
-            pins.len()
-        ),
-        source: Box::new(e),
-    })
 }
 
 /// Write the calibration into the sensor folder `dir` (refused when it

@@ -5,12 +5,11 @@ use crate::error::{LabError, Result};
 use crate::import_reader;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
-use tactrace_sensor::read_frame;
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::{
     DatasetMeta, LabelledCollection, LabelledRow, TapData, TapFields, TargetColumns, TrackTotals,
 };
-use tactrace_vision::{BlobParams, PinExtractor, PinReader, SightParams, TrackCounts, VisionError};
+use tactrace_vision::{BlobParams, PinReader, SightParams, TrackCounts, VisionError};
 
 /// One frame's displacement and whether pins were missing, or why it was
 /// rejected.
@@ -254,19 +253,29 @@ pub(crate) fn gather(
     })
 }
 
-/// The pin extractor whose order is that of the undeformed frame at `path`.
-pub(crate) fn reference_extractor(path: &Path, blob: &BlobParams) -> Result<PinExtractor> {
-    let reference = read_frame(path)?;
-    PinExtractor::from_reference_frame(&reference, blob.clone()).map_err(|e| LabError::Format {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })
-}
-
 /// The rest layout (and the sensor settings, when it had some) of a
 /// dataset imported earlier, so that another split of the same sensor is
 /// read against the same pins: `import --reference DATASET`.
 pub fn recorded_reference(dir: &Path) -> Result<(EstimatedRest, Option<SightParams>)> {
+    let r = recorded(dir)?;
+    Ok((r.rest, r.sight))
+}
+
+/// What a dataset imported earlier records of how its frames were read
+/// (`--reference DATASET` of `import`, `twin`, `calibrate`, `sim-fit`).
+pub struct RecordedReference {
+    /// Its rest pins (estimated from taps, or an undeformed frame's).
+    pub rest: EstimatedRest,
+    /// The sensor settings it was read with, when any.
+    pub sight: Option<SightParams>,
+    /// The blob detector it was read with.
+    pub blob: Option<BlobParams>,
+    /// The folder of its frames.
+    pub frames: Option<PathBuf>,
+}
+
+/// The reading of the dataset `dir` (see [`RecordedReference`]).
+pub fn recorded(dir: &Path) -> Result<RecordedReference> {
     let data = tactrace_store::read_dataset(dir)?;
     let meta = data.meta;
     let recorded: Option<LabelledCollection> = meta
@@ -288,5 +297,10 @@ pub fn recorded_reference(dir: &Path) -> Result<(EstimatedRest, Option<SightPara
             reason: "the dataset records no reference pins to read other frames against".into(),
         });
     }
-    Ok((rest, sight))
+    Ok(RecordedReference {
+        rest,
+        sight,
+        blob: recorded.as_ref().map(|c| c.blob().clone()),
+        frames: recorded.as_ref().map(|c| c.frames().to_path_buf()),
+    })
 }

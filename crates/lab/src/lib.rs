@@ -35,6 +35,7 @@ pub mod reproduce;
 pub mod reproduce3d;
 pub mod search;
 pub mod sensor_inspect;
+pub mod sim_sight;
 pub mod train;
 pub mod trajectory_csv;
 pub mod transfer_fit;

@@ -16,12 +16,14 @@
 //! correction, so the result is a plain simulated sensor.
 use crate::error::{LabError, Result};
 use crate::import::import;
+use crate::sim_sight::{lay_out, resolve_reference, sim_sight, LayoutReport, SimSight};
 use crate::train::{holdout, resolve_config, train_with_validation, validate_net};
-use crate::twin::simulate_twin;
+use crate::twin::simulate_twin_rows;
 use std::path::{Path, PathBuf};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_optim::{Cmaes, CmaesConfig};
 use tactrace_sensor::TacTipConfig;
+use tactrace_store::collection::Reference;
 use tactrace_store::fsutil::{write_atomic, StagedDir};
 use tactrace_store::{CsvText, LabelledCollection, TapData};
 
@@ -131,6 +133,9 @@ pub struct TransferFit {
     pub real_frames: usize,
     /// What the import of those frames warned of (a pressed reference, ...).
     pub warnings: Vec<String>,
+    /// Both pin layouts' fits to the rest pins (the start is laid out as
+    /// the better one when the rest pins were estimated from taps).
+    pub layout: LayoutReport,
 }
 
 /// Cost of a candidate: position MAE / 1 mm + angle MAE / `deg_per_mm`
@@ -159,20 +164,33 @@ pub fn with_values(base: &TacTipConfig, values: &[f64]) -> TacTipConfig {
     c
 }
 
-/// Fit [`TRANSFER_PARAMS`] of `base` (module docs); `progress` is told of
-/// every candidate as it is scored.
+/// Fit [`TRANSFER_PARAMS`] of `base` (module docs), laid out first like
+/// the collection's rest pins when they were estimated from taps
+/// ([`crate::sim_sight`]; an undeformed frame's pins must fit `base` as it
+/// is, so a pressed frame is refused); `progress` is told of every
+/// candidate as it is scored.
 pub fn fit_transfer(
     cfg: &TransferFitConfig,
     base: &TacTipConfig,
     progress: &mut dyn FnMut(&Candidate, &Candidate),
 ) -> Result<TransferFit> {
-    let imported = import(&cfg.collection, &|| {})?;
+    let (collection, _) = resolve_reference(cfg.collection.clone())?;
+    let imported = import(&collection, &|| {})?;
     let (real, warnings) = (imported.data, imported.warnings);
+    let sight = sim_sight(&collection)?;
+    // An undeformed frame's pins must fit `base` as it is (a frame pressed
+    // out of its layout is refused by the twin); a rest layout estimated
+    // from taps lays `base` out first.
+    let (laid_out, layout) = lay_out(base, &sight)?;
+    let base = match collection.reference() {
+        Reference::Frame(_) => base,
+        _ => &laid_out,
+    };
     let start_values: Vec<f64> = TRANSFER_PARAMS.iter().map(|p| (p.get)(base)).collect();
     let score = |values: &[f64], generation: usize| -> Result<Candidate> {
         let sensor = with_values(base, values);
         let mae = match sensor.validate() {
-            Ok(()) => Some(transfer_mae(cfg, &sensor, &real)?),
+            Ok(()) => Some(transfer_mae(cfg, (&collection, &sight), &sensor, &real)?),
             Err(_) => None,
         };
         Ok(Candidate {
@@ -213,6 +231,7 @@ pub fn fit_transfer(
         candidates,
         real_frames: real.len(),
         warnings,
+        layout,
     })
 }
 
@@ -221,6 +240,7 @@ pub fn fit_transfer(
 /// on `real`.
 fn transfer_mae(
     cfg: &TransferFitConfig,
+    (collection, sight): (&LabelledCollection, &SimSight),
     sensor: &TacTipConfig,
     real: &TapData,
 ) -> Result<[f64; 2]> {
@@ -228,7 +248,7 @@ fn transfer_mae(
     let mut sum = [0.0; 2];
     for k in 0..renders {
         let seed = cfg.render_seed + k as u64;
-        let twin = simulate_twin(&cfg.collection, sensor, seed, &|| {})?.data;
+        let twin = simulate_twin_rows(collection, sight, sensor, seed, (None, &|| {}))?.data;
         let (train, val) = holdout(&twin, cfg.val_fraction, 1)?;
         let model_cfg = resolve_config(ModelKind::PDenNN, Preset::Default, None, None)?;
         let (model, _) = train_with_validation(&model_cfg, &train, Some(&val), &mut |_| {})?;

@@ -8,50 +8,81 @@
 //! validated on the other: the simulator judged by what it predicts about
 //! real frames (docs/results.md, "Simulated to real").
 use crate::error::{LabError, Result};
-use crate::import::{
-    gather, keep_rows, reference_extractor, FrameOutcome, Imported, TwinComposition,
-};
+use crate::import::{gather, keep_rows, FrameOutcome, Imported, TwinComposition};
+use crate::sim_sight::{lay_out, sim_sight, LayoutReport, SimSight};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use std::path::Path;
 use tactrace_calib::real_tap_repeats;
 use tactrace_sensor::{EdgeTap, Shear, TacTipConfig, TacTipModel};
+use tactrace_store::collection::Reference;
 use tactrace_store::{
     pin_order_mismatch, DatasetMeta, LabelledCollection, LabelledRow, SensorFolder, StoreError,
-    TapData, TapFields,
+    TapData, TapFields, TargetColumns,
 };
-use tactrace_vision::PinExtractor;
+use tactrace_vision::PinReader;
 
 /// Simulate every labelled row of `collection` (its labels, depth and
-/// shear columns, rows, reference frame and blob detector) with the
-/// sensor `sensor`; `seed` draws the pin jitter and image noise (row `k`
-/// of the labels file from stream `k`). `progress` is called once per
-/// frame.
+/// shear columns, rows, reference and sensor settings or blob detector)
+/// with the sensor `sensor`, laid out like the reference's pins (see
+/// [`crate::sim_sight::lay_out`]); `seed` draws the pin jitter and image
+/// noise (row `k` of the labels file from stream `k`). `progress` is
+/// called once per frame.
 pub fn simulate_twin(
     collection: &LabelledCollection,
     sensor: &TacTipConfig,
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
-    simulate_twin_rows(collection, sensor, seed, None, progress)
+    let rows = twin_rows(collection)?;
+    let sight = sim_sight(collection)?;
+    simulate_read_rows(collection, rows, &sight, sensor, (seed, progress))
 }
 
-/// As [`simulate_twin`], only the label rows at `keep` when given.
-pub(crate) fn simulate_twin_rows(
+/// As [`simulate_twin`] with `sensor` first laid out like the
+/// collection's rest pins ([`crate::sim_sight::lay_out`]: a hexagonal
+/// lattice and concentric rings fitted, the better kept; a sensor that
+/// already fits is kept as it is): what `tactrace twin` runs.
+pub fn simulate_twin_laid_out(
     collection: &LabelledCollection,
     sensor: &TacTipConfig,
     seed: u64,
-    keep: Option<&[usize]>,
     progress: &(dyn Fn() + Sync),
+) -> Result<(Imported, LayoutReport)> {
+    // The labels are read (and checked) before the reference.
+    let rows = twin_rows(collection)?;
+    let sight = sim_sight(collection)?;
+    let (laid_out, layout) = lay_out(sensor, &sight)?;
+    let got = simulate_read_rows(collection, rows, &sight, &laid_out, (seed, progress))?;
+    Ok((got, layout))
+}
+
+/// As [`simulate_twin`] with the collection's simulated-tap reader
+/// `sight` made once, only the label rows at `keep` when given.
+pub(crate) fn simulate_twin_rows(
+    collection: &LabelledCollection,
+    sight: &SimSight,
+    sensor: &TacTipConfig,
+    seed: u64,
+    (keep, progress): (Option<&[usize]>, &(dyn Fn() + Sync)),
+) -> Result<Imported> {
+    let rows = keep_rows(twin_rows(collection)?, keep);
+    simulate_read_rows(collection, rows, sight, sensor, (seed, progress))
+}
+
+/// The twin of the labelled `rows` of `collection`, read already.
+fn simulate_read_rows(
+    collection: &LabelledCollection,
+    rows: Vec<LabelledRow>,
+    sight: &SimSight,
+    sensor: &TacTipConfig,
+    (seed, progress): (u64, &(dyn Fn() + Sync)),
 ) -> Result<Imported> {
     let names = edge_names(collection)?;
-    let rows = keep_rows(twin_rows(collection)?, keep);
-    let reference = collection.reference().path()?;
-    let extractor = reference_extractor(reference, collection.blob())?;
-    let rest = extractor.tracker.reference().to_vec();
-    let model = twin_model(reference, sensor, &rest)?;
-    let outcomes = simulate_rows(&model, &extractor, &rows, seed, progress);
+    let rest = sight.rest().to_vec();
+    let model = twin_model(&sight.origin, sensor, &rest)?;
+    let outcomes = simulate_rows(&model, &sight.reader, &rows, seed, progress);
     let settings = serde_json::json!({
         "twin": collection, "seed": seed, "sensor": sensor,
     });
@@ -60,11 +91,13 @@ pub(crate) fn simulate_twin_rows(
 }
 
 /// As [`simulate_twin`] with a calibrated sensor (`tactrace calibrate`):
-/// its parameters, blob detector, field correction and training recipe
+/// its parameters, detector, field correction and training recipe
 /// (several renders of every row, seeds `seed`, `seed + 1`, ..., and the
 /// real calibration taps repeated to about a third of the set, unless
-/// `real_taps` is false). The reference frame must list its pins like the
-/// sensor's.
+/// `real_taps` is false). The collection's reference, when it has one (a
+/// frame, or a dataset's recorded rest pins), must list its pins like the
+/// sensor's; without one ([`Reference::Estimate`]) the sensor's own rest
+/// pins order the taps.
 pub fn simulate_twin_calibrated(
     collection: &LabelledCollection,
     sensor: &SensorFolder,
@@ -75,18 +108,17 @@ pub fn simulate_twin_calibrated(
     let spec = &sensor.spec;
     let names = edge_names(collection)?;
     let rows = twin_rows(collection)?;
-    let reference = collection.reference().path()?;
-    let extractor = reference_extractor(reference, &spec.blob)?;
-    let rest = extractor.tracker.reference().to_vec();
+    let sight = calibrated_sight(collection, sensor)?;
+    let rest = sight.rest().to_vec();
     if let Some(source) = pin_order_mismatch(&spec.reference_pins, &rest) {
         return Err(StoreError::PinOrder {
-            path: reference.to_path_buf(),
+            path: sight.origin.clone(),
             source,
         }
         .into());
     }
-    let model =
-        twin_model(reference, &spec.sensor, &rest)?.with_correction(sensor.field_correction()?)?;
+    let model = twin_model(&sight.origin, &spec.sensor, &rest)?
+        .with_correction(sensor.field_correction()?)?;
     let renders = spec.training.renders.max(1);
     let repeats = if real_taps && spec.training.add_real_taps {
         real_tap_repeats(rows.len(), sensor.real_labels.len())
@@ -99,7 +131,7 @@ pub fn simulate_twin_calibrated(
     });
     let mut all = Vec::new();
     for r in 0..renders as u64 {
-        let outcomes = simulate_rows(&model, &extractor, &rows, seed + r, progress);
+        let outcomes = simulate_rows(&model, &sight.reader, &rows, seed + r, progress);
         let meta = twin_meta(
             collection,
             (seed, names.clone()),
@@ -113,7 +145,7 @@ pub fn simulate_twin_calibrated(
     for k in 0..repeats {
         append_real_taps(&mut out.data, sensor, k);
     }
-    out.data.meta.samples = out.data.targets.len() / 2;
+    out.data.meta.samples = out.data.targets.len() / names.len();
     out.composition = Some(TwinComposition {
         rows: rows.len(),
         renders,
@@ -123,20 +155,72 @@ pub fn simulate_twin_calibrated(
     Ok(out)
 }
 
+/// The reader of a calibrated sensor's simulated taps: its detector, and
+/// the collection's reference pins when it has a reference (checked
+/// against the sensor's by the caller), else the sensor's own rest pins.
+fn calibrated_sight(collection: &LabelledCollection, sensor: &SensorFolder) -> Result<SimSight> {
+    let spec = &sensor.spec;
+    let folder = collection
+        .clone()
+        .with_blob(spec.blob.clone())
+        .map_err(StoreError::from)?
+        .with_sight(spec.sight.clone());
+    match collection.reference() {
+        Reference::Frame(_) => sim_sight(&folder),
+        Reference::Estimated(e) => sensor_sight(spec, e.pins.clone(), collection.frames()),
+        Reference::Estimate { .. } => {
+            sensor_sight(spec, spec.reference_pins.clone(), &sensor.source)
+        }
+    }
+}
+
+/// A calibrated sensor's detector on frames of its simulator's size, over
+/// the rest pins `rest` (from `origin`).
+fn sensor_sight(
+    spec: &tactrace_store::sensor_file::SensorSpec,
+    rest: Vec<[f64; 2]>,
+    origin: &Path,
+) -> Result<SimSight> {
+    let camera = &spec.sensor.camera;
+    let detect = match &spec.sight {
+        Some(s) => s.detect.clone(),
+        None => tactrace_vision::DetectorParams::Blobs(spec.blob.clone()),
+    };
+    let params = tactrace_vision::SightParams {
+        preprocess: Default::default(),
+        detect,
+    };
+    let detector = params
+        .check(camera.width, camera.height)
+        .map_err(|e| LabError::Format {
+            path: origin.to_path_buf(),
+            reason: format!("the sensor's detector: {e}"),
+        })?;
+    let reader = PinReader::new(detector, rest).map_err(|e| LabError::Format {
+        path: origin.to_path_buf(),
+        reason: format!("the reference pins: {e}"),
+    })?;
+    Ok(SimSight {
+        reader,
+        frame: (camera.width, camera.height),
+        origin: origin.to_path_buf(),
+    })
+}
+
 /// The dataset's target names: the twin makes an edge task's dataset.
 fn edge_names(collection: &LabelledCollection) -> Result<[String; 2]> {
     Ok(collection.spec().edge_names().map_err(StoreError::from)?)
 }
 
-/// The simulated sensor `sensor` with the reference frame's pins `rest` as
-/// its rest layout; a reference (the file `reference`) that does not fit
-/// the layout is named.
+/// The simulated sensor `sensor` with the reference's pins `rest` as its
+/// rest layout; a reference (from `reference`) that does not fit the
+/// layout is named.
 fn twin_model(reference: &Path, sensor: &TacTipConfig, rest: &[[f64; 2]]) -> Result<TacTipModel> {
     TacTipModel::with_rest_pins(sensor.clone(), rest.to_vec()).map_err(|e| LabError::Reference {
         path: reference.to_path_buf(),
-        reason: "not an undeformed frame of the simulated sensor's layout; give the \
-                 sensor's frame taken without contact as --reference, or blob parameters \
-                 that find its pins (--params)"
+        reason: "not an undeformed frame (or rest layout) of the simulated sensor's layout; \
+                 give the sensor's frame taken without contact (or an imported dataset) as \
+                 --reference, or settings that find its pins (--params, --sensor)"
             .into(),
         source: Box::new(e),
     })
@@ -160,7 +244,9 @@ fn twin_meta(
         samples: 0,
         pins: rest.len(),
         targets: targets.into(),
-        target_columns: Default::default(),
+        // The targets' units and circular flags, as the real set's import
+        // records them (a full-circle angle stays circular).
+        target_columns: TargetColumns::of(&collection.spec().model_targets()),
         frames_with_missing_pins: 0,
         reference_pins: rest,
         settings,
@@ -176,14 +262,14 @@ fn twin_meta(
 /// simulated).
 fn simulate_rows(
     model: &TacTipModel,
-    extractor: &PinExtractor,
+    reader: &PinReader,
     rows: &[LabelledRow],
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Vec<FrameOutcome> {
     rows.par_iter()
         .map(|row| {
-            let out = simulate_row(model, extractor, row, (seed, row.index as u64));
+            let out = simulate_row(model, reader, row, (seed, row.index as u64));
             progress();
             out
         })
@@ -235,7 +321,7 @@ pub(crate) fn edge_tap(row: &LabelledRow) -> EdgeTap {
 /// whether pins were missing, or why the frame was rejected.
 fn simulate_row(
     model: &TacTipModel,
-    extractor: &PinExtractor,
+    reader: &PinReader,
     row: &LabelledRow,
     (seed, k): (u64, u64),
 ) -> FrameOutcome {
@@ -243,9 +329,11 @@ fn simulate_row(
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(k);
     let frame = model.render(&pins, Some(&mut rng));
-    let tracked = extractor.extract(&frame).map_err(|e| e.to_string())?;
+    let read = reader
+        .read_preprocessed(&frame)
+        .map_err(|e| e.to_string())?;
     Ok((
-        tracked.displacement(extractor.tracker.reference()),
-        tracked.missing > 0,
+        read.tracked.displacement(reader.tracker().reference()),
+        !read.counts.fully_tracked(),
     ))
 }

@@ -8,7 +8,9 @@
 //!   builds a training set (`[training]`) and the calibration's record with
 //!   its held-out field RMS and cosine (`[calibration]`);
 //! - `reference.png`: the real undeformed frame (its pins order every
-//!   simulated tap, so models move between the simulator and the sensor);
+//!   simulated tap, so models move between the simulator and the sensor),
+//!   or, for a sensor with none (rest layout estimated from its taps), the
+//!   calibrated simulator's rest frame;
 //! - `correction.safetensors`: the field correction W, b and the chosen
 //!   real calibration taps (fields and labels).
 use crate::error::{write_err, Result, StoreError};
@@ -20,7 +22,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use tactrace_calib::{CalibrationRecord, LinearCorrection, Tensor};
 use tactrace_sensor::{FieldCorrection, Frame, LabelConvention, TacTipConfig, TacTipModel};
-use tactrace_vision::BlobParams;
+use tactrace_vision::{BlobParams, SightParams};
 
 /// The `format` key of every sensor file.
 pub const SENSOR_FORMAT: &str = "tactrace-sensor";
@@ -72,9 +74,16 @@ pub struct SensorSpec {
     pub tactrace_version: String,
     pub sensor: TacTipConfig,
     pub blob: BlobParams,
+    /// The sensor settings (`tactrace sensor inspect`) its real frames
+    /// were read with, when given: their detector reads its simulated
+    /// taps (in place of `blob`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sight: Option<SightParams>,
     pub labels: LabelColumnNames,
     pub training: TrainingRecipe,
-    /// The real reference frame's pins, px, in detection order.
+    /// The real reference's pins, px, in their order: an undeformed
+    /// frame's in detection order, or the rest layout estimated from the
+    /// taps (`reference.png` is then the simulator's rest frame).
     pub reference_pins: Vec<[f64; 2]>,
     pub calibration: CalibrationRecord,
 }

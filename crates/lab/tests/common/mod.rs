@@ -37,6 +37,17 @@ pub fn distorted_sensor_set(dir: &Path, n: usize) -> LabelledCollection {
 
 /// As [`distorted_sensor_set`] for the sensor `sensor` (any layout).
 pub fn sensor_set(dir: &Path, n: usize, sensor: TacTipConfig) -> LabelledCollection {
+    sensor_set_over(dir, n, sensor, 5.0)
+}
+
+/// As [`sensor_set`] with r spread over [-5, `r_max`] mm (a larger
+/// `r_max` adds light taps, from which a rest layout can be estimated).
+pub fn sensor_set_over(
+    dir: &Path,
+    n: usize,
+    sensor: TacTipConfig,
+    r_max: f64,
+) -> LabelledCollection {
     let plain = TacTipModel::new(sensor.clone()).unwrap();
     let pins = plain.rest_pins().len();
     let real = TacTipModel::with_rest_pins(sensor, plain.rest_pins().to_vec())
@@ -53,7 +64,7 @@ pub fn sensor_set(dir: &Path, n: usize, sensor: TacTipConfig) -> LabelledCollect
     let mut csv = String::from("image_name,pose_2,pose_6\n");
     for k in 0..n {
         let tap = EdgeTap {
-            r_mm: rng.random_range(-5.0..5.0),
+            r_mm: rng.random_range(-5.0..r_max),
             theta_deg: rng.random_range(-45.0..45.0),
             dz_mm: 0.0,
             shear: None,

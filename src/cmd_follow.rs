@@ -13,7 +13,7 @@ use tactrace_lab::world::{OpenWorld, ReplayBank, World};
 use tactrace_lab::LabError;
 use tactrace_servo::{LoopConfig, StepRecord};
 use tactrace_store::collection::{bristol, CollectionEdits};
-use tactrace_store::{fsutil, load_config, load_shape, StoredModel};
+use tactrace_store::{fsutil, load_config, load_shape, LoadedModel, StoredModel};
 
 #[derive(Args)]
 pub struct FollowArgs {
@@ -148,7 +148,7 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     let spec =
         ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default()).map_err(LabError::from)?;
     let shape = (spec.name(), load_shape(&spec)?);
-    let model = StoredModel::load(&a.model)?;
+    let model = LoadedModel::load(&a.model)?;
     follow_in(world, &model, Some(&shape), (&a.out, a.force), None)
 }
 
@@ -156,7 +156,7 @@ pub fn follow(a: FollowArgs) -> Result<()> {
 /// then print the run's summary ([`report_run`]); `stop` stops a real rig.
 fn follow_in(
     world: OpenWorld,
-    model: &StoredModel,
+    model: &LoadedModel,
     shape: Option<&(String, Contour)>,
     out: (&std::path::Path, bool),
     stop: Option<&StopFlag>,
@@ -170,7 +170,7 @@ fn follow_in(
         stop,
     };
     let named = shape.map(|(n, c)| (n.as_str(), c));
-    let res = tactrace_lab::follow::run(world, model, named, out, hooks);
+    let res = tactrace_lab::follow::run_model(world, model, named, out, hooks);
     pb.finish_and_clear();
     let res = res?;
     if let Some(stats) = &res.replay {
@@ -471,7 +471,7 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
         }
         None => None,
     };
-    let model = StoredModel::load(&a.model)?;
+    let model = LoadedModel::load(&a.model)?;
     // From here on SIGINT / SIGTERM stop the arm (stopl) instead of the
     // process; the run keeps its steps and exits 130 / 143.
     let stop = StopFlag::on_signals().map_err(LabError::from)?;

@@ -317,3 +317,108 @@ fn issue22_import_keeps_the_frames_as_images_of_the_size_asked() {
     let meta = json(&std::fs::read_to_string(t.join("p/meta.json")).unwrap());
     assert!(meta.get("image_frames").is_none());
 }
+
+/// `follow --replay` with an image model: the perception reads the answered
+/// real frames' pixels; the run goes its steps and writes its folder. A
+/// world whose frames are of another size than the model's training
+/// frames is refused before anything moves.
+#[test]
+fn issue22_follow_in_the_real_frame_world_with_an_image_model() {
+    let Some(set) = tactrace_testdata::real_edge_set() else {
+        return;
+    };
+    let t = TempDir::new("issue22-follow");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let (frames, targets) = (s(&set.join("frames")), s(&set.join("targets.csv")));
+    let r = tactrace(
+        &t.0,
+        &[
+            "import",
+            "--frames",
+            &frames,
+            "--targets",
+            &targets,
+            "--reference",
+            &s(&set.join("frames/init_0.png")),
+            "--limit",
+            "200",
+            "--frames-size",
+            "16",
+            "--out",
+            "d",
+        ],
+    );
+    expect_code(&r, 0, "import");
+    std::fs::write(t.join("small.toml"), SMALL).unwrap();
+    let r = tactrace(
+        &t.0,
+        &[
+            "train",
+            "--model",
+            "conv-mlp",
+            "--train",
+            "d",
+            "--epochs",
+            "3",
+            "--config",
+            "small.toml",
+            "--out",
+            "m",
+        ],
+    );
+    expect_code(&r, 0, "train");
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow",
+            "--model",
+            "m",
+            "--shape",
+            "disk",
+            "--replay",
+            &s(&set),
+            "--steps",
+            "6",
+            "--out",
+            "run",
+        ],
+    );
+    // A barely trained model may lose the edge (exit 1): the run is whole either way.
+    assert!(r.code == 0 || r.code == 1, "{}", r.stderr);
+    let metrics = json(&std::fs::read_to_string(t.join("run/metrics.json")).unwrap());
+    assert!(metrics["steps"].as_u64().unwrap_or(0) >= 1, "{metrics}");
+    let trajectory = std::fs::read_to_string(t.join("run/trajectory.csv")).unwrap();
+    assert!(trajectory.lines().count() >= 2, "{trajectory}");
+    // The simulated world renders 256 px frames too, but the synthetic
+    // model was trained on 16 px ones: refused, exit 2.
+    synthetic_dataset(&t.join("syn"), 40);
+    let r = tactrace(
+        &t.0,
+        &[
+            "train",
+            "--model",
+            "conv-mlp",
+            "--train",
+            "syn",
+            "--epochs",
+            "1",
+            "--config",
+            "small.toml",
+            "--out",
+            "syn-m",
+        ],
+    );
+    expect_code(&r, 0, "train synthetic");
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow", "--model", "syn-m", "--shape", "disk", "--steps", "3", "--out", "sim",
+        ],
+    );
+    expect_code(&r, 2, "follow with a model of other frames");
+    assert!(
+        r.stderr.contains("trained on frames of 16 x 16 px"),
+        "{}",
+        r.stderr
+    );
+}

@@ -110,6 +110,24 @@ impl ImageModel {
         Ok([values[r], values[theta]])
     }
 
+    /// [`Self::predict`] of a frame of any size `(height, width)` px,
+    /// area-averaged to the input size first (as `frames.npy` was made).
+    pub fn predict_resampled(
+        &self,
+        frame: &[u8],
+        size: (usize, usize),
+    ) -> Result<[f64; 2], LearnError> {
+        if frame.len() != size.0 * size.1 {
+            return Err(LearnError::Shape {
+                what: "frame pixels",
+                expected: size.0 * size.1,
+                got: frame.len(),
+            });
+        }
+        let small = tactrace_convnet::area_resample(frame, size, self.input_size());
+        self.predict(&small)
+    }
+
     /// Every frame's targets, one row a frame (frames shared among the
     /// threads of the current rayon pool).
     pub fn predict_batch(&self, frames: &Frames) -> Result<Vec<Vec<f64>>, LearnError> {

@@ -75,10 +75,30 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
     let pb = bar(cfg.epochs as u64, "train");
     let t0 = std::time::Instant::now();
     let pair = val.as_ref().zip(val_frames.as_ref());
-    let (model, history) =
-        ti::train_image(&cfg, seed, (&split.train, &train_frames), pair, &mut |e| {
-            pb.set_position(e.epoch as u64 + 1)
-        })?;
+    let mut on_epoch = |e: &tactrace_convnet::EpochReport| {
+        pb.set_position(e.epoch as u64 + 1);
+        let val = e
+            .validation
+            .as_ref()
+            .map(|v| format!(", validation loss {:.4}", v.loss))
+            .unwrap_or_default();
+        let secs = t0.elapsed().as_secs_f64();
+        pb.suspend(|| {
+            eprintln!(
+                "epoch {}/{}: loss {:.4}{val} ({secs:.0} s)",
+                e.epoch + 1,
+                cfg.epochs,
+                e.loss
+            )
+        });
+    };
+    let (model, history) = ti::train_image(
+        &cfg,
+        seed,
+        (&split.train, &train_frames),
+        pair,
+        &mut on_epoch,
+    )?;
     pb.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     let stored = StoredImageModel::new(model, all_frames.info.clone()).with_training(split.record);

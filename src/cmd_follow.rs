@@ -238,13 +238,18 @@ pub struct ReproduceArgs {
     /// Add results on real frames from this folder (Bristol layout).
     #[arg(long)]
     real: Option<PathBuf>,
+    /// With --real: also train the image model conv-dennn on the real
+    /// frames (64 px; --epochs applies, default 40: minutes) and follow
+    /// the four shapes with it in the real-frame world.
+    #[arg(long)]
+    image_model: bool,
     /// A calibrated sensor folder (`tactrace calibrate`): the whole report
     /// in that sensor's simulated world (collection in its label
     /// convention, training, following).
     #[arg(long)]
     sensor: Option<PathBuf>,
     /// Reproduce TOML overlaying the defaults (keys: seed, train_samples,
-    /// val_samples, epochs, preset, report_steps, real, and the follow
+    /// val_samples, epochs, preset, report_steps, real, image_model, and the follow
     /// tables rig, controller, follow, start).
     #[arg(long)]
     config: Option<PathBuf>,
@@ -256,6 +261,7 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     cfg.epochs = a.epochs.or(cfg.epochs);
     cfg.report_steps |= a.report_steps;
     cfg.real = a.real.or(cfg.real);
+    cfg.image_model |= a.image_model;
     if a.sensor.is_some() {
         cfg.follow.calibrated_sensor = a.sensor.clone();
     }
@@ -310,9 +316,11 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
             s.metrics.closed
         );
     }
-    for s in &r.real_shapes {
+    let real_runs = r.real_shapes.iter().map(|s| ("", s));
+    let image_runs = r.real_image_shapes.iter().map(|s| (", conv-dennn", s));
+    for (with, s) in real_runs.chain(image_runs) {
         crate::say!(
-            "{:<16} real-frame world: mean L2 {:.2} mm (report {:.2}), closed {}, label distance mean {:.2} / p95 {:.2}",
+            "{:<16} real-frame world{with}: mean L2 {:.2} mm (report {:.2}), closed {}, label distance mean {:.2} / p95 {:.2}",
             s.shape,
             s.metrics.mean_l2_mm,
             s.report_l2_mm,
@@ -326,7 +334,7 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     for s in runs {
         tactrace_lab::numbers::require_finite_run(&s.shape, &s.metrics)?;
     }
-    for s in &r.real_shapes {
+    for s in r.real_shapes.iter().chain(&r.real_image_shapes) {
         tactrace_lab::numbers::require_finite_run(&s.shape, &s.metrics)?;
     }
     Ok(())

@@ -422,3 +422,14 @@ fn issue22_follow_in_the_real_frame_world_with_an_image_model() {
         r.stderr
     );
 }
+
+/// `reproduce --image-model` trains and follows on real frames: without
+/// `--real` it is refused before any work.
+#[test]
+fn issue22_reproduce_image_model_needs_real_frames() {
+    let t = TempDir::new("issue22-reproduce");
+    let r = tactrace(&t.0, &["reproduce", "--image-model", "--out", "rep"]);
+    expect_code(&r, 2, "reproduce --image-model without --real");
+    assert!(r.stderr.contains("give --real DIR"), "{}", r.stderr);
+    assert!(!t.join("rep").exists());
+}

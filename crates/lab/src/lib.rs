@@ -30,6 +30,7 @@ pub mod import_reader;
 pub mod numbers;
 pub mod render;
 pub mod reproduce;
+mod reproduce_image;
 pub mod search;
 pub mod sensor_inspect;
 pub mod train;

@@ -95,6 +95,8 @@ pub struct ReproduceResults {
     pub shapes: Vec<ShapeRow>,
     /// The four shapes in the real-frame world (`--real`).
     pub real_shapes: Vec<ReplayShapeRow>,
+    /// The same with the image model `conv-dennn` (`--real --image-model`).
+    pub real_image_shapes: Vec<ReplayShapeRow>,
     pub seconds: f64,
     pub seed: u64,
     pub tactrace_version: String,

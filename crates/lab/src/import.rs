@@ -2,7 +2,7 @@
 //! ([`LabelledCollection`]) into the dataset format, through the same pin
 //! extraction as simulated taps.
 use crate::error::{LabError, Result};
-use crate::import_reader::{self, SmallFrame};
+use crate::import_reader::{self, FrameRead, SmallFrame};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::read_frame;
@@ -145,7 +145,7 @@ fn import_rows_with(
             &paths[..paths.len().min(REFERENCE_PROBE_ROWS)],
         )?;
     }
-    let read: Vec<Result<(Vec<f32>, TrackCounts, Option<SmallFrame>)>> = paths
+    let read: Vec<Result<FrameRead>> = paths
         .par_iter()
         .map(|path| {
             let out = import_reader::read_one_with_image(reader, path, frames_size);

@@ -209,13 +209,17 @@ pub fn read_one(reader: &PinReader, path: &Path) -> Result<(Vec<f32>, TrackCount
 /// from the frame the detector sees, with that frame's `[height, width]`.
 pub type SmallFrame = (Vec<u8>, [usize; 2]);
 
+/// One frame read with its image: the displacement, the counts and the
+/// small frame when asked for.
+pub type FrameRead = (Vec<f32>, TrackCounts, Option<SmallFrame>);
+
 /// [`read_one`], with the frame the detector saw area-averaged to
 /// `size x size` px when `size` is given.
 pub fn read_one_with_image(
     reader: &PinReader,
     path: &Path,
     size: Option<usize>,
-) -> Result<(Vec<f32>, TrackCounts, Option<SmallFrame>)> {
+) -> Result<FrameRead> {
     let image = read_image(path)?;
     let frame = seen(reader.frames(), &image)?;
     let small = size.map(|s| small_frame(&frame, s));

@@ -25,6 +25,7 @@ or what ``load_dataset`` returns) or arrays with ``reference_pins``.
 """
 
 from ._tactrace import (
+    ImageModel,
     InputError,
     Model,
     PinExtractor,
@@ -44,6 +45,7 @@ from .protocols import Arm, TactileSensor
 
 __all__ = [
     "Arm",
+    "ImageModel",
     "InputError",
     "Model",
     "PinExtractor",

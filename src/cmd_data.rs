@@ -158,6 +158,12 @@ pub struct ImportArgs {
     /// Import only the first N rows.
     #[arg(long)]
     limit: Option<usize>,
+    /// Also keep every row's frame as an image for the image models
+    /// (conv-dennn, conv-mlp): `frames.npy`, uint8 N x PX x PX, the frame
+    /// as the pin detector sees it, area-averaged to PX x PX (e.g. 64);
+    /// with --like, the size that dataset's frames have.
+    #[arg(long, value_name = "PX", value_parser = clap::value_parser!(u16).range(4..=1024))]
+    frames_size: Option<u16>,
     /// Another split of a collection: import --frames and --targets with
     /// the blob detector, reference and targets this dataset was imported
     /// with (its meta.json's settings).
@@ -262,7 +268,12 @@ pub fn import(a: ImportArgs) -> Result<()> {
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "import");
     let tick = || pb.inc(1);
-    let got = imp::import(&plan.collection, &tick)?;
+    let frames_size = match (a.frames_size, &a.like) {
+        (Some(px), _) => Some(px as usize),
+        (None, Some(dir)) => dataset::read_dataset_frames_info(dir)?.map(|i| i.height),
+        (None, None) => None,
+    };
+    let got = imp::import_with_frames(&plan.collection, frames_size, &tick)?;
     pb.finish_and_clear();
     plan.check(&got.data)?;
     if let Some(e) = &got.estimated_rest {
@@ -274,8 +285,17 @@ pub fn import(a: ImportArgs) -> Result<()> {
             e.residual_px
         );
     }
-    let dir = dataset::write_dataset(&a.out, &got.data, &[], a.force)?;
+    let dir = dataset::write_dataset_with(&a.out, &got.data, &[], got.images.as_ref(), a.force)?;
     let n = got.data.len();
+    if let Some(images) = &got.images {
+        eprintln!(
+            "kept every frame as a {} x {} px image (frames.npy, from {} x {} px)",
+            images.info.height,
+            images.info.width,
+            images.info.source_size[0],
+            images.info.source_size[1]
+        );
+    }
     let t = got.data.meta.tracking;
     eprintln!(
         "imported {n} frames into {}: fully tracked {} of {} ({:.2}%), {} with missing pins, {} rejected (too few pins)",

@@ -13,7 +13,7 @@ use tactrace_lab::world::{OpenWorld, ReplayBank, World};
 use tactrace_lab::LabError;
 use tactrace_servo::{LoopConfig, StepRecord};
 use tactrace_store::collection::{bristol, CollectionEdits};
-use tactrace_store::{fsutil, load_config, load_shape, StoredModel};
+use tactrace_store::{fsutil, load_config, load_shape, LoadedModel, StoredModel};
 
 #[derive(Args)]
 pub struct FollowArgs {
@@ -154,7 +154,7 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     let spec =
         ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default()).map_err(LabError::from)?;
     let shape = (spec.name(), load_shape(&spec)?);
-    let model = StoredModel::load(&a.model)?;
+    let model = LoadedModel::load(&a.model)?;
     follow_in(world, &model, Some(&shape), (&a.out, a.force), None)
 }
 
@@ -162,7 +162,7 @@ pub fn follow(a: FollowArgs) -> Result<()> {
 /// then print the run's summary ([`report_run`]); `stop` stops a real rig.
 fn follow_in(
     world: OpenWorld,
-    model: &StoredModel,
+    model: &LoadedModel,
     shape: Option<&(String, Contour)>,
     out: (&std::path::Path, bool),
     stop: Option<&StopFlag>,
@@ -176,7 +176,7 @@ fn follow_in(
         stop,
     };
     let named = shape.map(|(n, c)| (n.as_str(), c));
-    let res = tactrace_lab::follow::run(world, model, named, out, hooks);
+    let res = tactrace_lab::follow::run_model(world, model, named, out, hooks);
     pb.finish_and_clear();
     let res = res?;
     if let Some(stats) = &res.replay {
@@ -244,6 +244,11 @@ pub struct ReproduceArgs {
     /// Add results on real frames from this folder (Bristol layout).
     #[arg(long)]
     real: Option<PathBuf>,
+    /// With --real: also train the image model conv-dennn on the real
+    /// frames (64 px; --epochs applies, default 40: minutes) and follow
+    /// the four shapes with it in the real-frame world.
+    #[arg(long)]
+    image_model: bool,
     /// A calibrated sensor folder (`tactrace calibrate`): the whole report
     /// in that sensor's simulated world (collection in its label
     /// convention, training, following).
@@ -255,7 +260,7 @@ pub struct ReproduceArgs {
     #[arg(long = "3d")]
     three_d: bool,
     /// Reproduce TOML overlaying the defaults (keys: seed, train_samples,
-    /// val_samples, epochs, preset, report_steps, real, and the follow
+    /// val_samples, epochs, preset, report_steps, real, image_model, and the follow
     /// tables rig, controller, follow, start).
     #[arg(long)]
     config: Option<PathBuf>,
@@ -268,6 +273,7 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     cfg.report_steps |= a.report_steps;
     cfg.three_d |= a.three_d;
     cfg.real = a.real.or(cfg.real);
+    cfg.image_model |= a.image_model;
     if a.sensor.is_some() {
         cfg.follow.calibrated_sensor = a.sensor.clone();
     }
@@ -322,9 +328,11 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
             s.metrics.closed
         );
     }
-    for s in &r.real_shapes {
+    let real_runs = r.real_shapes.iter().map(|s| ("", s));
+    let image_runs = r.real_image_shapes.iter().map(|s| (", conv-dennn", s));
+    for (with, s) in real_runs.chain(image_runs) {
         crate::say!(
-            "{:<16} real-frame world: mean L2 {:.2} mm (report {:.2}), closed {}, label distance mean {:.2} / p95 {:.2}",
+            "{:<16} real-frame world{with}: mean L2 {:.2} mm (report {:.2}), closed {}, label distance mean {:.2} / p95 {:.2}",
             s.shape,
             s.metrics.mean_l2_mm,
             s.report_l2_mm,
@@ -338,7 +346,7 @@ pub fn reproduce(a: ReproduceArgs) -> Result<()> {
     for s in runs {
         tactrace_lab::numbers::require_finite_run(&s.shape, &s.metrics)?;
     }
-    for s in &r.real_shapes {
+    for s in r.real_shapes.iter().chain(&r.real_image_shapes) {
         tactrace_lab::numbers::require_finite_run(&s.shape, &s.metrics)?;
     }
     Ok(())
@@ -482,7 +490,7 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
         }
         None => None,
     };
-    let model = StoredModel::load(&a.model)?;
+    let model = LoadedModel::load(&a.model)?;
     // From here on SIGINT / SIGTERM stop the arm (stopl) instead of the
     // process; the run keeps its steps and exits 130 / 143.
     let stop = StopFlag::on_signals().map_err(LabError::from)?;

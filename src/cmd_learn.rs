@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use tactrace_lab::{import_reader, train as tr, LabError};
 use tactrace_learn::{ModelKind, Preset, SearchSpace};
 use tactrace_report::figures::{self, Predicted};
-use tactrace_store::{check_output_dir, fsutil, read_dataset, SightFile, StoredModel};
+use tactrace_store::{check_output_dir, fsutil, read_dataset, LoadedModel, SightFile, StoredModel};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ModelArg {
@@ -32,6 +32,38 @@ impl From<ModelArg> for ModelKind {
     }
 }
 
+/// `train --model`: a pin model, or an image model (frames in).
+#[derive(Clone, Copy, ValueEnum)]
+pub enum TrainModelArg {
+    /// Two dendritic networks (position, angle), each on its own principal components.
+    Pdennn,
+    /// One dendritic network on principal components, both targets.
+    Pcadennn,
+    /// One dendritic network on the standardised pin displacements, both targets.
+    Disdennn,
+    /// Backprop twin of the PDenNN (same architecture, SGD backprop).
+    Mlp,
+    /// Image model: a convolutional dendritic network on the dataset's
+    /// frames (frames.npy), trained by equilibrium propagation.
+    ConvDennn,
+    /// Backprop twin of conv-dennn (same layers and initialisation).
+    ConvMlp,
+}
+
+impl TrainModelArg {
+    /// The pin model, or the image model's kind.
+    fn pins(self) -> std::result::Result<ModelArg, tactrace_convnet::ModelKind> {
+        match self {
+            TrainModelArg::Pdennn => Ok(ModelArg::Pdennn),
+            TrainModelArg::Pcadennn => Ok(ModelArg::Pcadennn),
+            TrainModelArg::Disdennn => Ok(ModelArg::Disdennn),
+            TrainModelArg::Mlp => Ok(ModelArg::Mlp),
+            TrainModelArg::ConvDennn => Err(tactrace_convnet::ModelKind::ConvDennn),
+            TrainModelArg::ConvMlp => Err(tactrace_convnet::ModelKind::ConvMlp),
+        }
+    }
+}
+
 #[derive(Clone, Copy, ValueEnum)]
 pub enum PresetArg {
     /// Tuned to work on simulated and real data alike.
@@ -51,38 +83,45 @@ impl From<PresetArg> for Preset {
 
 #[derive(Args)]
 pub struct TrainArgs {
-    /// Kind of pose model.
+    /// Kind of pose model: a pin model (displacement vectors in) or an
+    /// image model (conv-dennn, conv-mlp: the dataset's frames.npy in,
+    /// from `import --frames-size`).
     #[arg(long, value_enum, default_value = "pdennn")]
-    model: ModelArg,
+    pub(crate) model: TrainModelArg,
     /// Training dataset directory.
     #[arg(long)]
-    train: PathBuf,
+    pub(crate) train: PathBuf,
     /// Validation dataset directory (scored after training).
     #[arg(long, conflicts_with = "val_fraction")]
-    val: Option<PathBuf>,
+    pub(crate) val: Option<PathBuf>,
     /// Hold out this fraction of --train (seeded shuffle) as the validation
     /// set instead of a separate --val directory; the model never sees it.
     #[arg(long)]
-    val_fraction: Option<f64>,
+    pub(crate) val_fraction: Option<f64>,
     /// Seed of the --val-fraction shuffle.
     #[arg(long, default_value_t = 1)]
-    split_seed: u64,
+    pub(crate) split_seed: u64,
     /// Output model directory.
     #[arg(long)]
-    out: PathBuf,
+    pub(crate) out: PathBuf,
     /// Training epochs (default: the preset's).
     #[arg(long)]
-    epochs: Option<usize>,
-    /// Hyper-parameter preset the --config file is laid over.
-    #[arg(long, value_enum, default_value = "default")]
-    preset: PresetArg,
-    /// TOML overriding any hyper-parameter of the preset.
+    pub(crate) epochs: Option<usize>,
+    /// Seed of an image model's initialisation, shuffling and shifts
+    /// (pin models take theirs from --config).
     #[arg(long)]
-    config: Option<PathBuf>,
+    pub(crate) seed: Option<u64>,
+    /// Hyper-parameter preset the --config file is laid over (pin models).
+    #[arg(long, value_enum, default_value = "default")]
+    pub(crate) preset: PresetArg,
+    /// TOML overriding any hyper-parameter of the preset (of an image
+    /// model: of its defaults, `--print-config` shows them).
+    #[arg(long)]
+    pub(crate) config: Option<PathBuf>,
     /// Run a hyper-parameter search first (on a validation split carved out
     /// of the training data), then train the best configuration on all of it.
     #[arg(long)]
-    search: bool,
+    pub(crate) search: bool,
     /// TOML with the search grid (keys of `SearchSpace`; missing keys take
     /// the built-in grid).
     #[arg(long, requires = "search")]
@@ -95,10 +134,10 @@ pub struct TrainArgs {
     trials: Option<usize>,
     /// Print the resolved configuration as TOML and exit.
     #[arg(long)]
-    print_config: bool,
+    pub(crate) print_config: bool,
     /// Replace an existing model directory.
     #[arg(long)]
-    force: bool,
+    pub(crate) force: bool,
 }
 
 /// The model configuration `--model`, `--preset`, `--config FILE` and
@@ -115,7 +154,17 @@ pub fn model_config(
 }
 
 pub fn train(a: TrainArgs) -> Result<()> {
-    let cfg = model_config(a.model, a.preset, a.config.as_deref(), a.epochs)?;
+    let model = match a.model.pins() {
+        Ok(model) => model,
+        Err(kind) => return crate::cmd_image::train(kind, a),
+    };
+    if a.seed.is_some() {
+        return Err(LabError::Config(
+            "--seed is an image model's; a pin model takes its seeds from --config".into(),
+        )
+        .into());
+    }
+    let cfg = model_config(model, a.preset, a.config.as_deref(), a.epochs)?;
     if a.print_config {
         crate::say!("{}", toml::to_string(&cfg)?.trim_end());
         return Ok(());
@@ -322,12 +371,10 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
         }
         None => None,
     };
-    let model = StoredModel::load(&a.model)?;
+    let model = LoadedModel::load(&a.model)?;
     let data = read_dataset(&a.data)?;
-    let v = match a.val_fraction {
-        Some(f) => tr::validate_held_out(&model, &data, &a.data, f, a.split_seed)?,
-        None => tr::validate(&model, &data, &a.data)?,
-    };
+    let held_out = a.val_fraction.map(|f| (f, a.split_seed));
+    let v = tactrace_lab::train_image::validate_loaded(&model, &data, &a.data, held_out)?;
     if let Some(w) = v.seen_warning() {
         eprintln!("warning: {w}");
     }
@@ -342,11 +389,17 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
         std::fs::create_dir_all(dir)
             .map_err(tactrace_store::write_err(dir.as_path()))
             .map_err(LabError::from)?;
-        let kind = model
-            .for_data(&data, &a.data)
-            .map_err(LabError::from)?
-            .kind();
-        let title = figures::model_on_data_title(kind, &a.model, &a.data);
+        let title = match &model {
+            LoadedModel::Pins(m) => {
+                let kind = m.for_data(&data, &a.data).map_err(LabError::from)?.kind();
+                figures::model_on_data_title(kind, &a.model, &a.data)
+            }
+            LoadedModel::Image(m) => format!(
+                "{} on {}",
+                m.model().kind_name(),
+                a.data.file_name().unwrap_or_default().to_string_lossy()
+            ),
+        };
         let stem = dir.join(PLOTS_STEM);
         if v.predictions.is_empty() || v.targets.iter().any(|t| t.circular) {
             figures::predicted_vs_true_targets(&stem, &title, &target_panels(&v))
@@ -405,7 +458,7 @@ fn target_panels(v: &tr::Validation) -> Vec<figures::TargetPanel> {
 
 /// `predict --data` of a model of other targets than the edge pose: one
 /// CSV row a sample, every target predicted then true.
-fn say_target_rows(v: &tr::Validation) -> Result<()> {
+pub(crate) fn say_target_rows(v: &tr::Validation) -> Result<()> {
     let names: Vec<String> = v
         .targets
         .iter()
@@ -424,27 +477,32 @@ fn say_target_rows(v: &tr::Validation) -> Result<()> {
 pub struct PredictArgs {
     /// Model directory (from `tactrace train`).
     #[arg(long)]
-    model: PathBuf,
-    /// One frame (needs --reference, or --sensor).
+    pub(crate) model: PathBuf,
+    /// One frame (a pin model needs --reference, or --sensor; an image
+    /// model reads it as its training frames were read: --sensor when
+    /// they were imported with one).
     #[arg(long, conflicts_with = "data")]
-    image: Option<PathBuf>,
+    pub(crate) image: Option<PathBuf>,
     /// The undeformed frame of the same sensor; default with --sensor: the
     /// model's own rest pins (those its training data was read against).
     #[arg(long, requires = "image")]
-    reference: Option<PathBuf>,
+    pub(crate) reference: Option<PathBuf>,
     /// Sensor settings (`tactrace sensor inspect`): how to read the frame.
     #[arg(long, requires = "image", conflicts_with = "params")]
-    sensor: Option<PathBuf>,
+    pub(crate) sensor: Option<PathBuf>,
     /// A dataset directory: prints one CSV row per sample.
     #[arg(long)]
-    data: Option<PathBuf>,
+    pub(crate) data: Option<PathBuf>,
     /// Blob parameters TOML; default: the real256 preset.
     #[arg(long)]
-    params: Option<PathBuf>,
+    pub(crate) params: Option<PathBuf>,
 }
 
 pub fn predict(a: PredictArgs) -> Result<()> {
-    let model = StoredModel::load(&a.model)?;
+    let model = match LoadedModel::load(&a.model)? {
+        LoadedModel::Pins(m) => m,
+        LoadedModel::Image(m) => return crate::cmd_image::predict(&m, a),
+    };
     match (a.image, a.reference, a.data) {
         (Some(image), reference, None) if reference.is_some() || a.sensor.is_some() => {
             let sensor = a.sensor.as_deref().map(SightFile::read).transpose()?;

@@ -9,6 +9,7 @@
 mod cmd_completions;
 mod cmd_data;
 mod cmd_follow;
+mod cmd_image;
 mod cmd_inspect;
 mod cmd_learn;
 mod cmd_rig;

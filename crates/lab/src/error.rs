@@ -143,7 +143,6 @@ impl LabError {
     /// configuration, data: exit code 2) rather than in a run that went
     /// wrong (exit code 1).
     pub fn is_bad_input(&self) -> bool {
-        use tactrace_learn::LearnError as L;
         use tactrace_sensor::SensorError as S;
         match self {
             LabError::Format { .. }
@@ -162,7 +161,7 @@ impl LabError {
             LabError::Servo(e) => e.is_bad_input(),
             LabError::Sensor(e) => !matches!(e, S::ReplayExhausted { .. }),
             LabError::Vision(_) => true,
-            LabError::Learn(e) => !matches!(e, L::Diverged { .. }),
+            LabError::Learn(e) => !e.is_diverged(),
             LabError::Arm(e) => matches!(e, tactrace_arm::ArmError::InvalidConfig { .. }),
             #[cfg(feature = "hardware")]
             LabError::Hardware(e) => matches!(

@@ -2,12 +2,13 @@
 //! ([`LabelledCollection`]) into the dataset format, through the same pin
 //! extraction as simulated taps.
 use crate::error::{LabError, Result};
-use crate::import_reader;
+use crate::import_reader::{self, FrameRead, SmallFrame};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::{
-    DatasetMeta, LabelledCollection, LabelledRow, TapData, TapFields, TargetColumns, TrackTotals,
+    DatasetMeta, FramesInfo, ImageFrames, LabelledCollection, LabelledRow, TapData, TapFields,
+    TargetColumns, TrackTotals,
 };
 use tactrace_vision::{BlobParams, PinReader, SightParams, TrackCounts, VisionError};
 
@@ -31,6 +32,8 @@ pub struct Imported {
     /// The rest layout this import estimated from the taps (no
     /// `--reference`), with its residual.
     pub estimated_rest: Option<EstimatedRest>,
+    /// Every kept row's frame as a small image (`import --frames-size`).
+    pub images: Option<ImageFrames>,
 }
 
 /// Where the taps of a calibrated sensor's twin come from
@@ -88,11 +91,32 @@ pub fn import(collection: &LabelledCollection, progress: &(dyn Fn() + Sync)) -> 
     import_rows(collection, None, progress)
 }
 
+/// [`import`], keeping every kept row's frame as the detector saw it,
+/// area-averaged to `frames_size x frames_size` px, when `frames_size` is
+/// given ([`Imported::images`], the dataset's `frames.npy`).
+pub fn import_with_frames(
+    collection: &LabelledCollection,
+    frames_size: Option<usize>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Imported> {
+    import_rows_with(collection, None, frames_size, progress)
+}
+
 /// As [`import`], only the label rows at `keep` (indices of the CSV's data
 /// rows, in that order) when given.
 pub(crate) fn import_rows(
     collection: &LabelledCollection,
     keep: Option<&[usize]>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<Imported> {
+    import_rows_with(collection, keep, None, progress)
+}
+
+/// [`import_rows`], with the frames as images when `frames_size` is given.
+fn import_rows_with(
+    collection: &LabelledCollection,
+    keep: Option<&[usize]>,
+    frames_size: Option<usize>,
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
     let spec = collection.spec();
@@ -120,10 +144,10 @@ pub(crate) fn import_rows(
             &paths[..paths.len().min(REFERENCE_PROBE_ROWS)],
         )?;
     }
-    let read: Vec<Result<(Vec<f32>, TrackCounts)>> = paths
+    let read: Vec<Result<FrameRead>> = paths
         .par_iter()
         .map(|path| {
-            let out = import_reader::read_one(reader, path);
+            let out = import_reader::read_one_with_image(reader, path, frames_size);
             progress();
             out
         })
@@ -131,11 +155,13 @@ pub(crate) fn import_rows(
     // An unreadable file is an error of the whole import: nothing is lost silently.
     let mut outcomes: Vec<FrameOutcome> = Vec::with_capacity(read.len());
     let mut counts = Vec::with_capacity(read.len());
+    let mut small = Vec::new();
     for (path, r) in paths.iter().zip(read) {
         match r {
-            Ok((disp, c)) => {
+            Ok((disp, c, frame)) => {
                 outcomes.push(Ok((disp, !c.fully_tracked())));
                 counts.push(c);
+                small.extend(frame);
             }
             Err(e) if import_reader::too_few_pins(&e) => outcomes.push(Err(e.to_string())),
             Err(e) => {
@@ -166,6 +192,7 @@ pub(crate) fn import_rows(
     let mut got = gather(&rows, outcomes, meta, frames)?;
     got.data.meta.tracking = totals(paths.len(), &counts);
     got.estimated_rest = opened.estimated;
+    got.images = frames_size.and_then(|size| images_of(size, small));
     let d = &got.data;
     if let Some(reference) = opened.reference.frame() {
         got.warnings.extend(crate::import_checks::pressed_reference(
@@ -176,6 +203,16 @@ pub(crate) fn import_rows(
         ));
     }
     Ok(got)
+}
+
+/// The kept rows' small frames as one stack (`None` when there is none).
+fn images_of(size: usize, small: Vec<SmallFrame>) -> Option<ImageFrames> {
+    let source = small.first()?.1;
+    let pixels = small.into_iter().flat_map(|(p, _)| p).collect();
+    Some(ImageFrames {
+        info: FramesInfo::new(size, size, source),
+        pixels,
+    })
 }
 
 /// The tracking totals of `total` frames read, `counts` those of the frames
@@ -250,6 +287,7 @@ pub(crate) fn gather(
         warnings: Vec::new(),
         composition: None,
         estimated_rest: None,
+        images: None,
     })
 }
 

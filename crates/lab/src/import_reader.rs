@@ -201,9 +201,53 @@ fn most_common(values: impl Iterator<Item = usize>) -> usize {
 
 /// One frame read: its displacement from the rest pins and its counts.
 pub fn read_one(reader: &PinReader, path: &Path) -> Result<(Vec<f32>, TrackCounts)> {
+    let (disp, counts, _) = read_one_with_image(reader, path, None)?;
+    Ok((disp, counts))
+}
+
+/// A frame as the image models see it: `size x size` px area-averaged
+/// from the frame the detector sees, with that frame's `[height, width]`.
+pub type SmallFrame = (Vec<u8>, [usize; 2]);
+
+/// One frame read with its image: the displacement, the counts and the
+/// small frame when asked for.
+pub type FrameRead = (Vec<f32>, TrackCounts, Option<SmallFrame>);
+
+/// [`read_one`], with the frame the detector saw area-averaged to
+/// `size x size` px when `size` is given.
+pub fn read_one_with_image(
+    reader: &PinReader,
+    path: &Path,
+    size: Option<usize>,
+) -> Result<FrameRead> {
     let image = read_image(path)?;
-    let Reading { tracked, counts } = reading_of(reader, &image)?;
-    Ok((tracked.displacement(reader.tracker().reference()), counts))
+    let frame = seen(reader.frames(), &image)?;
+    let small = size.map(|s| small_frame(&frame, s));
+    let Reading { tracked, counts } = reader.read_preprocessed(&frame)?;
+    Ok((
+        tracked.displacement(reader.tracker().reference()),
+        counts,
+        small,
+    ))
+}
+
+/// `frame` area-averaged to `size x size` px, with its own size.
+pub fn small_frame(frame: &Frame, size: usize) -> SmallFrame {
+    let (h, w) = (frame.height() as usize, frame.width() as usize);
+    let pixels = tactrace_convnet::area_resample(frame.as_raw(), (h, w), (size, size));
+    (pixels, [h, w])
+}
+
+/// The image of the file at `path` as the image models of a dataset read
+/// by `detector` see it: preprocessed as the pins are, then area-averaged
+/// to `size x size` px.
+pub fn image_input(detector: &FrameDetector, path: &Path, size: usize) -> Result<Vec<u8>> {
+    let image = read_image(path)?;
+    let frame = seen(detector, &image).map_err(|e| LabError::Format {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    Ok(small_frame(&frame, size).0)
 }
 
 /// A camera image (decoded) read into ordered pins as [`read_one`] reads

@@ -6,7 +6,7 @@
 //! [`import`] turns a labelled collection of real frames
 //! (`tactrace_store::LabelledCollection`) into the same dataset format,
 //! [`twin`] replays a real set's labels on the simulator, [`train`] fits
-//! and validates pose models, [`follow`] runs the servo loop round an
+//! and validates pose models ([`train_image`] the image models), [`follow`] runs the servo loop round an
 //! object into a run folder in any [`world`] (the simulated TacTip, a
 //! calibrated sensor, the real-frame world, the real rig of [`hardware`]),
 //! [`reproduce`] regenerates the report, [`mod@bench`] times it, [`render`]
@@ -33,10 +33,12 @@ pub mod numbers;
 pub mod render;
 pub mod reproduce;
 pub mod reproduce3d;
+mod reproduce_image;
 pub mod search;
 pub mod sensor_inspect;
 pub mod sim_sight;
 pub mod train;
+pub mod train_image;
 pub mod trajectory_csv;
 pub mod transfer_fit;
 pub mod tune;

@@ -22,8 +22,8 @@ use tactrace_report::{NetRow, ReplayShapeRow, ReproduceResults, ShapeRow};
 use tactrace_servo::pose_at_edge;
 use tactrace_store::collection::CollectionEdits;
 use tactrace_store::{
-    write_atomic, write_dataset, LabelledCollection, SensorFolder, StagedDir, StoredModel, TapData,
-    TrainingRecord,
+    write_atomic, write_dataset, LabelledCollection, LoadedModel, SensorFolder, StagedDir,
+    StoredModel, TapData, TrainingRecord,
 };
 use tactrace_vision::PinExtractor;
 /// The report's contour-following mean L2 errors, mm (ch. 5.3).
@@ -53,6 +53,10 @@ pub struct ReproduceConfig {
     /// Add surface following in 3D (`--3d`: [`crate::reproduce3d`]).
     #[serde(default, rename = "3d", skip_serializing_if = "std::ops::Not::not")]
     pub three_d: bool,
+    /// With `real`: also train the image model `conv-dennn` on the real
+    /// frames and follow the four shapes with it in the real-frame world.
+    #[serde(default)]
+    pub image_model: bool,
 }
 
 impl Default for ReproduceConfig {
@@ -67,6 +71,7 @@ impl Default for ReproduceConfig {
             follow: SimFollowConfig::report(),
             real: None,
             three_d: false,
+            image_model: false,
         }
     }
 }
@@ -134,6 +139,11 @@ pub fn reproduce(
                 .into(),
         ));
     }
+    if cfg.image_model && cfg.real.is_none() {
+        return Err(LabError::Config(
+            "the image model is trained and followed on real frames: give --real DIR".into(),
+        ));
+    }
     let stage = StagedDir::new(out, force)?;
     let results = reproduce_into(cfg, stage.path(), log)?;
     stage.commit()?;
@@ -194,18 +204,27 @@ fn reproduce_into(
         &out.join("models/pdennn"),
         (&out.join("follow"), &out.join("figures"), ""),
     )?;
-    let (real_rows, real_shapes) = match &cfg.real {
+    let (real_rows, real_shapes, real_image_shapes) = match &cfg.real {
         Some(real) => {
             log("importing real frames and training on them, on their simulated twin, and on the calibrated twin");
             let rows = real_rows(cfg, real, out, log)?;
             log("following the four shapes in the real-frame world");
+            let dir = out.join("real");
+            let (model, runs) = (dir.join("models/pdennn"), dir.join("follow"));
             let shapes = match &rows.held_out {
-                Some(va) => real_world_shapes(cfg, real, va, &out.join("real"))?,
+                Some(va) => real_world_shapes(cfg, real, va, (&model, &runs))?,
                 None => Vec::new(),
             };
-            (rows, shapes)
+            let image = match (&rows.held_out, cfg.image_model) {
+                (Some(va), true) => {
+                    log("training the image model (conv-dennn) on the real frames and following the four shapes with it");
+                    crate::reproduce_image::image_world_shapes(cfg, real, va, &dir)?
+                }
+                _ => Vec::new(),
+            };
+            (rows, shapes, image)
         }
-        None => (RealRows::default(), Vec::new()),
+        None => (RealRows::default(), Vec::new(), Vec::new()),
     };
     let surface_3d = if cfg.three_d {
         Some(crate::reproduce3d::surface_section(cfg, out, log)?)
@@ -226,6 +245,7 @@ fn reproduce_into(
         shapes,
         real_shapes,
         surface_3d,
+        real_image_shapes,
         seconds: t0.elapsed().as_secs_f64(),
         seed: cfg.seed,
         tactrace_version: crate::VERSION.into(),
@@ -292,6 +312,17 @@ fn follow_quietly(
 ) -> Result<FollowOutcome> {
     let hooks = RunHooks::default();
     crate::follow::run(fcfg.world().open()?, model, Some(shape), (run, true), hooks)
+}
+
+/// [`follow_quietly`] with any model (pin or image).
+fn follow_any_quietly(
+    fcfg: &SimFollowConfig,
+    model: &LoadedModel,
+    shape: (&str, &Contour),
+    run: &Path,
+) -> Result<FollowOutcome> {
+    let hooks = RunHooks::default();
+    crate::follow::run_model(fcfg.world().open()?, model, Some(shape), (run, true), hooks)
 }
 
 /// What `--real` adds to the report.
@@ -422,16 +453,18 @@ fn fig_4_1_real(collection: &LabelledCollection, stem: &Path) -> Result<()> {
 }
 
 /// The report's four shapes in the real-frame world (`follow --replay`):
-/// the PDenNN trained on the real 80 % (`dir/models/pdennn`), every tap
-/// answered by a frame of the held-out 20 % (`held_out`, written as
-/// `dir/bank.csv`), runs in `dir/follow/SHAPE`.
-fn real_world_shapes(
+/// the model in `model_dir` (the PDenNN, or the image model, trained on
+/// the real 80 %), every tap answered by a frame of the held-out 20 %
+/// (`held_out`, written as `bank.csv` beside `runs`), runs in
+/// `runs/SHAPE`.
+pub(crate) fn real_world_shapes(
     cfg: &ReproduceConfig,
     real: &Path,
     held_out: &TapData,
-    dir: &Path,
+    (model_dir, runs): (&Path, &Path),
 ) -> Result<Vec<ReplayShapeRow>> {
     let bank = crate::world::ReplayBank::from_dir(real, &CollectionEdits::default())?;
+    let dir = runs.parent().unwrap_or(runs);
     let part = bank
         .collection()
         .with_images(&held_out.meta.images, &dir.join("bank.csv"))?;
@@ -439,17 +472,17 @@ fn real_world_shapes(
     let rows: Vec<Result<ReplayShapeRow>> = REPORT_L2
         .par_iter()
         .map(|(shape, report_l2, steps)| {
-            let model = StoredModel::load(&dir.join("models/pdennn"))?;
+            let model = LoadedModel::load(model_dir)?;
             let mut fcfg = cfg.follow.clone();
             if cfg.report_steps {
                 fcfg.follow.steps = Some(*steps);
             }
             fcfg.follow.seed = cfg.seed;
             let contour = builtin_shape(*shape);
-            let run = dir.join("follow").join(shape.name());
+            let run = runs.join(shape.name());
             fcfg.replay = Some(bank.clone());
             let named = (shape.name(), &contour);
-            let res = follow_quietly(&fcfg, &model, named, &run)?;
+            let res = follow_any_quietly(&fcfg, &model, named, &run)?;
             let metrics = res.metrics.expect("scored against the known contour");
             let stats = res.replay.expect("the real-frame world's statistics");
             Ok(ReplayShapeRow {

@@ -334,11 +334,24 @@ pub fn validate_held_out(
     fraction: f64,
     seed: u64,
 ) -> Result<Validation> {
+    let rows = held_out_rows(model.training(), data, what, (fraction, seed))?;
+    validate(model, &data.subset(&rows), what)
+}
+
+/// The rows of `data` (named `what`) that `train --val-fraction fraction
+/// --split-seed seed` held out, checked against the model's `record`
+/// when it has one (see [`validate_held_out`]).
+pub(crate) fn held_out_rows(
+    record: Option<&TrainingRecord>,
+    data: &TapData,
+    what: &Path,
+    (fraction, seed): (f64, u64),
+) -> Result<Vec<usize>> {
     let (_, rows) = holdout_rows(data, fraction, seed)?;
-    if let Some(record) = model.training() {
+    if let Some(record) = record {
         check_held_out(record, data, what, (fraction, seed), &rows)?;
     }
-    validate(model, &data.subset(&rows), what)
+    Ok(rows)
 }
 
 /// That `record` held out `rows` of `data` with `(fraction, seed)`.
@@ -399,7 +412,7 @@ fn check_held_out(
 
 /// Error unless `data`'s targets are the model's: as many, in the same
 /// units, in order.
-fn check_same_targets(model: &[ModelTarget], data: &[ModelTarget]) -> Result<()> {
+pub(crate) fn check_same_targets(model: &[ModelTarget], data: &[ModelTarget]) -> Result<()> {
     let units = |t: &[ModelTarget]| t.iter().map(|t| t.unit).collect::<Vec<_>>();
     if units(model) == units(data) {
         return Ok(());
@@ -417,6 +430,21 @@ fn check_same_targets(model: &[ModelTarget], data: &[ModelTarget]) -> Result<()>
             list(data)
         ),
     }))
+}
+
+/// A model's `outputs` named by `data`'s columns, refused when the data's
+/// targets are not the model's.
+pub(crate) fn named_targets(outputs: &[ModelTarget], data: &TapData) -> Result<Vec<ModelTarget>> {
+    let named = data_targets(data)?;
+    check_same_targets(outputs, &named)?;
+    Ok(outputs
+        .iter()
+        .zip(&named)
+        .map(|(m, d)| ModelTarget {
+            name: d.name.clone(),
+            ..m.clone()
+        })
+        .collect())
 }
 
 /// The mean of the MAEs of the targets in `unit` (NaN when none is).
@@ -437,18 +465,21 @@ fn unit_mean(targets: &[ModelTarget], mae: &[f64], unit: Unit) -> f64 {
 pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
     let ds = data.to_learn()?;
     check_dim(model.input_dim(), data.dim())?;
-    let named = data_targets(data)?;
-    check_same_targets(model.outputs(), &named)?;
-    let targets: Vec<ModelTarget> = model
-        .outputs()
-        .iter()
-        .zip(&named)
-        .map(|(m, d)| ModelTarget {
-            name: d.name.clone(),
-            ..m.clone()
-        })
-        .collect();
+    let targets = named_targets(model.outputs(), data)?;
     let predicted = model.predict_targets_batch(&ds)?;
+    score_predictions(targets, data, predicted, model.edge_roles().ok())
+}
+
+/// The validation of `predicted` (one row of every target a sample of
+/// `data`, `targets` named by the data's columns): every prediction a
+/// number, every target scored (circular ones wrapped); the edge pose
+/// kept when `edge` gives its targets' indices.
+pub(crate) fn score_predictions(
+    targets: Vec<ModelTarget>,
+    data: &TapData,
+    predicted: Vec<Vec<f64>>,
+    edge: Option<[usize; 2]>,
+) -> Result<Validation> {
     for (k, p) in predicted.iter().enumerate() {
         let values: Vec<(&str, f64)> = targets
             .iter()
@@ -473,12 +504,12 @@ pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
         .collect();
     let refs: Vec<(&str, f64)> = maes.iter().map(|(n, m)| (n.as_str(), *m)).collect();
     crate::numbers::require_finite("the validation", &refs, "")?;
-    let (predictions, edge_truth) = match model.edge_roles() {
-        Ok([r, theta]) => (
+    let (predictions, edge_truth) = match edge {
+        Some([r, theta]) => (
             predicted.iter().map(|p| [p[r], p[theta]]).collect(),
             truth.iter().map(|t| [t[r], t[theta]]).collect(),
         ),
-        Err(_) => (Vec::new(), Vec::new()),
+        None => (Vec::new(), Vec::new()),
     };
     let per_target = targets
         .iter()

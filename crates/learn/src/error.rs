@@ -65,6 +65,10 @@ pub enum LearnError {
          in deg)"
     )]
     NotAnEdgeModel { targets: String },
+    /// The image model's network (bad frames, configuration, file; or
+    /// a fit that diverged: [`LearnError::is_diverged`]).
+    #[error(transparent)]
+    Image(#[from] tactrace_convnet::ConvError),
     /// A serialised model could not be parsed or is inconsistent.
     #[error("corrupt model data: {reason}")]
     Corrupt { reason: String },
@@ -82,6 +86,17 @@ pub enum LearnError {
         loss: f64,
         limit: f64,
     },
+}
+
+impl LearnError {
+    /// Whether training diverged (a run that failed, not bad input).
+    pub fn is_diverged(&self) -> bool {
+        match self {
+            LearnError::Diverged { .. } => true,
+            LearnError::Image(e) => !e.is_bad_input(),
+            _ => false,
+        }
+    }
 }
 
 /// Why a loss counts as diverged, for [`LearnError::Diverged`].

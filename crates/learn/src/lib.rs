@@ -4,6 +4,10 @@
 //! displacement vector to N named targets in mm or degrees (circular angles
 //! learnt as sine and cosine), the edge pose `[r mm, theta deg]` among them.
 //!
+//! Image models (one grey frame in: `conv-dennn`, `conv-mlp`) wrap the
+//! convolutional networks of `tactrace_convnet` over the same targets
+//! ([`ImageModel`]).
+//!
 //! Everything here is pure: no files, no printing. Models serialise to a JSON
 //! string plus safetensors bytes; the lab crate writes them.
 mod closed_form;
@@ -12,6 +16,7 @@ mod dataset;
 mod dennn;
 mod ep;
 mod error;
+mod image_model;
 mod kernels;
 mod mlp;
 mod net;
@@ -29,6 +34,7 @@ pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling};
 pub use dataset::{mean_absolute_error, Dataset};
 pub use dennn::{ClampedPhase, DenNN, EpConfig, FreePhase, LrScaling, SampleStats};
 pub use error::LearnError;
+pub use image_model::{is_image_model_json, ImageModel, IMAGE_FORMAT, IMAGE_FORMAT_VERSION};
 pub use mlp::Mlp;
 pub use net::Layers;
 pub use pca::{Components, PcScaling, Pca};

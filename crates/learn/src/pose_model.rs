@@ -324,24 +324,7 @@ impl PoseModel {
     /// The indices of the position (mm) and angle (deg) targets of an edge
     /// model: exactly one of each.
     pub fn edge_roles(&self) -> Result<[usize; 2], LearnError> {
-        let find = |u: Unit| {
-            let mut it = self.outputs.iter().enumerate().filter(|(_, t)| t.unit == u);
-            match (it.next(), it.next()) {
-                (Some((k, _)), None) => Some(k),
-                _ => None,
-            }
-        };
-        match (self.outputs.len(), find(Unit::Mm), find(Unit::Deg)) {
-            (2, Some(r), Some(theta)) => Ok([r, theta]),
-            _ => Err(LearnError::NotAnEdgeModel {
-                targets: self
-                    .outputs
-                    .iter()
-                    .map(|t| format!("{} ({})", t.name, t.unit.as_str()))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            }),
-        }
+        edge_roles_of(&self.outputs)
     }
 
     /// Displacement-vector length the model expects.
@@ -396,5 +379,27 @@ fn fit_target_scaling(scaling: TargetScaling, train: &Dataset) -> Result<Standar
         TargetScaling::None => {
             Standardiser::from_parts(vec![0.0; train.dim_y], vec![1.0; train.dim_y])
         }
+    }
+}
+
+/// The indices of the position (mm) and angle (deg) targets among
+/// `outputs`: exactly two targets, one of each.
+pub(crate) fn edge_roles_of(outputs: &[ModelTarget]) -> Result<[usize; 2], LearnError> {
+    let find = |u: Unit| {
+        let mut it = outputs.iter().enumerate().filter(|(_, t)| t.unit == u);
+        match (it.next(), it.next()) {
+            (Some((k, _)), None) => Some(k),
+            _ => None,
+        }
+    };
+    match (outputs.len(), find(Unit::Mm), find(Unit::Deg)) {
+        (2, Some(r), Some(theta)) => Ok([r, theta]),
+        _ => Err(LearnError::NotAnEdgeModel {
+            targets: outputs
+                .iter()
+                .map(|t| format!("{} ({})", t.name, t.unit.as_str()))
+                .collect::<Vec<_>>()
+                .join(", "),
+        }),
     }
 }

@@ -11,6 +11,7 @@ mod arrays;
 mod data;
 mod errors;
 mod follow;
+mod image_model;
 mod interrupt;
 mod model;
 mod rig;
@@ -33,6 +34,7 @@ fn _tactrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(data::save_dataset, m)?)?;
     m.add_function(wrap_pyfunction!(data::import_dataset, m)?)?;
     m.add_class::<model::Model>()?;
+    m.add_class::<image_model::ImageModel>()?;
     m.add_function(wrap_pyfunction!(model::load_model, m)?)?;
     m.add_function(wrap_pyfunction!(model::train, m)?)?;
     m.add_function(wrap_pyfunction!(vision::read_frame, m)?)?;

@@ -396,17 +396,26 @@ fn config_text(config: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
     tactrace_store::read_text(&path).map(Some).map_err(store)
 }
 
-/// Load a model folder written by ``tactrace train`` (or ``Model.save``).
+/// Load a model folder written by ``tactrace train`` (or ``save``): a
+/// ``Model`` (pin model), or an ``ImageModel`` for a conv-dennn or
+/// conv-mlp folder.
 #[pyfunction]
-pub fn load_model(py: Python<'_>, dir: PathBuf) -> PyResult<Model> {
+pub fn load_model(py: Python<'_>, dir: PathBuf) -> PyResult<Py<PyAny>> {
+    if tactrace_store::image_model_dir::is_image_model_dir(&dir) {
+        let m = crate::image_model::load(py, &dir)?;
+        return Ok(Py::new(py, m)?.into_any());
+    }
     let stored = py.detach(|| StoredModel::load(&dir)).map_err(store)?;
-    Model::new(stored, TrainingHistory::default(), None)
+    Ok(Py::new(py, Model::new(stored, TrainingHistory::default(), None)?)?.into_any())
 }
 
 /// Train a pose model, as ``tactrace train`` does.
 ///
 /// ``kind`` is one of "pdennn", "pcadennn", "disdennn", "mlp" (``train
-/// --model``). ``data`` is a dataset folder, the ``(inputs, targets,
+/// --model``), or an image model's, "conv-dennn" or "conv-mlp": then
+/// ``data`` is a dataset folder with frames (``import --frames-size``),
+/// ``config`` overrides the network's settings, ``seed`` seeds it (0 by
+/// default), and an ``ImageModel`` is returned. ``data`` is a dataset folder, the ``(inputs, targets,
 /// meta)`` tuple ``load_dataset`` returns, or an N x 2P array of inputs
 /// with ``targets`` (N x 2: r mm, theta deg) and ``reference_pins`` (P x 2
 /// px, the pins the inputs are ordered by); any dtype (used as float32).
@@ -434,8 +443,24 @@ pub fn train(
     config: Option<&Bound<'_, PyAny>>,
     val_fraction: Option<f64>,
     split_seed: u64,
-) -> PyResult<Model> {
+) -> PyResult<Py<PyAny>> {
     let text = config_text(config)?;
+    if let Some(image) = image_kind(kind) {
+        let dir: PathBuf = data.extract().map_err(|_| {
+            input(format!(
+                "{kind} trains on a dataset folder with frames (frames.npy)"
+            ))
+        })?;
+        if preset != "default" || targets.is_some() || reference_pins.is_some() {
+            return Err(input(format!(
+                "{kind}: preset, targets and reference_pins are the pin models'"
+            )));
+        }
+        let settings = (text.as_deref(), epochs, seed);
+        let held_out = val_fraction.map(|f| (f, split_seed));
+        let m = crate::image_model::train(py, image, &dir, settings, held_out)?;
+        return Ok(Py::new(py, m)?.into_any());
+    }
     let mut cfg = tactrace_lab::train::resolve_config(
         parse_kind(kind)?,
         parse_preset(preset)?,
@@ -462,5 +487,13 @@ pub fn train(
         let samples = Samples::from_tap_data(v.clone(), None);
         m.validation = Some(m.validation_of(py, &samples)?);
     }
-    Ok(m)
+    Ok(Py::new(py, m)?.into_any())
+}
+
+/// The image model of `kind`, if it names one.
+fn image_kind(kind: &str) -> Option<tactrace_convnet::ModelKind> {
+    use tactrace_convnet::ModelKind as K;
+    [K::ConvDennn, K::ConvMlp]
+        .into_iter()
+        .find(|k| k.name() == kind)
 }

@@ -2,7 +2,9 @@
 //! report.html (figures embedded) and metrics.json, every measured number
 //! beside the report's.
 use crate::error::Result;
-use crate::results::{slug, NetRow, ReproduceResults, LITERATURE_CNN, REPORT_TABLE_4_1};
+use crate::results::{
+    slug, NetRow, ReplayShapeRow, ReproduceResults, LITERATURE_CNN, REPORT_TABLE_4_1,
+};
 use base64::Engine as _;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -211,10 +213,23 @@ fn replay_links<'a>(md: &mut String, shapes: impl Iterator<Item = &'a str>, dir:
     );
 }
 
-/// The four shapes in the real-frame world (`--real`).
+/// The four shapes in the real-frame world (`--real`), and with the image
+/// model (`--image-model`).
 fn real_shapes_table(md: &mut String, r: &ReproduceResults) {
-    md.push_str("## Contour following in the real-frame world (the PDenNN trained on the real 80 %; every tap answered by the held-out real frame whose labels are nearest the pose reached; docs/results.md)\n\n| shape | mean L2 (mm) | report L2 (mm) | mean track error (mm) | max (mm) | closed | steps | bank frames | label distance mean / p95 / max |\n|---|---|---|---|---|---|---|---|---|\n");
-    for s in &r.real_shapes {
+    let pdennn = "the PDenNN trained on the real 80 %";
+    shapes_in_real_world(md, pdennn, &r.real_shapes, "real/follow");
+    if !r.real_image_shapes.is_empty() {
+        let image =
+            "the image model conv-dennn (whole frames, 64 px, no pins) trained on the real 80 %";
+        shapes_in_real_world(md, image, &r.real_image_shapes, "real/follow-image");
+    }
+}
+
+/// One table of the four shapes in the real-frame world, followed with
+/// `model`, runs under `runs`.
+fn shapes_in_real_world(md: &mut String, model: &str, rows: &[ReplayShapeRow], runs: &str) {
+    let _ = write!(md, "## Contour following in the real-frame world ({model}; every tap answered by the held-out real frame whose labels are nearest the pose reached; docs/results.md)\n\n| shape | mean L2 (mm) | report L2 (mm) | mean track error (mm) | max (mm) | closed | steps | bank frames | label distance mean / p95 / max |\n|---|---|---|---|---|---|---|---|---|\n");
+    for s in rows {
         let m = &s.metrics;
         let _ = writeln!(
             md,
@@ -233,11 +248,7 @@ fn real_shapes_table(md: &mut String, r: &ReproduceResults) {
         );
     }
     md.push_str("\nThe frames are of a straight edge: this world cannot show curvature or corners (the sensor never feels a bend, only the change of edge pose between taps).\n\n");
-    replay_links(
-        md,
-        r.real_shapes.iter().map(|s| s.shape.as_str()),
-        "real/follow",
-    );
+    replay_links(md, rows.iter().map(|s| s.shape.as_str()), runs);
 }
 
 /// A data URI for the image file `src` (relative to `dir`), if readable.

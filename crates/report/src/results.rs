@@ -98,6 +98,9 @@ pub struct ReproduceResults {
     /// Surface following in 3D (`--3d`); absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub surface_3d: Option<crate::document3d::Surface3dSection>,
+    /// The same with the image model `conv-dennn` (`--real --image-model`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub real_image_shapes: Vec<ReplayShapeRow>,
     pub seconds: f64,
     pub seed: u64,
     pub tactrace_version: String,

@@ -1,5 +1,7 @@
 //! Frame -> (r, theta): pin extraction against the undeformed frame, then
 //! the pose model (report ch. 4: the displacement vector, then the network).
+//! An image model reads the frame's pixels instead (area-averaged to its
+//! input size); the pins still say whether the tap made contact.
 //!
 //! A follow run that keeps every tap's displacement vector asks for it
 //! ([`Perception::displacement`]) before the loop perceives the same
@@ -8,14 +10,21 @@
 use crate::error::{Result, ServoError};
 use serde::Serialize;
 use std::sync::{Mutex, PoisonError};
-use tactrace_learn::PoseModel;
+use tactrace_learn::{ImageModel, PoseModel};
 use tactrace_sensor::{Frame, LabelConvention};
 use tactrace_vision::{PinExtractor, Tracked};
+
+/// What reads the pose from a tap: the pins' displacement vector, or the
+/// frame's pixels.
+enum Reader {
+    Pins(PoseModel),
+    Image(ImageModel),
+}
 
 /// Pin extraction and the pose model, with the contact rule.
 pub struct Perception {
     extractor: PinExtractor,
-    model: PoseModel,
+    model: Reader,
     /// Below this mean pin displacement (px) a tap counts as no contact.
     contact_threshold_px: f64,
     /// The model predicts in this collection's labels; the percept is in
@@ -57,13 +66,31 @@ impl Perception {
         }
         Ok(Self {
             extractor,
-            model,
+            model: Reader::Pins(model),
             contact_threshold_px,
             labels: None,
             last: Mutex::new(None),
             #[cfg(test)]
             extractions: Default::default(),
         })
+    }
+
+    /// Pair `extractor` (for the contact rule and the recorded pins) with
+    /// the image model `model`, which reads each frame's pixels.
+    pub fn with_image_model(
+        extractor: PinExtractor,
+        model: ImageModel,
+        contact_threshold_px: f64,
+    ) -> Self {
+        Self {
+            extractor,
+            model: Reader::Image(model),
+            contact_threshold_px,
+            labels: None,
+            last: Mutex::new(None),
+            #[cfg(test)]
+            extractions: Default::default(),
+        }
     }
 
     /// The model predicts in the labels of a real collection whose
@@ -121,7 +148,13 @@ impl Perception {
             .map(|i| f64::hypot(disp[i] as f64, disp[p + i] as f64))
             .sum::<f64>()
             / p.max(1) as f64;
-        let [r, theta] = self.model.predict(&disp)?;
+        let [r, theta] = match &self.model {
+            Reader::Pins(model) => model.predict(&disp)?,
+            Reader::Image(model) => {
+                let size = (frame.height() as usize, frame.width() as usize);
+                model.predict_resampled(frame.as_raw(), size)?
+            }
+        };
         let (r, theta) = LabelConvention::edge_pose_of(self.labels.as_ref(), r, theta);
         Ok(Percept {
             r_mm: r,

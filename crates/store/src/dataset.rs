@@ -9,9 +9,12 @@
 //! - `meta.json`: how it was made ([`DatasetMeta`]): the layout of the
 //!   inputs, the reference pins they are ordered by, and for imported or
 //!   twinned real sets the image name of every row;
-//! - optionally `frames/` with one PNG a sample and `reference.png`.
+//! - optionally `frames/` with one PNG a sample and `reference.png`;
+//! - optionally `frames.npy`, every row's frame as a small grey image
+//!   for the image models ([`crate::image_frames`]).
 use crate::error::{write_err, Result, StoreError};
 use crate::fsutil::StagedDir;
+use crate::image_frames::{ImageFrames, FRAMES_NPY};
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -291,6 +294,18 @@ pub fn write_dataset(
     frames: &[(String, Vec<u8>)],
     force: bool,
 ) -> Result<PathBuf> {
+    write_dataset_with(dir, data, frames, None, force)
+}
+
+/// [`write_dataset`], with the rows' frames as images (`frames.npy`,
+/// described in `meta.json`'s `image_frames`) when `images` is given.
+pub fn write_dataset_with(
+    dir: &Path,
+    data: &TapData,
+    frames: &[(String, Vec<u8>)],
+    images: Option<&ImageFrames>,
+    force: bool,
+) -> Result<PathBuf> {
     let n = data.len();
     let dim = data.dim();
     let stage = StagedDir::new(dir, force)?;
@@ -324,7 +339,21 @@ pub fn write_dataset(
             std::fs::write(&p, bytes).map_err(write_err(&p))?;
         }
     }
-    let meta = serde_json::to_string_pretty(&data.meta).expect("meta serialises");
+    let mut meta = serde_json::to_value(&data.meta).expect("meta serialises");
+    if let Some(images) = images {
+        if images.count() != n {
+            return Err(StoreError::Format {
+                path: dir.join(FRAMES_NPY),
+                reason: format!("{} frames for {n} rows", images.count()),
+            });
+        }
+        crate::image_frames::write_frames(stage.path(), images)?;
+        if let Some(object) = meta.as_object_mut() {
+            let info = serde_json::to_value(&images.info).expect("info serialises");
+            object.insert("image_frames".into(), info);
+        }
+    }
+    let meta = serde_json::to_string_pretty(&meta).expect("meta serialises");
     let p = stage.path().join("meta.json");
     std::fs::write(&p, meta).map_err(write_err(&p))?;
     stage.commit()
@@ -388,6 +417,20 @@ pub fn read_dataset(dir: &Path) -> Result<TapData> {
         targets: targets.iter().copied().collect(),
         meta,
     })
+}
+
+/// The frames as images of the dataset `data` read from `dir`, when its
+/// `meta.json` records some (`image_frames`); checked against its rows.
+pub fn read_dataset_frames(dir: &Path, data: &TapData) -> Result<Option<ImageFrames>> {
+    let text = crate::fsutil::read_text(&dir.join("meta.json"))?;
+    crate::image_frames::read_image_frames(dir, &text, data.len())
+}
+
+/// What the dataset folder `dir` records of its frames as images
+/// (`meta.json`'s `image_frames`), without reading them.
+pub fn read_dataset_frames_info(dir: &Path) -> Result<Option<crate::FramesInfo>> {
+    let p = dir.join("meta.json");
+    crate::image_frames::frames_info(&crate::fsutil::read_text(&p)?, &p)
 }
 
 fn read_npy(path: &Path) -> Result<Array2<f32>> {

@@ -3,9 +3,12 @@
 //! - [`collection`]: a labelled collection of real frames (frames,
 //!   detector, reference, target spec) and the one reader of its labels;
 //! - [`dataset`]: `inputs.npy` / `targets.npy` / `meta.json` folders;
+//!   [`image_frames`]: their optional `frames.npy` (the rows as images);
 //! - [`model_dir`]: a trained model with the reference pins of its training
 //!   data, loaded as one [`StoredModel`] so the pin-order check
 //!   ([`pin_order`]) runs whenever a model meets data or a rig;
+//!   [`image_model_dir`]: image model folders, and [`LoadedModel`], the
+//!   one loader of either kind;
 //! - [`training_record`]: which rows of which dataset a model was trained
 //!   on (content hashes), so scores on training rows are told apart;
 //! - [`frame_file`], [`shape_file`]: frames (PNG) and contours (CSV);
@@ -32,6 +35,8 @@ pub mod error;
 pub mod folder_kind;
 pub mod frame_file;
 pub mod fsutil;
+pub mod image_frames;
+pub mod image_model_dir;
 pub mod input_file;
 pub mod lock;
 pub mod model_dir;
@@ -47,11 +52,16 @@ pub mod training_record;
 pub use collection::{LabelledCollection, LabelledRow, TapFields, TargetSpec};
 pub use config_file::{load_config, overlay, resolved_config_toml};
 pub use csv_text::CsvText;
-pub use dataset::{read_dataset, write_dataset, DatasetMeta, TapData, TargetColumns, TrackTotals};
+pub use dataset::{
+    read_dataset, read_dataset_frames, write_dataset, write_dataset_with, DatasetMeta, TapData,
+    TargetColumns, TrackTotals,
+};
 pub use error::{read_err, write_err, Result, StoreError};
 pub use fsutil::{
     check_output_dir, check_output_file, read_text, write_atomic, write_output_file, StagedDir,
 };
+pub use image_frames::{FramesInfo, ImageFrames};
+pub use image_model_dir::{stage_image_model, LoadedModel, StoredImageModel};
 pub use input_file::{open_regular, read_bounded};
 pub use lock::OutputLock;
 pub use model_dir::{stage_model, StoredModel};

@@ -69,6 +69,15 @@ impl StoredModel {
                 reason: wrong_folder(dir, "model", MODEL_JSON, MODEL_EXPECTED),
             });
         }
+        if let Some(kind) = crate::image_model_dir::image_model_kind(dir) {
+            return Err(StoreError::Format {
+                path: dir.into(),
+                reason: format!(
+                    "an image model ({kind}, frames in): this takes a pin model (pdennn, \
+                     pcadennn, disdennn, mlp)"
+                ),
+            });
+        }
         let json = read_text(&json_path)?;
         let weights_path = dir.join(WEIGHTS);
         let weights = read_bounded(&weights_path, MAX_BINARY_BYTES, "weights file")?;
@@ -154,7 +163,7 @@ fn read_pins(dir: &Path) -> Result<Vec<[f64; 2]>> {
 }
 
 /// `training.json` of `dir`, if there is one (older folders have none).
-fn read_training(dir: &Path) -> Result<Option<TrainingRecord>> {
+pub(crate) fn read_training(dir: &Path) -> Result<Option<TrainingRecord>> {
     let path = dir.join(TRAINING_FILE);
     if !path.exists() {
         return Ok(None);

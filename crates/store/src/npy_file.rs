@@ -3,7 +3,7 @@
 //! (100000000, 254) in a 1 KB file is refused, not allocated.
 use crate::error::{read_err, Result, StoreError};
 use crate::input_file::open_regular;
-use ndarray::Array2;
+use ndarray::{Array2, Array3};
 use ndarray_npy::npy::header::Header;
 use ndarray_npy::ReadNpyExt;
 use std::io::{BufReader, Read, Seek, SeekFrom};
@@ -18,6 +18,26 @@ const MAX_HEADER: usize = 1 << 20;
 /// Read a 2-D float32 `.npy` file whose data is exactly what its header
 /// declares.
 pub fn read_f32_matrix(path: &Path) -> Result<Array2<f32>> {
+    let file = open_checked(path)?;
+    Array2::<f32>::read_npy(BufReader::new(file)).map_err(|e| StoreError::Format {
+        path: path.to_path_buf(),
+        reason: format!("not a 2-D float32 .npy file: {e}"),
+    })
+}
+
+/// Read a 3-D uint8 `.npy` file (a stack of grey frames, `N x H x W`)
+/// whose data is exactly what its header declares.
+pub fn read_u8_stack(path: &Path) -> Result<Array3<u8>> {
+    let file = open_checked(path)?;
+    Array3::<u8>::read_npy(BufReader::new(file)).map_err(|e| StoreError::Format {
+        path: path.to_path_buf(),
+        reason: format!("not a 3-D uint8 .npy file: {e}"),
+    })
+}
+
+/// The `.npy` file at `path`, opened and rewound, once its header's shape
+/// and value size are found to match the bytes it holds.
+fn open_checked(path: &Path) -> Result<std::fs::File> {
     let (mut file, len) = open_regular(path)?;
     let fmt = |reason: String| StoreError::Format {
         path: path.to_path_buf(),
@@ -43,8 +63,7 @@ pub fn read_f32_matrix(path: &Path) -> Result<Array2<f32>> {
         )));
     }
     file.seek(SeekFrom::Start(0)).map_err(read_err(path))?;
-    Array2::<f32>::read_npy(BufReader::new(file))
-        .map_err(|e| fmt(format!("not a 2-D float32 .npy file: {e}")))
+    Ok(file)
 }
 
 /// The header of the `.npy` file `file` of `len` bytes, and how many bytes
@@ -79,8 +98,8 @@ fn read_header(file: &mut std::fs::File, len: u64) -> std::result::Result<(Heade
     file.seek(SeekFrom::Start(start as u64))
         .and_then(|_| file.read_exact(&mut bytes[start..]))
         .map_err(|e| e.to_string())?;
-    let header = Header::from_reader(&mut &bytes[..])
-        .map_err(|e| format!("not a 2-D float32 .npy file: {e}"))?;
+    let header =
+        Header::from_reader(&mut &bytes[..]).map_err(|e| format!("not a .npy file: {e}"))?;
     Ok((header, total))
 }
 

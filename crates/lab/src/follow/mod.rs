@@ -30,7 +30,7 @@ use tactrace_control::PbtsController;
 use tactrace_geometry::Contour;
 use tactrace_sensor::{Frame, TactileSensor};
 use tactrace_servo::{servo_loop, FnSink, FollowMetrics, LoopSummary, Perception, StepRecord};
-use tactrace_store::{write_atomic, StagedDir, StoredModel};
+use tactrace_store::{write_atomic, LoadedModel, StagedDir, StoredModel};
 use tactrace_vision::PinExtractor;
 
 /// The outcome of a follow run.
@@ -75,6 +75,19 @@ pub struct RunHooks<'a> {
 pub fn run(
     world: OpenWorld,
     model: &StoredModel,
+    shape: Option<(&str, &Contour)>,
+    (out, force): (&Path, bool),
+    hooks: RunHooks,
+) -> Result<FollowOutcome> {
+    let model = LoadedModel::Pins(model.clone());
+    run_model(world, &model, shape, (out, force), hooks)
+}
+
+/// [`run`] with any model: a pin model, or an image model, which reads
+/// the taps' pixels ([`perception_of`]).
+pub fn run_model(
+    world: OpenWorld,
+    model: &LoadedModel,
     shape: Option<(&str, &Contour)>,
     (out, force): (&Path, bool),
     hooks: RunHooks,
@@ -151,6 +164,36 @@ pub fn perception_for(
         net.clone(),
         settings.follow().contact_threshold_px,
     )?)
+}
+
+/// The perception of `model`, pin or image model, on a rig whose
+/// undeformed frame is `reference` ([`perception_for`] a pin model). An
+/// image model must predict an edge pose and have been trained on frames
+/// of the rig's frame size (it sees them area-averaged to its input).
+pub fn perception_of(
+    reference: &Frame,
+    model: &LoadedModel,
+    settings: &ServoSettings,
+) -> Result<Perception> {
+    let image = match model {
+        LoadedModel::Pins(m) => return perception_for(reference, m, settings),
+        LoadedModel::Image(m) => m,
+    };
+    image.model().edge_roles()?;
+    let rig = [reference.height() as usize, reference.width() as usize];
+    let trained = image.frames().source_size;
+    if rig != trained {
+        return Err(crate::LabError::Config(format!(
+            "the image model was trained on frames of {} x {} px, this world's are {} x {} px",
+            trained[0], trained[1], rig[0], rig[1]
+        )));
+    }
+    let extractor = PinExtractor::from_reference_frame(reference, settings.blob().clone())?;
+    Ok(Perception::with_image_model(
+        extractor,
+        image.model().clone(),
+        settings.follow().contact_threshold_px,
+    ))
 }
 
 /// The servo loop on any arm and sensor, simulated or real, seeing frames

@@ -8,7 +8,7 @@
 use super::replay::{answered_frames, write_answers};
 use super::{ReplayStats, SimWorld};
 use crate::error::{LabError, Result};
-use crate::follow::{perception_for, write_results_with, Recorded, RunExtras, ServoSettings};
+use crate::follow::{perception_of, write_results_with, Recorded, RunExtras, ServoSettings};
 use std::path::Path;
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
 use tactrace_geometry::Contour;
@@ -17,7 +17,7 @@ use tactrace_sensor::{Frame, FrameBank, LabelConvention, TactileSensor};
 use tactrace_servo::{
     start_pose, FollowMetrics, Perception, ReplayRig, RigConfig, SimRig, StartConfig,
 };
-use tactrace_store::{SensorFolder, StoredModel};
+use tactrace_store::{LoadedModel, SensorFolder};
 
 /// What an open world builds its rig from.
 pub(crate) enum Parts {
@@ -116,7 +116,7 @@ impl Parts {
     pub(crate) fn build(
         self,
         shape: Option<(&str, &Contour)>,
-        model: &StoredModel,
+        model: &LoadedModel,
         settings: &ServoSettings,
         stop: &Stop,
     ) -> Result<Rig> {
@@ -124,7 +124,7 @@ impl Parts {
             Parts::Sim(p) => build_sim(*p, contour(shape)?, model, settings),
             Parts::Replay(p) => {
                 let p = *p;
-                let perception = perception_for(&p.reference, model, settings)?
+                let perception = perception_of(&p.reference, model, settings)?
                     .with_label_convention(p.convention.clone());
                 let shape = contour(shape)?;
                 let start = reachable_start(&p.rig, &p.start, shape)?;
@@ -141,7 +141,7 @@ impl Parts {
             Parts::Hardware(cfg) => {
                 let (arm, sensor, reference) =
                     crate::hardware::connect_at(&cfg, cfg.start_pose(), stop)?;
-                let perception = perception_for(&reference, model, settings)?;
+                let perception = perception_of(&reference, model, settings)?;
                 Ok(Rig {
                     kind: Kind::Hardware {
                         arm: Box::new(arm),
@@ -155,7 +155,7 @@ impl Parts {
                 sensor,
                 reference,
             } => Ok(Rig {
-                perception: perception_for(&reference, model, settings)?,
+                perception: perception_of(&reference, model, settings)?,
                 kind: Kind::Own { arm, sensor },
             }),
         }
@@ -169,7 +169,7 @@ impl Parts {
 fn build_sim(
     p: SimParts,
     shape: &Contour,
-    model: &StoredModel,
+    model: &LoadedModel,
     settings: &ServoSettings,
 ) -> Result<Rig> {
     let start = reachable_start(&p.rig, &p.start, shape)?;
@@ -180,12 +180,12 @@ fn build_sim(
             let mount = convention.mount_yaw_deg;
             let rig = SimRig::with_model(&p.rig, s.model()?, mount, shape.clone(), start, seed);
             let perception =
-                perception_for(&s.reference, model, settings)?.with_label_convention(convention);
+                perception_of(&s.reference, model, settings)?.with_label_convention(convention);
             (rig, perception)
         }
         None => {
             let rig = SimRig::new(&p.rig, shape.clone(), start, seed)?;
-            let perception = perception_for(&rig.reference_frame(), model, settings)?;
+            let perception = perception_of(&rig.reference_frame(), model, settings)?;
             (rig, perception)
         }
     };
@@ -251,7 +251,7 @@ impl Rig {
         &self,
         recorded: &Recorded,
         shape: Option<(&str, &Contour)>,
-        (model, settings): (&StoredModel, &ServoSettings),
+        (model, settings): (&LoadedModel, &ServoSettings),
         (dir, sensor_diameter_mm): (&Path, f64),
     ) -> Result<(Option<FollowMetrics>, Vec<f64>, Option<ReplayStats>)> {
         let fields = Some(PinFields {

@@ -29,6 +29,7 @@ Any TacTip's raw frames: ``inspect_sensor`` proposes a sensor file,
 """
 
 from ._tactrace import (
+    ImageModel,
     InputError,
     Model,
     PinExtractor,
@@ -52,6 +53,7 @@ from .protocols import Arm, TactileSensor
 
 __all__ = [
     "Arm",
+    "ImageModel",
     "InputError",
     "Model",
     "PinExtractor",

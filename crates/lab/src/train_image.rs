@@ -1,0 +1,182 @@
+//! Training and validation of the image models (`conv-dennn`,
+//! `conv-mlp`: a dataset's `frames.npy` in, its N targets out), with the
+//! same targets, validation figures and model folders as the pin models
+//! (`crate::train`). docs/learning.md, "Images in".
+use crate::error::{LabError, Result};
+use crate::train::{data_targets, held_out_rows, named_targets, score_predictions, Validation};
+use std::path::{Path, PathBuf};
+use tactrace_convnet::{ConvConfig, EpochReport, Frames, ModelKind, TrainingHistory};
+use tactrace_learn::ImageModel;
+use tactrace_store::{stage_image_model, ImageFrames, LoadedModel, StoredImageModel, TapData};
+
+/// The configuration of an image model of `kind`: its defaults, then the
+/// keys of an optional TOML override (unknown keys are errors), then
+/// `epochs`; validated here, before any work.
+pub fn resolve_image_config(
+    kind: ModelKind,
+    toml_text: Option<&str>,
+    epochs: Option<usize>,
+) -> Result<ConvConfig> {
+    let mut cfg = ConvConfig::new(kind);
+    if let Some(text) = toml_text {
+        cfg = tactrace_store::overlay(&cfg, text, "model config")?;
+        cfg.kind = kind;
+    }
+    if let Some(e) = epochs {
+        cfg.epochs = e;
+    }
+    cfg.validate().map_err(tactrace_learn::LearnError::from)?;
+    Ok(cfg)
+}
+
+/// The frames of the dataset `data` read from `dir`, refused (bad input)
+/// when it has none: a dataset of pin vectors only.
+pub fn data_frames(data: &TapData, dir: &Path) -> Result<ImageFrames> {
+    tactrace_store::read_dataset_frames(dir, data)?.ok_or_else(|| LabError::Format {
+        path: dir.to_path_buf(),
+        reason: "the dataset holds pin displacements only, no frames as images \
+                 (frames.npy): an image model trains on frames; import the collection \
+                 again with --frames-size PX (e.g. 64)"
+            .into(),
+    })
+}
+
+/// A view of `frames` for the network.
+fn view(frames: &ImageFrames) -> Result<Frames<'_>> {
+    let (h, w) = (frames.info.height, frames.info.width);
+    Ok(Frames::new(&frames.pixels, frames.count(), h, w)
+        .map_err(tactrace_learn::LearnError::from)?)
+}
+
+/// Fit an image model of `cfg` from `seed` on `data`'s targets and its
+/// `frames`, scoring `val` (rows and their frames) after every epoch;
+/// `on_epoch` sees each epoch's report as it ends.
+pub fn train_image(
+    cfg: &ConvConfig,
+    seed: u64,
+    (data, frames): (&TapData, &ImageFrames),
+    val: Option<(&TapData, &ImageFrames)>,
+    on_epoch: &mut dyn FnMut(&EpochReport),
+) -> Result<(ImageModel, TrainingHistory)> {
+    let outputs = data_targets(data)?;
+    if let Some((v, _)) = val {
+        named_targets(&outputs, v)?;
+    }
+    let val = match val {
+        Some((v, f)) => {
+            same_size(frames, f)?;
+            Some((view(f)?, v.targets.as_slice()))
+        }
+        None => None,
+    };
+    let train = view(frames)?;
+    Ok(ImageModel::fit(
+        &train,
+        &data.targets,
+        &outputs,
+        cfg,
+        seed,
+        val,
+        on_epoch,
+    )?)
+}
+
+fn same_size(a: &ImageFrames, b: &ImageFrames) -> Result<()> {
+    if (a.info.height, a.info.width) == (b.info.height, b.info.width) {
+        return Ok(());
+    }
+    Err(LabError::Config(format!(
+        "frames of {} x {} px and of {} x {} px: import both datasets with the same --frames-size",
+        a.info.height, a.info.width, b.info.height, b.info.width
+    )))
+}
+
+/// Validate the image model `model` on `data` (named `what`) and its
+/// `frames`: the same figures as a pin model's, every target scored;
+/// counts the samples it was trained on when its folder records them.
+pub fn validate_image(
+    model: &StoredImageModel,
+    data: &TapData,
+    frames: &ImageFrames,
+    what: &Path,
+) -> Result<Validation> {
+    let net = model.model();
+    let (h, w) = net.input_size();
+    if (frames.info.height, frames.info.width) != (h, w) {
+        return Err(LabError::Format {
+            path: what.to_path_buf(),
+            reason: format!(
+                "its frames are {} x {} px, the model takes {h} x {w} px: import it with \
+                 --frames-size {h}",
+                frames.info.height, frames.info.width
+            ),
+        });
+    }
+    let targets = named_targets(net.outputs(), data)?;
+    let predicted = net.predict_batch(&view(frames)?)?;
+    let mut v = score_predictions(targets, data, predicted, net.edge_roles().ok())?;
+    v.rows_seen_in_training = model.training().map(|t| t.rows_seen(data));
+    Ok(v)
+}
+
+/// Validate any model on the dataset `data` read from `dir` (an image
+/// model on its frames), on every row or, with `held_out = Some((fraction,
+/// seed))`, on the rows `train --val-fraction --split-seed` held out.
+pub fn validate_loaded(
+    model: &LoadedModel,
+    data: &TapData,
+    dir: &Path,
+    held_out: Option<(f64, u64)>,
+) -> Result<Validation> {
+    match (model, held_out) {
+        (LoadedModel::Pins(m), None) => crate::train::validate(m, data, dir),
+        (LoadedModel::Pins(m), Some((f, s))) => crate::train::validate_held_out(m, data, dir, f, s),
+        (LoadedModel::Image(m), held_out) => {
+            let frames = data_frames(data, dir)?;
+            match held_out {
+                None => validate_image(m, data, &frames, dir),
+                Some(split) => {
+                    let rows = held_out_rows(m.training(), data, dir, split)?;
+                    validate_image(m, &data.subset(&rows), &frames.subset(&rows), dir)
+                }
+            }
+        }
+    }
+}
+
+/// The per-epoch history as CSV: epoch, learning rate, training loss,
+/// validation loss and each encoded output's validation MAE.
+pub fn image_history_csv(history: &TrainingHistory) -> Vec<u8> {
+    let mut out = String::from("epoch,learning_rate,loss,val_loss,val_mae\n");
+    for e in &history.epochs {
+        let (vl, vm) = match &e.validation {
+            Some(v) => (
+                v.loss.to_string(),
+                v.mae
+                    .iter()
+                    .map(f64::to_string)
+                    .collect::<Vec<_>>()
+                    .join(" "),
+            ),
+            None => (String::new(), String::new()),
+        };
+        out.push_str(&format!(
+            "{},{},{},{vl},{vm}\n",
+            e.epoch, e.learning_rate, e.loss
+        ));
+    }
+    out.into_bytes()
+}
+
+/// Save a trained image model, its history and `extra` text files into
+/// `dir`, which appears only when complete.
+pub fn save_image_model(
+    dir: &Path,
+    model: &StoredImageModel,
+    history: &TrainingHistory,
+    force: bool,
+    extra: &[(&str, String)],
+) -> Result<PathBuf> {
+    let stage = stage_image_model(dir, model, &image_history_csv(history), force, extra)?;
+    Ok(stage.commit()?)
+}

@@ -1,0 +1,223 @@
+//! The image pose model: a convolutional network of `tactrace_convnet`
+//! (`conv-dennn` learnt by equilibrium propagation, or its backprop twin
+//! `conv-mlp`) over N named targets as the pin models have them
+//! ([`ModelTarget`]: mm or deg, a circular angle learnt as its sine and
+//! cosine and read back by `atan2`). One grey frame of the model's input
+//! size in, the N targets out.
+//!
+//! Serialised as a JSON string (format, version, targets, the network's
+//! own JSON) plus the network's safetensors bytes; the caller writes them.
+use crate::error::LearnError;
+use crate::targets::{self, ModelTarget};
+use serde::{Deserialize, Serialize};
+use tactrace_convnet::{ConvConfig, ConvModel, EpochReport, Frames, Targets, TrainingHistory};
+
+/// Identifies an image model's `model.json`.
+pub const IMAGE_FORMAT: &str = "tactrace-image-model";
+/// Bumped on any incompatible change.
+pub const IMAGE_FORMAT_VERSION: u32 = 1;
+
+/// A fitted image model: the network and the targets it predicts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageModel {
+    conv: ConvModel,
+    outputs: Vec<ModelTarget>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ImageFile {
+    format: String,
+    version: u32,
+    targets: Vec<ModelTarget>,
+    network: serde_json::Value,
+}
+
+/// The encoded columns (circular targets as sine and cosine) of the
+/// `count x T` target rows `values`.
+fn encode(outputs: &[ModelTarget], values: &[f32], count: usize) -> Result<Vec<f64>, LearnError> {
+    let t = outputs.len();
+    if values.len() != count * t {
+        return Err(LearnError::Shape {
+            what: "target values (one row a frame)",
+            expected: count * t,
+            got: values.len(),
+        });
+    }
+    let mut out = Vec::new();
+    let mut row = Vec::new();
+    for r in values.chunks_exact(t.max(1)) {
+        row.clear();
+        targets::encode_into(outputs, r, &mut row);
+        out.extend(row.iter().map(|&v| f64::from(v)));
+    }
+    Ok(out)
+}
+
+fn width(outputs: &[ModelTarget]) -> usize {
+    outputs.iter().map(ModelTarget::width).sum()
+}
+
+impl ImageModel {
+    /// Fit a model of `config` on `frames` and their targets `values`
+    /// (`count x T`, in `outputs`' order and units) from `seed`, scoring
+    /// `validation` (frames and their target rows) after each epoch and
+    /// handing each epoch's report (errors in encoded units) to `on_epoch`.
+    pub fn fit(
+        frames: &Frames,
+        values: &[f32],
+        outputs: &[ModelTarget],
+        config: &ConvConfig,
+        seed: u64,
+        validation: Option<(Frames, &[f32])>,
+        on_epoch: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(Self, TrainingHistory), LearnError> {
+        targets::check_targets(outputs)?;
+        let w = width(outputs);
+        let encoded = encode(outputs, values, frames.count())?;
+        let train = Targets::new(&encoded, frames.count(), w)?;
+        let val = match validation {
+            Some((vf, vv)) => Some((vf, encode(outputs, vv, vf.count())?)),
+            None => None,
+        };
+        let val_views = match &val {
+            Some((vf, enc)) => Some((*vf, Targets::new(enc, vf.count(), w)?)),
+            None => None,
+        };
+        let (conv, history) =
+            ConvModel::fit_with(frames, &train, config, seed, val_views, on_epoch)?;
+        Ok((
+            Self {
+                conv,
+                outputs: outputs.to_vec(),
+            },
+            history,
+        ))
+    }
+
+    /// Every target, in [`Self::outputs`]' order and units (circular
+    /// angles within (-180, 180] deg), for one frame of the input size.
+    pub fn predict_targets(&self, frame: &[u8]) -> Result<Vec<f64>, LearnError> {
+        let encoded = self.conv.predict(frame)?;
+        Ok(targets::decode(&self.outputs, &encoded))
+    }
+
+    /// The edge pose `[r mm, theta deg]` of one frame, refused
+    /// ([`LearnError::NotAnEdgeModel`]) for a model of other targets.
+    pub fn predict(&self, frame: &[u8]) -> Result<[f64; 2], LearnError> {
+        let [r, theta] = self.edge_roles()?;
+        let values = self.predict_targets(frame)?;
+        Ok([values[r], values[theta]])
+    }
+
+    /// [`Self::predict`] of a frame of any size `(height, width)` px,
+    /// area-averaged to the input size first (as `frames.npy` was made).
+    pub fn predict_resampled(
+        &self,
+        frame: &[u8],
+        size: (usize, usize),
+    ) -> Result<[f64; 2], LearnError> {
+        if frame.len() != size.0 * size.1 {
+            return Err(LearnError::Shape {
+                what: "frame pixels",
+                expected: size.0 * size.1,
+                got: frame.len(),
+            });
+        }
+        let small = tactrace_convnet::area_resample(frame, size, self.input_size());
+        self.predict(&small)
+    }
+
+    /// Every frame's targets, one row a frame (frames shared among the
+    /// threads of the current rayon pool).
+    pub fn predict_batch(&self, frames: &Frames) -> Result<Vec<Vec<f64>>, LearnError> {
+        let encoded = self.conv.predict_batch(frames)?;
+        let w = width(&self.outputs).max(1);
+        Ok(encoded
+            .chunks_exact(w)
+            .map(|row| targets::decode(&self.outputs, row))
+            .collect())
+    }
+
+    /// The indices of the position (mm) and angle (deg) targets of an edge
+    /// model: exactly one of each.
+    pub fn edge_roles(&self) -> Result<[usize; 2], LearnError> {
+        crate::pose_model::edge_roles_of(&self.outputs)
+    }
+
+    /// What the model predicts, in order.
+    pub fn outputs(&self) -> &[ModelTarget] {
+        &self.outputs
+    }
+
+    /// The frame size it takes, `(height, width)` px.
+    pub fn input_size(&self) -> (usize, usize) {
+        self.conv.input_size()
+    }
+
+    /// The network, its configuration and seed.
+    pub fn network(&self) -> &ConvModel {
+        &self.conv
+    }
+
+    /// "conv-dennn" or "conv-mlp".
+    pub fn kind_name(&self) -> &'static str {
+        self.conv.config().kind.name()
+    }
+
+    /// Serialise: `(json, safetensors weights)`.
+    pub fn to_bytes(&self) -> Result<(String, Vec<u8>), LearnError> {
+        let (net_json, weights) = self.conv.to_bytes()?;
+        let file = ImageFile {
+            format: IMAGE_FORMAT.into(),
+            version: IMAGE_FORMAT_VERSION,
+            targets: self.outputs.clone(),
+            network: serde_json::from_str(&net_json).map_err(corrupt)?,
+        };
+        let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
+        Ok((json, weights))
+    }
+
+    /// Rebuild a model from [`Self::to_bytes`] output; another format
+    /// version, or targets that do not match the network, are errors.
+    pub fn from_bytes(json: &str, weights: &[u8]) -> Result<Self, LearnError> {
+        let value: serde_json::Value =
+            serde_json::from_str(json).map_err(|e| corrupt(format!("model json: {e}")))?;
+        if !is_image_model_json(&value) {
+            return Err(corrupt(format!("not a {IMAGE_FORMAT} file")));
+        }
+        let version = value.get("version").and_then(|v| v.as_u64()).unwrap_or(0);
+        if version != u64::from(IMAGE_FORMAT_VERSION) {
+            return Err(LearnError::Version {
+                found: version.min(u64::from(u32::MAX)) as u32,
+                supported: IMAGE_FORMAT_VERSION,
+            });
+        }
+        let file: ImageFile =
+            serde_json::from_value(value).map_err(|e| corrupt(format!("model json: {e}")))?;
+        targets::check_targets(&file.targets)?;
+        let conv = ConvModel::from_bytes(&file.network.to_string(), weights)?;
+        if conv.outputs() != width(&file.targets) {
+            return Err(corrupt(format!(
+                "{} network outputs for targets that take {}",
+                conv.outputs(),
+                width(&file.targets)
+            )));
+        }
+        Ok(Self {
+            conv,
+            outputs: file.targets,
+        })
+    }
+}
+
+/// Whether a parsed `model.json` is an image model's.
+pub fn is_image_model_json(value: &serde_json::Value) -> bool {
+    value.get("format").and_then(|f| f.as_str()) == Some(IMAGE_FORMAT)
+}
+
+fn corrupt(reason: impl ToString) -> LearnError {
+    LearnError::Corrupt {
+        reason: reason.to_string(),
+    }
+}

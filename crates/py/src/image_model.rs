@@ -1,0 +1,207 @@
+//! Image models (`conv-dennn`, `conv-mlp`): the `ImageModel` class over
+//! `tactrace_store::StoredImageModel` and `tactrace_lab::train_image`, as
+//! `tactrace train --model conv-dennn|conv-mlp`, `validate` and `predict`
+//! use them. `load_model` and `train` (model.rs) hand one back for an
+//! image model's folder or kind.
+use crate::arrays::{contiguous, json_to_py, shape_text, to_matrix};
+use crate::errors::{input, lab, store};
+use crate::interrupt::{checkpoint, run_detached};
+use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use std::path::{Path, PathBuf};
+use tactrace_convnet::TrainingHistory;
+use tactrace_lab::train_image as ti;
+use tactrace_store::{LoadedModel, StoredImageModel};
+
+/// A trained image model: grey frames (uint8) in, its N targets out.
+#[pyclass(module = "tactrace", frozen)]
+pub struct ImageModel {
+    stored: StoredImageModel,
+    history: TrainingHistory,
+}
+
+impl ImageModel {
+    pub(crate) fn new(stored: StoredImageModel) -> Self {
+        Self {
+            stored,
+            history: TrainingHistory::default(),
+        }
+    }
+}
+
+#[pymethods]
+impl ImageModel {
+    /// Every target for each frame: ``frames`` is one H x W grey frame or
+    /// an N x H x W stack (any dtype, used as uint8), of any size: each is
+    /// area-averaged to the model's input (as ``frames.npy`` was made from
+    /// the frames the pin detector sees). Returns N x T float64 (one row
+    /// for one frame), in ``targets``' order and units.
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        frames: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let a = contiguous::<u8>(frames, "uint8", "frames")?;
+        let shape = a.shape().to_vec();
+        let (n, h, w) = match shape[..] {
+            [h, w] => (1, h, w),
+            [n, h, w] => (n, h, w),
+            _ => {
+                return Err(input(format!(
+                    "frames must be an H x W frame or an N x H x W stack, got shape {}",
+                    shape_text(&shape)
+                )))
+            }
+        };
+        if h == 0 || w == 0 {
+            return Err(input("frames: empty frames"));
+        }
+        let pixels = a.to_vec().map_err(|e| input(format!("frames: {e}")))?;
+        let net = self.stored.model();
+        let (ih, iw) = net.input_size();
+        let t = net.outputs().len();
+        let out = run_detached(py, || -> Result<Vec<f64>, tactrace_learn::LearnError> {
+            let mut out = Vec::with_capacity(n * t);
+            for frame in pixels.chunks_exact(h * w) {
+                let small = tactrace_convnet::area_resample(frame, (h, w), (ih, iw));
+                out.extend(net.predict_targets(&small)?);
+            }
+            Ok(out)
+        })?
+        .map_err(|e| lab(e.into()))?;
+        to_matrix(py, out, n, t)
+    }
+
+    /// Mean absolute errors on the dataset folder ``data`` (with
+    /// ``frames.npy``, from ``import --frames-size``) as ``tactrace
+    /// validate --json`` gives them: ``position_mae_mm``,
+    /// ``angle_mae_deg``, ``per_target``, ``samples``,
+    /// ``rows_seen_in_training``.
+    fn validate<'py>(&self, py: Python<'py>, data: PathBuf) -> PyResult<Bound<'py, PyAny>> {
+        let loaded = LoadedModel::Image(self.stored.clone());
+        let v = py
+            .detach(|| {
+                let d = tactrace_store::read_dataset(&data)?;
+                ti::validate_loaded(&loaded, &d, &data, None)
+            })
+            .map_err(lab)?;
+        if let Some(w) = v.seen_warning() {
+            crate::follow::warn(py, &w)?;
+        }
+        json_to_py(
+            py,
+            &serde_json::to_value(&v).map_err(|e| input(e.to_string()))?,
+        )
+    }
+
+    /// What the model predicts, in order: dicts with ``name``, ``unit``
+    /// and ``circular``.
+    #[getter]
+    fn targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v = serde_json::to_value(self.stored.model().outputs())
+            .map_err(|e| input(e.to_string()))?;
+        json_to_py(py, &v)
+    }
+
+    /// "conv-dennn" or "conv-mlp".
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.stored.model().kind_name()
+    }
+
+    /// The frame size the network takes, ``(height, width)`` px.
+    #[getter]
+    fn input_size(&self) -> (usize, usize) {
+        self.stored.model().input_size()
+    }
+
+    /// The network's configuration and seed, as in its ``model.json``.
+    #[getter]
+    fn config<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let net = self.stored.model().network();
+        let mut v = serde_json::to_value(net.config()).map_err(|e| input(e.to_string()))?;
+        if let Some(o) = v.as_object_mut() {
+            o.insert("seed".into(), net.seed().into());
+        }
+        json_to_py(py, &v)
+    }
+
+    /// Which rows of which dataset it was trained on (``training.json``),
+    /// or None.
+    #[getter]
+    fn training<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.stored
+            .training()
+            .map(|t| {
+                json_to_py(
+                    py,
+                    &serde_json::to_value(t).map_err(|e| input(e.to_string()))?,
+                )
+            })
+            .transpose()
+    }
+
+    /// The per-epoch history of a model trained in this session (empty for
+    /// a loaded one: its folder has history.csv).
+    #[getter]
+    fn history<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let v = serde_json::to_value(&self.history.epochs).map_err(|e| input(e.to_string()))?;
+        json_to_py(py, &v)
+    }
+
+    /// Write the model folder ``tactrace train`` writes; an existing
+    /// non-empty folder is refused unless ``force=True``.
+    #[pyo3(signature = (dir, *, force = false))]
+    fn save(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<PathBuf> {
+        py.detach(|| ti::save_image_model(&dir, &self.stored, &self.history, force, &[]))
+            .map_err(lab)
+    }
+
+    fn __repr__(&self) -> String {
+        let (h, w) = self.stored.model().input_size();
+        format!(
+            "ImageModel(kind='{}', input={h}x{w}, source='{}')",
+            self.kind(),
+            self.stored.source().display()
+        )
+    }
+}
+
+/// Load an image model folder (`load_model` of an image model's folder).
+pub(crate) fn load(py: Python<'_>, dir: &Path) -> PyResult<ImageModel> {
+    let stored = py.detach(|| StoredImageModel::load(dir)).map_err(store)?;
+    Ok(ImageModel::new(stored))
+}
+
+/// `train` of an image model `kind` on the dataset folder `dir` (with
+/// frames.npy), as `tactrace train --model conv-dennn|conv-mlp` does.
+pub(crate) fn train(
+    py: Python<'_>,
+    kind: tactrace_convnet::ModelKind,
+    dir: &Path,
+    (config, epochs, seed): (Option<&str>, Option<usize>, Option<u64>),
+    held_out: Option<(f64, u64)>,
+) -> PyResult<ImageModel> {
+    let cfg = ti::resolve_image_config(kind, config, epochs).map_err(lab)?;
+    let all = py
+        .detach(|| tactrace_store::read_dataset(dir))
+        .map_err(store)?;
+    let frames = py.detach(|| ti::data_frames(&all, dir)).map_err(lab)?;
+    let split = tactrace_lab::train::training_split(&all, Some(dir), held_out).map_err(lab)?;
+    let train_frames = frames.subset(&split.record.train_rows);
+    let val_frames = split.record.split.as_ref().map(|s| frames.subset(&s.rows));
+    let val = split.val.as_ref().zip(val_frames.as_ref());
+    let fitted = run_detached(py, || {
+        ti::train_image(
+            &cfg,
+            seed.unwrap_or(0),
+            (&split.train, &train_frames),
+            val,
+            &mut |_| checkpoint(),
+        )
+    })?;
+    let (model, history) = fitted.map_err(lab)?;
+    let stored =
+        StoredImageModel::new(model, frames.info.clone()).with_training(split.record.clone());
+    Ok(ImageModel { stored, history })
+}

@@ -1,0 +1,182 @@
+//! Image model folders (`conv-dennn`, `conv-mlp`): `model.json` and
+//! `weights.safetensors` as a pin model's (the JSON says which kind),
+//! `frames.json` (the training frames' [`FramesInfo`]: the input size and
+//! what it was averaged from), `training.json` and `history.csv`. No
+//! `pins.json`: an image model reads pixels, whatever the pin order.
+//!
+//! [`LoadedModel`] is the one entry that loads any model folder, pin or
+//! image model, for the commands that take either.
+use crate::error::{write_err, Result, StoreError};
+use crate::fsutil::{read_text, StagedDir};
+use crate::image_frames::FramesInfo;
+use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
+use crate::model_dir::{read_training, StoredModel};
+use crate::training_record::{TrainingRecord, TRAINING_FILE};
+use std::path::{Path, PathBuf};
+use tactrace_learn::ImageModel;
+
+const MODEL_JSON: &str = "model.json";
+const WEIGHTS: &str = "weights.safetensors";
+const FRAMES_JSON: &str = "frames.json";
+
+/// An image model with what its training frames were.
+#[derive(Debug, Clone)]
+pub struct StoredImageModel {
+    model: ImageModel,
+    frames: FramesInfo,
+    training: Option<TrainingRecord>,
+    source: PathBuf,
+}
+
+impl StoredImageModel {
+    /// A model just trained on frames described by `frames`.
+    pub fn new(model: ImageModel, frames: FramesInfo) -> Self {
+        Self {
+            model,
+            frames,
+            training: None,
+            source: PathBuf::new(),
+        }
+    }
+
+    /// The model with the record of what it was trained on.
+    pub fn with_training(mut self, training: TrainingRecord) -> Self {
+        self.training = Some(training);
+        self
+    }
+
+    /// Load an image model folder, with errors naming the file.
+    pub fn load(dir: &Path) -> Result<Self> {
+        let json = read_text(&dir.join(MODEL_JSON))?;
+        let weights = read_bounded(&dir.join(WEIGHTS), MAX_BINARY_BYTES, "weights file")?;
+        let model = ImageModel::from_bytes(&json, &weights).map_err(|e| StoreError::Format {
+            path: dir.into(),
+            reason: e.to_string(),
+        })?;
+        let frames_path = dir.join(FRAMES_JSON);
+        let frames: FramesInfo =
+            serde_json::from_str(&read_text(&frames_path)?).map_err(|e| StoreError::Format {
+                path: frames_path.clone(),
+                reason: e.to_string(),
+            })?;
+        if (frames.height, frames.width) != model.input_size() {
+            return Err(StoreError::Format {
+                path: frames_path,
+                reason: format!(
+                    "frames of {} x {} px, but the model takes {} x {} px",
+                    frames.height,
+                    frames.width,
+                    model.input_size().0,
+                    model.input_size().1
+                ),
+            });
+        }
+        Ok(Self {
+            model,
+            frames,
+            training: read_training(dir)?,
+            source: dir.to_path_buf(),
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &ImageModel {
+        &self.model
+    }
+
+    /// What its training frames were (size, source size).
+    pub fn frames(&self) -> &FramesInfo {
+        &self.frames
+    }
+
+    /// What the model was trained on, when its folder records it.
+    pub fn training(&self) -> Option<&TrainingRecord> {
+        self.training.as_ref()
+    }
+
+    /// Where the model was loaded from (empty for one made in memory).
+    pub fn source(&self) -> &Path {
+        &self.source
+    }
+}
+
+/// Write a trained image model, what it was trained on, its history
+/// (`history.csv` bytes) and `extra` text files into a staging folder
+/// for `dir`; the caller adds figures and commits it.
+pub fn stage_image_model(
+    dir: &Path,
+    model: &StoredImageModel,
+    history_csv: &[u8],
+    force: bool,
+    extra: &[(&str, String)],
+) -> Result<StagedDir> {
+    let stage = StagedDir::new(dir, force)?;
+    let (json, weights) = model.model.to_bytes().map_err(|e| StoreError::Format {
+        path: dir.into(),
+        reason: e.to_string(),
+    })?;
+    write(&stage.path().join(MODEL_JSON), json.as_bytes())?;
+    write(&stage.path().join(WEIGHTS), &weights)?;
+    let frames = serde_json::to_string_pretty(&model.frames).expect("info serialises");
+    write(&stage.path().join(FRAMES_JSON), frames.as_bytes())?;
+    if let Some(training) = &model.training {
+        let text = serde_json::to_string(training).expect("record serialises");
+        write(&stage.path().join(TRAINING_FILE), text.as_bytes())?;
+    }
+    for (name, text) in extra {
+        write(&stage.path().join(name), text.as_bytes())?;
+    }
+    write(&stage.path().join("history.csv"), history_csv)?;
+    Ok(stage)
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<()> {
+    std::fs::write(path, bytes).map_err(write_err(path))
+}
+
+/// Any model folder: a pin model (displacement vectors in) or an image
+/// model (frames in), as its `model.json` says.
+#[derive(Debug, Clone)]
+pub enum LoadedModel {
+    Pins(StoredModel),
+    Image(StoredImageModel),
+}
+
+impl LoadedModel {
+    /// Load the model folder `dir`, whichever kind it holds.
+    pub fn load(dir: &Path) -> Result<Self> {
+        if is_image_model_dir(dir) {
+            StoredImageModel::load(dir).map(LoadedModel::Image)
+        } else {
+            StoredModel::load(dir).map(LoadedModel::Pins)
+        }
+    }
+
+    /// What the model was trained on, when its folder records it.
+    pub fn training(&self) -> Option<&TrainingRecord> {
+        match self {
+            LoadedModel::Pins(m) => m.training(),
+            LoadedModel::Image(m) => m.training(),
+        }
+    }
+}
+
+/// Whether `dir`'s `model.json` is an image model's (false when it cannot
+/// be read: the pin model's loader then says what is wrong).
+pub fn is_image_model_dir(dir: &Path) -> bool {
+    image_model_kind(dir).is_some()
+}
+
+/// The kind of the image model in `dir` ("conv-dennn", "conv-mlp"), or
+/// `None` when it holds none.
+pub(crate) fn image_model_kind(dir: &Path) -> Option<String> {
+    let text = read_text(&dir.join(MODEL_JSON)).ok()?;
+    let value: serde_json::Value = serde_json::from_str(&text).ok()?;
+    if !tactrace_learn::is_image_model_json(&value) {
+        return None;
+    }
+    let kind = value
+        .pointer("/network/config/kind")
+        .and_then(|k| k.as_str());
+    Some(kind.unwrap_or("image model").to_string())
+}

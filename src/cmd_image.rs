@@ -1,0 +1,193 @@
+//! The image models' side of `train` and `predict`: `train --model
+//! conv-dennn|conv-mlp` on a dataset's frames (`frames.npy`), with the pin
+//! models' splits, record of the rows trained on, validation and model
+//! folder; `predict` of one frame or a dataset.
+use crate::cmd_learn::{PredictArgs, PresetArg, TrainArgs};
+use crate::inputs::Inputs;
+use crate::progress::bar;
+use anyhow::{Context, Result};
+use tactrace_convnet::ModelKind;
+use tactrace_lab::{import_reader, train as tr, train_image as ti, LabError};
+use tactrace_store::{
+    check_output_dir, fsutil, read_dataset, ImageFrames, LoadedModel, SightFile, StoredImageModel,
+    TapData,
+};
+
+/// Train the image model `kind` as `a` says.
+pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
+    if a.search || !matches!(a.preset, PresetArg::Default) {
+        return Err(LabError::Config(format!(
+            "{}: --search and --preset are the pin models' (an image model's settings: \
+             --config FILE, --epochs, --seed)",
+            kind.name()
+        ))
+        .into());
+    }
+    let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
+    let cfg = ti::resolve_image_config(kind, text.as_deref(), a.epochs).with_context(|| {
+        a.config
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default()
+    })?;
+    let seed = a.seed.unwrap_or(0);
+    if a.print_config {
+        crate::say!("{}", toml::to_string(&cfg)?.trim_end());
+        return Ok(());
+    }
+    Inputs::new()
+        .add("--train", &a.train)
+        .opt("--val", a.val.as_deref())
+        .opt("--config", a.config.as_deref())
+        .check_apart("--out", &a.out)?;
+    let _out = check_output_dir(&a.out, a.force)?;
+    let all = read_dataset(&a.train)?;
+    let all_frames = ti::data_frames(&all, &a.train)?;
+    let split = tr::training_split(
+        &all,
+        Some(&a.train),
+        a.val_fraction.map(|f| (f, a.split_seed)),
+    )?;
+    let train_frames = all_frames.subset(&split.record.train_rows);
+    let (val, val_frames): (Option<TapData>, Option<ImageFrames>) = match a.val.as_deref() {
+        Some(dir) => {
+            let v = read_dataset(dir)?;
+            let f = ti::data_frames(&v, dir)?;
+            (Some(v), Some(f))
+        }
+        None => {
+            let rows = split
+                .record
+                .split
+                .as_ref()
+                .map(|s| all_frames.subset(&s.rows));
+            if let (Some(f), Some(va)) = (a.val_fraction, &split.val) {
+                eprintln!(
+                    "training on {} samples, holding out {} (fraction {f}, seed {})",
+                    split.train.len(),
+                    va.len(),
+                    a.split_seed
+                );
+            }
+            (split.val.clone(), rows)
+        }
+    };
+    let pb = bar(cfg.epochs as u64, "train");
+    let t0 = std::time::Instant::now();
+    let pair = val.as_ref().zip(val_frames.as_ref());
+    let mut on_epoch = |e: &tactrace_convnet::EpochReport| {
+        pb.set_position(e.epoch as u64 + 1);
+        let val = e
+            .validation
+            .as_ref()
+            .map(|v| format!(", validation loss {:.4}", v.loss))
+            .unwrap_or_default();
+        let secs = t0.elapsed().as_secs_f64();
+        pb.suspend(|| {
+            eprintln!(
+                "epoch {}/{}: loss {:.4}{val} ({secs:.0} s)",
+                e.epoch + 1,
+                cfg.epochs,
+                e.loss
+            )
+        });
+    };
+    let (model, history) = ti::train_image(
+        &cfg,
+        seed,
+        (&split.train, &train_frames),
+        pair,
+        &mut on_epoch,
+    )?;
+    pb.finish_and_clear();
+    let secs = t0.elapsed().as_secs_f64();
+    let stored = StoredImageModel::new(model, all_frames.info.clone()).with_training(split.record);
+    let resolved = format!(
+        "# {} {} (seed {seed})\n{}",
+        kind.name(),
+        env!("CARGO_PKG_VERSION"),
+        toml::to_string(&cfg)?
+    );
+    let dir = ti::save_image_model(
+        &a.out,
+        &stored,
+        &history,
+        a.force,
+        &[("config.toml", resolved)],
+    )?;
+    eprintln!(
+        "trained {} in {secs:.1} s ({} epochs, seed {seed}); saved model to {}",
+        kind.name(),
+        cfg.epochs,
+        dir.display()
+    );
+    if let (Some(v), Some(f)) = (&val, &val_frames) {
+        let what = a.val.as_deref().unwrap_or(&a.train);
+        let score = ti::validate_image(&stored, v, f, what)?;
+        let parts: Vec<String> = score
+            .targets
+            .iter()
+            .map(|t| {
+                let s = &score.per_target[&t.name];
+                format!("{} {:.3} {}", t.name, s.mae, s.unit.as_str())
+            })
+            .collect();
+        crate::say!(
+            "validation: {} over {} samples",
+            parts.join(", "),
+            score.samples
+        );
+        if let Some(w) = score.seen_warning() {
+            eprintln!("warning: {w}");
+        }
+    }
+    Ok(())
+}
+
+/// `predict` with an image model: one frame (`--image`, read as the
+/// training frames were: `--sensor` settings or the frame as it is, then
+/// area-averaged to the model's input), or a dataset with frames
+/// (`--data`), every target predicted then true.
+pub fn predict(model: &StoredImageModel, a: PredictArgs) -> Result<()> {
+    let net = model.model();
+    match (a.image, a.data) {
+        (Some(image), None) => {
+            let sensor = a.sensor.as_deref().map(SightFile::read).transpose()?;
+            let sight = sensor.as_ref().map(SightFile::sight);
+            let blob = crate::cmd_data::blob_params(a.params.as_deref(), "real256")?;
+            let detector = import_reader::frame_detector(sight.as_ref(), &blob, &image)?;
+            let (h, w) = net.input_size();
+            debug_assert_eq!(h, w);
+            let pixels = import_reader::image_input(&detector, &image, h)?;
+            let values = net.predict_targets(&pixels).map_err(LabError::from)?;
+            let names: Vec<(String, f64)> = net
+                .outputs()
+                .iter()
+                .zip(&values)
+                .map(|(t, &v)| (format!("{}_{}", t.name, t.unit.as_str()), v))
+                .collect();
+            let refs: Vec<(&str, f64)> = names.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+            tactrace_lab::numbers::require_finite(
+                &format!("the model's prediction for {}", image.display()),
+                &refs,
+                "the model is degenerate, or the frame far from its training data",
+            )?;
+            let header: Vec<&str> = refs.iter().map(|(n, _)| *n).collect();
+            let cells: Vec<String> = values.iter().map(|v| format!("{v:.4}")).collect();
+            crate::say!("{}\n{}", header.join(","), cells.join(","));
+        }
+        (None, Some(dir)) => {
+            let data = read_dataset(&dir)?;
+            let loaded = LoadedModel::Image(model.clone());
+            let v = ti::validate_loaded(&loaded, &data, &dir, None)?;
+            crate::cmd_learn::say_target_rows(&v)?;
+        }
+        _ => {
+            return Err(LabError::Config(
+                "give either --image FRAME or --data DIR (with frames.npy)".into(),
+            )
+            .into())
+        }
+    }
+    Ok(())
+}

@@ -74,6 +74,9 @@ pub enum LabError {
     Learn(#[from] tactrace_learn::LearnError),
     #[error(transparent)]
     Arm(#[from] tactrace_arm::ArmError),
+    /// The remote (Ray) executor could not run a batch.
+    #[error(transparent)]
+    Remote(#[from] crate::remote::RemoteError),
     #[cfg(feature = "hardware")]
     #[error(transparent)]
     Hardware(#[from] tactrace_hw::HwError),
@@ -159,6 +162,7 @@ impl LabError {
             LabError::Vision(_) => true,
             LabError::Learn(e) => !matches!(e, L::Diverged { .. }),
             LabError::Arm(e) => matches!(e, tactrace_arm::ArmError::InvalidConfig { .. }),
+            LabError::Remote(e) => e.is_bad_input(),
             #[cfg(feature = "hardware")]
             LabError::Hardware(e) => matches!(
                 e,

@@ -28,6 +28,7 @@ pub mod import_checks;
 pub mod import_like;
 pub mod import_reader;
 pub mod numbers;
+pub mod remote;
 pub mod render;
 pub mod reproduce;
 pub mod search;

@@ -20,7 +20,7 @@ use crate::train::{holdout, resolve_config, train_with_validation, validate_net}
 use crate::twin::simulate_twin;
 use std::path::{Path, PathBuf};
 use tactrace_learn::{ModelKind, Preset};
-use tactrace_optim::{Cmaes, CmaesConfig};
+use tactrace_optim::{Cmaes, CmaesConfig, Evaluation, Executor};
 use tactrace_sensor::TacTipConfig;
 use tactrace_store::fsutil::{write_atomic, StagedDir};
 use tactrace_store::{CsvText, LabelledCollection, TapData};
@@ -83,7 +83,7 @@ pub const TRANSFER_PARAMS: [TransferParam; 24] = [
 ];
 
 /// What to fit on and how long to search.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct TransferFitConfig {
     /// The real taps (every row is a cost tap): frames, labels, depth and
     /// shear columns, reference frame and blob detector.
@@ -159,30 +159,90 @@ pub fn with_values(base: &TacTipConfig, values: &[f64]) -> TacTipConfig {
     c
 }
 
-/// Fit [`TRANSFER_PARAMS`] of `base` (module docs); `progress` is told of
-/// every candidate as it is scored.
+/// One candidate's scoring as an evaluation: the twins of the labelled
+/// taps rendered with the candidate's parameters, a PDenNN trained on
+/// each, its mean absolute error on the real frames (`None`: the
+/// candidate is not a valid sensor). Pure: the seeds are in the settings.
+pub struct TransferTrial {
+    context: TransferContext,
+    real: TapData,
+    /// What the import of the real frames warned of.
+    warnings: Vec<String>,
+}
+
+/// What a remote worker rebuilds a [`TransferTrial`] from: the fit's
+/// settings (the collection's files must be visible to it) and the base
+/// sensor.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct TransferContext {
+    config: TransferFitConfig,
+    base: TacTipConfig,
+}
+
+impl TransferTrial {
+    /// The evaluation of `cfg` around `base` (the real frames imported).
+    pub fn new(cfg: &TransferFitConfig, base: &TacTipConfig) -> Result<Self> {
+        let imported = import(&cfg.collection, &|| {})?;
+        Ok(TransferTrial {
+            context: TransferContext {
+                config: cfg.clone(),
+                base: base.clone(),
+            },
+            real: imported.data,
+            warnings: imported.warnings,
+        })
+    }
+
+    /// The evaluation a remote worker rebuilds from its context JSON.
+    pub fn from_context(context: &str) -> Result<Self> {
+        let c: TransferContext = crate::remote::parse_context(Self::NAME, context)?;
+        Self::new(&c.config, &c.base)
+    }
+}
+
+impl Evaluation for TransferTrial {
+    const NAME: &'static str = "tactrace.sim_fit.transfer";
+    /// The parameter values, in [`TRANSFER_PARAMS`] order.
+    type Config = Vec<f64>;
+    type Score = Option<[f64; 2]>;
+    type Error = LabError;
+
+    fn evaluate(&self, values: &Vec<f64>) -> Result<Option<[f64; 2]>> {
+        let sensor = with_values(&self.context.base, values);
+        match sensor.validate() {
+            Ok(()) => Ok(Some(transfer_mae(
+                &self.context.config,
+                &sensor,
+                &self.real,
+            )?)),
+            Err(_) => Ok(None),
+        }
+    }
+
+    fn context(&self) -> Option<String> {
+        crate::remote::context_json(Self::NAME, &self.context)
+    }
+}
+
+/// Fit [`TRANSFER_PARAMS`] of `base` (module docs), each generation's
+/// candidates scored through `executor`; `progress` is told of every
+/// candidate as it is scored.
 pub fn fit_transfer(
     cfg: &TransferFitConfig,
     base: &TacTipConfig,
+    executor: &impl Executor,
     progress: &mut dyn FnMut(&Candidate, &Candidate),
 ) -> Result<TransferFit> {
-    let imported = import(&cfg.collection, &|| {})?;
-    let (real, warnings) = (imported.data, imported.warnings);
+    let trial = TransferTrial::new(cfg, base)?;
     let start_values: Vec<f64> = TRANSFER_PARAMS.iter().map(|p| (p.get)(base)).collect();
-    let score = |values: &[f64], generation: usize| -> Result<Candidate> {
-        let sensor = with_values(base, values);
-        let mae = match sensor.validate() {
-            Ok(()) => Some(transfer_mae(cfg, &sensor, &real)?),
-            Err(_) => None,
-        };
-        Ok(Candidate {
-            generation,
-            values: values.to_vec(),
-            mae,
-            cost: mae.map_or(f64::NAN, |m| transfer_cost(m, cfg.deg_per_mm)),
-        })
+    let candidate = |generation: usize, values: Vec<f64>, mae: Option<[f64; 2]>| Candidate {
+        generation,
+        values,
+        mae,
+        cost: mae.map_or(f64::NAN, |m| transfer_cost(m, cfg.deg_per_mm)),
     };
-    let start = score(&start_values, 0)?;
+    let first = executor.run(&trial, std::slice::from_ref(&start_values))?;
+    let start = candidate(0, start_values.clone(), first[0]);
     let mut best = start.clone();
     progress(&start, &best);
     let mut search = Cmaes::new(&CmaesConfig {
@@ -193,10 +253,15 @@ pub fn fit_transfer(
     })?;
     let mut candidates = vec![start.clone()];
     for generation in 1..=cfg.generations {
+        let points: Vec<Vec<f64>> = search
+            .ask()
+            .iter()
+            .map(|unit| search_point(&start_values, unit))
+            .collect();
+        let maes = executor.run(&trial, &points)?;
         let mut costs = Vec::new();
-        for unit in search.ask() {
-            let values = search_point(&start_values, &unit);
-            let c = score(&values, generation)?;
+        for (values, mae) in points.into_iter().zip(maes) {
+            let c = candidate(generation, values, mae);
             if c.cost < best.cost {
                 best = c.clone();
             }
@@ -211,8 +276,8 @@ pub fn fit_transfer(
         start,
         best,
         candidates,
-        real_frames: real.len(),
-        warnings,
+        real_frames: trial.real.len(),
+        warnings: trial.warnings,
     })
 }
 

@@ -13,6 +13,7 @@ mod errors;
 mod follow;
 mod interrupt;
 mod model;
+mod remote;
 mod rig;
 mod samples;
 mod sim;
@@ -38,5 +39,6 @@ fn _tactrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<sim::SimTacTip>()?;
     m.add_function(wrap_pyfunction!(follow::follow, m)?)?;
     m.add_function(wrap_pyfunction!(rig::follow_rig, m)?)?;
+    m.add_function(wrap_pyfunction!(remote::evaluate, m)?)?;
     Ok(())
 }

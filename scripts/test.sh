@@ -2,7 +2,9 @@
 # The project's test command: the Rust workspace, then the Python package.
 #
 # 1. a virtual environment in target/py-venv (reused when present) with
-#    maturin, numpy, pytest and ur_rtde from the package registry;
+#    maturin, numpy, pytest, ur_rtde and ray from the package registry
+#    (ray: crates/py/tests/test_ray.py starts a local two-node Ray cluster
+#    and runs search and sim-fit on it);
 # 2. `cargo test --workspace --release` (builds target/release/tactrace,
 #    which the Python tests compare with; the RTDE conformance test runs
 #    ur_rtde from the venv);
@@ -25,7 +27,7 @@ export PATH=$venv/bin:$PATH
 # The venv's interpreter, with ur_rtde, checks the fake RTDE controller
 # (crates/hw/tests/rtde_conformance.rs; required here, not skipped).
 pip install --quiet --disable-pip-version-check \
-    "maturin==1.16.0" "numpy==2.4.6" "pytest==9.2.0" "ur_rtde==1.6.5"
+    "maturin==1.16.0" "numpy==2.4.6" "pytest==9.2.0" "ur_rtde==1.6.5" "ray==2.60.0"
 export TACTRACE_PYTHON=$venv/bin/python TACTRACE_REQUIRE_UR_RTDE=1
 
 cargo test --workspace --release

@@ -5,8 +5,8 @@ use crate::inputs::Inputs;
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
+use tactrace_lab::remote::{Exec, RayExecutor, RaySettings};
 use tactrace_lab::search::{self, SearchSettings, SpaceFile};
-use tactrace_optim::Local;
 use tactrace_store::{fsutil, read_dataset};
 
 #[derive(Args)]
@@ -55,6 +55,71 @@ pub struct SearchArgs {
     /// Replace an existing output folder (or a stopped search's trials).
     #[arg(long)]
     force: bool,
+    #[command(flatten)]
+    executor: ExecutorArgs,
+}
+
+/// Where the evaluations of `search`, `sim-fit` and `tune` run.
+#[derive(Args)]
+pub struct ExecutorArgs {
+    /// Where evaluations run: `local` (this machine's cores) or `ray` (a
+    /// Ray cluster at --ray-address, through the Python package; data
+    /// paths must be visible to every worker).
+    #[arg(long, value_enum, default_value = "local")]
+    executor: ExecutorKind,
+    /// The Ray cluster's address: the head's HOST:PORT, or `auto` (the
+    /// cluster started on this machine, or RAY_ADDRESS).
+    #[arg(long, default_value = "auto")]
+    ray_address: String,
+    /// CPUs each Ray task asks for (and threads it trains on).
+    #[arg(long, default_value_t = 1)]
+    ray_cpus_per_task: usize,
+    /// Python interpreter with ray and the tactrace package (default:
+    /// TACTRACE_PYTHON, else python3).
+    #[arg(long)]
+    python: Option<PathBuf>,
+}
+
+/// The executors `--executor` names.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ExecutorKind {
+    /// rayon threads on this machine.
+    Local,
+    /// Ray tasks on a cluster.
+    Ray,
+}
+
+impl ExecutorArgs {
+    /// The executor asked for (a Ray one has joined its cluster).
+    pub fn executor(&self) -> Result<Exec> {
+        Ok(match self.executor {
+            ExecutorKind::Local => Exec::Local,
+            ExecutorKind::Ray => {
+                if self.ray_cpus_per_task == 0 {
+                    return Err(tactrace_lab::LabError::Config(
+                        "--ray-cpus-per-task must be at least 1".into(),
+                    )
+                    .into());
+                }
+                let python = self.python.clone().unwrap_or_else(|| {
+                    std::env::var_os("TACTRACE_PYTHON")
+                        .map(PathBuf::from)
+                        .unwrap_or_else(|| "python3".into())
+                });
+                let ray = RayExecutor::new(RaySettings {
+                    address: self.ray_address.clone(),
+                    python,
+                    cpus_per_task: self.ray_cpus_per_task,
+                });
+                let info = ray.connect().map_err(tactrace_lab::LabError::from)?;
+                eprintln!(
+                    "Ray cluster at {}: {} nodes, {} CPUs",
+                    self.ray_address, info.nodes, info.cpus
+                );
+                Exec::Ray(ray)
+            }
+        })
+    }
 }
 
 pub fn search(a: SearchArgs) -> Result<()> {
@@ -67,6 +132,7 @@ pub fn search(a: SearchArgs) -> Result<()> {
         .add("--space", &a.space)
         .opt("--config", a.config.as_deref())
         .check_apart("--out", &a.out)?;
+    let executor = a.executor.executor()?;
     let data = read_dataset(&a.train)?;
     let (data_sha256, data_rows) = search::data_id(&data);
     let settings = SearchSettings {
@@ -83,10 +149,10 @@ pub fn search(a: SearchArgs) -> Result<()> {
     let t0 = std::time::Instant::now();
     let outcome = search::search(
         &settings,
-        &data,
+        (&data, &a.train),
         &a.out,
         (a.force, a.resume),
-        &Local,
+        &executor,
         &mut |t| {
             let named: Vec<String> = t
                 .settings

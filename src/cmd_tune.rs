@@ -47,6 +47,8 @@ pub struct TuneArgs {
     /// Replace an existing output folder (or an interrupted one's best).
     #[arg(long)]
     force: bool,
+    #[command(flatten)]
+    executor: crate::cmd_search::ExecutorArgs,
 }
 
 pub fn tune(a: TuneArgs) -> Result<()> {
@@ -78,7 +80,15 @@ pub fn tune(a: TuneArgs) -> Result<()> {
             ..
         } => pb.set_message(format!("gen {generation} {best_so_far:.3}")),
     };
-    let res = run_tune(&cfg, &base, &model, (&a.out, a.force), &progress);
+    let executor = a.executor.executor()?;
+    let res = run_tune(
+        &cfg,
+        &base,
+        (&model, &a.model),
+        (&a.out, a.force),
+        &executor,
+        &progress,
+    );
     pb.finish_and_clear();
     let res = res?;
     crate::say!(

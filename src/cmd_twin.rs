@@ -395,6 +395,8 @@ pub struct SimFitArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     force: bool,
+    #[command(flatten)]
+    executor: crate::cmd_search::ExecutorArgs,
 }
 
 /// `sim-fit`: the simulator's physical parameters fitted by what a PDenNN
@@ -452,7 +454,8 @@ pub fn sim_fit(a: SimFitArgs) -> Result<()> {
             pb.println(line);
         }
     };
-    let fit = fit_transfer(&cfg, &sensor, &mut report);
+    let executor = a.executor.executor()?;
+    let fit = fit_transfer(&cfg, &sensor, &executor, &mut report);
     pb.finish_and_clear();
     let fit = fit?;
     eprintln!("{}", fit.layout.describe());

@@ -238,3 +238,23 @@ fn issue24_a_bad_space_is_refused_before_any_work() {
         );
     }
 }
+
+/// Issue 24: `--executor ray` with an interpreter that does not exist is
+/// bad input (exit 2), named, before anything is written.
+#[test]
+fn issue24_search_on_ray_without_its_interpreter_is_refused() {
+    let t = TempDir::new("search-ray-no-python");
+    dataset(&t.0);
+    let space = space();
+    let mut args = search_args(&space, "s", "2", "1");
+    args.extend(["--executor", "ray", "--python", "/no/such/python3"]);
+    let r = tactrace(&t.0, &args);
+    expect_code(&r, 2, "search --executor ray --python /no/such/python3");
+    assert!(
+        r.stderr
+            .contains("cannot start the Python interpreter /no/such/python3"),
+        "{}",
+        r.stderr
+    );
+    assert!(!t.join("s").exists() && !t.join("s.partial").exists());
+}

@@ -77,6 +77,9 @@ pub enum LabError {
     Learn(#[from] tactrace_learn::LearnError),
     #[error(transparent)]
     Arm(#[from] tactrace_arm::ArmError),
+    /// The remote (Ray) executor could not run a batch.
+    #[error(transparent)]
+    Remote(#[from] crate::remote::RemoteError),
     #[cfg(feature = "hardware")]
     #[error(transparent)]
     Hardware(#[from] tactrace_hw::HwError),
@@ -163,6 +166,7 @@ impl LabError {
             LabError::Vision(_) => true,
             LabError::Learn(e) => !e.is_diverged(),
             LabError::Arm(e) => matches!(e, tactrace_arm::ArmError::InvalidConfig { .. }),
+            LabError::Remote(e) => e.is_bad_input(),
             #[cfg(feature = "hardware")]
             LabError::Hardware(e) => matches!(
                 e,

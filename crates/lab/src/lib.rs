@@ -30,6 +30,7 @@ pub mod import_like;
 pub mod import_reader;
 pub mod import_request;
 pub mod numbers;
+pub mod remote;
 pub mod render;
 pub mod reproduce;
 pub mod reproduce3d;

@@ -21,7 +21,7 @@ use crate::train::{holdout, resolve_config, train_with_validation, validate_net}
 use crate::twin::simulate_twin_rows;
 use std::path::{Path, PathBuf};
 use tactrace_learn::{ModelKind, Preset};
-use tactrace_optim::{Cmaes, CmaesConfig};
+use tactrace_optim::{Cmaes, CmaesConfig, Evaluation, Executor};
 use tactrace_sensor::TacTipConfig;
 use tactrace_store::collection::Reference;
 use tactrace_store::fsutil::{write_atomic, StagedDir};
@@ -85,7 +85,7 @@ pub const TRANSFER_PARAMS: [TransferParam; 24] = [
 ];
 
 /// What to fit on and how long to search.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct TransferFitConfig {
     /// The real taps (every row is a cost tap): frames, labels, depth and
     /// shear columns, reference frame and blob detector.
@@ -164,43 +164,118 @@ pub fn with_values(base: &TacTipConfig, values: &[f64]) -> TacTipConfig {
     c
 }
 
+/// One candidate's scoring as an evaluation: the twins of the labelled
+/// taps rendered with the candidate's parameters, a PDenNN trained on
+/// each, its mean absolute error on the real frames (`None`: the
+/// candidate is not a valid sensor). Pure: the seeds are in the settings.
+pub struct TransferTrial {
+    context: TransferContext,
+    /// The collection, its rest layout estimated when it had none.
+    collection: LabelledCollection,
+    /// How the simulated taps are read (the collection's rest pins).
+    sight: SimSight,
+    /// The sensor the candidates' values are set on: the given one, laid
+    /// out first like rest pins estimated from taps (an undeformed
+    /// frame's pins must fit it as it is, so a pressed frame is refused).
+    base: TacTipConfig,
+    /// Which pin layout fitted the rest pins better.
+    layout: LayoutReport,
+    real: TapData,
+    /// What the import of the real frames warned of.
+    warnings: Vec<String>,
+}
+
+/// What a remote worker rebuilds a [`TransferTrial`] from: the fit's
+/// settings (the collection's files must be visible to it) and the base
+/// sensor.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct TransferContext {
+    config: TransferFitConfig,
+    base: TacTipConfig,
+}
+
+impl TransferTrial {
+    /// The evaluation of `cfg` around `base` (the real frames imported,
+    /// the simulator laid out like their rest pins: [`crate::sim_sight`]).
+    pub fn new(cfg: &TransferFitConfig, base: &TacTipConfig) -> Result<Self> {
+        let (collection, _) = resolve_reference(cfg.collection.clone())?;
+        let imported = import(&collection, &|| {})?;
+        let sight = sim_sight(&collection)?;
+        let (laid_out, layout) = lay_out(base, &sight)?;
+        let used = match collection.reference() {
+            Reference::Frame(_) => base.clone(),
+            _ => laid_out,
+        };
+        Ok(TransferTrial {
+            context: TransferContext {
+                config: cfg.clone(),
+                base: base.clone(),
+            },
+            collection,
+            sight,
+            base: used,
+            layout,
+            real: imported.data,
+            warnings: imported.warnings,
+        })
+    }
+
+    /// The evaluation a remote worker rebuilds from its context JSON.
+    pub fn from_context(context: &str) -> Result<Self> {
+        let c: TransferContext = crate::remote::parse_context(Self::NAME, context)?;
+        Self::new(&c.config, &c.base)
+    }
+}
+
+impl Evaluation for TransferTrial {
+    const NAME: &'static str = "tactrace.sim_fit.transfer";
+    /// The parameter values, in [`TRANSFER_PARAMS`] order.
+    type Config = Vec<f64>;
+    type Score = Option<[f64; 2]>;
+    type Error = LabError;
+
+    fn evaluate(&self, values: &Vec<f64>) -> Result<Option<[f64; 2]>> {
+        let sensor = with_values(&self.base, values);
+        match sensor.validate() {
+            Ok(()) => Ok(Some(transfer_mae(
+                &self.context.config,
+                (&self.collection, &self.sight),
+                &sensor,
+                &self.real,
+            )?)),
+            Err(_) => Ok(None),
+        }
+    }
+
+    fn context(&self) -> Option<String> {
+        crate::remote::context_json(Self::NAME, &self.context)
+    }
+}
+
 /// Fit [`TRANSFER_PARAMS`] of `base` (module docs), laid out first like
 /// the collection's rest pins when they were estimated from taps
-/// ([`crate::sim_sight`]; an undeformed frame's pins must fit `base` as it
-/// is, so a pressed frame is refused); `progress` is told of every
+/// ([`TransferTrial::new`]), each generation's candidates scored through
+/// `executor`; `progress` is told of every
 /// candidate as it is scored.
 pub fn fit_transfer(
     cfg: &TransferFitConfig,
     base: &TacTipConfig,
+    executor: &impl Executor,
     progress: &mut dyn FnMut(&Candidate, &Candidate),
 ) -> Result<TransferFit> {
-    let (collection, _) = resolve_reference(cfg.collection.clone())?;
-    let imported = import(&collection, &|| {})?;
-    let (real, warnings) = (imported.data, imported.warnings);
-    let sight = sim_sight(&collection)?;
-    // An undeformed frame's pins must fit `base` as it is (a frame pressed
-    // out of its layout is refused by the twin); a rest layout estimated
-    // from taps lays `base` out first.
-    let (laid_out, layout) = lay_out(base, &sight)?;
-    let base = match collection.reference() {
-        Reference::Frame(_) => base,
-        _ => &laid_out,
+    let trial = TransferTrial::new(cfg, base)?;
+    let start_values: Vec<f64> = TRANSFER_PARAMS
+        .iter()
+        .map(|p| (p.get)(&trial.base))
+        .collect();
+    let candidate = |generation: usize, values: Vec<f64>, mae: Option<[f64; 2]>| Candidate {
+        generation,
+        values,
+        mae,
+        cost: mae.map_or(f64::NAN, |m| transfer_cost(m, cfg.deg_per_mm)),
     };
-    let start_values: Vec<f64> = TRANSFER_PARAMS.iter().map(|p| (p.get)(base)).collect();
-    let score = |values: &[f64], generation: usize| -> Result<Candidate> {
-        let sensor = with_values(base, values);
-        let mae = match sensor.validate() {
-            Ok(()) => Some(transfer_mae(cfg, (&collection, &sight), &sensor, &real)?),
-            Err(_) => None,
-        };
-        Ok(Candidate {
-            generation,
-            values: values.to_vec(),
-            mae,
-            cost: mae.map_or(f64::NAN, |m| transfer_cost(m, cfg.deg_per_mm)),
-        })
-    };
-    let start = score(&start_values, 0)?;
+    let first = executor.run(&trial, std::slice::from_ref(&start_values))?;
+    let start = candidate(0, start_values.clone(), first[0]);
     let mut best = start.clone();
     progress(&start, &best);
     let mut search = Cmaes::new(&CmaesConfig {
@@ -211,10 +286,15 @@ pub fn fit_transfer(
     })?;
     let mut candidates = vec![start.clone()];
     for generation in 1..=cfg.generations {
+        let points: Vec<Vec<f64>> = search
+            .ask()
+            .iter()
+            .map(|unit| search_point(&start_values, unit))
+            .collect();
+        let maes = executor.run(&trial, &points)?;
         let mut costs = Vec::new();
-        for unit in search.ask() {
-            let values = search_point(&start_values, &unit);
-            let c = score(&values, generation)?;
+        for (values, mae) in points.into_iter().zip(maes) {
+            let c = candidate(generation, values, mae);
             if c.cost < best.cost {
                 best = c.clone();
             }
@@ -225,13 +305,13 @@ pub fn fit_transfer(
         search.tell(&costs)?;
     }
     Ok(TransferFit {
-        config: with_values(base, &best.values),
+        config: with_values(&trial.base, &best.values),
         start,
         best,
         candidates,
-        real_frames: real.len(),
-        warnings,
-        layout,
+        real_frames: trial.real.len(),
+        warnings: trial.warnings,
+        layout: trial.layout,
     })
 }
 

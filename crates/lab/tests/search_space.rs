@@ -86,8 +86,12 @@ fn issue24_a_trial_is_pure_and_the_local_executor_changes_nothing() {
     let configs: Vec<ModelConfig> = (0..6)
         .map(|k| small.apply(&base, &tpe.suggest(k, &[])).unwrap())
         .collect();
-    let batch = Local.run(&trial, &configs);
-    let one_by_one: Vec<_> = configs.iter().rev().map(|c| trial.evaluate(c)).collect();
+    let batch = Local.run(&trial, &configs).unwrap();
+    let one_by_one: Vec<_> = configs
+        .iter()
+        .rev()
+        .map(|c| trial.evaluate(c).unwrap())
+        .collect();
     let one_by_one: Vec<_> = one_by_one.into_iter().rev().collect();
     assert_eq!(batch, one_by_one);
     assert!(batch.iter().any(|s| s.score.is_finite()));

@@ -14,5 +14,5 @@ mod tpe;
 
 pub use cmaes::{Cmaes, CmaesConfig};
 pub use error::OptimError;
-pub use executor::{Evaluation, Executor, Local};
+pub use executor::{Evaluation, Executor, Local, RunError};
 pub use tpe::{Domain, Observation, Tpe, TpeConfig};

@@ -14,6 +14,7 @@ mod follow;
 mod image_model;
 mod interrupt;
 mod model;
+mod remote;
 mod rig;
 mod samples;
 mod sight;
@@ -45,5 +46,6 @@ fn _tactrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<sim::SimTacTip>()?;
     m.add_function(wrap_pyfunction!(follow::follow, m)?)?;
     m.add_function(wrap_pyfunction!(rig::follow_rig, m)?)?;
+    m.add_function(wrap_pyfunction!(remote::evaluate, m)?)?;
     Ok(())
 }

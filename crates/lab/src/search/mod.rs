@@ -76,14 +76,31 @@ pub fn data_id(data: &TapData) -> (String, usize) {
 /// What one trial gave: validation mean absolute errors `[r mm, theta
 /// deg]` and the score (`mae_r / std_r + mae_theta / std_theta`, the
 /// training targets' stds; lower is better); a diverged training scores
-/// +inf.
+/// +inf (written `null` in JSON, read back as +inf).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrialScore {
+    #[serde(deserialize_with = "null_is_infinite::pair")]
     pub val_mae: [f64; 2],
+    #[serde(deserialize_with = "null_is_infinite::one")]
     pub score: f64,
     /// Why the training failed, other than by diverging.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
+}
+
+/// JSON has no infinity: serde_json writes it `null`; read `null` back as
+/// +inf (a diverged trial's score).
+mod null_is_infinite {
+    use serde::{Deserialize, Deserializer};
+
+    pub fn one<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
+    }
+
+    pub fn pair<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+        let v = <[Option<f64>; 2]>::deserialize(d)?;
+        Ok(v.map(|x| x.unwrap_or(f64::INFINITY)))
+    }
 }
 
 /// One trial as an evaluation: train a pose model on the fit part, score
@@ -94,6 +111,20 @@ pub struct PoseTrial {
     val: Dataset,
     /// The training targets' standard deviations.
     std: [f64; 2],
+    /// Where a remote worker finds the same parts, if known.
+    context: Option<SearchContext>,
+}
+
+/// What a remote worker rebuilds a [`PoseTrial`] from: the training
+/// dataset's folder (which it must see: a shared file system), its
+/// content hash, and the inner split.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SearchContext {
+    pub train: std::path::PathBuf,
+    pub data_sha256: String,
+    pub val_fraction: f64,
+    pub seed: u64,
 }
 
 impl PoseTrial {
@@ -101,7 +132,37 @@ impl PoseTrial {
     pub fn new(fit: Dataset, val: Dataset) -> Result<Self> {
         let scale = Standardiser::fit(&fit.y, fit.n, fit.dim_y)?;
         let std = [scale.std()[0], scale.std()[1]];
-        Ok(PoseTrial { fit, val, std })
+        Ok(PoseTrial {
+            fit,
+            val,
+            std,
+            context: None,
+        })
+    }
+
+    /// The evaluation over the inner split of `data` (fit part, validation
+    /// part), which a remote worker rebuilds from `context`.
+    fn split(data: &TapData, context: SearchContext) -> Result<(Self, TapData, usize)> {
+        let (fit_rows, val_rows) = holdout_rows(data, context.val_fraction, context.seed)?;
+        let val = data.subset(&val_rows).to_learn()?;
+        let fit_data = data.subset(&fit_rows);
+        let mut trial = PoseTrial::new(fit_data.to_learn()?, val)?;
+        trial.context = Some(context);
+        Ok((trial, fit_data, val_rows.len()))
+    }
+
+    /// The evaluation a remote worker rebuilds from [`SearchContext`] JSON
+    /// (the dataset read again, and refused if its content differs).
+    pub fn from_context(context: &str) -> Result<Self> {
+        let context: SearchContext = crate::remote::parse_context(Self::NAME, context)?;
+        let data = tactrace_store::read_dataset(&context.train)?;
+        if data_id(&data).0 != context.data_sha256 {
+            return Err(LabError::Format {
+                path: context.train.clone(),
+                reason: "this worker's copy of the training data differs from the search's".into(),
+            });
+        }
+        Ok(Self::split(&data, context)?.0)
     }
 }
 
@@ -109,8 +170,21 @@ impl Evaluation for PoseTrial {
     const NAME: &'static str = "tactrace.search.pose_model";
     type Config = ModelConfig;
     type Score = TrialScore;
+    type Error = LabError;
 
-    fn evaluate(&self, config: &ModelConfig) -> TrialScore {
+    fn context(&self) -> Option<String> {
+        let c = self.context.as_ref()?;
+        crate::remote::context_json(Self::NAME, c)
+    }
+
+    fn evaluate(&self, config: &ModelConfig) -> Result<TrialScore> {
+        Ok(self.score(config))
+    }
+}
+
+impl PoseTrial {
+    /// Train on the fit part, score on the validation part.
+    fn score(&self, config: &ModelConfig) -> TrialScore {
         let failed = |failure: Option<String>| TrialScore {
             val_mae: [f64::INFINITY; 2],
             score: f64::INFINITY,
@@ -153,10 +227,11 @@ pub struct SearchOutcome {
 }
 
 /// Run (or with `resume`, continue) the search of `settings` on `data`
-/// into `out`, calling `progress` after each trial.
+/// (read from the folder `train`, where a remote executor's workers read
+/// it too) into `out`, calling `progress` after each trial.
 pub fn search(
     settings: &SearchSettings,
-    data: &TapData,
+    (data, train): (&TapData, &Path),
     out: &Path,
     (force, resume): (bool, bool),
     executor: &impl Executor,
@@ -168,13 +243,16 @@ pub fn search(
             "--trials and --batch must be at least 1".into(),
         ));
     }
-    let (fit_rows, val_rows) = holdout_rows(data, settings.val_fraction, settings.seed)?;
-    let val = data.subset(&val_rows).to_learn()?;
-    let fit_data = data.subset(&fit_rows);
+    let context = SearchContext {
+        train: std::path::absolute(train).map_err(|e| LabError::Config(e.to_string()))?,
+        data_sha256: settings.data_sha256.clone(),
+        val_fraction: settings.val_fraction,
+        seed: settings.seed,
+    };
+    let (trial, fit_data, val_rows) = PoseTrial::split(data, context)?;
     for cfg in settings.space.corners(&settings.base, tpe.domains())? {
-        crate::train::check_trainable(&cfg, &fit_data, val_rows.len())?;
+        crate::train::check_trainable(&cfg, &fit_data, val_rows)?;
     }
-    let trial = PoseTrial::new(fit_data.to_learn()?, val)?;
     let mut folder = SearchFolder::open(out, settings, force, resume)?;
     let mut history: Vec<Observation> = folder
         .trials()
@@ -197,7 +275,7 @@ pub fn search(
             .map(|v| settings.space.apply(&settings.base, v))
             .collect::<Result<Vec<_>>>()?;
         let t0 = std::time::Instant::now();
-        let scores = executor.run(&trial, &configs);
+        let scores = executor.run(&trial, &configs)?;
         let seconds = t0.elapsed().as_secs_f64() / ks.len() as f64;
         for ((k, v), score) in ks.into_iter().zip(values).zip(scores) {
             if let Some(reason) = &score.failure {

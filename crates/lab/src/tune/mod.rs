@@ -13,10 +13,12 @@
 mod outputs;
 mod score;
 mod space;
+mod trial;
 
 pub use outputs::{held_out_table, HeldOutRow, TuneOutcome};
 pub use score::{evaluate_set, simulate, Objective, RunScore, TimedRun};
 pub use space::{from_unit, to_unit, Knob, KNOBS};
+pub use trial::{TuneContext, TuneTrial};
 
 use crate::error::{LabError, Result};
 use crate::follow::SimFollowConfig;
@@ -24,10 +26,9 @@ use outputs::Outputs;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use tactrace_control::PbtsConfig;
 use tactrace_geometry::{Contour, ShapeSpec};
-use tactrace_optim::{Cmaes, CmaesConfig};
+use tactrace_optim::{Cmaes, CmaesConfig, Executor};
 use tactrace_report::figures::GenerationCost;
 use tactrace_store::{load_shape, StoredModel};
 
@@ -173,17 +174,30 @@ fn score_candidate(
     Ok((cost, runs))
 }
 
-/// Tune `base`'s controller on the training contours with `model`, judge
-/// the best on the held-out ones, into `out` (refused when it exists,
-/// unless `force`).
+/// Tune `base`'s controller on the training contours with `model` (read
+/// from the folder `model_dir`, where a remote executor's workers read it
+/// too), each generation's candidates run through `executor`; judge the
+/// best on the held-out ones, into `out` (refused when it exists, unless
+/// `force`).
 pub fn tune(
     cfg: &TuneConfig,
     base: &SimFollowConfig,
-    model: &StoredModel,
+    (model, model_dir): (&StoredModel, &Path),
     (out, force): (&Path, bool),
+    executor: &impl Executor,
     progress: &(dyn Fn(TuneEvent) + Sync),
 ) -> Result<TuneOutcome> {
-    let (training, held_out) = cfg.check()?;
+    let (_, held_out) = cfg.check()?;
+    let trial = TuneTrial::new(
+        TuneContext {
+            base: base.clone(),
+            model: std::path::absolute(model_dir).map_err(|e| LabError::Config(e.to_string()))?,
+            training: cfg.training.clone(),
+            objective: cfg.objective.clone(),
+        },
+        model.clone(),
+    )?;
+    let training = trial.training();
     base.controller
         .validate()
         .map_err(|e| LabError::Config(format!("the base controller: {e}")))?;
@@ -202,7 +216,7 @@ pub fn tune(
     let done = || progress(TuneEvent::RunDone);
     let objective = &cfg.objective;
     let (start_cost, _) =
-        score_candidate(base, &base.controller, model, &training, objective, &done)?;
+        score_candidate(base, &base.controller, model, training, objective, &done)?;
     let mut best = (base.controller.clone(), start_cost);
     let mut history = vec![GenerationCost {
         evaluations: training.len(),
@@ -210,19 +224,21 @@ pub fn tune(
         best_so_far: start_cost,
     }];
     outputs.generation(&best, &history)?;
-    let evaluated = AtomicUsize::new(training.len());
+    let mut evaluated = training.len();
     for generation in 1..=generations {
-        let points = es.ask();
-        let scored: Vec<(PbtsConfig, f64)> = points
-            .par_iter()
-            .map(|u| {
-                let (controller, outside) = from_unit(&base.controller, u);
-                let (cost, _) =
-                    score_candidate(base, &controller, model, &training, objective, &done)?;
-                evaluated.fetch_add(training.len(), Ordering::Relaxed);
-                Ok((controller, cost + 10.0 * outside))
-            })
-            .collect::<Result<_>>()?;
+        let (controllers, outside): (Vec<PbtsConfig>, Vec<f64>) = es
+            .ask()
+            .iter()
+            .map(|u| from_unit(&base.controller, u))
+            .unzip();
+        let costs = executor.run(&trial, &controllers)?;
+        (0..controllers.len() * training.len()).for_each(|_| done());
+        evaluated += controllers.len() * training.len();
+        let scored: Vec<(PbtsConfig, f64)> = controllers
+            .into_iter()
+            .zip(costs.iter().zip(outside))
+            .map(|(c, (cost, out))| (c, cost.unwrap_or(f64::INFINITY) + 10.0 * out))
+            .collect();
         let costs: Vec<f64> = scored.iter().map(|(_, c)| *c).collect();
         es.tell(&costs)?;
         let (gen_best, gen_cost) = scored
@@ -234,7 +250,7 @@ pub fn tune(
             best = (gen_best, gen_cost);
         }
         history.push(GenerationCost {
-            evaluations: evaluated.load(Ordering::Relaxed),
+            evaluations: evaluated,
             generation_best: gen_cost,
             best_so_far: best.1,
         });

@@ -227,3 +227,7 @@ def follow_rig(
     force: bool = False,
     check: bool = True,
 ) -> dict[str, Any]: ...
+def evaluate(name: str, context: str, config: str) -> str:
+    """Run the named Rust evaluation, rebuilt from its JSON context, on one
+    JSON configuration; the score as JSON (a remote executor's worker)."""
+    ...

@@ -40,7 +40,7 @@ pub fn feature_frame(
 }
 
 /// The sensor frame of label `s` in the frame `frame`: `frame * T(s)`
-/// with the depth s[2] taken downwards (z = -depth).
+/// with the depth `s[2]` taken downwards (z = -depth).
 pub fn pose_of_label(frame: &Isometry3<f64>, s: [f64; 6]) -> Pose {
     let local = Pose::new(s[0], s[1], -s[2], s[3], s[4], s[5]).to_isometry();
     Pose::from_isometry(&(frame * local))

@@ -161,6 +161,10 @@ fn commands_of_line(line: &str, vars: &HashMap<String, String>) -> Vec<Vec<Strin
         } else if let Some(stripped) = word.strip_suffix(';') {
             segments.last_mut().unwrap().push(stripped.to_owned());
             segments.push(Vec::new());
+        } else if raw.starts_with('$') {
+            // An unquoted variable splits into words as the shell splits it.
+            let words = word.split_whitespace().map(str::to_owned);
+            segments.last_mut().unwrap().extend(words);
         } else {
             segments.last_mut().unwrap().push(word);
         }
@@ -305,8 +309,22 @@ fn tokens(args: &[String]) -> Vec<String> {
     for w in args {
         let lead = w.len() - w.trim_start_matches(['[', '(']).len();
         let core = w.trim_start_matches(['[', '(']);
-        let body = core.trim_end_matches([']', ')']);
-        let trail = &core[body.len()..];
+        // Brackets opened inside the word close inside it
+        // (`COLUMN:UNIT[:circular]`); only the closers beyond them end groups.
+        let mut inner = 0usize;
+        let mut cut = core.len();
+        for (i, c) in core.char_indices() {
+            match c {
+                '[' | '(' => inner += 1,
+                ']' | ')' if inner == 0 => {
+                    cut = i;
+                    break;
+                }
+                ']' | ')' => inner -= 1,
+                _ => {}
+            }
+        }
+        let (body, trail) = core.split_at(cut);
         out.extend(w[..lead].chars().map(String::from));
         if !body.is_empty() {
             out.push(body.to_owned());
@@ -463,4 +481,18 @@ fn issue20_the_doc_command_checker_reads_synopses_and_shell() {
         ..bad
     };
     assert!(problem(&unparsable).is_some_and(|p| p.contains("does not parse")));
+    // An unquoted variable holding options splits into words.
+    learn_vars("TG=\"--target a:mm --target b:deg\"", &mut vars);
+    let cmds = commands_of_line("$T import --frames f $TG --out d", &vars);
+    assert_eq!(
+        cmds,
+        vec![words(
+            "import --frames f --target a:mm --target b:deg --out d"
+        )]
+    );
+    // A bracket inside a word does not end the optional group round it.
+    let syn = tokens(&words(
+        "twin --targets t [--target COLUMN:UNIT[:circular] ...] --out d",
+    ));
+    assert_eq!(required(&syn), words("twin --targets t --out d"));
 }

@@ -6,8 +6,10 @@ use crate::cmd_learn::{PredictArgs, PresetArg, TrainArgs};
 use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::{Context, Result};
+use std::path::Path;
 use tactrace_convnet::ModelKind;
 use tactrace_lab::{import_reader, train as tr, train_image as ti, LabError};
+use tactrace_servo::ImageInput;
 use tactrace_store::{
     check_output_dir, fsutil, read_dataset, ImageFrames, LoadedModel, SightFile, StoredImageModel,
     TapData,
@@ -144,21 +146,17 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
     Ok(())
 }
 
-/// `predict` with an image model: one frame (`--image`, read as the
-/// training frames were: `--sensor` settings or the frame as it is, then
-/// area-averaged to the model's input), or a dataset with frames
-/// (`--data`), every target predicted then true.
+/// `predict` with an image model: one frame (`--image`, made as the
+/// training frames were: the preprocessing the model folder records, or
+/// for a folder that records none the `--sensor` settings or the frame as
+/// it is, then area-averaged to the model's input), or a dataset with
+/// frames (`--data`), every target predicted then true.
 pub fn predict(model: &StoredImageModel, a: PredictArgs) -> Result<()> {
     let net = model.model();
     match (a.image, a.data) {
         (Some(image), None) => {
-            let sensor = a.sensor.as_deref().map(SightFile::read).transpose()?;
-            let sight = sensor.as_ref().map(SightFile::sight);
-            let blob = crate::cmd_data::blob_params(a.params.as_deref(), "real256")?;
-            let detector = import_reader::frame_detector(sight.as_ref(), &blob, &image)?;
-            let (h, w) = net.input_size();
-            debug_assert_eq!(h, w);
-            let pixels = import_reader::image_input(&detector, &image, h)?;
+            let input = predict_input(model, a.sensor.as_deref())?;
+            let pixels = import_reader::image_input(&input, &image)?;
             let values = net.predict_targets(&pixels).map_err(LabError::from)?;
             let names: Vec<(String, f64)> = net
                 .outputs()
@@ -190,4 +188,27 @@ pub fn predict(model: &StoredImageModel, a: PredictArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// How `predict --image` makes the frame: as the model folder records
+/// ([`tactrace_lab::follow::image_input_for`]); a folder that records no
+/// preprocessing takes `--sensor`'s, if given (models trained before the
+/// folder recorded it). A `--sensor` that disagrees with the record is
+/// refused.
+fn predict_input(model: &StoredImageModel, sensor: Option<&Path>) -> Result<ImageInput> {
+    let recorded = model.frames().preprocess.as_ref();
+    let Some(path) = sensor else {
+        return Ok(tactrace_lab::follow::image_input_for(model)?);
+    };
+    let sight = SightFile::read(path)?.sight();
+    let given = Some(&sight.preprocess).filter(|p| **p != Default::default());
+    if recorded.is_some() && recorded != given {
+        return Err(LabError::Config(format!(
+            "{} preprocesses frames otherwise than the image model's training frames were              (its folder records how); leave out --sensor",
+            path.display()
+        ))
+        .into());
+    }
+    let size = model.model().input_size();
+    Ok(ImageInput::new(recorded.or(given), size).map_err(LabError::from)?)
 }

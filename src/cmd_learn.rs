@@ -479,8 +479,9 @@ pub struct PredictArgs {
     #[arg(long)]
     pub(crate) model: PathBuf,
     /// One frame (a pin model needs --reference, or --sensor; an image
-    /// model reads it as its training frames were read: --sensor when
-    /// they were imported with one).
+    /// model reads it as its training frames were made, with the sensor
+    /// preprocessing its folder records; --sensor only for a folder that
+    /// records none).
     #[arg(long, conflicts_with = "data")]
     pub(crate) image: Option<PathBuf>,
     /// The undeformed frame of the same sensor; default with --sensor: the

@@ -5,6 +5,7 @@ use crate::error::{LabError, Result};
 use crate::import_reader::{self, FrameRead, SmallFrame};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
+use tactrace_servo::ImageInput;
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::{
     DatasetMeta, FramesInfo, ImageFrames, LabelledCollection, LabelledRow, TapData, TapFields,
@@ -137,6 +138,9 @@ fn import_rows_with(
     let paths: Vec<PathBuf> = rows.iter().map(|r| frames.join(&r.image)).collect();
     let opened = import_reader::open(collection, &paths)?;
     let reader = &opened.reader;
+    let input = frames_size
+        .map(|s| import_reader::image_input_of(reader, s))
+        .transpose()?;
     if let Some(reference) = opened.reference.frame() {
         check_reference(
             reader,
@@ -147,7 +151,7 @@ fn import_rows_with(
     let read: Vec<Result<FrameRead>> = paths
         .par_iter()
         .map(|path| {
-            let out = import_reader::read_one_with_image(reader, path, frames_size);
+            let out = import_reader::read_one_with_image(reader, path, input.as_ref());
             progress();
             out
         })
@@ -192,7 +196,7 @@ fn import_rows_with(
     let mut got = gather(&rows, outcomes, meta, frames)?;
     got.data.meta.tracking = totals(paths.len(), &counts);
     got.estimated_rest = opened.estimated;
-    got.images = frames_size.and_then(|size| images_of(size, small));
+    got.images = input.and_then(|i| images_of(&i, small));
     let d = &got.data;
     if let Some(reference) = opened.reference.frame() {
         got.warnings.extend(crate::import_checks::pressed_reference(
@@ -206,11 +210,14 @@ fn import_rows_with(
 }
 
 /// The kept rows' small frames as one stack (`None` when there is none).
-fn images_of(size: usize, small: Vec<SmallFrame>) -> Option<ImageFrames> {
+/// They record `input`'s preprocessing, so image models trained on them
+/// are fed frames made the same way.
+fn images_of(input: &ImageInput, small: Vec<SmallFrame>) -> Option<ImageFrames> {
     let source = small.first()?.1;
     let pixels = small.into_iter().flat_map(|(p, _)| p).collect();
+    let (h, w) = input.size();
     Some(ImageFrames {
-        info: FramesInfo::new(size, size, source),
+        info: FramesInfo::new(h, w, source).with_preprocess(input.preprocess()),
         pixels,
     })
 }

@@ -12,6 +12,7 @@ use image::DynamicImage;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_sensor::read_image;
+use tactrace_servo::ImageInput;
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::LabelledCollection;
 use tactrace_vision::{
@@ -205,24 +206,29 @@ pub fn read_one(reader: &PinReader, path: &Path) -> Result<(Vec<f32>, TrackCount
     Ok((disp, counts))
 }
 
-/// A frame as the image models see it: `size x size` px area-averaged
-/// from the frame the detector sees, with that frame's `[height, width]`.
+/// A frame as the image models see it ([`ImageInput::small`] of the frame
+/// the detector sees), with that frame's `[height, width]`.
 pub type SmallFrame = (Vec<u8>, [usize; 2]);
 
 /// One frame read with its image: the displacement, the counts and the
 /// small frame when asked for.
 pub type FrameRead = (Vec<f32>, TrackCounts, Option<SmallFrame>);
 
-/// [`read_one`], with the frame the detector saw area-averaged to
-/// `size x size` px when `size` is given.
+/// [`read_one`], with the frame the detector saw made into an image
+/// model's input by `input` (made by [`image_input_of`] for `reader`).
 pub fn read_one_with_image(
     reader: &PinReader,
     path: &Path,
-    size: Option<usize>,
+    input: Option<&ImageInput>,
 ) -> Result<FrameRead> {
     let image = read_image(path)?;
     let frame = seen(reader.frames(), &image)?;
-    let small = size.map(|s| small_frame(&frame, s));
+    let small = input.map(|i| {
+        (
+            i.small(&frame),
+            [frame.height(), frame.width()].map(|v| v as usize),
+        )
+    });
     let Reading { tracked, counts } = reader.read_preprocessed(&frame)?;
     Ok((
         tracked.displacement(reader.tracker().reference()),
@@ -231,23 +237,29 @@ pub fn read_one_with_image(
     ))
 }
 
-/// `frame` area-averaged to `size x size` px, with its own size.
-pub fn small_frame(frame: &Frame, size: usize) -> SmallFrame {
-    let (h, w) = (frame.height() as usize, frame.width() as usize);
-    let pixels = tactrace_convnet::area_resample(frame.as_raw(), (h, w), (size, size));
-    (pixels, [h, w])
+/// The image input of frames read by `reader`: its preprocessing, then
+/// area-averaged to `size x size` px (what `frames.npy` holds).
+pub fn image_input_of(reader: &PinReader, size: usize) -> Result<ImageInput> {
+    Ok(ImageInput::new(
+        Some(reader.frames().stage().params()),
+        (size, size),
+    )?)
 }
 
-/// The image of the file at `path` as the image models of a dataset read
-/// by `detector` see it: preprocessed as the pins are, then area-averaged
-/// to `size x size` px.
-pub fn image_input(detector: &FrameDetector, path: &Path, size: usize) -> Result<Vec<u8>> {
+/// The image in the file at `path` as `input` makes an image model's
+/// frames: grey (refused in colour when `input` has no preprocessing: a
+/// raw camera frame), preprocessed, area-averaged.
+pub fn image_input(input: &ImageInput, path: &Path) -> Result<Vec<u8>> {
     let image = read_image(path)?;
-    let frame = seen(detector, &image).map_err(|e| LabError::Format {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    Ok(small_frame(&frame, size).0)
+    if input.preprocess().is_none() && image.color().has_color() {
+        return Err(raw_frame_error(path, &image));
+    }
+    input
+        .of_frame(&grey_of(&image))
+        .map_err(|e| LabError::Format {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })
 }
 
 /// A camera image (decoded) read into ordered pins as [`read_one`] reads

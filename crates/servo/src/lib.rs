@@ -13,6 +13,7 @@
 //! This crate writes no files and prints nothing.
 
 pub mod error;
+pub mod image_input;
 pub mod metrics;
 pub mod perception;
 pub mod replay_rig;
@@ -22,6 +23,7 @@ pub mod servo_loop;
 pub mod start;
 
 pub use error::{error_chain, Result, ServoError};
+pub use image_input::ImageInput;
 pub use metrics::{
     evaluate, l2_curve, l2_curve_arc_mm, traced_fraction, trajectory_closes, ClosureDetector,
     FollowMetrics,

@@ -1,13 +1,16 @@
 //! Frame -> (r, theta): pin extraction against the undeformed frame, then
 //! the pose model (report ch. 4: the displacement vector, then the network).
-//! An image model reads the frame's pixels instead (area-averaged to its
-//! input size); the pins still say whether the tap made contact.
+//! An image model reads the frame's pixels instead, made as its training
+//! frames were ([`ImageInput`]: the dataset's preprocessing, then
+//! area-averaged to its input size); the pins still say whether the tap
+//! made contact.
 //!
 //! A follow run that keeps every tap's displacement vector asks for it
 //! ([`Perception::displacement`]) before the loop perceives the same
 //! frame: the pins of the frame last asked for are kept, so that frame is
 //! extracted once, not twice (the extraction is most of a step's cost).
 use crate::error::{Result, ServoError};
+use crate::image_input::ImageInput;
 use serde::Serialize;
 use std::sync::{Mutex, PoisonError};
 use tactrace_learn::{ImageModel, PoseModel};
@@ -18,7 +21,7 @@ use tactrace_vision::{PinExtractor, Tracked};
 /// frame's pixels.
 enum Reader {
     Pins(PoseModel),
-    Image(ImageModel),
+    Image(ImageModel, ImageInput),
 }
 
 /// Pin extraction and the pose model, with the contact rule.
@@ -76,21 +79,30 @@ impl Perception {
     }
 
     /// Pair `extractor` (for the contact rule and the recorded pins) with
-    /// the image model `model`, which reads each frame's pixels.
+    /// the image model `model`, which reads each frame's pixels made by
+    /// `input`; refuses an input of another size than the model takes.
     pub fn with_image_model(
         extractor: PinExtractor,
         model: ImageModel,
+        input: ImageInput,
         contact_threshold_px: f64,
-    ) -> Self {
-        Self {
+    ) -> Result<Self> {
+        let (expected, got) = (model.input_size(), input.size());
+        if expected != got {
+            return Err(ServoError::Config(format!(
+                "the image model takes {} x {} px frames, its input is made at {} x {} px",
+                expected.0, expected.1, got.0, got.1
+            )));
+        }
+        Ok(Self {
             extractor,
-            model: Reader::Image(model),
+            model: Reader::Image(model, input),
             contact_threshold_px,
             labels: None,
             last: Mutex::new(None),
             #[cfg(test)]
             extractions: Default::default(),
-        }
+        })
     }
 
     /// The model predicts in the labels of a real collection whose
@@ -150,10 +162,7 @@ impl Perception {
             / p.max(1) as f64;
         let [r, theta] = match &self.model {
             Reader::Pins(model) => model.predict(&disp)?,
-            Reader::Image(model) => {
-                let size = (frame.height() as usize, frame.width() as usize);
-                model.predict_resampled(frame.as_raw(), size)?
-            }
+            Reader::Image(model, input) => model.predict(&input.of_frame(frame)?)?,
         };
         let (r, theta) = LabelConvention::edge_pose_of(self.labels.as_ref(), r, theta);
         Ok(Percept {

@@ -2,17 +2,21 @@
 //! (uint8, `N x H x W`, row i the frame of row i of `inputs.npy` and
 //! `targets.npy`), the sensor's preprocessed frame area-averaged to
 //! `H x W` px, described in `meta.json` under `image_frames`
-//! ([`FramesInfo`]). A dataset without them has no `image_frames` key.
+//! ([`FramesInfo`], which also records the sensor preprocessing the frames
+//! went through, copied into an image model's `frames.json` so the model
+//! is fed frames made the same way). A dataset without them has no
+//! `image_frames` key.
 use crate::error::{Result, StoreError};
 use ndarray::Array3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use tactrace_vision::PreprocessParams;
 
 /// The frames file of a dataset folder.
 pub const FRAMES_NPY: &str = "frames.npy";
 
 /// `meta.json`'s `image_frames`: what `frames.npy` holds.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FramesInfo {
     /// The file, [`FRAMES_NPY`].
@@ -26,6 +30,11 @@ pub struct FramesInfo {
     pub source_size: [usize; 2],
     /// How they were made, for readers.
     pub layout: String,
+    /// The sensor preprocessing settings each frame went through before
+    /// the averaging; absent: none (the grey frame as it is; also what
+    /// folders written before this was recorded mean).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preprocess: Option<PreprocessParams>,
 }
 
 impl FramesInfo {
@@ -39,7 +48,17 @@ impl FramesInfo {
             layout: "N x H x W uint8 grey: each row's frame as the pin detector sees it \
                      (after the sensor's preprocessing), area-averaged to H x W"
                 .into(),
+            preprocess: None,
         }
+    }
+
+    /// The same frames, recorded as preprocessed by `preprocess` (settings
+    /// that do nothing are recorded as none).
+    pub fn with_preprocess(mut self, preprocess: Option<&PreprocessParams>) -> Self {
+        self.preprocess = preprocess
+            .filter(|p| **p != PreprocessParams::default())
+            .cloned();
+        self
     }
 }
 

@@ -29,8 +29,10 @@ use tactrace_arm::Arm;
 use tactrace_control::PbtsController;
 use tactrace_geometry::Contour;
 use tactrace_sensor::{Frame, TactileSensor};
-use tactrace_servo::{servo_loop, FnSink, FollowMetrics, LoopSummary, Perception, StepRecord};
-use tactrace_store::{write_atomic, LoadedModel, StagedDir, StoredModel};
+use tactrace_servo::{
+    servo_loop, FnSink, FollowMetrics, ImageInput, LoopSummary, Perception, StepRecord,
+};
+use tactrace_store::{write_atomic, LoadedModel, StagedDir, StoredImageModel, StoredModel};
 use tactrace_vision::PinExtractor;
 
 /// The outcome of a follow run.
@@ -169,7 +171,8 @@ pub fn perception_for(
 /// The perception of `model`, pin or image model, on a rig whose
 /// undeformed frame is `reference` ([`perception_for`] a pin model). An
 /// image model must predict an edge pose and have been trained on frames
-/// of the rig's frame size (it sees them area-averaged to its input).
+/// that the rig's frames make through its dataset's preprocessing (it
+/// sees them made as its training frames were: [`image_input_for`]).
 pub fn perception_of(
     reference: &Frame,
     model: &LoadedModel,
@@ -180,20 +183,39 @@ pub fn perception_of(
         LoadedModel::Image(m) => m,
     };
     image.model().edge_roles()?;
-    let rig = [reference.height() as usize, reference.width() as usize];
+    let input = image_input_for(image)?;
+    let rig = input.preprocessed_size(reference.width(), reference.height());
     let trained = image.frames().source_size;
-    if rig != trained {
+    if rig.as_ref().ok() != Some(&trained) {
+        let seen = match &rig {
+            Ok([h, w]) => format!("make {h} x {w} px frames"),
+            Err(e) => format!("cannot be preprocessed as its training frames were: {e}"),
+        };
         return Err(crate::LabError::Config(format!(
-            "the image model was trained on frames of {} x {} px, this world's are {} x {} px",
-            trained[0], trained[1], rig[0], rig[1]
+            "the image model was trained on frames of {} x {} px, this world's {} x {} px ones {seen}",
+            trained[0],
+            trained[1],
+            reference.height(),
+            reference.width()
         )));
     }
     let extractor = PinExtractor::from_reference_frame(reference, settings.blob().clone())?;
     Ok(Perception::with_image_model(
         extractor,
         image.model().clone(),
+        input,
         settings.follow().contact_threshold_px,
-    ))
+    )?)
+}
+
+/// How `model`'s input frames are made: the preprocessing its folder
+/// records (none for a folder that records none), then area-averaged to
+/// its input size, as its training dataset's `frames.npy` was.
+pub fn image_input_for(model: &StoredImageModel) -> Result<ImageInput> {
+    Ok(ImageInput::new(
+        model.frames().preprocess.as_ref(),
+        model.model().input_size(),
+    )?)
 }
 
 /// The servo loop on any arm and sensor, simulated or real, seeing frames

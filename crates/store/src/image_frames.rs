@@ -146,7 +146,7 @@ pub fn read_image_frames(
     if info.file != FRAMES_NPY {
         return Err(StoreError::Format {
             path: dir.join("meta.json"),
-            reason: format!("image_frames.file is {:?}, not {FRAMES_NPY}", info.file),
+            reason: format!("image_frames.file is \"{}\", not {FRAMES_NPY}", info.file),
         });
     }
     let array = crate::npy_file::read_u8_stack(&p)?;

@@ -228,3 +228,56 @@ fn issue21_the_shared_331_pin_set_calibrates_with_nothing_hand_written() {
     let (before, after) = held_out_rms(&format!("{}{}", run.stdout, run.stderr));
     assert!(after < 0.5 * before, "{before} -> {after} px");
 }
+
+#[test]
+fn issue21_a_sensor_calibrated_without_an_undeformed_frame_collects_and_follows() {
+    let t = TempDir::new("sensor-estimated-runs");
+    ring_taps(&t.0, 60);
+    let run = tactrace(
+        &t.0,
+        &[
+            "calibrate",
+            "--frames",
+            "frames",
+            "--targets",
+            "targets.csv",
+            "--samples",
+            "30",
+            "--out",
+            "s",
+            "--dz-column",
+            "none",
+            "--shear-columns",
+            "none",
+        ],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let sensor = tactrace_store::SensorFolder::read(&t.join("s")).unwrap();
+    // Its taps are read against its own (estimated) rest pins, in their
+    // order, not against the pins a detector finds in reference.png (the
+    // simulator's rest frame).
+    let run = tactrace(
+        &t.0,
+        &["collect", "--sensor", "s", "--samples", "40", "--out", "c"],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let pins: Vec<[f64; 2]> = serde_json::from_value(reference_pins(&t.join("c"))).unwrap();
+    assert_eq!(pins, sensor.spec.reference_pins);
+    let run = tactrace(
+        &t.0,
+        &[
+            "train", "--model", "pdennn", "--train", "c", "--epochs", "1", "--out", "m",
+        ],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let run = tactrace(
+        &t.0,
+        &[
+            "follow", "--sensor", "s", "--model", "m", "--shape", "disk", "--steps", "3", "--out",
+            "run",
+        ],
+    );
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    let trajectory = std::fs::read_to_string(t.join("run/trajectory.csv")).unwrap();
+    assert_eq!(trajectory.lines().count(), 4, "{trajectory}");
+}

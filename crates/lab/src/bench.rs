@@ -151,16 +151,15 @@ pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<
 }
 
 /// As [`bench()`] with a calibrated sensor (`--sensor`): its taps, seen
-/// against its real reference frame with its blob detector, over its own
-/// label range.
+/// against its own reference pins with its blob detector
+/// ([`crate::sim_sight::blob_extractor`]), over its own label range.
 pub fn bench_calibrated(
     folder: &SensorFolder,
     rig: &RigConfig,
     taps: usize,
     model: Option<&PoseModel>,
 ) -> Result<BenchFigures> {
-    let spec = &folder.spec;
-    let extractor = PinExtractor::from_reference_frame(&folder.reference, spec.blob.clone())?;
+    let extractor = crate::sim_sight::blob_extractor(folder)?;
     // The sensor's own pose (no mount): the labels' tip pose.
     let convention = LabelConvention {
         mount_yaw_deg: 0.0,

@@ -30,7 +30,7 @@ use tactrace_store::{DatasetMeta, SensorFolder, TapData};
 const PRESIZED_ROWS: usize = 1 << 16;
 /// Taps handed to the threads at a time (progress is reported between).
 const TAPS_PER_BATCH: usize = 256;
-use tactrace_vision::{BlobParams, PinExtractor};
+use tactrace_vision::{BlobParams, DetectorParams, PinExtractor, PinReader, SightParams};
 
 /// What to collect.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -79,21 +79,24 @@ pub fn collect(
     rig_cfg.validate()?;
     let model = TacTipModel::new(rig_cfg.sensor.clone())?;
     let reference = model.render(model.rest_pins(), None);
+    let reader = blob_reader(&reference, &rig_cfg.blob)?;
     let world = SimWorld {
         rig: rig_cfg,
         model: &model,
         mount_yaw_deg: 0.0,
         shape,
         reference: &reference,
-        blob: &rig_cfg.blob,
+        reader: &reader,
         labels: None,
     };
     let settings = serde_json::json!({ "rig": rig_cfg, "collect": cfg });
     collect_simulated(world, cfg, "simulated", origin, settings, progress)
 }
 
-/// As [`collect`] with a calibrated sensor (`--sensor`): its taps, pins
-/// ordered by its real reference frame, labels drawn in its own convention
+/// As [`collect`] with a calibrated sensor (`--sensor`): its taps, read
+/// by its own detector (its sensor settings' or its blob detector) and
+/// ordered by its reference pins (an undeformed frame's or the rest layout
+/// estimated from its taps: [`crate::sim_sight::of_sensor`]), labels drawn in its own convention
 /// (r in +-`r_range_mm`, theta swept over +-`theta_range_deg` of its
 /// labels) and placed at their loop pose (eq. L1), so the set looks like
 /// the sensor's real collection. `rig_cfg.sensor` is not used.
@@ -108,6 +111,7 @@ pub fn collect_calibrated(
     let spec = &sensor.spec;
     let convention = sensor.label_convention();
     let model = sensor.model()?;
+    let sight = crate::sim_sight::of_sensor(sensor)?;
     rig_cfg.validate()?;
     let names = [
         format!("r_mm ({})", spec.labels.r),
@@ -119,7 +123,7 @@ pub fn collect_calibrated(
         mount_yaw_deg: convention.mount_yaw_deg,
         shape,
         reference: &sensor.reference,
-        blob: &spec.blob,
+        reader: &sight.reader,
         labels: Some((convention, names)),
     };
     let settings = serde_json::json!({
@@ -137,15 +141,15 @@ pub fn collect_calibrated(
 
 /// The simulated rig of a collection, shared by every thread: the arm's
 /// and workspace's settings, the TacTip model (mounted turned by
-/// `mount_yaw_deg`), the object, the reference frame and blob settings,
-/// and the label convention with its target names (as [`EdgeRig`]).
+/// `mount_yaw_deg`), the object, the reference frame (kept with the
+/// frames), the reader of its taps' pins, and the label convention with its target names (as [`EdgeRig`]).
 struct SimWorld<'a> {
     rig: &'a RigConfig,
     model: &'a TacTipModel,
     mount_yaw_deg: f64,
     shape: &'a Contour,
     reference: &'a Frame,
-    blob: &'a BlobParams,
+    reader: &'a PinReader,
     labels: Option<(LabelConvention, [String; 2])>,
 }
 
@@ -168,8 +172,8 @@ fn collect_simulated(
     mut progress: impl FnMut(usize),
 ) -> Result<Collected> {
     check_samples(cfg)?;
-    let extractor = PinExtractor::from_reference_frame(world.reference, world.blob.clone())?;
-    let dim = 2 * extractor.tracker.reference().len();
+    let rest = world.reader.tracker().reference();
+    let dim = 2 * rest.len();
     let rows = cfg.samples.min(PRESIZED_ROWS);
     let mut inputs = Vec::with_capacity(rows * dim);
     let mut targets = Vec::with_capacity(rows * 2);
@@ -179,7 +183,7 @@ fn collect_simulated(
         let last = (first + TAPS_PER_BATCH).min(cfg.samples);
         let batch: Vec<TapRow> = (first..last)
             .into_par_iter()
-            .map(|i| simulated_tap(&world, &extractor, cfg, i))
+            .map(|i| simulated_tap(&world, cfg, i))
             .collect::<Result<_>>()?;
         for (i, row) in (first..).zip(batch) {
             with_missing += usize::from(row.missing);
@@ -197,7 +201,7 @@ fn collect_simulated(
             png_bytes(world.reference, "reference")?,
         ));
     }
-    let meta = dataset_meta(cfg, (source, origin), settings, &extractor, with_missing);
+    let meta = dataset_meta(cfg, (source, origin), settings, rest, with_missing);
     let names = world.labels.map(|(_, n)| n);
     Ok(Collected {
         data: TapData {
@@ -217,12 +221,7 @@ fn collect_simulated(
 /// then seeds the arm's noise and the camera's nuisance. The arm starts at
 /// the tap's approach pose (checked by the limiter), taps down, and the
 /// sensor renders the pins at the pose physically reached.
-fn simulated_tap(
-    world: &SimWorld,
-    extractor: &PinExtractor,
-    cfg: &CollectConfig,
-    i: usize,
-) -> Result<TapRow> {
+fn simulated_tap(world: &SimWorld, cfg: &CollectConfig, i: usize) -> Result<TapRow> {
     let tap_cfg = &world.rig.tap;
     let (mut rng, r, depth) = tap_draws(cfg, tap_cfg, i);
     let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
@@ -243,9 +242,9 @@ fn simulated_tap(
     };
     arm.move_to(approach)?;
     let frame = tap(&mut arm, &mut sensor, depth)?;
-    let tracked = extractor.extract(&frame)?;
+    let tracked = world.reader.read_preprocessed(&frame)?.tracked;
     Ok(TapRow {
-        inputs: tracked.displacement(extractor.tracker.reference()),
+        inputs: tracked.displacement(world.reader.tracker().reference()),
         targets: [r as f32, theta as f32],
         missing: tracked.missing > 0,
         frame: cfg.save_frames.then_some(frame),
@@ -370,7 +369,13 @@ pub fn collect_on(
     if cfg.save_frames {
         frames.push(("reference.png".into(), png_bytes(reference, "reference")?));
     }
-    let meta = dataset_meta(cfg, (source, origin), settings, &extractor, with_missing);
+    let meta = dataset_meta(
+        cfg,
+        (source, origin),
+        settings,
+        extractor.tracker.reference(),
+        with_missing,
+    );
     let names = labels.map(|(_, n)| n);
     let meta = DatasetMeta {
         targets: names.map_or(meta.targets, |n| n.into()),
@@ -391,10 +396,10 @@ pub(crate) fn dataset_meta(
     cfg: &CollectConfig,
     (source, origin): (&str, &str),
     settings: serde_json::Value,
-    extractor: &PinExtractor,
+    reference_pins: &[[f64; 2]],
     with_missing: usize,
 ) -> DatasetMeta {
-    let reference_pins = extractor.tracker.reference().to_vec();
+    let reference_pins = reference_pins.to_vec();
     DatasetMeta {
         source: source.into(),
         origin: origin.into(),
@@ -411,6 +416,20 @@ pub(crate) fn dataset_meta(
         images: Vec::new(),
         tracking: tactrace_store::TrackTotals::frames(cfg.samples, with_missing),
     }
+}
+
+/// The blob detector `blob` over the pins it finds in the undeformed
+/// frame `reference` (the default simulated TacTip's rest frame), in
+/// detection order.
+fn blob_reader(reference: &Frame, blob: &BlobParams) -> Result<PinReader> {
+    let sight = SightParams {
+        preprocess: Default::default(),
+        detect: DetectorParams::Blobs(blob.clone()),
+    };
+    let detector = sight.check(reference.width(), reference.height())?;
+    let rest = detector.detector().detect(reference).points;
+    let rest = rest.iter().map(|k| [k.x, k.y]).collect();
+    Ok(PinReader::new(detector, rest)?)
 }
 
 /// theta for sample `i` of `n`, sweeping linearly from -range to +range.

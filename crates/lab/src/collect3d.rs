@@ -232,7 +232,13 @@ fn meta(
         ..CollectConfig::default()
     };
     let settings = serde_json::json!({ "rig": rig_cfg, "collect_3d": cfg });
-    let base = dataset_meta(&edge, ("simulated", origin), settings, extractor, 0);
+    let base = dataset_meta(
+        &edge,
+        ("simulated", origin),
+        settings,
+        extractor.tracker.reference(),
+        0,
+    );
     DatasetMeta {
         targets: TargetColumns::display(targets),
         target_columns: TargetColumns::of(targets),

@@ -9,7 +9,7 @@
 //! real frames (docs/results.md, "Simulated to real").
 use crate::error::{LabError, Result};
 use crate::import::{gather, keep_rows, FrameOutcome, Imported, TwinComposition};
-use crate::sim_sight::{lay_out, sim_sight, LayoutReport, SimSight};
+use crate::sim_sight::{lay_out, sensor_sight, sim_sight, LayoutReport, SimSight};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -172,39 +172,6 @@ fn calibrated_sight(collection: &LabelledCollection, sensor: &SensorFolder) -> R
             sensor_sight(spec, spec.reference_pins.clone(), &sensor.source)
         }
     }
-}
-
-/// A calibrated sensor's detector on frames of its simulator's size, over
-/// the rest pins `rest` (from `origin`).
-fn sensor_sight(
-    spec: &tactrace_store::sensor_file::SensorSpec,
-    rest: Vec<[f64; 2]>,
-    origin: &Path,
-) -> Result<SimSight> {
-    let camera = &spec.sensor.camera;
-    let detect = match &spec.sight {
-        Some(s) => s.detect.clone(),
-        None => tactrace_vision::DetectorParams::Blobs(spec.blob.clone()),
-    };
-    let params = tactrace_vision::SightParams {
-        preprocess: Default::default(),
-        detect,
-    };
-    let detector = params
-        .check(camera.width, camera.height)
-        .map_err(|e| LabError::Format {
-            path: origin.to_path_buf(),
-            reason: format!("the sensor's detector: {e}"),
-        })?;
-    let reader = PinReader::new(detector, rest).map_err(|e| LabError::Format {
-        path: origin.to_path_buf(),
-        reason: format!("the reference pins: {e}"),
-    })?;
-    Ok(SimSight {
-        reader,
-        frame: (camera.width, camera.height),
-        origin: origin.to_path_buf(),
-    })
 }
 
 /// The dataset's target names: the twin makes an edge task's dataset.

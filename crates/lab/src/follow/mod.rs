@@ -156,6 +156,16 @@ pub fn perception_for(
     settings: &ServoSettings,
 ) -> Result<Perception> {
     let extractor = PinExtractor::from_reference_frame(reference, settings.blob().clone())?;
+    perception_with(extractor, model, settings)
+}
+
+/// As [`perception_for`] with the pins read by `extractor` (ordered by its
+/// reference pins: a calibrated sensor's own).
+pub fn perception_with(
+    extractor: PinExtractor,
+    model: &StoredModel,
+    settings: &ServoSettings,
+) -> Result<Perception> {
     let net = model.for_pins(
         extractor.tracker.reference(),
         Path::new("the rig's reference frame"),

@@ -8,7 +8,9 @@
 use super::replay::{answered_frames, write_answers};
 use super::{ReplayStats, SimWorld};
 use crate::error::{LabError, Result};
-use crate::follow::{perception_of, write_results_with, Recorded, RunExtras, ServoSettings};
+use crate::follow::{
+    perception_of, perception_with, write_results_with, Recorded, RunExtras, ServoSettings,
+};
 use std::path::Path;
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
 use tactrace_geometry::Contour;
@@ -163,9 +165,9 @@ impl Parts {
 }
 
 /// The simulated rig: the calibrated sensor's TacTip mounted so that the
-/// controller's aligned pose is its label angle zero, its real reference
-/// frame and blob detector ordering its taps' pins (as for its real
-/// frames); else the default TacTip and its rendered rest frame.
+/// controller's aligned pose is its label angle zero, its reference pins
+/// ordering its taps' pins (as for its real frames; [`sensor_perception`]);
+/// else the default TacTip and its rendered rest frame.
 fn build_sim(
     p: SimParts,
     shape: &Contour,
@@ -180,7 +182,7 @@ fn build_sim(
             let mount = convention.mount_yaw_deg;
             let rig = SimRig::with_model(&p.rig, s.model()?, mount, shape.clone(), start, seed);
             let perception =
-                perception_of(&s.reference, model, settings)?.with_label_convention(convention);
+                sensor_perception(s, model, settings)?.with_label_convention(convention);
             (rig, perception)
         }
         None => {
@@ -193,6 +195,23 @@ fn build_sim(
         kind: Kind::Sim(Box::new(rig)),
         perception,
     })
+}
+
+/// The perception of a calibrated sensor's simulated taps: a pin model's
+/// pins read by the sensor's blob detector (its sensor settings' when they
+/// name one) against its own reference pins, whether from an undeformed
+/// frame or estimated from its taps ([`crate::sim_sight::of_sensor`]); an
+/// image model as on any rig.
+fn sensor_perception(
+    sensor: &SensorFolder,
+    model: &LoadedModel,
+    settings: &ServoSettings,
+) -> Result<Perception> {
+    let LoadedModel::Pins(net) = model else {
+        return perception_of(&sensor.reference, model, settings);
+    };
+    let extractor = crate::sim_sight::blob_extractor(sensor)?;
+    perception_with(extractor, net, settings)
 }
 
 /// The contour a simulated world needs.

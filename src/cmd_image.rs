@@ -126,17 +126,9 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
     if let (Some(v), Some(f)) = (&val, &val_frames) {
         let what = a.val.as_deref().unwrap_or(&a.train);
         let score = ti::validate_image(&stored, v, f, what)?;
-        let parts: Vec<String> = score
-            .targets
-            .iter()
-            .map(|t| {
-                let s = &score.per_target[&t.name];
-                format!("{} {:.3} {}", t.name, s.mae, s.unit.as_str())
-            })
-            .collect();
         crate::say!(
             "validation: {} over {} samples",
-            parts.join(", "),
+            score.per_target_line(),
             score.samples
         );
         if let Some(w) = score.seen_warning() {

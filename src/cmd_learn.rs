@@ -268,17 +268,9 @@ pub fn train(a: TrainArgs) -> Result<()> {
     if let Some(val) = val {
         let v = tr::validate(&model, &val, a.val.as_deref().unwrap_or(&a.train))?;
         if v.predictions.is_empty() {
-            let parts: Vec<String> = v
-                .targets
-                .iter()
-                .map(|t| {
-                    let s = &v.per_target[&t.name];
-                    format!("{} {:.3} {}", t.name, s.mae, s.unit.as_str())
-                })
-                .collect();
             crate::say!(
                 "validation: {} over {} samples",
-                parts.join(", "),
+                v.per_target_line(),
                 v.samples
             );
         } else {

@@ -283,6 +283,20 @@ pub struct Validation {
 }
 
 impl Validation {
+    /// Every target's MAE with its unit, in the model's order: "r 0.120
+    /// mm, theta 1.010 deg".
+    pub fn per_target_line(&self) -> String {
+        let parts: Vec<String> = self
+            .targets
+            .iter()
+            .map(|t| {
+                let s = &self.per_target[&t.name];
+                format!("{} {:.3} {}", t.name, s.mae, s.unit.as_str())
+            })
+            .collect();
+        parts.join(", ")
+    }
+
     /// The warning when some of the samples were training samples.
     pub fn seen_warning(&self) -> Option<String> {
         let seen = self.rows_seen_in_training.filter(|&k| k > 0)?;

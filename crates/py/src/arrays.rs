@@ -95,6 +95,17 @@ pub fn json_to_py<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound
     py.import("json")?.call_method1("loads", (text,))
 }
 
+/// Any serialisable value as a Python object, as `json_to_py` gives it.
+pub fn serde_to_py<'py, T: serde::Serialize + ?Sized>(
+    py: Python<'py>,
+    v: &T,
+) -> PyResult<Bound<'py, PyAny>> {
+    json_to_py(
+        py,
+        &serde_json::to_value(v).map_err(|e| input(e.to_string()))?,
+    )
+}
+
 /// A Python object (dict, list, numbers, strings; numpy arrays as lists)
 /// as a JSON value.
 pub fn py_to_json(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<serde_json::Value> {

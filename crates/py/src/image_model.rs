@@ -3,7 +3,7 @@
 //! `tactrace train --model conv-dennn|conv-mlp`, `validate` and `predict`
 //! use them. `load_model` and `train` (model.rs) hand one back for an
 //! image model's folder or kind.
-use crate::arrays::{contiguous, json_to_py, shape_text, to_matrix};
+use crate::arrays::{contiguous, json_to_py, serde_to_py, shape_text, to_matrix};
 use crate::errors::{input, lab, store};
 use crate::interrupt::{checkpoint, run_detached};
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
@@ -88,19 +88,14 @@ impl ImageModel {
         if let Some(w) = v.seen_warning() {
             crate::follow::warn(py, &w)?;
         }
-        json_to_py(
-            py,
-            &serde_json::to_value(&v).map_err(|e| input(e.to_string()))?,
-        )
+        serde_to_py(py, &v)
     }
 
     /// What the model predicts, in order: dicts with ``name``, ``unit``
     /// and ``circular``.
     #[getter]
     fn targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let v = serde_json::to_value(self.stored.model().outputs())
-            .map_err(|e| input(e.to_string()))?;
-        json_to_py(py, &v)
+        serde_to_py(py, self.stored.model().outputs())
     }
 
     /// "conv-dennn" or "conv-mlp".
@@ -132,12 +127,7 @@ impl ImageModel {
     fn training<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
         self.stored
             .training()
-            .map(|t| {
-                json_to_py(
-                    py,
-                    &serde_json::to_value(t).map_err(|e| input(e.to_string()))?,
-                )
-            })
+            .map(|t| serde_to_py(py, t))
             .transpose()
     }
 
@@ -145,8 +135,7 @@ impl ImageModel {
     /// a loaded one: its folder has history.csv).
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let v = serde_json::to_value(&self.history.epochs).map_err(|e| input(e.to_string()))?;
-        json_to_py(py, &v)
+        serde_to_py(py, &self.history.epochs)
     }
 
     /// Write the model folder ``tactrace train`` writes; an existing

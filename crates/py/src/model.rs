@@ -1,7 +1,7 @@
 //! Pose models: `load_model`, `train` and the `Model` class over
 //! `tactrace_store::StoredModel` and `tactrace_lab::train`, as
 //! `tactrace train` / `validate` / `predict` use them.
-use crate::arrays::{json_to_py, points_array, py_to_json, to_matrix};
+use crate::arrays::{points_array, py_to_json, serde_to_py, to_matrix};
 use crate::errors::{core, input, lab, store};
 use crate::interrupt::{checkpoint, run_detached};
 use crate::samples::Samples;
@@ -192,9 +192,7 @@ impl Model {
     /// cosine, its errors wrapped).
     #[getter]
     fn targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let value =
-            serde_json::to_value(self.own_net().outputs()).map_err(|e| input(e.to_string()))?;
-        json_to_py(py, &value)
+        serde_to_py(py, self.own_net().outputs())
     }
 
     /// Mean absolute errors on ``data`` as ``tactrace validate --json``
@@ -219,10 +217,7 @@ impl Model {
         if let Some(w) = v.seen_warning() {
             crate::follow::warn(py, &w)?;
         }
-        json_to_py(
-            py,
-            &serde_json::to_value(&v).map_err(|e| input(e.to_string()))?,
-        )
+        serde_to_py(py, &v)
     }
 
     /// Which rows of which dataset the model was trained on (the model
@@ -233,12 +228,7 @@ impl Model {
     fn training<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
         self.stored
             .training()
-            .map(|t| {
-                json_to_py(
-                    py,
-                    &serde_json::to_value(t).map_err(|e| input(e.to_string()))?,
-                )
-            })
+            .map(|t| serde_to_py(py, t))
             .transpose()
     }
 
@@ -254,8 +244,7 @@ impl Model {
     #[getter]
     fn config<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let net = self.own_net();
-        let v = serde_json::to_value(net.config()).map_err(|e| input(e.to_string()))?;
-        json_to_py(py, &v)
+        serde_to_py(py, net.config())
     }
 
     /// The kind of model ("pdennn", "pcadennn", "disdennn" or "mlp").
@@ -274,8 +263,7 @@ impl Model {
     /// in this session; empty for a loaded one (its folder has history.csv).
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let v = serde_json::to_value(&self.history.epochs).map_err(|e| input(e.to_string()))?;
-        json_to_py(py, &v)
+        serde_to_py(py, &self.history.epochs)
     }
 
     /// The held-out validation of ``train(..., val_fraction=f)``, as
@@ -284,12 +272,7 @@ impl Model {
     fn validation<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
         self.validation
             .as_ref()
-            .map(|v| {
-                json_to_py(
-                    py,
-                    &serde_json::to_value(v).map_err(|e| input(e.to_string()))?,
-                )
-            })
+            .map(|v| serde_to_py(py, v))
             .transpose()
     }
 

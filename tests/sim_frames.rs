@@ -90,7 +90,10 @@ fn issue22_collect_frames_size_writes_the_rendered_frames_and_trains_an_image_mo
         ],
     );
     ok(&r, "train conv-mlp on a collection's frames");
-    let r = tactrace(&t.0, &["validate", "--model", "m", "--data", "ds", "--json"]);
+    let r = tactrace(
+        &t.0,
+        &["validate", "--model", "m", "--data", "ds", "--json"],
+    );
     ok(&r, "validate");
     let v = json(&r.stdout);
     assert_eq!(v["samples"], 24);
@@ -126,7 +129,12 @@ fn issue22_twin_frames_size_trains_on_simulated_frames_and_validates_on_real_one
         init.to_str().unwrap(),
     );
     let common = ["--targets", targets, "--limit", "30", "--frames-size", "32"];
-    let twin = [&["twin", "--reference", init][..], &common, &["--out", "tw"]].concat();
+    let twin = [
+        &["twin", "--reference", init][..],
+        &common,
+        &["--out", "tw"],
+    ]
+    .concat();
     ok(&tactrace(&t.0, &twin), "twin --frames-size");
     let real = [
         &["import", "--frames", frames, "--reference", init][..],

@@ -17,12 +17,12 @@ use rayon::prelude::*;
 use std::path::Path;
 use tactrace_calib::real_tap_repeats;
 use tactrace_sensor::{EdgeTap, Shear, TacTipConfig, TacTipModel};
+use tactrace_servo::ImageInput;
 use tactrace_store::collection::Reference;
 use tactrace_store::{
     pin_order_mismatch, DatasetMeta, LabelledCollection, LabelledRow, SensorFolder, StoreError,
     TapData, TapFields, TargetColumns,
 };
-use tactrace_servo::ImageInput;
 use tactrace_vision::PinReader;
 
 /// Simulate every labelled row of `collection` (its labels, depth and

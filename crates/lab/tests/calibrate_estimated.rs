@@ -95,7 +95,8 @@ fn issue21_an_uncalibrated_twin_is_laid_out_like_the_estimated_rest_pins() {
     // A lattice sensor keeps the lattice (and says the rings fit worse).
     let lattice = tempfile::tempdir().unwrap();
     let taps = sensor_set(lattice.path(), 20, TacTipConfig::default());
-    let (_, layout) = simulate_twin_laid_out(&taps, &TacTipConfig::default(), 1, None, &|| {}).unwrap();
+    let (_, layout) =
+        simulate_twin_laid_out(&taps, &TacTipConfig::default(), 1, None, &|| {}).unwrap();
     assert_eq!(layout.kept, PinLayout::Hex, "{}", layout.describe());
     assert!(layout.hex.0 < layout.rings.0, "{}", layout.describe());
 }

@@ -34,6 +34,13 @@ pub struct CollectArgs {
     /// Keep every tap's frame as PNG under frames/.
     #[arg(long)]
     save_frames: bool,
+    /// Also keep every tap's frame as an image for the image models
+    /// (conv-dennn, conv-mlp): frames.npy, uint8 N x PX x PX, the rendered
+    /// frame area-averaged, as `import --frames-size` writes (simulated
+    /// edge collections only).
+    #[arg(long, value_name = "PX", conflicts_with = "hardware",
+          value_parser = clap::value_parser!(u16).range(4..=1024))]
+    frames_size: Option<u16>,
     /// Rig configuration TOML (tables sensor, arm, workspace, tap, blob).
     #[arg(long)]
     config: Option<PathBuf>,
@@ -67,6 +74,12 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         return collect_hardware(&a, path);
     }
     if a.task.is_3d() {
+        if a.frames_size.is_some() {
+            return Err(tactrace_lab::LabError::Config(
+                "--frames-size keeps the taps of an edge collection (--task edge_2d) only".into(),
+            )
+            .into());
+        }
         let (samples, seed, frames) = (a.samples, a.seed, a.save_frames);
         let out = (a.out.as_path(), a.force);
         return crate::cmd_task3d::collect(
@@ -88,6 +101,7 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         samples: a.samples,
         seed: a.seed,
         save_frames: a.save_frames,
+        frames_size: a.frames_size.map(usize::from),
         ..CollectConfig::default()
     };
     let sensor = match &a.sensor {
@@ -102,7 +116,8 @@ pub fn collect(a: CollectArgs) -> Result<()> {
         None => run_collect(&rig, &shape, &cfg, &spec.name(), tick)?,
     };
     pb.finish_and_clear();
-    let dir = dataset::write_dataset(&a.out, &got.data, &got.frames, a.force)?;
+    let images = got.images.as_ref();
+    let dir = dataset::write_dataset_with(&a.out, &got.data, &got.frames, images, a.force)?;
     eprintln!(
         "collected {} taps on {} into {} ({} with missing pins)",
         got.data.len(),

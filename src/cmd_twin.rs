@@ -77,6 +77,11 @@ pub struct TwinArgs {
     /// Simulate only the first N rows.
     #[arg(long)]
     limit: Option<usize>,
+    /// Also keep every simulated tap's frame as an image for the image
+    /// models (frames.npy, uint8 N x PX x PX, as `import --frames-size`
+    /// writes a real collection's), so an image model trains on the twin.
+    #[arg(long, value_name = "PX", value_parser = clap::value_parser!(u16).range(4..=1024))]
+    frames_size: Option<u16>,
     /// Output dataset directory.
     #[arg(long)]
     out: PathBuf,
@@ -117,22 +122,28 @@ pub fn twin(a: TwinArgs) -> Result<()> {
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let pb = bar(0, "twin");
     let tick = || pb.inc(1);
+    let frames_size = a.frames_size.map(usize::from);
     let got = match &a.sensor {
         Some(dir) => {
             let sensor = SensorFolder::read(dir)?;
-            simulate_twin_calibrated(&collection, &sensor, a.seed, !a.no_real_taps, &tick)
+            let how = (!a.no_real_taps, frames_size);
+            simulate_twin_calibrated(&collection, &sensor, a.seed, how, &tick)
         }
         None => {
             let rig = rig_config(a.config.as_deref())?;
-            simulate_twin_laid_out(&collection, &rig.sensor, a.seed, &tick).map(|(got, layout)| {
-                pb.suspend(|| eprintln!("{}", layout.describe()));
-                got
-            })
+            let sensor = &rig.sensor;
+            simulate_twin_laid_out(&collection, sensor, a.seed, frames_size, &tick).map(
+                |(got, layout)| {
+                    pb.suspend(|| eprintln!("{}", layout.describe()));
+                    got
+                },
+            )
         }
     };
     pb.finish_and_clear();
     let got = got?;
-    let dir = dataset::write_dataset(&a.out, &got.data, &[], a.force)?;
+    let images = got.images.as_ref();
+    let dir = dataset::write_dataset_with(&a.out, &got.data, &[], images, a.force)?;
     summary("simulated", "labelled taps", &got, &dir);
     Ok(())
 }

@@ -16,7 +16,7 @@
 //!
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
-//! learning_rate, final_lr_fraction, weight_decay, shift_augment, beta, sweeps,
+//! learning_rate, final_lr_fraction, weight_decay, shift_augment, input_noise, beta, sweeps,
 //! activation (sigmoid|tanh|relu), input_centring (global|mean_frame), conv (e.g. 16k5s2,32k3s2), dense
 //! (e.g. 256 or 256,64 or none). Prints per epoch the training loss, the
 //! select part's mean absolute errors, the wall time and this process's
@@ -155,6 +155,7 @@ fn set(cfg: &mut ConvConfig, kv: &str) -> Result<(), Box<dyn Error>> {
         "final_lr_fraction" => cfg.final_lr_fraction = v.parse()?,
         "weight_decay" => cfg.weight_decay = v.parse()?,
         "shift_augment" => cfg.shift_augment = v.parse()?,
+        "input_noise" => cfg.input_noise = v.parse()?,
         "beta" => cfg.ep.beta = v.parse()?,
         "sweeps" => {
             cfg.ep.clamped_phase = ClampedPhase::Sweeps {

@@ -167,6 +167,12 @@ pub struct ConvConfig {
     /// repeated), so the network cannot rely on where the whole pin
     /// pattern sits; 0 turns it off.
     pub shift_augment: usize,
+    /// Standard deviation of the Gaussian noise added to every
+    /// standardised training pixel (a fresh seeded draw for each frame
+    /// and epoch; never at prediction): a regulariser against
+    /// over-fitting the few training frames; 0 turns it off.
+    #[serde(default)]
+    pub input_noise: f64,
 }
 
 impl ConvConfig {
@@ -202,6 +208,7 @@ impl ConvConfig {
             final_lr_fraction: 0.02,
             weight_decay: 0.0,
             shift_augment: 0,
+            input_noise: 0.0,
         }
     }
 
@@ -224,6 +231,12 @@ impl ConvConfig {
             return Err(config_error(
                 "final_lr_fraction",
                 format!("{} is not in (0, 1]", self.final_lr_fraction),
+            ));
+        }
+        if !(self.input_noise >= 0.0 && self.input_noise <= 10.0) {
+            return Err(config_error(
+                "input_noise",
+                format!("{} is not in [0, 10]", self.input_noise),
             ));
         }
         if !(self.weight_decay >= 0.0 && self.weight_decay.is_finite()) {

@@ -195,6 +195,9 @@ fn chunk_gradient(
             (0, 0) => data.input.apply(frame, x),
             (dx, dy) => data.input.apply_shifted(frame, (h, w), (dx, dy), x),
         }
+        if config.input_noise > 0.0 {
+            add_noise(x, config.input_noise as f32, mix(data.seed, epoch, i));
+        }
         for (j, &v) in data.targets.row(i).iter().enumerate() {
             ws.t[j * nb + b] = data.scaling.scale(j, v);
         }
@@ -226,6 +229,35 @@ fn shift_of(max: usize, seed: u64, epoch: usize, i: usize) -> (isize, isize) {
     let dx = (z % span) as isize - max as isize;
     let dy = ((z / span) % span) as isize - max as isize;
     (dx, dy)
+}
+
+/// A 64-bit hash of frame `i`'s draw in `epoch` of a fit from `seed`
+/// (splitmix64's finaliser): the same whatever the thread.
+fn mix(seed: u64, epoch: usize, i: usize) -> u64 {
+    let mut z = seed
+        .wrapping_add((epoch as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15))
+        .wrapping_add((i as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Add Gaussian noise of standard deviation `std` to every value of `x`,
+/// drawn (Box-Muller, two values a pair of uniforms) from a generator
+/// seeded with `key`.
+fn add_noise(x: &mut [f32], std: f32, key: u64) {
+    use rand::Rng;
+    let mut rng = ChaCha8Rng::seed_from_u64(key);
+    for pair in x.chunks_mut(2) {
+        let u1: f32 = 1.0 - rng.random::<f32>();
+        let u2: f32 = rng.random();
+        let r = std * (-2.0 * u1.ln()).sqrt();
+        let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
+        pair[0] += r * c;
+        if let Some(v) = pair.get_mut(1) {
+            *v += r * s;
+        }
+    }
 }
 
 /// Mean loss (scaled units) and mean absolute error per target (the

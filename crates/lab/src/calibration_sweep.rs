@@ -152,7 +152,7 @@ fn run_case(
         split.collection,
         &got.sensor,
         split.render_seed,
-        true,
+        (true, None),
         &|| {},
     )?;
     let training = rows_not_in(&twin.data, split.validation);

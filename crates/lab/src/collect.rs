@@ -15,6 +15,7 @@
 //! (`RAYON_NUM_THREADS`). A real rig ([`collect_on`]) taps in turn, each
 //! tap drawing its labels from the same generator as here.
 use crate::error::{LabError, Result};
+use crate::import_reader::SmallFrame;
 use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
@@ -22,9 +23,9 @@ use serde::{Deserialize, Serialize};
 use tactrace_arm::{Arm, LimitMode, LimitedArm, PoseProbe, SimArm, SimArmConfig};
 use tactrace_geometry::{Contour, Vec2};
 use tactrace_sensor::{Frame, LabelConvention, SensorError, TacTipModel, TactileSensor};
-use tactrace_servo::{pose_at_edge, tap, RigConfig, TapConfig};
+use tactrace_servo::{pose_at_edge, tap, ImageInput, RigConfig, TapConfig};
 use tactrace_store::frame_file::png_bytes;
-use tactrace_store::{DatasetMeta, SensorFolder, TapData};
+use tactrace_store::{DatasetMeta, ImageFrames, SensorFolder, TapData};
 
 /// Rows whose buffers are reserved up front; more grow as they come.
 const PRESIZED_ROWS: usize = 1 << 16;
@@ -46,6 +47,11 @@ pub struct CollectConfig {
     pub edge_arc_mm: f64,
     /// Keep the PNG of every tap.
     pub save_frames: bool,
+    /// Also keep every simulated tap's frame area-averaged to this many px
+    /// square, for the image models (the dataset's `frames.npy`, as
+    /// `import --frames-size` writes it); `None`: pin vectors only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames_size: Option<usize>,
 }
 
 impl Default for CollectConfig {
@@ -57,6 +63,7 @@ impl Default for CollectConfig {
             theta_range_deg: 45.0,
             edge_arc_mm: 0.0,
             save_frames: false,
+            frames_size: None,
         }
     }
 }
@@ -66,6 +73,9 @@ pub struct Collected {
     pub data: TapData,
     /// (file name, PNG bytes) when `save_frames`.
     pub frames: Vec<(String, Vec<u8>)>,
+    /// Every tap's frame as an image model's input (`frames.npy`) when
+    /// `frames_size` is given.
+    pub images: Option<ImageFrames>,
 }
 
 /// Run the collection over `shape` with the simulated rig.
@@ -159,6 +169,8 @@ struct TapRow {
     targets: [f32; 2],
     missing: bool,
     frame: Option<Frame>,
+    /// The frame area-averaged for the image models, when asked for.
+    small: Option<SmallFrame>,
 }
 
 /// [`collect_on`] on the simulated rig, taps on all cores (see the module
@@ -172,23 +184,26 @@ fn collect_simulated(
     mut progress: impl FnMut(usize),
 ) -> Result<Collected> {
     check_samples(cfg)?;
+    let input = crate::tap_images::sim_input(cfg.frames_size)?;
     let rest = world.reader.tracker().reference();
     let dim = 2 * rest.len();
     let rows = cfg.samples.min(PRESIZED_ROWS);
     let mut inputs = Vec::with_capacity(rows * dim);
     let mut targets = Vec::with_capacity(rows * 2);
     let mut frames = Vec::new();
+    let mut small = Vec::new();
     let mut with_missing = 0;
     for first in (0..cfg.samples).step_by(TAPS_PER_BATCH) {
         let last = (first + TAPS_PER_BATCH).min(cfg.samples);
         let batch: Vec<TapRow> = (first..last)
             .into_par_iter()
-            .map(|i| simulated_tap(&world, cfg, i))
+            .map(|i| simulated_tap(&world, cfg, input.as_ref(), i))
             .collect::<Result<_>>()?;
         for (i, row) in (first..).zip(batch) {
             with_missing += usize::from(row.missing);
             inputs.extend(row.inputs);
             targets.extend(row.targets);
+            small.extend(row.small);
             if let Some(frame) = row.frame {
                 frames.push((format!("frame_{i:05}.png"), png_bytes(&frame, "frame")?));
             }
@@ -202,6 +217,7 @@ fn collect_simulated(
         ));
     }
     let meta = dataset_meta(cfg, (source, origin), settings, rest, with_missing);
+    let images = input.and_then(|i| crate::import::images_of(&i, small));
     let names = world.labels.map(|(_, n)| n);
     Ok(Collected {
         data: TapData {
@@ -213,6 +229,7 @@ fn collect_simulated(
             },
         },
         frames,
+        images,
     })
 }
 
@@ -220,8 +237,14 @@ fn collect_simulated(
 /// own: stream `i` of the collection's seed draws its labels and depth,
 /// then seeds the arm's noise and the camera's nuisance. The arm starts at
 /// the tap's approach pose (checked by the limiter), taps down, and the
-/// sensor renders the pins at the pose physically reached.
-fn simulated_tap(world: &SimWorld, cfg: &CollectConfig, i: usize) -> Result<TapRow> {
+/// sensor renders the pins at the pose physically reached. With `input`,
+/// the frame is also made into an image model's input.
+fn simulated_tap(
+    world: &SimWorld,
+    cfg: &CollectConfig,
+    input: Option<&ImageInput>,
+    i: usize,
+) -> Result<TapRow> {
     let tap_cfg = &world.rig.tap;
     let (mut rng, r, depth) = tap_draws(cfg, tap_cfg, i);
     let theta = sweep(i, cfg.samples, cfg.theta_range_deg);
@@ -247,6 +270,7 @@ fn simulated_tap(world: &SimWorld, cfg: &CollectConfig, i: usize) -> Result<TapR
         inputs: tracked.displacement(world.reader.tracker().reference()),
         targets: [r as f32, theta as f32],
         missing: tracked.missing > 0,
+        small: input.map(|i| crate::tap_images::small_of(i, &frame)),
         frame: cfg.save_frames.then_some(frame),
     })
 }
@@ -388,6 +412,8 @@ pub fn collect_on(
             meta,
         },
         frames,
+        // A rig's camera frames are kept by `save_frames`, not as images.
+        images: None,
     })
 }
 

@@ -183,7 +183,11 @@ pub fn collect_3d(
     }
     data.meta.frames_with_missing_pins = missing;
     data.meta.tracking = tactrace_store::TrackTotals::frames(cfg.samples, missing);
-    Ok(Collected { data, frames })
+    Ok(Collected {
+        data,
+        frames,
+        images: None,
+    })
 }
 
 /// The frame the labels are placed in: surface_3d the feature frame at

@@ -212,7 +212,7 @@ fn import_rows_with(
 /// The kept rows' small frames as one stack (`None` when there is none).
 /// They record `input`'s preprocessing, so image models trained on them
 /// are fed frames made the same way.
-fn images_of(input: &ImageInput, small: Vec<SmallFrame>) -> Option<ImageFrames> {
+pub(crate) fn images_of(input: &ImageInput, small: Vec<SmallFrame>) -> Option<ImageFrames> {
     let source = small.first()?.1;
     let pixels = small.into_iter().flat_map(|(p, _)| p).collect();
     let (h, w) = input.size();

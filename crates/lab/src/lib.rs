@@ -38,6 +38,7 @@ mod reproduce_image;
 pub mod search;
 pub mod sensor_inspect;
 pub mod sim_sight;
+mod tap_images;
 pub mod train;
 pub mod train_image;
 pub mod trajectory_csv;

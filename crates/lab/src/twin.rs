@@ -8,7 +8,8 @@
 //! validated on the other: the simulator judged by what it predicts about
 //! real frames (docs/results.md, "Simulated to real").
 use crate::error::{LabError, Result};
-use crate::import::{gather, keep_rows, FrameOutcome, Imported, TwinComposition};
+use crate::import::{gather, images_of, keep_rows, FrameOutcome, Imported, TwinComposition};
+use crate::import_reader::SmallFrame;
 use crate::sim_sight::{lay_out, sensor_sight, sim_sight, LayoutReport, SimSight};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -16,6 +17,7 @@ use rayon::prelude::*;
 use std::path::Path;
 use tactrace_calib::real_tap_repeats;
 use tactrace_sensor::{EdgeTap, Shear, TacTipConfig, TacTipModel};
+use tactrace_servo::ImageInput;
 use tactrace_store::collection::Reference;
 use tactrace_store::{
     pin_order_mismatch, DatasetMeta, LabelledCollection, LabelledRow, SensorFolder, StoreError,
@@ -37,24 +39,30 @@ pub fn simulate_twin(
 ) -> Result<Imported> {
     let rows = twin_rows(collection)?;
     let sight = sim_sight(collection)?;
-    simulate_read_rows(collection, rows, &sight, sensor, (seed, progress))
+    simulate_read_rows(collection, rows, &sight, sensor, (seed, None, progress))
 }
 
 /// As [`simulate_twin`] with `sensor` first laid out like the
 /// collection's rest pins ([`crate::sim_sight::lay_out`]: a hexagonal
 /// lattice and concentric rings fitted, the better kept; a sensor that
-/// already fits is kept as it is): what `tactrace twin` runs.
+/// already fits is kept as it is): what `tactrace twin` runs. With
+/// `frames_size`, every kept tap's frame is also kept as an image
+/// ([`Imported::images`], made as `import --frames-size` makes a real
+/// frame's from the frame the detector reads).
 pub fn simulate_twin_laid_out(
     collection: &LabelledCollection,
     sensor: &TacTipConfig,
     seed: u64,
+    frames_size: Option<usize>,
     progress: &(dyn Fn() + Sync),
 ) -> Result<(Imported, LayoutReport)> {
     // The labels are read (and checked) before the reference.
     let rows = twin_rows(collection)?;
     let sight = sim_sight(collection)?;
     let (laid_out, layout) = lay_out(sensor, &sight)?;
-    let got = simulate_read_rows(collection, rows, &sight, &laid_out, (seed, progress))?;
+    let input = twin_input(&sight, frames_size)?;
+    let how = (seed, input.as_ref(), progress);
+    let got = simulate_read_rows(collection, rows, &sight, &laid_out, how)?;
     Ok((got, layout))
 }
 
@@ -68,7 +76,16 @@ pub(crate) fn simulate_twin_rows(
     (keep, progress): (Option<&[usize]>, &(dyn Fn() + Sync)),
 ) -> Result<Imported> {
     let rows = keep_rows(twin_rows(collection)?, keep);
-    simulate_read_rows(collection, rows, sight, sensor, (seed, progress))
+    simulate_read_rows(collection, rows, sight, sensor, (seed, None, progress))
+}
+
+/// The image input of a twin's taps (`frames_size`): the collection's
+/// preprocessing recorded, as its real frames are imported.
+fn twin_input(sight: &SimSight, frames_size: Option<usize>) -> Result<Option<ImageInput>> {
+    let preprocess = sight.reader.frames().stage().params();
+    frames_size
+        .map(|s| crate::tap_images::input_of(Some(preprocess), s))
+        .transpose()
 }
 
 /// The twin of the labelled `rows` of `collection`, read already.
@@ -77,17 +94,19 @@ fn simulate_read_rows(
     rows: Vec<LabelledRow>,
     sight: &SimSight,
     sensor: &TacTipConfig,
-    (seed, progress): (u64, &(dyn Fn() + Sync)),
+    (seed, input, progress): (u64, Option<&ImageInput>, &(dyn Fn() + Sync)),
 ) -> Result<Imported> {
     let names = edge_names(collection)?;
     let rest = sight.rest().to_vec();
     let model = twin_model(&sight.origin, sensor, &rest)?;
-    let outcomes = simulate_rows(&model, &sight.reader, &rows, seed, progress);
+    let (outcomes, small) = simulate_rows(&model, &sight.reader, &rows, (seed, input), progress);
     let settings = serde_json::json!({
         "twin": collection, "seed": seed, "sensor": sensor,
     });
     let meta = twin_meta(collection, (seed, names), rest, settings);
-    gather(&rows, outcomes, meta, collection.targets())
+    let mut got = gather(&rows, outcomes, meta, collection.targets())?;
+    got.images = input.and_then(|i| images_of(i, small));
+    Ok(got)
 }
 
 /// As [`simulate_twin`] with a calibrated sensor (`tactrace calibrate`):
@@ -97,12 +116,14 @@ fn simulate_read_rows(
 /// `real_taps` is false). The collection's reference, when it has one (a
 /// frame, or a dataset's recorded rest pins), must list its pins like the
 /// sensor's; without one ([`Reference::Estimate`]) the sensor's own rest
-/// pins order the taps.
+/// pins order the taps. With `frames_size`, the rendered taps are also
+/// kept as images (refused with the real calibration taps, which have no
+/// frames).
 pub fn simulate_twin_calibrated(
     collection: &LabelledCollection,
     sensor: &SensorFolder,
     seed: u64,
-    real_taps: bool,
+    (real_taps, frames_size): (bool, Option<usize>),
     progress: &(dyn Fn() + Sync),
 ) -> Result<Imported> {
     let spec = &sensor.spec;
@@ -125,20 +146,31 @@ pub fn simulate_twin_calibrated(
     } else {
         0
     };
+    if frames_size.is_some() && repeats > 0 {
+        return Err(LabError::Config(
+            "--frames-size keeps the rendered taps as images, and the sensor's real \
+             calibration taps have none: give --no-real-taps with --frames-size"
+                .into(),
+        ));
+    }
+    let input = twin_input(&sight, frames_size)?;
     let settings = serde_json::json!({
         "twin": collection, "seed": seed, "sensor": sensor.source, "recipe": spec.training,
         "renders": renders, "real_tap_repeats": repeats,
     });
     let mut all = Vec::new();
     for r in 0..renders as u64 {
-        let outcomes = simulate_rows(&model, &sight.reader, &rows, seed + r, progress);
+        let how = (seed + r, input.as_ref());
+        let (outcomes, small) = simulate_rows(&model, &sight.reader, &rows, how, progress);
         let meta = twin_meta(
             collection,
             (seed, names.clone()),
             rest.clone(),
             settings.clone(),
         );
-        all.push(gather(&rows, outcomes, meta, collection.targets())?);
+        let mut got = gather(&rows, outcomes, meta, collection.targets())?;
+        got.images = input.as_ref().and_then(|i| images_of(i, small));
+        all.push(got);
     }
     let mut out = concatenate(all);
     out.data.meta.source = "simulated twin (calibrated sensor)".into();
@@ -226,21 +258,34 @@ fn twin_meta(
 
 /// Render, detect and order every row with the rendering seed `seed`
 /// (row `k` of the labels file draws from stream `k`, whichever rows are
-/// simulated).
+/// simulated); with `input`, also the small frames of the rows kept, in
+/// row order.
 fn simulate_rows(
     model: &TacTipModel,
     reader: &PinReader,
     rows: &[LabelledRow],
-    seed: u64,
+    (seed, input): (u64, Option<&ImageInput>),
     progress: &(dyn Fn() + Sync),
-) -> Vec<FrameOutcome> {
-    rows.par_iter()
+) -> (Vec<FrameOutcome>, Vec<SmallFrame>) {
+    let all: Vec<(FrameOutcome, Option<SmallFrame>)> = rows
+        .par_iter()
         .map(|row| {
-            let out = simulate_row(model, reader, row, (seed, row.index as u64));
+            let out = simulate_row(model, reader, row, (seed, row.index as u64), input);
             progress();
             out
         })
-        .collect()
+        .collect();
+    let mut small = Vec::new();
+    let outcomes = all
+        .into_iter()
+        .map(|(outcome, frame)| {
+            if outcome.is_ok() {
+                small.extend(frame);
+            }
+            outcome
+        })
+        .collect();
+    (outcomes, small)
 }
 
 /// The imports of several renders as one set (rows in render order).
@@ -253,6 +298,9 @@ fn concatenate(parts: Vec<Imported>) -> Imported {
         first.data.meta.images.extend(p.data.meta.images);
         first.data.meta.frames_with_missing_pins += p.data.meta.frames_with_missing_pins;
         first.frames_with_missing_pins += p.frames_with_missing_pins;
+        if let (Some(a), Some(b)) = (&mut first.images, p.images) {
+            a.pixels.extend(b.pixels);
+        }
         let (t, u) = (&mut first.data.meta.tracking, p.data.meta.tracking);
         t.frames_total += u.frames_total;
         t.frames_fully_tracked += u.frames_fully_tracked;
@@ -285,22 +333,28 @@ pub(crate) fn edge_tap(row: &LabelledRow) -> EdgeTap {
 }
 
 /// Render, detect and order one row's tap: its displacement vector and
-/// whether pins were missing, or why the frame was rejected.
+/// whether pins were missing, or why the frame was rejected; with `input`,
+/// the rendered frame (what the detector reads) as an image model's input.
 fn simulate_row(
     model: &TacTipModel,
     reader: &PinReader,
     row: &LabelledRow,
     (seed, k): (u64, u64),
-) -> FrameOutcome {
+    input: Option<&ImageInput>,
+) -> (FrameOutcome, Option<SmallFrame>) {
     let pins = model.seen_pins(model.edge_tap_pins(&edge_tap(row)));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(k);
     let frame = model.render(&pins, Some(&mut rng));
-    let read = reader
+    let small = input.map(|i| crate::tap_images::small_of(i, &frame));
+    let outcome = reader
         .read_preprocessed(&frame)
-        .map_err(|e| e.to_string())?;
-    Ok((
-        read.tracked.displacement(reader.tracker().reference()),
-        !read.counts.fully_tracked(),
-    ))
+        .map_err(|e| e.to_string())
+        .map(|read| {
+            (
+                read.tracked.displacement(reader.tracker().reference()),
+                !read.counts.fully_tracked(),
+            )
+        });
+    (outcome, small)
 }

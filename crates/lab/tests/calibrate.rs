@@ -79,8 +79,8 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
         got.sensor.field_correction().unwrap()
     );
     assert_eq!(back.real_fields, got.sensor.real_fields);
-    let a = simulate_twin_calibrated(&twin, &got.sensor, 1, true, &|| {}).unwrap();
-    let b = simulate_twin_calibrated(&twin, &back, 1, true, &|| {}).unwrap();
+    let a = simulate_twin_calibrated(&twin, &got.sensor, 1, (true, None), &|| {}).unwrap();
+    let b = simulate_twin_calibrated(&twin, &back, 1, (true, None), &|| {}).unwrap();
     assert_eq!(a.data.inputs, b.data.inputs);
     assert_eq!(a.data.meta.reference_pins, got.sensor.spec.reference_pins);
     // Three renders of the 160 labels plus the 100 real taps, repeated.

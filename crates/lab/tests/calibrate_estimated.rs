@@ -71,11 +71,11 @@ fn issue21_calibrate_from_an_estimated_rest_layout_on_a_ring_sensor() {
     let dir = root.path().join("sensor");
     got.sensor.write(&dir, false).unwrap();
     let back = SensorFolder::read(&dir).unwrap();
-    let own = simulate_twin_calibrated(&collection, &back, 1, false, &|| {}).unwrap();
+    let own = simulate_twin_calibrated(&collection, &back, 1, (false, None), &|| {}).unwrap();
     assert_eq!(own.data.meta.reference_pins, estimated.pins);
     assert_eq!(own.data.len(), 3 * 160);
     let recorded = collection.with_reference(Reference::Estimated(estimated.clone()));
-    let again = simulate_twin_calibrated(&recorded, &back, 1, false, &|| {}).unwrap();
+    let again = simulate_twin_calibrated(&recorded, &back, 1, (false, None), &|| {}).unwrap();
     assert_eq!(again.data.inputs, own.data.inputs);
 }
 
@@ -88,14 +88,15 @@ fn issue21_an_uncalibrated_twin_is_laid_out_like_the_estimated_rest_pins() {
     let est = est.expect("estimated");
     // The default simulator is a lattice: the twin lays it out as rings.
     let (got, layout) =
-        simulate_twin_laid_out(&resolved, &TacTipConfig::default(), 1, &|| {}).unwrap();
+        simulate_twin_laid_out(&resolved, &TacTipConfig::default(), 1, None, &|| {}).unwrap();
     assert_eq!(layout.kept, PinLayout::Rings);
     assert_eq!(got.data.meta.reference_pins, est.pins);
     assert_eq!(got.data.len() + got.rejected.len(), 40);
     // A lattice sensor keeps the lattice (and says the rings fit worse).
     let lattice = tempfile::tempdir().unwrap();
     let taps = sensor_set(lattice.path(), 20, TacTipConfig::default());
-    let (_, layout) = simulate_twin_laid_out(&taps, &TacTipConfig::default(), 1, &|| {}).unwrap();
+    let (_, layout) =
+        simulate_twin_laid_out(&taps, &TacTipConfig::default(), 1, None, &|| {}).unwrap();
     assert_eq!(layout.kept, PinLayout::Hex, "{}", layout.describe());
     assert!(layout.hex.0 < layout.rings.0, "{}", layout.describe());
 }

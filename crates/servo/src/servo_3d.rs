@@ -12,11 +12,17 @@
 //! runs straight across the surface in the start's heading (rz is not
 //! sensed, so the heading is never turned).
 //!
+//! The edge tasks (edge_3d, edge_5d) run the same loop: rz is sensed, so
+//! the controller turns the heading onto the edge, and the constant step
+//! along y carries the sensor along it; round a closed edge the loop stops
+//! when the commanded path closes ([`Loop3dConfig::closure`]).
+//!
 //! A tap is made along the sensor's own axis: from a contact pose the arm
 //! lifts `lift_mm` along the axis, moves to the next pose lifted the same,
 //! and presses down to it. The loop sees only the arm's commanded pose and
 //! the frames, never the sensor's true pose on the object.
 use crate::error::{Result, ServoError};
+use crate::metrics::ClosureDetector;
 use crate::servo_loop::{Ending, LoopSummary};
 use serde::Serialize;
 use tactrace_arm::{Arm, ArmError, Pose};
@@ -167,6 +173,10 @@ pub struct Loop3dConfig {
     pub max_no_contact: usize,
     /// Lift between taps, along the sensor's axis, mm.
     pub lift_mm: f64,
+    /// Stop when the commanded path closes (edge tasks round a closed
+    /// edge): the [`ClosureDetector`] of the 2D loop on the poses' (x, y),
+    /// with this radius and minimum excursion, mm; `None`: run every step.
+    pub closure: Option<[f64; 2]>,
 }
 
 /// `pose` moved `height_mm` back along its own z axis (away from the
@@ -205,6 +215,7 @@ pub fn servo_loop_3d(
     }
     let stop = |step: usize, ending, message: String| Ok(LoopSummary::new(step, ending, message));
     let mut no_contact = 0;
+    let mut closure = cfg.closure.map(|[r, m]| ClosureDetector::new(r, m));
     for step in 0..cfg.steps {
         let pose = arm.pose();
         let sensed = match sensor.capture().map_err(ServoError::from) {
@@ -238,6 +249,13 @@ pub fn servo_loop_3d(
             let m = format!("lost the surface: {no_contact} taps without contact at step {step}");
             return stop(step + 1, Ending::LostContact, m);
         }
+        let closed = closure
+            .as_mut()
+            .is_some_and(|c| c.observe(tactrace_geometry::Vec2::new(pose.x, pose.y)));
+        if closed {
+            let m = format!("closed the loop after {} steps", step + 1);
+            return stop(step + 1, Ending::Closed, m);
+        }
         if step + 1 == cfg.steps {
             break;
         }
@@ -259,6 +277,10 @@ pub fn servo_loop_3d(
         }
     }
     let n = cfg.steps;
+    if cfg.closure.is_some() {
+        let m = format!("the path did not close in {n} steps (the step cap)");
+        return stop(n, Ending::StepCap, m);
+    }
     stop(
         n,
         Ending::StepsDone,

@@ -55,7 +55,12 @@ pub struct CollectTaskArgs {
     object: String,
     /// The point tapped: the object's top over this X,Y (mm); edge_5d:
     /// the edge point nearest it.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_value = "0,0")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0,0",
+        allow_hyphen_values = true
+    )]
     at: Vec<f64>,
     /// Tilts rx, ry uniform in +-DEG (default 25, the anchors').
     #[arg(long, value_name = "DEG")]
@@ -72,6 +77,14 @@ impl CollectTaskArgs {
     /// Whether a 3D task was asked for.
     pub fn is_3d(&self) -> bool {
         self.task != TaskArg::Edge2d
+    }
+}
+
+/// The two numbers of an `X,Y` (or `X Y`) flag; bad input otherwise.
+fn xy(values: &[f64], flag: &str) -> Result<[f64; 2]> {
+    match values {
+        [x, y] => Ok([*x, *y]),
+        _ => Err(LabError::Config(format!("{flag} takes two numbers, X,Y (mm)")).into()),
     }
 }
 
@@ -103,7 +116,7 @@ pub fn collect(
         samples,
         seed,
         task: a.task.into(),
-        at_mm: [a.at[0], a.at[1]],
+        at_mm: xy(&a.at, "--at")?,
         save_frames,
         tilt_range_deg: a.tilt_range.unwrap_or(base.tilt_range_deg),
         x_range_mm: a.x_range.unwrap_or(base.x_range_mm),
@@ -147,7 +160,12 @@ pub struct FollowTaskArgs {
     /// The path's start: the surface point over X,Y (mm); default: the
     /// object's (-40,0; the saddle -40,10; plane and ramp -20,0). Edge
     /// tasks: the edge point nearest X,Y (default the edge's first).
-    #[arg(long, value_delimiter = ',', num_args = 2, requires = "task")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        requires = "task",
+        allow_hyphen_values = true
+    )]
     start: Option<Vec<f64>>,
     /// The path's heading in the xy plane, deg from +x (default 0;
     /// surface_3d only).
@@ -191,7 +209,7 @@ pub fn follow(
         cfg.path = PathConfig::for_object(name);
     }
     if let Some(s) = &a.start {
-        cfg.path.start_mm = [s[0], s[1]];
+        cfg.path.start_mm = xy(s, "--start")?;
     }
     cfg.path.heading_deg = a.heading.unwrap_or(cfg.path.heading_deg);
     cfg.path.length_mm = a.length.unwrap_or(cfg.path.length_mm);
@@ -267,7 +285,7 @@ fn follow_edge(
         .into());
     }
     if let Some(s) = &a.start {
-        cfg.start_mm = Some([s[0], s[1]]);
+        cfg.start_mm = Some(xy(s, "--start")?);
     }
     cfg.seed = seed.unwrap_or(cfg.seed);
     cfg.validate()?;

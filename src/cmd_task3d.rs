@@ -175,6 +175,12 @@ pub struct FollowTaskArgs {
     /// only).
     #[arg(long, requires = "task")]
     length: Option<f64>,
+    /// surface_3d in the real-frame world: every tap over --object
+    /// answered by the row of this dataset (imported from a real surface
+    /// collection, e.g. its held-out part with `import --like`) whose
+    /// labels (depth, rx, ry) are nearest the tool's true pose.
+    #[arg(long, value_name = "DATASET", requires = "task")]
+    replay_data: Option<std::path::PathBuf>,
 }
 
 impl FollowTaskArgs {
@@ -198,7 +204,11 @@ pub fn follow(
         return follow_edge(a, model, config, seed, (out, force));
     }
     let name = a.object.as_deref().unwrap_or("plane");
-    crate::inputs::Inputs::new()
+    let mut inputs = crate::inputs::Inputs::new();
+    if let Some(dir) = &a.replay_data {
+        inputs = inputs.add("--replay-data", dir);
+    }
+    inputs
         .add("--model", model)
         .opt("--config", config)
         .file_arg("--object", name)
@@ -220,7 +230,34 @@ pub fn follow(
     let model = tactrace_store::StoredModel::load(model)?;
     let pb = bar(cfg.steps() as u64, "follow");
     let mut progress = |s: &tactrace_servo::Step3d| pb.set_position(s.step as u64 + 1);
-    let res = run_surface(&cfg, &surface, name, &model, (out, force), &mut progress);
+    let res = match &a.replay_data {
+        None => run_surface(&cfg, &surface, name, &model, (out, force), &mut progress),
+        Some(dir) => {
+            use tactrace_lab::follow::surface_replay::run_surface_replay;
+            let data = tactrace_store::dataset::read_dataset(dir)?;
+            let bank = tactrace_lab::world::SurfaceBank::from_dataset(&data)?;
+            let res = run_surface_replay(
+                &cfg,
+                (&surface, name),
+                &bank,
+                &model,
+                (out, force),
+                &mut progress,
+            );
+            res.map(|(outcome, stats)| {
+                eprintln!(
+                    "real-frame world: {} taps answered by {} of the {} rows, label distance \
+                     mean {:.3} / max {:.3}",
+                    stats.taps,
+                    stats.distinct_rows,
+                    stats.bank_rows,
+                    stats.mean_label_distance,
+                    stats.max_label_distance
+                );
+                outcome
+            })
+        }
+    };
     pb.finish_and_clear();
     let res = res?;
     let m = &res.metrics;
@@ -261,9 +298,9 @@ fn follow_edge(
     use tactrace_control::Se3Config;
     use tactrace_lab::follow::edge3d::{edge_of, run_edge, Edge3dConfig};
     let task: Task = a.task.unwrap_or(TaskArg::Edge5d).into();
-    if a.heading.is_some() || a.length.is_some() {
+    if a.heading.is_some() || a.length.is_some() || a.replay_data.is_some() {
         return Err(LabError::Config(format!(
-            "--heading and --length are surface_3d's: {task} follows the edge round"
+            "--heading, --length and --replay-data are surface_3d's: {task} follows the edge round"
         ))
         .into());
     }

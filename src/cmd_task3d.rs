@@ -1,5 +1,6 @@
-//! The 3D tasks on the command line: `collect --task surface_3d --object
-//! NAME_OR_FILE` and `follow --task surface_3d --object ...`.
+//! The 3D tasks on the command line: `collect --task
+//! surface_3d|edge_5d|edge_3d --object NAME_OR_FILE` and `follow --task
+//! surface_3d|edge_5d|edge_3d --object ...`.
 use crate::progress::bar;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
@@ -19,8 +20,10 @@ pub enum TaskArg {
     /// A surface in 3D (depth z; tilts rx, ry), on `--object`.
     #[value(name = "surface_3d")]
     Surface3d,
-    /// An edge in 3D (x, z; rx, ry, rz), on an edged `--object`
-    /// (collection only so far).
+    /// An edge at a varying height (x, z; rz), on an edged `--object`.
+    #[value(name = "edge_3d")]
+    Edge3d,
+    /// An edge in 3D (x, z; rx, ry, rz), on an edged `--object`.
     #[value(name = "edge_5d")]
     Edge5d,
 }
@@ -30,6 +33,7 @@ impl From<TaskArg> for Task {
         match t {
             TaskArg::Edge2d => Task::Edge2d,
             TaskArg::Surface3d => Task::Surface3d,
+            TaskArg::Edge3d => Task::Edge3d,
             TaskArg::Edge5d => Task::Edge5d,
         }
     }
@@ -40,8 +44,9 @@ impl From<TaskArg> for Task {
 pub struct CollectTaskArgs {
     /// The task whose poses are collected: edge_2d (the report's, on
     /// --shape), surface_3d (depth 1-5 mm, tilts +-25 deg, on --object;
-    /// targets z mm, rx deg, ry deg) or edge_5d (also x +-5 mm across
-    /// the edge and rz +-180 deg, circular; on an edged --object).
+    /// targets z mm, rx deg, ry deg), edge_5d (also x +-5 mm across
+    /// the edge and rz +-180 deg, circular; on an edged --object) or
+    /// edge_3d (x, z, rz; level to the face).
     #[arg(long, value_enum, default_value = "edge_2d", conflicts_with_all = ["hardware", "sensor"])]
     task: TaskArg,
     /// The 3D object of a 3D task: plane, ramp, saddle, bowl, wave, foil,
@@ -50,14 +55,36 @@ pub struct CollectTaskArgs {
     object: String,
     /// The point tapped: the object's top over this X,Y (mm); edge_5d:
     /// the edge point nearest it.
-    #[arg(long, value_delimiter = ',', num_args = 2, default_value = "0,0")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0,0",
+        allow_hyphen_values = true
+    )]
     at: Vec<f64>,
+    /// Tilts rx, ry uniform in +-DEG (default 25, the anchors').
+    #[arg(long, value_name = "DEG")]
+    tilt_range: Option<f64>,
+    /// Edge tasks: x across the edge uniform in +-MM (default 5).
+    #[arg(long, value_name = "MM")]
+    x_range: Option<f64>,
+    /// Edge tasks: rz uniform in +-DEG (default 180, the anchors').
+    #[arg(long, value_name = "DEG")]
+    rz_range: Option<f64>,
 }
 
 impl CollectTaskArgs {
     /// Whether a 3D task was asked for.
     pub fn is_3d(&self) -> bool {
         self.task != TaskArg::Edge2d
+    }
+}
+
+/// The two numbers of an `X,Y` (or `X Y`) flag; bad input otherwise.
+fn xy(values: &[f64], flag: &str) -> Result<[f64; 2]> {
+    match values {
+        [x, y] => Ok([*x, *y]),
+        _ => Err(LabError::Config(format!("{flag} takes two numbers, X,Y (mm)")).into()),
     }
 }
 
@@ -84,13 +111,17 @@ pub fn collect(
         .file_arg("--object", &a.object)
         .check_apart("--out", out)?;
     let rig = crate::cmd_data::rig_config(config)?;
+    let base = Collect3dConfig::default();
     let cfg = Collect3dConfig {
         samples,
         seed,
         task: a.task.into(),
-        at_mm: [a.at[0], a.at[1]],
+        at_mm: xy(&a.at, "--at")?,
         save_frames,
-        ..Collect3dConfig::default()
+        tilt_range_deg: a.tilt_range.unwrap_or(base.tilt_range_deg),
+        x_range_mm: a.x_range.unwrap_or(base.x_range_mm),
+        rz_range_deg: a.rz_range.unwrap_or(base.rz_range_deg),
+        ..base
     };
     cfg.validate()?;
     let surface = object(&a.object)?;
@@ -116,8 +147,10 @@ pub fn collect(
 /// `--task`, `--object` and the path of `follow`.
 #[derive(Args)]
 pub struct FollowTaskArgs {
-    /// The task: edge_2d (the report's, on --shape; the default) or
-    /// surface_3d (on --object, with a model of the targets z, rx, ry).
+    /// The task: edge_2d (the report's, on --shape; the default),
+    /// surface_3d (on --object, with a model of the targets z, rx, ry),
+    /// edge_5d (round an edged --object: x, z, rx, ry, rz) or edge_3d
+    /// (x, z, rz).
     #[arg(long, value_enum, conflicts_with_all = ["hardware", "sensor", "replay"])]
     task: Option<TaskArg>,
     /// The 3D object of a 3D task: plane, ramp, saddle, bowl, wave, foil,
@@ -125,15 +158,29 @@ pub struct FollowTaskArgs {
     #[arg(long, requires = "task")]
     object: Option<String>,
     /// The path's start: the surface point over X,Y (mm); default: the
-    /// object's (-40,0; the saddle -40,10; plane and ramp -20,0).
-    #[arg(long, value_delimiter = ',', num_args = 2, requires = "task")]
+    /// object's (-40,0; the saddle -40,10; plane and ramp -20,0). Edge
+    /// tasks: the edge point nearest X,Y (default the edge's first).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        requires = "task",
+        allow_hyphen_values = true
+    )]
     start: Option<Vec<f64>>,
-    /// The path's heading in the xy plane, deg from +x (default 0).
+    /// The path's heading in the xy plane, deg from +x (default 0;
+    /// surface_3d only).
     #[arg(long, requires = "task", allow_negative_numbers = true)]
     heading: Option<f64>,
-    /// The path's length, mm (default 80; plane and ramp 40).
+    /// The path's length, mm (default 80; plane and ramp 40; surface_3d
+    /// only).
     #[arg(long, requires = "task")]
     length: Option<f64>,
+    /// surface_3d in the real-frame world: every tap over --object
+    /// answered by the row of this dataset (imported from a real surface
+    /// collection, e.g. its held-out part with `import --like`) whose
+    /// labels (depth, rx, ry) are nearest the tool's true pose.
+    #[arg(long, value_name = "DATASET", requires = "task")]
+    replay_data: Option<std::path::PathBuf>,
 }
 
 impl FollowTaskArgs {
@@ -154,13 +201,14 @@ pub fn follow(
 ) -> Result<()> {
     use tactrace_lab::follow::task3d::{run_surface, PathConfig, Surface3dConfig};
     if a.task != Some(TaskArg::Surface3d) {
-        return Err(LabError::Config(
-            "follow --task edge_5d is not built yet (surface_3d is)".into(),
-        )
-        .into());
+        return follow_edge(a, model, config, seed, (out, force));
     }
     let name = a.object.as_deref().unwrap_or("plane");
-    crate::inputs::Inputs::new()
+    let mut inputs = crate::inputs::Inputs::new();
+    if let Some(dir) = &a.replay_data {
+        inputs = inputs.add("--replay-data", dir);
+    }
+    inputs
         .add("--model", model)
         .opt("--config", config)
         .file_arg("--object", name)
@@ -171,7 +219,7 @@ pub fn follow(
         cfg.path = PathConfig::for_object(name);
     }
     if let Some(s) = &a.start {
-        cfg.path.start_mm = [s[0], s[1]];
+        cfg.path.start_mm = xy(s, "--start")?;
     }
     cfg.path.heading_deg = a.heading.unwrap_or(cfg.path.heading_deg);
     cfg.path.length_mm = a.length.unwrap_or(cfg.path.length_mm);
@@ -182,13 +230,115 @@ pub fn follow(
     let model = tactrace_store::StoredModel::load(model)?;
     let pb = bar(cfg.steps() as u64, "follow");
     let mut progress = |s: &tactrace_servo::Step3d| pb.set_position(s.step as u64 + 1);
-    let res = run_surface(&cfg, &surface, name, &model, (out, force), &mut progress);
+    let res = match &a.replay_data {
+        None => run_surface(&cfg, &surface, name, &model, (out, force), &mut progress),
+        Some(dir) => {
+            use tactrace_lab::follow::surface_replay::run_surface_replay;
+            let data = tactrace_store::dataset::read_dataset(dir)?;
+            let bank = tactrace_lab::world::SurfaceBank::from_dataset(&data)?;
+            let res = run_surface_replay(
+                &cfg,
+                (&surface, name),
+                &bank,
+                &model,
+                (out, force),
+                &mut progress,
+            );
+            res.map(|(outcome, stats)| {
+                eprintln!(
+                    "real-frame world: {} taps answered by {} of the {} rows, label distance \
+                     mean {:.3} / max {:.3}",
+                    stats.taps,
+                    stats.distinct_rows,
+                    stats.bank_rows,
+                    stats.mean_label_distance,
+                    stats.max_label_distance
+                );
+                outcome
+            })
+        }
+    };
     pb.finish_and_clear();
     let res = res?;
     let m = &res.metrics;
     crate::say!(
         "{name}: {} steps, {}; depth error mean {:.3} / max {:.3} mm, normal error mean {:.2} / \
          max {:.2} deg, coverage {:.0}%",
+        m.steps,
+        res.summary.ending,
+        m.mean_distance_mm,
+        m.max_distance_mm,
+        m.mean_normal_error_deg,
+        m.max_normal_error_deg,
+        100.0 * m.coverage
+    );
+    if !res.summary.ending.succeeded() {
+        eprintln!(
+            "the run and its trajectory so far are in {}",
+            res.dir.display()
+        );
+        return Err(LabError::RunFailed {
+            ending: res.summary.ending,
+            message: res.summary.message.clone(),
+        }
+        .into());
+    }
+    eprintln!("{} (run folder {})", res.summary.message, res.dir.display());
+    Ok(())
+}
+
+/// `follow --task edge_5d|edge_3d`: round the edge of `--object`.
+fn follow_edge(
+    a: &FollowTaskArgs,
+    model: &Path,
+    config: Option<&Path>,
+    seed: Option<u64>,
+    (out, force): (&Path, bool),
+) -> Result<()> {
+    use tactrace_control::Se3Config;
+    use tactrace_lab::follow::edge3d::{edge_of, run_edge, Edge3dConfig};
+    let task: Task = a.task.unwrap_or(TaskArg::Edge5d).into();
+    if a.heading.is_some() || a.length.is_some() || a.replay_data.is_some() {
+        return Err(LabError::Config(format!(
+            "--heading, --length and --replay-data are surface_3d's: {task} follows the edge round"
+        ))
+        .into());
+    }
+    let name = a.object.as_deref().unwrap_or("foil");
+    crate::inputs::Inputs::new()
+        .add("--model", model)
+        .opt("--config", config)
+        .file_arg("--object", name)
+        .check_apart("--out", out)?;
+    let mut cfg: Edge3dConfig = tactrace_store::load_config(config, "edge follow configuration")?;
+    if config.is_none() {
+        cfg.controller = Se3Config::for_task(task);
+    }
+    if cfg.controller.task != task {
+        return Err(LabError::Config(format!(
+            "--task {task} but the configuration's controller.task is {}",
+            cfg.controller.task
+        ))
+        .into());
+    }
+    if let Some(s) = &a.start {
+        cfg.start_mm = Some(xy(s, "--start")?);
+    }
+    cfg.seed = seed.unwrap_or(cfg.seed);
+    cfg.validate()?;
+    let surface = object(name)?;
+    let edge = edge_of(&surface, name)?;
+    let _out = fsutil::check_output_dir(out, force)?;
+    let model = tactrace_store::StoredModel::load(model)?;
+    let pb = bar(cfg.steps(&edge) as u64, "follow");
+    let mut progress = |s: &tactrace_servo::Step3d| pb.set_position(s.step as u64 + 1);
+    let res = run_edge(&cfg, &surface, name, &model, (out, force), &mut progress);
+    pb.finish_and_clear();
+    let res = res?;
+    let m = &res.metrics;
+    crate::say!(
+        "{name}: {task}, {} steps, {}; distance from the edge mean {:.3} / max {:.3} mm, normal \
+         error mean {:.2} / max {:.2} deg, coverage {:.0}%",
         m.steps,
         res.summary.ending,
         m.mean_distance_mm,

@@ -196,3 +196,65 @@ fn issue23_planar_task_flag_gives_the_identical_run() {
     let read = |d: &str| std::fs::read(t.join(d).join("trajectory.csv")).unwrap();
     assert_eq!(read("a"), read("b"));
 }
+
+/// `collect --task edge_5d` with its range flags and `--at X,Y` (negative
+/// numbers too); `follow --task edge_5d` refuses an object without an
+/// edge and the surface task's path flags before anything runs (exit 2).
+#[test]
+fn issue23_edge_5d_collect_flags_and_follow_refusals() {
+    let t = TempDir::new("edge5d");
+    let r = tactrace(
+        &t.0,
+        &[
+            "collect",
+            "--task",
+            "edge_5d",
+            "--object",
+            "foil",
+            "--at",
+            "-3,-40",
+            "--x-range",
+            "2",
+            "--tilt-range",
+            "10",
+            "--rz-range",
+            "30",
+            "--samples",
+            "40",
+            "--out",
+            "e",
+        ],
+    );
+    ok(&r, "collect edge_5d");
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(t.join("e/meta.json")).unwrap()).unwrap();
+    assert_eq!(
+        meta["target_names"],
+        serde_json::json!(["x", "z", "rx", "ry", "rz"])
+    );
+    let targets = std::fs::read(t.join("e/targets.npy")).unwrap();
+    assert!(targets.len() > 40 * 5 * 4);
+    let bad_at = tactrace(
+        &t.0,
+        &[
+            "collect", "--task", "edge_5d", "--object", "foil", "--at", "1,2,3", "--out", "x",
+        ],
+    );
+    assert_eq!(bad_at.code, 2, "{}", bad_at.stderr);
+    assert!(
+        bad_at.stderr.contains("--at takes two numbers"),
+        "{}",
+        bad_at.stderr
+    );
+    let follow = |extra: &[&str], out: &str| {
+        let mut args = vec!["follow", "--task", "edge_5d", "--model", "m", "--out", out];
+        args.extend_from_slice(extra);
+        tactrace(&t.0, &args)
+    };
+    let no_edge = follow(&["--object", "saddle"], "r1");
+    assert_eq!(no_edge.code, 2, "{}", no_edge.stderr);
+    assert!(no_edge.stderr.contains("no edge"), "{}", no_edge.stderr);
+    let heading = follow(&["--object", "foil", "--heading", "10"], "r2");
+    assert_eq!(heading.code, 2, "{}", heading.stderr);
+    assert!(!t.join("r1").exists() && !t.join("r2").exists());
+}

@@ -4,11 +4,12 @@
 //!
 //! 1. The feature frame F at the object's surface point over `at_mm`
 //!    (z the outward normal; x, y the work frame's turned the least way).
-//!    edge_5d: the edge's own frame at the edge sample nearest `at_mm`
+//!    edge_5d and edge_3d: the edge's own frame at the edge sample nearest `at_mm`
 //!    (z the pressed face's normal, x across the edge out of the object).
 //! 2. Tap i draws its label s: depth z uniform in [`depth_range_mm`],
 //!    tilts rx, ry uniform in +-`tilt_range_deg`; edge_5d also x uniform
-//!    in +-`x_range_mm` and rz in +-`rz_range_deg` (the others 0).
+//!    in +-`x_range_mm` and rz in +-`rz_range_deg` (the others 0);
+//!    edge_3d as edge_5d, level to the face (rx = ry = 0).
 //! 3. The simulated arm moves to the tap's approach (the pose lifted
 //!    `tap.height_mm` along the sensor's own axis), then presses along
 //!    the axis to the pose F T(s) (z = -depth); the simulated TacTip
@@ -16,7 +17,7 @@
 //!    (`TacTipModel::pins_3d`), with nuisance.
 //! 4. The pins' displacements are the inputs, s's sensed components the
 //!    named targets (surface_3d `z` mm, `rx`, `ry` deg; edge_5d `x`, `z`
-//!    mm, `rx`, `ry` deg, `rz` deg circular).
+//!    mm, `rx`, `ry` deg, `rz` deg circular; edge_3d `x`, `z`, `rz`).
 //!
 //! Every tap has generators of its own (stream i of the seed), so the set
 //! is the same whatever the number of threads.
@@ -79,9 +80,9 @@ impl Default for Collect3dConfig {
 impl Collect3dConfig {
     /// Refuse a task this collection cannot draw and ranges that cannot work.
     pub fn validate(&self) -> Result<()> {
-        if !matches!(self.task, Task::Surface3d | Task::Edge5d) {
+        if self.task == Task::Edge2d {
             return Err(LabError::Config(format!(
-                "collect --task {} is not built yet (surface_3d and edge_5d are)",
+                "collect --task {} is the planar task: collect it with --shape",
                 self.task
             )));
         }
@@ -199,10 +200,11 @@ fn task_frame(
     origin: &str,
 ) -> Result<nalgebra::Isometry3<f64>> {
     let [x, y] = cfg.at_mm;
-    if cfg.task == Task::Edge5d {
+    if cfg.task != Task::Surface3d {
         let edge = object.edge().ok_or_else(|| {
             LabError::Config(format!(
-                "the object {origin} has no edge (edge_5d needs one)"
+                "the object {origin} has no edge ({} needs one)",
+                cfg.task
             ))
         })?;
         let near = |p: &tactrace_shape3d::Vec3| (p.x - x).hypot(p.y - y);
@@ -271,10 +273,15 @@ impl World<'_> {
         let z = rng.random_range(lo..=hi);
         let rx = rng.random_range(-t..=t);
         let ry = rng.random_range(-t..=t);
-        let label = if cfg.task == Task::Edge5d {
+        let label = if cfg.task != Task::Surface3d {
             let (xr, rzr) = (cfg.x_range_mm, cfg.rz_range_deg);
             let x = rng.random_range(-xr..=xr);
-            [x, 0.0, z, rx, ry, rng.random_range(-rzr..=rzr)]
+            let rz = rng.random_range(-rzr..=rzr);
+            // edge_3d: level to the face (its tilts drawn all the same,
+            // so its x, z and rz are edge_5d's of the same seed).
+            let level = cfg.task == Task::Edge3d;
+            let (rx, ry) = if level { (0.0, 0.0) } else { (rx, ry) };
+            [x, 0.0, z, rx, ry, rz]
         } else {
             [0.0, 0.0, z, rx, ry, 0.0]
         };

@@ -68,9 +68,9 @@ fn issue23_collect_surface_3d_writes_named_targets_in_the_anchors_ranges() {
         avg(&deep),
         avg(&shallow)
     );
-    // Tasks not built yet are refused.
+    // The planar task is collected with --shape, not here.
     let edge = Collect3dConfig {
-        task: Task::Edge3d,
+        task: Task::Edge2d,
         ..Collect3dConfig::default()
     };
     assert!(edge.validate().is_err());
@@ -174,4 +174,64 @@ fn issue23_follow_surface_3d_on_a_plane_writes_metrics_and_figures() {
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     assert!(csv.starts_with("step,x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg,z_pred_mm"));
     assert_eq!(csv.lines().count(), 1 + res.metrics.steps);
+}
+
+/// The real-frame world for surfaces on a synthetic bank (simulated taps
+/// standing in for real rows): every tap is answered by a bank row, listed
+/// in answers.csv with its labels and label distance, and the run is
+/// scored as a simulated one.
+#[test]
+fn issue23_surface_replay_answers_every_tap_from_the_bank() {
+    use tactrace_lab::follow::surface_replay::run_surface_replay;
+    use tactrace_lab::world::SurfaceBank;
+    let cfg = resolve_config(
+        ModelKind::DisDenNN,
+        Preset::Default,
+        Some("[pose]\nhidden = [16]\n"),
+        Some(3),
+    )
+    .unwrap();
+    let (net, _) = train(&cfg, data(), &mut |_| {}).unwrap();
+    let model = StoredModel::new(net, data().meta.reference_pins.clone());
+    let bank = SurfaceBank::from_dataset(data()).unwrap();
+    assert_eq!(bank.len(), 120);
+    let run_cfg = Surface3dConfig {
+        path: PathConfig {
+            length_mm: 5.0,
+            ..PathConfig::for_object("plane")
+        },
+        settle_steps: 1,
+        ..Surface3dConfig::default()
+    };
+    let root = tempfile::tempdir().unwrap();
+    let out = root.path().join("run");
+    let plane = object("plane");
+    let (res, stats) = run_surface_replay(
+        &run_cfg,
+        (&plane, "plane"),
+        &bank,
+        &model,
+        (&out, false),
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(stats.taps, res.metrics.steps);
+    assert_eq!(stats.bank_rows, 120);
+    assert!(stats.mean_label_distance.is_finite() && stats.max_label_distance >= 0.0);
+    let answers = std::fs::read_to_string(out.join("answers.csv")).unwrap();
+    let mut lines = answers.lines();
+    assert_eq!(
+        lines.next(),
+        Some("step,row,image,label_distance,z_mm,rx_deg,ry_deg")
+    );
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        let row: usize = f[1].parse().unwrap();
+        let l = bank.label(row);
+        for k in 0..3 {
+            let v: f64 = f[4 + k].parse().unwrap();
+            assert!((v - l[k]).abs() < 1e-3, "{line}");
+        }
+    }
+    assert!(out.join("replay.json").is_file() && out.join("metrics.json").is_file());
 }

@@ -32,7 +32,8 @@ pub use perception::{Percept, Perception};
 pub use replay_rig::ReplayRig;
 pub use rig::{tap, RigConfig, SimRig, TapConfig};
 pub use servo_3d::{
-    component_of, lifted, servo_loop_3d, Loop3dConfig, Perception3d, Sensed, Step3d,
+    component_of, lifted, servo_loop_3d, servo_loop_3d_taps, Loop3dConfig, Perception3d, Sensed,
+    Step3d,
 };
 pub use servo_loop::{servo_loop, Ending, FnSink, LoopConfig, LoopSummary, StepRecord, StepSink};
 pub use start::{flattest_arc_mm, pose_at_edge, start_pose, StartConfig};

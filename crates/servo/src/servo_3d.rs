@@ -12,11 +12,17 @@
 //! runs straight across the surface in the start's heading (rz is not
 //! sensed, so the heading is never turned).
 //!
+//! The edge tasks (edge_3d, edge_5d) run the same loop: rz is sensed, so
+//! the controller turns the heading onto the edge, and the constant step
+//! along y carries the sensor along it; round a closed edge the loop stops
+//! when the commanded path closes ([`Loop3dConfig::closure`]).
+//!
 //! A tap is made along the sensor's own axis: from a contact pose the arm
 //! lifts `lift_mm` along the axis, moves to the next pose lifted the same,
 //! and presses down to it. The loop sees only the arm's commanded pose and
 //! the frames, never the sensor's true pose on the object.
 use crate::error::{Result, ServoError};
+use crate::metrics::ClosureDetector;
 use crate::servo_loop::{Ending, LoopSummary};
 use serde::Serialize;
 use tactrace_arm::{Arm, ArmError, Pose};
@@ -28,7 +34,10 @@ use tactrace_vision::PinExtractor;
 /// Pin extraction and a pose model whose named targets are components of
 /// the six-component label.
 pub struct Perception3d {
-    extractor: PinExtractor,
+    /// `None` when the taps come as displacement vectors (a bank of real
+    /// frames read by import).
+    extractor: Option<PinExtractor>,
+    reference_pins: Vec<[f64; 2]>,
     model: PoseModel,
     /// For each model output, its component (0..6).
     components: Vec<usize>,
@@ -63,7 +72,21 @@ impl Perception3d {
         sensed: [bool; 6],
         contact_threshold_px: f64,
     ) -> Result<Self> {
-        let got = 2 * extractor.tracker.reference().len();
+        let pins = extractor.tracker.reference().to_vec();
+        let mut p = Self::of_fields(pins, model, sensed, contact_threshold_px)?;
+        p.extractor = Some(extractor);
+        Ok(p)
+    }
+
+    /// As [`Self::new`] for taps given as displacement vectors against
+    /// `reference_pins` ([`Self::perceive_field`]); frames are refused.
+    pub fn of_fields(
+        reference_pins: Vec<[f64; 2]>,
+        model: PoseModel,
+        sensed: [bool; 6],
+        contact_threshold_px: f64,
+    ) -> Result<Self> {
+        let got = 2 * reference_pins.len();
         if model.input_dim() != got {
             return Err(ServoError::InputSize {
                 expected: model.input_dim(),
@@ -97,7 +120,8 @@ impl Perception3d {
             )));
         }
         Ok(Self {
-            extractor,
+            extractor: None,
+            reference_pins,
             model,
             components,
             contact_threshold_px,
@@ -106,14 +130,30 @@ impl Perception3d {
 
     /// The reference pins (px) the displacement vectors are ordered by.
     pub fn reference_pins(&self) -> &[[f64; 2]] {
-        self.extractor.tracker.reference()
+        &self.reference_pins
     }
 
     /// The displacement vector of a frame, its mean pin displacement (px)
     /// and the label it predicts (unsensed components 0).
     pub fn perceive(&self, frame: &Frame) -> Result<Sensed> {
-        let tracked = self.extractor.extract(frame)?;
-        let field = tracked.displacement(self.extractor.tracker.reference());
+        let Some(extractor) = &self.extractor else {
+            return Err(ServoError::Config(
+                "this perception takes displacement vectors, not frames".into(),
+            ));
+        };
+        let tracked = extractor.extract(frame)?;
+        self.perceive_field(tracked.displacement(&self.reference_pins))
+    }
+
+    /// What a displacement vector (x of every reference pin, then y; px)
+    /// tells: as [`Self::perceive`] after the pins are read.
+    pub fn perceive_field(&self, field: Vec<f32>) -> Result<Sensed> {
+        if field.len() != 2 * self.reference_pins.len() {
+            return Err(ServoError::InputSize {
+                expected: 2 * self.reference_pins.len(),
+                got: field.len(),
+            });
+        }
         let p = field.len() / 2;
         let mean = (0..p)
             .map(|i| f64::hypot(field[i] as f64, field[p + i] as f64))
@@ -167,6 +207,10 @@ pub struct Loop3dConfig {
     pub max_no_contact: usize,
     /// Lift between taps, along the sensor's axis, mm.
     pub lift_mm: f64,
+    /// Stop when the commanded path closes (edge tasks round a closed
+    /// edge): the [`ClosureDetector`] of the 2D loop on the poses' (x, y),
+    /// with this radius and minimum excursion, mm; `None`: run every step.
+    pub closure: Option<[f64; 2]>,
 }
 
 /// `pose` moved `height_mm` back along its own z axis (away from the
@@ -198,6 +242,23 @@ pub fn servo_loop_3d(
     cfg: &Loop3dConfig,
     sink: &mut dyn FnMut(&Step3d, &[f32]) -> Result<()>,
 ) -> Result<LoopSummary> {
+    let mut tap = || {
+        let frame = sensor.capture().map_err(ServoError::from)?;
+        perception.perceive(&frame)
+    };
+    servo_loop_3d_taps(arm, &mut tap, controller, cfg, sink)
+}
+
+/// [`servo_loop_3d`] with each tap's percept from `tap` (called at the
+/// arm's pose after each move): the real-frame world answers it from a
+/// bank of read frames.
+pub fn servo_loop_3d_taps(
+    arm: &mut dyn Arm,
+    tap: &mut dyn FnMut() -> Result<Sensed>,
+    controller: &mut Se3Controller,
+    cfg: &Loop3dConfig,
+    sink: &mut dyn FnMut(&Step3d, &[f32]) -> Result<()>,
+) -> Result<LoopSummary> {
     if cfg.steps == 0 || cfg.max_no_contact == 0 || !cfg.lift_mm.is_finite() || cfg.lift_mm < 0.0 {
         return Err(ServoError::Config(
             "steps and max_no_contact must be at least 1, lift_mm >= 0".into(),
@@ -205,13 +266,10 @@ pub fn servo_loop_3d(
     }
     let stop = |step: usize, ending, message: String| Ok(LoopSummary::new(step, ending, message));
     let mut no_contact = 0;
+    let mut closure = cfg.closure.map(|[r, m]| ClosureDetector::new(r, m));
     for step in 0..cfg.steps {
         let pose = arm.pose();
-        let sensed = match sensor.capture().map_err(ServoError::from) {
-            Ok(frame) => perception.perceive(&frame),
-            Err(e) => Err(e),
-        };
-        let sensed = match sensed {
+        let sensed = match tap() {
             Ok(s) => s,
             Err(e) => return stop(step, Ending::Fault, format!("stopped at step {step}: {e}")),
         };
@@ -238,6 +296,13 @@ pub fn servo_loop_3d(
             let m = format!("lost the surface: {no_contact} taps without contact at step {step}");
             return stop(step + 1, Ending::LostContact, m);
         }
+        let closed = closure
+            .as_mut()
+            .is_some_and(|c| c.observe(tactrace_geometry::Vec2::new(pose.x, pose.y)));
+        if closed {
+            let m = format!("closed the loop after {} steps", step + 1);
+            return stop(step + 1, Ending::Closed, m);
+        }
         if step + 1 == cfg.steps {
             break;
         }
@@ -259,6 +324,10 @@ pub fn servo_loop_3d(
         }
     }
     let n = cfg.steps;
+    if cfg.closure.is_some() {
+        let m = format!("the path did not close in {n} steps (the step cap)");
+        return stop(n, Ending::StepCap, m);
+    }
     stop(
         n,
         Ending::StepsDone,

@@ -110,6 +110,7 @@ fn issue23_tilt_too_large_ends_the_surface_loop_as_a_refused_move() {
         steps: 5,
         max_no_contact: 3,
         lift_mm: 0.0,
+        closure: None,
     };
     let mut seen = 0;
     let mut sink = |_: &Step3d, _: &[f32]| {

@@ -13,7 +13,10 @@
 //! (or killed, or by Ctrl-C on a real rig) leaves its trajectory so far in
 //! `OUT.partial`, which the next run into `OUT` replaces.
 mod config;
+pub mod edge3d;
+pub mod edge3d_results;
 mod results;
+pub mod surface_replay;
 pub mod task3d;
 pub mod task3d_results;
 

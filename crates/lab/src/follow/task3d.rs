@@ -218,6 +218,7 @@ pub fn run_surface(
         steps: cfg.steps(),
         max_no_contact: cfg.max_no_contact,
         lift_mm: cfg.rig.tap.height_mm,
+        closure: None,
     };
     let mut csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
     let mut steps = Vec::new();

@@ -239,7 +239,7 @@ fn score(
 }
 
 /// Lines of the surface every 5 mm over the path's box widened by 20 mm.
-fn wire_mesh(object: &Surface, steps: &[Step3d]) -> Vec<Vec<[f64; 3]>> {
+pub(super) fn wire_mesh(object: &Surface, steps: &[Step3d]) -> Vec<Vec<[f64; 3]>> {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for s in steps {
         for (k, v) in [s.pose.x, s.pose.y].into_iter().enumerate() {

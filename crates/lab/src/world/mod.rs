@@ -15,9 +15,11 @@
 mod replay;
 mod replay_stats;
 mod rig;
+mod surface_bank;
 
 pub use replay::{load_bank, ReplayBank};
 pub use replay_stats::ReplayStats;
+pub use surface_bank::{SurfaceAnswer, SurfaceBank};
 
 use crate::error::Result;
 use crate::follow::{tactip_diameter_mm, ServoSettings, SimFollowConfig};

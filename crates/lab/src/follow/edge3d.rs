@@ -1,0 +1,239 @@
+//! Edge following in 3D (`follow --task edge_5d|edge_3d --object ...`):
+//! the servo loop of `tactrace_servo::servo_3d` with the SE(3) controller
+//! of an edge task, round the edge curve of a 3D object (the foil's rim,
+//! the bowl's rim, an extruded shape's top rim), into a run folder.
+//!
+//! The start: the sensor in the edge's own frame (z the pressed face's
+//! normal, x across the edge out of the object, y along it) at the edge
+//! sample nearest `start_mm` (the first sample by default), pressed to the
+//! reference depth. Every step the model predicts the pose in the edge's
+//! frame (edge_5d: x, z, rx, ry, rz; edge_3d: x, z, rz); the controller
+//! corrects it towards the reference (x = 0 on the edge, 3 mm deep, level
+//! to the face, rz = 0 so that y runs along the edge), and its constant
+//! step along the sensor's y carries the sensor along the edge; the
+//! predicted rz turns the heading. The run stops when the commanded path
+//! comes back to its start (the 2D loop's closure detector on (x, y)), at
+//! the step cap, or on a lost contact or refused move. The model sees only
+//! the pins; the run is scored against the edge afterwards
+//! ([`super::edge3d_results`]).
+use super::edge3d_results::{write_edge_results, Edge3dMetrics, EdgeCsv};
+use super::RunFolder;
+use crate::error::{LabError, Result};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig};
+use tactrace_control::{Se3Config, Se3Controller, Task};
+use tactrace_sensor::{SimTacTip, TacTipModel};
+use tactrace_servo::{servo_loop_3d, Loop3dConfig, LoopSummary, Perception3d, RigConfig, Step3d};
+use tactrace_shape3d::{pose_of_label, EdgeCurve, EdgeSample, Surface};
+use tactrace_store::StoredModel;
+use tactrace_vision::PinExtractor;
+
+/// An edge run in simulation (the run folder's `config.toml`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Edge3dConfig {
+    /// The simulated sensor, arm noise, workspace, tap (its `height_mm`
+    /// is the lift between taps, along the sensor's axis) and detector.
+    pub rig: RigConfig,
+    /// The SE(3) controller of an edge task (edge_5d's preset by default).
+    pub controller: Se3Config,
+    /// The start: the edge sample nearest this (x, y), mm; the edge's
+    /// first sample when absent.
+    pub start_mm: Option<[f64; 2]>,
+    /// Step cap; absent: 1.5 times the edge's length in steps, plus 10.
+    pub max_steps: Option<usize>,
+    /// The arm refuses a tilt of the tool beyond this, deg.
+    pub max_tilt_deg: f64,
+    /// Below this mean pin displacement (px) a tap counts as no contact.
+    pub contact_threshold_px: f64,
+    /// Taps in a row without contact before the run stops.
+    pub max_no_contact: usize,
+    /// Steps left out of the distance and normal metrics (the approach).
+    pub settle_steps: usize,
+    /// The path closes when it comes within this of its start, mm...
+    pub close_radius_mm: f64,
+    /// ...after getting at least this far from it, mm.
+    pub min_excursion_mm: f64,
+    /// Seed of the arm's and the camera's noise.
+    pub seed: u64,
+}
+
+impl Default for Edge3dConfig {
+    fn default() -> Self {
+        Self {
+            rig: RigConfig::default(),
+            controller: Se3Config::edge_5d(),
+            start_mm: None,
+            max_steps: None,
+            max_tilt_deg: 45.0,
+            contact_threshold_px: 0.5,
+            max_no_contact: 3,
+            settle_steps: 5,
+            close_radius_mm: 3.0,
+            min_excursion_mm: 20.0,
+            seed: 1,
+        }
+    }
+}
+
+impl Edge3dConfig {
+    /// Check the settings before anything runs.
+    pub fn validate(&self) -> Result<()> {
+        self.rig.validate()?;
+        self.controller.validate()?;
+        if !matches!(self.controller.task, Task::Edge5d | Task::Edge3d) {
+            return Err(LabError::Config(format!(
+                "controller.task is {}: an edge run needs edge_5d or edge_3d",
+                self.controller.task
+            )));
+        }
+        let start_ok = self
+            .start_mm
+            .is_none_or(|s| s.iter().all(|v| v.is_finite()));
+        let ok = start_ok
+            && self.controller.reference[1] > 0.0
+            && self.max_steps != Some(0)
+            && (0.0..=90.0).contains(&self.max_tilt_deg)
+            && self.contact_threshold_px.is_finite()
+            && self.max_no_contact > 0
+            && self.close_radius_mm > 0.0
+            && self.min_excursion_mm > self.close_radius_mm
+            && self.min_excursion_mm.is_finite();
+        if !ok {
+            return Err(LabError::Config(
+                "edge run: finite start_mm, the reference's y step > 0, max_steps >= 1, \
+                 max_tilt_deg in [0, 90], max_no_contact >= 1, 0 < close_radius_mm < \
+                 min_excursion_mm"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The step cap round `edge`.
+    pub fn steps(&self, edge: &EdgeCurve) -> usize {
+        self.max_steps.unwrap_or_else(|| {
+            (1.5 * edge.length() / self.controller.reference[1]).ceil() as usize + 10
+        })
+    }
+}
+
+/// A finished edge run.
+pub struct Edge3dOutcome {
+    pub summary: LoopSummary,
+    pub metrics: Edge3dMetrics,
+    pub dir: PathBuf,
+}
+
+/// The object's edge, or bad input naming the object.
+pub fn edge_of(object: &Surface, name: &str) -> Result<EdgeCurve> {
+    object
+        .edge()
+        .filter(|e| e.samples.len() >= 2)
+        .ok_or_else(|| LabError::Config(format!("the object {name} has no edge to follow")))
+}
+
+/// The edge sample nearest `start` in (x, y), the first without one.
+pub fn start_sample(edge: &EdgeCurve, start: Option<[f64; 2]>) -> EdgeSample {
+    let Some([x, y]) = start else {
+        return edge.samples[0];
+    };
+    let near = |s: &&EdgeSample| (s.point.x - x).hypot(s.point.y - y);
+    *edge
+        .samples
+        .iter()
+        .min_by(|a, b| near(a).total_cmp(&near(b)))
+        .expect("an edge has samples")
+}
+
+/// The start pose: the reference pose (its step along y left out) in the
+/// edge's frame at the start sample.
+pub fn start_pose(edge: &EdgeCurve, cfg: &Edge3dConfig) -> Pose {
+    let mut reference = cfg.controller.reference;
+    reference[1] = 0.0;
+    pose_of_label(&start_sample(edge, cfg.start_mm).frame(), reference)
+}
+
+/// Follow the edge of `object` (named `name`) with `model` in simulation
+/// into the run folder `out` (refused when it exists, unless `force`);
+/// `progress` hears every step. A run that did not close is still written
+/// (its metrics say how it ended).
+pub fn run_edge(
+    cfg: &Edge3dConfig,
+    object: &Surface,
+    name: &str,
+    model: &StoredModel,
+    (out, force): (&Path, bool),
+    progress: &mut dyn FnMut(&Step3d),
+) -> Result<Edge3dOutcome> {
+    cfg.validate()?;
+    let edge = edge_of(object, name)?;
+    let _claim = tactrace_store::check_output_dir(out, force)?;
+    let start = start_pose(&edge, cfg);
+    let arm_cfg = SimArmConfig {
+        seed: cfg.seed,
+        ..cfg.rig.arm.clone()
+    };
+    let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
+    let mut arm = LimitedArm::new(sim_arm, cfg.rig.workspace.clone(), LimitMode::Refuse)
+        .with_max_tilt_deg(cfg.max_tilt_deg);
+    arm.move_to(start)?;
+    let sensor_model = TacTipModel::new(cfg.rig.sensor.clone())?;
+    let pose_source = Box::new(move || probe.actual());
+    let mut sensor = SimTacTip::over_object(
+        sensor_model,
+        object.clone(),
+        pose_source,
+        cfg.seed.wrapping_add(1),
+    );
+    let reference = sensor.reference_frame();
+    let extractor = PinExtractor::from_reference_frame(&reference, cfg.rig.blob.clone())?;
+    let net = model.for_pins(
+        extractor.tracker.reference(),
+        Path::new("the simulated sensor's reference frame"),
+    )?;
+    let task = cfg.controller.task;
+    let perception = Perception3d::new(
+        extractor,
+        net.clone(),
+        task.sensed(),
+        cfg.contact_threshold_px,
+    )?;
+    let run = RunFolder::start(out, force, cfg)?;
+    let mut controller = Se3Controller::try_new(cfg.controller.clone())?;
+    let loop_cfg = Loop3dConfig {
+        steps: cfg.steps(&edge),
+        max_no_contact: cfg.max_no_contact,
+        lift_mm: cfg.rig.tap.height_mm,
+        closure: Some([cfg.close_radius_mm, cfg.min_excursion_mm]),
+    };
+    let mut csv = EdgeCsv::create(run.path(), &edge, cfg.controller.reference)?;
+    let mut steps = Vec::new();
+    let summary = {
+        let mut sink = |s: &Step3d, _field: &[f32]| -> tactrace_servo::Result<()> {
+            csv.write(s).map_err(|e| tactrace_servo::ServoError::Sink {
+                step: s.step,
+                source: Box::new(e),
+            })?;
+            progress(s);
+            steps.push(s.clone());
+            Ok(())
+        };
+        servo_loop_3d(
+            &mut arm,
+            &mut sensor,
+            &perception,
+            &mut controller,
+            &loop_cfg,
+            &mut sink,
+        )?
+    };
+    let metrics = write_edge_results(run.path(), (name, object, &edge), cfg, &steps, &summary)?;
+    let dir = run.finish()?;
+    Ok(Edge3dOutcome {
+        summary,
+        metrics,
+        dir,
+    })
+}

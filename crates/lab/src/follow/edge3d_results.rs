@@ -1,0 +1,354 @@
+//! What an edge run writes and how it is scored against the object's edge
+//! curve (which the loop never sees): `trajectory.csv` row by row with the
+//! true errors beside the prediction, then `metrics.json`, the 3D figure
+//! (`trajectory_3d.svg/.png`: the edge, the surface's wire mesh and the
+//! tip's path), the error curves (`errors.svg/.png`) and `replay.html`.
+//!
+//! The truth at a commanded pose, from the edge sample nearest its pole:
+//! the pose in that sample's edge frame ([`EdgeSample::frame`]) is the
+//! true label (x across the edge, z the depth, rx, ry, rz), as the
+//! collection's labels. Metrics, over the steps after `settle_steps`:
+//! - `mean_distance_mm`, `max_distance_mm`: the distance of the tip from
+//!   the edge curve, the tip being the dome's pole moved back the
+//!   reference depth along the sensor's axis (where the undeformed dome
+//!   first touches: on the edge when the pose is the reference);
+//! - `mean_offset_mm` (|true x - reference x|) and `mean_depth_error_mm`
+//!   (|true depth - reference depth|), the distance's two parts;
+//! - `mean_normal_error_deg`, `max_normal_error_deg`: the angle between
+//!   the sensor's axis and the pressed face's normal at that sample;
+//! - `coverage`: the fraction of the edge's samples passed (each step
+//!   within 3 mm of the edge marks the samples between its nearest one and
+//!   the previous step's, the shorter way round), all steps;
+//! - `closed`: the loop stopped by closing (came back to its start);
+//! - `mean_abs_error`: the model's error per sensed component against the
+//!   true label (rz wrapped to +-180 deg).
+use super::edge3d::Edge3dConfig;
+use super::task3d_results::wire_mesh;
+use crate::error::Result;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+use tactrace_arm::Pose;
+use tactrace_report::plot::{chart, chart_3d, Axes, Chart3d, Series, Style};
+use tactrace_report::replay_3d::{replay_3d_html, Replay3dPage, Replay3dStep};
+use tactrace_report::ReportError;
+use tactrace_servo::{lifted, Ending, LoopSummary, Step3d};
+use tactrace_shape3d::{EdgeCurve, Surface, Vec3};
+use tactrace_store::row_file::RowFile;
+use tactrace_store::write_atomic;
+
+/// An edge run's scores (see the module header).
+#[derive(Debug, Clone, Serialize)]
+pub struct Edge3dMetrics {
+    pub task: &'static str,
+    pub object: String,
+    pub steps: usize,
+    pub settle_steps: usize,
+    pub mean_distance_mm: f64,
+    pub max_distance_mm: f64,
+    pub mean_offset_mm: f64,
+    pub mean_depth_error_mm: f64,
+    pub mean_normal_error_deg: f64,
+    pub max_normal_error_deg: f64,
+    pub coverage: f64,
+    pub closed: bool,
+    pub path_length_mm: f64,
+    pub edge_length_mm: f64,
+    /// The model's mean absolute error per sensed component (mm, deg).
+    pub mean_abs_error: BTreeMap<&'static str, f64>,
+}
+
+#[derive(Serialize)]
+struct MetricsDocument<'a> {
+    #[serde(flatten)]
+    metrics: &'a Edge3dMetrics,
+    ending: Ending,
+    succeeded: bool,
+    message: &'a str,
+}
+
+/// The truth at one commanded pose.
+#[derive(Debug, Clone, Copy)]
+pub struct EdgeTruth {
+    /// The index of the edge sample nearest the pole.
+    pub sample: usize,
+    /// The tip's distance from the edge curve, mm.
+    pub distance_mm: f64,
+    /// The true label in the edge frame (x, y, z mm with z the depth; rx,
+    /// ry, rz deg).
+    pub label: [f64; 6],
+    /// The angle between the sensor's axis and the face normal, deg.
+    pub normal_error_deg: f64,
+    /// The tip (the pole moved back the reference depth), mm.
+    pub tip: Vec3,
+}
+
+/// The truth of `pose` against `edge` for the reference `reference`.
+pub fn edge_truth(edge: &EdgeCurve, pose: Pose, reference: [f64; 6]) -> EdgeTruth {
+    let p = Vec3::new(pose.x, pose.y, pose.z);
+    let sample = (0..edge.samples.len())
+        .min_by(|a, b| {
+            let d = |k: &usize| (edge.samples[*k].point - p).norm_squared();
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap_or(0);
+    let s = &edge.samples[sample];
+    let local = Pose::from_isometry(&(s.frame().inverse() * pose.to_isometry()));
+    let tip = lifted(pose, reference[2]);
+    let tip = Vec3::new(tip.x, tip.y, tip.z);
+    let axis = pose.to_isometry().rotation * Vec3::z();
+    EdgeTruth {
+        sample,
+        distance_mm: edge.distance(tip),
+        label: [local.x, local.y, -local.z, local.rx, local.ry, local.rz],
+        normal_error_deg: axis.angle(&s.normals[0]).to_degrees(),
+        tip,
+    }
+}
+
+/// `trajectory.csv` of an edge run, a whole row flushed per step.
+pub struct EdgeCsv {
+    rows: RowFile<std::fs::File>,
+    edge: EdgeCurve,
+    reference: [f64; 6],
+}
+
+impl EdgeCsv {
+    /// `dir/trajectory.csv` with its header.
+    pub fn create(dir: &Path, edge: &EdgeCurve, reference: [f64; 6]) -> Result<Self> {
+        let mut rows = RowFile::create(&dir.join("trajectory.csv"))?;
+        let pose = ["x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"];
+        let pred = ["x_pred_mm", "z_pred_mm", "rx_pred_deg", "ry_pred_deg"];
+        let rest = [
+            "rz_pred_deg",
+            "mean_displacement_px",
+            "contact",
+            "distance_mm",
+            "x_true_mm",
+            "depth_true_mm",
+            "rz_true_deg",
+            "normal_error_deg",
+        ];
+        let header = ["step"].iter().chain(&pose).chain(&pred).chain(&rest);
+        rows.write_row(header.copied())?;
+        Ok(Self {
+            rows,
+            edge: edge.clone(),
+            reference,
+        })
+    }
+
+    /// One step's row.
+    pub fn write(&mut self, s: &Step3d) -> tactrace_store::Result<()> {
+        let t = edge_truth(&self.edge, s.pose, self.reference);
+        let (p, l) = (s.pose, s.label);
+        let nums = [
+            p.x, p.y, p.z, p.rx, p.ry, p.rz, l[0], l[2], l[3], l[4], l[5],
+        ];
+        let mut row = vec![s.step.to_string()];
+        row.extend(nums.iter().map(|v| format!("{v:.4}")));
+        row.push(format!("{:.4}", s.mean_displacement_px));
+        row.push(s.contact.to_string());
+        let truth = [t.distance_mm, t.label[0], t.label[2], t.label[5]];
+        row.extend(truth.iter().map(|v| format!("{v:.4}")));
+        row.push(format!("{:.4}", t.normal_error_deg));
+        self.rows.write_row(row)
+    }
+}
+
+/// Score the run and write `metrics.json`, the figures and `replay.html`
+/// into `dir`.
+pub fn write_edge_results(
+    dir: &Path,
+    (name, object, edge): (&str, &Surface, &EdgeCurve),
+    cfg: &Edge3dConfig,
+    steps: &[Step3d],
+    summary: &LoopSummary,
+) -> Result<Edge3dMetrics> {
+    let reference = cfg.controller.reference;
+    let truths: Vec<EdgeTruth> = steps
+        .iter()
+        .map(|s| edge_truth(edge, s.pose, reference))
+        .collect();
+    let metrics = score(name, cfg, (edge, steps, &truths), summary);
+    let doc = MetricsDocument {
+        metrics: &metrics,
+        ending: summary.ending,
+        succeeded: summary.ending.succeeded(),
+        message: &summary.message,
+    };
+    let json = serde_json::to_string_pretty(&doc).expect("metrics serialise");
+    write_atomic(&dir.join("metrics.json"), json.as_bytes())?;
+    let task = cfg.controller.task;
+    let mut wire = wire_mesh(object, steps);
+    let mut rim: Vec<[f64; 3]> = edge
+        .samples
+        .iter()
+        .map(|s| [s.point.x, s.point.y, s.point.z])
+        .collect();
+    if edge.closed {
+        rim.extend(rim.first().copied());
+    }
+    wire.push(rim);
+    if !steps.is_empty() {
+        let title = format!("{task} round the {name}'s edge");
+        let tips: Vec<[f64; 3]> = truths.iter().map(|t| [t.tip.x, t.tip.y, t.tip.z]).collect();
+        let paths = [("sensor tip", tips)];
+        chart_3d(
+            &dir.join("trajectory_3d"),
+            &Chart3d {
+                title: &title,
+                wire: &wire,
+                paths: &paths,
+            },
+        )
+        .map_err(ReportError::from)?;
+        error_figure(dir, &title, &truths, reference)?;
+    }
+    let page_steps: Vec<Replay3dStep> = steps
+        .iter()
+        .zip(&truths)
+        .map(|(s, t)| {
+            let axis = s.pose.to_isometry().rotation * Vec3::z();
+            Replay3dStep {
+                pose: [s.pose.x, s.pose.y, s.pose.z, axis.x, axis.y, axis.z],
+                label: s.label,
+                depth_error_mm: t.label[2] - reference[2],
+                normal_error_deg: t.normal_error_deg,
+            }
+        })
+        .collect();
+    let title = format!("{task} round the {name}'s edge: {}", summary.message);
+    let html = replay_3d_html(&Replay3dPage {
+        title: &title,
+        wire: &wire,
+        steps: &page_steps,
+    });
+    write_atomic(&dir.join("replay.html"), html.as_bytes())?;
+    Ok(metrics)
+}
+
+/// The difference of two angles wrapped to [-180, 180), deg.
+fn wrap_deg(d: f64) -> f64 {
+    (d + 180.0).rem_euclid(360.0) - 180.0
+}
+
+fn score(
+    name: &str,
+    cfg: &Edge3dConfig,
+    (edge, steps, truths): (&EdgeCurve, &[Step3d], &[EdgeTruth]),
+    summary: &LoopSummary,
+) -> Edge3dMetrics {
+    let reference = cfg.controller.reference;
+    let settle = cfg.settle_steps.min(truths.len().saturating_sub(1));
+    let scored = &truths[settle.min(truths.len())..];
+    let n = scored.len().max(1) as f64;
+    let mean = |f: &dyn Fn(&EdgeTruth) -> f64| scored.iter().map(f).sum::<f64>() / n;
+    let max = |f: &dyn Fn(&EdgeTruth) -> f64| scored.iter().map(f).fold(0.0, f64::max);
+    let path_length_mm: f64 = truths
+        .windows(2)
+        .map(|w| (w[1].tip - w[0].tip).norm())
+        .sum();
+    let task = cfg.controller.task;
+    let sensed = task.sensed();
+    let mut mean_abs_error = BTreeMap::new();
+    for k in (0..6).filter(|k| sensed[*k]) {
+        let err = |s: &Step3d, t: &EdgeTruth| {
+            let d = s.label[k] - t.label[k];
+            if k == 5 {
+                wrap_deg(d).abs()
+            } else {
+                d.abs()
+            }
+        };
+        let errs: Vec<f64> = steps[settle.min(steps.len())..]
+            .iter()
+            .zip(scored)
+            .map(|(s, t)| err(s, t))
+            .collect();
+        let m = errs.iter().sum::<f64>() / errs.len().max(1) as f64;
+        mean_abs_error.insert(tactrace_control::COMPONENTS[k], m);
+    }
+    Edge3dMetrics {
+        task: task.name(),
+        object: name.to_string(),
+        steps: steps.len(),
+        settle_steps: settle,
+        mean_distance_mm: mean(&|t| t.distance_mm),
+        max_distance_mm: max(&|t| t.distance_mm),
+        mean_offset_mm: mean(&|t| (t.label[0] - reference[0]).abs()),
+        mean_depth_error_mm: mean(&|t| (t.label[2] - reference[2]).abs()),
+        mean_normal_error_deg: mean(&|t| t.normal_error_deg),
+        max_normal_error_deg: max(&|t| t.normal_error_deg),
+        coverage: coverage(edge, truths, summary.ending == Ending::Closed),
+        closed: summary.ending == Ending::Closed,
+        path_length_mm,
+        edge_length_mm: edge.length(),
+        mean_abs_error,
+    }
+}
+
+/// The fraction of the edge's samples passed (see the module header).
+fn coverage(edge: &EdgeCurve, truths: &[EdgeTruth], closed: bool) -> f64 {
+    const NEAR_MM: f64 = 3.0;
+    let n = edge.samples.len();
+    if n == 0 {
+        return 0.0;
+    }
+    let mut covered = vec![false; n];
+    let mut prev: Option<usize> = None;
+    let mark = |from: usize, to: usize, covered: &mut Vec<bool>| {
+        let forward = (to + n - from) % n;
+        let (start, len) = if !edge.closed {
+            (from.min(to), from.abs_diff(to))
+        } else if forward <= n - forward {
+            (from, forward)
+        } else {
+            (to, n - forward)
+        };
+        for k in 0..=len {
+            covered[(start + k) % n] = true;
+        }
+    };
+    for t in truths {
+        if t.distance_mm > NEAR_MM {
+            prev = None;
+            continue;
+        }
+        mark(prev.unwrap_or(t.sample), t.sample, &mut covered);
+        prev = Some(t.sample);
+    }
+    if let (true, Some(last), Some(first)) = (closed, prev, truths.first()) {
+        if first.distance_mm <= NEAR_MM {
+            mark(last, first.sample, &mut covered);
+        }
+    }
+    covered.iter().filter(|c| **c).count() as f64 / n as f64
+}
+
+/// The true distance, offset and depth error (mm) and normal error (deg)
+/// at every step.
+fn error_figure(dir: &Path, title: &str, truths: &[EdgeTruth], reference: [f64; 6]) -> Result<()> {
+    let series = |label: &str, f: &dyn Fn(&EdgeTruth) -> f64| Series {
+        name: label.into(),
+        points: truths
+            .iter()
+            .enumerate()
+            .map(|(i, t)| (i as f64, f(t)))
+            .collect(),
+        style: Style::Line,
+    };
+    let axes = Axes::new(&format!("{title}: true errors"), "step", "mm / deg");
+    chart(
+        &dir.join("errors"),
+        &axes,
+        &[
+            series("distance from the edge (mm)", &|t| t.distance_mm),
+            series("offset x (mm)", &|t| t.label[0] - reference[0]),
+            series("depth error (mm)", &|t| t.label[2] - reference[2]),
+            series("normal error (deg)", &|t| t.normal_error_deg),
+        ],
+    )
+    .map_err(ReportError::from)?;
+    Ok(())
+}

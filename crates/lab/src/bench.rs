@@ -240,8 +240,31 @@ pub fn real_control_latency_stats(
     limit: usize,
 ) -> Result<Latency> {
     let reference = tactrace_sensor::read_frame(&frames.join("init_0.png"))?;
-    let extractor =
+    let reader =
         PinReader::from_reference_frame(DetectorParams::Blobs(blob.clone()).check()?, &reference)?;
+    control_loop(&reader, model, &real_frames(frames, limit)?)
+}
+
+/// As [`real_control_latency_stats`] for a sensor of any kind: its frames
+/// read through the sensor settings `sight` (preprocessing and detector,
+/// as `import` reads them) against the rest pins `rest` (the model's
+/// reference pins), timed from the grey frame.
+pub fn real_control_latency_sight(
+    frames: &std::path::Path,
+    sight: tactrace_vision::SightParams,
+    rest: Vec<[f64; 2]>,
+    model: &PoseModel,
+    limit: usize,
+) -> Result<Latency> {
+    let images = real_frames(frames, limit)?;
+    let (w, h) = images.first().map_or((0, 0), |f| f.dimensions());
+    let reader = PinReader::new(sight.check(w, h)?, rest)?;
+    control_loop(&reader, model, &images)
+}
+
+/// Up to `limit` `.png` frames of `frames` in name order (not the
+/// undeformed `init_0.png`), grey.
+fn real_frames(frames: &std::path::Path, limit: usize) -> Result<Vec<tactrace_sensor::Frame>> {
     let mut paths: Vec<_> = std::fs::read_dir(frames)
         .map_err(tactrace_store::read_err(frames))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -249,11 +272,10 @@ pub fn real_control_latency_stats(
         .collect();
     paths.sort();
     paths.truncate(limit.max(1));
-    let images = paths
+    Ok(paths
         .iter()
         .map(|p| tactrace_sensor::read_frame(p))
-        .collect::<std::result::Result<Vec<_>, _>>()?;
-    control_loop(&extractor, model, &images)
+        .collect::<std::result::Result<Vec<_>, _>>()?)
 }
 
 /// Time from frame to command over `frames`, microseconds: extract and
@@ -288,7 +310,7 @@ fn control_loop(
         .iter()
         .map(|f| {
             let t = Instant::now();
-            std::hint::black_box(extractor.frames().detector().detect(f));
+            std::hint::black_box(extractor.detect_grey(f).ok());
             t.elapsed().as_secs_f64() * 1e6
         })
         .collect();

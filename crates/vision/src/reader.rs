@@ -206,14 +206,33 @@ impl PinReader {
     /// [`PinReader::read_preprocessed`], without the counts. The servo
     /// loop's perception reads every tap with it.
     pub fn read_grey(&self, frame: &Frame) -> Result<Tracked, VisionError> {
-        let stage = &self.frames.stage;
-        let tracked = if *stage.params() == PreprocessParams::default() {
-            track(self.frames.detector(), &self.tracker, frame).0
-        } else {
-            let seen = stage.apply_grey(frame)?;
-            track(self.frames.detector(), &self.tracker, &seen).0
+        let (detector, tracker) = (self.frames.detector(), &self.tracker);
+        let tracked = match self.preprocessed_grey(frame)? {
+            Some(seen) => track(detector, tracker, &seen).0,
+            None => track(detector, tracker, frame).0,
         };
         check_found(&tracked, tracked.matched_count(), self.min_found_fraction)?;
         Ok(tracked)
+    }
+
+    /// The detection of a grey frame as [`PinReader::read_grey`] sees it
+    /// (without the clusters the blob detector finds only when pins are
+    /// missing): what `bench` times as detection.
+    pub fn detect_grey(&self, frame: &Frame) -> Result<Detection, VisionError> {
+        let detector = self.frames.detector();
+        Ok(match self.preprocessed_grey(frame)? {
+            Some(seen) => detector.detect(&seen),
+            None => detector.detect(frame),
+        })
+    }
+
+    /// A grey frame through the stage; `None` when the stage has no step
+    /// (the frame is seen as it is).
+    fn preprocessed_grey(&self, frame: &Frame) -> Result<Option<Frame>, VisionError> {
+        let stage = &self.frames.stage;
+        if *stage.params() == PreprocessParams::default() {
+            return Ok(None);
+        }
+        stage.apply_grey(frame).map(Some)
     }
 }

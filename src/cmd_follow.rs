@@ -364,6 +364,11 @@ pub struct BenchArgs {
     /// the control loop on them (needs --model).
     #[arg(long)]
     real_frames: Option<PathBuf>,
+    /// A sensor file (`tactrace sensor inspect --out`) the real frames are
+    /// read with (its preprocessing and detector, against the model's
+    /// reference pins; no init_0.png needed), as `import` read them.
+    #[arg(long, requires = "real_frames")]
+    real_sensor: Option<PathBuf>,
     /// A calibrated sensor folder (`tactrace calibrate`): time its taps
     /// (with its field correction) instead of the default sensor's.
     #[arg(long)]
@@ -392,6 +397,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         .into());
     }
     let stored = a.model.as_deref().map(StoredModel::load).transpose()?;
+    let model_pins = stored.as_ref().map(|m| m.reference_pins().to_vec());
     let model = stored.map(|m| {
         let pins = m.reference_pins().to_vec();
         m.into_model_for(&pins, std::path::Path::new("bench"))
@@ -399,15 +405,24 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let model = model.transpose().map_err(LabError::from)?;
     let rig = tactrace_servo::RigConfig::default();
     let taps = a.taps.max(1);
+    // A model of another sensor's real frames is timed on them only.
+    let sim_model = model.as_ref().filter(|_| a.real_sensor.is_none());
     let f = match &a.sensor {
         Some(dir) => {
             let folder = tactrace_store::SensorFolder::read(dir)?;
-            tactrace_lab::bench::bench_calibrated(&folder, &rig, taps, model.as_ref())?
+            tactrace_lab::bench::bench_calibrated(&folder, &rig, taps, sim_model)?
         }
-        None => tactrace_lab::bench::bench(&rig, taps, model.as_ref())?,
+        None => tactrace_lab::bench::bench(&rig, taps, sim_model)?,
     };
-    let real = match (&a.real_frames, &model) {
-        (Some(dir), Some(m)) => {
+    let real = match (&a.real_frames, &model, &a.real_sensor) {
+        (Some(dir), Some(m), Some(file)) => {
+            let sight = tactrace_store::SightFile::read(file)?.sight();
+            let rest = model_pins.unwrap_or_default();
+            Some(tactrace_lab::bench::real_control_latency_sight(
+                dir, sight, rest, m, a.taps,
+            )?)
+        }
+        (Some(dir), Some(m), None) => {
             let blob = tactrace_vision::BlobParams::preset("real256").map_err(LabError::from)?;
             Some(tactrace_lab::bench::real_control_latency_stats(
                 dir, &blob, m, a.taps,

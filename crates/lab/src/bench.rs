@@ -14,7 +14,7 @@ use tactrace_learn::{measure_fma_peak, PoseModel};
 use tactrace_sensor::{LabelConvention, TacTipModel};
 use tactrace_servo::{pose_at_edge, RigConfig};
 use tactrace_store::SensorFolder;
-use tactrace_vision::{detect_blobs, PinExtractor};
+use tactrace_vision::{DetectorParams, PinReader};
 
 /// Figures from one benchmark run (single thread).
 #[derive(Debug, Clone, Serialize)]
@@ -146,20 +146,23 @@ pub fn median(samples: &[f64]) -> f64 {
 pub fn bench(rig: &RigConfig, taps: usize, model: Option<&PoseModel>) -> Result<BenchFigures> {
     let sensor = TacTipModel::new(rig.sensor.clone())?;
     let reference = sensor.render(sensor.rest_pins(), None);
-    let extractor = PinExtractor::from_reference_frame(&reference, rig.blob.clone())?;
+    let extractor = PinReader::from_reference_frame(
+        DetectorParams::Blobs(rig.blob.clone()).check()?,
+        &reference,
+    )?;
     bench_with(&sensor, &extractor, None, rig, taps, model)
 }
 
 /// As [`bench()`] with a calibrated sensor (`--sensor`): its taps, seen
-/// against its own reference pins with its blob detector
-/// ([`crate::sim_sight::blob_extractor`]), over its own label range.
+/// against its own reference pins with its detector (blob or small-pin:
+/// [`crate::sim_sight::of_sensor`]), over its own label range.
 pub fn bench_calibrated(
     folder: &SensorFolder,
     rig: &RigConfig,
     taps: usize,
     model: Option<&PoseModel>,
 ) -> Result<BenchFigures> {
-    let extractor = crate::sim_sight::blob_extractor(folder)?;
+    let extractor = crate::sim_sight::of_sensor(folder)?.reader;
     // The sensor's own pose (no mount): the labels' tip pose.
     let convention = LabelConvention {
         mount_yaw_deg: 0.0,
@@ -177,7 +180,7 @@ pub fn bench_calibrated(
 
 fn bench_with(
     sensor: &TacTipModel,
-    extractor: &PinExtractor,
+    extractor: &PinReader,
     labels: Option<&LabelConvention>,
     rig: &RigConfig,
     taps: usize,
@@ -202,8 +205,8 @@ fn bench_with(
     let t1 = Instant::now();
     let mut disps = Vec::with_capacity(taps);
     for f in &frames {
-        let tracked = extractor.extract(f)?;
-        disps.push(tracked.displacement(extractor.tracker.reference()));
+        let tracked = extractor.read_grey(f)?;
+        disps.push(tracked.displacement(extractor.tracker().reference()));
     }
     let extract = t1.elapsed().as_secs_f64();
     let latency = model
@@ -237,7 +240,31 @@ pub fn real_control_latency_stats(
     limit: usize,
 ) -> Result<Latency> {
     let reference = tactrace_sensor::read_frame(&frames.join("init_0.png"))?;
-    let extractor = PinExtractor::from_reference_frame(&reference, blob.clone())?;
+    let reader =
+        PinReader::from_reference_frame(DetectorParams::Blobs(blob.clone()).check()?, &reference)?;
+    control_loop(&reader, model, &real_frames(frames, limit)?)
+}
+
+/// As [`real_control_latency_stats`] for a sensor of any kind: its frames
+/// read through the sensor settings `sight` (preprocessing and detector,
+/// as `import` reads them) against the rest pins `rest` (the model's
+/// reference pins), timed from the grey frame.
+pub fn real_control_latency_sight(
+    frames: &std::path::Path,
+    sight: tactrace_vision::SightParams,
+    rest: Vec<[f64; 2]>,
+    model: &PoseModel,
+    limit: usize,
+) -> Result<Latency> {
+    let images = real_frames(frames, limit)?;
+    let (w, h) = images.first().map_or((0, 0), |f| f.dimensions());
+    let reader = PinReader::new(sight.check(w, h)?, rest)?;
+    control_loop(&reader, model, &images)
+}
+
+/// Up to `limit` `.png` frames of `frames` in name order (not the
+/// undeformed `init_0.png`), grey.
+fn real_frames(frames: &std::path::Path, limit: usize) -> Result<Vec<tactrace_sensor::Frame>> {
     let mut paths: Vec<_> = std::fs::read_dir(frames)
         .map_err(tactrace_store::read_err(frames))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -245,11 +272,10 @@ pub fn real_control_latency_stats(
         .collect();
     paths.sort();
     paths.truncate(limit.max(1));
-    let images = paths
+    Ok(paths
         .iter()
         .map(|p| tactrace_sensor::read_frame(p))
-        .collect::<std::result::Result<Vec<_>, _>>()?;
-    control_loop(&extractor, model, &images)
+        .collect::<std::result::Result<Vec<_>, _>>()?)
 }
 
 /// Time from frame to command over `frames`, microseconds: extract and
@@ -258,7 +284,7 @@ pub fn real_control_latency_stats(
 /// whole loop (for the mean); the prediction within it, and blob detection
 /// in a pass of its own (its median; ordering is the rest).
 fn control_loop(
-    extractor: &PinExtractor,
+    extractor: &PinReader,
     model: &PoseModel,
     frames: &[tactrace_sensor::Frame],
 ) -> Result<Latency> {
@@ -268,8 +294,8 @@ fn control_loop(
     let t0 = Instant::now();
     for f in frames {
         let t = Instant::now();
-        let tracked = extractor.extract(f)?;
-        let displacement = tracked.displacement(extractor.tracker.reference());
+        let tracked = extractor.read_grey(f)?;
+        let displacement = tracked.displacement(extractor.tracker().reference());
         let tp = Instant::now();
         let [r, theta] = model.predict(&displacement)?;
         predict.push(tp.elapsed().as_secs_f64() * 1e6);
@@ -284,7 +310,7 @@ fn control_loop(
         .iter()
         .map(|f| {
             let t = Instant::now();
-            std::hint::black_box(detect_blobs(f, &extractor.params));
+            std::hint::black_box(extractor.detect_grey(f).ok());
             t.elapsed().as_secs_f64() * 1e6
         })
         .collect();

@@ -326,13 +326,13 @@ pub fn check_samples(cfg: &CollectConfig) -> Result<()> {
 }
 
 /// An arm and sensor (simulated or real) at an edge: the undeformed
-/// reference frame, the blob settings, the tap and the edge point with its
+/// reference frame, the detector settings, the tap and the edge point with its
 /// outward normal in the work frame.
 pub struct EdgeRig<'a> {
     pub arm: &'a mut dyn Arm,
     pub sensor: &'a mut dyn TactileSensor,
     pub reference: &'a Frame,
-    pub blob: &'a BlobParams,
+    pub detect: &'a DetectorParams,
     pub tap: &'a TapConfig,
     pub edge: Vec2,
     pub normal: Vec2,
@@ -358,13 +358,13 @@ pub fn collect_on(
         arm,
         sensor,
         reference,
-        blob,
+        detect,
         tap: tap_cfg,
         edge,
         normal,
         labels,
     } = on;
-    let extractor = PinExtractor::from_reference_frame(reference, blob.clone())?;
+    let extractor = PinExtractor::with_detector(reference, detect.clone().check()?)?;
     let dim = 2 * extractor.tracker.reference().len();
     // Reserved for at most PRESIZED_ROWS: a huge --samples grows the
     // buffers as taps come instead of aborting on one giant allocation.

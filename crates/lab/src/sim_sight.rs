@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use tactrace_sensor::{fit_layouts, PinLayout, TacTipConfig};
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::{LabelledCollection, TapFields};
-use tactrace_vision::{Detector, FrameDetector, PinExtractor, PinReader, PinTracker};
+use tactrace_vision::{DetectorParams, FrameDetector, PinReader};
 
 /// The reader of a collection's simulated taps.
 pub struct SimSight {
@@ -191,6 +191,15 @@ pub fn lay_out(sensor: &TacTipConfig, sight: &SimSight) -> Result<(TacTipConfig,
     Ok((fit.config, report))
 }
 
+/// A calibrated sensor's detector: its sensor settings' (the blob detector
+/// or the small-pin one), else its blob detector.
+pub fn sensor_detect(spec: &tactrace_store::sensor_file::SensorSpec) -> DetectorParams {
+    match &spec.sight {
+        Some(s) => s.detect.clone(),
+        None => DetectorParams::Blobs(spec.blob.clone()),
+    }
+}
+
 /// A calibrated sensor's detector on frames of its simulator's size, over
 /// the rest pins `rest` (from `origin`).
 pub fn sensor_sight(
@@ -199,13 +208,9 @@ pub fn sensor_sight(
     origin: &Path,
 ) -> Result<SimSight> {
     let camera = &spec.sensor.camera;
-    let detect = match &spec.sight {
-        Some(s) => s.detect.clone(),
-        None => tactrace_vision::DetectorParams::Blobs(spec.blob.clone()),
-    };
     let params = tactrace_vision::SightParams {
         preprocess: Default::default(),
-        detect,
+        detect: sensor_detect(spec),
     };
     let detector = params
         .check(camera.width, camera.height)
@@ -233,24 +238,4 @@ pub fn sensor_sight(
 pub fn of_sensor(sensor: &tactrace_store::SensorFolder) -> Result<SimSight> {
     let spec = &sensor.spec;
     sensor_sight(spec, spec.reference_pins.clone(), &sensor.source)
-}
-
-/// The blob-detector extractor of a calibrated sensor's simulated taps
-/// (the follow loop's and `bench`'s): [`of_sensor`]'s reader as a
-/// [`PinExtractor`] over the sensor's own reference pins; refused (bad
-/// input) when the sensor's settings name the small-pin detector.
-pub fn blob_extractor(sensor: &tactrace_store::SensorFolder) -> Result<PinExtractor> {
-    let sight = of_sensor(sensor)?;
-    let Detector::Blobs(params) = sight.reader.frames().detector() else {
-        return Err(LabError::Config(format!(
-            "the calibrated sensor {} reads its pins with the small-pin (spots) detector: the \
-             follow loop and bench read a pin model's taps with the blob detector only",
-            sensor.source.display()
-        )));
-    };
-    Ok(PinExtractor {
-        params: params.clone(),
-        tracker: PinTracker::new(sight.rest().to_vec())?,
-        min_matched_fraction: sight.reader.min_found_fraction,
-    })
 }

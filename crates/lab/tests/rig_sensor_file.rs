@@ -2,14 +2,20 @@
 //! "sensor.toml"` in the rig file): the same preprocessing stage as
 //! `import` and `predict --image`, on the folder camera the hardware
 //! tests use; one way to read the camera (a sensor file and the rig's own
-//! `[preprocess]` / `[blob]` tables together are refused).
+//! `[preprocess]` / `[blob]` tables together are refused); a sensor file
+//! naming the small-pin detector runs its taps on the fake UR5.
 use image::{Rgb, RgbImage};
 use std::path::Path;
-use tactrace_lab::hardware::HardwareConfig;
+use tactrace_hw::{FakeUrController, FakeUrOptions, StateInterface};
+use tactrace_lab::collect::CollectConfig;
+use tactrace_lab::hardware::{collect_hardware, HardwareConfig, StopFlag};
 use tactrace_lab::LabError;
+use tactrace_sensor::{EdgeTap, Frame, PinLayout, TacTipConfig, TacTipModel};
+use tactrace_servo::pose_at_edge;
 use tactrace_store::{SensorSummary, SightFile};
 use tactrace_vision::{
-    detect_blobs, BlobParams, DetectorParams, LayoutKind, MaskCircle, PreprocessParams, Threshold,
+    detect_blobs, BlobParams, DetectorParams, LayoutKind, MaskCircle, PinExtractor,
+    PreprocessParams, Threshold,
 };
 
 /// The crop of the synthetic camera image: the dome's square.
@@ -112,7 +118,8 @@ fn issue21_the_rig_camera_reads_a_raw_colour_frame_through_a_sensor_file() {
     let sight = cfg.sight().unwrap();
     assert_eq!(sight.frame_size, Some([220, 200]));
     let settings = cfg.servo_settings().unwrap();
-    assert_eq!(*settings.blob(), BlobParams::preset("real256").unwrap());
+    let blob = BlobParams::preset("real256").unwrap();
+    assert_eq!(*settings.detect(), DetectorParams::Blobs(blob.clone()));
 
     let frame = cfg.camera().unwrap().capture().unwrap();
     assert_eq!(frame.dimensions(), (160, 160), "cropped");
@@ -121,7 +128,7 @@ fn issue21_the_rig_camera_reads_a_raw_colour_frame_through_a_sensor_file() {
     let again = HardwareConfig::from_toml(&copy, "config.toml").unwrap();
     assert_eq!(again.sensor, cfg.sensor);
     again.validate().unwrap();
-    let found: Vec<[f64; 2]> = detect_blobs(&frame, settings.blob())
+    let found: Vec<[f64; 2]> = detect_blobs(&frame, &blob)
         .iter()
         .map(|k| [k.x, k.y])
         .collect();
@@ -185,22 +192,98 @@ fn issue21_a_sensor_file_and_the_rigs_own_tables_together_are_refused() {
     assert_eq!(frame.dimensions(), (160, 160));
 }
 
+/// A small-pin TacTip (127 pins about 3 px wide, 7 px apart, on rings in
+/// 128 x 128 binarised frames): its rest frame and `n` pressed frames.
+fn small_pin_frames(n: usize) -> (Frame, Vec<Frame>) {
+    let mut cfg = TacTipConfig::default();
+    cfg.geometry.layout = PinLayout::Rings;
+    cfg.geometry.pin_radius_mm = 0.7;
+    cfg.camera.width = 128;
+    cfg.camera.height = 128;
+    cfg.camera.centre_px = [63.4, 64.5];
+    cfg.camera.focal_px = 39.0;
+    let model = TacTipModel::new(cfg).unwrap();
+    let rest = model.render(model.rest_pins(), None);
+    let taps = (0..n)
+        .map(|k| {
+            let tap = EdgeTap {
+                r_mm: -4.0 + k as f64,
+                theta_deg: 10.0 * k as f64 - 20.0,
+                ..EdgeTap::default()
+            };
+            model.render(&model.edge_tap_pins(&tap), None)
+        })
+        .collect();
+    (rest, taps)
+}
+
+/// A rig whose sensor file names the small-pin detector runs its taps on
+/// the fake UR5: the collection reads every tap's pins with that
+/// detector, against the pins it found in the frame taken at the start,
+/// exactly as the detector reads the same frames off the rig.
 #[test]
-fn issue21_a_sensor_file_with_the_small_pin_detector_is_refused_on_the_rig() {
+fn issue21_a_small_pin_sensor_file_on_the_rig_runs_its_taps_on_the_fake_ur5() {
     let dir = tempfile::tempdir().unwrap();
-    let frames = rig_folder(dir.path());
-    let mut file = sensor_file(pins().len());
-    file.detect = DetectorParams::Spots(tactrace_vision::SpotParams {
+    let frames = dir.path().join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    let (rest, taps) = small_pin_frames(6);
+    // The camera replays the frame taken at the start, then the taps.
+    for (k, f) in std::iter::once(&rest).chain(&taps).enumerate() {
+        f.save(frames.join(format!("{k:05}.png"))).unwrap();
+    }
+    let spots = DetectorParams::Spots(tactrace_vision::SpotParams {
         level: 127,
         min_pixels: 1,
-        max_pixels: 10,
-        max_cluster_pixels: 24,
+        max_pixels: 16,
+        max_cluster_pixels: 48,
         connectivity: Default::default(),
     });
+    let file = SightFile {
+        sensor: SensorSummary {
+            pins: 127,
+            layout: LayoutKind::Rings,
+            spacing_px: 7.0,
+            pin_pixels: 7.0,
+            frame_size: [128, 128],
+        },
+        preprocess: PreprocessParams::default(),
+        detect: spots.clone(),
+    };
     std::fs::write(dir.path().join("sensor.toml"), file.to_toml()).unwrap();
     let rig = dir.path().join("rig.toml");
     std::fs::write(&rig, rig_text(&frames, "sensor = \"sensor.toml\"")).unwrap();
-    let err = HardwareConfig::read(&rig).unwrap().validate().unwrap_err();
-    assert!(err.is_bad_input(), "{err}");
-    assert!(err.to_string().contains("small-pin"), "{err}");
+    let mut cfg = HardwareConfig::read(&rig).unwrap();
+    let collect = CollectConfig {
+        samples: taps.len(),
+        theta_range_deg: 5.0,
+        r_range_mm: 2.0,
+        ..CollectConfig::default()
+    };
+    let (edge, normal) = tactrace_lab::hardware::collection_edge(&cfg);
+    let first = pose_at_edge(edge, normal, 0.0, -5.0, cfg.tap.height_mm);
+    let fake = FakeUrController::start(FakeUrOptions {
+        start: [
+            first.x / 1000.0,
+            first.y / 1000.0,
+            (first.z + 5.0) / 1000.0,
+            0.0,
+            0.0,
+            first.rz.to_radians(),
+        ],
+        state: StateInterface::Rtde,
+        ..FakeUrOptions::default()
+    })
+    .unwrap();
+    cfg.arm = fake.config();
+    cfg.validate().unwrap();
+    assert_eq!(cfg.servo_settings().unwrap().detect(), &spots);
+    let got = collect_hardware(&cfg, &collect, "rig", &StopFlag::new(), |_| {}).unwrap();
+    let extractor = PinExtractor::with_detector(&rest, spots.check().unwrap()).unwrap();
+    let pins = extractor.tracker.reference();
+    assert_eq!(pins.len(), 127, "every pin found at rest");
+    let expected: Vec<f32> = taps
+        .iter()
+        .flat_map(|f| extractor.extract(f).unwrap().displacement(pins))
+        .collect();
+    assert_eq!(got.data.inputs, expected);
 }

@@ -41,13 +41,15 @@ impl TactileSensor for ReplaySensor {
 /// stored uncompressed is 128 MiB).
 pub const MAX_FRAME_BYTES: u64 = 256 << 20;
 
-/// Read one frame from an image file, converting colour to 8-bit grey.
+/// Read one frame from an image file, converting colour to 8-bit grey by
+/// [`tactrace_vision::preprocess::grey_of`] (the conversion `import` and
+/// the preprocessing stage use).
 ///
 /// Errors name the file and say whether it is missing, unreadable, not an
 /// image or corrupt. Only a regular file of at most `MAX_FRAME_BYTES` (256 MiB)
 /// is read: a FIFO named like a frame would block the reader for ever.
 pub fn read_frame(path: &Path) -> Result<Frame, SensorError> {
-    Ok(read_image(path)?.into_luma8())
+    Ok(tactrace_vision::preprocess::grey_of(&read_image(path)?))
 }
 
 /// A camera image file decoded as it is (grey or colour), with the checks
@@ -123,4 +125,33 @@ fn plain_chunk_names(msg: &str) -> String {
     }
     out.push_str(rest);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A colour frame file is made grey by the one conversion `import`
+    /// and the preprocessing stage use (`grey_of`, OpenCV's weights), not
+    /// by the image crate's own (which differs on this frame).
+    #[test]
+    fn issue21_a_colour_frame_is_read_grey_as_import_reads_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("colour.png");
+        let image = image::RgbImage::from_fn(7, 5, |x, y| {
+            image::Rgb([
+                (40 * x) as u8,
+                (50 * y + 3) as u8,
+                (17 * (x + y) + 90) as u8,
+            ])
+        });
+        image.save(&path).unwrap();
+        let frame = read_frame(&path).unwrap();
+        let decoded = read_image(&path).unwrap();
+        assert_eq!(frame, tactrace_vision::preprocess::grey_of(&decoded));
+        assert_ne!(frame, decoded.to_luma8(), "the two conversions differ here");
+        let p = image.get_pixel(6, 4).0.map(u32::from);
+        let expected = (p[0] * 9798 + p[1] * 19235 + p[2] * 3735 + (1 << 14)) >> 15;
+        assert_eq!(u32::from(frame.get_pixel(6, 4)[0]), expected);
+    }
 }

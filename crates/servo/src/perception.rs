@@ -1,5 +1,8 @@
 //! Frame -> (r, theta): pin extraction against the undeformed frame, then
 //! the pose model (report ch. 4: the displacement vector, then the network).
+//! The pins are read by the sensor's own reader ([`PinReader`]: its
+//! preprocessing, its detector, the blob detector or the small-pin one,
+//! and its rest pins), the one `import` reads the same frames with.
 //! An image model reads the frame's pixels instead, made as its training
 //! frames were ([`ImageInput`]: the dataset's preprocessing, then
 //! area-averaged to its input size); the pins still say whether the tap
@@ -15,7 +18,7 @@ use serde::Serialize;
 use std::sync::{Mutex, PoisonError};
 use tactrace_learn::{ImageModel, PoseModel};
 use tactrace_sensor::{Frame, LabelConvention};
-use tactrace_vision::{PinExtractor, Tracked};
+use tactrace_vision::{PinReader, Tracked};
 
 /// What reads the pose from a tap: the pins' displacement vector, or the
 /// frame's pixels.
@@ -26,7 +29,7 @@ enum Reader {
 
 /// Pin extraction and the pose model, with the contact rule.
 pub struct Perception {
-    extractor: PinExtractor,
+    reader: PinReader,
     model: Reader,
     /// Below this mean pin displacement (px) a tap counts as no contact.
     contact_threshold_px: f64,
@@ -53,14 +56,10 @@ pub struct Percept {
 }
 
 impl Perception {
-    /// Pair `extractor` (ordered against the undeformed frame) with `model`;
-    /// refuses a model whose input size is not twice the pin count.
-    pub fn new(
-        extractor: PinExtractor,
-        model: PoseModel,
-        contact_threshold_px: f64,
-    ) -> Result<Self> {
-        let got = 2 * extractor.tracker.reference().len();
+    /// Pair `reader` (ordered by the rest pins) with `model`; refuses a
+    /// model whose input size is not twice the pin count.
+    pub fn new(reader: PinReader, model: PoseModel, contact_threshold_px: f64) -> Result<Self> {
+        let got = 2 * reader.tracker().reference().len();
         if model.input_dim() != got {
             return Err(ServoError::InputSize {
                 expected: model.input_dim(),
@@ -68,7 +67,7 @@ impl Perception {
             });
         }
         Ok(Self {
-            extractor,
+            reader,
             model: Reader::Pins(model),
             contact_threshold_px,
             labels: None,
@@ -78,11 +77,11 @@ impl Perception {
         })
     }
 
-    /// Pair `extractor` (for the contact rule and the recorded pins) with
+    /// Pair `reader` (for the contact rule and the recorded pins) with
     /// the image model `model`, which reads each frame's pixels made by
     /// `input`; refuses an input of another size than the model takes.
     pub fn with_image_model(
-        extractor: PinExtractor,
+        reader: PinReader,
         model: ImageModel,
         input: ImageInput,
         contact_threshold_px: f64,
@@ -95,7 +94,7 @@ impl Perception {
             )));
         }
         Ok(Self {
-            extractor,
+            reader,
             model: Reader::Image(model, input),
             contact_threshold_px,
             labels: None,
@@ -117,7 +116,7 @@ impl Perception {
 
     /// The reference pins (px) the displacement vectors are ordered by.
     pub fn reference_pins(&self) -> &[[f64; 2]] {
-        self.extractor.tracker.reference()
+        self.reader.tracker().reference()
     }
 
     /// The displacement vector of one frame (x of every pin, then y, px,
@@ -125,7 +124,7 @@ impl Perception {
     /// Its pins are kept for a [`Perception::perceive`] of the same frame.
     pub fn displacement(&self, frame: &Frame) -> Result<Vec<f32>> {
         let tracked = self.extract(frame)?;
-        let disp = tracked.displacement(self.extractor.tracker.reference());
+        let disp = tracked.displacement(self.reader.tracker().reference());
         *self.last.lock().unwrap_or_else(PoisonError::into_inner) = Some((frame.clone(), tracked));
         Ok(disp)
     }
@@ -148,13 +147,13 @@ impl Perception {
         #[cfg(test)]
         self.extractions
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        Ok(self.extractor.extract(frame)?)
+        Ok(self.reader.read_grey(frame)?)
     }
 
     /// Extract pins and predict the edge pose from one frame.
     pub fn perceive(&self, frame: &Frame) -> Result<Percept> {
         let tracked = self.pins(frame)?;
-        let disp = tracked.displacement(self.extractor.tracker.reference());
+        let disp = tracked.displacement(self.reader.tracker().reference());
         let p = disp.len() / 2;
         let mean = (0..p)
             .map(|i| f64::hypot(disp[i] as f64, disp[p + i] as f64))
@@ -190,7 +189,10 @@ mod tests {
         let rig = RigConfig::default();
         let sensor = TacTipModel::new(rig.sensor.clone()).expect("sensor");
         let reference = sensor.render(sensor.rest_pins(), None);
-        let extractor = PinExtractor::from_reference_frame(&reference, rig.blob).expect("pins");
+        let detector = tactrace_vision::DetectorParams::Blobs(rig.blob)
+            .check()
+            .expect("blob");
+        let extractor = PinReader::from_reference_frame(detector, &reference).expect("pins");
         let disk = builtin_shape(BuiltinShape::Disk);
         let (edge, normal) = disk.at_arc_length(0.0);
         let depth = -rig.tap.nominal_indentation_mm();
@@ -200,7 +202,7 @@ mod tests {
                 None,
             )
         });
-        let dim = 2 * extractor.tracker.reference().len();
+        let dim = 2 * extractor.tracker().reference().len();
         let n = 8;
         let x = (0..n * dim).map(|k| (k % 7) as f32 - 3.0).collect();
         let y = (0..2 * n).map(|k| k as f32).collect();

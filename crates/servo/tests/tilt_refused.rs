@@ -9,7 +9,7 @@ use tactrace_servo::{
     servo_loop, servo_loop_3d, Ending, Loop3dConfig, LoopConfig, Perception, Perception3d,
     RigConfig, Step3d,
 };
-use tactrace_vision::PinExtractor;
+use tactrace_vision::{PinExtractor, PinReader};
 
 /// An arm that taps straight down and up but refuses every other move
 /// for its tilt.
@@ -72,7 +72,12 @@ fn issue23_tilt_too_large_ends_the_planar_loop_as_a_refused_move() {
         ModelTarget::new("r", Unit::Mm),
         ModelTarget::new("theta", Unit::Deg),
     ]);
-    let perception = Perception::new(extractor, model, 0.0).unwrap();
+    let reader = PinReader::new(
+        tactrace_vision::FrameDetector::unprocessed(extractor.detector, [1, 1]).unwrap(),
+        extractor.tracker.reference().to_vec(),
+    )
+    .unwrap();
+    let perception = Perception::new(reader, model, 0.0).unwrap();
     let mut arm = TiltLimited(Pose::new(0.0, 0.0, 2.0, 0.0, 0.0, 0.0));
     let mut controller = PbtsController::try_new(PbtsConfig::report()).unwrap();
     let cfg = LoopConfig {

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::blob::Frame;
 use crate::detection::{Detection, Detector, DetectorParams};
 use crate::error::VisionError;
-use crate::extractor::DEFAULT_MIN_MATCHED_FRACTION;
+use crate::extractor::{check_found, track, DEFAULT_MIN_MATCHED_FRACTION};
 use crate::preprocess::{PreprocessParams, PreprocessStage};
 use crate::tracker::{PinTracker, Tracked};
 
@@ -108,6 +108,14 @@ impl TrackCounts {
 }
 
 impl FrameDetector {
+    /// `detector` on frames taken as they are: no preprocessing step (for
+    /// frames of `[width, height]` px, though [`PinReader::read_grey`]
+    /// takes any size then).
+    pub fn unprocessed(detector: Detector, [width, height]: [u32; 2]) -> Result<Self, VisionError> {
+        let stage = PreprocessParams::default().check()?.stage(width, height)?;
+        Ok(Self { stage, detector })
+    }
+
     /// The preprocessing stage.
     pub fn stage(&self) -> &PreprocessStage {
         &self.stage
@@ -143,6 +151,24 @@ impl PinReader {
         })
     }
 
+    /// The detector `detector` on frames taken as they are (no
+    /// preprocessing step), over the pins it finds in the undeformed
+    /// frame `reference`, in detection order (as
+    /// [`crate::PinExtractor::with_detector`] orders them).
+    pub fn from_reference_frame(
+        detector: Detector,
+        reference: &Frame,
+    ) -> Result<Self, VisionError> {
+        let size = [reference.width(), reference.height()];
+        let rest = detector
+            .detect(reference)
+            .points
+            .iter()
+            .map(|k| [k.x, k.y])
+            .collect();
+        Self::new(FrameDetector::unprocessed(detector, size)?, rest)
+    }
+
     /// The frame detector.
     pub fn frames(&self) -> &FrameDetector {
         &self.frames
@@ -163,29 +189,50 @@ impl PinReader {
     /// [`PinReader::read`] for a frame already preprocessed. The blob
     /// detector's clusters are looked for only when pins are missing.
     pub fn read_preprocessed(&self, frame: &Frame) -> Result<Reading, VisionError> {
-        let detector = &self.frames.detector;
-        let mut detection = detector.detect(frame);
-        let first = self.tracker.first_pass(&detection.points);
-        let tracked = if first.tracked().missing > 0 {
-            detector.add_clusters(frame, &mut detection);
-            self.tracker.split_pass(first, &detection.clusters)
-        } else {
-            first.into_tracked()
-        };
+        let (tracked, detection) = track(self.frames.detector(), &self.tracker, frame);
         let counts = TrackCounts::of(&tracked, &detection);
-        let f = self.min_found_fraction;
-        if !(0.0..=1.0).contains(&f) {
-            return Err(VisionError::InvalidFraction { value: f });
-        }
-        let required = (f * tracked.pins.len() as f64).ceil() as usize;
-        let found = counts.matched + counts.split;
-        if found < required {
-            return Err(VisionError::TooFewPins {
-                matched: found,
-                total: tracked.pins.len(),
-                required,
-            });
-        }
+        check_found(
+            &tracked,
+            counts.matched + counts.split,
+            self.min_found_fraction,
+        )?;
         Ok(Reading { tracked, counts })
+    }
+
+    /// The ordered pins of a grey frame (a camera image made grey by
+    /// [`crate::preprocess::grey_of`]): through the preprocessing stage,
+    /// or, when the stage has no step, the frame as it is whatever its
+    /// size (as `import` reads frames); then as
+    /// [`PinReader::read_preprocessed`], without the counts. The servo
+    /// loop's perception reads every tap with it.
+    pub fn read_grey(&self, frame: &Frame) -> Result<Tracked, VisionError> {
+        let (detector, tracker) = (self.frames.detector(), &self.tracker);
+        let tracked = match self.preprocessed_grey(frame)? {
+            Some(seen) => track(detector, tracker, &seen).0,
+            None => track(detector, tracker, frame).0,
+        };
+        check_found(&tracked, tracked.matched_count(), self.min_found_fraction)?;
+        Ok(tracked)
+    }
+
+    /// The detection of a grey frame as [`PinReader::read_grey`] sees it
+    /// (without the clusters the blob detector finds only when pins are
+    /// missing): what `bench` times as detection.
+    pub fn detect_grey(&self, frame: &Frame) -> Result<Detection, VisionError> {
+        let detector = self.frames.detector();
+        Ok(match self.preprocessed_grey(frame)? {
+            Some(seen) => detector.detect(&seen),
+            None => detector.detect(frame),
+        })
+    }
+
+    /// A grey frame through the stage; `None` when the stage has no step
+    /// (the frame is seen as it is).
+    fn preprocessed_grey(&self, frame: &Frame) -> Result<Option<Frame>, VisionError> {
+        let stage = &self.frames.stage;
+        if *stage.params() == PreprocessParams::default() {
+            return Ok(None);
+        }
+        stage.apply_grey(frame).map(Some)
     }
 }

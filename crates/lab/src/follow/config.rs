@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 use tactrace_control::PbtsConfig;
 use tactrace_servo::{LoopConfig, RigConfig, StartConfig, TapConfig};
-use tactrace_vision::BlobParams;
+use tactrace_vision::{BlobParams, Detector, DetectorParams};
 
 /// A follow run in the simulated world: one TOML file with these tables,
 /// laid over [`SimFollowConfig::default`]; with `calibrated_sensor`, in a
@@ -112,7 +112,7 @@ impl SimFollowConfig {
 /// every part, so settings in hand are settings the loop can run.
 #[derive(Debug, Clone, Serialize)]
 pub struct ServoSettings {
-    blob: BlobParams,
+    detect: DetectorParams,
     controller: PbtsConfig,
     follow: LoopConfig,
     tap: TapConfig,
@@ -127,27 +127,50 @@ impl ServoSettings {
         follow: LoopConfig,
         tap: TapConfig,
     ) -> Result<Self> {
-        blob.validate()?;
+        Self::of_detector(DetectorParams::Blobs(blob), controller, follow, tap)
+    }
+
+    /// [`ServoSettings::new`] with the pins found by `detect` (the blob
+    /// detector or the small-pin one).
+    pub fn of_detector(
+        detect: DetectorParams,
+        controller: PbtsConfig,
+        follow: LoopConfig,
+        tap: TapConfig,
+    ) -> Result<Self> {
+        detect.clone().check()?;
         controller.validate()?;
         follow.validate()?;
         tap.validate()?;
         Ok(Self {
-            blob,
+            detect,
             controller,
             follow,
             tap,
         })
     }
 
-    /// The same settings with the pins found by `blob` (a calibrated
-    /// sensor's or a real collection's detector).
+    /// The same settings with the pins found by the blob detector `blob`
+    /// (a real collection's detector).
     pub fn with_blob(self, blob: BlobParams) -> Result<Self> {
-        Self::new(blob, self.controller, self.follow, self.tap)
+        self.with_detector(DetectorParams::Blobs(blob))
     }
 
-    /// The blob detector that finds the pins.
-    pub fn blob(&self) -> &BlobParams {
-        &self.blob
+    /// The same settings with the pins found by `detect` (a sensor file's
+    /// or a calibrated sensor's detector: the blob detector or the
+    /// small-pin one).
+    pub fn with_detector(self, detect: DetectorParams) -> Result<Self> {
+        Self::of_detector(detect, self.controller, self.follow, self.tap)
+    }
+
+    /// The detector that finds the pins, as its settings.
+    pub fn detect(&self) -> &DetectorParams {
+        &self.detect
+    }
+
+    /// The detector that finds the pins (checked when the settings were made).
+    pub fn detector(&self) -> Result<Detector> {
+        Ok(self.detect.clone().check()?)
     }
 
     /// The controller's settings.

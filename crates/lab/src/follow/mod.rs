@@ -36,7 +36,7 @@ use tactrace_servo::{
     servo_loop, FnSink, FollowMetrics, ImageInput, LoopSummary, Perception, StepRecord,
 };
 use tactrace_store::{write_atomic, LoadedModel, StagedDir, StoredImageModel, StoredModel};
-use tactrace_vision::PinExtractor;
+use tactrace_vision::PinReader;
 
 /// The outcome of a follow run.
 pub struct FollowOutcome {
@@ -152,30 +152,38 @@ pub fn run_model(
 /// The perception of a rig whose undeformed frame is `reference`: refused
 /// (before anything moves) when the frame lists its pins otherwise than the
 /// model's training data, or when the model predicts no edge pose (one
-/// target in mm, one in deg: the controller's r and theta).
+/// target in mm, one in deg: the controller's r and theta). The pins are
+/// found by the settings' detector (blob or small-pin).
 pub fn perception_for(
     reference: &Frame,
     model: &StoredModel,
     settings: &ServoSettings,
 ) -> Result<Perception> {
-    let extractor = PinExtractor::from_reference_frame(reference, settings.blob().clone())?;
-    perception_with(extractor, model, settings)
+    perception_with(reference_reader(reference, settings)?, model, settings)
 }
 
-/// As [`perception_for`] with the pins read by `extractor` (ordered by its
-/// reference pins: a calibrated sensor's own).
+/// The settings' detector over the pins it finds in `reference`.
+fn reference_reader(reference: &Frame, settings: &ServoSettings) -> Result<PinReader> {
+    Ok(PinReader::from_reference_frame(
+        settings.detector()?,
+        reference,
+    )?)
+}
+
+/// As [`perception_for`] with the pins read by `reader` (ordered by its
+/// rest pins: a calibrated sensor's own, a collection's).
 pub fn perception_with(
-    extractor: PinExtractor,
+    reader: PinReader,
     model: &StoredModel,
     settings: &ServoSettings,
 ) -> Result<Perception> {
     let net = model.for_pins(
-        extractor.tracker.reference(),
+        reader.tracker().reference(),
         Path::new("the rig's reference frame"),
     )?;
     net.edge_roles()?;
     Ok(Perception::new(
-        extractor,
+        reader,
         net.clone(),
         settings.follow().contact_threshold_px,
     )?)
@@ -191,10 +199,24 @@ pub fn perception_of(
     model: &LoadedModel,
     settings: &ServoSettings,
 ) -> Result<Perception> {
-    let image = match model {
-        LoadedModel::Pins(m) => return perception_for(reference, m, settings),
-        LoadedModel::Image(m) => m,
-    };
+    match model {
+        LoadedModel::Pins(m) => perception_for(reference, m, settings),
+        LoadedModel::Image(m) => {
+            let reader = reference_reader(reference, settings)?;
+            image_perception(reader, reference, m, settings)
+        }
+    }
+}
+
+/// The perception of the image model `image` on a rig whose undeformed
+/// frame is `reference`, its contact rule's pins read by `reader` (the
+/// rig's sensor's detector over its rest pins).
+pub fn image_perception(
+    reader: PinReader,
+    reference: &Frame,
+    image: &StoredImageModel,
+    settings: &ServoSettings,
+) -> Result<Perception> {
     image.model().edge_roles()?;
     let input = image_input_for(image)?;
     let rig = input.preprocessed_size(reference.width(), reference.height());
@@ -212,9 +234,8 @@ pub fn perception_of(
             reference.width()
         )));
     }
-    let extractor = PinExtractor::from_reference_frame(reference, settings.blob().clone())?;
     Ok(Perception::with_image_model(
-        extractor,
+        reader,
         image.model().clone(),
         input,
         settings.follow().contact_threshold_px,

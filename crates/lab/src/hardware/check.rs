@@ -65,7 +65,7 @@ pub fn rig_check(
     pins: Option<usize>,
 ) -> Result<RigCheck> {
     cfg.validate()?;
-    let blob = cfg.sight()?.blob;
+    let detect = cfg.sight()?.detect.check()?;
     let mut arm = cfg.arm.clone();
     arm.timeout_s = arm.timeout_s.min(CHECK_TIMEOUT_S);
     let mut check = RigCheck::default();
@@ -87,7 +87,7 @@ pub fn rig_check(
         }
     };
     match frame {
-        Some(frame) => check_reference(&blob, &frame, (model, pins), &mut check),
+        Some(frame) => check_reference(&detect, &frame, (model, pins), &mut check),
         None => check.push("reference", false, "not checked: no camera frame"),
     }
     Ok(check)
@@ -221,16 +221,17 @@ fn check_state(
 
 /// The reference row: pins in the frame, and the model's pins.
 fn check_reference(
-    blob: &tactrace_vision::BlobParams,
+    detect: &tactrace_vision::Detector,
     frame: &Frame,
     (model, expected): (Option<&StoredModel>, Option<usize>),
     check: &mut RigCheck,
 ) {
-    let pins = match tactrace_vision::PinExtractor::from_reference_frame(frame, blob.clone()) {
+    let pins = match tactrace_vision::PinExtractor::with_detector(frame, detect.clone()) {
         Ok(extractor) => extractor.tracker.reference().to_vec(),
         Err(e) => {
-            let detail =
-                format!("no usable reference frame ({e}): check the crop and the blob settings");
+            let detail = format!(
+                "no usable reference frame ({e}): check the crop and the detector settings"
+            );
             check.push("reference", false, detail);
             return;
         }
@@ -242,7 +243,7 @@ fn check_reference(
                 false,
                 format!(
                     "{} pins found, {n} expected: check the crop, the exposure and the \
-                     blob settings",
+                     detector settings",
                     pins.len()
                 ),
             ),

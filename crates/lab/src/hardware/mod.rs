@@ -82,7 +82,7 @@ pub struct HardwareConfig {
     pub arm: Ur5Config,
     pub camera: FrameSourceConfig,
     /// The sensor file (`tactrace sensor inspect --out`) saying how to
-    /// read the camera's images: its preprocessing and blob detector
+    /// read the camera's images: its preprocessing and detector
     /// replace `preprocess` and `blob`, which must then be left out
     /// ([`HardwareConfig::sight`]). A relative path is taken from the rig
     /// file's folder ([`HardwareConfig::read`]).
@@ -151,10 +151,10 @@ impl HardwareConfig {
     }
 
     /// The loop settings of this rig, checked (a sensor file is read for
-    /// its blob detector).
+    /// its detector).
     pub fn servo_settings(&self) -> Result<ServoSettings> {
-        ServoSettings::new(
-            self.sight()?.blob,
+        ServoSettings::of_detector(
+            self.sight()?.detect,
             self.controller.clone(),
             self.follow.clone(),
             self.tap,
@@ -347,13 +347,13 @@ pub fn collect_hardware(
         }
     }
     let first = pose_at_edge(edge, normal, 0.0, -collect.theta_range_deg, t.height_mm);
-    let blob = cfg.sight()?.blob;
+    let detect = cfg.sight()?.detect;
     let (mut arm, mut sensor, reference) = connect_at(cfg, first, stop)?;
     let on = EdgeRig {
         arm: &mut arm,
         sensor: sensor.as_mut(),
         reference: &reference,
-        blob: &blob,
+        detect: &detect,
         tap: &cfg.tap,
         edge,
         normal,

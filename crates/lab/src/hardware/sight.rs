@@ -4,17 +4,18 @@
 //! they were made for), or, in older rig files, the rig's own
 //! `[preprocess]` and `[blob]` tables. Both give the one preprocessing
 //! type `import` and `predict --image` use
-//! ([`tactrace_vision::Preprocess`]); a rig file giving both ways is
-//! refused, so there is one way to read the camera.
+//! ([`tactrace_vision::Preprocess`]) and the detector (a sensor file's:
+//! the blob detector or the small-pin one); a rig file giving both ways
+//! is refused, so there is one way to read the camera.
 use super::{real_blob, HardwareConfig};
 use crate::error::{LabError, Result};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use tactrace_hw::PreprocessConfig;
 use tactrace_store::SightFile;
-use tactrace_vision::{BlobParams, DetectorParams, Preprocess};
+use tactrace_vision::{DetectorParams, Preprocess};
 
 /// What a rig's camera images go through, resolved: the preprocessing,
-/// the image size it was made for (a sensor file's), the blob detector.
+/// the image size it was made for (a sensor file's), the detector.
 #[derive(Debug, Clone)]
 pub struct RigSight {
     /// Camera image -> frame.
@@ -22,8 +23,9 @@ pub struct RigSight {
     /// The camera's `[width, height]` the sensor file was made for (other
     /// sizes are refused); `None` for the rig's own table (any size).
     pub frame_size: Option<[u32; 2]>,
-    /// Frame -> pins.
-    pub blob: BlobParams,
+    /// Frame -> pins: the rig's blob detector, or the sensor file's
+    /// detector (blob or small-pin).
+    pub detect: DetectorParams,
 }
 
 /// Refuses a rig file text that names a sensor file and also has its own
@@ -69,16 +71,14 @@ impl HardwareConfig {
     }
 
     /// How this rig reads its camera's images, checked: the sensor file's
-    /// settings (read here; its detector must be the blob detector, the
-    /// one the servo loop and the collection find pins with), else the
-    /// `[preprocess]` and `[blob]` tables. With a sensor file the tables
+    /// settings (read here), else the `[preprocess]` and `[blob]` tables. With a sensor file the tables
     /// must be left at their defaults.
     pub fn sight(&self) -> Result<RigSight> {
         let Some(path) = &self.sensor else {
             return Ok(RigSight {
                 preprocess: self.preprocess.validate()?,
                 frame_size: None,
-                blob: self.blob.clone(),
+                detect: DetectorParams::Blobs(self.blob.clone()),
             });
         };
         if self.preprocess != PreprocessConfig::default() {
@@ -88,24 +88,10 @@ impl HardwareConfig {
             return Err(conflict("the rig", "blob"));
         }
         let file = SightFile::read(path)?;
-        let blob = match &file.detect {
-            DetectorParams::Blobs(b) => b.clone(),
-            DetectorParams::Spots(_) => return Err(spots_refused(path)),
-        };
         Ok(RigSight {
             preprocess: file.preprocess.clone().check()?,
             frame_size: Some(file.sensor.frame_size),
-            blob,
+            detect: file.detect.clone(),
         })
-    }
-}
-
-fn spots_refused(path: &Path) -> LabError {
-    LabError::Format {
-        path: PathBuf::from(path),
-        reason: "its detector is the small-pin one (`kind = \"spots\"`); the rig's servo loop \
-                 and collection find pins with the blob detector only: use this file with \
-                 import and predict --image"
-            .into(),
     }
 }

@@ -28,9 +28,10 @@ use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 use tactrace_arm::Arm;
 use tactrace_control::PbtsConfig;
-use tactrace_sensor::{read_frame, Frame, LabelConvention, TactileSensor};
+use tactrace_sensor::{read_frame, Frame, FrameBank, LabelConvention, TactileSensor};
 use tactrace_servo::{LoopConfig, RigConfig, StartConfig};
 use tactrace_store::SensorFolder;
+use tactrace_vision::{DetectorParams, PinReader};
 
 /// Where a follow run happens.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -134,7 +135,8 @@ impl World {
             }
             World::Calibrated(w) => {
                 let folder = SensorFolder::read(&w.sensor)?;
-                let settings = sim_settings(&w.sim)?.with_blob(folder.spec.blob.clone())?;
+                let detect = crate::sim_sight::sensor_detect(&folder.spec);
+                let settings = sim_settings(&w.sim)?.with_detector(detect)?;
                 let record = SimFollowConfig::of(&w.sim, Some(w.sensor.clone()), None);
                 Ok(OpenWorld {
                     sensor_diameter_mm: 2.0 * folder.spec.sensor.geometry.dome_radius_mm,
@@ -170,12 +172,18 @@ fn sim_settings(sim: &SimWorld) -> Result<ServoSettings> {
     )
 }
 
-/// The real-frame world: its bank, reference frame and label convention.
+/// The real-frame world: its bank, its reader (the collection's sensor
+/// settings or blob detector over its reference pins, as `import` reads
+/// it), a frame of its size and label convention.
 fn open_replay(w: &ReplayWorld) -> Result<OpenWorld> {
     let collection = w.bank.collection();
-    let settings = sim_settings(&w.sim)?.with_blob(collection.blob().clone())?;
+    let detect = match collection.sight() {
+        Some(s) => s.detect.clone(),
+        None => DetectorParams::Blobs(collection.blob().clone()),
+    };
+    let settings = sim_settings(&w.sim)?.with_detector(detect)?;
     let bank = load_bank(&w.bank)?;
-    let reference = read_frame(collection.reference().path()?)?;
+    let (reader, reference) = replay_reader(collection, &bank)?;
     let calibration = match &w.sensor {
         Some(dir) => SensorFolder::read(dir)?.spec.sensor.calibration,
         None => w.sim.rig.sensor.calibration.clone(),
@@ -186,6 +194,7 @@ fn open_replay(w: &ReplayWorld) -> Result<OpenWorld> {
             rig: w.sim.rig.clone(),
             start: w.sim.start.clone(),
             bank,
+            reader,
             reference,
             convention: LabelConvention::centred(calibration),
             far_distance: w.bank.far_distance(),
@@ -194,6 +203,23 @@ fn open_replay(w: &ReplayWorld) -> Result<OpenWorld> {
         record: Record::Sim(Box::new(record)),
         sensor_diameter_mm: tactip_diameter_mm(),
     })
+}
+
+/// The reader of the real-frame world's taps: `import`'s for the bank's
+/// collection ([`crate::sim_sight::sim_sight`]: its sensor settings or
+/// blob detector over the pins of its undeformed frame or its rest
+/// layout, estimated from its frames when asked), and a frame of the
+/// collection's size (its undeformed frame, else its first).
+pub(crate) fn replay_reader(
+    collection: &tactrace_store::LabelledCollection,
+    bank: &FrameBank,
+) -> Result<(PinReader, Frame)> {
+    let sight = crate::sim_sight::sim_sight(collection)?;
+    let frame = match collection.reference().frame() {
+        Some(path) => path.to_path_buf(),
+        None => bank.frames()[0].path.clone(),
+    };
+    Ok((sight.reader, read_frame(&frame)?))
 }
 
 impl OpenWorld {
@@ -281,3 +307,6 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod replay_tests;

@@ -9,7 +9,8 @@ use super::replay::{answered_frames, write_answers};
 use super::{ReplayStats, SimWorld};
 use crate::error::{LabError, Result};
 use crate::follow::{
-    perception_of, perception_with, write_results_with, Recorded, RunExtras, ServoSettings,
+    image_perception, perception_of, perception_with, write_results_with, Recorded, RunExtras,
+    ServoSettings,
 };
 use std::path::Path;
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
@@ -20,6 +21,7 @@ use tactrace_servo::{
     start_pose, FollowMetrics, Perception, ReplayRig, RigConfig, SimRig, StartConfig,
 };
 use tactrace_store::{LoadedModel, SensorFolder};
+use tactrace_vision::PinReader;
 
 /// What an open world builds its rig from.
 pub(crate) enum Parts {
@@ -45,11 +47,13 @@ pub(crate) struct SimParts {
 }
 
 /// The real-frame world's parts: the simulated arm, the bank, its
-/// reference frame and label convention.
+/// reader, a frame of its size (the reference frame, if it has one) and
+/// label convention.
 pub(crate) struct ReplayParts {
     pub rig: RigConfig,
     pub start: StartConfig,
     pub bank: FrameBank,
+    pub reader: PinReader,
     pub reference: Frame,
     pub convention: LabelConvention,
     pub far_distance: f64,
@@ -126,8 +130,11 @@ impl Parts {
             Parts::Sim(p) => build_sim(*p, contour(shape)?, model, settings),
             Parts::Replay(p) => {
                 let p = *p;
-                let perception = perception_of(&p.reference, model, settings)?
-                    .with_label_convention(p.convention.clone());
+                let perception = match model {
+                    LoadedModel::Pins(net) => perception_with(p.reader, net, settings)?,
+                    LoadedModel::Image(m) => image_perception(p.reader, &p.reference, m, settings)?,
+                }
+                .with_label_convention(p.convention.clone());
                 let shape = contour(shape)?;
                 let start = reachable_start(&p.rig, &p.start, shape)?;
                 let seed = settings.follow().seed;
@@ -197,21 +204,22 @@ fn build_sim(
     })
 }
 
-/// The perception of a calibrated sensor's simulated taps: a pin model's
-/// pins read by the sensor's blob detector (its sensor settings' when they
-/// name one) against its own reference pins, whether from an undeformed
-/// frame or estimated from its taps ([`crate::sim_sight::of_sensor`]); an
-/// image model as on any rig.
+/// The perception of a calibrated sensor's simulated taps: the pins read
+/// by the sensor's detector (its sensor settings', blob or small-pin, else
+/// its blob detector) against its own reference pins, whether from an
+/// undeformed frame or estimated from its taps
+/// ([`crate::sim_sight::of_sensor`]), for a pin model and for an image
+/// model's contact rule alike.
 fn sensor_perception(
     sensor: &SensorFolder,
     model: &LoadedModel,
     settings: &ServoSettings,
 ) -> Result<Perception> {
-    let LoadedModel::Pins(net) = model else {
-        return perception_of(&sensor.reference, model, settings);
-    };
-    let extractor = crate::sim_sight::blob_extractor(sensor)?;
-    perception_with(extractor, net, settings)
+    let reader = crate::sim_sight::of_sensor(sensor)?.reader;
+    match model {
+        LoadedModel::Pins(net) => perception_with(reader, net, settings),
+        LoadedModel::Image(m) => image_perception(reader, &sensor.reference, m, settings),
+    }
 }
 
 /// The contour a simulated world needs.

@@ -1,0 +1,211 @@
+//! A sensor whose pins are a few pixels wide, read by the small-pin
+//! ("spots") detector, in the servo loop through the binary: a synthetic
+//! 127-pin TacTip on concentric rings in 128 x 128 frames (the simulator,
+//! frames on disk, no undeformed frame), calibrated with a sensor file
+//! naming the small-pin detector, then `collect`, `follow` and `bench`
+//! with `--sensor`, for a pin model and for an image model (whose contact
+//! check reads the pins with the same detector).
+mod util;
+use rand::{Rng, SeedableRng};
+use std::path::Path;
+use tactrace_sensor::{EdgeTap, PinLayout, TacTipConfig, TacTipModel};
+use tactrace_store::{SensorSummary, SightFile};
+use tactrace_vision::{DetectorParams, LayoutKind, PreprocessParams, SpotParams};
+use util::{tactrace, Run, TempDir};
+
+/// 127 pins on 6 rings, about 3 px wide and 7 px apart in 128 x 128
+/// binarised frames.
+fn small_pin_sensor() -> TacTipConfig {
+    let mut cfg = TacTipConfig::default();
+    cfg.geometry.layout = PinLayout::Rings;
+    cfg.geometry.ring_phase_deg = (1..=6).map(|k| 2.0 / k as f64).collect();
+    cfg.geometry.pin_radius_mm = 0.7;
+    cfg.camera.width = 128;
+    cfg.camera.height = 128;
+    cfg.camera.centre_px = [63.4, 64.5];
+    cfg.camera.focal_px = 39.0;
+    cfg
+}
+
+/// `n` labelled taps of the small-pin sensor in `dir` (frames/,
+/// targets.csv), r over [-5, 25] mm (the lightest barely touch), theta
+/// over [-45, 45] deg, and the sensor file reading them (`sensor.toml`:
+/// no preprocessing, the small-pin detector).
+fn small_pin_taps(dir: &Path, n: usize) {
+    let model = TacTipModel::new(small_pin_sensor()).unwrap();
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut csv = String::from("image_name,pose_2,pose_6\n");
+    for k in 0..n {
+        let tap = EdgeTap {
+            r_mm: rng.random_range(-5.0..25.0),
+            theta_deg: rng.random_range(-45.0..45.0),
+            ..EdgeTap::default()
+        };
+        let name = format!("frame_{k}_0.png");
+        let pins = model.edge_tap_pins(&tap);
+        model
+            .render(&pins, Some(&mut rng))
+            .save(frames.join(&name))
+            .unwrap();
+        csv.push_str(&format!("{name},{},{}\n", tap.r_mm, tap.theta_deg));
+    }
+    std::fs::write(dir.join("targets.csv"), csv).unwrap();
+    let file = SightFile {
+        sensor: SensorSummary {
+            pins: 127,
+            layout: LayoutKind::Rings,
+            spacing_px: 7.0,
+            pin_pixels: 4.0,
+            frame_size: [128, 128],
+        },
+        preprocess: PreprocessParams::default(),
+        detect: DetectorParams::Spots(SpotParams {
+            level: 127,
+            min_pixels: 1,
+            max_pixels: 16,
+            max_cluster_pixels: 48,
+            connectivity: Default::default(),
+        }),
+    };
+    std::fs::write(dir.join("sensor.toml"), file.to_toml()).unwrap();
+}
+
+fn ok(run: &Run, what: &str) {
+    assert_eq!(
+        run.code, 0,
+        "{what}\nstdout: {}\nstderr: {}",
+        run.stdout, run.stderr
+    );
+}
+
+/// Calibrated from the taps (no undeformed frame) with the sensor file:
+/// the sensor folder records the small-pin detector.
+fn calibrated(t: &TempDir) {
+    small_pin_taps(&t.0, 60);
+    let run = tactrace(
+        &t.0,
+        &[
+            "calibrate",
+            "--frames",
+            "frames",
+            "--targets",
+            "targets.csv",
+            "--sensor",
+            "sensor.toml",
+            "--samples",
+            "30",
+            "--out",
+            "s",
+            "--dz-column",
+            "none",
+            "--shear-columns",
+            "none",
+        ],
+    );
+    ok(&run, "calibrate");
+    let folder = tactrace_store::SensorFolder::read(&t.join("s")).unwrap();
+    let sight = folder.spec.sight.expect("the sensor settings recorded");
+    assert!(matches!(sight.detect, DetectorParams::Spots(_)));
+}
+
+/// A follow run of 3 steps on the disk with `--sensor s`.
+fn follows(t: &TempDir, model: &str, out: &str) {
+    let run = tactrace(
+        &t.0,
+        &[
+            "follow", "--sensor", "s", "--model", model, "--shape", "disk", "--steps", "3",
+            "--out", out,
+        ],
+    );
+    ok(&run, "follow");
+    let trajectory = std::fs::read_to_string(t.join(out).join("trajectory.csv")).unwrap();
+    assert_eq!(trajectory.lines().count(), 4, "{trajectory}");
+}
+
+#[test]
+fn issue21_a_small_pin_sensor_follows_a_disk_and_benches_with_a_pin_model() {
+    let t = TempDir::new("small-pins-follow");
+    calibrated(&t);
+    let run = tactrace(
+        &t.0,
+        &["collect", "--sensor", "s", "--samples", "40", "--out", "c"],
+    );
+    ok(&run, "collect");
+    let run = tactrace(
+        &t.0,
+        &[
+            "train", "--model", "pdennn", "--train", "c", "--epochs", "1", "--out", "m",
+        ],
+    );
+    ok(&run, "train");
+    follows(&t, "m", "run");
+    let run = tactrace(
+        &t.0,
+        &["bench", "--sensor", "s", "--model", "m", "--taps", "5"],
+    );
+    ok(&run, "bench");
+    assert!(run.stdout.contains("frame -> command"), "{}", run.stdout);
+}
+
+/// An image model on the small-pin sensor: its contact check reads the
+/// pins with the sensor's small-pin detector over its own rest pins
+/// (the blob detector finds none of these pins).
+#[test]
+fn issue21_a_small_pin_sensor_follows_a_disk_with_an_image_model() {
+    let t = TempDir::new("small-pins-image");
+    calibrated(&t);
+    let run = tactrace(
+        &t.0,
+        &[
+            "import",
+            "--frames",
+            "frames",
+            "--targets",
+            "targets.csv",
+            "--sensor",
+            "sensor.toml",
+            "--frames-size",
+            "16",
+            "--out",
+            "d",
+        ],
+    );
+    ok(&run, "import");
+    std::fs::write(
+        t.join("small.toml"),
+        "dense = [8]\nbatch_size = 8\n[[conv]]\nchannels = 4\nkernel = 3\nstride = 2\n",
+    )
+    .unwrap();
+    let run = tactrace(
+        &t.0,
+        &[
+            "train",
+            "--model",
+            "conv-mlp",
+            "--train",
+            "d",
+            "--epochs",
+            "1",
+            "--config",
+            "small.toml",
+            "--out",
+            "m",
+        ],
+    );
+    ok(&run, "train");
+    follows(&t, "m", "run");
+    let metrics = std::fs::read_to_string(t.join("run/trajectory.csv")).unwrap();
+    let header = metrics.lines().next().unwrap();
+    let col = header
+        .split(',')
+        .position(|c| c == "contact")
+        .expect(header);
+    let touched = metrics
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(col) == Some("true"))
+        .count();
+    assert!(touched > 0, "no tap made contact:\n{metrics}");
+}

@@ -468,9 +468,10 @@ fn report(kind: ModelKind) -> ModelConfig {
 /// by only about `eta a` (`a = sum W2^2 phi'^2`, small), so it takes a
 /// larger rate. The first layer's rate was 18 until the select parts of
 /// four sets (127-pin edge and surface, 331-pin edge, the simulated taps)
-/// all scored better at 72, model seeds 0-2 (docs/learning.md, "The
-/// first layer's rate"); the output rate is still the first sweep's.
-const DEFAULT_LR: (f64, f64) = (72.0, 5.0);
+/// all scored better at 36 (docs/learning.md, "The first layer's rate");
+/// 72 scored better still but diverged on half the real-frame fits. The
+/// output rate is still the first sweep's.
+const DEFAULT_LR: (f64, f64) = (36.0, 5.0);
 
 /// DisDenNN: its 254 correlated raw inputs saturate more hidden units, which
 /// raises `||phi||^2`; output rate 6 diverged on the real frames.
@@ -508,13 +509,13 @@ mod anneal_tests {
     use super::*;
 
     #[test]
-    fn issue21_the_default_first_layer_rate_is_72() {
+    fn issue21_the_default_first_layer_rate_is_36() {
         // Chosen on the select parts (docs/learning.md); the output rate
         // and the DisDenNN's own rates are unchanged.
         for kind in [ModelKind::PDenNN, ModelKind::Mlp, ModelKind::PcaDenNN] {
             let cfg = tuned(kind);
             for (_, _, n) in cfg.nets() {
-                assert_eq!((n.learning_rate, n.output_learning_rate), (72.0, Some(5.0)));
+                assert_eq!((n.learning_rate, n.output_learning_rate), (36.0, Some(5.0)));
             }
         }
         let dis = tuned(ModelKind::DisDenNN);

@@ -40,7 +40,7 @@ impl Default for SearchSpace {
     /// [`crate::LrScaling::FanIn`]): 8 of the 96 grid points.
     fn default() -> Self {
         SearchSpace {
-            learning_rates: vec![18.0, 72.0],
+            learning_rates: vec![18.0, 36.0],
             output_learning_rates: vec![3.0, 5.0],
             betas: vec![0.5, 1.0],
             hidden: vec![500, 1000],

@@ -216,6 +216,7 @@ pub fn train(a: TrainArgs) -> Result<()> {
         let space = search_space(a.search_space.as_deref(), a.trials)?;
         let t0 = std::time::Instant::now();
         let mut k = 0;
+        let outputs = tr::data_targets(&data)?;
         let trials = tr::search(
             &cfg,
             &space,
@@ -225,10 +226,10 @@ pub fn train(a: TrainArgs) -> Result<()> {
             &mut |t| {
                 k += 1;
                 eprintln!(
-                    "trial {k}: {} -> validation {:.3} mm, {:.3} deg ({:.0} s so far)",
+                    "trial {k}: {} -> validation {}; score {:.4} ({:.0} s so far)",
                     tr::trial_summary(t),
-                    t.val_mae[0],
-                    t.val_mae[1],
+                    tr::trial_errors(t, &outputs),
+                    t.score,
                     t0.elapsed().as_secs_f64()
                 );
             },
@@ -239,7 +240,7 @@ pub fn train(a: TrainArgs) -> Result<()> {
             .ok_or_else(|| LabError::Config("every search trial diverged".into()))?;
         eprintln!("best: {}", tr::trial_summary(best));
         let extra = vec![
-            ("search.csv", tr::trials_csv(&trials)),
+            ("search.csv", tr::trials_csv(&trials, &outputs)),
             ("search_best.toml", toml::to_string(&best.config)?),
         ];
         (best.config.clone(), extra)

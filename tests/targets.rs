@@ -287,3 +287,83 @@ fn import_fit(t: &TempDir, data: &Path, extra: &[&str]) -> Run {
     args.extend(["--out", "fit"]);
     tactrace(&t.0, &args)
 }
+
+/// `train --search` on a three-target set (one circular) scores every
+/// target: `search.csv` has an error column a target and the score is the
+/// sum of the three errors over their goals (`goals` in the search file).
+#[test]
+fn issue21_train_search_scores_every_target() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("search3");
+    part_csv(&data, &t.join("fit.csv"), &[2, 3, 4], 80);
+    let targets = [
+        "--target",
+        "pose_2:mm",
+        "--target",
+        "pose_6:deg:circular",
+        "--target",
+        "pose_3:mm",
+    ];
+    ok(&import_fit(&t, &data, &targets), "import --target");
+    std::fs::write(t.join("small.toml"), SMALL).unwrap();
+    std::fs::write(
+        t.join("grid.toml"),
+        "learning_rates = [18.0]\noutput_learning_rates = [1.0, 5.0]\nbetas = [1.0]\n\
+         hidden = [16]\nn_components = [8]\ntrials = 2\ngoals = [0.25, 3.0, 0.1]\n",
+    )
+    .unwrap();
+    let args = [
+        "train",
+        "--train",
+        "fit",
+        "--model",
+        "pdennn",
+        "--config",
+        "small.toml",
+        "--epochs",
+        "3",
+        "--search",
+        "--search-space",
+        "grid.toml",
+        "--out",
+        "m",
+    ];
+    let r = tactrace(&t.0, &args);
+    ok(&r, "train --search");
+    assert!(r.stderr.contains("pose_3"), "{}", r.stderr);
+    let csv = std::fs::read_to_string(t.join("m/search.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let tail = &header[header.len() - 4..];
+    assert_eq!(
+        tail,
+        ["mae_pose_2_mm", "mae_pose_6_deg", "mae_pose_3_mm", "score"]
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .rev()
+                .take(4)
+                .map(|v| v.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 2);
+    for row in &rows {
+        let (score, pose_3, pose_6, pose_2) = (row[0], row[1], row[2], row[3]);
+        assert!(pose_6 <= 180.0, "{row:?}");
+        let expected = pose_2 / 0.25 + pose_6 / 3.0 + pose_3 / 0.1;
+        assert!(
+            (score - expected).abs() < 1e-9 * expected.max(1.0),
+            "{row:?}"
+        );
+    }
+    assert!(rows[0][0] <= rows[1][0], "best first: {rows:?}");
+    // A goal list that does not give one goal a target is refused.
+    std::fs::write(t.join("bad.toml"), "goals = [0.25, 3.0]\ntrials = 1\n").unwrap();
+    let mut bad = args.to_vec();
+    bad[11] = "bad.toml";
+    bad[13] = "m2";
+    let r = tactrace(&t.0, &bad);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+}

@@ -167,9 +167,12 @@ pub fn search(
     seed: u64,
     progress: &mut dyn FnMut(&Trial),
 ) -> Result<Vec<Trial>> {
+    let outputs = data_targets(data)?;
     let (inner, val) = holdout(data, fraction, seed)?;
     let (inner, val) = (inner.to_learn()?, val.to_learn()?);
-    Ok(hyperparameter_search(base, space, &inner, &val, progress)?)
+    Ok(hyperparameter_search(
+        base, space, &outputs, &inner, &val, progress,
+    )?)
 }
 
 /// One line describing a trial's hyper-parameters (the first net's; the
@@ -194,25 +197,33 @@ pub fn trial_summary(t: &Trial) -> String {
     )
 }
 
-/// The trials as CSV (best first).
-pub fn trials_csv(trials: &[Trial]) -> String {
+/// The trials as CSV (best first): the settings, then the validation
+/// error of every target of `outputs` (`mae_NAME_UNIT`, circular ones
+/// wrapped) and the score.
+pub fn trials_csv(trials: &[Trial], outputs: &[ModelTarget]) -> String {
     let mut csv = tactrace_store::CsvText::new();
-    csv.row([
+    let mut header: Vec<String> = [
         "rank",
         "learning_rate",
         "output_learning_rate",
         "beta",
         "hidden",
         "n_components",
-        "position_mae_mm",
-        "angle_mae_deg",
-        "score",
-    ]);
+    ]
+    .map(String::from)
+    .to_vec();
+    header.extend(
+        outputs
+            .iter()
+            .map(|t| format!("mae_{}_{}", t.name, t.unit.as_str())),
+    );
+    header.push("score".into());
+    csv.row(header);
     for (k, t) in trials.iter().enumerate() {
         let c = &t.config;
         if let Some(net) = c.pose.as_ref().or(c.angle.as_ref()) {
             let hidden: Vec<String> = net.hidden.iter().map(|h| h.to_string()).collect();
-            csv.row([
+            let mut row = vec![
                 (k + 1).to_string(),
                 net.learning_rate.to_string(),
                 net.output_learning_rate
@@ -221,13 +232,24 @@ pub fn trials_csv(trials: &[Trial]) -> String {
                 net.beta.to_string(),
                 hidden.join(" "),
                 net.n_components.map(|k| k.to_string()).unwrap_or_default(),
-                t.val_mae[0].to_string(),
-                t.val_mae[1].to_string(),
-                t.score.to_string(),
-            ]);
+            ];
+            row.extend(t.val_mae.iter().map(f64::to_string));
+            row.push(t.score.to_string());
+            csv.row(row);
         }
     }
     csv.into_string()
+}
+
+/// A trial's validation errors as one line: `NAME MAE UNIT` for every
+/// target of `outputs`, comma separated.
+pub fn trial_errors(t: &Trial, outputs: &[ModelTarget]) -> String {
+    outputs
+        .iter()
+        .zip(&t.val_mae)
+        .map(|(o, m)| format!("{} {m:.3} {}", o.name, o.unit.as_str()))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn check_dim(expected: usize, got: usize) -> Result<()> {

@@ -62,10 +62,12 @@ fn search_grid_of_ten_billion_points_is_refused() {
         n_components: (1..=100).collect(),
         trials: 1,
         seed: 0,
+        goals: Vec::new(),
     };
     let data = Dataset::new(vec![0.5; 8], vec![1.0, 2.0, 3.0, 4.0], 2, 4, 2).expect("dataset");
     let base = ModelConfig::preset(ModelKind::DisDenNN, Preset::Default);
-    let err = hyperparameter_search(&base, &space, &data, &data, &mut |_| {})
+    let edge = tactrace_learn::edge_targets();
+    let err = hyperparameter_search(&base, &space, &edge, &data, &data, &mut |_| {})
         .expect_err("grid too large");
     assert!(
         err.to_string().contains(&MAX_GRID_POINTS.to_string()),

@@ -301,11 +301,13 @@ fn search_ranks_trials_on_the_validation_split() {
         n_components: vec![6],
         trials: 2,
         seed: 1,
+        goals: Vec::new(),
     };
     let mut seen = 0;
     let trials = hyperparameter_search(
         &small(ModelKind::PDenNN, 5),
         &space,
+        &tactrace_learn::edge_targets(),
         &train,
         &val,
         &mut |_| seen += 1,

@@ -162,3 +162,85 @@ fn issue21_a_version_2_model_file_loads_as_the_edge_task() {
     let nets: Vec<String> = back.architecture().into_iter().map(|(n, _)| n).collect();
     assert_eq!(nets, ["position", "angle"]);
 }
+
+/// `train --search`'s search (issue 21, pin331 item 2) scores every target
+/// of a model, not the first two: each trial's errors are the three
+/// targets' (the circular one wrapped), equal to those of the same
+/// configuration fitted alone, and its score is the sum of each error over
+/// its spread (the circular spread wrapped) or over the goals given.
+#[test]
+fn issue21_search_scores_all_n_targets_circular_ones_wrapped() {
+    use tactrace_learn::{hyperparameter_search, SearchSpace, TargetScale};
+    let data = three_targets(240, 5);
+    let (train, val) = data.split(0.75, 6);
+    let outputs = targets(true);
+    let space = SearchSpace {
+        learning_rates: vec![18.0],
+        output_learning_rates: vec![0.5, 5.0],
+        betas: vec![1.0],
+        hidden: vec![24],
+        n_components: vec![10],
+        trials: 2,
+        seed: 3,
+        goals: Vec::new(),
+    };
+    let base = small(ModelKind::PDenNN, 15);
+    let trials = hyperparameter_search(&base, &space, &outputs, &train, &val, &mut |_| {}).unwrap();
+    assert_eq!(trials.len(), 2);
+    let spread = TargetScale::spreads(&outputs, &train).unwrap();
+    // The circular angle spans the whole circle: its wrapped spread is
+    // about 360 / sqrt(12), not the 0-centred linear one.
+    assert!(
+        (spread.scales()[2] - 104.0).abs() < 8.0,
+        "{:?}",
+        spread.scales()
+    );
+    for t in &trials {
+        assert_eq!(t.val_mae.len(), 3);
+        let (model, _) =
+            PoseModel::fit_targets(&t.config, &outputs, &train, None, &mut |_| {}).unwrap();
+        let alone = target_mae(
+            &outputs,
+            &model.predict_targets_batch(&val).unwrap(),
+            &truth(&val),
+        );
+        assert_eq!(t.val_mae, alone);
+        assert!(
+            t.val_mae[2] < 90.0,
+            "the angle's error is wrapped: {:?}",
+            t.val_mae
+        );
+        let expected: f64 = (0..3).map(|j| t.val_mae[j] / spread.scales()[j]).sum();
+        assert!(
+            (t.score - expected).abs() < 1e-12,
+            "{} vs {expected}",
+            t.score
+        );
+    }
+    assert!(trials[0].score <= trials[1].score);
+    // With goals, each error is divided by its goal instead.
+    let goals = SearchSpace {
+        goals: vec![0.1, 1.0, 5.0],
+        trials: 1,
+        ..space
+    };
+    let t = &hyperparameter_search(&base, &goals, &outputs, &train, &val, &mut |_| {}).unwrap()[0];
+    let expected = t.val_mae[0] / 0.1 + t.val_mae[1] / 1.0 + t.val_mae[2] / 5.0;
+    assert!((t.score - expected).abs() < 1e-12);
+    // A goal list of the wrong length, and validation rows of other
+    // targets, are refused.
+    let short = SearchSpace {
+        goals: vec![0.1],
+        ..goals.clone()
+    };
+    assert!(hyperparameter_search(&base, &short, &outputs, &train, &val, &mut |_| {}).is_err());
+    let two = Dataset::new(
+        val.x.clone(),
+        val.y.iter().copied().take(val.n * 2).collect(),
+        val.n,
+        val.dim_x,
+        2,
+    )
+    .unwrap();
+    assert!(hyperparameter_search(&base, &goals, &outputs, &train, &two, &mut |_| {}).is_err());
+}

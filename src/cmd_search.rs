@@ -146,6 +146,7 @@ pub fn search(a: SearchArgs) -> Result<()> {
         base,
         space,
     };
+    let targets = tactrace_lab::train::data_targets(&data)?;
     let t0 = std::time::Instant::now();
     let outcome = search::search(
         &settings,
@@ -159,24 +160,39 @@ pub fn search(a: SearchArgs) -> Result<()> {
                 .iter()
                 .map(|(n, v)| format!("{n} {v:.4}"))
                 .collect();
+            let result = match t.score.status().as_str() {
+                "ok" => format!(
+                    "{}, score {:.4}",
+                    search::describe_mae(&targets, &t.score.val_mae),
+                    t.score.score
+                ),
+                status => status.to_string(),
+            };
             eprintln!(
-                "trial {}: {} -> {:.4} mm, {:.3} deg, score {:.4} ({:.0} s so far)",
+                "trial {}: {} -> {result} ({:.0} s so far)",
                 t.trial,
                 named.join(", "),
-                t.score.val_mae[0],
-                t.score.val_mae[1],
-                t.score.score,
                 t0.elapsed().as_secs_f64()
             );
         },
     )?;
     let best = &outcome.trials[outcome.best];
+    let failed = outcome
+        .trials
+        .iter()
+        .filter(|t| !t.score.score.is_finite())
+        .count();
+    if failed > 0 {
+        eprintln!(
+            "{failed} of {} trials failed (status in trials.csv)",
+            outcome.trials.len()
+        );
+    }
     crate::say!(
-        "best: trial {} of {}, inner validation {:.4} mm, {:.3} deg; {}",
+        "best: trial {} of {}, inner validation {}; {}",
         best.trial,
         outcome.trials.len(),
-        best.score.val_mae[0],
-        best.score.val_mae[1],
+        search::describe_mae(&outcome.targets, &best.score.val_mae),
         outcome.dir.join("best.toml").display()
     );
     Ok(())

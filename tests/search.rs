@@ -258,3 +258,73 @@ fn issue24_search_on_ray_without_its_interpreter_is_refused() {
     );
     assert!(!t.join("s").exists() && !t.join("s.partial").exists());
 }
+
+/// A space of one output learning rate, a range or choices (TOML body).
+fn output_rate_space(dir: &Path, body: &str) -> String {
+    let path = dir.join("rates.toml");
+    std::fs::write(
+        &path,
+        format!("[[param]]\nname = \"output_learning_rate\"\n{body}"),
+    )
+    .unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn issue24_a_search_whose_every_trial_diverged_fails_without_a_best() {
+    let t = TempDir::new("search-diverged");
+    dataset(&t.0);
+    let space = output_rate_space(&t.0, "low = 1e6\nhigh = 1e8\nlog = true\n");
+    let r = tactrace(&t.0, &search_args(&space, "s", "3", "3"));
+    expect_code(&r, 1, "a search whose every trial diverged");
+    assert!(
+        r.stderr
+            .contains("every one of the 3 search trials failed (3 diverged"),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stdout.contains("best:"), "{}", r.stdout);
+    assert!(!t.join("s").exists());
+    // What was tried is kept, and no best written from nothing.
+    assert_eq!(trials(&t.join("s.partial")).len(), 3);
+    assert!(!t.join("s.partial/best.toml").exists());
+}
+
+#[test]
+fn issue24_a_search_records_its_failed_trials_in_the_table_and_figure() {
+    let t = TempDir::new("search-some-failed");
+    dataset(&t.0);
+    let space = output_rate_space(&t.0, "choices = [5.0, 1e8]\n");
+    let mut args = search_args(&space, "s", "6", "3");
+    args.extend(["--seed", "2"]);
+    let r = tactrace(&t.0, &args);
+    expect_code(&r, 0, "a search with some diverged trials");
+    let csv = std::fs::read_to_string(t.join("s/trials.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].ends_with(",status"), "{csv}");
+    assert!(lines[0].contains(",mae_r_mm,mae_theta_deg,"), "{csv}");
+    let status: Vec<&str> = lines[1..]
+        .iter()
+        .map(|l| l.rsplit(',').next().unwrap())
+        .collect();
+    let diverged = status.iter().filter(|s| **s == "diverged").count();
+    assert!(
+        diverged > 0 && status.contains(&"ok"),
+        "both kinds of trial: {csv}"
+    );
+    assert!(
+        r.stderr.contains(&format!(
+            "{diverged} of 6 trials failed (status in trials.csv)"
+        )),
+        "{}",
+        r.stderr
+    );
+    let svg = std::fs::read_to_string(t.join("s/convergence.svg")).unwrap();
+    assert!(
+        svg.contains(&format!("failed ({diverged}): no score")),
+        "the figure marks the failed trials"
+    );
+    // best.toml is the best finished trial's: the small rate.
+    let best = std::fs::read_to_string(t.join("s/best.toml")).unwrap();
+    assert!(best.contains("output_learning_rate = 5.0"), "{best}");
+}

@@ -27,6 +27,7 @@ mod predict;
 mod search;
 mod serialise;
 mod standardise;
+mod target_score;
 mod targets;
 mod trainer;
 
@@ -43,6 +44,7 @@ pub use pose_model::{EpochReport, NetEpoch, PoseModel, TrainingHistory};
 pub use search::{hyperparameter_search, SearchSpace, Trial, MAX_GRID_POINTS};
 pub use serialise::FORMAT_VERSION;
 pub use standardise::Standardiser;
+pub use target_score::target_score;
 pub use targets::{
     check_targets, decode, edge_targets, encode_into, encoded_columns, target_mae, wrap_deg,
     ModelTarget, Unit,

@@ -14,7 +14,7 @@
 mod files;
 mod space;
 
-pub use files::TrialRecord;
+pub use files::{describe_mae, TrialRecord};
 pub use space::{ParamSpec, SpaceFile};
 
 use crate::error::{LabError, Result};
@@ -23,7 +23,7 @@ use files::SearchFolder;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use tactrace_learn::{
-    mean_absolute_error, Dataset, LearnError, ModelConfig, PoseModel, Standardiser,
+    target_score, Dataset, LearnError, ModelConfig, ModelTarget, PoseModel, Standardiser,
 };
 use tactrace_optim::{Evaluation, Executor, Observation, Tpe, TpeConfig};
 use tactrace_store::{TapData, TrainingRecord};
@@ -73,14 +73,16 @@ pub fn data_id(data: &TapData) -> (String, usize) {
     (id.sha256, id.rows)
 }
 
-/// What one trial gave: validation mean absolute errors `[r mm, theta
-/// deg]` and the score (`mae_r / std_r + mae_theta / std_theta`, the
-/// training targets' stds; lower is better); a diverged training scores
-/// +inf (written `null` in JSON, read back as +inf).
+/// What one trial gave: the inner validation mean absolute error of
+/// every target of the data (in its unit, circular angles wrapped) and
+/// the score (`sum MAE_k / std_k`, the fit part's target stds; lower is
+/// better: [`tactrace_learn::target_score`]). A trial that failed scores
+/// +inf (written `null` in JSON, read back as +inf): a training that
+/// diverged (`failure` empty) or another failure (`failure` says why).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrialScore {
-    #[serde(deserialize_with = "null_is_infinite::pair")]
-    pub val_mae: [f64; 2],
+    #[serde(deserialize_with = "null_is_infinite::many")]
+    pub val_mae: Vec<f64>,
     #[serde(deserialize_with = "null_is_infinite::one")]
     pub score: f64,
     /// Why the training failed, other than by diverging.
@@ -88,8 +90,28 @@ pub struct TrialScore {
     pub failure: Option<String>,
 }
 
+impl TrialScore {
+    /// A failed trial: diverged when `failure` is `None`.
+    fn failed(targets: usize, failure: Option<String>) -> Self {
+        TrialScore {
+            val_mae: vec![f64::INFINITY; targets],
+            score: f64::INFINITY,
+            failure,
+        }
+    }
+
+    /// `ok`, `diverged` or `failed: REASON` (the table's status column).
+    pub fn status(&self) -> String {
+        match (&self.failure, self.score.is_finite()) {
+            (Some(reason), _) => format!("failed: {reason}"),
+            (None, true) => "ok".into(),
+            (None, false) => "diverged".into(),
+        }
+    }
+}
+
 /// JSON has no infinity: serde_json writes it `null`; read `null` back as
-/// +inf (a diverged trial's score).
+/// +inf (a failed trial's score).
 mod null_is_infinite {
     use serde::{Deserialize, Deserializer};
 
@@ -97,20 +119,24 @@ mod null_is_infinite {
         Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
     }
 
-    pub fn pair<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
-        let v = <[Option<f64>; 2]>::deserialize(d)?;
-        Ok(v.map(|x| x.unwrap_or(f64::INFINITY)))
+    pub fn many<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        let v = Vec::<Option<f64>>::deserialize(d)?;
+        Ok(v.into_iter().map(|x| x.unwrap_or(f64::INFINITY)).collect())
     }
 }
 
-/// One trial as an evaluation: train a pose model on the fit part, score
-/// it on the inner validation part. Pure: the model's seed is in its
-/// configuration.
+/// One trial as an evaluation: train a pose model of the data's targets
+/// on the fit part, score it on the inner validation part. Pure: the
+/// model's seed is in its configuration.
 pub struct PoseTrial {
     fit: Dataset,
     val: Dataset,
-    /// The training targets' standard deviations.
-    std: [f64; 2],
+    /// The data's targets (names, units, circular flags), in order.
+    targets: Vec<ModelTarget>,
+    /// The fit part's target standard deviations.
+    std: Vec<f64>,
+    /// The validation part's targets, a row a sample.
+    truth: Vec<Vec<f64>>,
     /// Where a remote worker finds the same parts, if known.
     context: Option<SearchContext>,
 }
@@ -128,14 +154,19 @@ pub struct SearchContext {
 }
 
 impl PoseTrial {
-    /// The evaluation over the fit and validation parts.
-    pub fn new(fit: Dataset, val: Dataset) -> Result<Self> {
+    /// The evaluation of a model of `targets` over the fit and validation
+    /// parts.
+    pub fn new(fit: Dataset, val: Dataset, targets: Vec<ModelTarget>) -> Result<Self> {
         let scale = Standardiser::fit(&fit.y, fit.n, fit.dim_y)?;
-        let std = [scale.std()[0], scale.std()[1]];
+        let truth = (0..val.n)
+            .map(|i| val.y_row(i).iter().map(|&v| f64::from(v)).collect())
+            .collect();
         Ok(PoseTrial {
+            std: scale.std().to_vec(),
             fit,
             val,
-            std,
+            targets,
+            truth,
             context: None,
         })
     }
@@ -146,7 +177,8 @@ impl PoseTrial {
         let (fit_rows, val_rows) = holdout_rows(data, context.val_fraction, context.seed)?;
         let val = data.subset(&val_rows).to_learn()?;
         let fit_data = data.subset(&fit_rows);
-        let mut trial = PoseTrial::new(fit_data.to_learn()?, val)?;
+        let targets = crate::train::data_targets(data)?;
+        let mut trial = PoseTrial::new(fit_data.to_learn()?, val, targets)?;
         trial.context = Some(context);
         Ok((trial, fit_data, val_rows.len()))
     }
@@ -183,34 +215,25 @@ impl Evaluation for PoseTrial {
 }
 
 impl PoseTrial {
-    /// Train on the fit part, score on the validation part.
+    /// Train on the fit part, score every target on the validation part.
     fn score(&self, config: &ModelConfig) -> TrialScore {
-        let failed = |failure: Option<String>| TrialScore {
-            val_mae: [f64::INFINITY; 2],
-            score: f64::INFINITY,
-            failure,
-        };
-        let model = match PoseModel::fit(config, &self.fit, &mut |_| {}) {
+        let n = self.targets.len();
+        let fitted = PoseModel::fit_targets(config, &self.targets, &self.fit, None, &mut |_| {});
+        let model = match fitted {
             Ok((model, _)) => model,
-            Err(LearnError::Diverged { .. }) => return failed(None),
-            Err(e) => return failed(Some(e.to_string())),
+            Err(LearnError::Diverged { .. }) => return TrialScore::failed(n, None),
+            Err(e) => return TrialScore::failed(n, Some(e.to_string())),
         };
-        match model.predict_batch(&self.val) {
-            Ok(pred) => {
-                let mae = mean_absolute_error(&pred, &self.val);
-                let score = mae[0] / self.std[0] + mae[1] / self.std[1];
-                let score = if score.is_finite() {
-                    score
-                } else {
-                    f64::INFINITY
-                };
-                TrialScore {
-                    val_mae: mae,
-                    score,
-                    failure: None,
-                }
-            }
-            Err(e) => failed(Some(e.to_string())),
+        let predicted = match model.predict_targets_batch(&self.val) {
+            Ok(p) => p,
+            Err(e) => return TrialScore::failed(n, Some(e.to_string())),
+        };
+        let (val_mae, score) = target_score(&self.targets, &predicted, &self.truth, &self.std);
+        let failure = (!score.is_finite()).then(|| "its predictions are not numbers".to_string());
+        TrialScore {
+            val_mae,
+            score,
+            failure,
         }
     }
 }
@@ -224,6 +247,8 @@ pub struct SearchOutcome {
     pub best: usize,
     /// The finished folder.
     pub dir: std::path::PathBuf,
+    /// The data's targets, in the order of each trial's `val_mae`.
+    pub targets: Vec<ModelTarget>,
 }
 
 /// Run (or with `resume`, continue) the search of `settings` on `data`
@@ -278,9 +303,6 @@ pub fn search(
         let scores = executor.run(&trial, &configs)?;
         let seconds = t0.elapsed().as_secs_f64() / ks.len() as f64;
         for ((k, v), score) in ks.into_iter().zip(values).zip(scores) {
-            if let Some(reason) = &score.failure {
-                return Err(LabError::Config(format!("search trial {k}: {reason}")));
-            }
             let record = TrialRecord {
                 trial: k,
                 settings: settings.space.named(&v),
@@ -296,10 +318,39 @@ pub fn search(
             });
         }
     }
-    let best = folder.best().ok_or_else(|| {
-        LabError::Config("every search trial diverged: lower the learning rates' ranges".into())
-    })?;
+    let Some(best) = folder.best() else {
+        return Err(all_failed(folder.trials(), out));
+    };
     let trials = folder.trials().to_vec();
-    let dir = folder.finish(settings, best)?;
-    Ok(SearchOutcome { trials, best, dir })
+    let dir = folder.finish(settings, best, &trial.targets)?;
+    Ok(SearchOutcome {
+        trials,
+        best,
+        dir,
+        targets: trial.targets,
+    })
+}
+
+/// The error of a search none of whose `trials` gave a score (exit 1):
+/// how many diverged, how many failed otherwise and the last reason; the
+/// trials stay in `<out>.partial`.
+fn all_failed(trials: &[TrialRecord], out: &Path) -> LabError {
+    let failed: Vec<&String> = trials
+        .iter()
+        .filter_map(|t| t.score.failure.as_ref())
+        .collect();
+    let diverged = trials.len() - failed.len();
+    let mut reason = format!("{diverged} diverged, {} failed otherwise", failed.len());
+    if let Some(last) = failed.last() {
+        reason += &format!(", the last because {last}");
+    }
+    if diverged > 0 {
+        reason += "; lower the learning rates' ranges";
+    }
+    LabError::AllFailed {
+        what: "search trials".into(),
+        tried: trials.len(),
+        reason,
+        kept: Some(tactrace_store::fsutil::partial_path(out)),
+    }
 }

@@ -1,19 +1,20 @@
 //! `tactrace search`: Bayesian hyper-parameter search (TPE) of a pose
 //! model on an inner validation part of the training data.
-use crate::cmd_learn::{ModelArg, PresetArg};
+use crate::cmd_learn::{PresetArg, TrainModelArg};
 use crate::inputs::Inputs;
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 use tactrace_lab::remote::{Exec, RayExecutor, RaySettings};
-use tactrace_lab::search::{self, SearchSettings, SpaceFile};
+use tactrace_lab::search::{self, SearchSettings, SpaceFile, TrialConfig};
 use tactrace_store::{fsutil, read_dataset};
 
 #[derive(Args)]
 pub struct SearchArgs {
-    /// Kind of pose model.
+    /// Kind of model: a pin model, or an image model (conv-dennn,
+    /// conv-mlp: needs a dataset with frames, import --frames-size).
     #[arg(long, value_enum, default_value = "pdennn")]
-    model: ModelArg,
+    model: TrainModelArg,
     /// Training dataset directory: each trial fits on part of it and is
     /// scored on the rest (--val-fraction); nothing else is read.
     #[arg(long)]
@@ -123,7 +124,33 @@ impl ExecutorArgs {
 }
 
 pub fn search(a: SearchArgs) -> Result<()> {
-    let base = crate::cmd_learn::model_config(a.model, a.preset, a.config.as_deref(), a.epochs)?;
+    let base = match a.model.pins() {
+        Ok(model) => TrialConfig::Pins(crate::cmd_learn::model_config(
+            model,
+            a.preset,
+            a.config.as_deref(),
+            a.epochs,
+        )?),
+        Err(kind) => {
+            if !matches!(a.preset, PresetArg::Default) {
+                return Err(tactrace_lab::LabError::Config(format!(
+                    "{}: --preset is the pin models' (an image model's settings: --config FILE, --epochs)",
+                    kind.name()
+                ))
+                .into());
+            }
+            let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
+            let cfg =
+                tactrace_lab::train_image::resolve_image_config(kind, text.as_deref(), a.epochs)
+                    .with_context(|| {
+                        a.config
+                            .as_ref()
+                            .map(|p| p.display().to_string())
+                            .unwrap_or_default()
+                    })?;
+            TrialConfig::Image(cfg)
+        }
+    };
     let space_text = fsutil::read_text(&a.space)?;
     let space: SpaceFile = toml::from_str(&space_text)
         .with_context(|| format!("search space {}", a.space.display()))?;

@@ -173,7 +173,7 @@ impl SearchFolder {
             t.score.score
         );
         write_atomic(&dir.join("best.toml"), text.as_bytes())?;
-        let title = format!("TPE search of a {}", settings.base.kind.name());
+        let title = format!("TPE search of a {}", settings.base.kind_name());
         let failed: Vec<usize> = self
             .trials
             .iter()

@@ -15,18 +15,20 @@ mod files;
 mod space;
 
 pub use files::{describe_mae, TrialRecord};
-pub use space::{ParamSpec, SpaceFile};
+pub use space::{ParamSpec, SpaceFile, TrialConfig};
 
 use crate::error::{LabError, Result};
 use crate::train::holdout_rows;
+use crate::train_image::train_image;
 use files::SearchFolder;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use tactrace_convnet::{ConvConfig, Frames};
 use tactrace_learn::{
     target_score, Dataset, LearnError, ModelConfig, ModelTarget, PoseModel, Standardiser,
 };
 use tactrace_optim::{Evaluation, Executor, Observation, Tpe, TpeConfig};
-use tactrace_store::{TapData, TrainingRecord};
+use tactrace_store::{ImageFrames, TapData, TrainingRecord};
 
 /// Everything a search was asked (`config.toml`); a resumed search must
 /// be asked the same.
@@ -48,8 +50,9 @@ pub struct SearchSettings {
     /// The training data's content hash and rows.
     pub data_sha256: String,
     pub data_rows: usize,
-    /// The configuration each trial's settings are laid over.
-    pub base: ModelConfig,
+    /// The configuration each trial's settings are laid over (a pin or
+    /// an image model's).
+    pub base: TrialConfig,
     /// The settings searched.
     pub space: SpaceFile,
 }
@@ -137,9 +140,24 @@ pub struct PoseTrial {
     std: Vec<f64>,
     /// The validation part's targets, a row a sample.
     truth: Vec<Vec<f64>>,
+    /// The parts' frames, for a search of an image model.
+    images: Option<ImageParts>,
     /// Where a remote worker finds the same parts, if known.
     context: Option<SearchContext>,
 }
+
+/// An image model's trial data: the fit part's rows and frames, the
+/// validation part's frames.
+struct ImageParts {
+    fit: TapData,
+    fit_frames: ImageFrames,
+    val_frames: ImageFrames,
+}
+
+/// The seed of every image model a search trains (`train --model
+/// conv-dennn` without `--seed` uses it too, so `best.toml` trains the
+/// best trial's model again).
+const IMAGE_SEED: u64 = 0;
 
 /// What a remote worker rebuilds a [`PoseTrial`] from: the training
 /// dataset's folder (which it must see: a shared file system), its
@@ -151,6 +169,9 @@ pub struct SearchContext {
     pub data_sha256: String,
     pub val_fraction: f64,
     pub seed: u64,
+    /// A search of an image model: the dataset's frames are read too.
+    #[serde(default)]
+    pub images: bool,
 }
 
 impl PoseTrial {
@@ -167,6 +188,7 @@ impl PoseTrial {
             val,
             targets,
             truth,
+            images: None,
             context: None,
         })
     }
@@ -179,6 +201,14 @@ impl PoseTrial {
         let fit_data = data.subset(&fit_rows);
         let targets = crate::train::data_targets(data)?;
         let mut trial = PoseTrial::new(fit_data.to_learn()?, val, targets)?;
+        if context.images {
+            let frames = crate::train_image::data_frames(data, &context.train)?;
+            trial.images = Some(ImageParts {
+                fit: fit_data.clone(),
+                fit_frames: frames.subset(&fit_rows),
+                val_frames: frames.subset(&val_rows),
+            });
+        }
         trial.context = Some(context);
         Ok((trial, fit_data, val_rows.len()))
     }
@@ -200,7 +230,7 @@ impl PoseTrial {
 
 impl Evaluation for PoseTrial {
     const NAME: &'static str = "tactrace.search.pose_model";
-    type Config = ModelConfig;
+    type Config = TrialConfig;
     type Score = TrialScore;
     type Error = LabError;
 
@@ -209,8 +239,14 @@ impl Evaluation for PoseTrial {
         crate::remote::context_json(Self::NAME, c)
     }
 
-    fn evaluate(&self, config: &ModelConfig) -> Result<TrialScore> {
-        Ok(self.score(config))
+    fn evaluate(&self, config: &TrialConfig) -> Result<TrialScore> {
+        match (config, &self.images) {
+            (TrialConfig::Pins(c), None) => Ok(self.score(c)),
+            (TrialConfig::Image(c), Some(parts)) => Ok(self.score_image(c, parts)),
+            _ => Err(LabError::Config(
+                "a search trial of a pin model on frames, or of an image model on pins".into(),
+            )),
+        }
     }
 }
 
@@ -228,12 +264,37 @@ impl PoseTrial {
             Ok(p) => p,
             Err(e) => return TrialScore::failed(n, Some(e.to_string())),
         };
-        let (val_mae, score) = target_score(&self.targets, &predicted, &self.truth, &self.std);
+        self.scored(&predicted)
+    }
+
+    /// The score of `predicted`, the validation part's every target.
+    fn scored(&self, predicted: &[Vec<f64>]) -> TrialScore {
+        let (val_mae, score) = target_score(&self.targets, predicted, &self.truth, &self.std);
         let failure = (!score.is_finite()).then(|| "its predictions are not numbers".to_string());
         TrialScore {
             val_mae,
             score,
             failure,
+        }
+    }
+
+    /// Train an image model on the fit part's frames, score every target
+    /// on the validation part's.
+    fn score_image(&self, config: &ConvConfig, parts: &ImageParts) -> TrialScore {
+        let n = self.targets.len();
+        let fit = (&parts.fit, &parts.fit_frames);
+        let model = match train_image(config, IMAGE_SEED, fit, None, &mut |_| {}) {
+            Ok((model, _)) => model,
+            Err(LabError::Learn(e)) if e.is_diverged() => return TrialScore::failed(n, None),
+            Err(e) => return TrialScore::failed(n, Some(e.to_string())),
+        };
+        let f = &parts.val_frames;
+        let predicted = Frames::new(&f.pixels, f.count(), f.info.height, f.info.width)
+            .map_err(LearnError::from)
+            .and_then(|frames| model.predict_batch(&frames));
+        match predicted {
+            Ok(p) => self.scored(&p),
+            Err(e) => TrialScore::failed(n, Some(e.to_string())),
         }
     }
 }
@@ -273,10 +334,13 @@ pub fn search(
         data_sha256: settings.data_sha256.clone(),
         val_fraction: settings.val_fraction,
         seed: settings.seed,
+        images: matches!(settings.base, TrialConfig::Image(_)),
     };
     let (trial, fit_data, val_rows) = PoseTrial::split(data, context)?;
     for cfg in settings.space.corners(&settings.base, tpe.domains())? {
-        crate::train::check_trainable(&cfg, &fit_data, val_rows)?;
+        if let TrialConfig::Pins(cfg) = cfg {
+            crate::train::check_trainable(&cfg, &fit_data, val_rows)?;
+        }
     }
     let mut folder = SearchFolder::open(out, settings, force, resume)?;
     let mut history: Vec<Observation> = folder

@@ -1,7 +1,8 @@
 //! `tactrace search`: Bayesian optimisation (TPE, `tactrace_optim::Tpe`)
-//! of a pose model's settings. Each trial trains on the fit part of the
-//! training data and is scored on an inner validation part of the same
-//! data (a seeded split, recorded; nothing given for scoring is read).
+//! of a pin or image model's settings. Each trial trains on the fit part
+//! of the training data and is scored on every target of an inner
+//! validation part of the same data (a seeded split, recorded; nothing
+//! given for scoring is read).
 //! Trials run in batches through an [`Executor`]; trial `k` depends only
 //! on the seed, `k` and the trials finished before its batch, so a search
 //! resumed from its trials file gives the trials an uninterrupted one

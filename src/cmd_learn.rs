@@ -52,7 +52,7 @@ pub enum TrainModelArg {
 
 impl TrainModelArg {
     /// The pin model, or the image model's kind.
-    fn pins(self) -> std::result::Result<ModelArg, tactrace_convnet::ModelKind> {
+    pub(crate) fn pins(self) -> std::result::Result<ModelArg, tactrace_convnet::ModelKind> {
         match self {
             TrainModelArg::Pdennn => Ok(ModelArg::Pdennn),
             TrainModelArg::Pcadennn => Ok(ModelArg::Pcadennn),

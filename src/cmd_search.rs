@@ -1,19 +1,20 @@
 //! `tactrace search`: Bayesian hyper-parameter search (TPE) of a pose
 //! model on an inner validation part of the training data.
-use crate::cmd_learn::{ModelArg, PresetArg};
+use crate::cmd_learn::{PresetArg, TrainModelArg};
 use crate::inputs::Inputs;
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 use tactrace_lab::remote::{Exec, RayExecutor, RaySettings};
-use tactrace_lab::search::{self, SearchSettings, SpaceFile};
+use tactrace_lab::search::{self, SearchSettings, SpaceFile, TrialConfig};
 use tactrace_store::{fsutil, read_dataset};
 
 #[derive(Args)]
 pub struct SearchArgs {
-    /// Kind of pose model.
+    /// Kind of model: a pin model, or an image model (conv-dennn,
+    /// conv-mlp: needs a dataset with frames, import --frames-size).
     #[arg(long, value_enum, default_value = "pdennn")]
-    model: ModelArg,
+    model: TrainModelArg,
     /// Training dataset directory: each trial fits on part of it and is
     /// scored on the rest (--val-fraction); nothing else is read.
     #[arg(long)]
@@ -123,7 +124,33 @@ impl ExecutorArgs {
 }
 
 pub fn search(a: SearchArgs) -> Result<()> {
-    let base = crate::cmd_learn::model_config(a.model, a.preset, a.config.as_deref(), a.epochs)?;
+    let base = match a.model.pins() {
+        Ok(model) => TrialConfig::Pins(crate::cmd_learn::model_config(
+            model,
+            a.preset,
+            a.config.as_deref(),
+            a.epochs,
+        )?),
+        Err(kind) => {
+            if !matches!(a.preset, PresetArg::Default) {
+                return Err(tactrace_lab::LabError::Config(format!(
+                    "{}: --preset is the pin models' (an image model's settings: --config FILE, --epochs)",
+                    kind.name()
+                ))
+                .into());
+            }
+            let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
+            let cfg =
+                tactrace_lab::train_image::resolve_image_config(kind, text.as_deref(), a.epochs)
+                    .with_context(|| {
+                        a.config
+                            .as_ref()
+                            .map(|p| p.display().to_string())
+                            .unwrap_or_default()
+                    })?;
+            TrialConfig::Image(cfg)
+        }
+    };
     let space_text = fsutil::read_text(&a.space)?;
     let space: SpaceFile = toml::from_str(&space_text)
         .with_context(|| format!("search space {}", a.space.display()))?;
@@ -146,6 +173,7 @@ pub fn search(a: SearchArgs) -> Result<()> {
         base,
         space,
     };
+    let targets = tactrace_lab::train::data_targets(&data)?;
     let t0 = std::time::Instant::now();
     let outcome = search::search(
         &settings,
@@ -159,24 +187,39 @@ pub fn search(a: SearchArgs) -> Result<()> {
                 .iter()
                 .map(|(n, v)| format!("{n} {v:.4}"))
                 .collect();
+            let result = match t.score.status().as_str() {
+                "ok" => format!(
+                    "{}, score {:.4}",
+                    search::describe_mae(&targets, &t.score.val_mae),
+                    t.score.score
+                ),
+                status => status.to_string(),
+            };
             eprintln!(
-                "trial {}: {} -> {:.4} mm, {:.3} deg, score {:.4} ({:.0} s so far)",
+                "trial {}: {} -> {result} ({:.0} s so far)",
                 t.trial,
                 named.join(", "),
-                t.score.val_mae[0],
-                t.score.val_mae[1],
-                t.score.score,
                 t0.elapsed().as_secs_f64()
             );
         },
     )?;
     let best = &outcome.trials[outcome.best];
+    let failed = outcome
+        .trials
+        .iter()
+        .filter(|t| !t.score.score.is_finite())
+        .count();
+    if failed > 0 {
+        eprintln!(
+            "{failed} of {} trials failed (status in trials.csv)",
+            outcome.trials.len()
+        );
+    }
     crate::say!(
-        "best: trial {} of {}, inner validation {:.4} mm, {:.3} deg; {}",
+        "best: trial {} of {}, inner validation {}; {}",
         best.trial,
         outcome.trials.len(),
-        best.score.val_mae[0],
-        best.score.val_mae[1],
+        search::describe_mae(&outcome.targets, &best.score.val_mae),
         outcome.dir.join("best.toml").display()
     );
     Ok(())

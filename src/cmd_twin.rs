@@ -446,19 +446,15 @@ pub fn sim_fit(a: SimFitArgs) -> Result<()> {
     let t0 = std::time::Instant::now();
     let pb = bar(0, "sim-fit");
     let mut report = |c: &tactrace_lab::transfer_fit::Candidate,
-                      best: &tactrace_lab::transfer_fit::Candidate| {
+                      best: Option<&tactrace_lab::transfer_fit::Candidate>| {
         pb.inc(1);
-        let show = |c: &tactrace_lab::transfer_fit::Candidate| {
-            c.mae.map_or("invalid sensor".into(), |m| {
-                format!("{:.3} mm / {:.2} deg", m[0], m[1])
-            })
+        let show = |c: &tactrace_lab::transfer_fit::Candidate| match (c.mae, &c.failure) {
+            (Some(m), _) => format!("{:.3} mm / {:.2} deg", m[0], m[1]),
+            (None, Some(why)) => format!("failed ({why})"),
+            (None, None) => "failed".into(),
         };
-        let line = format!(
-            "generation {:>3}: {}   best {}",
-            c.generation,
-            show(c),
-            show(best)
-        );
+        let best = best.map_or("none yet".into(), show);
+        let line = format!("generation {:>3}: {}   best {best}", c.generation, show(c));
         if pb.is_hidden() {
             eprintln!("{line}");
         } else {

@@ -258,3 +258,186 @@ fn issue24_search_on_ray_without_its_interpreter_is_refused() {
     );
     assert!(!t.join("s").exists() && !t.join("s.partial").exists());
 }
+
+/// A space of one output learning rate, a range or choices (TOML body).
+fn output_rate_space(dir: &Path, body: &str) -> String {
+    let path = dir.join("rates.toml");
+    std::fs::write(
+        &path,
+        format!("[[param]]\nname = \"output_learning_rate\"\n{body}"),
+    )
+    .unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn issue24_a_search_whose_every_trial_diverged_fails_without_a_best() {
+    let t = TempDir::new("search-diverged");
+    dataset(&t.0);
+    let space = output_rate_space(&t.0, "low = 1e6\nhigh = 1e8\nlog = true\n");
+    let r = tactrace(&t.0, &search_args(&space, "s", "3", "3"));
+    expect_code(&r, 1, "a search whose every trial diverged");
+    assert!(
+        r.stderr
+            .contains("every one of the 3 search trials failed (3 diverged"),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stdout.contains("best:"), "{}", r.stdout);
+    assert!(!t.join("s").exists());
+    // What was tried is kept, and no best written from nothing.
+    assert_eq!(trials(&t.join("s.partial")).len(), 3);
+    assert!(!t.join("s.partial/best.toml").exists());
+}
+
+#[test]
+fn issue24_a_search_records_its_failed_trials_in_the_table_and_figure() {
+    let t = TempDir::new("search-some-failed");
+    dataset(&t.0);
+    let space = output_rate_space(&t.0, "choices = [5.0, 1e8]\n");
+    let mut args = search_args(&space, "s", "6", "3");
+    args.extend(["--seed", "2"]);
+    let r = tactrace(&t.0, &args);
+    expect_code(&r, 0, "a search with some diverged trials");
+    let csv = std::fs::read_to_string(t.join("s/trials.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].ends_with(",status"), "{csv}");
+    assert!(lines[0].contains(",mae_r_mm,mae_theta_deg,"), "{csv}");
+    let status: Vec<&str> = lines[1..]
+        .iter()
+        .map(|l| l.rsplit(',').next().unwrap())
+        .collect();
+    let diverged = status.iter().filter(|s| **s == "diverged").count();
+    assert!(
+        diverged > 0 && status.contains(&"ok"),
+        "both kinds of trial: {csv}"
+    );
+    assert!(
+        r.stderr.contains(&format!(
+            "{diverged} of 6 trials failed (status in trials.csv)"
+        )),
+        "{}",
+        r.stderr
+    );
+    let svg = std::fs::read_to_string(t.join("s/convergence.svg")).unwrap();
+    assert!(
+        svg.contains(&format!("failed ({diverged}): no score")),
+        "the figure marks the failed trials"
+    );
+    // best.toml is the best finished trial's: the small rate.
+    let best = std::fs::read_to_string(t.join("s/best.toml")).unwrap();
+    assert!(best.contains("output_learning_rate = 5.0"), "{best}");
+}
+
+/// A dataset of `n` synthetic 16 px frames in `dir` (a bright spot a
+/// frame), targets `x` (mm) and `angle` (deg, circular): the spot's
+/// offset and direction from the centre; a dummy pin vector a row.
+fn frames_dataset(dir: &Path, n: usize) {
+    use tactrace_store::{DatasetMeta, FramesInfo, ImageFrames, TapData};
+    const SIDE: usize = 16;
+    let (mut inputs, mut targets, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
+    let c = (SIDE as f64 - 1.0) / 2.0;
+    for k in 0..n {
+        let cx = 3.5 + 9.0 * (k as f64 * 0.618_034).fract();
+        let cy = 3.5 + 9.0 * (k as f64 * 0.414_214 + 0.3).fract();
+        pixels.extend((0..SIDE * SIDE).map(|i| {
+            let (y, x) = ((i / SIDE) as f64, (i % SIDE) as f64);
+            let d2 = (x - cx).powi(2) + (y - cy).powi(2);
+            (20.0 + 220.0 * (-d2 / 4.0).exp()).round() as u8
+        }));
+        let angle = (cy - c).atan2(cx - c).to_degrees();
+        targets.extend([((cx - c) * 0.25) as f32, angle as f32]);
+        inputs.extend([cx as f32, cy as f32, 0.0, 0.0, 0.0, 0.0]);
+    }
+    let meta: DatasetMeta = serde_json::from_value(serde_json::json!({
+        "source": "synthetic", "origin": "tests/search.rs", "seed": null,
+        "samples": n, "pins": 3, "targets": ["x (mm)", "angle (deg)"],
+        "target_names": ["x", "angle"], "target_units": ["mm", "deg"],
+        "target_circular": [false, true], "frames_with_missing_pins": 0,
+        "reference_pins": [[1.0, 1.0], [8.0, 8.0], [14.0, 2.0]],
+        "settings": {}, "tactrace_version": "test",
+    }))
+    .unwrap();
+    let data = TapData {
+        inputs,
+        targets,
+        meta,
+    };
+    let frames = ImageFrames {
+        info: FramesInfo::new(SIDE, SIDE, [SIDE, SIDE]),
+        pixels,
+    };
+    tactrace_store::write_dataset_with(dir, &data, &[], Some(&frames), false).unwrap();
+}
+
+/// A small network for the 16 px frames, the search's base.
+const SMALL_CONV: &str = "dense = [16]\nbatch_size = 8\n\
+                          [[conv]]\nchannels = 6\nkernel = 3\nstride = 2\n\
+                          [[conv]]\nchannels = 8\nkernel = 3\nstride = 2\n";
+
+#[test]
+fn issue24_search_of_an_image_model_on_its_frames() {
+    let t = TempDir::new("search-image");
+    frames_dataset(&t.join("frames"), 80);
+    std::fs::write(t.join("small.toml"), SMALL_CONV).unwrap();
+    dataset(&t.0);
+    for kind in ["conv-dennn", "conv-mlp"] {
+        let space = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("configs/search/{kind}.toml"))
+            .display()
+            .to_string();
+        let out = format!("s-{kind}");
+        let mut args = search_args(&space, &out, "3", "2");
+        args[2] = "frames";
+        args.extend(["--model", kind, "--config", "small.toml"]);
+        let r = tactrace(&t.0, &args);
+        expect_code(&r, 0, kind);
+        let csv = std::fs::read_to_string(t.join(&out).join("trials.csv")).unwrap();
+        let header = csv.lines().next().unwrap();
+        assert!(
+            header.contains(",dense.0,") && header.contains(",mae_x_mm,mae_angle_deg,"),
+            "{csv}"
+        );
+        assert_eq!(header.contains(",ep.beta,"), kind == "conv-dennn", "{csv}");
+        assert_eq!(csv.lines().count(), 4, "{csv}");
+        // best.toml is an image model's configuration train takes.
+        let best = std::fs::read_to_string(t.join(&out).join("best.toml")).unwrap();
+        assert!(best.contains(&format!("kind = \"{kind}\"")), "{best}");
+        let train = [
+            "train",
+            "--model",
+            kind,
+            "--train",
+            "frames",
+            "--val-fraction",
+            "0.25",
+            "--config",
+            &format!("{out}/best.toml"),
+            "--out",
+            &format!("m-{kind}"),
+        ];
+        expect_code(&tactrace(&t.0, &train), 0, "train --config best.toml");
+    }
+    // A dataset of pins only is refused before any trial.
+    let space = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs/search/conv-dennn.toml")
+        .display()
+        .to_string();
+    let mut args = search_args(&space, "pins", "3", "2");
+    args.extend(["--model", "conv-dennn"]);
+    let r = tactrace(&t.0, &args);
+    expect_code(&r, 2, "an image search on pins");
+    assert!(r.stderr.contains("pin displacements only"), "{}", r.stderr);
+    // A field the image model does not have is refused.
+    std::fs::write(
+        t.join("bad.toml"),
+        "[[param]]\nname = \"hidden\"\nlow = 2\nhigh = 9\ninteger = true\n",
+    )
+    .unwrap();
+    let mut args = search_args("bad.toml", "bad", "3", "2");
+    args[2] = "frames";
+    args.extend(["--model", "conv-dennn"]);
+    let r = tactrace(&t.0, &args);
+    expect_code(&r, 2, "an image search of a field it lacks");
+    assert!(r.stderr.contains("no such setting"), "{}", r.stderr);
+}

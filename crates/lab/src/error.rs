@@ -28,6 +28,19 @@ pub enum LabError {
     /// step cap, refused move, fault). Its outputs are kept.
     #[error("the run failed ({ending}): {message}")]
     RunFailed { ending: Ending, message: String },
+    /// Every trial of a search, sim-fit or tune failed (diverged, not a
+    /// valid candidate, or a run that gave no number): there is no best to
+    /// write. What was tried is kept where `kept` says.
+    #[error(
+        "every one of the {tried} {what} failed ({reason}): there is no best to write{}",
+        kept_suffix(.kept)
+    )]
+    AllFailed {
+        what: String,
+        tried: usize,
+        reason: String,
+        kept: Option<PathBuf>,
+    },
     /// A result that is not a number (a NaN or infinite error, loss or
     /// metric): never reported as success.
     #[error("{what}: {metric} is {value}, not a number{}", hint_suffix(.hint))]
@@ -158,7 +171,10 @@ impl LabError {
             LabError::Control(e) => {
                 !matches!(e, tactrace_control::ControlError::NonFiniteInput { .. })
             }
-            LabError::RunFailed { .. } | LabError::NotANumber { .. } | LabError::Report(_) => false,
+            LabError::RunFailed { .. }
+            | LabError::AllFailed { .. }
+            | LabError::NotANumber { .. }
+            | LabError::Report(_) => false,
             LabError::Optim(e) => matches!(e, tactrace_optim::OptimError::Config(_)),
             LabError::Store(e) => e.is_bad_input(),
             LabError::Servo(e) => e.is_bad_input(),
@@ -203,6 +219,13 @@ fn more_samples_hint(held_out: usize) -> String {
     } else {
         "collect more taps, or lower n_components (--config)".into()
     }
+}
+
+/// `; what was tried is in {kept}` when something was kept.
+fn kept_suffix(kept: &Option<PathBuf>) -> String {
+    kept.as_ref()
+        .map(|p| format!("; what was tried is in {}", p.display()))
+        .unwrap_or_default()
 }
 
 /// `; {hint}` when there is a hint.

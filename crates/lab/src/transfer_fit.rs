@@ -118,9 +118,34 @@ pub struct Candidate {
     pub generation: usize,
     pub values: Vec<f64>,
     /// Position and angle mean absolute error on the real frames (mm, deg);
-    /// `None` when the candidate is not a valid sensor.
+    /// `None` when the candidate failed (`failure` says why).
     pub mae: Option<[f64; 2]>,
     pub cost: f64,
+    /// Why the candidate has no score: not a valid sensor, or a training
+    /// on its twin that diverged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+}
+
+impl Candidate {
+    /// `ok` or `failed: REASON` (the table's status column).
+    pub fn status(&self) -> String {
+        match &self.failure {
+            Some(reason) => format!("failed: {reason}"),
+            None => "ok".into(),
+        }
+    }
+}
+
+/// What one candidate gave: its errors on the real frames, or why it has
+/// none.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TransferScore {
+    /// Position and angle mean absolute error (mm, deg).
+    pub mae: Option<[f64; 2]>,
+    /// Why there is none (not a valid sensor, a diverged training).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
 }
 
 /// The search's outcome: the best sensor, its start, every candidate.
@@ -166,8 +191,9 @@ pub fn with_values(base: &TacTipConfig, values: &[f64]) -> TacTipConfig {
 
 /// One candidate's scoring as an evaluation: the twins of the labelled
 /// taps rendered with the candidate's parameters, a PDenNN trained on
-/// each, its mean absolute error on the real frames (`None`: the
-/// candidate is not a valid sensor). Pure: the seeds are in the settings.
+/// each, its mean absolute error on the real frames (none when the
+/// candidate is not a valid sensor or a training diverged: a failed
+/// candidate, not a failed fit). Pure: the seeds are in the settings.
 pub struct TransferTrial {
     context: TransferContext,
     /// The collection, its rest layout estimated when it had none.
@@ -231,19 +257,26 @@ impl Evaluation for TransferTrial {
     const NAME: &'static str = "tactrace.sim_fit.transfer";
     /// The parameter values, in [`TRANSFER_PARAMS`] order.
     type Config = Vec<f64>;
-    type Score = Option<[f64; 2]>;
+    type Score = TransferScore;
     type Error = LabError;
 
-    fn evaluate(&self, values: &Vec<f64>) -> Result<Option<[f64; 2]>> {
+    fn evaluate(&self, values: &Vec<f64>) -> Result<TransferScore> {
+        let failed = |why: String| TransferScore {
+            mae: None,
+            failure: Some(why),
+        };
         let sensor = with_values(&self.base, values);
-        match sensor.validate() {
-            Ok(()) => Ok(Some(transfer_mae(
-                &self.context.config,
-                (&self.collection, &self.sight),
-                &sensor,
-                &self.real,
-            )?)),
-            Err(_) => Ok(None),
+        if let Err(e) = sensor.validate() {
+            return Ok(failed(format!("not a valid sensor: {e}")));
+        }
+        let twin = (&self.collection, &self.sight);
+        match transfer_mae(&self.context.config, twin, &sensor, &self.real) {
+            Ok(mae) => Ok(TransferScore {
+                mae: Some(mae),
+                failure: None,
+            }),
+            Err(e) if !e.is_bad_input() => Ok(failed(e.to_string())),
+            Err(e) => Err(e),
         }
     }
 
@@ -256,28 +289,33 @@ impl Evaluation for TransferTrial {
 /// the collection's rest pins when they were estimated from taps
 /// ([`TransferTrial::new`]), each generation's candidates scored through
 /// `executor`; `progress` is told of every
-/// candidate as it is scored.
+/// candidate as it is scored, with the best so far (none while every
+/// candidate failed). A fit none of whose candidates gave a score is
+/// [`LabError::AllFailed`].
 pub fn fit_transfer(
     cfg: &TransferFitConfig,
     base: &TacTipConfig,
     executor: &impl Executor,
-    progress: &mut dyn FnMut(&Candidate, &Candidate),
+    progress: &mut dyn FnMut(&Candidate, Option<&Candidate>),
 ) -> Result<TransferFit> {
     let trial = TransferTrial::new(cfg, base)?;
     let start_values: Vec<f64> = TRANSFER_PARAMS
         .iter()
         .map(|p| (p.get)(&trial.base))
         .collect();
-    let candidate = |generation: usize, values: Vec<f64>, mae: Option<[f64; 2]>| Candidate {
+    let candidate = |generation: usize, values: Vec<f64>, score: TransferScore| Candidate {
         generation,
         values,
-        mae,
-        cost: mae.map_or(f64::NAN, |m| transfer_cost(m, cfg.deg_per_mm)),
+        mae: score.mae,
+        cost: score
+            .mae
+            .map_or(f64::NAN, |m| transfer_cost(m, cfg.deg_per_mm)),
+        failure: score.failure,
     };
-    let first = executor.run(&trial, std::slice::from_ref(&start_values))?;
-    let start = candidate(0, start_values.clone(), first[0]);
-    let mut best = start.clone();
-    progress(&start, &best);
+    let mut first = executor.run(&trial, std::slice::from_ref(&start_values))?;
+    let start = candidate(0, start_values.clone(), first.remove(0));
+    let mut best: Option<Candidate> = start.cost.is_finite().then(|| start.clone());
+    progress(&start, best.as_ref());
     let mut search = Cmaes::new(&CmaesConfig {
         start: vec![0.0; TRANSFER_PARAMS.len()],
         sigma: cfg.sigma,
@@ -295,15 +333,18 @@ pub fn fit_transfer(
         let mut costs = Vec::new();
         for (values, mae) in points.into_iter().zip(maes) {
             let c = candidate(generation, values, mae);
-            if c.cost < best.cost {
-                best = c.clone();
+            if c.cost.is_finite() && best.as_ref().is_none_or(|b| c.cost < b.cost) {
+                best = Some(c.clone());
             }
-            progress(&c, &best);
+            progress(&c, best.as_ref());
             costs.push(c.cost);
             candidates.push(c);
         }
         search.tell(&costs)?;
     }
+    let Some(best) = best else {
+        return Err(all_failed(&candidates));
+    };
     Ok(TransferFit {
         config: with_values(&trial.base, &best.values),
         start,
@@ -313,6 +354,20 @@ pub fn fit_transfer(
         warnings: trial.warnings,
         layout: trial.layout,
     })
+}
+
+/// The error of a fit none of whose `candidates` gave a score (exit 1).
+fn all_failed(candidates: &[Candidate]) -> LabError {
+    let last = candidates.iter().rev().find_map(|c| c.failure.as_ref());
+    LabError::AllFailed {
+        what: "sim-fit candidates".into(),
+        tried: candidates.len(),
+        reason: format!(
+            "the last because {}",
+            last.map_or("it gave no number", String::as_str)
+        ),
+        kept: None,
+    }
 }
 
 /// Twins of the labels with `sensor`, a PDenNN trained on each as
@@ -369,10 +424,15 @@ pub fn write_transfer_fit(
     let body = toml::to_string(&rig).map_err(|e| LabError::Config(e.to_string()))?;
     write_atomic(&dir.join("sensor.toml"), (head + &body).as_bytes())?;
     search_csv(&fit.candidates).write(&dir.join("search.csv"))?;
+    let failed: Vec<usize> = (0..fit.candidates.len())
+        .filter(|&k| !fit.candidates[k].cost.is_finite())
+        .map(|k| k + 1)
+        .collect();
     tactrace_report::figures::convergence(
         &dir.join("convergence"),
         ("sim-fit: CMA-ES over the simulator's physics", "candidates"),
         &history(&fit.candidates),
+        &failed,
     )?;
     let summary = serde_json::json!({
         "tactrace_version": env!("CARGO_PKG_VERSION"),
@@ -423,13 +483,14 @@ fn fmt_mae(c: &Candidate, k: usize) -> String {
 }
 
 /// One row per candidate: generation, cost, position and angle MAE, then
-/// the parameters by key.
+/// the parameters by key, then its status (`ok`, `failed: REASON`).
 fn search_csv(candidates: &[Candidate]) -> CsvText {
     let mut csv = CsvText::new();
     let head = ["generation", "cost", "position_mae_mm", "angle_mae_deg"];
     csv.row(
         head.into_iter()
-            .chain(TRANSFER_PARAMS.iter().map(|p| p.key)),
+            .chain(TRANSFER_PARAMS.iter().map(|p| p.key))
+            .chain(["status"]),
     );
     for c in candidates {
         let lead = [
@@ -438,7 +499,8 @@ fn search_csv(candidates: &[Candidate]) -> CsvText {
             fmt_mae(c, 0),
             fmt_mae(c, 1),
         ];
-        csv.row(lead.into_iter().chain(c.values.iter().map(f64::to_string)));
+        let values = c.values.iter().map(f64::to_string);
+        csv.row(lead.into_iter().chain(values).chain([c.status()]));
     }
     csv
 }

@@ -25,6 +25,7 @@ fn issue24_a_worker_refuses_an_unknown_evaluation_and_a_bad_context() {
         PoseTrial::NAME,
         tactrace_lab::transfer_fit::TransferTrial::NAME,
         tactrace_lab::tune::TuneTrial::NAME,
+        tactrace_lab::tune::HeldOutTrial::NAME,
     ] {
         let e = evaluate(name, "{\"not\": \"a context\"}", "{}").unwrap_err();
         assert!(e.is_bad_input(), "{name}: {e}");

@@ -1,8 +1,9 @@
 //! The shipped search spaces (`configs/search/*.toml`) parse and fit their
 //! models, and a trial is a pure function of its configuration: the local
 //! executor's batch gives what one-by-one evaluation gives (issue 24).
-use tactrace_lab::search::{PoseTrial, SpaceFile};
-use tactrace_learn::{Dataset, ModelConfig, ModelKind, Preset};
+use tactrace_convnet::ConvConfig;
+use tactrace_lab::search::{PoseTrial, SpaceFile, TrialConfig};
+use tactrace_learn::{edge_targets, Dataset, ModelConfig, ModelKind, Preset};
 use tactrace_optim::{Evaluation, Executor, Local, Tpe, TpeConfig};
 
 fn shipped(name: &str) -> SpaceFile {
@@ -19,14 +20,17 @@ fn issue24_shipped_search_spaces_parse_and_fit_their_models() {
     let mut seen = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let name = entry.unwrap().file_name().into_string().unwrap();
-        let kind = match name.as_str() {
-            "pdennn.toml" => ModelKind::PDenNN,
-            "pcadennn.toml" => ModelKind::PcaDenNN,
-            "mlp.toml" => ModelKind::Mlp,
+        let pins = |kind| TrialConfig::Pins(ModelConfig::preset(kind, Preset::Default));
+        let image = |kind| TrialConfig::Image(ConvConfig::new(kind));
+        let base = match name.as_str() {
+            "pdennn.toml" => pins(ModelKind::PDenNN),
+            "pcadennn.toml" => pins(ModelKind::PcaDenNN),
+            "mlp.toml" => pins(ModelKind::Mlp),
+            "conv-dennn.toml" => image(tactrace_convnet::ModelKind::ConvDennn),
+            "conv-mlp.toml" => image(tactrace_convnet::ModelKind::ConvMlp),
             other => panic!("{other}: a space for which model?"),
         };
         let space = shipped(&name);
-        let base = ModelConfig::preset(kind, Preset::Default);
         let domains = space
             .domains(&base)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -37,10 +41,17 @@ fn issue24_shipped_search_spaces_parse_and_fit_their_models() {
         }
         seen += 1;
     }
-    assert_eq!(seen, 3);
-    // A PDenNN space on a one-net model is refused.
+    assert_eq!(seen, 5);
+    // A PDenNN space on a one-net model is refused, and a pin model's
+    // space on an image model.
     let pca = ModelConfig::preset(ModelKind::PcaDenNN, Preset::Default);
-    assert!(shipped("pdennn.toml").domains(&pca).is_err());
+    assert!(shipped("pdennn.toml")
+        .domains(&TrialConfig::Pins(pca))
+        .is_err());
+    let conv = ConvConfig::new(tactrace_convnet::ModelKind::ConvDennn);
+    assert!(shipped("pdennn.toml")
+        .domains(&TrialConfig::Image(conv))
+        .is_err());
 }
 
 /// A small learnable set: y = (x0 + x1, x2 - x3).
@@ -67,7 +78,7 @@ fn data(n: usize, seed: u64) -> Dataset {
 
 #[test]
 fn issue24_a_trial_is_pure_and_the_local_executor_changes_nothing() {
-    let trial = PoseTrial::new(data(80, 1), data(30, 2)).unwrap();
+    let trial = PoseTrial::new(data(80, 1), data(30, 2), edge_targets()).unwrap();
     let space = shipped("pdennn.toml");
     let mut base = ModelConfig::preset(ModelKind::PDenNN, Preset::Default);
     base.epochs = 3;
@@ -82,8 +93,9 @@ fn issue24_a_trial_is_pure_and_the_local_executor_changes_nothing() {
             .filter(|p| !p.name.contains("n_components"))
             .collect(),
     };
+    let base = TrialConfig::Pins(base);
     let tpe = Tpe::new(small.domains(&base).unwrap(), TpeConfig::default()).unwrap();
-    let configs: Vec<ModelConfig> = (0..6)
+    let configs: Vec<TrialConfig> = (0..6)
         .map(|k| small.apply(&base, &tpe.suggest(k, &[])).unwrap())
         .collect();
     let batch = Local.run(&trial, &configs).unwrap();
@@ -99,5 +111,5 @@ fn issue24_a_trial_is_pure_and_the_local_executor_changes_nothing() {
     // and parses floats exactly; serde_json's default parser can be one
     // ulp off, so JSON transport needs exact float parsing).
     let text = toml::to_string(&configs[0]).unwrap();
-    assert_eq!(toml::from_str::<ModelConfig>(&text).unwrap(), configs[0]);
+    assert_eq!(toml::from_str::<TrialConfig>(&text).unwrap(), configs[0]);
 }

@@ -266,11 +266,14 @@ pub struct GenerationCost {
 
 /// A search's convergence: each generation's best and the best so far
 /// against the number of evaluations (named `x_label`: the tuning's
-/// simulated runs, the transfer fit's candidates), log y.
+/// simulated runs, the transfer fit's candidates), log y; the evaluations
+/// listed in `failed` (their x: diverged, invalid, no score) are marked
+/// as their own series along the top of the chart.
 pub fn convergence(
     stem: &Path,
     (title, x_label): (&str, &str),
     history: &[GenerationCost],
+    failed: &[usize],
 ) -> Result<Vec<PathBuf>> {
     let series = |name: &str, style: Style, f: fn(&GenerationCost) -> f64| Series {
         name: name.into(),
@@ -280,16 +283,30 @@ pub fn convergence(
             .collect(),
         style,
     };
+    let mut all = vec![
+        series("generation best", Style::Points, |g| g.generation_best),
+        series("best so far", Style::Line, |g| g.best_so_far),
+    ];
+    if !failed.is_empty() {
+        let top = history
+            .iter()
+            .map(|g| g.generation_best)
+            .filter(|c| c.is_finite() && *c > 0.0)
+            .fold(f64::NAN, f64::max);
+        let top = if top.is_finite() { top * 1.5 } else { 1.0 };
+        all.push(Series {
+            name: format!("failed ({}): no score", failed.len()),
+            points: failed.iter().map(|&x| (x as f64, top)).collect(),
+            style: Style::Points,
+        });
+    }
     chart(
         stem,
         &Axes {
             log_y: true,
             ..axes(title, x_label, "cost")
         },
-        &[
-            series("generation best", Style::Points, |g| g.generation_best),
-            series("best so far", Style::Line, |g| g.best_so_far),
-        ],
+        &all,
     )
     .map_err(Into::into)
 }

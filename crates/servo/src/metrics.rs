@@ -4,7 +4,7 @@ use serde::Serialize;
 use tactrace_geometry::{Contour, Vec2};
 
 /// Everything measured on one trajectory against the true contour.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct FollowMetrics {
     /// The report's metric: mean over 1000 evenly spaced contour points of
     /// the distance to the nearest trajectory point, mm.

@@ -131,7 +131,7 @@ impl<F: FnMut(&StepRecord)> StepSink for FnSink<F> {
 }
 
 /// How a run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Ending {
     /// Came back to the start: the loop is closed.

@@ -64,11 +64,12 @@ impl From<RunError<LabError>> for LabError {
 pub fn evaluate(name: &str, context: &str, config: &str) -> Result<String> {
     use crate::search::PoseTrial;
     use crate::transfer_fit::TransferTrial;
-    use crate::tune::TuneTrial;
+    use crate::tune::{HeldOutTrial, TuneTrial};
     match name {
         PoseTrial::NAME => run_one(context, config, PoseTrial::from_context),
         TransferTrial::NAME => run_one(context, config, TransferTrial::from_context),
         TuneTrial::NAME => run_one(context, config, TuneTrial::from_context),
+        HeldOutTrial::NAME => run_one(context, config, HeldOutTrial::from_context),
         _ => Err(RemoteError::UnknownEvaluation { name: name.into() }.into()),
     }
 }

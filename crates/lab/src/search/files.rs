@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use tactrace_learn::ModelTarget;
 use tactrace_report::figures::{self, GenerationCost};
 use tactrace_store::fsutil::partial_path;
 use tactrace_store::{write_atomic, StagedDir};
@@ -151,28 +152,39 @@ impl SearchFolder {
 
     /// Write the table, the best configuration and the figure, and move
     /// the folder into place.
-    pub fn finish(self, settings: &SearchSettings, best: usize) -> Result<PathBuf> {
+    pub fn finish(
+        self,
+        settings: &SearchSettings,
+        best: usize,
+        targets: &[ModelTarget],
+    ) -> Result<PathBuf> {
         let dir = self.stage.path();
-        write_atomic(&dir.join("trials.csv"), &trials_csv(&self.trials)?)?;
+        write_atomic(&dir.join("trials.csv"), &trials_csv(&self.trials, targets)?)?;
         let t = &self.trials[best];
         let cfg = settings.space.apply(&settings.base, &t.values)?;
         let body = toml::to_string(&cfg).map_err(|e| LabError::Config(e.to_string()))?;
         let text = format!(
             "# tactrace {} search, seed {}: trial {best} of {}, inner validation \
-             {:.4} mm, {:.4} deg (score {:.4}).\n# Train it with `tactrace train --config best.toml`.\n{body}",
+             {} (score {:.4}).\n# Train it with `tactrace train --config best.toml`.\n{body}",
             env!("CARGO_PKG_VERSION"),
             settings.seed,
             self.trials.len(),
-            t.score.val_mae[0],
-            t.score.val_mae[1],
+            describe_mae(targets, &t.score.val_mae),
             t.score.score
         );
         write_atomic(&dir.join("best.toml"), text.as_bytes())?;
-        let title = format!("TPE search of a {}", settings.base.kind.name());
+        let title = format!("TPE search of a {}", settings.base.kind_name());
+        let failed: Vec<usize> = self
+            .trials
+            .iter()
+            .filter(|t| !t.score.score.is_finite())
+            .map(|t| t.trial + 1)
+            .collect();
         figures::convergence(
             &dir.join("convergence"),
             (&title, "trials"),
             &convergence(&self.trials),
+            &failed,
         )?;
         Ok(self.stage.commit()?)
     }
@@ -231,36 +243,56 @@ fn read_trials(path: &Path) -> Result<Vec<TrialRecord>> {
     Ok(out)
 }
 
-/// `trials.csv`: one row per trial, its settings by name.
-fn trials_csv(trials: &[TrialRecord]) -> Result<Vec<u8>> {
+/// Every target's error in its unit: `pose_2 0.1234 mm, pose_6 3.2100 deg`
+/// (a name that ends in its unit, `r_mm`, without it: `r 0.1234 mm`).
+pub fn describe_mae(targets: &[ModelTarget], mae: &[f64]) -> String {
+    let parts: Vec<String> = targets
+        .iter()
+        .zip(mae)
+        .map(|(t, m)| {
+            let unit = t.unit.as_str();
+            let name = t.name.strip_suffix(&format!("_{unit}")).unwrap_or(&t.name);
+            format!("{name} {m:.4} {unit}")
+        })
+        .collect();
+    parts.join(", ")
+}
+
+/// A target's error column: `mae_NAME_UNIT` (`mae_pose_2_mm`; a name that
+/// ends in its unit keeps it once: `mae_r_mm`).
+fn mae_column(t: &ModelTarget) -> String {
+    let unit = t.unit.as_str();
+    if t.name.ends_with(&format!("_{unit}")) {
+        format!("mae_{}", t.name)
+    } else {
+        format!("mae_{}_{unit}", t.name)
+    }
+}
+
+/// `trials.csv`: one row per trial, its settings by name, every target's
+/// inner validation error ([`mae_column`]), the score, the best so far,
+/// the time and the status (`ok`, `diverged`, `failed: REASON`).
+fn trials_csv(trials: &[TrialRecord], targets: &[ModelTarget]) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let csv_err = |e: csv::Error| LabError::Config(format!("trials.csv: {e}"));
     let mut header = vec!["trial".to_string()];
     if let Some(t) = trials.first() {
         header.extend(t.settings.iter().map(|(n, _)| n.clone()));
     }
-    header.extend(
-        [
-            "position_mae_mm",
-            "angle_mae_deg",
-            "score",
-            "best_so_far",
-            "seconds",
-        ]
-        .map(String::from),
-    );
+    header.extend(targets.iter().map(mae_column));
+    header.extend(["score", "best_so_far", "seconds", "status"].map(String::from));
     w.write_record(&header).map_err(csv_err)?;
     let mut best = f64::INFINITY;
     for t in trials {
         best = best.min(t.score.score);
         let mut row = vec![t.trial.to_string()];
         row.extend(t.settings.iter().map(|(_, v)| v.to_string()));
+        row.extend(t.score.val_mae.iter().map(f64::to_string));
         row.extend([
-            t.score.val_mae[0].to_string(),
-            t.score.val_mae[1].to_string(),
             t.score.score.to_string(),
             best.to_string(),
             format!("{:.2}", t.seconds),
+            t.score.status(),
         ]);
         w.write_record(&row).map_err(csv_err)?;
     }
@@ -268,7 +300,8 @@ fn trials_csv(trials: &[TrialRecord]) -> Result<Vec<u8>> {
         .map_err(|e| LabError::Config(format!("trials.csv: {}", e.error())))
 }
 
-/// Each trial's score and the best so far (diverged trials left out).
+/// Each trial's score and the best so far (failed trials left out: the
+/// figure marks them apart).
 fn convergence(trials: &[TrialRecord]) -> Vec<GenerationCost> {
     let mut best = f64::INFINITY;
     let mut out = Vec::new();

@@ -1,7 +1,8 @@
 //! `tactrace search`: Bayesian optimisation (TPE, `tactrace_optim::Tpe`)
-//! of a pose model's settings. Each trial trains on the fit part of the
-//! training data and is scored on an inner validation part of the same
-//! data (a seeded split, recorded; nothing given for scoring is read).
+//! of a pin or image model's settings. Each trial trains on the fit part
+//! of the training data and is scored on every target of an inner
+//! validation part of the same data (a seeded split, recorded; nothing
+//! given for scoring is read).
 //! Trials run in batches through an [`Executor`]; trial `k` depends only
 //! on the seed, `k` and the trials finished before its batch, so a search
 //! resumed from its trials file gives the trials an uninterrupted one
@@ -14,19 +15,21 @@
 mod files;
 mod space;
 
-pub use files::TrialRecord;
-pub use space::{ParamSpec, SpaceFile};
+pub use files::{describe_mae, TrialRecord};
+pub use space::{ParamSpec, SpaceFile, TrialConfig};
 
 use crate::error::{LabError, Result};
 use crate::train::holdout_rows;
+use crate::train_image::train_image;
 use files::SearchFolder;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use tactrace_convnet::{ConvConfig, Frames};
 use tactrace_learn::{
-    mean_absolute_error, Dataset, LearnError, ModelConfig, PoseModel, Standardiser,
+    target_mae, Dataset, LearnError, ModelConfig, ModelTarget, PoseModel, TargetScale,
 };
 use tactrace_optim::{Evaluation, Executor, Observation, Tpe, TpeConfig};
-use tactrace_store::{TapData, TrainingRecord};
+use tactrace_store::{ImageFrames, TapData, TrainingRecord};
 
 /// Everything a search was asked (`config.toml`); a resumed search must
 /// be asked the same.
@@ -48,8 +51,9 @@ pub struct SearchSettings {
     /// The training data's content hash and rows.
     pub data_sha256: String,
     pub data_rows: usize,
-    /// The configuration each trial's settings are laid over.
-    pub base: ModelConfig,
+    /// The configuration each trial's settings are laid over (a pin or
+    /// an image model's).
+    pub base: TrialConfig,
     /// The settings searched.
     pub space: SpaceFile,
 }
@@ -73,14 +77,16 @@ pub fn data_id(data: &TapData) -> (String, usize) {
     (id.sha256, id.rows)
 }
 
-/// What one trial gave: validation mean absolute errors `[r mm, theta
-/// deg]` and the score (`mae_r / std_r + mae_theta / std_theta`, the
-/// training targets' stds; lower is better); a diverged training scores
-/// +inf (written `null` in JSON, read back as +inf).
+/// What one trial gave: the inner validation mean absolute error of
+/// every target of the data (in its unit, circular angles wrapped) and
+/// the score (`sum MAE_k / spread_k`, the fit part's target spreads,
+/// circular ones wrapped; lower is better: [`tactrace_learn::TargetScale`]). A trial that failed scores
+/// +inf (written `null` in JSON, read back as +inf): a training that
+/// diverged (`failure` empty) or another failure (`failure` says why).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrialScore {
-    #[serde(deserialize_with = "null_is_infinite::pair")]
-    pub val_mae: [f64; 2],
+    #[serde(deserialize_with = "null_is_infinite::many")]
+    pub val_mae: Vec<f64>,
     #[serde(deserialize_with = "null_is_infinite::one")]
     pub score: f64,
     /// Why the training failed, other than by diverging.
@@ -88,8 +94,28 @@ pub struct TrialScore {
     pub failure: Option<String>,
 }
 
+impl TrialScore {
+    /// A failed trial: diverged when `failure` is `None`.
+    fn failed(targets: usize, failure: Option<String>) -> Self {
+        TrialScore {
+            val_mae: vec![f64::INFINITY; targets],
+            score: f64::INFINITY,
+            failure,
+        }
+    }
+
+    /// `ok`, `diverged` or `failed: REASON` (the table's status column).
+    pub fn status(&self) -> String {
+        match (&self.failure, self.score.is_finite()) {
+            (Some(reason), _) => format!("failed: {reason}"),
+            (None, true) => "ok".into(),
+            (None, false) => "diverged".into(),
+        }
+    }
+}
+
 /// JSON has no infinity: serde_json writes it `null`; read `null` back as
-/// +inf (a diverged trial's score).
+/// +inf (a failed trial's score).
 mod null_is_infinite {
     use serde::{Deserialize, Deserializer};
 
@@ -97,23 +123,42 @@ mod null_is_infinite {
         Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
     }
 
-    pub fn pair<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
-        let v = <[Option<f64>; 2]>::deserialize(d)?;
-        Ok(v.map(|x| x.unwrap_or(f64::INFINITY)))
+    pub fn many<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        let v = Vec::<Option<f64>>::deserialize(d)?;
+        Ok(v.into_iter().map(|x| x.unwrap_or(f64::INFINITY)).collect())
     }
 }
 
-/// One trial as an evaluation: train a pose model on the fit part, score
-/// it on the inner validation part. Pure: the model's seed is in its
-/// configuration.
+/// One trial as an evaluation: train a pose model of the data's targets
+/// on the fit part, score it on the inner validation part. Pure: the
+/// model's seed is in its configuration.
 pub struct PoseTrial {
     fit: Dataset,
     val: Dataset,
-    /// The training targets' standard deviations.
-    std: [f64; 2],
+    /// The data's targets (names, units, circular flags), in order.
+    targets: Vec<ModelTarget>,
+    /// Each target's spread over the fit part (circular ones wrapped).
+    scale: TargetScale,
+    /// The validation part's targets, a row a sample.
+    truth: Vec<Vec<f64>>,
+    /// The parts' frames, for a search of an image model.
+    images: Option<ImageParts>,
     /// Where a remote worker finds the same parts, if known.
     context: Option<SearchContext>,
 }
+
+/// An image model's trial data: the fit part's rows and frames, the
+/// validation part's frames.
+struct ImageParts {
+    fit: TapData,
+    fit_frames: ImageFrames,
+    val_frames: ImageFrames,
+}
+
+/// The seed of every image model a search trains (`train --model
+/// conv-dennn` without `--seed` uses it too, so `best.toml` trains the
+/// best trial's model again).
+const IMAGE_SEED: u64 = 0;
 
 /// What a remote worker rebuilds a [`PoseTrial`] from: the training
 /// dataset's folder (which it must see: a shared file system), its
@@ -125,17 +170,26 @@ pub struct SearchContext {
     pub data_sha256: String,
     pub val_fraction: f64,
     pub seed: u64,
+    /// A search of an image model: the dataset's frames are read too.
+    #[serde(default)]
+    pub images: bool,
 }
 
 impl PoseTrial {
-    /// The evaluation over the fit and validation parts.
-    pub fn new(fit: Dataset, val: Dataset) -> Result<Self> {
-        let scale = Standardiser::fit(&fit.y, fit.n, fit.dim_y)?;
-        let std = [scale.std()[0], scale.std()[1]];
+    /// The evaluation of a model of `targets` over the fit and validation
+    /// parts.
+    pub fn new(fit: Dataset, val: Dataset, targets: Vec<ModelTarget>) -> Result<Self> {
+        let scale = TargetScale::spreads(&targets, &fit)?;
+        let truth = (0..val.n)
+            .map(|i| val.y_row(i).iter().map(|&v| f64::from(v)).collect())
+            .collect();
         Ok(PoseTrial {
+            scale,
             fit,
             val,
-            std,
+            targets,
+            truth,
+            images: None,
             context: None,
         })
     }
@@ -146,7 +200,16 @@ impl PoseTrial {
         let (fit_rows, val_rows) = holdout_rows(data, context.val_fraction, context.seed)?;
         let val = data.subset(&val_rows).to_learn()?;
         let fit_data = data.subset(&fit_rows);
-        let mut trial = PoseTrial::new(fit_data.to_learn()?, val)?;
+        let targets = crate::train::data_targets(data)?;
+        let mut trial = PoseTrial::new(fit_data.to_learn()?, val, targets)?;
+        if context.images {
+            let frames = crate::train_image::data_frames(data, &context.train)?;
+            trial.images = Some(ImageParts {
+                fit: fit_data.clone(),
+                fit_frames: frames.subset(&fit_rows),
+                val_frames: frames.subset(&val_rows),
+            });
+        }
         trial.context = Some(context);
         Ok((trial, fit_data, val_rows.len()))
     }
@@ -168,7 +231,7 @@ impl PoseTrial {
 
 impl Evaluation for PoseTrial {
     const NAME: &'static str = "tactrace.search.pose_model";
-    type Config = ModelConfig;
+    type Config = TrialConfig;
     type Score = TrialScore;
     type Error = LabError;
 
@@ -177,40 +240,63 @@ impl Evaluation for PoseTrial {
         crate::remote::context_json(Self::NAME, c)
     }
 
-    fn evaluate(&self, config: &ModelConfig) -> Result<TrialScore> {
-        Ok(self.score(config))
+    fn evaluate(&self, config: &TrialConfig) -> Result<TrialScore> {
+        match (config, &self.images) {
+            (TrialConfig::Pins(c), None) => Ok(self.score(c)),
+            (TrialConfig::Image(c), Some(parts)) => Ok(self.score_image(c, parts)),
+            _ => Err(LabError::Config(
+                "a search trial of a pin model on frames, or of an image model on pins".into(),
+            )),
+        }
     }
 }
 
 impl PoseTrial {
-    /// Train on the fit part, score on the validation part.
+    /// Train on the fit part, score every target on the validation part.
     fn score(&self, config: &ModelConfig) -> TrialScore {
-        let failed = |failure: Option<String>| TrialScore {
-            val_mae: [f64::INFINITY; 2],
-            score: f64::INFINITY,
-            failure,
-        };
-        let model = match PoseModel::fit(config, &self.fit, &mut |_| {}) {
+        let n = self.targets.len();
+        let fitted = PoseModel::fit_targets(config, &self.targets, &self.fit, None, &mut |_| {});
+        let model = match fitted {
             Ok((model, _)) => model,
-            Err(LearnError::Diverged { .. }) => return failed(None),
-            Err(e) => return failed(Some(e.to_string())),
+            Err(LearnError::Diverged { .. }) => return TrialScore::failed(n, None),
+            Err(e) => return TrialScore::failed(n, Some(e.to_string())),
         };
-        match model.predict_batch(&self.val) {
-            Ok(pred) => {
-                let mae = mean_absolute_error(&pred, &self.val);
-                let score = mae[0] / self.std[0] + mae[1] / self.std[1];
-                let score = if score.is_finite() {
-                    score
-                } else {
-                    f64::INFINITY
-                };
-                TrialScore {
-                    val_mae: mae,
-                    score,
-                    failure: None,
-                }
-            }
-            Err(e) => failed(Some(e.to_string())),
+        let predicted = match model.predict_targets_batch(&self.val) {
+            Ok(p) => p,
+            Err(e) => return TrialScore::failed(n, Some(e.to_string())),
+        };
+        self.scored(&predicted)
+    }
+
+    /// The score of `predicted`, the validation part's every target.
+    fn scored(&self, predicted: &[Vec<f64>]) -> TrialScore {
+        let val_mae = target_mae(&self.targets, predicted, &self.truth);
+        let score = self.scale.score(&val_mae);
+        let failure = (!score.is_finite()).then(|| "its predictions are not numbers".to_string());
+        TrialScore {
+            val_mae,
+            score,
+            failure,
+        }
+    }
+
+    /// Train an image model on the fit part's frames, score every target
+    /// on the validation part's.
+    fn score_image(&self, config: &ConvConfig, parts: &ImageParts) -> TrialScore {
+        let n = self.targets.len();
+        let fit = (&parts.fit, &parts.fit_frames);
+        let model = match train_image(config, IMAGE_SEED, fit, None, &mut |_| {}) {
+            Ok((model, _)) => model,
+            Err(LabError::Learn(e)) if e.is_diverged() => return TrialScore::failed(n, None),
+            Err(e) => return TrialScore::failed(n, Some(e.to_string())),
+        };
+        let f = &parts.val_frames;
+        let predicted = Frames::new(&f.pixels, f.count(), f.info.height, f.info.width)
+            .map_err(LearnError::from)
+            .and_then(|frames| model.predict_batch(&frames));
+        match predicted {
+            Ok(p) => self.scored(&p),
+            Err(e) => TrialScore::failed(n, Some(e.to_string())),
         }
     }
 }
@@ -224,6 +310,8 @@ pub struct SearchOutcome {
     pub best: usize,
     /// The finished folder.
     pub dir: std::path::PathBuf,
+    /// The data's targets, in the order of each trial's `val_mae`.
+    pub targets: Vec<ModelTarget>,
 }
 
 /// Run (or with `resume`, continue) the search of `settings` on `data`
@@ -248,10 +336,13 @@ pub fn search(
         data_sha256: settings.data_sha256.clone(),
         val_fraction: settings.val_fraction,
         seed: settings.seed,
+        images: matches!(settings.base, TrialConfig::Image(_)),
     };
     let (trial, fit_data, val_rows) = PoseTrial::split(data, context)?;
     for cfg in settings.space.corners(&settings.base, tpe.domains())? {
-        crate::train::check_trainable(&cfg, &fit_data, val_rows)?;
+        if let TrialConfig::Pins(cfg) = cfg {
+            crate::train::check_trainable(&cfg, &fit_data, val_rows)?;
+        }
     }
     let mut folder = SearchFolder::open(out, settings, force, resume)?;
     let mut history: Vec<Observation> = folder
@@ -278,9 +369,6 @@ pub fn search(
         let scores = executor.run(&trial, &configs)?;
         let seconds = t0.elapsed().as_secs_f64() / ks.len() as f64;
         for ((k, v), score) in ks.into_iter().zip(values).zip(scores) {
-            if let Some(reason) = &score.failure {
-                return Err(LabError::Config(format!("search trial {k}: {reason}")));
-            }
             let record = TrialRecord {
                 trial: k,
                 settings: settings.space.named(&v),
@@ -296,10 +384,39 @@ pub fn search(
             });
         }
     }
-    let best = folder.best().ok_or_else(|| {
-        LabError::Config("every search trial diverged: lower the learning rates' ranges".into())
-    })?;
+    let Some(best) = folder.best() else {
+        return Err(all_failed(folder.trials(), out));
+    };
     let trials = folder.trials().to_vec();
-    let dir = folder.finish(settings, best)?;
-    Ok(SearchOutcome { trials, best, dir })
+    let dir = folder.finish(settings, best, &trial.targets)?;
+    Ok(SearchOutcome {
+        trials,
+        best,
+        dir,
+        targets: trial.targets,
+    })
+}
+
+/// The error of a search none of whose `trials` gave a score (exit 1):
+/// how many diverged, how many failed otherwise and the last reason; the
+/// trials stay in `<out>.partial`.
+fn all_failed(trials: &[TrialRecord], out: &Path) -> LabError {
+    let failed: Vec<&String> = trials
+        .iter()
+        .filter_map(|t| t.score.failure.as_ref())
+        .collect();
+    let diverged = trials.len() - failed.len();
+    let mut reason = format!("{diverged} diverged, {} failed otherwise", failed.len());
+    if let Some(last) = failed.last() {
+        reason += &format!(", the last because {last}");
+    }
+    if diverged > 0 {
+        reason += "; lower the learning rates' ranges";
+    }
+    LabError::AllFailed {
+        what: "search trials".into(),
+        tried: trials.len(),
+        reason,
+        kept: Some(tactrace_store::fsutil::partial_path(out)),
+    }
 }

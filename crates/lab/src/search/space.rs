@@ -1,17 +1,46 @@
 //! A search space file (`configs/search/*.toml`): the model settings a
 //! search varies, each with its range (linear or log, real or integer)
 //! or its list of choices, and how a point of the space becomes a
-//! [`ModelConfig`].
+//! [`TrialConfig`]: a pin model's [`ModelConfig`] or an image model's
+//! [`ConvConfig`].
 //!
-//! A setting is a model key (`epochs`, `anneal_fraction`) or a net key
-//! (`learning_rate`, `output_learning_rate`, `beta`, `hidden`,
-//! `n_components`) that applies to every net of the model, or to one net
-//! when prefixed by its name (`position.beta`, `angle.n_components`,
-//! `pose.hidden`).
+//! For a pin model, a setting is a model key (`epochs`,
+//! `anneal_fraction`) or a net key (`learning_rate`,
+//! `output_learning_rate`, `beta`, `hidden`, `n_components`) that applies
+//! to every net of the model, or to one net when prefixed by its name
+//! (`position.beta`, `angle.n_components`, `pose.hidden`). For an image
+//! model, a setting is any number of its configuration named by its path
+//! (`learning_rate`, `ep.beta`, `epochs`, `batch_size`, `dense.0`,
+//! `conv.1.channels`, `weight_decay`): the space file names the fields,
+//! nothing here lists them.
 use crate::error::{LabError, Result};
 use serde::{Deserialize, Serialize};
-use tactrace_learn::{ModelConfig, NetConfig};
+use serde_json::Value;
+use tactrace_convnet::ConvConfig;
+use tactrace_learn::{LearnError, ModelConfig, NetConfig};
 use tactrace_optim::Domain;
+
+/// What a search lays its settings over and what each trial trains: a
+/// pin model's configuration or an image model's (written as either,
+/// untagged: a pin search's files are those of before image searches).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum TrialConfig {
+    /// A pin model (`pdennn`, `pcadennn`, `disdennn`, `mlp`).
+    Pins(ModelConfig),
+    /// An image model (`conv-dennn`, `conv-mlp`).
+    Image(ConvConfig),
+}
+
+impl TrialConfig {
+    /// The model kind's name (`pdennn`, `conv-dennn`, ...).
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            TrialConfig::Pins(c) => c.kind.name(),
+            TrialConfig::Image(c) => c.kind.name(),
+        }
+    }
+}
 
 /// The file: a list of `[[param]]` tables.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -123,7 +152,7 @@ impl ParamSpec {
 impl SpaceFile {
     /// The domains, after checking every setting's name and range, and
     /// that the ranges' ends give valid configurations over `base`.
-    pub fn domains(&self, base: &ModelConfig) -> Result<Vec<Domain>> {
+    pub fn domains(&self, base: &TrialConfig) -> Result<Vec<Domain>> {
         if self.param.is_empty() {
             return Err(LabError::Config(
                 "search space: no [[param]] to search".into(),
@@ -146,7 +175,7 @@ impl SpaceFile {
 
     /// The configurations at the ranges' low ends and at their high ends
     /// (the first and the last choice), validated.
-    pub fn corners(&self, base: &ModelConfig, domains: &[Domain]) -> Result<Vec<ModelConfig>> {
+    pub fn corners(&self, base: &TrialConfig, domains: &[Domain]) -> Result<Vec<TrialConfig>> {
         [Corner::Low, Corner::High]
             .into_iter()
             .map(|end| {
@@ -158,13 +187,27 @@ impl SpaceFile {
 
     /// `base` with the optimiser's `values` (one per setting) set,
     /// validated.
-    pub fn apply(&self, base: &ModelConfig, values: &[f64]) -> Result<ModelConfig> {
-        let mut cfg = base.clone();
-        for (p, &v) in self.param.iter().zip(values) {
-            set(&mut cfg, p, p.value(v))?;
+    pub fn apply(&self, base: &TrialConfig, values: &[f64]) -> Result<TrialConfig> {
+        match base {
+            TrialConfig::Pins(base) => {
+                let mut cfg = base.clone();
+                for (p, &v) in self.param.iter().zip(values) {
+                    set(&mut cfg, p, p.value(v))?;
+                }
+                cfg.validate()?;
+                Ok(TrialConfig::Pins(cfg))
+            }
+            TrialConfig::Image(base) => {
+                let mut doc = serde_json::to_value(base).map_err(|e| bad("image model", e))?;
+                for (p, &v) in self.param.iter().zip(values) {
+                    set_field(&mut doc, p, p.value(v))?;
+                }
+                let cfg: ConvConfig =
+                    serde_json::from_value(doc).map_err(|e| bad("image model", e))?;
+                cfg.validate().map_err(LearnError::from)?;
+                Ok(TrialConfig::Image(cfg))
+            }
         }
-        cfg.validate()?;
-        Ok(cfg)
     }
 
     /// `(name, value)` of each setting for the optimiser's `values`.
@@ -192,6 +235,46 @@ fn corner(d: &Domain, end: Corner) -> f64 {
         (Domain::Choice { .. }, Corner::Low) => 0.0,
         (Domain::Choice { n }, Corner::High) => n as f64 - 1.0,
     }
+}
+
+/// Set the number at the path `p.name` (`ep.beta`, `dense.0`) of an
+/// image model's configuration `doc` to `v`: a whole number where the
+/// configuration holds one (the space must say `integer = true`, or list
+/// whole choices).
+fn set_field(doc: &mut Value, p: &ParamSpec, v: f64) -> Result<()> {
+    let mut at = doc;
+    for part in p.name.split('.') {
+        let next = match at {
+            Value::Object(m) => m.get_mut(part),
+            Value::Array(a) => part.parse::<usize>().ok().and_then(|i| a.get_mut(i)),
+            _ => None,
+        };
+        at = next.ok_or_else(|| {
+            bad(
+                &p.name,
+                "an image model has no such setting (e.g. learning_rate, ep.beta, epochs, \
+                 batch_size, dense.0, conv.0.channels, weight_decay, final_lr_fraction)",
+            )
+        })?;
+    }
+    let whole = p.integer
+        || p.choices
+            .as_ref()
+            .is_some_and(|c| c.iter().all(|x| x.fract() == 0.0 && *x >= 0.0));
+    *at = match at {
+        Value::Number(n) if n.is_u64() && !whole => {
+            return Err(bad(&p.name, "is a whole number: set `integer = true`"))
+        }
+        Value::Number(n) if n.is_u64() => Value::from(v as u64),
+        Value::Number(_) => Value::from(v),
+        _ => {
+            return Err(bad(
+                &p.name,
+                "is not a number of the image model's settings",
+            ))
+        }
+    };
+    Ok(())
 }
 
 /// Set one setting on `cfg`.

@@ -18,7 +18,7 @@ mod trial;
 pub use outputs::{held_out_table, HeldOutRow, TuneOutcome};
 pub use score::{evaluate_set, simulate, Objective, RunScore, TimedRun};
 pub use space::{from_unit, to_unit, Knob, KNOBS};
-pub use trial::{TuneContext, TuneTrial};
+pub use trial::{HeldOutContext, HeldOutRun, HeldOutTrial, TuneContext, TuneTrial};
 
 use crate::error::{LabError, Result};
 use crate::follow::SimFollowConfig;
@@ -176,9 +176,11 @@ fn score_candidate(
 
 /// Tune `base`'s controller on the training contours with `model` (read
 /// from the folder `model_dir`, where a remote executor's workers read it
-/// too), each generation's candidates run through `executor`; judge the
-/// best on the held-out ones, into `out` (refused when it exists, unless
-/// `force`).
+/// too): the start, each generation's candidates and the held-out
+/// judgement run through `executor`; the best is judged on the held-out
+/// contours, into `out` (refused when it exists, unless `force`). A
+/// tuning none of whose candidates (the start included) gave a cost is
+/// [`LabError::AllFailed`], its history kept in `OUT.partial`.
 pub fn tune(
     cfg: &TuneConfig,
     base: &SimFollowConfig,
@@ -188,10 +190,11 @@ pub fn tune(
     progress: &(dyn Fn(TuneEvent) + Sync),
 ) -> Result<TuneOutcome> {
     let (_, held_out) = cfg.check()?;
+    let model_path = std::path::absolute(model_dir).map_err(|e| LabError::Config(e.to_string()))?;
     let trial = TuneTrial::new(
         TuneContext {
             base: base.clone(),
-            model: std::path::absolute(model_dir).map_err(|e| LabError::Config(e.to_string()))?,
+            model: model_path.clone(),
             training: cfg.training.clone(),
             objective: cfg.objective.clone(),
         },
@@ -213,17 +216,20 @@ pub fn tune(
         runs: (1 + generations * es.population()) * training.len() + held_out_runs,
     });
     let mut outputs = Outputs::start(out, force, cfg, base)?;
-    let done = || progress(TuneEvent::RunDone);
-    let objective = &cfg.objective;
-    let (start_cost, _) =
-        score_candidate(base, &base.controller, model, training, objective, &done)?;
-    let mut best = (base.controller.clone(), start_cost);
+    let runs_done = |n: usize| (0..n).for_each(|_| progress(TuneEvent::RunDone));
+    let start = executor.run(&trial, std::slice::from_ref(&base.controller))?;
+    runs_done(training.len());
+    let start_cost = start[0].unwrap_or(f64::INFINITY);
+    let mut best = start_cost
+        .is_finite()
+        .then(|| (base.controller.clone(), start_cost));
     let mut history = vec![GenerationCost {
         evaluations: training.len(),
         generation_best: start_cost,
         best_so_far: start_cost,
     }];
-    outputs.generation(&best, &history)?;
+    let mut failed = vec![(!start_cost.is_finite()) as usize];
+    outputs.generation(best.as_ref(), &history, &failed)?;
     let mut evaluated = training.len();
     for generation in 1..=generations {
         let (controllers, outside): (Vec<PbtsConfig>, Vec<f64>) = es
@@ -232,8 +238,9 @@ pub fn tune(
             .map(|u| from_unit(&base.controller, u))
             .unzip();
         let costs = executor.run(&trial, &controllers)?;
-        (0..controllers.len() * training.len()).for_each(|_| done());
+        runs_done(controllers.len() * training.len());
         evaluated += controllers.len() * training.len();
+        failed.push(costs.iter().filter(|c| c.is_none()).count());
         let scored: Vec<(PbtsConfig, f64)> = controllers
             .into_iter()
             .zip(costs.iter().zip(outside))
@@ -246,57 +253,69 @@ pub fn tune(
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .cloned()
             .expect("a generation has points");
-        if gen_cost < best.1 {
-            best = (gen_best, gen_cost);
+        if gen_cost.is_finite() && best.as_ref().is_none_or(|b| gen_cost < b.1) {
+            best = Some((gen_best, gen_cost));
         }
+        let best_so_far = best.as_ref().map_or(f64::INFINITY, |b| b.1);
         history.push(GenerationCost {
             evaluations: evaluated,
             generation_best: gen_cost,
-            best_so_far: best.1,
+            best_so_far,
         });
-        outputs.generation(&best, &history)?;
+        outputs.generation(best.as_ref(), &history, &failed)?;
         progress(TuneEvent::Generation {
             generation,
             generation_best: gen_cost,
-            best_so_far: best.1,
+            best_so_far,
         });
     }
-    let rows = judge(base, &best.0, model, &held_out, cfg, &done)?;
-    outputs.finish(&best, &history, rows)
+    let Some(best) = best else {
+        return Err(LabError::AllFailed {
+            what: "tune candidates (the start included)".into(),
+            tried: 1 + generations * es.population(),
+            reason: "every one stopped with an error or gave a cost that is not a number".into(),
+            kept: Some(tactrace_store::fsutil::partial_path(out)),
+        });
+    };
+    let judge_trial = HeldOutTrial::new(
+        HeldOutContext {
+            base: base.clone(),
+            model: model_path,
+            held_out: cfg.held_out.clone(),
+        },
+        model.clone(),
+    )?;
+    let rows = judge(&judge_trial, base, &best.0, cfg.held_out_seeds, executor)?;
+    runs_done(held_out_runs);
+    outputs.finish(&best, &history, &failed, rows)
 }
 
 /// The held-out table: every held-out contour and seed, run with the base
-/// controller and with the tuned one.
+/// controller and with the tuned one, through `executor`.
 fn judge(
+    trial: &HeldOutTrial,
     base: &SimFollowConfig,
     tuned: &PbtsConfig,
-    model: &StoredModel,
-    held_out: &[Named],
-    cfg: &TuneConfig,
-    done: &(dyn Fn() + Sync),
+    seeds: usize,
+    executor: &impl Executor,
 ) -> Result<Vec<HeldOutRow>> {
-    let jobs: Vec<(&Named, u64)> = held_out
-        .iter()
-        .flat_map(|shape| (0..cfg.held_out_seeds as u64).map(move |k| (shape, k)))
-        .collect();
-    jobs.par_iter()
-        .map(|((name, contour), k)| {
-            let run = |controller: &PbtsConfig| {
-                let mut c = SimFollowConfig {
-                    controller: controller.clone(),
-                    ..base.clone()
-                };
-                c.follow.seed = base.follow.seed + 1000 + k;
-                let r = simulate(&c, model, (name, contour));
-                done();
-                r
-            };
-            Ok(HeldOutRow {
-                before: run(&base.controller)?,
-                after: run(tuned)?,
+    let runs: Vec<HeldOutRun> = (0..trial.held_out().len())
+        .flat_map(|contour| (0..seeds as u64).map(move |k| (contour, k)))
+        .flat_map(|(contour, seed_offset)| {
+            [&base.controller, tuned].map(|c| HeldOutRun {
+                controller: c.clone(),
+                contour,
+                seed_offset,
             })
         })
-        .collect()
+        .collect();
+    let scores = executor.run(trial, &runs)?;
+    let mut scores = scores.into_iter();
+    let mut rows = Vec::new();
+    while let (Some(before), Some(after)) = (scores.next(), scores.next()) {
+        rows.push(HeldOutRow { before, after });
+    }
+    Ok(rows)
 }
 
 /// The threads the runs are spread over (rayon's pool: one per core

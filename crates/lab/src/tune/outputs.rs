@@ -1,6 +1,7 @@
 //! The files of a tuning: `config.toml` and `base.toml` (what was asked),
 //! `tuned.toml` (the best controller so far, a follow configuration),
-//! `history.csv` and `convergence.{svg,png}` (rewritten every generation),
+//! `history.csv` (with each generation's failed candidates) and
+//! `convergence.{svg,png}` (rewritten every generation),
 //! and at the end `held_out.md` / `held_out.json` (the judgement).
 use super::{RunScore, TuneConfig};
 use crate::error::{LabError, Result};
@@ -76,39 +77,63 @@ impl Outputs {
         })
     }
 
-    /// After a generation: the best so far, the history and the figure.
+    /// After a generation: the best so far (none while every candidate
+    /// failed), the history (with each generation's failed candidates,
+    /// `failed`, the start first) and the figure.
     pub(super) fn generation(
         &mut self,
-        (best, cost): &(PbtsConfig, f64),
+        best: Option<&(PbtsConfig, f64)>,
         history: &[GenerationCost],
+        failed: &[usize],
     ) -> Result<()> {
         let dir = self.stage.path();
-        let body = toml::to_string(&TunedFile { controller: best })
-            .map_err(|e| LabError::Config(format!("tuned settings: {e}")))?;
-        let generations = history.len() - 1;
-        let text = format!(
-            "# tactrace {} tune, seed {}: the best controller after {generations} \
-             generation(s), training cost {cost:.4}.\n# Use it with `tactrace follow \
-             --config tuned.toml`.\n{body}",
-            crate::VERSION,
-            self.seed
-        );
-        write_atomic(&dir.join("tuned.toml"), text.as_bytes())?;
+        if let Some((best, cost)) = best {
+            let body = toml::to_string(&TunedFile { controller: best })
+                .map_err(|e| LabError::Config(format!("tuned settings: {e}")))?;
+            let generations = history.len() - 1;
+            let text = format!(
+                "# tactrace {} tune, seed {}: the best controller after {generations} \
+                 generation(s), training cost {cost:.4}.\n# Use it with `tactrace follow \
+                 --config tuned.toml`.\n{body}",
+                crate::VERSION,
+                self.seed
+            );
+            write_atomic(&dir.join("tuned.toml"), text.as_bytes())?;
+        }
         let mut csv = tactrace_store::CsvText::new();
-        csv.row(["generation", "runs", "generation_best", "best_so_far"]);
-        for (g, h) in history.iter().enumerate() {
+        csv.row([
+            "generation",
+            "runs",
+            "generation_best",
+            "best_so_far",
+            "failed",
+        ]);
+        for (g, (h, f)) in history.iter().zip(failed).enumerate() {
             csv.row([
                 g.to_string(),
                 h.evaluations.to_string(),
                 format!("{:.6}", h.generation_best),
                 format!("{:.6}", h.best_so_far),
+                f.to_string(),
             ]);
         }
         csv.write(&dir.join("history.csv"))?;
+        let scored: Vec<GenerationCost> = history
+            .iter()
+            .copied()
+            .filter(|h| h.generation_best.is_finite())
+            .collect();
+        let failed_at: Vec<usize> = history
+            .iter()
+            .zip(failed)
+            .filter(|(_, &f)| f > 0)
+            .map(|(h, _)| h.evaluations)
+            .collect();
         figures::convergence(
             &dir.join("convergence"),
             ("CMA-ES tuning", "simulated runs"),
-            history,
+            &scored,
+            &failed_at,
         )?;
         Ok(())
     }
@@ -118,9 +143,10 @@ impl Outputs {
         mut self,
         best: &(PbtsConfig, f64),
         history: &[GenerationCost],
+        failed: &[usize],
         held_out: Vec<HeldOutRow>,
     ) -> Result<TuneOutcome> {
-        self.generation(best, history)?;
+        self.generation(Some(best), history, failed)?;
         let dir = self.stage.path();
         let json = serde_json::to_string_pretty(&held_out).expect("rows serialise");
         write_atomic(&dir.join("held_out.json"), json.as_bytes())?;

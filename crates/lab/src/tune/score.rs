@@ -9,7 +9,7 @@ use tactrace_servo::{evaluate, servo_loop, start_pose, Ending, FollowMetrics, Si
 use tactrace_store::StoredModel;
 
 /// A finished simulated run: how it ended and its metrics.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RunScore {
     pub shape: String,
     pub seed: u64,

@@ -289,6 +289,12 @@ fn best_slide(
     if refined.cosine > best.cosine {
         best = refined;
     }
+    // The same slide with the turn within +-90 deg: a half turn is the
+    // other sign.
+    if best.shear_angle_offset_deg.abs() > 90.0 {
+        best.shear_sign = -best.shear_sign;
+        best.shear_angle_offset_deg = wrap_deg(best.shear_angle_offset_deg + 180.0);
+    }
     best
 }
 

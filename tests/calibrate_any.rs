@@ -351,7 +351,10 @@ fn issue21_calibrate_estimates_and_records_the_label_convention() {
     assert_eq!(chosen["angle_sign"].as_float(), Some(-1.0), "{text}");
     let want = tactrace_sensor::wrap_deg(own.calibration.angle_offset_deg + 270.0);
     let got = chosen["angle_offset_deg"].as_float().unwrap();
-    assert!(tactrace_sensor::wrap_deg(got - want).abs() < 5.0, "{got} for {want}");
+    assert!(
+        tactrace_sensor::wrap_deg(got - want).abs() < 5.0,
+        "{got} for {want}"
+    );
     // The simulator it writes is set to the convention found.
     let cal = &spec["sensor"]["calibration"];
     assert!(cal["angle_scale"].as_float().unwrap() < 0.0, "{text}");

@@ -88,7 +88,8 @@ pub struct ConventionFit {
     pub kept_own: bool,
     /// The given configuration's convention and misfit.
     pub own: ConventionScore,
-    /// The convention used.
+    /// The convention used (scored on the taps with their slides when it
+    /// is not the sensor's own and some tap slid).
     pub chosen: ConventionScore,
     /// Each discrete convention's best after refining, best first.
     pub candidates: Vec<ConventionScore>,
@@ -112,11 +113,16 @@ impl ConventionFit {
             .iter()
             .map(|k| format!("{} {:.3}", k.signs(), k.cosine))
             .collect();
+        let slid = if self.kept_own {
+            String::new()
+        } else {
+            format!("; with slides {:.3}, RMS {:.3} px", c.cosine, c.rms_px)
+        };
         format!(
             "label convention ({what}, {} taps): angle sign {:+}, position sign {:+}, \
              angle offset {:.1} deg, edge offset {:.2} mm, slide sign {:+} turned {:.1} deg; \
              field cosine without slides: the sensor's own {:.3}, best of each sign pair \
-             (angle, position) {}; with slides {:.3}, RMS {:.3} px",
+             (angle, position) {}{slid}",
             self.taps,
             c.angle_sign,
             c.edge_sign,
@@ -126,8 +132,6 @@ impl ConventionFit {
             c.shear_angle_offset_deg,
             self.own.cosine,
             others.join(", "),
-            c.cosine,
-            c.rms_px,
         )
     }
 
@@ -188,7 +192,8 @@ pub fn fit_convention(
     candidates.sort_by(|a, b| b.cosine.total_cmp(&a.cosine));
     let best = candidates[0];
     let same_class = best.angle_sign == own.angle_sign && best.edge_sign == own.edge_sign;
-    let near = wrap_deg(best.angle_offset_deg - own.angle_offset_deg).abs() <= search.angle_step_deg;
+    let near =
+        wrap_deg(best.angle_offset_deg - own.angle_offset_deg).abs() <= search.angle_step_deg;
     let kept_own = own.cosine >= best.cosine || (same_class && near);
     let slid = samples.iter().any(|s| s.tap.shear.is_some());
     let chosen = match (kept_own, slid) {

@@ -54,7 +54,12 @@ fn issue21_a_sensor_labelled_another_way_round_has_its_convention_recovered() {
     // a turn round: the angle offset turned by 180 deg, the position
     // negated.
     let c = fit.chosen;
-    assert_eq!((c.angle_sign, c.edge_sign), (-1.0, -1.0), "{}", fit.describe());
+    assert_eq!(
+        (c.angle_sign, c.edge_sign),
+        (-1.0, -1.0),
+        "{}",
+        fit.describe()
+    );
     let want = wrap_deg(truth.calibration.angle_offset_deg + 180.0);
     assert!(
         wrap_deg(c.angle_offset_deg - want).abs() < 2.0,
@@ -64,7 +69,11 @@ fn issue21_a_sensor_labelled_another_way_round_has_its_convention_recovered() {
     );
     let edge = -truth.calibration.edge_offset_mm;
     assert!((c.edge_offset_mm - edge).abs() < 0.3, "{}", fit.describe());
-    assert!(c.cosine > 0.99 && fit.own.cosine < 0.9, "{}", fit.describe());
+    assert!(
+        c.cosine > 0.99 && fit.own.cosine < 0.9,
+        "{}",
+        fit.describe()
+    );
     // The fitted configuration simulates the same taps.
     let fitted = TacTipModel::with_rest_pins(fit.apply(&own), rest.clone()).unwrap();
     let (rms, cos) = tactrace_sensor::field_misfit(&fitted, &samples);

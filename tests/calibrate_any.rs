@@ -225,8 +225,19 @@ fn issue21_the_shared_331_pin_set_calibrates_with_nothing_hand_written() {
         run.stderr
     );
     names_both_layouts(&run.stderr);
+    // Its label convention is not the simulator's: the angle turns the
+    // other way (docs/results.md, "The 331-pin simulator").
+    assert!(
+        run.stderr
+            .contains("label convention (estimated from the taps, 100 taps): angle sign -1"),
+        "{}",
+        run.stderr
+    );
     let (before, after) = held_out_rms(&format!("{}{}", run.stdout, run.stderr));
-    assert!(after < 0.5 * before, "{before} -> {after} px");
+    assert!(
+        after < 0.6 * before && before < 1.3,
+        "{before} -> {after} px"
+    );
 }
 
 #[test]

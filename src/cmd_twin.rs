@@ -350,6 +350,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
         );
     }
     eprintln!("{}", got.layout.describe());
+    eprintln!("{}", got.convention.describe());
     let c = &got.sensor.spec.calibration;
     eprintln!(
         "calibrated on {} of {} labelled taps ({} frames rejected) in {:.1} s into {}",

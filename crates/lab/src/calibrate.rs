@@ -21,7 +21,7 @@ use tactrace_calib::{
     calibrate, check_labels, field_stats, select_taps, CalibError, CalibrationPlan, Fields, Label,
     Selection, MIN_TAPS, RECOMMENDED_TAPS,
 };
-use tactrace_sensor::{TacTipConfig, TacTipModel};
+use tactrace_sensor::{ConventionFit, ConventionSearch, FitSample, TacTipConfig, TacTipModel};
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::sensor_file::{
     LabelColumnNames, SensorSpec, TrainingRecipe, SENSOR_FORMAT, SENSOR_FORMAT_VERSION,
@@ -72,6 +72,8 @@ pub struct Calibrated {
     pub layout: LayoutReport,
     /// The rest layout estimated here from the taps (no reference given).
     pub estimated: Option<EstimatedRest>,
+    /// The label convention found from the calibration taps.
+    pub convention: ConventionFit,
 }
 
 /// A held-out tap's fields before and after calibration (the tap of
@@ -150,10 +152,14 @@ pub fn calibrate_sensor(
     };
     let keep: Vec<usize> = chosen.iter().chain(&held).copied().collect();
     let real = import_rows(c, Some(&keep), progress)?;
+    let samples = fit_samples(&real, &rows, &chosen);
+    let rest = &real.data.meta.reference_pins;
+    let convention = fit_convention(sensor, rest, &samples)?;
+    let physics = convention.apply(sensor);
     let physics = if cfg.fit_physics {
-        fit_physics(sensor, &real, &rows, &chosen)?
+        fit_physics(&physics, rest, &samples)?
     } else {
-        sensor.clone()
+        physics
     };
     let sensor = &physics;
     let twin = simulate_twin_rows(c, &sight, sensor, cfg.render_seed, (Some(&keep), progress))?;
@@ -213,6 +219,7 @@ pub fn calibrate_sensor(
         training: TrainingRecipe::default(),
         reference_pins: real.data.meta.reference_pins.clone(),
         calibration: record,
+        convention: Some(convention.clone()),
     };
     let sensor = SensorFolder {
         spec,
@@ -234,24 +241,43 @@ pub fn calibrate_sensor(
         warnings: real.warnings.clone(),
         layout,
         estimated,
+        convention,
     })
 }
 
 /// Nelder-Mead rounds and steps of the physics fit (`--fit-physics`).
 const PHYSICS_FIT: (usize, usize) = (2, 150);
 
-/// `sensor` with its label convention and mechanics fitted to the real
-/// fields of the `chosen` rows (`tactrace_sensor::fit_joint`).
-fn fit_physics(
+/// Settings of the label-convention search (`tactrace_sensor::fit_convention`).
+fn convention_search() -> ConventionSearch {
+    ConventionSearch {
+        threads: rayon::current_num_threads(),
+        ..ConventionSearch::default()
+    }
+}
+
+/// The label convention of the calibration taps `samples` (pins in the
+/// order of `rest`), from `sensor`'s.
+fn fit_convention(
     sensor: &TacTipConfig,
-    real: &Imported,
-    rows: &[LabelledRow],
-    chosen: &[usize],
-) -> Result<TacTipConfig> {
+    rest: &[[f64; 2]],
+    samples: &[FitSample],
+) -> Result<ConventionFit> {
+    Ok(tactrace_sensor::fit_convention(
+        sensor,
+        rest,
+        samples,
+        &convention_search(),
+    )?)
+}
+
+/// The real fields of the `chosen` rows with their labelled taps, for the
+/// fits against the simulator's pins.
+fn fit_samples(real: &Imported, rows: &[LabelledRow], chosen: &[usize]) -> Vec<FitSample> {
     let data = &real.data;
     let p = data.dim() / 2;
     let of_image = data.image_rows();
-    let samples: Vec<tactrace_sensor::FitSample> = chosen
+    chosen
         .iter()
         .filter_map(|&i| {
             let k = *of_image.get(rows[i].image.as_str())?;
@@ -259,18 +285,26 @@ fn fit_physics(
             let disp = (0..p)
                 .map(|j| Some([f64::from(x[j]), f64::from(x[p + j])]))
                 .collect();
-            Some(tactrace_sensor::FitSample {
+            Some(FitSample {
                 tap: crate::twin::edge_tap(&rows[i]),
                 disp,
             })
         })
-        .collect();
-    let rest = &data.meta.reference_pins;
+        .collect()
+}
+
+/// `sensor` with its label convention and mechanics fitted to the real
+/// fields `samples` (`tactrace_sensor::fit_joint`).
+fn fit_physics(
+    sensor: &TacTipConfig,
+    rest: &[[f64; 2]],
+    samples: &[FitSample],
+) -> Result<TacTipConfig> {
     let (rounds, iterations) = PHYSICS_FIT;
     let threads = rayon::current_num_threads();
     let mut best: Option<tactrace_sensor::JointFit> = None;
-    for start in discrete_conventions(sensor, &samples) {
-        let fit = tactrace_sensor::fit_joint(&start, rest, &samples, (1, iterations, threads))?;
+    for start in discrete_conventions(sensor, samples) {
+        let fit = tactrace_sensor::fit_joint(&start, rest, samples, (1, iterations, threads))?;
         if best.as_ref().is_none_or(|b| fit.rms_px < b.rms_px) {
             best = Some(fit);
         }
@@ -279,7 +313,7 @@ fn fit_physics(
         return Ok(sensor.clone());
     };
     let fit =
-        tactrace_sensor::fit_joint(&best.config, rest, &samples, (rounds, iterations, threads))?;
+        tactrace_sensor::fit_joint(&best.config, rest, samples, (rounds, iterations, threads))?;
     Ok(fit.config)
 }
 

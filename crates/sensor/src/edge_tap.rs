@@ -22,7 +22,10 @@ pub struct EdgeTap {
 impl EdgeTap {
     /// The slide in the sensor frame: the labelled work-frame move times
     /// the calibrated sign, turned by -theta into the sensor's axes and by
-    /// the calibrated shear angle offset (eq. S7d).
+    /// the calibrated shear angle offset (eq. S7d). A negative angle scale
+    /// (the model turns against the labelled angle: its frame is the
+    /// labels' mirror image) mirrors the slide too: y and the twist
+    /// change sign and the turn is +theta.
     pub fn sensor_shear(&self, model: &TacTipModel) -> Option<Shear> {
         self.sensor_shear_with(&model.config().calibration)
     }
@@ -30,12 +33,16 @@ impl EdgeTap {
     /// As [`Self::sensor_shear`] with the calibration `cal`.
     pub(crate) fn sensor_shear_with(&self, cal: &Calibration) -> Option<Shear> {
         let sign = cal.shear_sign;
-        let turn = cal.shear_angle_offset_deg - self.theta_deg;
+        let mirror = if cal.angle_scale < 0.0 { -1.0 } else { 1.0 };
+        let turn = cal.shear_angle_offset_deg - mirror * self.theta_deg;
         let (s, c) = turn.to_radians().sin_cos();
-        self.shear.map(|m| Shear {
-            dx_mm: sign * (c * m.dx_mm - s * m.dy_mm),
-            dy_mm: sign * (s * m.dx_mm + c * m.dy_mm),
-            drz_deg: sign * m.drz_deg,
+        self.shear.map(|m| {
+            let dy = mirror * m.dy_mm;
+            Shear {
+                dx_mm: sign * (c * m.dx_mm - s * dy),
+                dy_mm: sign * (s * m.dx_mm + c * dy),
+                drz_deg: sign * mirror * m.drz_deg,
+            }
         })
     }
 

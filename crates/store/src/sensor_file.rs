@@ -86,6 +86,12 @@ pub struct SensorSpec {
     /// taps (`reference.png` is then the simulator's rest frame).
     pub reference_pins: Vec<[f64; 2]>,
     pub calibration: CalibrationRecord,
+    /// How `calibrate` found the label convention (the signs and offsets
+    /// in `sensor.calibration`) from the calibration taps: the sensor's
+    /// own kept or another chosen, with every convention's misfit. Absent
+    /// in sensor folders written before it was estimated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convention: Option<tactrace_sensor::ConventionFit>,
 }
 
 /// A calibrated sensor in memory.

@@ -5,7 +5,7 @@
 //! tip's path), the error curves (`errors.svg/.png`) and `replay.html`.
 //!
 //! The truth at a commanded pose, from the edge sample nearest its pole:
-//! the pose in that sample's edge frame ([`EdgeSample::frame`]) is the
+//! the pose in that sample's edge frame ([`tactrace_shape3d::EdgeSample::frame`]) is the
 //! true label (x across the edge, z the depth, rx, ry, rz), as the
 //! collection's labels. Metrics, over the steps after `settle_steps`:
 //! - `mean_distance_mm`, `max_distance_mm`: the distance of the tip from

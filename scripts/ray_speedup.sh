@@ -19,7 +19,7 @@
 # with both.
 #
 #   scripts/ray_speedup.sh            # B = 8 trials, PDenNN, 300 epochs, 1500 taps
-#   scripts/ray_speedup.sh --tiny     # B = 2, 2 epochs, 60 taps: checks it runs (seconds)
+#   scripts/ray_speedup.sh --tiny     # B = 2, 2 epochs, 200 taps: checks it runs (seconds)
 #   scripts/ray_speedup.sh --trials 16 --epochs 600 --samples 3000 --keep DIR
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -28,7 +28,7 @@ root=$PWD
 trials=8 epochs=300 samples=1500 keep=""
 while [ $# -gt 0 ]; do
     case $1 in
-        --tiny) trials=2 epochs=2 samples=60 ;;
+        --tiny) trials=2 epochs=2 samples=200 ;;
         --trials) trials=$2; shift ;;
         --epochs) epochs=$2; shift ;;
         --samples) samples=$2; shift ;;

@@ -17,17 +17,16 @@
 //! the pins; the run is scored against the edge afterwards
 //! ([`super::edge3d_results`]).
 use super::edge3d_results::{write_edge_results, Edge3dMetrics, EdgeCsv};
+use super::sim3d::{sim_3d, Sim3d};
 use super::RunFolder;
 use crate::error::{LabError, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig};
+use tactrace_arm::Pose;
 use tactrace_control::{Se3Config, Se3Controller, Task};
-use tactrace_sensor::{SimTacTip, TacTipModel};
-use tactrace_servo::{servo_loop_3d, Loop3dConfig, LoopSummary, Perception3d, RigConfig, Step3d};
+use tactrace_servo::{servo_loop_3d, Loop3dConfig, LoopSummary, RigConfig, Step3d};
 use tactrace_shape3d::{pose_of_label, EdgeCurve, EdgeSample, Surface};
 use tactrace_store::StoredModel;
-use tactrace_vision::PinExtractor;
 
 /// An edge run in simulation (the run folder's `config.toml`).
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -171,34 +170,17 @@ pub fn run_edge(
     let edge = edge_of(object, name)?;
     let _claim = tactrace_store::check_output_dir(out, force)?;
     let start = start_pose(&edge, cfg);
-    let arm_cfg = SimArmConfig {
-        seed: cfg.seed,
-        ..cfg.rig.arm.clone()
-    };
-    let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
-    let mut arm = LimitedArm::new(sim_arm, cfg.rig.workspace.clone(), LimitMode::Refuse)
-        .with_max_tilt_deg(cfg.max_tilt_deg);
-    arm.move_to(start)?;
-    let sensor_model = TacTipModel::new(cfg.rig.sensor.clone())?;
-    let pose_source = Box::new(move || probe.actual());
-    let mut sensor = SimTacTip::over_object(
-        sensor_model,
-        object.clone(),
-        pose_source,
-        cfg.seed.wrapping_add(1),
-    );
-    let reference = sensor.reference_frame();
-    let extractor = PinExtractor::from_reference_frame(&reference, cfg.rig.blob.clone())?;
-    let net = model.for_pins(
-        extractor.tracker.reference(),
-        Path::new("the simulated sensor's reference frame"),
-    )?;
-    let task = cfg.controller.task;
-    let perception = Perception3d::new(
-        extractor,
-        net.clone(),
-        task.sensed(),
-        cfg.contact_threshold_px,
+    let Sim3d {
+        mut arm,
+        mut sensor,
+        perception,
+    } = sim_3d(
+        &cfg.rig,
+        (cfg.seed, cfg.max_tilt_deg),
+        object,
+        start,
+        model,
+        (cfg.controller.task.sensed(), cfg.contact_threshold_px),
     )?;
     let run = RunFolder::start(out, force, cfg)?;
     let mut controller = Se3Controller::try_new(cfg.controller.clone())?;

@@ -16,6 +16,7 @@ mod config;
 pub mod edge3d;
 pub mod edge3d_results;
 mod results;
+mod sim3d;
 pub mod surface_replay;
 pub mod task3d;
 pub mod task3d_results;

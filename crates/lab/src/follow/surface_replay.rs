@@ -11,6 +11,7 @@
 //! real tap); the run folder adds
 //! `answers.csv` (each tap's row, image and label distance) and
 //! `replay.json` (the label distances and the distinct rows).
+use super::sim3d::sim_arm_3d;
 use super::task3d::{start_pose, Surface3dConfig, Surface3dOutcome};
 use super::task3d_results::{write_surface_results, TruthCsv};
 use super::RunFolder;
@@ -18,7 +19,6 @@ use crate::error::{LabError, Result};
 use crate::world::{SurfaceAnswer, SurfaceBank};
 use serde::Serialize;
 use std::path::Path;
-use tactrace_arm::{Arm, LimitMode, LimitedArm, SimArm, SimArmConfig};
 use tactrace_control::{Se3Controller, Task};
 use tactrace_servo::{servo_loop_3d_taps, Loop3dConfig, Perception3d, Step3d};
 use tactrace_shape3d::{true_label, Surface};
@@ -48,14 +48,7 @@ pub fn run_surface_replay(
     cfg.validate()?;
     let _claim = tactrace_store::check_output_dir(out, force)?;
     let start = start_pose(object, cfg)?;
-    let arm_cfg = SimArmConfig {
-        seed: cfg.seed,
-        ..cfg.rig.arm.clone()
-    };
-    let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
-    let mut arm = LimitedArm::new(sim_arm, cfg.rig.workspace.clone(), LimitMode::Refuse)
-        .with_max_tilt_deg(cfg.max_tilt_deg);
-    arm.move_to(start)?;
+    let (mut arm, probe) = sim_arm_3d(&cfg.rig, (cfg.seed, cfg.max_tilt_deg), start)?;
     let pins = bank.reference_pins().to_vec();
     let net = model.for_pins(&pins, Path::new("the bank's dataset"))?;
     // Every row of the bank is a tap in contact (a real frame's pins move

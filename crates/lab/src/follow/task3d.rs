@@ -11,18 +11,17 @@
 //! the tilt (`max_tilt_deg`: a larger tilt is refused and ends the run).
 //! The model sees only the pins; the run is scored against the object
 //! afterwards ([`super::task3d_results`]).
+use super::sim3d::{sim_3d, Sim3d};
 use super::task3d_results::{write_surface_results, Surface3dMetrics, TruthCsv};
 use super::RunFolder;
 use crate::error::{LabError, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig};
+use tactrace_arm::Pose;
 use tactrace_control::{Se3Config, Se3Controller, Task};
-use tactrace_sensor::{SimTacTip, TacTipModel};
-use tactrace_servo::{servo_loop_3d, Loop3dConfig, LoopSummary, Perception3d, RigConfig, Step3d};
+use tactrace_servo::{servo_loop_3d, Loop3dConfig, LoopSummary, RigConfig, Step3d};
 use tactrace_shape3d::{surface_point, Surface};
 use tactrace_store::StoredModel;
-use tactrace_vision::PinExtractor;
 
 /// The path across the surface.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -183,33 +182,17 @@ pub fn run_surface(
     cfg.validate()?;
     let _claim = tactrace_store::check_output_dir(out, force)?;
     let start = start_pose(object, cfg)?;
-    let arm_cfg = SimArmConfig {
-        seed: cfg.seed,
-        ..cfg.rig.arm.clone()
-    };
-    let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
-    let mut arm = LimitedArm::new(sim_arm, cfg.rig.workspace.clone(), LimitMode::Refuse)
-        .with_max_tilt_deg(cfg.max_tilt_deg);
-    arm.move_to(start)?;
-    let sensor_model = TacTipModel::new(cfg.rig.sensor.clone())?;
-    let pose_source = Box::new(move || probe.actual());
-    let mut sensor = SimTacTip::over_object(
-        sensor_model,
-        object.clone(),
-        pose_source,
-        cfg.seed.wrapping_add(1),
-    );
-    let reference = sensor.reference_frame();
-    let extractor = PinExtractor::from_reference_frame(&reference, cfg.rig.blob.clone())?;
-    let net = model.for_pins(
-        extractor.tracker.reference(),
-        Path::new("the simulated sensor's reference frame"),
-    )?;
-    let perception = Perception3d::new(
-        extractor,
-        net.clone(),
-        Task::Surface3d.sensed(),
-        cfg.contact_threshold_px,
+    let Sim3d {
+        mut arm,
+        mut sensor,
+        perception,
+    } = sim_3d(
+        &cfg.rig,
+        (cfg.seed, cfg.max_tilt_deg),
+        object,
+        start,
+        model,
+        (Task::Surface3d.sensed(), cfg.contact_threshold_px),
     )?;
     let reference_pins = perception.reference_pins().to_vec();
     let run = RunFolder::start(out, force, cfg)?;

@@ -1,0 +1,76 @@
+//! The simulated world of a 3D run (surface or edge): the arm started at
+//! its first pose, the TacTip pressed into the object, and the pin
+//! perception of the model, built one way for `task3d` and `edge3d`.
+use crate::error::Result;
+use std::path::Path;
+use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, PoseProbe, SimArm, SimArmConfig};
+use tactrace_sensor::{SimTacTip, TacTipModel};
+use tactrace_servo::{Perception3d, RigConfig};
+use tactrace_shape3d::Surface;
+use tactrace_store::StoredModel;
+use tactrace_vision::PinExtractor;
+
+/// What a simulated 3D run taps with.
+pub(crate) struct Sim3d {
+    /// The simulated arm (seeded noise), refusing moves out of the
+    /// workspace or tilted past the limit, already at the start pose.
+    pub arm: LimitedArm<SimArm>,
+    /// The dome over the object, following the arm's actual pose.
+    pub sensor: SimTacTip,
+    /// Pins read over the simulated reference frame, `model` taking them.
+    pub perception: Perception3d,
+}
+
+/// The simulated 3D world: `rig` (sensor, arm noise, workspace, detector)
+/// seeded by `seed` (the sensor by `seed + 1`), the arm moved to `start`,
+/// the model's pose components `sensed`, contact when a pin moves
+/// `contact_threshold_px` or more.
+pub(crate) fn sim_3d(
+    rig: &RigConfig,
+    (seed, max_tilt_deg): (u64, f64),
+    object: &Surface,
+    start: Pose,
+    model: &StoredModel,
+    (sensed, contact_threshold_px): ([bool; 6], f64),
+) -> Result<Sim3d> {
+    let (arm, probe) = sim_arm_3d(rig, (seed, max_tilt_deg), start)?;
+    let sensor_model = TacTipModel::new(rig.sensor.clone())?;
+    let pose_source = Box::new(move || probe.actual());
+    let sensor = SimTacTip::over_object(
+        sensor_model,
+        object.clone(),
+        pose_source,
+        seed.wrapping_add(1),
+    );
+    let reference = sensor.reference_frame();
+    let extractor = PinExtractor::from_reference_frame(&reference, rig.blob.clone())?;
+    let net = model.for_pins(
+        extractor.tracker.reference(),
+        Path::new("the simulated sensor's reference frame"),
+    )?;
+    let perception = Perception3d::new(extractor, net.clone(), sensed, contact_threshold_px)?;
+    Ok(Sim3d {
+        arm,
+        sensor,
+        perception,
+    })
+}
+
+/// The simulated arm of a 3D run (`rig`'s noise seeded by `seed`, its
+/// workspace, tilts past `max_tilt_deg` refused), moved to `start`, and
+/// the probe that reads its actual pose (for the world, never the loop).
+pub(crate) fn sim_arm_3d(
+    rig: &RigConfig,
+    (seed, max_tilt_deg): (u64, f64),
+    start: Pose,
+) -> Result<(LimitedArm<SimArm>, PoseProbe)> {
+    let arm_cfg = SimArmConfig {
+        seed,
+        ..rig.arm.clone()
+    };
+    let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
+    let mut arm = LimitedArm::new(sim_arm, rig.workspace.clone(), LimitMode::Refuse)
+        .with_max_tilt_deg(max_tilt_deg);
+    arm.move_to(start)?;
+    Ok((arm, probe))
+}

@@ -45,6 +45,12 @@ pub fn chart_3d(stem: &Path, chart: &Chart3d) -> Result<Vec<PathBuf>, PlotError>
     write_both(stem, (900, 700), &figure)
 }
 
+/// A tick label of the axis named `axis`: its value in millimetres, to
+/// `decimals` places.
+fn tick(axis: &'static str, decimals: usize) -> impl Fn(&f64) -> String {
+    move |v| format!("{axis} {v:.decimals$} mm")
+}
+
 struct Figure3d<'a> {
     chart: &'a Chart3d<'a>,
     ranges: [(f64, f64); 3],
@@ -70,12 +76,18 @@ impl Figure for Figure3d<'_> {
             p.scale = 0.8;
             p.into_matrix()
         });
+        // Every tick names its axis and unit (plotters' 3D axes take no
+        // axis titles).
+        let (x_tick, z_tick, y_tick) = (tick("x", 0), tick("z", 1), tick("y", 0));
         chart
             .configure_axes()
             .label_style((FAMILY, LABEL_SIZE))
             .x_labels(6)
             .y_labels(4)
             .z_labels(6)
+            .x_formatter(&x_tick)
+            .y_formatter(&z_tick)
+            .z_formatter(&y_tick)
             .draw()
             .map_err(draw_err)?;
         let grey = RGBColor(170, 170, 170);

@@ -235,7 +235,16 @@ pub fn follow(
         Some(dir) => {
             use tactrace_lab::follow::surface_replay::run_surface_replay;
             let data = tactrace_store::dataset::read_dataset(dir)?;
-            let bank = tactrace_lab::world::SurfaceBank::from_dataset(&data)?;
+            let seen = model.training().map(|t| t.rows_seen(&data));
+            let bank = tactrace_lab::world::SurfaceBank::from_dataset(&data)?
+                .with_rows_seen_in_training(seen);
+            if let Some(k) = seen.filter(|&k| k > 0) {
+                eprintln!(
+                    "warning: {k} of the bank's {} rows were in the model's training data: \
+                     this run's figures are not held-out ones",
+                    bank.len()
+                );
+            }
             let res = run_surface_replay(
                 &cfg,
                 (&surface, name),

@@ -234,4 +234,24 @@ fn issue23_surface_replay_answers_every_tap_from_the_bank() {
         }
     }
     assert!(out.join("replay.json").is_file() && out.join("metrics.json").is_file());
+    assert_eq!(
+        stats.bank_rows_seen_in_training, None,
+        "this model records no training rows"
+    );
+    // A bank whose rows the model was trained on says so in replay.json.
+    let out2 = root.path().join("run-seen");
+    let seen = bank.clone().with_rows_seen_in_training(Some(7));
+    let (_, stats) = run_surface_replay(
+        &run_cfg,
+        (&plane, "plane"),
+        &seen,
+        &model,
+        (&out2, false),
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(stats.bank_rows_seen_in_training, Some(7));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out2.join("replay.json")).unwrap()).unwrap();
+    assert_eq!(json["bank_rows_seen_in_training"], 7);
 }

@@ -33,6 +33,9 @@ pub struct SurfaceReplayStats {
     pub max_label_distance: f64,
     pub distinct_rows: usize,
     pub bank_rows: usize,
+    /// How many of the bank's rows the model was trained on (null: not
+    /// known); above 0 the run's figures are not held-out ones.
+    pub bank_rows_seen_in_training: Option<usize>,
 }
 
 /// Follow `object` (named `name`) in the real-frame world
@@ -149,6 +152,7 @@ fn write_answers(
         max_label_distance: answers.iter().map(|a| a.distance).fold(0.0, f64::max),
         distinct_rows: distinct.len(),
         bank_rows: bank.len(),
+        bank_rows_seen_in_training: bank.rows_seen_in_training(),
     };
     if !stats.mean_label_distance.is_finite() {
         return Err(LabError::Config("a label distance is not a number".into()));

@@ -31,6 +31,9 @@ pub struct SurfaceBank {
     /// Each component's spread over the bank.
     scales: [f64; 3],
     reference_pins: Vec<[f64; 2]>,
+    /// How many rows the model following in this world was trained on
+    /// (None: not known).
+    rows_seen_in_training: Option<usize>,
 }
 
 /// One tap's answer.
@@ -80,7 +83,21 @@ impl SurfaceBank {
             images,
             scales,
             reference_pins,
+            rows_seen_in_training: None,
         })
+    }
+
+    /// The same bank, knowing that `seen` of its rows were in the
+    /// training data of the model that follows in it (a figure over such
+    /// a bank is not a held-out one; the run says so).
+    pub fn with_rows_seen_in_training(mut self, seen: Option<usize>) -> Self {
+        self.rows_seen_in_training = seen;
+        self
+    }
+
+    /// How many rows the following model was trained on, if known.
+    pub fn rows_seen_in_training(&self) -> Option<usize> {
+        self.rows_seen_in_training
     }
 
     /// The bank of an imported dataset whose three targets name the

@@ -281,18 +281,21 @@ pub fn follow(
         m.max_normal_error_deg,
         100.0 * m.coverage
     );
-    if !res.summary.ending.succeeded() {
-        eprintln!(
-            "the run and its trajectory so far are in {}",
-            res.dir.display()
-        );
+    run_ended(&res.summary, &res.dir)
+}
+
+/// How a 3D run ended: its message and folder, and a failed run (lost
+/// contact, a refused move, the step cap of an edge run) as an error.
+fn run_ended(summary: &tactrace_servo::LoopSummary, dir: &Path) -> Result<()> {
+    if !summary.ending.succeeded() {
+        eprintln!("the run and its trajectory so far are in {}", dir.display());
         return Err(LabError::RunFailed {
-            ending: res.summary.ending,
-            message: res.summary.message.clone(),
+            ending: summary.ending,
+            message: summary.message.clone(),
         }
         .into());
     }
-    eprintln!("{} (run folder {})", res.summary.message, res.dir.display());
+    eprintln!("{} (run folder {})", summary.message, dir.display());
     Ok(())
 }
 
@@ -356,17 +359,5 @@ fn follow_edge(
         m.max_normal_error_deg,
         100.0 * m.coverage
     );
-    if !res.summary.ending.succeeded() {
-        eprintln!(
-            "the run and its trajectory so far are in {}",
-            res.dir.display()
-        );
-        return Err(LabError::RunFailed {
-            ending: res.summary.ending,
-            message: res.summary.message.clone(),
-        }
-        .into());
-    }
-    eprintln!("{} (run folder {})", res.summary.message, res.dir.display());
-    Ok(())
+    run_ended(&res.summary, &res.dir)
 }

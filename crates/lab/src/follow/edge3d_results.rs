@@ -23,14 +23,14 @@
 //! - `mean_abs_error`: the model's error per sensed component against the
 //!   true label (rz wrapped to +-180 deg).
 use super::edge3d::Edge3dConfig;
-use super::task3d_results::wire_mesh;
+use super::task3d_results::{wire_mesh, write_replay_page};
 use crate::error::Result;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 use tactrace_arm::Pose;
+use tactrace_learn::wrap_deg;
 use tactrace_report::plot::{chart, chart_3d, Axes, Chart3d, Series, Style};
-use tactrace_report::replay_3d::{replay_3d_html, Replay3dPage, Replay3dStep};
 use tactrace_report::ReportError;
 use tactrace_servo::{lifted, Ending, LoopSummary, Step3d};
 use tactrace_shape3d::{EdgeCurve, Surface, Vec3};
@@ -205,32 +205,12 @@ pub fn write_edge_results(
         .map_err(ReportError::from)?;
         error_figure(dir, &title, &truths, reference)?;
     }
-    let page_steps: Vec<Replay3dStep> = steps
+    let errors = truths
         .iter()
-        .zip(&truths)
-        .map(|(s, t)| {
-            let axis = s.pose.to_isometry().rotation * Vec3::z();
-            Replay3dStep {
-                pose: [s.pose.x, s.pose.y, s.pose.z, axis.x, axis.y, axis.z],
-                label: s.label,
-                depth_error_mm: t.label[2] - reference[2],
-                normal_error_deg: t.normal_error_deg,
-            }
-        })
-        .collect();
+        .map(|t| (t.label[2] - reference[2], t.normal_error_deg));
     let title = format!("{task} round the {name}'s edge: {}", summary.message);
-    let html = replay_3d_html(&Replay3dPage {
-        title: &title,
-        wire: &wire,
-        steps: &page_steps,
-    });
-    write_atomic(&dir.join("replay.html"), html.as_bytes())?;
+    write_replay_page(dir, &title, &wire, steps, errors)?;
     Ok(metrics)
-}
-
-/// The difference of two angles wrapped to [-180, 180), deg.
-fn wrap_deg(d: f64) -> f64 {
-    (d + 180.0).rem_euclid(360.0) - 180.0
 }
 
 fn score(

@@ -171,27 +171,44 @@ pub fn write_surface_results(
         .map_err(ReportError::from)?;
         error_figure(dir, name, &truths)?;
     }
+    let errors = truths
+        .iter()
+        .map(|t| (t.depth_error_mm, t.normal_error_deg));
+    let title = format!("surface_3d over the {name}: {}", summary.message);
+    write_replay_page(dir, &title, &wire, steps, errors)?;
+    Ok(metrics)
+}
+
+/// `replay.html` of a 3D run: every step's pose (position and the sensor's
+/// axis) and label, beside its true depth error (mm) and normal error
+/// (deg) from `errors`, over the object's wire mesh.
+pub(super) fn write_replay_page(
+    dir: &Path,
+    title: &str,
+    wire: &[Vec<[f64; 3]>],
+    steps: &[Step3d],
+    errors: impl Iterator<Item = (f64, f64)>,
+) -> Result<()> {
     let page_steps: Vec<Replay3dStep> = steps
         .iter()
-        .zip(&truths)
-        .map(|(s, t)| {
+        .zip(errors)
+        .map(|(s, (depth_error_mm, normal_error_deg))| {
             let axis = s.pose.to_isometry().rotation * Vec3::z();
             Replay3dStep {
                 pose: [s.pose.x, s.pose.y, s.pose.z, axis.x, axis.y, axis.z],
                 label: s.label,
-                depth_error_mm: t.depth_error_mm,
-                normal_error_deg: t.normal_error_deg,
+                depth_error_mm,
+                normal_error_deg,
             }
         })
         .collect();
-    let title = format!("surface_3d over the {name}: {}", summary.message);
     let html = replay_3d_html(&Replay3dPage {
-        title: &title,
-        wire: &wire,
+        title,
+        wire,
         steps: &page_steps,
     });
     write_atomic(&dir.join("replay.html"), html.as_bytes())?;
-    Ok(metrics)
+    Ok(())
 }
 
 fn score(

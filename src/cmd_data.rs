@@ -70,6 +70,7 @@ pub fn rig_config(path: Option<&Path>) -> Result<RigConfig> {
 }
 
 pub fn collect(a: CollectArgs) -> Result<()> {
+    a.task.refuse_3d_flags()?;
     if let Some(path) = &a.hardware {
         return collect_hardware(&a, path);
     }

@@ -71,12 +71,40 @@ pub struct CollectTaskArgs {
     /// Edge tasks: rz uniform in +-DEG (default 180, the anchors').
     #[arg(long, value_name = "DEG")]
     rz_range: Option<f64>,
+    /// 3D tasks: an unlabelled shear, a slide ending at each tap's pose
+    /// with dx, dy uniform in +-MM in the sensor's plane (default 0; the
+    /// anchors' real taps: 5). Seeded; recorded in the dataset's meta.
+    #[arg(long, value_name = "MM")]
+    shear_mm: Option<f64>,
+    /// 3D tasks: an unlabelled twist ending at each tap's pose, uniform
+    /// in +-DEG (default 0; the anchors': 5).
+    #[arg(long, value_name = "DEG")]
+    shear_deg: Option<f64>,
 }
 
 impl CollectTaskArgs {
     /// Whether a 3D task was asked for.
     pub fn is_3d(&self) -> bool {
         self.task != TaskArg::Edge2d
+    }
+
+    /// Refuse the flags only a 3D collection reads (bad input) when the
+    /// task is the planar one, rather than ignore them.
+    pub fn refuse_3d_flags(&self) -> Result<()> {
+        let given = [
+            ("--tilt-range", self.tilt_range),
+            ("--x-range", self.x_range),
+            ("--rz-range", self.rz_range),
+            ("--shear-mm", self.shear_mm),
+            ("--shear-deg", self.shear_deg),
+        ];
+        match given.iter().find(|(_, v)| v.is_some()) {
+            Some((flag, _)) if !self.is_3d() => Err(LabError::Config(format!(
+                "{flag} is for a 3D collection (--task surface_3d, edge_3d or edge_5d)"
+            ))
+            .into()),
+            _ => Ok(()),
+        }
     }
 }
 
@@ -121,6 +149,8 @@ pub fn collect(
         tilt_range_deg: a.tilt_range.unwrap_or(base.tilt_range_deg),
         x_range_mm: a.x_range.unwrap_or(base.x_range_mm),
         rz_range_deg: a.rz_range.unwrap_or(base.rz_range_deg),
+        shear_mm: a.shear_mm.unwrap_or(base.shear_mm),
+        shear_deg: a.shear_deg.unwrap_or(base.shear_deg),
         ..base
     };
     cfg.validate()?;

@@ -15,6 +15,14 @@
 //!    the axis to the pose F T(s) (z = -depth); the simulated TacTip
 //!    renders the pins at the pose the arm physically reached
 //!    (`TacTipModel::pins_3d`), with nuisance.
+//!    With an unlabelled shear ([`Collect3dConfig::shear_mm`],
+//!    [`Collect3dConfig::shear_deg`]; the anchors' real taps carry
+//!    +-5 mm / +-5 deg) the arm presses at the pose moved back by a
+//!    random slide (dx, dy uniform in +-`shear_mm` in the sensor's
+//!    plane) and twist (drz uniform in +-`shear_deg`), then slides to the
+//!    pose in contact: the skin lags (S7, or B1-B3), the label is the pose
+//!    alone. The shear has a generator of its own, so a sheared set has
+//!    the unsheared set's labels and noise at the same seed.
 //! 4. The pins' displacements are the inputs, s's sensed components the
 //!    named targets (surface_3d `z` mm, `rx`, `ry` deg; edge_5d `x`, `z`
 //!    mm, `rx`, `ry` deg, `rz` deg circular; edge_3d `x`, `z`, `rz`).
@@ -28,10 +36,10 @@ use crate::error::{LabError, Result};
 use rand::{Rng, RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use tactrace_arm::{Arm, LimitMode, LimitedArm, SimArm, SimArmConfig};
+use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, SimArm, SimArmConfig};
 use tactrace_control::Task;
 use tactrace_learn::{ModelTarget, Unit};
-use tactrace_sensor::{Frame, TacTipModel};
+use tactrace_sensor::{Frame, Shear, TacTipModel};
 use tactrace_servo::{lifted, RigConfig};
 use tactrace_shape3d::{feature_frame, pose_of_label, surface_point, Surface};
 use tactrace_store::dataset::TargetColumns;
@@ -57,6 +65,12 @@ pub struct Collect3dConfig {
     pub x_range_mm: f64,
     /// edge_5d: rz is uniform in +-this, deg.
     pub rz_range_deg: f64,
+    /// Unlabelled shear: the slide ending at each tap's pose has dx, dy
+    /// uniform in +-this (sensor frame), mm; 0 for none.
+    pub shear_mm: f64,
+    /// Unlabelled shear: the twist ending at each tap's pose is uniform
+    /// in +-this, deg; 0 for none.
+    pub shear_deg: f64,
     /// Keep the PNG of every tap.
     pub save_frames: bool,
 }
@@ -72,6 +86,8 @@ impl Default for Collect3dConfig {
             tilt_range_deg: 25.0,
             x_range_mm: 5.0,
             rz_range_deg: 180.0,
+            shear_mm: 0.0,
+            shear_deg: 0.0,
             save_frames: false,
         }
     }
@@ -96,11 +112,13 @@ impl Collect3dConfig {
             && self.x_range_mm.is_finite()
             && self.x_range_mm >= 0.0
             && (0.0..=180.0).contains(&self.rz_range_deg)
+            && (0.0..=MAX_SHEAR_MM).contains(&self.shear_mm)
+            && (0.0..=MAX_SHEAR_DEG).contains(&self.shear_deg)
             && self.at_mm.iter().all(|v| v.is_finite());
         if !ok {
             return Err(LabError::Config(
                 "depth_range_mm must be 0 <= min <= max, tilt_range_deg in [0, 90), x_range_mm >= 0, \
-                 rz_range_deg in [0, 180], at_mm finite"
+                 rz_range_deg in [0, 180], shear_mm in [0, 10], shear_deg in [0, 45], at_mm finite"
                     .into(),
             ));
         }
@@ -109,6 +127,38 @@ impl Collect3dConfig {
             ..CollectConfig::default()
         })
     }
+}
+
+/// The largest unlabelled slide a collection draws, mm (twice the anchors').
+pub const MAX_SHEAR_MM: f64 = 10.0;
+/// The largest unlabelled twist a collection draws, deg.
+pub const MAX_SHEAR_DEG: f64 = 45.0;
+
+/// Mixed into the seed of the shear's own generators.
+const SHEAR_STREAM_SALT: u64 = 0x5348_4541_5233_4400;
+
+/// The unlabelled shear of tap `i`: its own generator (stream `i` of the
+/// salted seed), so the labels and noise do not depend on it; `None`
+/// when the collection has none.
+pub fn tap_shear(cfg: &Collect3dConfig, i: usize) -> Option<Shear> {
+    if cfg.shear_mm == 0.0 && cfg.shear_deg == 0.0 {
+        return None;
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed ^ SHEAR_STREAM_SALT);
+    rng.set_stream(i as u64);
+    let (m, a) = (cfg.shear_mm, cfg.shear_deg);
+    Some(Shear {
+        dx_mm: rng.random_range(-m..=m),
+        dy_mm: rng.random_range(-m..=m),
+        drz_deg: rng.random_range(-a..=a),
+    })
+}
+
+/// Where a tap whose `pose` ends a `shear` starts its slide: the pose
+/// moved back by the slide and twist, in its own frame.
+fn slide_start(pose: Pose, shear: Shear) -> Pose {
+    let slide = Pose::new(shear.dx_mm, shear.dy_mm, 0.0, 0.0, 0.0, shear.drz_deg);
+    Pose::from_isometry(&(pose.to_isometry() * slide.to_isometry().inverse()))
 }
 
 /// The named targets of `task`'s sensed components (x, y, z in mm; rx, ry,
@@ -286,7 +336,9 @@ impl World<'_> {
             [0.0, 0.0, z, rx, ry, 0.0]
         };
         let pose = pose_of_label(&self.frame, label);
-        let approach = lifted(pose, self.rig.tap.height_mm);
+        let shear = tap_shear(cfg, i);
+        let pressed = shear.map_or(pose, |s| slide_start(pose, s));
+        let approach = lifted(pressed, self.rig.tap.height_mm);
         let arm_cfg = SimArmConfig {
             seed: rng.next_u64(),
             ..self.rig.arm.clone()
@@ -294,15 +346,18 @@ impl World<'_> {
         let (sim_arm, probe) = SimArm::with_probe(arm_cfg, approach);
         let mut arm = LimitedArm::new(sim_arm, self.rig.workspace.clone(), LimitMode::Refuse);
         arm.move_to(approach)?;
+        if shear.is_some() {
+            arm.move_to(pressed)?;
+        }
         arm.move_to(pose)?;
         let mut nuisance = ChaCha8Rng::seed_from_u64(rng.next_u64());
         let pins = self
             .model
-            .pins_3d(self.object.as_ref(), probe.actual(), None);
+            .pins_3d(self.object.as_ref(), probe.actual(), shear);
         let frame = self
             .model
             .render(&self.model.seen_pins(pins), Some(&mut nuisance));
-        arm.move_to(approach)?;
+        arm.move_to(lifted(pose, self.rig.tap.height_mm))?;
         let tracked = self.extractor.extract(&frame)?;
         Ok(Row {
             inputs: tracked.displacement(self.extractor.tracker.reference()),

@@ -174,6 +174,7 @@ pub fn run_edge(
         mut arm,
         mut sensor,
         perception,
+        probe,
     } = sim_3d(
         &cfg.rig,
         (cfg.seed, cfg.max_tilt_deg),
@@ -192,14 +193,19 @@ pub fn run_edge(
     };
     let mut csv = EdgeCsv::create(run.path(), &edge, cfg.controller.reference)?;
     let mut steps = Vec::new();
+    let mut reached = Vec::new();
     let summary = {
         let mut sink = |s: &Step3d, _field: &[f32]| -> tactrace_servo::Result<()> {
-            csv.write(s).map_err(|e| tactrace_servo::ServoError::Sink {
-                step: s.step,
-                source: Box::new(e),
-            })?;
+            // The arm is still at the tap's pose: what it physically reached.
+            let at = probe.actual();
+            csv.write(s, at)
+                .map_err(|e| tactrace_servo::ServoError::Sink {
+                    step: s.step,
+                    source: Box::new(e),
+                })?;
             progress(s);
             steps.push(s.clone());
+            reached.push(at);
             Ok(())
         };
         servo_loop_3d(
@@ -211,7 +217,13 @@ pub fn run_edge(
             &mut sink,
         )?
     };
-    let metrics = write_edge_results(run.path(), (name, object, &edge), cfg, &steps, &summary)?;
+    let metrics = write_edge_results(
+        run.path(),
+        (name, object, &edge),
+        cfg,
+        (&steps, &reached),
+        &summary,
+    )?;
     let dir = run.finish()?;
     Ok(Edge3dOutcome {
         summary,

@@ -4,7 +4,9 @@
 //! (`trajectory_3d.svg/.png`: the edge, the surface's wire mesh and the
 //! tip's path), the error curves (`errors.svg/.png`) and `replay.html`.
 //!
-//! The truth at a commanded pose, from the edge sample nearest its pole:
+//! The truth at a pose the arm reached (its repeatability noise included;
+//! the commanded poses are in `trajectory.csv` beside them), from the
+//! edge sample nearest its pole:
 //! the pose in that sample's edge frame ([`tactrace_shape3d::EdgeSample::frame`]) is the
 //! true label (x across the edge, z the depth, rx, ry, rz), as the
 //! collection's labels. Metrics, over the steps after `settle_steps`:
@@ -23,7 +25,7 @@
 //! - `mean_abs_error`: the model's error per sensed component against the
 //!   true label (rz wrapped to +-180 deg).
 use super::edge3d::Edge3dConfig;
-use super::task3d_results::{wire_mesh, write_replay_page};
+use super::task3d_results::{pose_cells, wire_mesh, write_replay_page};
 use crate::error::Result;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -67,7 +69,7 @@ struct MetricsDocument<'a> {
     message: &'a str,
 }
 
-/// The truth at one commanded pose.
+/// The truth at one (reached) pose.
 #[derive(Debug, Clone, Copy)]
 pub struct EdgeTruth {
     /// The index of the edge sample nearest the pole.
@@ -128,6 +130,12 @@ impl EdgeCsv {
             "depth_true_mm",
             "rz_true_deg",
             "normal_error_deg",
+            "x_reached_mm",
+            "y_reached_mm",
+            "z_reached_mm",
+            "rx_reached_deg",
+            "ry_reached_deg",
+            "rz_reached_deg",
         ];
         let header = ["step"].iter().chain(&pose).chain(&pred).chain(&rest);
         rows.write_row(header.copied())?;
@@ -138,9 +146,10 @@ impl EdgeCsv {
         })
     }
 
-    /// One step's row.
-    pub fn write(&mut self, s: &Step3d) -> tactrace_store::Result<()> {
-        let t = edge_truth(&self.edge, s.pose, self.reference);
+    /// One step's row: the commanded pose and prediction, then the truth
+    /// at `reached` (the pose the arm reached) and that pose.
+    pub fn write(&mut self, s: &Step3d, reached: Pose) -> tactrace_store::Result<()> {
+        let t = edge_truth(&self.edge, reached, self.reference);
         let (p, l) = (s.pose, s.label);
         let nums = [
             p.x, p.y, p.z, p.rx, p.ry, p.rz, l[0], l[2], l[3], l[4], l[5],
@@ -152,23 +161,24 @@ impl EdgeCsv {
         let truth = [t.distance_mm, t.label[0], t.label[2], t.label[5]];
         row.extend(truth.iter().map(|v| format!("{v:.4}")));
         row.push(format!("{:.4}", t.normal_error_deg));
+        row.extend(pose_cells(reached));
         self.rows.write_row(row)
     }
 }
 
-/// Score the run and write `metrics.json`, the figures and `replay.html`
-/// into `dir`.
+/// Score the run at the poses the arm reached (`reached`, one per step)
+/// and write `metrics.json`, the figures and `replay.html` into `dir`.
 pub fn write_edge_results(
     dir: &Path,
     (name, object, edge): (&str, &Surface, &EdgeCurve),
     cfg: &Edge3dConfig,
-    steps: &[Step3d],
+    (steps, reached): (&[Step3d], &[Pose]),
     summary: &LoopSummary,
 ) -> Result<Edge3dMetrics> {
     let reference = cfg.controller.reference;
-    let truths: Vec<EdgeTruth> = steps
+    let truths: Vec<EdgeTruth> = reached
         .iter()
-        .map(|s| edge_truth(edge, s.pose, reference))
+        .map(|p| edge_truth(edge, *p, reference))
         .collect();
     let metrics = score(name, cfg, (edge, steps, &truths), summary);
     let doc = MetricsDocument {

@@ -19,6 +19,9 @@ pub(crate) struct Sim3d {
     pub sensor: SimTacTip,
     /// Pins read over the simulated reference frame, `model` taking them.
     pub perception: Perception3d,
+    /// The pose the arm physically reached, for the metrics after each
+    /// step (never the loop).
+    pub probe: PoseProbe,
 }
 
 /// The simulated 3D world: `rig` (sensor, arm noise, workspace, detector)
@@ -35,7 +38,8 @@ pub(crate) fn sim_3d(
 ) -> Result<Sim3d> {
     let (arm, probe) = sim_arm_3d(rig, (seed, max_tilt_deg), start)?;
     let sensor_model = TacTipModel::new(rig.sensor.clone())?;
-    let pose_source = Box::new(move || probe.actual());
+    let seen = probe.clone();
+    let pose_source = Box::new(move || seen.actual());
     let sensor = SimTacTip::over_object(
         sensor_model,
         object.clone(),
@@ -53,6 +57,7 @@ pub(crate) fn sim_3d(
         arm,
         sensor,
         perception,
+        probe,
     })
 }
 

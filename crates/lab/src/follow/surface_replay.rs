@@ -80,15 +80,21 @@ pub fn run_surface_replay(
         perception.perceive_field(field)
     };
     let mut steps = Vec::new();
+    let mut reached = Vec::new();
     let mut fields = Vec::new();
+    let probe_after = probe.clone();
     let summary = {
         let mut sink = |s: &Step3d, field: &[f32]| -> tactrace_servo::Result<()> {
-            csv.write(s).map_err(|e| tactrace_servo::ServoError::Sink {
-                step: s.step,
-                source: Box::new(e),
-            })?;
+            // The arm is still at the tap's pose: what it physically reached.
+            let at = probe_after.actual();
+            csv.write(s, at)
+                .map_err(|e| tactrace_servo::ServoError::Sink {
+                    step: s.step,
+                    source: Box::new(e),
+                })?;
             progress(s);
             steps.push(s.clone());
+            reached.push(at);
             fields.push(field.to_vec());
             Ok(())
         };
@@ -98,7 +104,7 @@ pub fn run_surface_replay(
         run.path(),
         (name, object),
         cfg,
-        &steps,
+        (&steps, &reached),
         &summary,
         (&pins, &fields),
     )?;

@@ -186,6 +186,7 @@ pub fn run_surface(
         mut arm,
         mut sensor,
         perception,
+        probe,
     } = sim_3d(
         &cfg.rig,
         (cfg.seed, cfg.max_tilt_deg),
@@ -205,15 +206,20 @@ pub fn run_surface(
     };
     let mut csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
     let mut steps = Vec::new();
+    let mut reached = Vec::new();
     let mut fields = Vec::new();
     let summary = {
         let mut sink = |s: &Step3d, field: &[f32]| -> tactrace_servo::Result<()> {
-            csv.write(s).map_err(|e| tactrace_servo::ServoError::Sink {
-                step: s.step,
-                source: Box::new(e),
-            })?;
+            // The arm is still at the tap's pose: what it physically reached.
+            let at = probe.actual();
+            csv.write(s, at)
+                .map_err(|e| tactrace_servo::ServoError::Sink {
+                    step: s.step,
+                    source: Box::new(e),
+                })?;
             progress(s);
             steps.push(s.clone());
+            reached.push(at);
             fields.push(field.to_vec());
             Ok(())
         };
@@ -230,7 +236,7 @@ pub fn run_surface(
         run.path(),
         (name, object),
         cfg,
-        &steps,
+        (&steps, &reached),
         &summary,
         (&reference_pins, &fields),
     )?;

@@ -4,7 +4,9 @@
 //! 3D figure (`trajectory_3d.svg/.png`), the error curves
 //! (`errors.svg/.png`) and `replay.html` (a view the mouse turns).
 //!
-//! Metrics, over the steps after `settle_steps` (the commanded poses):
+//! Metrics, over the steps after `settle_steps`, at the poses the arm
+//! reached (its repeatability noise included; the commanded ones are in
+//! `trajectory.csv` beside them):
 //! - `mean_distance_mm`, `max_distance_mm`: |true depth - reference
 //!   depth|, the true depth being the pole's distance below the surface
 //!   (minus its signed distance);
@@ -58,7 +60,7 @@ struct MetricsDocument<'a> {
     message: &'a str,
 }
 
-/// The truth at one commanded pose.
+/// The truth at one reached pose.
 struct Truth {
     depth_error_mm: f64,
     normal_error_deg: f64,
@@ -84,7 +86,7 @@ pub struct TruthCsv {
 }
 
 /// The trajectory's columns.
-const HEADER: [&str; 14] = [
+const HEADER: [&str; 20] = [
     "step",
     "x_mm",
     "y_mm",
@@ -99,6 +101,12 @@ const HEADER: [&str; 14] = [
     "contact",
     "depth_error_mm",
     "normal_error_deg",
+    "x_reached_mm",
+    "y_reached_mm",
+    "z_reached_mm",
+    "rx_reached_deg",
+    "ry_reached_deg",
+    "rz_reached_deg",
 ];
 
 impl TruthCsv {
@@ -113,9 +121,10 @@ impl TruthCsv {
         })
     }
 
-    /// One step's row.
-    pub fn write(&mut self, s: &Step3d) -> tactrace_store::Result<()> {
-        let t = truth(&self.object, s.pose, self.depth_mm);
+    /// One step's row: the commanded pose and prediction, then the truth
+    /// at `reached` (the pose the arm reached) and that pose.
+    pub fn write(&mut self, s: &Step3d, reached: Pose) -> tactrace_store::Result<()> {
+        let t = truth(&self.object, reached, self.depth_mm);
         let p = s.pose;
         let nums = [
             p.x, p.y, p.z, p.rx, p.ry, p.rz, s.label[2], s.label[3], s.label[4],
@@ -126,23 +135,32 @@ impl TruthCsv {
         row.push(s.contact.to_string());
         row.push(format!("{:.4}", t.depth_error_mm));
         row.push(format!("{:.4}", t.normal_error_deg));
+        row.extend(pose_cells(reached));
         self.rows.write_row(row)
     }
 }
 
-/// Score the run and write `metrics.json`, the figures and `replay.html`
-/// into `dir`; the reference pins and each tap's field are kept for
-/// later pages (unused by the 3D page).
+/// A pose's six cells (mm, deg) for a trajectory row.
+pub(super) fn pose_cells(p: Pose) -> impl Iterator<Item = String> {
+    [p.x, p.y, p.z, p.rx, p.ry, p.rz]
+        .into_iter()
+        .map(|v| format!("{v:.4}"))
+}
+
+/// Score the run at the poses the arm reached (`reached`, one per step)
+/// and write `metrics.json`, the figures and `replay.html` into `dir`;
+/// the reference pins and each tap's field are kept for later pages
+/// (unused by the 3D page).
 pub fn write_surface_results(
     dir: &Path,
     (name, object): (&str, &Surface),
     cfg: &Surface3dConfig,
-    steps: &[Step3d],
+    (steps, reached): (&[Step3d], &[Pose]),
     summary: &LoopSummary,
     _fields: (&[[f64; 2]], &[Vec<f32>]),
 ) -> Result<Surface3dMetrics> {
     let depth = cfg.controller.reference[2];
-    let truths: Vec<Truth> = steps.iter().map(|s| truth(object, s.pose, depth)).collect();
+    let truths: Vec<Truth> = reached.iter().map(|p| truth(object, *p, depth)).collect();
     let metrics = score(name, cfg, steps, &truths);
     let doc = MetricsDocument {
         metrics: &metrics,
@@ -153,10 +171,7 @@ pub fn write_surface_results(
     let json = serde_json::to_string_pretty(&doc).expect("metrics serialise");
     write_atomic(&dir.join("metrics.json"), json.as_bytes())?;
     let wire = wire_mesh(object, steps);
-    let path: Vec<[f64; 3]> = steps
-        .iter()
-        .map(|s| [s.pose.x, s.pose.y, s.pose.z])
-        .collect();
+    let path: Vec<[f64; 3]> = reached.iter().map(|p| [p.x, p.y, p.z]).collect();
     if !steps.is_empty() {
         let title = format!("surface_3d over the {name}");
         let paths = [("sensor tip (dome pole)", path)];

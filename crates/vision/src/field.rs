@@ -82,7 +82,8 @@ impl Kernel {
     }
 
     /// Number of weights kept (zeros inside runs included).
-    pub fn kept(&self) -> usize {
+    #[cfg(test)]
+    fn kept(&self) -> usize {
         self.weights.len()
     }
 

@@ -36,6 +36,7 @@ pub use blob::{detect_blobs, Frame, KeyPoint};
 pub use detection::{Detection, Detector, DetectorParams};
 pub use error::VisionError;
 pub use extractor::PinExtractor;
+pub use field::EXACT_TOLERANCE;
 pub use fold::TURNED_RATIO;
 pub use inspect::{draw_inspection, inspect, layout_of, Inspection, Layout, LayoutKind, Picture};
 pub use merged::{find_clusters, Cluster};
@@ -46,4 +47,4 @@ pub use preprocess::{
 pub use reader::{FrameDetector, PinReader, Reading, SightParams, TrackCounts};
 pub use rest::{estimate_rest, RestEstimate, RestParams};
 pub use spots::{Connectivity, Spot, SpotDetector, SpotParams, Spots};
-pub use tracker::{median_spacing, FirstPass, PinTracker, Tracked};
+pub use tracker::{median_spacing, FirstPass, PinTracker, Tracked, CUT_MIN_PINS, CUT_TOLERANCE};

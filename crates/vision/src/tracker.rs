@@ -12,7 +12,7 @@ use crate::assign::{assign_usable, Edge, EdgeRows};
 use crate::blob::KeyPoint;
 use crate::detection::Detection;
 use crate::error::VisionError;
-use crate::field::{smooth_field, Kernel, Observations};
+use crate::field::{smooth_field, Kernel, Observations, EXACT_TOLERANCE};
 use crate::fold::FoldCheck;
 use crate::merged::Cluster;
 
@@ -34,6 +34,40 @@ const CLUSTER_REACH: f64 = 0.35;
 struct Stage {
     gate: f64,
     kernel: Kernel,
+}
+
+/// The coarse-to-fine stages: gate and kernel width (spacings), and the
+/// tolerance below which the cut field drops a kernel weight.
+const STAGES: [(f64, f64, f64); 4] = [
+    (3.0, 3.0, CUT_TOLERANCE),
+    (1.5, 2.0, CUT_TOLERANCE),
+    (1.0, 1.2, CUT_TOLERANCE),
+    (0.6, 1.0, EXACT_TOLERANCE),
+];
+
+/// Fewest reference pins for which the tracker cuts the smooth field by
+/// default ([`PinTracker::with_exact_field`]): below it the exact field is
+/// cheap (127 pins) and the ordering stays what it was, bit for bit.
+pub const CUT_MIN_PINS: usize = 200;
+
+/// Kernel weights below this share of the peak are dropped in the cut
+/// field of the wide stages (those whose field only predicts where the next
+/// stage looks).
+pub const CUT_TOLERANCE: f64 = 1e-2;
+
+/// The stages for a reference layout of median spacing `spacing` px.
+fn stages(reference: &[[f64; 2]], spacing: f64, exact: bool) -> Vec<Stage> {
+    STAGES
+        .iter()
+        .map(|&(gate, sigma, cut)| Stage {
+            gate: gate * spacing,
+            kernel: Kernel::new(
+                reference,
+                sigma * spacing,
+                if exact { EXACT_TOLERANCE } else { cut },
+            ),
+        })
+        .collect()
 }
 
 /// Orders keypoints like a fixed reference pin set.
@@ -118,23 +152,24 @@ impl PinTracker {
         if spacing.is_nan() || spacing <= 0.0 {
             return Err(VisionError::DegenerateReference);
         }
-        let stage = |gate: f64, sigma: f64| Stage {
-            gate: gate * spacing,
-            kernel: Kernel::new(&reference, sigma * spacing),
-        };
-        let stages = vec![
-            stage(3.0, 3.0),
-            stage(1.5, 2.0),
-            stage(1.0, 1.2),
-            stage(0.6, 1.0),
-        ];
+        let exact = reference.len() < CUT_MIN_PINS;
         Ok(Self {
             folds: FoldCheck::new(&reference, spacing),
+            stages: stages(&reference, spacing, exact),
             reference,
             spacing,
-            stages,
             nearest: true,
         })
+    }
+
+    /// This tracker with the exact smooth field (every kernel weight down
+    /// to [`EXACT_TOLERANCE`]; the default below [`CUT_MIN_PINS`] pins) or
+    /// the cut one (the wide stages' kernels cut at [`CUT_TOLERANCE`]; the
+    /// default from [`CUT_MIN_PINS`] pins). Kept to check that the cut
+    /// changes nothing that matters (`tests/speed3.rs`).
+    pub fn with_exact_field(mut self, exact: bool) -> Self {
+        self.stages = stages(&self.reference, self.spacing, exact);
+        self
     }
 
     /// This tracker with the nearest-neighbour start on (the default) or

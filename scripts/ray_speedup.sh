@@ -65,6 +65,11 @@ trap cleanup EXIT
 port=$("$python" -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 address=127.0.0.1:$port
 export RAY_USAGE_STATS_ENABLED=0
+# Ray starts its worker processes at nice 15 (its `worker_niceness`):
+# they would give way to every other process, Ray's own included, and the
+# comparison with the command's own thread (nice 0) would measure that.
+# The nodes here start their workers at the command's priority.
+export RAY_worker_niceness=0
 
 # A Ray node in its own process group (stopped with its raylet and GCS).
 start_node() {

@@ -1,6 +1,6 @@
 //! Experiment commands: `follow` and `reproduce`.
 use crate::inputs::Inputs;
-use crate::progress::bar;
+use crate::progress::follow_bar;
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -167,18 +167,18 @@ fn follow_in(
     out: (&std::path::Path, bool),
     stop: Option<&StopFlag>,
 ) -> Result<()> {
-    let pb = bar(world.settings().follow().step_limit() as u64, "follow");
-    let mut progress = |r: &StepRecord| pb.set_position(r.step as u64 + 1);
-    let mut warn = |w: &str| pb.suspend(|| eprintln!("warning: {w}"));
-    let hooks = RunHooks {
-        progress: Some(&mut progress),
-        warn: Some(&mut warn),
-        stop,
-    };
     let named = shape.map(|(n, c)| (n.as_str(), c));
-    let res = tactrace_lab::follow::run_model(world, model, named, out, hooks);
-    pb.finish_and_clear();
-    let res = res?;
+    let steps = world.settings().follow().step_limit();
+    let res = follow_bar(steps, |pb| {
+        let mut progress = |r: &StepRecord| pb.set_position(r.step as u64 + 1);
+        let mut warn = |w: &str| pb.suspend(|| eprintln!("warning: {w}"));
+        let hooks = RunHooks {
+            progress: Some(&mut progress),
+            warn: Some(&mut warn),
+            stop,
+        };
+        tactrace_lab::follow::run_model(world, model, named, out, hooks)
+    })?;
     if let Some(stats) = &res.replay {
         crate::say!("{}", stats.summary());
         if let Some(w) = stats.warning() {

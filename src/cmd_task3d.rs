@@ -1,15 +1,17 @@
 //! The 3D tasks on the command line: `collect --task
 //! surface_3d|edge_5d|edge_3d --object NAME_OR_FILE` and `follow --task
 //! surface_3d|edge_5d|edge_3d --object ...`.
-use crate::progress::bar;
+use crate::inputs::Inputs;
+use crate::progress::{bar, follow_bar};
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 use std::path::Path;
 use tactrace_control::Task;
 use tactrace_lab::collect3d::{collect_3d, Collect3dConfig};
 use tactrace_lab::LabError;
+use tactrace_servo::{LoopSummary, Step3d};
 use tactrace_shape3d::{ObjectConfig, Surface, OBJECT_NAMES};
-use tactrace_store::{dataset, fsutil};
+use tactrace_store::{dataset, fsutil, OutputLock, StoredModel};
 
 /// The servo task (`--task`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -134,7 +136,7 @@ pub fn collect(
     config: Option<&Path>,
     (out, force): (&Path, bool),
 ) -> Result<()> {
-    crate::inputs::Inputs::new()
+    Inputs::new()
         .opt("--config", config)
         .file_arg("--object", &a.object)
         .check_apart("--out", out)?;
@@ -234,15 +236,8 @@ pub fn follow(
         return follow_edge(a, model, config, seed, (out, force));
     }
     let name = a.object.as_deref().unwrap_or("plane");
-    let mut inputs = crate::inputs::Inputs::new();
-    if let Some(dir) = &a.replay_data {
-        inputs = inputs.add("--replay-data", dir);
-    }
-    inputs
-        .add("--model", model)
-        .opt("--config", config)
-        .file_arg("--object", name)
-        .check_apart("--out", out)?;
+    let inputs = Inputs::new().opt("--replay-data", a.replay_data.as_deref());
+    keep_apart(inputs, (model, config, name), out)?;
     let mut cfg: Surface3dConfig =
         tactrace_store::load_config(config, "surface follow configuration")?;
     if config.is_none() {
@@ -256,67 +251,64 @@ pub fn follow(
     cfg.seed = seed.unwrap_or(cfg.seed);
     cfg.validate()?;
     let surface = object(name)?;
-    let _out = fsutil::check_output_dir(out, force)?;
-    let model = tactrace_store::StoredModel::load(model)?;
-    let pb = bar(cfg.steps() as u64, "follow");
-    let mut progress = |s: &tactrace_servo::Step3d| pb.set_position(s.step as u64 + 1);
-    let res = match &a.replay_data {
-        None => run_surface(&cfg, &surface, name, &model, (out, force), &mut progress),
-        Some(dir) => {
-            use tactrace_lab::follow::surface_replay::run_surface_replay;
-            let data = tactrace_store::dataset::read_dataset(dir)?;
-            let seen = model.training().map(|t| t.rows_seen(&data));
-            let bank = tactrace_lab::world::SurfaceBank::from_dataset(&data)?
-                .with_rows_seen_in_training(seen);
-            if let Some(k) = seen.filter(|&k| k > 0) {
-                eprintln!(
-                    "warning: {k} of the bank's {} rows were in the model's training data: \
-                     this run's figures are not held-out ones",
-                    bank.len()
-                );
-            }
-            let res = run_surface_replay(
+    let (_out, model) = claim_and_load(model, (out, force))?;
+    let res = follow_bar(cfg.steps(), |pb| -> Result<_> {
+        let mut progress = |s: &Step3d| pb.set_position(s.step as u64 + 1);
+        let Some(dir) = &a.replay_data else {
+            return Ok(run_surface(
                 &cfg,
-                (&surface, name),
-                &bank,
+                &surface,
+                name,
                 &model,
                 (out, force),
                 &mut progress,
+            )?);
+        };
+        use tactrace_lab::follow::surface_replay::run_surface_replay;
+        let data = tactrace_store::dataset::read_dataset(dir)?;
+        let seen = model.training().map(|t| t.rows_seen(&data));
+        let bank =
+            tactrace_lab::world::SurfaceBank::from_dataset(&data)?.with_rows_seen_in_training(seen);
+        if let Some(k) = seen.filter(|&k| k > 0) {
+            eprintln!(
+                "warning: {k} of the bank's {} rows were in the model's training data: \
+                 this run's figures are not held-out ones",
+                bank.len()
             );
-            res.map(|(outcome, stats)| {
-                eprintln!(
-                    "real-frame world: {} taps answered by {} of the {} rows, label distance \
-                     mean {:.3} / max {:.3}",
-                    stats.taps,
-                    stats.distinct_rows,
-                    stats.bank_rows,
-                    stats.mean_label_distance,
-                    stats.max_label_distance
-                );
-                outcome
-            })
         }
-    };
-    pb.finish_and_clear();
-    let res = res?;
+        let (outcome, stats) = run_surface_replay(
+            &cfg,
+            (&surface, name),
+            &bank,
+            &model,
+            (out, force),
+            &mut progress,
+        )?;
+        eprintln!(
+            "real-frame world: {} taps answered by {} of the {} rows, label distance \
+             mean {:.3} / max {:.3}",
+            stats.taps,
+            stats.distinct_rows,
+            stats.bank_rows,
+            stats.mean_label_distance,
+            stats.max_label_distance
+        );
+        Ok(outcome)
+    })?;
     let m = &res.metrics;
-    crate::say!(
-        "{name}: {} steps, {}; depth error mean {:.3} / max {:.3} mm, normal error mean {:.2} / \
-         max {:.2} deg, coverage {:.0}%",
-        m.steps,
-        res.summary.ending,
-        m.mean_distance_mm,
-        m.max_distance_mm,
-        m.mean_normal_error_deg,
-        m.max_normal_error_deg,
-        100.0 * m.coverage
-    );
+    say_run(
+        &format!("{name}:"),
+        (m.steps, &res.summary),
+        ("depth error", m.mean_distance_mm, m.max_distance_mm),
+        (m.mean_normal_error_deg, m.max_normal_error_deg),
+        m.coverage,
+    )?;
     run_ended(&res.summary, &res.dir)
 }
 
 /// How a 3D run ended: its message and folder, and a failed run (lost
 /// contact, a refused move, the step cap of an edge run) as an error.
-fn run_ended(summary: &tactrace_servo::LoopSummary, dir: &Path) -> Result<()> {
+fn run_ended(summary: &LoopSummary, dir: &Path) -> Result<()> {
     if !summary.ending.succeeded() {
         eprintln!("the run and its trajectory so far are in {}", dir.display());
         return Err(LabError::RunFailed {
@@ -347,11 +339,7 @@ fn follow_edge(
         .into());
     }
     let name = a.object.as_deref().unwrap_or("foil");
-    crate::inputs::Inputs::new()
-        .add("--model", model)
-        .opt("--config", config)
-        .file_arg("--object", name)
-        .check_apart("--out", out)?;
+    keep_apart(Inputs::new(), (model, config, name), out)?;
     let mut cfg: Edge3dConfig = tactrace_store::load_config(config, "edge follow configuration")?;
     if config.is_none() {
         cfg.controller = Se3Config::for_task(task);
@@ -370,24 +358,65 @@ fn follow_edge(
     cfg.validate()?;
     let surface = object(name)?;
     let edge = edge_of(&surface, name)?;
-    let _out = fsutil::check_output_dir(out, force)?;
-    let model = tactrace_store::StoredModel::load(model)?;
-    let pb = bar(cfg.steps(&edge) as u64, "follow");
-    let mut progress = |s: &tactrace_servo::Step3d| pb.set_position(s.step as u64 + 1);
-    let res = run_edge(&cfg, &surface, name, &model, (out, force), &mut progress);
-    pb.finish_and_clear();
-    let res = res?;
+    let (_out, model) = claim_and_load(model, (out, force))?;
+    let res = follow_bar(cfg.steps(&edge), |pb| {
+        let mut progress = |s: &Step3d| pb.set_position(s.step as u64 + 1);
+        run_edge(&cfg, &surface, name, &model, (out, force), &mut progress)
+    })?;
     let m = &res.metrics;
-    crate::say!(
-        "{name}: {task}, {} steps, {}; distance from the edge mean {:.3} / max {:.3} mm, normal \
-         error mean {:.2} / max {:.2} deg, coverage {:.0}%",
-        m.steps,
-        res.summary.ending,
-        m.mean_distance_mm,
-        m.max_distance_mm,
-        m.mean_normal_error_deg,
-        m.max_normal_error_deg,
-        100.0 * m.coverage
-    );
+    say_run(
+        &format!("{name}: {task},"),
+        (m.steps, &res.summary),
+        (
+            "distance from the edge",
+            m.mean_distance_mm,
+            m.max_distance_mm,
+        ),
+        (m.mean_normal_error_deg, m.max_normal_error_deg),
+        m.coverage,
+    )?;
     run_ended(&res.summary, &res.dir)
+}
+
+/// The inputs of a 3D follow run kept apart from its folder `out`: the
+/// task's own (`inputs`), then the model, the configuration file and the
+/// `--object` when it names a mesh file.
+fn keep_apart(
+    inputs: Inputs,
+    (model, config, object): (&Path, Option<&Path>, &str),
+    out: &Path,
+) -> Result<()> {
+    inputs
+        .add("--model", model)
+        .opt("--config", config)
+        .file_arg("--object", object)
+        .check_apart("--out", out)?;
+    Ok(())
+}
+
+/// The last checks before a 3D run starts, once its settings and object
+/// are good: the run folder free (its lock held until the returned guard
+/// drops), then the model loaded.
+fn claim_and_load(model: &Path, (out, force): (&Path, bool)) -> Result<(OutputLock, StoredModel)> {
+    let lock = fsutil::check_output_dir(out, force)?;
+    Ok((lock, StoredModel::load(model)?))
+}
+
+/// A finished 3D run's line: `head` (the object, the task), its steps and
+/// ending, `distance` (what is measured, mean and max, mm), the normal
+/// error (mean and max, deg) and the coverage (a fraction, shown in %).
+fn say_run(
+    head: &str,
+    (steps, summary): (usize, &LoopSummary),
+    (distance, mean_mm, max_mm): (&str, f64, f64),
+    (mean_deg, max_deg): (f64, f64),
+    coverage: f64,
+) -> Result<()> {
+    crate::say!(
+        "{head} {steps} steps, {}; {distance} mean {mean_mm:.3} / max {max_mm:.3} mm, normal \
+         error mean {mean_deg:.2} / max {max_deg:.2} deg, coverage {:.0}%",
+        summary.ending,
+        100.0 * coverage
+    );
+    Ok(())
 }

@@ -7,44 +7,27 @@
 //! calibrated with nothing hand-written (fails when the data is absent,
 //! unless `TACTRACE_SKIP_REAL_DATA=1`).
 mod util;
-use rand::{Rng, SeedableRng};
-use std::path::Path;
-use tactrace_sensor::{EdgeTap, PinLayout, TacTipConfig, TacTipModel};
-use util::{tactrace, TempDir};
+use tactrace_sensor::{TacTipConfig, TacTipModel};
+use util::{
+    calibrate_taps, follows_three_steps, import_taps, ok, reference_pins, tactrace, train,
+    write_taps, TapSpread, TempDir,
+};
 
 /// `n` labelled taps of a 127-pin ring sensor in `dir` (frames/,
 /// targets.csv), r over [-5, 25] mm (the lightest taps barely touch: the
 /// rest layout is estimated from them), theta over [-45, 45] deg.
-fn ring_taps(dir: &Path, n: usize) {
-    let mut cfg = TacTipConfig::default();
-    cfg.geometry.layout = PinLayout::Rings;
-    cfg.geometry.ring_phase_deg = (1..=6).map(|k| 2.0 / k as f64).collect();
-    let model = TacTipModel::new(cfg).unwrap();
-    let frames = dir.join("frames");
-    std::fs::create_dir_all(&frames).unwrap();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-    let mut csv = String::from("image_name,pose_2,pose_6\n");
-    for k in 0..n {
-        let tap = EdgeTap {
-            r_mm: rng.random_range(-5.0..25.0),
-            theta_deg: rng.random_range(-45.0..45.0),
-            ..EdgeTap::default()
-        };
-        let name = format!("frame_{k}_0.png");
-        let pins = model.edge_tap_pins(&tap);
-        model
-            .render(&pins, Some(&mut rng))
-            .save(frames.join(&name))
-            .unwrap();
-        csv.push_str(&format!("{name},{},{}\n", tap.r_mm, tap.theta_deg));
-    }
-    std::fs::write(dir.join("targets.csv"), csv).unwrap();
+fn ring_taps(dir: &std::path::Path, n: usize) {
+    let model = TacTipModel::new(util::ring_sensor()).unwrap();
+    write_taps(dir, &model, n, &TapSpread::edge(5));
 }
 
-fn reference_pins(dataset: &Path) -> serde_json::Value {
-    let text = std::fs::read_to_string(dataset.join("meta.json")).unwrap();
-    let meta: serde_json::Value = serde_json::from_str(&text).unwrap();
-    meta["reference_pins"].clone()
+/// `tactrace twin` of the taps' labels (`targets.csv`, plain edge
+/// labels) into `tw`, with `extra` arguments.
+fn twin_taps(dir: &std::path::Path, extra: &[&str]) -> util::Run {
+    let mut args = vec!["twin", "--targets", "targets.csv", "--out", "tw"];
+    args.extend(extra);
+    args.extend(["--dz-column", "none", "--shear-columns", "none"]);
+    tactrace(dir, &args)
 }
 
 /// Both layouts named, the rings kept.
@@ -60,34 +43,11 @@ fn names_both_layouts(stderr: &str) {
 fn issue21_twin_with_a_dataset_reference_writes_the_datasets_pin_order() {
     let t = TempDir::new("twin-dataset");
     ring_taps(&t.0, 60);
-    let plain = ["--dz-column", "none", "--shear-columns", "none"];
-    let run = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.csv",
-            "--out",
-            "ds",
-        ],
-    );
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    ok(&import_taps(&t.0, &[], "ds"), "import");
     let pins = reference_pins(&t.join("ds"));
     assert_eq!(pins.as_array().unwrap().len(), 127);
-    let mut args = vec![
-        "twin",
-        "--reference",
-        "ds",
-        "--targets",
-        "targets.csv",
-        "--out",
-        "tw",
-    ];
-    args.extend(plain);
-    let run = tactrace(&t.0, &args);
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    let run = twin_taps(&t.0, &["--reference", "ds"]);
+    ok(&run, "twin --reference DATASET");
     names_both_layouts(&run.stderr);
     assert_eq!(reference_pins(&t.join("tw")), pins);
     // Neither a reference nor a calibrated sensor: bad input, saying what to give.
@@ -103,21 +63,8 @@ fn issue21_twin_with_a_dataset_reference_writes_the_datasets_pin_order() {
 fn issue21_calibrate_without_an_undeformed_frame_then_twin_in_its_pin_order() {
     let t = TempDir::new("calibrate-estimated");
     ring_taps(&t.0, 80);
-    let plain = ["--dz-column", "none", "--shear-columns", "none"];
-    let mut args = vec![
-        "calibrate",
-        "--frames",
-        "frames",
-        "--targets",
-        "targets.csv",
-        "--samples",
-        "40",
-        "--out",
-        "s",
-    ];
-    args.extend(plain);
-    let run = tactrace(&t.0, &args);
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    let run = calibrate_taps(&t.0, "40", &[]);
+    ok(&run, "calibrate");
     assert!(
         run.stderr
             .contains("no --reference: estimated the rest layout (127 pins)"),
@@ -129,31 +76,8 @@ fn issue21_calibrate_without_an_undeformed_frame_then_twin_in_its_pin_order() {
     assert!(toml.contains("layout = \"rings\""), "{toml}");
     // The calibrated sensor's twin, no --reference: its own rest pins,
     // which an import of the same taps estimates alike.
-    let mut args = vec![
-        "twin",
-        "--sensor",
-        "s",
-        "--targets",
-        "targets.csv",
-        "--out",
-        "tw",
-    ];
-    args.extend(plain);
-    let run = tactrace(&t.0, &args);
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let run = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.csv",
-            "--out",
-            "ds",
-        ],
-    );
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    ok(&twin_taps(&t.0, &["--sensor", "s"]), "twin --sensor");
+    ok(&import_taps(&t.0, &[], "ds"), "import");
     assert_eq!(reference_pins(&t.join("tw")), reference_pins(&t.join("ds")));
 }
 
@@ -193,7 +117,7 @@ fn issue21_the_shared_331_pin_set_calibrates_with_nothing_hand_written() {
     let targets = t.join("part.csv");
     std::fs::write(&targets, part).unwrap();
     let run = tactrace(&t.0, &["sensor", "inspect", frames, "--out", "s331.toml"]);
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    ok(&run, "sensor inspect");
     let run = tactrace(
         &t.0,
         &[
@@ -218,7 +142,7 @@ fn issue21_the_shared_331_pin_set_calibrates_with_nothing_hand_written() {
             "s",
         ],
     );
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    ok(&run, "calibrate");
     assert!(
         run.stderr.contains("estimated the rest layout (331 pins)"),
         "{}",
@@ -244,25 +168,7 @@ fn issue21_the_shared_331_pin_set_calibrates_with_nothing_hand_written() {
 fn issue21_a_sensor_calibrated_without_an_undeformed_frame_collects_and_follows() {
     let t = TempDir::new("sensor-estimated-runs");
     ring_taps(&t.0, 60);
-    let run = tactrace(
-        &t.0,
-        &[
-            "calibrate",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.csv",
-            "--samples",
-            "30",
-            "--out",
-            "s",
-            "--dz-column",
-            "none",
-            "--shear-columns",
-            "none",
-        ],
-    );
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    ok(&calibrate_taps(&t.0, "30", &[]), "calibrate");
     let sensor = tactrace_store::SensorFolder::read(&t.join("s")).unwrap();
     // Its taps are read against its own (estimated) rest pins, in their
     // order, not against the pins a detector finds in reference.png (the
@@ -271,26 +177,11 @@ fn issue21_a_sensor_calibrated_without_an_undeformed_frame_collects_and_follows(
         &t.0,
         &["collect", "--sensor", "s", "--samples", "40", "--out", "c"],
     );
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    ok(&run, "collect");
     let pins: Vec<[f64; 2]> = serde_json::from_value(reference_pins(&t.join("c"))).unwrap();
     assert_eq!(pins, sensor.spec.reference_pins);
-    let run = tactrace(
-        &t.0,
-        &[
-            "train", "--model", "pdennn", "--train", "c", "--epochs", "1", "--out", "m",
-        ],
-    );
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let run = tactrace(
-        &t.0,
-        &[
-            "follow", "--sensor", "s", "--model", "m", "--shape", "disk", "--steps", "3", "--out",
-            "run",
-        ],
-    );
-    assert_eq!(run.code, 0, "{}", run.stderr);
-    let trajectory = std::fs::read_to_string(t.join("run/trajectory.csv")).unwrap();
-    assert_eq!(trajectory.lines().count(), 4, "{trajectory}");
+    ok(&train(&t.0, "pdennn", "c", "1", "m", &[]), "train");
+    follows_three_steps(&t.0, "s", "m", "run");
 }
 
 /// A 127-pin sensor (undeformed frame given) whose labels turn against
@@ -306,47 +197,20 @@ fn issue21_calibrate_estimates_and_records_the_label_convention() {
     truth.calibration.angle_offset_deg += 90.0;
     truth.calibration.object_side = -own.calibration.object_side;
     let model = TacTipModel::new(truth).unwrap();
-    let frames = t.join("frames");
-    std::fs::create_dir_all(&frames).unwrap();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    std::fs::create_dir_all(t.join("frames")).unwrap();
     model
         .render(model.rest_pins(), None)
-        .save(frames.join("init_0.png"))
+        .save(t.join("frames/init_0.png"))
         .unwrap();
-    let mut csv = String::from("image_name,pose_2,pose_6\n");
-    for k in 0..50 {
-        let tap = EdgeTap {
-            r_mm: rng.random_range(-3.0..3.0),
-            theta_deg: rng.random_range(-180.0..180.0),
-            ..EdgeTap::default()
-        };
-        let name = format!("frame_{k}_0.png");
-        let pins = model.edge_tap_pins(&tap);
-        model.render(&pins, None).save(frames.join(&name)).unwrap();
-        csv.push_str(&format!("{name},{},{}\n", tap.r_mm, tap.theta_deg));
-    }
-    std::fs::write(t.join("targets.csv"), csv).unwrap();
-    let run = tactrace(
-        &t.0,
-        &[
-            "calibrate",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.csv",
-            "--reference",
-            "frames/init_0.png",
-            "--dz-column",
-            "none",
-            "--shear-columns",
-            "none",
-            "--samples",
-            "30",
-            "--out",
-            "s",
-        ],
-    );
-    assert_eq!(run.code, 0, "{}", run.stderr);
+    let spread = TapSpread {
+        r_mm: -3.0..3.0,
+        theta_deg: -180.0..180.0,
+        noise: false,
+        seed: 3,
+    };
+    write_taps(&t.0, &model, 50, &spread);
+    let run = calibrate_taps(&t.0, "30", &["--reference", "frames/init_0.png"]);
+    ok(&run, "calibrate");
     assert!(
         run.stderr.contains(
             "label convention (estimated from the taps, 30 taps): angle sign -1, position sign -1"

@@ -6,15 +6,7 @@
 //! named. Each test runs the real binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{real_data, tactrace, Run, TempDir};
-
-fn ok(r: &Run, what: &str) {
-    assert_eq!(r.code, 0, "{what}: {}\n{}", r.stdout, r.stderr);
-}
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
-}
+use util::{json, ok, real_data, tactrace, Run, TempDir};
 
 /// `ds` (60 simulated taps, seed 3) and `m`, trained on 45 of them with
 /// 15 held out (--val-fraction 0.25 --split-seed 3); returns train's

@@ -4,16 +4,7 @@
 //! binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{real_data, real_paths, tactrace, Run, TempDir};
-
-/// Assert a run's exit code, showing its output when it differs.
-fn expect_code(r: &Run, code: i32, what: &str) {
-    assert_eq!(
-        r.code, code,
-        "{what}: exit code {} (expected {code})\nstdout: {}\nstderr: {}",
-        r.code, r.stdout, r.stderr
-    );
-}
+use util::{expect_code, real_data, real_paths, tactrace, TempDir};
 
 /// A dataset `ds` of 40 simulated taps and a model `m` trained on it
 /// (2 epochs), in `dir`.

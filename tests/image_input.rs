@@ -10,15 +10,7 @@ use image::{GrayImage, Luma};
 use std::path::Path;
 use tactrace_lab::{follow::image_input_for, import_reader};
 use tactrace_store::{read_dataset, read_dataset_frames, SightFile, StoredImageModel};
-use util::{tactrace, Run, TempDir};
-
-fn ok(r: &Run, what: &str) {
-    assert_eq!(
-        r.code, 0,
-        "{what}\nstdout: {}\nstderr: {}",
-        r.stdout, r.stderr
-    );
-}
+use util::{ok, tactrace, train, write_small_conv, TempDir};
 
 /// A 96 x 96 px synthetic TacTip: 61 pins on a hexagonal lattice of
 /// spacing 9 px, with a bright frame border outside the dome that the
@@ -68,8 +60,6 @@ fn write_set(dir: &Path, n: usize) {
     std::fs::write(dir.join("targets.csv"), csv).unwrap();
 }
 
-const SMALL: &str = "dense = [8]\nbatch_size = 8\n[[conv]]\nchannels = 4\nkernel = 3\nstride = 2\n";
-
 #[test]
 fn issue22_an_image_model_is_fed_frames_made_as_its_frames_npy_rows() {
     let t = TempDir::new("issue22-sight");
@@ -89,7 +79,7 @@ fn issue22_an_image_model_is_fed_frames_made_as_its_frames_npy_rows() {
     );
     std::fs::write(t.join("sensor.toml"), text).unwrap();
     let sensor = SightFile::read(&t.join("sensor.toml")).unwrap().sight();
-    std::fs::write(t.join("small.toml"), SMALL).unwrap();
+    write_small_conv(&t.0);
     let r = tactrace(
         &t.0,
         &[
@@ -111,22 +101,7 @@ fn issue22_an_image_model_is_fed_frames_made_as_its_frames_npy_rows() {
         ],
     );
     ok(&r, "import --sensor --frames-size");
-    let r = tactrace(
-        &t.0,
-        &[
-            "train",
-            "--model",
-            "conv-mlp",
-            "--train",
-            "d",
-            "--epochs",
-            "2",
-            "--config",
-            "small.toml",
-            "--out",
-            "m",
-        ],
-    );
+    let r = train(&t.0, "conv-mlp", "d", "2", "m", &["--config", "small.toml"]);
     ok(&r, "train conv-mlp");
     let data = read_dataset(&t.join("d")).unwrap();
     let rows = read_dataset_frames(&t.join("d"), &data)
@@ -197,7 +172,7 @@ fn issue22_an_image_model_is_fed_frames_made_as_its_frames_npy_rows() {
 fn issue22_an_image_model_folder_without_the_record_still_loads() {
     let t = TempDir::new("issue22-old");
     write_set(&t.join("set"), 16);
-    std::fs::write(t.join("small.toml"), SMALL).unwrap();
+    write_small_conv(&t.0);
     let r = tactrace(
         &t.0,
         &[
@@ -221,22 +196,7 @@ fn issue22_an_image_model_folder_without_the_record_still_loads() {
     let meta: serde_json::Value = serde_json::from_str(&meta).unwrap();
     assert!(meta["image_frames"]["height"] == 16, "{meta}");
     assert!(meta["image_frames"].get("preprocess").is_none(), "{meta}");
-    let r = tactrace(
-        &t.0,
-        &[
-            "train",
-            "--model",
-            "conv-mlp",
-            "--train",
-            "d",
-            "--epochs",
-            "1",
-            "--config",
-            "small.toml",
-            "--out",
-            "m",
-        ],
-    );
+    let r = train(&t.0, "conv-mlp", "d", "1", "m", &["--config", "small.toml"]);
     ok(&r, "train conv-mlp");
     // frames.json as folders wrote it before the record existed.
     let old = r#"{"file": "frames.npy", "height": 16, "width": 16, "source_size": [96, 96],

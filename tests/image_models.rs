@@ -6,15 +6,7 @@
 mod util;
 use std::path::Path;
 use tactrace_store::{DatasetMeta, FramesInfo, ImageFrames, TapData};
-use util::{tactrace, Run, TempDir};
-
-fn expect_code(r: &Run, code: i32, what: &str) {
-    assert_eq!(
-        r.code, code,
-        "{what}: exit code {} (expected {code})\nstdout: {}\nstderr: {}",
-        r.code, r.stdout, r.stderr
-    );
-}
+use util::{expect_code, import_real, json, real_paths, tactrace, train, TempDir};
 
 /// Side of the synthetic frames, px.
 const SIDE: usize = 16;
@@ -80,10 +72,6 @@ const SMALL: &str = "dense = [16]\nlearning_rate = 0.003\nbatch_size = 8\n\
                      [[conv]]\nchannels = 6\nkernel = 3\nstride = 2\n\
                      [[conv]]\nchannels = 8\nkernel = 3\nstride = 2\n";
 
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"))
-}
-
 #[test]
 fn issue22_conv_models_train_on_frames_then_validate_and_predict() {
     let t = TempDir::new("issue22-train");
@@ -98,26 +86,15 @@ fn issue22_conv_models_train_on_frames_then_validate_and_predict() {
     assert!(x_baseline > 0.5 && angles.iter().any(|a| a.abs() > 150.0));
     for kind in ["conv-mlp", "conv-dennn"] {
         let out = format!("m-{kind}");
-        let r = tactrace(
-            &t.0,
-            &[
-                "train",
-                "--model",
-                kind,
-                "--train",
-                "ds",
-                "--val-fraction",
-                "0.25",
-                "--epochs",
-                "30",
-                "--seed",
-                "3",
-                "--config",
-                "small.toml",
-                "--out",
-                &out,
-            ],
-        );
+        let settings = [
+            "--val-fraction",
+            "0.25",
+            "--seed",
+            "3",
+            "--config",
+            "small.toml",
+        ];
+        let r = train(&t.0, kind, "ds", "30", &out, &settings);
         expect_code(&r, 0, kind);
         assert!(r.stdout.contains("validation: x "), "{}", r.stdout);
         for file in [
@@ -134,12 +111,7 @@ fn issue22_conv_models_train_on_frames_then_validate_and_predict() {
             "{config}"
         );
         // Again into the same folder: refused without --force.
-        let again = tactrace(
-            &t.0,
-            &[
-                "train", "--model", kind, "--train", "ds", "--epochs", "1", "--out", &out,
-            ],
-        );
+        let again = train(&t.0, kind, "ds", "1", &out, &[]);
         expect_code(&again, 2, "train into an existing model folder");
         let r = tactrace(
             &t.0,
@@ -201,20 +173,7 @@ fn issue22_an_image_model_refuses_a_dataset_of_pins_only() {
         &["collect", "--samples", "20", "--seed", "1", "--out", "pins"],
     );
     expect_code(&r, 0, "collect");
-    let r = tactrace(
-        &t.0,
-        &[
-            "train",
-            "--model",
-            "conv-dennn",
-            "--train",
-            "pins",
-            "--epochs",
-            "1",
-            "--out",
-            "m",
-        ],
-    );
+    let r = train(&t.0, "conv-dennn", "pins", "1", "m", &[]);
     expect_code(&r, 2, "train conv-dennn on pins only");
     assert!(
         r.stderr.contains("pin displacements only") && r.stderr.contains("--frames-size"),
@@ -230,26 +189,17 @@ fn issue22_import_keeps_the_frames_as_images_of_the_size_asked() {
         return;
     };
     let t = TempDir::new("issue22-import");
-    let frames = set.join("frames");
-    let (frames, targets) = (frames.to_str().unwrap(), set.join("targets.csv"));
-    let reference = set.join("frames/init_0.png");
-    let r = tactrace(
+    let [_, _, reference] = real_paths(&set);
+    let with_reference = ["--reference", &reference];
+    let r = import_real(
         &t.0,
+        &set,
         &[
-            "import",
-            "--frames",
-            frames,
-            "--targets",
-            targets.to_str().unwrap(),
-            "--reference",
-            reference.to_str().unwrap(),
-            "--limit",
-            "12",
-            "--frames-size",
-            "32",
-            "--out",
-            "d",
-        ],
+            &with_reference[..],
+            &["--limit", "12", "--frames-size", "32"],
+        ]
+        .concat(),
+        "d",
     );
     expect_code(&r, 0, "import --frames-size");
     let data = tactrace_store::read_dataset(&t.join("d")).unwrap();
@@ -273,22 +223,7 @@ fn issue22_import_keeps_the_frames_as_images_of_the_size_asked() {
     assert_eq!(meta["image_frames"]["height"], 32);
     assert_eq!(meta["image_frames"]["file"], "frames.npy");
     // Another split `--like` it keeps its frames at its size.
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            frames,
-            "--targets",
-            targets.to_str().unwrap(),
-            "--like",
-            "d",
-            "--limit",
-            "5",
-            "--out",
-            "e",
-        ],
-    );
+    let r = import_real(&t.0, &set, &["--like", "d", "--limit", "5"], "e");
     expect_code(&r, 0, "import --like");
     let e = tactrace_store::read_dataset(&t.join("e")).unwrap();
     let images = tactrace_store::read_dataset_frames(&t.join("e"), &e)
@@ -296,21 +231,11 @@ fn issue22_import_keeps_the_frames_as_images_of_the_size_asked() {
         .unwrap();
     assert_eq!((images.count(), images.info.height), (5, 32));
     // Without --frames-size: no frames.npy, no image_frames.
-    let r = tactrace(
+    let r = import_real(
         &t.0,
-        &[
-            "import",
-            "--frames",
-            frames,
-            "--targets",
-            targets.to_str().unwrap(),
-            "--reference",
-            reference.to_str().unwrap(),
-            "--limit",
-            "3",
-            "--out",
-            "p",
-        ],
+        &set,
+        &[&with_reference[..], &["--limit", "3"]].concat(),
+        "p",
     );
     expect_code(&r, 0, "import");
     assert!(!t.join("p/frames.npy").exists());
@@ -328,44 +253,19 @@ fn issue22_follow_in_the_real_frame_world_with_an_image_model() {
         return;
     };
     let t = TempDir::new("issue22-follow");
-    let s = |p: &Path| p.to_str().unwrap().to_string();
-    let (frames, targets) = (s(&set.join("frames")), s(&set.join("targets.csv")));
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            &frames,
-            "--targets",
-            &targets,
-            "--reference",
-            &s(&set.join("frames/init_0.png")),
-            "--limit",
-            "200",
-            "--frames-size",
-            "16",
-            "--out",
-            "d",
-        ],
-    );
+    let [_, _, reference] = real_paths(&set);
+    let settings = [
+        "--reference",
+        &reference,
+        "--limit",
+        "200",
+        "--frames-size",
+        "16",
+    ];
+    let r = import_real(&t.0, &set, &settings, "d");
     expect_code(&r, 0, "import");
     std::fs::write(t.join("small.toml"), SMALL).unwrap();
-    let r = tactrace(
-        &t.0,
-        &[
-            "train",
-            "--model",
-            "conv-mlp",
-            "--train",
-            "d",
-            "--epochs",
-            "3",
-            "--config",
-            "small.toml",
-            "--out",
-            "m",
-        ],
-    );
+    let r = train(&t.0, "conv-mlp", "d", "3", "m", &["--config", "small.toml"]);
     expect_code(&r, 0, "train");
     let r = tactrace(
         &t.0,
@@ -376,7 +276,7 @@ fn issue22_follow_in_the_real_frame_world_with_an_image_model() {
             "--shape",
             "disk",
             "--replay",
-            &s(&set),
+            set.to_str().unwrap(),
             "--steps",
             "6",
             "--out",
@@ -392,21 +292,13 @@ fn issue22_follow_in_the_real_frame_world_with_an_image_model() {
     // The simulated world renders 256 px frames too, but the synthetic
     // model was trained on 16 px ones: refused, exit 2.
     synthetic_dataset(&t.join("syn"), 40);
-    let r = tactrace(
+    let r = train(
         &t.0,
-        &[
-            "train",
-            "--model",
-            "conv-mlp",
-            "--train",
-            "syn",
-            "--epochs",
-            "1",
-            "--config",
-            "small.toml",
-            "--out",
-            "syn-m",
-        ],
+        "conv-mlp",
+        "syn",
+        "1",
+        "syn-m",
+        &["--config", "small.toml"],
     );
     expect_code(&r, 0, "train synthetic");
     let r = tactrace(

@@ -10,16 +10,7 @@ use std::io::Write;
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use util::{tactrace, Run, TempDir};
-
-/// Assert a run's exit code, showing its output when it differs.
-fn expect_code(r: &Run, code: i32, what: &str) {
-    assert_eq!(
-        r.code, code,
-        "{what}: exit code {} (expected {code})\nstdout: {}\nstderr: {}",
-        r.code, r.stdout, r.stderr
-    );
-}
+use util::{expect_code, tactrace, Run, TempDir};
 
 /// A small dataset `ds` (with its frames) and a model `m` trained on it.
 fn dataset_and_model(dir: &Path) {

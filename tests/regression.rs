@@ -2,16 +2,7 @@
 //! bug it pins down. They run the real binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{tactrace, tactrace_head, Run, TempDir};
-
-/// Assert a run's exit code, showing its output when it differs.
-fn expect_code(r: &Run, code: i32, what: &str) {
-    assert_eq!(
-        r.code, code,
-        "{what}: exit code {} (expected {code})\nstdout: {}\nstderr: {}",
-        r.code, r.stdout, r.stderr
-    );
-}
+use util::{expect_code, tactrace, tactrace_head, TempDir};
 
 /// A small dataset `ds` and a model `m` trained on it, in `dir`.
 fn dataset_and_model(dir: &Path) {

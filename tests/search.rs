@@ -5,15 +5,7 @@ mod util;
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use util::{tactrace, Run, TempDir};
-
-fn expect_code(r: &Run, code: i32, what: &str) {
-    assert_eq!(
-        r.code, code,
-        "{what}: exit code {} (expected {code})\nstdout: {}\nstderr: {}",
-        r.code, r.stdout, r.stderr
-    );
-}
+use util::{expect_code, tactrace, TempDir};
 
 /// The shipped PDenNN space, as an absolute path.
 fn space() -> String {

@@ -4,39 +4,16 @@
 //! on simulated data (and, for the twin, validates on the real frames it
 //! mirrors). They run the real binary through `tests/util.rs`.
 mod util;
-use std::path::Path;
 use tactrace_servo::ImageInput;
-use tactrace_store::{read_dataset, read_dataset_frames, ImageFrames};
-use util::{real_data, tactrace, Run, TempDir};
-
-fn ok(r: &Run, what: &str) {
-    assert_eq!(
-        r.code, 0,
-        "{what}\nstdout: {}\nstderr: {}",
-        r.stdout, r.stderr
-    );
-}
-
-/// The dataset in `dir` and its frames (which it must have).
-fn frames_of(dir: &Path) -> (usize, ImageFrames) {
-    let data = read_dataset(dir).unwrap();
-    let frames = read_dataset_frames(dir, &data)
-        .unwrap()
-        .unwrap_or_else(|| panic!("{} has no frames.npy", dir.display()));
-    (data.len(), frames)
-}
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"))
-}
-
-/// A small network for 32 px frames.
-const SMALL: &str = "dense = [8]\nbatch_size = 8\n[[conv]]\nchannels = 4\nkernel = 3\nstride = 2\n";
+use util::{
+    frames_of, import_real, json, ok, real_data, real_paths, tactrace, train, write_small_conv,
+    TempDir,
+};
 
 #[test]
 fn issue22_collect_frames_size_writes_the_rendered_frames_and_trains_an_image_model() {
     let t = TempDir::new("issue22-collect-frames");
-    std::fs::write(t.join("small.toml"), SMALL).unwrap();
+    write_small_conv(&t.0);
     let r = tactrace(
         &t.0,
         &[
@@ -73,21 +50,13 @@ fn issue22_collect_frames_size_writes_the_rendered_frames_and_trains_an_image_mo
     // Rows differ: the frames are the taps', not one frame repeated.
     assert_ne!(frames.frame(0), frames.frame(23));
     // An image model trains on them for one epoch, then validates.
-    let r = tactrace(
+    let r = train(
         &t.0,
-        &[
-            "train",
-            "--model",
-            "conv-mlp",
-            "--train",
-            "ds",
-            "--epochs",
-            "1",
-            "--config",
-            "small.toml",
-            "--out",
-            "m",
-        ],
+        "conv-mlp",
+        "ds",
+        "1",
+        "m",
+        &["--config", "small.toml"],
     );
     ok(&r, "train conv-mlp on a collection's frames");
     let r = tactrace(
@@ -120,29 +89,18 @@ fn issue22_collect_frames_size_is_refused_where_it_cannot_apply() {
 fn issue22_twin_frames_size_trains_on_simulated_frames_and_validates_on_real_ones() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("issue22-twin-frames");
-    std::fs::write(t.join("small.toml"), SMALL).unwrap();
-    let (targets, frames) = (data.join("targets.csv"), data.join("frames"));
-    let init = frames.join("init_0.png");
-    let (targets, frames, init) = (
-        targets.to_str().unwrap(),
-        frames.to_str().unwrap(),
-        init.to_str().unwrap(),
-    );
-    let common = ["--targets", targets, "--limit", "30", "--frames-size", "32"];
+    write_small_conv(&t.0);
+    let [_, targets, init] = real_paths(&data);
+    let common = ["--reference", &init, "--limit", "30", "--frames-size", "32"];
     let twin = [
-        &["twin", "--reference", init][..],
+        &["twin", "--targets", &targets][..],
         &common,
         &["--out", "tw"],
     ]
     .concat();
     ok(&tactrace(&t.0, &twin), "twin --frames-size");
-    let real = [
-        &["import", "--frames", frames, "--reference", init][..],
-        &common,
-        &["--out", "real"],
-    ]
-    .concat();
-    ok(&tactrace(&t.0, &real), "import --frames-size");
+    let r = import_real(&t.0, &data, &common, "real");
+    ok(&r, "import --frames-size");
     let (rows, sim) = frames_of(&t.join("tw"));
     let (_, real) = frames_of(&t.join("real"));
     assert_eq!(sim.count(), rows);
@@ -151,20 +109,15 @@ fn issue22_twin_frames_size_trains_on_simulated_frames_and_validates_on_real_one
     // same source size, same preprocessing, so one model takes both.
     assert_eq!(sim.info, real.info);
     assert_ne!(sim.frame(0), sim.frame(29));
-    let train = [
-        "train",
-        "--model",
+    let r = train(
+        &t.0,
         "conv-mlp",
-        "--train",
         "tw",
-        "--epochs",
         "1",
-        "--config",
-        "small.toml",
-        "--out",
         "m",
-    ];
-    ok(&tactrace(&t.0, &train), "train on the twin's frames");
+        &["--config", "small.toml"],
+    );
+    ok(&r, "train on the twin's frames");
     let r = tactrace(
         &t.0,
         &["validate", "--model", "m", "--data", "real", "--json"],

@@ -6,19 +6,19 @@
 //! with `--sensor`, for a pin model and for an image model (whose contact
 //! check reads the pins with the same detector).
 mod util;
-use rand::{Rng, SeedableRng};
 use std::path::Path;
-use tactrace_sensor::{EdgeTap, PinLayout, TacTipConfig, TacTipModel};
+use tactrace_sensor::{TacTipConfig, TacTipModel};
 use tactrace_store::{SensorSummary, SightFile};
 use tactrace_vision::{DetectorParams, LayoutKind, PreprocessParams, SpotParams};
-use util::{tactrace, Run, TempDir};
+use util::{
+    calibrate_taps, follows_three_steps, import_taps, ok, tactrace, train, write_small_conv,
+    write_taps, TapSpread, TempDir,
+};
 
 /// 127 pins on 6 rings, about 3 px wide and 7 px apart in 128 x 128
 /// binarised frames.
 fn small_pin_sensor() -> TacTipConfig {
-    let mut cfg = TacTipConfig::default();
-    cfg.geometry.layout = PinLayout::Rings;
-    cfg.geometry.ring_phase_deg = (1..=6).map(|k| 2.0 / k as f64).collect();
+    let mut cfg = util::ring_sensor();
     cfg.geometry.pin_radius_mm = 0.7;
     cfg.camera.width = 128;
     cfg.camera.height = 128;
@@ -33,25 +33,7 @@ fn small_pin_sensor() -> TacTipConfig {
 /// no preprocessing, the small-pin detector).
 fn small_pin_taps(dir: &Path, n: usize) {
     let model = TacTipModel::new(small_pin_sensor()).unwrap();
-    let frames = dir.join("frames");
-    std::fs::create_dir_all(&frames).unwrap();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-    let mut csv = String::from("image_name,pose_2,pose_6\n");
-    for k in 0..n {
-        let tap = EdgeTap {
-            r_mm: rng.random_range(-5.0..25.0),
-            theta_deg: rng.random_range(-45.0..45.0),
-            ..EdgeTap::default()
-        };
-        let name = format!("frame_{k}_0.png");
-        let pins = model.edge_tap_pins(&tap);
-        model
-            .render(&pins, Some(&mut rng))
-            .save(frames.join(&name))
-            .unwrap();
-        csv.push_str(&format!("{name},{},{}\n", tap.r_mm, tap.theta_deg));
-    }
-    std::fs::write(dir.join("targets.csv"), csv).unwrap();
+    write_taps(dir, &model, n, &TapSpread::edge(7));
     let file = SightFile {
         sensor: SensorSummary {
             pins: 127,
@@ -72,56 +54,15 @@ fn small_pin_taps(dir: &Path, n: usize) {
     std::fs::write(dir.join("sensor.toml"), file.to_toml()).unwrap();
 }
 
-fn ok(run: &Run, what: &str) {
-    assert_eq!(
-        run.code, 0,
-        "{what}\nstdout: {}\nstderr: {}",
-        run.stdout, run.stderr
-    );
-}
-
 /// Calibrated from the taps (no undeformed frame) with the sensor file:
 /// the sensor folder records the small-pin detector.
 fn calibrated(t: &TempDir) {
     small_pin_taps(&t.0, 60);
-    let run = tactrace(
-        &t.0,
-        &[
-            "calibrate",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.csv",
-            "--sensor",
-            "sensor.toml",
-            "--samples",
-            "30",
-            "--out",
-            "s",
-            "--dz-column",
-            "none",
-            "--shear-columns",
-            "none",
-        ],
-    );
+    let run = calibrate_taps(&t.0, "30", &["--sensor", "sensor.toml"]);
     ok(&run, "calibrate");
     let folder = tactrace_store::SensorFolder::read(&t.join("s")).unwrap();
     let sight = folder.spec.sight.expect("the sensor settings recorded");
     assert!(matches!(sight.detect, DetectorParams::Spots(_)));
-}
-
-/// A follow run of 3 steps on the disk with `--sensor s`.
-fn follows(t: &TempDir, model: &str, out: &str) {
-    let run = tactrace(
-        &t.0,
-        &[
-            "follow", "--sensor", "s", "--model", model, "--shape", "disk", "--steps", "3",
-            "--out", out,
-        ],
-    );
-    ok(&run, "follow");
-    let trajectory = std::fs::read_to_string(t.join(out).join("trajectory.csv")).unwrap();
-    assert_eq!(trajectory.lines().count(), 4, "{trajectory}");
 }
 
 #[test]
@@ -133,14 +74,8 @@ fn issue21_a_small_pin_sensor_follows_a_disk_and_benches_with_a_pin_model() {
         &["collect", "--sensor", "s", "--samples", "40", "--out", "c"],
     );
     ok(&run, "collect");
-    let run = tactrace(
-        &t.0,
-        &[
-            "train", "--model", "pdennn", "--train", "c", "--epochs", "1", "--out", "m",
-        ],
-    );
-    ok(&run, "train");
-    follows(&t, "m", "run");
+    ok(&train(&t.0, "pdennn", "c", "1", "m", &[]), "train");
+    follows_three_steps(&t.0, "s", "m", "run");
     let run = tactrace(
         &t.0,
         &["bench", "--sensor", "s", "--model", "m", "--taps", "5"],
@@ -156,46 +91,16 @@ fn issue21_a_small_pin_sensor_follows_a_disk_and_benches_with_a_pin_model() {
 fn issue21_a_small_pin_sensor_follows_a_disk_with_an_image_model() {
     let t = TempDir::new("small-pins-image");
     calibrated(&t);
-    let run = tactrace(
+    let run = import_taps(
         &t.0,
-        &[
-            "import",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.csv",
-            "--sensor",
-            "sensor.toml",
-            "--frames-size",
-            "16",
-            "--out",
-            "d",
-        ],
+        &["--sensor", "sensor.toml", "--frames-size", "16"],
+        "d",
     );
     ok(&run, "import");
-    std::fs::write(
-        t.join("small.toml"),
-        "dense = [8]\nbatch_size = 8\n[[conv]]\nchannels = 4\nkernel = 3\nstride = 2\n",
-    )
-    .unwrap();
-    let run = tactrace(
-        &t.0,
-        &[
-            "train",
-            "--model",
-            "conv-mlp",
-            "--train",
-            "d",
-            "--epochs",
-            "1",
-            "--config",
-            "small.toml",
-            "--out",
-            "m",
-        ],
-    );
+    write_small_conv(&t.0);
+    let run = train(&t.0, "conv-mlp", "d", "1", "m", &["--config", "small.toml"]);
     ok(&run, "train");
-    follows(&t, "m", "run");
+    follows_three_steps(&t.0, "s", "m", "run");
     let metrics = std::fs::read_to_string(t.join("run/trajectory.csv")).unwrap();
     let header = metrics.lines().next().unwrap();
     let col = header

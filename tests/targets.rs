@@ -4,11 +4,7 @@
 //! the edge task written before targets were named (model format 2).
 mod util;
 use std::path::Path;
-use util::{real_data, tactrace, Run, TempDir};
-
-fn ok(r: &Run, what: &str) {
-    assert_eq!(r.code, 0, "{what}: {}", r.stderr);
-}
+use util::{json, ok, real_data, tactrace, Run, TempDir};
 
 /// The header and the first `n` rows of the real set's labels whose frame
 /// number N has `N % 5` in `parts`, into `out`.
@@ -33,10 +29,6 @@ fn part_csv(data: &Path, out: &Path, parts: &[u64], n: usize) {
 const SMALL: &str = "[position]\nn_components = 10\nhidden = [32]\nlearning_rate = 18.0\n\
     output_learning_rate = 5.0\nbeta = 1.0\n\n[angle]\nn_components = 10\nhidden = [32]\n\
     learning_rate = 18.0\noutput_learning_rate = 5.0\nbeta = 1.0\n";
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"))
-}
 
 #[test]
 fn issue21_three_targets_import_train_validate_and_import_like() {

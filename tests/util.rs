@@ -93,3 +93,172 @@ pub fn tactrace_head(dir: &Path, args: &[&str], lines: usize) -> Run {
         stderr,
     }
 }
+
+/// Asserts that `run` exited with `code`, showing both outputs otherwise.
+pub fn expect_code(run: &Run, code: i32, what: &str) {
+    assert_eq!(
+        run.code, code,
+        "{what}: exit code {} (expected {code})\nstdout: {}\nstderr: {}",
+        run.code, run.stdout, run.stderr
+    );
+}
+
+/// Asserts that `run` succeeded (exit 0).
+pub fn ok(run: &Run, what: &str) {
+    expect_code(run, 0, what);
+}
+
+/// `text` (a command's `--json` output or a JSON file) parsed.
+pub fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"))
+}
+
+/// The reference pins a dataset's `meta.json` records.
+pub fn reference_pins(dataset: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dataset.join("meta.json")).unwrap();
+    json(&text)["reference_pins"].clone()
+}
+
+/// A small convolutional network (one conv layer, 8 dense units) for
+/// frames of 16 to 32 px; written by [`write_small_conv`].
+pub const SMALL_CONV: &str =
+    "dense = [8]\nbatch_size = 8\n[[conv]]\nchannels = 4\nkernel = 3\nstride = 2\n";
+
+/// Writes [`SMALL_CONV`] as `dir/small.toml`.
+pub fn write_small_conv(dir: &Path) {
+    std::fs::write(dir.join("small.toml"), SMALL_CONV).unwrap();
+}
+
+/// The simulator's 127-pin TacTip on 6 concentric rings (each ring turned
+/// a little), otherwise its defaults.
+pub fn ring_sensor() -> tactrace_sensor::TacTipConfig {
+    let mut cfg = tactrace_sensor::TacTipConfig::default();
+    cfg.geometry.layout = tactrace_sensor::PinLayout::Rings;
+    cfg.geometry.ring_phase_deg = (1..=6).map(|k| 2.0 / k as f64).collect();
+    cfg
+}
+
+/// How [`write_taps`] spreads its taps: uniform `r_mm` and `theta_deg`
+/// drawn from a generator seeded by `seed`, which also renders each frame's
+/// noise when `noise` is set.
+pub struct TapSpread {
+    pub r_mm: std::ops::Range<f64>,
+    pub theta_deg: std::ops::Range<f64>,
+    pub noise: bool,
+    pub seed: u64,
+}
+
+impl TapSpread {
+    /// r over [-5, 25] mm (the lightest taps barely touch), theta over
+    /// [-45, 45] deg, noisy frames.
+    pub fn edge(seed: u64) -> Self {
+        Self {
+            r_mm: -5.0..25.0,
+            theta_deg: -45.0..45.0,
+            noise: true,
+            seed,
+        }
+    }
+}
+
+/// `n` labelled edge taps of the simulated sensor `model` in `dir`:
+/// `frames/frame_K_0.png` and `targets.csv` (`image_name,pose_2,pose_6`,
+/// r in mm and theta in deg), no undeformed frame.
+pub fn write_taps(dir: &Path, model: &tactrace_sensor::TacTipModel, n: usize, spread: &TapSpread) {
+    use rand::{Rng, SeedableRng};
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(spread.seed);
+    let mut csv = String::from("image_name,pose_2,pose_6\n");
+    for k in 0..n {
+        let tap = tactrace_sensor::EdgeTap {
+            r_mm: rng.random_range(spread.r_mm.clone()),
+            theta_deg: rng.random_range(spread.theta_deg.clone()),
+            ..tactrace_sensor::EdgeTap::default()
+        };
+        let name = format!("frame_{k}_0.png");
+        let pins = model.edge_tap_pins(&tap);
+        let noise = if spread.noise { Some(&mut rng) } else { None };
+        model.render(&pins, noise).save(frames.join(&name)).unwrap();
+        csv.push_str(&format!("{name},{},{}\n", tap.r_mm, tap.theta_deg));
+    }
+    std::fs::write(dir.join("targets.csv"), csv).unwrap();
+}
+
+/// `tactrace calibrate` of the taps in `dir` (`frames/`, `targets.csv`)
+/// from `samples` of them into `s`, plain edge labels (no depth or shear
+/// columns), with `extra` arguments.
+pub fn calibrate_taps(dir: &Path, samples: &str, extra: &[&str]) -> Run {
+    let mut args = vec![
+        "calibrate",
+        "--frames",
+        "frames",
+        "--targets",
+        "targets.csv",
+        "--samples",
+        samples,
+        "--out",
+        "s",
+        "--dz-column",
+        "none",
+        "--shear-columns",
+        "none",
+    ];
+    args.extend(extra);
+    tactrace(dir, &args)
+}
+
+/// `tactrace import` of the taps in `dir` (`frames/`, `targets.csv`) into
+/// `out`, with `extra` arguments.
+pub fn import_taps(dir: &Path, extra: &[&str], out: &str) -> Run {
+    let mut args = vec!["import", "--frames", "frames", "--targets", "targets.csv"];
+    args.extend(extra);
+    args.extend(["--out", out]);
+    tactrace(dir, &args)
+}
+
+/// `tactrace train --model KIND --train DATA --epochs N --out OUT`, with
+/// `extra` arguments (e.g. `--config small.toml`).
+pub fn train(dir: &Path, kind: &str, data: &str, epochs: &str, out: &str, extra: &[&str]) -> Run {
+    let mut args = vec![
+        "train", "--model", kind, "--train", data, "--epochs", epochs,
+    ];
+    args.extend(extra);
+    args.extend(["--out", out]);
+    tactrace(dir, &args)
+}
+
+/// A follow run of 3 steps on the disk with `--sensor SENSOR --model
+/// MODEL` into `out`: it succeeds and its trajectory has a header and
+/// 3 rows.
+pub fn follows_three_steps(dir: &Path, sensor: &str, model: &str, out: &str) {
+    let run = tactrace(
+        dir,
+        &[
+            "follow", "--sensor", sensor, "--model", model, "--shape", "disk", "--steps", "3",
+            "--out", out,
+        ],
+    );
+    ok(&run, "follow");
+    let trajectory = std::fs::read_to_string(dir.join(out).join("trajectory.csv")).unwrap();
+    assert_eq!(trajectory.lines().count(), 4, "{trajectory}");
+}
+
+/// The dataset in `dir`: its row count and its frames (which it must have).
+pub fn frames_of(dir: &Path) -> (usize, tactrace_store::ImageFrames) {
+    let data = tactrace_store::read_dataset(dir).unwrap();
+    let frames = tactrace_store::read_dataset_frames(dir, &data)
+        .unwrap()
+        .unwrap_or_else(|| panic!("{} has no frames.npy", dir.display()));
+    (data.len(), frames)
+}
+
+/// `tactrace import` of the real set in `data` (its frames and labels,
+/// see [`real_paths`]) into `out`, with `extra` arguments.
+pub fn import_real(dir: &Path, data: &Path, extra: &[&str], out: &str) -> Run {
+    let [frames, targets, _] = real_paths(data);
+    let mut args = vec!["import", "--frames", &frames, "--targets", &targets];
+    args.extend(extra);
+    args.extend(["--out", out]);
+    tactrace(dir, &args)
+}

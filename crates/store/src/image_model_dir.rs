@@ -6,17 +6,17 @@
 //!
 //! [`LoadedModel`] is the one entry that loads any model folder, pin or
 //! image model, for the commands that take either.
-use crate::error::{write_err, Result, StoreError};
+use crate::error::{Result, StoreError};
 use crate::fsutil::{read_text, StagedDir};
 use crate::image_frames::FramesInfo;
-use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
-use crate::model_dir::{read_training, StoredModel};
-use crate::training_record::{TrainingRecord, TRAINING_FILE};
+use crate::model_dir::StoredModel;
+use crate::model_files::{
+    network_error, read_network, read_training, write_common, write_file, CommonParts, MODEL_JSON,
+};
+use crate::training_record::TrainingRecord;
 use std::path::{Path, PathBuf};
 use tactrace_learn::ImageModel;
 
-const MODEL_JSON: &str = "model.json";
-const WEIGHTS: &str = "weights.safetensors";
 const FRAMES_JSON: &str = "frames.json";
 
 /// An image model with what its training frames were.
@@ -47,12 +47,8 @@ impl StoredImageModel {
 
     /// Load an image model folder, with errors naming the file.
     pub fn load(dir: &Path) -> Result<Self> {
-        let json = read_text(&dir.join(MODEL_JSON))?;
-        let weights = read_bounded(&dir.join(WEIGHTS), MAX_BINARY_BYTES, "weights file")?;
-        let model = ImageModel::from_bytes(&json, &weights).map_err(|e| StoreError::Format {
-            path: dir.into(),
-            reason: e.to_string(),
-        })?;
+        let (json, weights) = read_network(dir)?;
+        let model = ImageModel::from_bytes(&json, &weights).map_err(|e| network_error(dir, e))?;
         let frames_path = dir.join(FRAMES_JSON);
         let frames: FramesInfo =
             serde_json::from_str(&read_text(&frames_path)?).map_err(|e| StoreError::Format {
@@ -111,27 +107,17 @@ pub fn stage_image_model(
     extra: &[(&str, String)],
 ) -> Result<StagedDir> {
     let stage = StagedDir::new(dir, force)?;
-    let (json, weights) = model.model.to_bytes().map_err(|e| StoreError::Format {
-        path: dir.into(),
-        reason: e.to_string(),
-    })?;
-    write(&stage.path().join(MODEL_JSON), json.as_bytes())?;
-    write(&stage.path().join(WEIGHTS), &weights)?;
+    let network = model.model.to_bytes().map_err(|e| network_error(dir, e))?;
     let frames = serde_json::to_string_pretty(&model.frames).expect("info serialises");
-    write(&stage.path().join(FRAMES_JSON), frames.as_bytes())?;
-    if let Some(training) = &model.training {
-        let text = serde_json::to_string(training).expect("record serialises");
-        write(&stage.path().join(TRAINING_FILE), text.as_bytes())?;
-    }
-    for (name, text) in extra {
-        write(&stage.path().join(name), text.as_bytes())?;
-    }
-    write(&stage.path().join("history.csv"), history_csv)?;
+    write_file(&stage.path().join(FRAMES_JSON), frames.as_bytes())?;
+    let parts = CommonParts {
+        network,
+        training: model.training.as_ref(),
+        history_csv,
+        extra,
+    };
+    write_common(&stage, parts)?;
     Ok(stage)
-}
-
-fn write(path: &Path, bytes: &[u8]) -> Result<()> {
-    std::fs::write(path, bytes).map_err(write_err(path))
 }
 
 /// Any model folder: a pin model (displacement vectors in) or an image

@@ -8,7 +8,8 @@
 //!   data, loaded as one [`StoredModel`] so the pin-order check
 //!   ([`pin_order`]) runs whenever a model meets data or a rig;
 //!   [`image_model_dir`]: image model folders, and [`LoadedModel`], the
-//!   one loader of either kind;
+//!   one loader of either kind; both read and write the parts they share
+//!   (network, training record, history, config) one way (`model_files`);
 //! - [`training_record`]: which rows of which dataset a model was trained
 //!   on (content hashes), so scores on training rows are told apart;
 //! - [`frame_file`], [`shape_file`]: frames (PNG) and contours (CSV);
@@ -40,6 +41,7 @@ pub mod image_model_dir;
 pub mod input_file;
 pub mod lock;
 pub mod model_dir;
+mod model_files;
 pub mod npy_file;
 pub mod overlap;
 pub mod pin_order;

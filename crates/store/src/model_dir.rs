@@ -11,16 +11,16 @@
 //! pins of the data or rig it is about to see, so the pin-order check
 //! cannot be forgotten.
 use crate::dataset::TapData;
-use crate::error::{write_err, Result, StoreError};
+use crate::error::{Result, StoreError};
 use crate::fsutil::{read_text, StagedDir};
-use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
+use crate::model_files::{
+    network_error, read_network, read_training, write_common, write_file, CommonParts, MODEL_JSON,
+};
 use crate::pin_order::pin_order_mismatch;
-use crate::training_record::{TrainingRecord, TRAINING_FILE};
+use crate::training_record::TrainingRecord;
 use std::path::{Path, PathBuf};
 use tactrace_learn::{PoseModel, TrainingHistory};
 
-const MODEL_JSON: &str = "model.json";
-const WEIGHTS: &str = "weights.safetensors";
 const PINS: &str = "pins.json";
 
 /// `pins.json`: the training data's reference pins (px, their order).
@@ -78,13 +78,8 @@ impl StoredModel {
                 ),
             });
         }
-        let json = read_text(&json_path)?;
-        let weights_path = dir.join(WEIGHTS);
-        let weights = read_bounded(&weights_path, MAX_BINARY_BYTES, "weights file")?;
-        let model = PoseModel::from_bytes(&json, &weights).map_err(|e| StoreError::Format {
-            path: dir.into(),
-            reason: e.to_string(),
-        })?;
+        let (json, weights) = read_network(dir)?;
+        let model = PoseModel::from_bytes(&json, &weights).map_err(|e| network_error(dir, e))?;
         let reference_pins = read_pins(dir)?;
         if 2 * reference_pins.len() != model.input_dim() {
             return Err(StoreError::Format {
@@ -162,22 +157,6 @@ fn read_pins(dir: &Path) -> Result<Vec<[f64; 2]>> {
     Ok(file.reference_pins)
 }
 
-/// `training.json` of `dir`, if there is one (older folders have none).
-pub(crate) fn read_training(dir: &Path) -> Result<Option<TrainingRecord>> {
-    let path = dir.join(TRAINING_FILE);
-    if !path.exists() {
-        return Ok(None);
-    }
-    let bad = |reason: String| StoreError::Format {
-        path: path.clone(),
-        reason,
-    };
-    let record: TrainingRecord =
-        serde_json::from_str(&read_text(&path)?).map_err(|e| bad(e.to_string()))?;
-    record.check().map_err(bad)?;
-    Ok(Some(record))
-}
-
 /// Write a trained model (with the reference pins of its training data and,
 /// when known, the record of its training rows), its training history and
 /// `extra` text files `(name, contents)` into a staging folder for `dir`;
@@ -194,26 +173,16 @@ pub fn stage_model(
         reference_pins: model.reference_pins.clone(),
     };
     let pins = serde_json::to_string(&pins).expect("pins serialise");
-    write(&stage.path().join(PINS), pins.as_bytes())?;
-    if let Some(training) = &model.training {
-        let text = serde_json::to_string(training).expect("record serialises");
-        write(&stage.path().join(TRAINING_FILE), text.as_bytes())?;
-    }
-    for (name, text) in extra {
-        write(&stage.path().join(name), text.as_bytes())?;
-    }
-    let (json, weights) = model.model.to_bytes().map_err(|e| StoreError::Format {
-        path: dir.into(),
-        reason: e.to_string(),
-    })?;
-    write(&stage.path().join(MODEL_JSON), json.as_bytes())?;
-    write(&stage.path().join(WEIGHTS), &weights)?;
-    write(&stage.path().join("history.csv"), &history_csv(history))?;
+    write_file(&stage.path().join(PINS), pins.as_bytes())?;
+    let network = model.model.to_bytes().map_err(|e| network_error(dir, e))?;
+    let parts = CommonParts {
+        network,
+        training: model.training.as_ref(),
+        history_csv: &history_csv(history),
+        extra,
+    };
+    write_common(&stage, parts)?;
     Ok(stage)
-}
-
-fn write(path: &Path, bytes: &[u8]) -> Result<()> {
-    std::fs::write(path, bytes).map_err(write_err(path))
 }
 
 /// The per-epoch history as CSV: one row per epoch and network.

@@ -28,8 +28,13 @@ import sys
 
 
 def _evaluate(name, context, config, cwd, threads):
-    """One evaluation in a Ray worker: ("ok", score) or (kind, message)."""
-    os.environ.setdefault("RAYON_NUM_THREADS", str(threads))
+    """One evaluation in a Ray worker: ("ok", score) or (kind, message).
+
+    The worker trains on as many threads as the task asked CPUs: set before
+    the package first runs anything in this process (rayon reads it once),
+    whatever the node's environment held (a job's RAYON_NUM_THREADS would
+    otherwise put many threads on one CPU)."""
+    os.environ["RAYON_NUM_THREADS"] = str(threads)
     if cwd and os.path.isdir(cwd):
         os.chdir(cwd)
     from tactrace import _tactrace

@@ -113,10 +113,10 @@ mod tests {
                 let off = wrap_deg(got - mean).abs();
                 assert!(off < 1e-4, "{angles:?}: {got} deg, want {mean}");
             }
-            for k in 0..2 {
+            for (k, want) in angles.iter().enumerate() {
                 let one = model.member(k).expect("member");
                 let got = one.predict_targets(&[0.0; 4]).expect("member")[0];
-                assert!(wrap_deg(got - angles[k]).abs() < 1e-4, "member {k}: {got}");
+                assert!(wrap_deg(got - want).abs() < 1e-4, "member {k}: {got}");
                 assert_eq!(one.nets[0].name, "pose");
             }
         }

@@ -107,6 +107,12 @@ pub struct TrainArgs {
     /// Training epochs (default: the preset's).
     #[arg(long)]
     pub(crate) epochs: Option<usize>,
+    /// Train an ensemble of K members (a pin model's nets K times, from
+    /// seeds derived from the configuration's seed, in parallel), their
+    /// predictions averaged; saved as one model folder. Default: the
+    /// configuration's `ensemble` (1).
+    #[arg(long, value_name = "K")]
+    pub(crate) ensemble: Option<usize>,
     /// Seed of an image model's initialisation, shuffling and shifts
     /// (pin models take theirs from --config).
     #[arg(long)]
@@ -156,6 +162,9 @@ pub fn model_config(
 pub fn train(a: TrainArgs) -> Result<()> {
     let model = match a.model.pins() {
         Ok(model) => model,
+        Err(_) if a.ensemble.is_some() => {
+            return Err(LabError::Config("--ensemble is a pin model's".into()).into())
+        }
         Err(kind) => return crate::cmd_image::train(kind, a),
     };
     if a.seed.is_some() {
@@ -164,7 +173,11 @@ pub fn train(a: TrainArgs) -> Result<()> {
         )
         .into());
     }
-    let cfg = model_config(model, a.preset, a.config.as_deref(), a.epochs)?;
+    let mut cfg = model_config(model, a.preset, a.config.as_deref(), a.epochs)?;
+    if let Some(k) = a.ensemble {
+        cfg.ensemble = k;
+        cfg.validate().map_err(LabError::from)?;
+    }
     if a.print_config {
         crate::say!("{}", toml::to_string(&cfg)?.trim_end());
         return Ok(());

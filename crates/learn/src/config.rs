@@ -122,6 +122,18 @@ pub struct ModelConfig {
     /// them. Default preset 0.25; report preset 0 (constant rates).
     #[serde(default)]
     pub anneal_fraction: f64,
+    /// Members of an ensemble: the model's nets trained this many times,
+    /// from seeds derived from `seed` ([`Self::member_seed`]), their
+    /// outputs averaged (a circular target's sine and cosine before its
+    /// `atan2`). 1 (the default, not written) is the single model.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub ensemble: usize,
+    /// Standard deviation of Gaussian noise added to every input of every
+    /// net (the standardised displacements or the scaled principal
+    /// components) of every training sample, drawn afresh each epoch from
+    /// the seed; never at prediction. 0 (the default, not written): none.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub input_noise: f64,
     /// The single net of DisDenNN / PcaDenNN (outputs r and theta).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<NetConfig>,
@@ -175,6 +187,22 @@ impl ModelConfig {
     /// Set the number of epochs.
     pub fn set_epochs(&mut self, epochs: usize) {
         self.epochs = epochs;
+    }
+
+    /// The seed of ensemble member `m` (from 0): member 0 takes `seed`
+    /// itself (so an ensemble of one is the single model), the others a
+    /// SplitMix64 mix of `seed` and `m`, far from `seed + k` (the seeds of
+    /// one member's nets).
+    pub fn member_seed(&self, m: usize) -> u64 {
+        if m == 0 {
+            return self.seed;
+        }
+        let mut z = self
+            .seed
+            .wrapping_add(0x9E37_79B9_7F4A_7C15u64.wrapping_mul(m as u64));
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
     }
 
     /// The nets to train: `(name, target columns, config)`.
@@ -246,6 +274,18 @@ impl ModelConfig {
             return Err(config_err(
                 "anneal_fraction",
                 format!("{} must lie in [0, 1]", self.anneal_fraction),
+            ));
+        }
+        if !(1..=MAX_ENSEMBLE).contains(&self.ensemble) {
+            return Err(config_err(
+                "ensemble",
+                format!("{} must lie in [1, {MAX_ENSEMBLE}]", self.ensemble),
+            ));
+        }
+        if !(self.input_noise.is_finite() && (0.0..=MAX_INPUT_NOISE).contains(&self.input_noise)) {
+            return Err(config_err(
+                "input_noise",
+                format!("{} must lie in [0, {MAX_INPUT_NOISE}]", self.input_noise),
             ));
         }
         if self.divergence_retries > MAX_RETRIES {
@@ -342,6 +382,24 @@ pub const MAX_HIDDEN_WEIGHTS: usize = 1 << 26;
 pub const MAX_EULER_STEPS: usize = 10_000;
 /// Largest number of learning-rate halvings after a divergence.
 pub const MAX_RETRIES: usize = 64;
+/// Largest ensemble ([`ModelConfig::ensemble`]).
+pub const MAX_ENSEMBLE: usize = 64;
+
+fn one() -> usize {
+    1
+}
+
+fn is_one(k: &usize) -> bool {
+    *k == 1
+}
+
+/// Largest input noise ([`ModelConfig::input_noise`]): the inputs have
+/// unit spread, so 10 drowns them.
+pub const MAX_INPUT_NOISE: f64 = 10.0;
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
 
 /// A net's key at fault and why.
 type FieldError = (&'static str, String);
@@ -441,6 +499,8 @@ fn report(kind: ModelKind) -> ModelConfig {
         clamped_phase: ClampedPhase::Euler { n_i: 5, dt: 1.0 },
         divergence_retries: 0,
         anneal_fraction: 0.0,
+        ensemble: 1,
+        input_noise: 0.0,
         pose: None,
         position: None,
         angle: None,

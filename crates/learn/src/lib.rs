@@ -18,6 +18,7 @@ mod ep;
 mod error;
 mod image_model;
 mod kernels;
+mod member;
 mod mlp;
 mod net;
 mod pca;
@@ -31,7 +32,7 @@ mod target_score;
 mod targets;
 mod trainer;
 
-pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling};
+pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_ENSEMBLE};
 pub use dataset::{mean_absolute_error, Dataset};
 pub use dennn::{ClampedPhase, DenNN, EpConfig, FreePhase, LrScaling, SampleStats};
 pub use error::LearnError;

@@ -2,7 +2,10 @@
 //! nets and target scaling, fitted together and predicting N named targets
 //! ([`ModelTarget`]: mm or deg, circular angles as sine and cosine) from one
 //! pin-displacement vector; the edge pose `[r mm, theta deg]` for a model of
-//! one position and one angle.
+//! one position and one angle. An ensemble ([`ModelConfig::ensemble`]) is
+//! the same model with its nets trained once per member (seeds derived
+//! from the run's) on the same standardiser, PCA and target scaling, the
+//! members' scaled outputs averaged.
 use crate::config::{ModelConfig, ModelKind, TargetScaling};
 use crate::dataset::Dataset;
 use crate::error::LearnError;
@@ -69,7 +72,8 @@ impl PoseModel {
     /// order), reporting each net's loss on `val` per epoch (never used for
     /// fitting). A divergence restarts the fit with halved learning rates
     /// up to `cfg.divergence_retries` times (the history counts the
-    /// halvings; the model's config holds the rates used).
+    /// halvings; the model's config holds the rates used). An ensemble's
+    /// members train together, in parallel, and restart together.
     pub fn fit_targets(
         cfg: &ModelConfig,
         outputs: &[ModelTarget],
@@ -129,9 +133,9 @@ impl PoseModel {
         let targets = fit_target_scaling(cfg.target_scaling, train)?;
         let z = standardiser.transform(&train.x);
         let z_val = val.map(|v| standardiser.transform(&v.x));
-        let mut trainers = Vec::new();
-        let mut fitted = Vec::new();
-        for (k, (name, which, net_cfg)) in cfg.nets_for(outputs).into_iter().enumerate() {
+        let nets = cfg.nets_for(outputs);
+        let mut plans = Vec::with_capacity(nets.len());
+        for (name, which, net_cfg) in nets {
             let cols: Vec<usize> = which.iter().flat_map(|&t| encoded[t].clone()).collect();
             let pca = match net_cfg.n_components {
                 Some(c) => Some(Pca::fit(
@@ -143,30 +147,42 @@ impl PoseModel {
                 )?),
                 None => None,
             };
-            let inputs = net_inputs(pca.as_ref(), &z);
-            let data = NetData::new(inputs, train, &cols, &targets)?;
-            let val_data = match (val, &z_val) {
-                (Some(v), Some(zv)) => Some(NetData::new(
-                    net_inputs(pca.as_ref(), zv),
-                    v,
-                    &cols,
-                    &targets,
-                )?),
-                _ => None,
+            plans.push((name, cols, pca, net_cfg));
+        }
+        let mut trainers = Vec::new();
+        let mut fitted = Vec::new();
+        for m in 0..cfg.ensemble {
+            // Member m: the single model's nets from the member's seed.
+            let member = ModelConfig {
+                seed: cfg.member_seed(m),
+                ..cfg.clone()
             };
-            let mut sizes = vec![data.set.dim_x];
-            sizes.extend(&net_cfg.hidden);
-            sizes.push(cols.len());
-            let layers = Layers::new(&sizes, cfg.seed.wrapping_add(k as u64))?;
-            trainers.push(Trainer::new(
-                &name, layers, cfg, net_cfg, data, val_data, k as u64,
-            ));
-            fitted.push(FittedNet {
-                name,
-                targets: cols,
-                pca,
-                layers: Layers::new(&sizes, 0)?,
-            });
+            for (k, (name, cols, pca, net_cfg)) in plans.iter().enumerate() {
+                let name = member_name(name, m, cfg.ensemble);
+                let data = NetData::new(net_inputs(pca.as_ref(), &z), train, cols, &targets)?;
+                let val_data = match (val, &z_val) {
+                    (Some(v), Some(zv)) => Some(NetData::new(
+                        net_inputs(pca.as_ref(), zv),
+                        v,
+                        cols,
+                        &targets,
+                    )?),
+                    _ => None,
+                };
+                let mut sizes = vec![data.set.dim_x];
+                sizes.extend(&net_cfg.hidden);
+                sizes.push(cols.len());
+                let layers = Layers::new(&sizes, member.seed.wrapping_add(k as u64))?;
+                trainers.push(Trainer::new(
+                    &name, layers, &member, net_cfg, data, val_data, k as u64,
+                ));
+                fitted.push(FittedNet {
+                    name,
+                    targets: cols.clone(),
+                    pca: pca.clone(),
+                    layers: Layers::new(&sizes, 0)?,
+                });
+            }
         }
         let history = train_nets(&mut trainers, cfg.epochs, progress)?;
         for (f, t) in fitted.iter_mut().zip(trainers) {
@@ -220,9 +236,10 @@ impl PoseModel {
             let mut out = vec![0.0f32; net.targets.len()];
             net.layers.predict(&input, &mut out)?;
             for (&col, &o) in net.targets.iter().zip(&out) {
-                scaled[col] = o as f64;
+                scaled[col] += o as f64;
             }
         }
+        self.average_members(&mut scaled);
         let mut encoded = vec![0.0f64; width];
         self.targets.inverse_into(&scaled, &mut encoded);
         Ok(targets::decode(&self.outputs, &encoded))
@@ -246,6 +263,20 @@ impl PoseModel {
             return Ok(out);
         }
         rows.chunks(dim).map(|row| self.predict(row)).collect()
+    }
+
+    /// Divide the sums of the members' scaled outputs by their number
+    /// (nothing to do for a single model).
+    pub(crate) fn average_members(&self, scaled: &mut [f64]) {
+        if self.config.ensemble > 1 {
+            let k = self.config.ensemble as f64;
+            scaled.iter_mut().for_each(|v| *v /= k);
+        }
+    }
+
+    /// Members of the ensemble (1: a single model).
+    pub fn ensemble(&self) -> usize {
+        self.config.ensemble
     }
 
     /// An edge model whose targets are `[r mm, theta deg]` in that order,
@@ -348,6 +379,16 @@ impl PoseModel {
             .iter()
             .map(|n| (n.name.clone(), n.layers.sizes().to_vec()))
             .collect()
+    }
+}
+
+/// A net's name in member `m` of an ensemble of `k`: the single model's
+/// name for `k = 1`, else `name#m` counting members from 1.
+fn member_name(name: &str, m: usize, k: usize) -> String {
+    if k == 1 {
+        name.to_string()
+    } else {
+        format!("{name}#{}", m + 1)
     }
 }
 

@@ -9,7 +9,9 @@
 //!   of rows (a single row is bound by reading the weights); elsewhere one
 //!   row at a time through the training kernels, with fused multiply-adds
 //!   where the CPU has AVX2 + FMA;
-//! - no allocation per row.
+//! - no allocation per row;
+//! - an ensemble's members each add their outputs, averaged before the
+//!   targets are unscaled.
 //!
 //! The numbers are those of the plain path to rounding: f64 up to the
 //! projection, f32 in the nets as before (`tests/predict.rs` checks
@@ -196,7 +198,7 @@ fn rows<const F: bool>(p: &Predictor, model: &PoseModel, flat: &[f32], out: &mut
                 }
             }
             for (k, &col) in net.targets.iter().enumerate() {
-                scaled[col] = f64::from(a[k]);
+                scaled[col] += f64::from(a[k]);
             }
         }
         out.push(p.unscale(model, &scaled));
@@ -214,10 +216,13 @@ impl Predictor {
         (&self.maps, &self.net_map)
     }
 
-    /// `[r mm, theta deg]` from the nets' scaled outputs.
+    /// `[r mm, theta deg]` from the sums of the nets' scaled outputs
+    /// (one net a column, or one a column per ensemble member: averaged).
     pub(crate) fn unscale(&self, model: &PoseModel, scaled: &[f64; 2]) -> [f64; 2] {
+        let mut scaled = *scaled;
+        model.average_members(&mut scaled);
         let mut pose = [0.0f64; 2];
-        model.targets.inverse_into(scaled, &mut pose);
+        model.targets.inverse_into(&scaled, &mut pose);
         pose
     }
 }
@@ -293,9 +298,10 @@ mod tests {
             let mut st = States::new(net.layers.sizes());
             net.layers.forward::<false>(&input, &mut st);
             for (k, &col) in net.targets.iter().enumerate() {
-                scaled[col] = f64::from(st.s[net.layers.depth()][k]);
+                scaled[col] += f64::from(st.s[net.layers.depth()][k]);
             }
         }
+        model.average_members(&mut scaled);
         let mut pose = [0.0f64; 2];
         model.targets.inverse_into(&scaled, &mut pose);
         pose

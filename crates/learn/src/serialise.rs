@@ -1,6 +1,7 @@
 //! Model (de)serialisation to a JSON string (format version, kind, config,
 //! architecture, standardiser, PCA, target scaling, the targets predicted:
-//! names, units, circular flags) plus safetensors bytes
+//! names, units, circular flags; an ensemble's members' nets one after
+//! the other, `config.ensemble` of them) plus safetensors bytes
 //! (the weights, in the report's `W(l)` orientation `d(l-1) x d(l)`). Pure:
 //! the lab crate writes the files.
 use crate::config::{ModelConfig, ModelKind};
@@ -156,7 +157,7 @@ impl PoseModel {
             .enumerate()
             .map(|(k, n)| load_net(k, n, &tensors, file.input_dim))
             .collect::<Result<Vec<_>, _>>()?;
-        check_targets(&nets, width)?;
+        check_targets(&nets, width, file.config.ensemble)?;
         Ok(PoseModel {
             config: file.config,
             standardiser,
@@ -243,17 +244,26 @@ fn read_f32(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f3
         .collect())
 }
 
-/// Every encoded target column (`0..width`) is predicted by exactly one net.
-fn check_targets(nets: &[FittedNet], width: usize) -> Result<(), LearnError> {
-    let mut seen = vec![0usize; width];
-    for &t in nets.iter().flat_map(|n| &n.targets) {
-        *seen
-            .get_mut(t)
-            .ok_or_else(|| corrupt(format!("target column {t} out of range")))? += 1;
+/// The nets are `members` equal parts (an ensemble's members, in order),
+/// and in each every encoded target column (`0..width`) is predicted by
+/// exactly one net.
+fn check_targets(nets: &[FittedNet], width: usize, members: usize) -> Result<(), LearnError> {
+    if nets.is_empty() || !nets.len().is_multiple_of(members) {
+        return Err(corrupt(format!(
+            "{} nets do not make {members} ensemble members",
+            nets.len()
+        )));
     }
-    if seen.iter().all(|&k| k == 1) {
-        Ok(())
-    } else {
-        Err(corrupt("each target column must come from exactly one net"))
+    for member in nets.chunks(nets.len() / members) {
+        let mut seen = vec![0usize; width];
+        for &t in member.iter().flat_map(|n| &n.targets) {
+            *seen
+                .get_mut(t)
+                .ok_or_else(|| corrupt(format!("target column {t} out of range")))? += 1;
+        }
+        if !seen.iter().all(|&k| k == 1) {
+            return Err(corrupt("each target column must come from exactly one net"));
+        }
     }
+    Ok(())
 }

@@ -1,6 +1,6 @@
 //! The training loop of a pose model: per-epoch shuffling with a seeded RNG,
-//! one EP (or backprop) pass per net, the two PDenNN nets on two cores with
-//! `rayon::join`, and the per-epoch history of report Fig. 4.5.
+//! one EP (or backprop) pass per net, the nets (the PDenNN's two, an
+//! ensemble's members) in parallel with rayon, and the per-epoch history of report Fig. 4.5.
 use crate::config::{anneal_factor, ModelConfig, ModelKind, NetConfig};
 use crate::dataset::Dataset;
 use crate::dennn::{DenNN, EpConfig};
@@ -11,6 +11,8 @@ use crate::standardise::Standardiser;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// One net's figures for one epoch.
@@ -124,6 +126,8 @@ pub(crate) struct Trainer {
     schedule: (usize, f64),
     /// An epoch's mean loss above this is a divergence ([`divergence_limit`]).
     limit: f64,
+    /// Noise added to the inputs each epoch (`ModelConfig::input_noise`).
+    noise: Option<InputNoise>,
 }
 
 impl Trainer {
@@ -170,6 +174,7 @@ impl Trainer {
             order,
             schedule: (cfg.epochs, cfg.anneal_fraction),
             limit,
+            noise: (cfg.input_noise > 0.0).then(|| InputNoise::new(cfg.input_noise, cfg.seed, k)),
         }
     }
 
@@ -177,6 +182,8 @@ impl Trainer {
     pub fn epoch(&mut self, epoch: usize) -> Result<NetEpoch, LearnError> {
         self.order.shuffle(&mut self.rng);
         let f = anneal_factor(epoch, self.schedule.0, self.schedule.1);
+        let noisy = self.noise.as_mut().map(|n| n.apply(&self.data.set));
+        let set = noisy.as_ref().unwrap_or(&self.data.set);
         let (loss, energy) = match &mut self.engine {
             Engine::Ep(net, cfg) => {
                 let cfg = EpConfig {
@@ -184,7 +191,7 @@ impl Trainer {
                     output_learning_rate: cfg.output_learning_rate.map(|o| o * f),
                     ..*cfg
                 };
-                let s = net.train_sequence(&self.data.set, &self.order, &cfg)?;
+                let s = net.train_sequence(set, &self.order, &cfg)?;
                 (s.loss, s.energy)
             }
             Engine::Backprop(net, lr, out_lr) => {
@@ -192,8 +199,7 @@ impl Trainer {
                 let lr = *lr * f;
                 let mut total = 0.0;
                 for &i in &self.order {
-                    total +=
-                        net.train_sample(self.data.set.x_row(i), self.data.set.y_row(i), lr)?;
+                    total += net.train_sample(set.x_row(i), set.y_row(i), lr)?;
                 }
                 let mean = total / self.order.len() as f64;
                 (mean, mean)
@@ -237,6 +243,43 @@ impl Trainer {
     }
 }
 
+/// Gaussian noise on a net's training inputs, drawn afresh every epoch
+/// from its own seeded generator (so the shuffles are those of a fit
+/// without noise); the targets and the validation inputs are left alone.
+struct InputNoise {
+    std: f32,
+    rng: ChaCha8Rng,
+}
+
+impl InputNoise {
+    /// Noise of standard deviation `std` for net `k` of a fit seeded `seed`.
+    fn new(std: f64, seed: u64, k: u64) -> Self {
+        let stream = seed.rotate_left(17) ^ 0xD1B5_4A32_D192_ED03u64.wrapping_mul(k + 1);
+        Self {
+            std: std as f32,
+            rng: ChaCha8Rng::seed_from_u64(stream),
+        }
+    }
+
+    /// `set` with noise added to every input.
+    fn apply(&mut self, set: &Dataset) -> Dataset {
+        let normal = StandardNormal;
+        let x = set
+            .x
+            .iter()
+            .map(|&v| {
+                let e: f32 = normal.sample(&mut self.rng);
+                v + self.std * e
+            })
+            .collect();
+        Dataset {
+            x,
+            y: set.y.clone(),
+            ..*set
+        }
+    }
+}
+
 /// Mean `0.5 ||y - t||^2` of `layers` over `data`.
 pub(crate) fn mean_loss(layers: &Layers, data: &Dataset) -> f64 {
     let mut st = States::new(layers.sizes());
@@ -258,7 +301,9 @@ pub(crate) fn mean_loss(layers: &Layers, data: &Dataset) -> f64 {
     total / data.n as f64
 }
 
-/// Train every net for `epochs`, two at a time on two cores.
+/// Train every net for `epochs`, the nets of an epoch in parallel (rayon;
+/// each net has its own data and random order, so the result does not
+/// depend on the threads). The first net's error in order is returned.
 pub(crate) fn train_nets(
     trainers: &mut [Trainer],
     epochs: usize,
@@ -266,16 +311,12 @@ pub(crate) fn train_nets(
 ) -> Result<TrainingHistory, LearnError> {
     let mut history = TrainingHistory::default();
     for epoch in 0..epochs {
-        let nets = match trainers {
-            [a, b] => {
-                let (ra, rb) = rayon::join(|| a.epoch(epoch), || b.epoch(epoch));
-                vec![ra?, rb?]
-            }
-            _ => trainers
-                .iter_mut()
-                .map(|t| t.epoch(epoch))
-                .collect::<Result<Vec<_>, _>>()?,
-        };
+        let nets = trainers
+            .par_iter_mut()
+            .map(|t| t.epoch(epoch))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()?;
         let report = EpochReport { epoch, nets };
         progress(&report);
         history.epochs.push(report);

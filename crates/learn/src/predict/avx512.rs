@@ -82,7 +82,7 @@ fn forward<const R: usize>(
         let d_last = layers.sizes()[depth];
         for (r, row) in scaled.iter_mut().enumerate() {
             for (k, &col) in net.targets.iter().enumerate() {
-                row[col] = f64::from(a[r * d_last + k]);
+                row[col] += f64::from(a[r * d_last + k]);
             }
         }
     }

@@ -1,0 +1,99 @@
+//! `train --ensemble K` end to end: the ensemble's folder is read by
+//! validate, predict and follow through the one model loader; one member
+//! is the single model's folder; out-of-range sizes are bad input.
+mod util;
+use util::{tactrace, Run, TempDir};
+
+/// Assert a run's exit code, showing its output when it differs.
+fn expect_code(r: &Run, code: i32, what: &str) {
+    assert_eq!(
+        r.code, code,
+        "{what}: exit code {} (expected {code})\nstdout: {}\nstderr: {}",
+        r.code, r.stdout, r.stderr
+    );
+}
+
+fn train(dir: &std::path::Path, out: &str, extra: &[&str]) -> Run {
+    let mut args = vec![
+        "train", "--model", "pdennn", "--train", "ds", "--epochs", "2", "--out", out,
+    ];
+    args.extend(extra);
+    tactrace(dir, &args)
+}
+
+#[test]
+fn issue21_train_ensemble_saves_a_folder_every_command_loads() {
+    let t = TempDir::new("ensemble");
+    let dir = &t.0;
+    let r = tactrace(
+        dir,
+        &["collect", "--samples", "60", "--seed", "3", "--out", "ds"],
+    );
+    expect_code(&r, 0, "collect");
+    expect_code(
+        &train(dir, "m3", &["--ensemble", "3"]),
+        0,
+        "train --ensemble 3",
+    );
+    let json = std::fs::read_to_string(t.join("m3/model.json")).unwrap();
+    assert!(json.contains("\"ensemble\": 3"), "{json}");
+    let r = tactrace(
+        dir,
+        &["validate", "--model", "m3", "--data", "ds", "--json"],
+    );
+    expect_code(&r, 0, "validate");
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).expect("json");
+    assert!(
+        v["position_mae_mm"].as_f64().is_some_and(f64::is_finite),
+        "{v}"
+    );
+    let r = tactrace(dir, &["predict", "--model", "m3", "--data", "ds"]);
+    expect_code(&r, 0, "predict");
+    // follow loads it (an untrained model may lose contact: 0 or 1).
+    let r = tactrace(
+        dir,
+        &[
+            "follow", "--model", "m3", "--shape", "disk", "--steps", "3", "--out", "run",
+        ],
+    );
+    assert!(
+        r.code == 0 || r.code == 1,
+        "follow: {}\n{}",
+        r.code,
+        r.stderr
+    );
+
+    // One member: the single model's files, byte for byte.
+    expect_code(&train(dir, "m", &[]), 0, "train");
+    expect_code(
+        &train(dir, "m1", &["--ensemble", "1"]),
+        0,
+        "train --ensemble 1",
+    );
+    for f in ["model.json", "weights.safetensors"] {
+        let a = std::fs::read(t.join("m").join(f)).unwrap();
+        assert_eq!(a, std::fs::read(t.join("m1").join(f)).unwrap(), "{f}");
+    }
+
+    // Sizes out of range, and an image model, are bad input.
+    for k in ["0", "65"] {
+        let r = train(dir, "bad", &["--ensemble", k]);
+        expect_code(&r, 2, "train --ensemble out of range");
+        assert!(r.stderr.contains("ensemble"), "{}", r.stderr);
+    }
+    let r = tactrace(
+        dir,
+        &[
+            "train",
+            "--model",
+            "conv-dennn",
+            "--train",
+            "ds",
+            "--ensemble",
+            "2",
+            "--out",
+            "c",
+        ],
+    );
+    expect_code(&r, 2, "train conv-dennn --ensemble");
+}

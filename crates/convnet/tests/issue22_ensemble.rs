@@ -133,7 +133,7 @@ fn issue22_an_ensemble_saves_every_network_and_a_single_network_file_is_unchange
     // The second network's tensors are named apart; drop them and the
     // file is refused, not read as one network.
     let parsed = safetensors::SafeTensors::deserialize(&tensors).unwrap();
-    assert!(parsed.names().iter().any(|n| *n == "net2.W1"));
+    assert!(parsed.names().contains(&"net2.W1"));
     let one_json = json.replace("\"members\": 2", "\"members\": 3");
     assert!(matches!(
         ConvModel::from_bytes(&one_json, &tensors),

@@ -14,9 +14,15 @@
 //! models saved there, so the reported part is scored once, for the
 //! settings adopted on the select part, without training again.
 //!
+//! `--ensemble DIR,DIR,...` trains nothing: it loads the `--model` saved in
+//! each folder (e.g. one a seed) and scores the mean of their predictions;
+//! `--tta R` scores the mean prediction over the frame moved by every
+//! shift in `-R..=R` px in x and y (edge pixels repeated), for one loaded
+//! model or an ensemble.
+//!
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
-//! learning_rate, final_lr_fraction, weight_decay, shift_augment, input_noise, beta, sweeps,
+//! learning_rate, final_lr_fraction, weight_decay, shift_augment, input_noise, members, beta, sweeps,
 //! activation (sigmoid|tanh|relu), input_centring (global|mean_frame), conv (e.g. 16k5s2,32k3s2), dense
 //! (e.g. 256 or 256,64 or none). Prints per epoch the training loss, the
 //! select part's mean absolute errors, the wall time and this process's
@@ -156,6 +162,7 @@ fn set(cfg: &mut ConvConfig, kv: &str) -> Result<(), Box<dyn Error>> {
         "weight_decay" => cfg.weight_decay = v.parse()?,
         "shift_augment" => cfg.shift_augment = v.parse()?,
         "input_noise" => cfg.input_noise = v.parse()?,
+        "members" => cfg.members = v.parse()?,
         "beta" => cfg.ep.beta = v.parse()?,
         "sweeps" => {
             cfg.ep.clamped_phase = ClampedPhase::Sweeps {
@@ -187,6 +194,8 @@ struct Args {
     save: Option<PathBuf>,
     load: Option<PathBuf>,
     score: bool,
+    ensemble: Vec<PathBuf>,
+    tta: usize,
 }
 
 fn parse_args() -> Result<Args, Box<dyn Error>> {
@@ -200,6 +209,8 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
         save: None,
         load: None,
         score: false,
+        ensemble: Vec::new(),
+        tta: 0,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -221,6 +232,8 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
             "--save" => a.save = Some(PathBuf::from(value()?)),
             "--load" => a.load = Some(PathBuf::from(value()?)),
             "--score" => a.score = true,
+            "--ensemble" => a.ensemble = value()?.split(',').map(PathBuf::from).collect(),
+            "--tta" => a.tta = value()?.parse()?,
             other => return Err(format!("unknown argument {other}").into()),
         }
     }
@@ -289,6 +302,82 @@ fn load_model(dir: &Path, kind: ModelKind) -> Result<ConvModel, Box<dyn Error>> 
     Ok(model)
 }
 
+/// `frame` (`size x size`) moved by `(dx, dy)` px, edge pixels repeated.
+fn shifted(frame: &[u8], size: usize, (dx, dy): (isize, isize)) -> Vec<u8> {
+    let at = |v: usize, d: isize| (v as isize - d).clamp(0, size as isize - 1) as usize;
+    (0..size * size)
+        .map(|i| frame[at(i / size, dy) * size + at(i % size, dx)])
+        .collect()
+}
+
+/// The mean prediction of `models` on `part`, each frame also moved by
+/// every shift in `-tta..=tta` px; the mean absolute error per target.
+fn ensemble_mae(
+    models: &[ConvModel],
+    part: &Part,
+    size: usize,
+    tta: usize,
+) -> Result<Vec<f64>, Box<dyn Error>> {
+    let r = tta as isize;
+    let mut sum = vec![0.0; part.targets.len()];
+    let mut n = 0.0;
+    for dy in -r..=r {
+        for dx in -r..=r {
+            let pixels: Vec<u8> = part
+                .pixels
+                .chunks_exact(size * size)
+                .flat_map(|f| shifted(f, size, (dx, dy)))
+                .collect();
+            let frames = Frames::new(&pixels, part.count, size, size)?;
+            for m in models {
+                for (s, p) in sum.iter_mut().zip(m.predict_batch(&frames)?) {
+                    *s += p;
+                }
+                n += 1.0;
+            }
+        }
+    }
+    let mut mae = vec![0.0; 2];
+    for (i, (s, t)) in sum.iter().zip(&part.targets).enumerate() {
+        mae[i % 2] += (s / n - t).abs() / part.count as f64;
+    }
+    Ok(mae)
+}
+
+/// `--ensemble` / `--tta`: score saved models on the select part (and the
+/// score part with `--score`), no training.
+fn score_saved(args: &Args, parts: &[Part]) -> Result<(), Box<dyn Error>> {
+    let dirs = match (&args.ensemble[..], &args.load) {
+        ([], Some(d)) => vec![d.clone()],
+        (e, _) => e.to_vec(),
+    };
+    for &kind in &args.kinds {
+        let models = dirs
+            .iter()
+            .map(|d| load_model(d, kind))
+            .collect::<Result<Vec<_>, _>>()?;
+        let (wall, cpu0) = (Instant::now(), cpu_seconds());
+        let mut which = vec![(1, "select part (N % 5 = 1)")];
+        if args.score {
+            which.push((0, "SCORE part (N % 5 = 0)"));
+        }
+        for (i, name) in which {
+            let mae = ensemble_mae(&models, &parts[i], args.size, args.tta)?;
+            println!(
+                "{} ensemble of {}, shifts up to {} px, {name}: {:.4} mm / {:.3} deg; {:.1} s wall, {:.1} s CPU",
+                kind.name(),
+                models.len(),
+                args.tta,
+                mae[0],
+                mae[1],
+                wall.elapsed().as_secs_f64(),
+                cpu_seconds() - cpu0
+            );
+        }
+    }
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn Error>> {
     let args = parse_args()?;
     let dir = match &args.data {
@@ -312,6 +401,9 @@ fn main() -> Result<(), Box<dyn Error>> {
         parts[0].count,
         s = args.size
     );
+    if !args.ensemble.is_empty() || args.tta > 0 {
+        return score_saved(&args, &parts);
+    }
     for &kind in &args.kinds {
         let (wall, cpu0) = (Instant::now(), cpu_seconds());
         let model = match &args.load {

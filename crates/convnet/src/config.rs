@@ -173,7 +173,25 @@ pub struct ConvConfig {
     /// over-fitting the few training frames; 0 turns it off.
     #[serde(default)]
     pub input_noise: f64,
+    /// Networks in the model, trained side by side from seeds `seed`,
+    /// `seed + 1`, ... on the same frames and batches' schedule; the model
+    /// predicts the mean of their outputs (a circular target's sine and
+    /// cosine are averaged, so its angle is the circular mean). 1, the
+    /// default, is one network (left out of the JSON then).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub members: usize,
 }
+
+fn one() -> usize {
+    1
+}
+
+fn is_one(v: &usize) -> bool {
+    *v == 1
+}
+
+/// Most networks an ensemble may have.
+pub const MAX_MEMBERS: usize = 32;
 
 impl ConvConfig {
     /// The defaults for `kind` (docs/learning.md says how they were chosen).
@@ -209,6 +227,7 @@ impl ConvConfig {
             weight_decay: 0.0,
             shift_augment: 0,
             input_noise: 0.0,
+            members: 1,
         }
     }
 
@@ -226,6 +245,7 @@ impl ConvConfig {
         check_range("batch_size", self.batch_size, 1, 65_536)?;
         check_range("chunk_size", self.chunk_size, 1, 1024)?;
         check_range("shift_augment", self.shift_augment, 0, 16)?;
+        check_range("members", self.members, 1, MAX_MEMBERS)?;
         check_positive("learning_rate", self.learning_rate)?;
         if !(self.final_lr_fraction > 0.0 && self.final_lr_fraction <= 1.0) {
             return Err(config_error(

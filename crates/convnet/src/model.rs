@@ -16,7 +16,8 @@ use crate::workspace::Workspace;
 pub struct ConvModel {
     pub(crate) config: ConvConfig,
     pub(crate) seed: u64,
-    pub(crate) net: Network,
+    /// The networks (`config.members` of them, the first from `seed`).
+    pub(crate) nets: Vec<Network>,
     pub(crate) input: InputScaling,
     pub(crate) targets: TargetScaling,
 }
@@ -62,21 +63,32 @@ impl ConvModel {
         }
         let (h, w) = frames.size();
         let layout = Layout::new(h, w, &config.conv, &config.dense, targets.dim())?;
-        let mut net = Network::new(layout, config.activation, seed);
-        let data = FitData {
-            seed,
-            frames: *frames,
-            targets: *targets,
-            input: InputScaling::fit(frames, config.input_centring),
-            scaling: TargetScaling::fit(targets),
-        };
-        let history = train(&mut net, config, seed, &data, validation, on_epoch)?;
+        let input = InputScaling::fit(frames, config.input_centring);
+        let scaling = TargetScaling::fit(targets);
+        let seeds: Vec<u64> = (0..config.members as u64)
+            .map(|k| seed.wrapping_add(k))
+            .collect();
+        let mut nets: Vec<Network> = seeds
+            .iter()
+            .map(|&s| Network::new(layout.clone(), config.activation, s))
+            .collect();
+        let data: Vec<FitData> = seeds
+            .iter()
+            .map(|&seed| FitData {
+                seed,
+                frames: *frames,
+                targets: *targets,
+                input: input.clone(),
+                scaling: scaling.clone(),
+            })
+            .collect();
+        let history = train(&mut nets, config, &data, validation, on_epoch)?;
         let model = ConvModel {
             config: config.clone(),
             seed,
-            net,
-            input: data.input.clone(),
-            targets: data.scaling,
+            nets,
+            input,
+            targets: scaling,
         };
         Ok((model, history))
     }
@@ -110,16 +122,29 @@ impl ConvModel {
                 got: out.len(),
             });
         }
-        let ws = &mut predictor.ws;
-        forward_frames(&self.net, &self.input, ws, &frames, 0, 1);
-        unscaled_output(&self.net, ws, &self.targets, 1, 0, out);
+        let Predictor { ws, member } = predictor;
+        let (first, others) = self.nets.split_first().expect("a model has a network");
+        forward_frames(first, &self.input, ws, &frames, 0, 1);
+        unscaled_output(first, ws, &self.targets, 1, 0, out);
+        for net in others {
+            forward_frames(net, &self.input, ws, &frames, 0, 1);
+            unscaled_output(net, ws, &self.targets, 1, 0, member);
+            for (o, m) in out.iter_mut().zip(member.iter()) {
+                *o += m;
+            }
+        }
+        if !others.is_empty() {
+            let n = self.nets.len() as f64;
+            out.iter_mut().for_each(|o| *o /= n);
+        }
         Ok(())
     }
 
     /// Buffers for [`Self::predict_with`].
     pub fn predictor(&self) -> Predictor {
         Predictor {
-            ws: Workspace::for_prediction(&self.net.layout, 1),
+            ws: Workspace::for_prediction(&self.nets[0].layout, 1),
+            member: vec![0.0; self.outputs()],
         }
     }
 
@@ -128,15 +153,19 @@ impl ConvModel {
     pub fn predict_batch(&self, frames: &Frames) -> Result<Vec<f64>, ConvError> {
         check_size(self.input_size(), frames.size())?;
         let mut out = vec![0.0; frames.count() * self.outputs()];
-        let mut pool = prediction_pool(&self.net);
-        predict_all(
-            &self.net,
-            &self.input,
-            &self.targets,
-            frames,
-            &mut pool,
-            &mut out,
-        );
+        let mut pool = prediction_pool(&self.nets[0]);
+        let (first, others) = self.nets.split_first().expect("a model has a network");
+        let (input, scaling) = (&self.input, &self.targets);
+        predict_all(first, input, scaling, frames, &mut pool, &mut out);
+        if !others.is_empty() {
+            let mut member = vec![0.0; out.len()];
+            for net in others {
+                predict_all(net, input, scaling, frames, &mut pool, &mut member);
+                out.iter_mut().zip(&member).for_each(|(o, m)| *o += m);
+            }
+            let n = self.nets.len() as f64;
+            out.iter_mut().for_each(|o| *o /= n);
+        }
         Ok(out)
     }
 
@@ -168,19 +197,26 @@ impl ConvModel {
         self.seed
     }
 
-    /// The network (layers and parameters).
+    /// The network (layers and parameters); of an ensemble, the first
+    /// (from `seed`).
     pub fn network(&self) -> &Network {
-        &self.net
+        &self.nets[0]
+    }
+
+    /// Every network, the first from `seed`, the next from `seed + 1`, ...
+    /// (one unless `config.members` > 1); the model predicts their mean.
+    pub fn networks(&self) -> &[Network] {
+        &self.nets
     }
 
     /// Frame `(height, width)` it takes, px.
     pub fn input_size(&self) -> (usize, usize) {
-        self.net.layout.input_size()
+        self.nets[0].layout.input_size()
     }
 
     /// Number of outputs N.
     pub fn outputs(&self) -> usize {
-        self.net.layout.outputs()
+        self.nets[0].layout.outputs()
     }
 
     /// The pixel standardisation fitted on the training frames.

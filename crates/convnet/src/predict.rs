@@ -16,6 +16,8 @@ pub(crate) const PREDICT_CHUNK: usize = 16;
 #[derive(Debug, Clone)]
 pub struct Predictor {
     pub(crate) ws: Workspace,
+    /// One network's outputs, for an ensemble's mean.
+    pub(crate) member: Vec<f64>,
 }
 
 /// Standardise frames `first..first + nb` of `frames` into `ws.x` and run

@@ -1,7 +1,7 @@
 //! A model as a JSON string (format, version, kind and configuration,
 //! seed, input size, outputs) plus safetensors bytes: `W1, b1, W2, ...`
 //! (each `W(l)` as `cout x cin x kh x kw`, a dense layer's window covering
-//! its whole input; f32) and the scalings (`input.mean`, `input.std`,
+//! its whole input; f32; an ensemble's other networks as `net2.W1`, ...) and the scalings (`input.mean`, `input.std`,
 //! `input.mean_frame` when used, `target.mean`, `target.std`; f64, so a
 //! reloaded model predicts bit for bit as the saved one). Pure: the
 //! caller writes the files, as with the pin models' `model.json` and
@@ -63,12 +63,14 @@ impl ConvModel {
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
         let mut buffers = Vec::new();
-        let p = &self.net.params;
-        for (l, s) in self.net.layout.layers().iter().enumerate() {
-            let shape = vec![s.cout, s.cin, s.kh, s.kw];
-            let (w, b) = (le_bytes(&p.weights[l]), le_bytes(&p.biases[l]));
-            buffers.push((format!("W{}", l + 1), Dtype::F32, shape, w));
-            buffers.push((format!("b{}", l + 1), Dtype::F32, vec![s.cout], b));
+        for (k, net) in self.nets.iter().enumerate() {
+            let (p, prefix) = (&net.params, member_prefix(k));
+            for (l, s) in net.layout.layers().iter().enumerate() {
+                let shape = vec![s.cout, s.cin, s.kh, s.kw];
+                let (w, b) = (le_bytes(&p.weights[l]), le_bytes(&p.biases[l]));
+                buffers.push((format!("{prefix}W{}", l + 1), Dtype::F32, shape, w));
+                buffers.push((format!("{prefix}b{}", l + 1), Dtype::F32, vec![s.cout], b));
+            }
         }
         let (i, t) = (&self.input, &self.targets);
         let f64s = |name: &str, shape: Vec<usize>, v: &[f64]| {
@@ -129,24 +131,47 @@ impl ConvModel {
         let tensors =
             SafeTensors::deserialize(safetensors).map_err(|e| corrupt(format!("weights: {e}")))?;
         let (input, targets) = read_scalings(&tensors, &file)?;
-        let mut params = Parameters::zeros(&layout);
-        for (l, s) in layout.layers().iter().enumerate() {
-            let w_shape = [s.cout, s.cin, s.kh, s.kw];
-            params.weights[l] = read_f32(&tensors, &format!("W{}", l + 1), &w_shape)?;
-            params.biases[l] = read_f32(&tensors, &format!("b{}", l + 1), &[s.cout])?;
-        }
-        if !params.is_finite() {
-            return Err(corrupt("non-finite weights"));
-        }
-        let net = Network::from_parts(layout, c.activation, params)?;
+        let nets = (0..c.members)
+            .map(|k| read_network(&tensors, &layout, c, k))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(ConvModel {
             config: file.config,
             seed: file.seed,
-            net,
+            nets,
             input,
             targets,
         })
     }
+}
+
+/// The tensor names' prefix of network `k` of a model: none for the
+/// first (a one-network file is as before ensembles), `net2.`, `net3.`,
+/// ... for the others.
+fn member_prefix(k: usize) -> String {
+    match k {
+        0 => String::new(),
+        k => format!("net{}.", k + 1),
+    }
+}
+
+/// Network `k` of a model of `layout` and `config` from its tensors.
+fn read_network(
+    tensors: &SafeTensors,
+    layout: &Layout,
+    config: &ConvConfig,
+    k: usize,
+) -> Result<Network, ConvError> {
+    let prefix = member_prefix(k);
+    let mut params = Parameters::zeros(layout);
+    for (l, s) in layout.layers().iter().enumerate() {
+        let w_shape = [s.cout, s.cin, s.kh, s.kw];
+        params.weights[l] = read_f32(tensors, &format!("{prefix}W{}", l + 1), &w_shape)?;
+        params.biases[l] = read_f32(tensors, &format!("{prefix}b{}", l + 1), &[s.cout])?;
+    }
+    if !params.is_finite() {
+        return Err(corrupt("non-finite weights"));
+    }
+    Network::from_parts(layout.clone(), config.activation, params)
 }
 
 /// The input and target scalings, checked for usable numbers.

@@ -57,7 +57,7 @@ pub struct TrainingHistory {
 
 /// What a fit reads: frames, targets and their scalings.
 pub(crate) struct FitData<'a> {
-    /// The fit's seed (initialisation, shuffling, shifts).
+    /// The network's seed (initialisation, shuffling, shifts, noise).
     pub seed: u64,
     pub frames: Frames<'a>,
     pub targets: Targets<'a>,
@@ -65,66 +65,99 @@ pub(crate) struct FitData<'a> {
     pub scaling: TargetScaling,
 }
 
-/// Train `net` in place for `config.epochs` epochs.
-pub(crate) fn train(
-    net: &mut Network,
-    config: &ConvConfig,
-    seed: u64,
-    data: &FitData,
-    validation: Option<(Frames, Targets)>,
-    on_epoch: &mut dyn FnMut(&EpochReport),
-) -> Result<TrainingHistory, ConvError> {
-    let chunks = config.batch_size.div_ceil(config.chunk_size);
-    let mut pool: Vec<Workspace> = (0..chunks)
-        .map(|_| Workspace::for_training(&net.layout, config.chunk_size))
-        .collect();
-    let mut losses = vec![0.0f64; chunks];
-    let mut predict_pool = prediction_pool(net);
-    let mut predictions = vec![0.0; validation.map_or(0, |v| v.0.count() * data.scaling.dim())];
-    let mut adam = Adam::new(&net.layout);
-    let mut order: Vec<usize> = (0..data.frames.count()).collect();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_add(SHUFFLE_STREAM));
-    let limit = DIVERGENCE_FACTOR * 0.5 * data.scaling.dim() as f64;
-    let mut history = TrainingHistory::default();
-    for epoch in 0..config.epochs {
-        order.shuffle(&mut rng);
-        let lr = config.learning_rate * config.lr_factor(epoch);
+/// One network's training state: its chunk buffers, optimiser, frame
+/// order and shuffling stream.
+struct Member {
+    pool: Vec<Workspace>,
+    losses: Vec<f64>,
+    adam: Adam,
+    order: Vec<usize>,
+    rng: ChaCha8Rng,
+}
+
+impl Member {
+    fn new(net: &Network, config: &ConvConfig, data: &FitData) -> Self {
+        let chunks = config.batch_size.div_ceil(config.chunk_size);
+        Member {
+            pool: (0..chunks)
+                .map(|_| Workspace::for_training(&net.layout, config.chunk_size))
+                .collect(),
+            losses: vec![0.0f64; chunks],
+            adam: Adam::new(&net.layout),
+            order: (0..data.frames.count()).collect(),
+            rng: ChaCha8Rng::seed_from_u64(data.seed.wrapping_add(SHUFFLE_STREAM)),
+        }
+    }
+
+    /// One epoch of `net` at step size `lr`; returns its mean loss.
+    fn epoch(
+        &mut self,
+        net: &mut Network,
+        config: &ConvConfig,
+        data: &FitData,
+        (lr, epoch): (f64, usize),
+    ) -> f64 {
+        self.order.shuffle(&mut self.rng);
         let mut total = 0.0;
-        for batch in order.chunks(config.batch_size) {
+        for batch in self.order.chunks(config.batch_size) {
             total += batch_step(
                 net,
                 config,
                 data,
                 batch,
-                (&mut pool, &mut losses),
-                &mut adam,
+                (&mut self.pool, &mut self.losses),
+                &mut self.adam,
                 lr,
                 epoch,
             );
         }
-        let loss = total / order.len() as f64;
-        if loss.is_nan() || loss > limit || !net.params.is_finite() {
-            return Err(ConvError::Diverged {
-                epoch,
-                loss: if net.params.is_finite() {
-                    loss
-                } else {
-                    f64::NAN
-                },
-                limit,
-            });
+        total / self.order.len() as f64
+    }
+}
+
+/// Train the networks `nets` in place for `config.epochs` epochs, side by
+/// side, network `k` on `data[k]` (its seed); each epoch's loss is their
+/// mean, and the validation frames are scored by their mean prediction.
+pub(crate) fn train(
+    nets: &mut [Network],
+    config: &ConvConfig,
+    data: &[FitData],
+    validation: Option<(Frames, Targets)>,
+    on_epoch: &mut dyn FnMut(&EpochReport),
+) -> Result<TrainingHistory, ConvError> {
+    let mut members: Vec<Member> = nets
+        .iter()
+        .zip(data)
+        .map(|(net, d)| Member::new(net, config, d))
+        .collect();
+    let (input, scaling) = (&data[0].input, &data[0].scaling);
+    let mut predict_pool = prediction_pool(&nets[0]);
+    let len = validation.map_or(0, |v| v.0.count() * scaling.dim());
+    let (mut one, mut mean) = (vec![0.0; len], vec![0.0; len]);
+    let limit = DIVERGENCE_FACTOR * 0.5 * scaling.dim() as f64;
+    let mut history = TrainingHistory::default();
+    for epoch in 0..config.epochs {
+        let lr = config.learning_rate * config.lr_factor(epoch);
+        let mut loss = 0.0;
+        let count = nets.len() as f64;
+        for ((net, member), d) in nets.iter_mut().zip(&mut members).zip(data) {
+            let l = member.epoch(net, config, d, (lr, epoch));
+            let finite = net.params.is_finite();
+            if l.is_nan() || l > limit || !finite {
+                let loss = if finite { l } else { f64::NAN };
+                return Err(ConvError::Diverged { epoch, loss, limit });
+            }
+            loss += l / count;
         }
         let validation = validation.map(|(frames, targets)| {
-            let (input, scaling) = (&data.input, &data.scaling);
-            predict_all(
-                net,
-                input,
-                scaling,
-                &frames,
-                &mut predict_pool,
-                &mut predictions,
-            );
-            score(&predictions, &targets, scaling)
+            mean.fill(0.0);
+            for net in nets.iter() {
+                predict_all(net, input, scaling, &frames, &mut predict_pool, &mut one);
+                for (m, v) in mean.iter_mut().zip(&one) {
+                    *m += v / count;
+                }
+            }
+            score(&mean, &targets, scaling)
         });
         let report = EpochReport {
             epoch,

@@ -6,6 +6,7 @@
 //! running a world with the GIL released, the result dict).
 use crate::arrays::{matrix, py_to_json};
 use crate::errors::{input, lab, store};
+use crate::image_model::ImageModel;
 use crate::interrupt::{checkpoint, run_detached};
 use crate::model::Model;
 use numpy::{PyArray1, PyArrayMethods};
@@ -16,17 +17,22 @@ use tactrace_geometry::{Contour, ShapeSpec, Vec2};
 use tactrace_lab::follow::{FollowOutcome, RunHooks, SimFollowConfig};
 use tactrace_lab::world::{OpenWorld, ReplayBank};
 use tactrace_store::collection::CollectionEdits;
-use tactrace_store::StoredModel;
+use tactrace_store::LoadedModel;
 
-/// A model argument: a `Model` or the path of a model folder.
-pub fn stored_model(obj: &Bound<'_, PyAny>) -> PyResult<StoredModel> {
+/// A model argument: a pin `Model`, an `ImageModel` or the path of either's
+/// folder. The servo loop's perception then reads the taps' pins or their
+/// pixels by the model, as `tactrace follow` does.
+pub fn loaded_model(obj: &Bound<'_, PyAny>) -> PyResult<LoadedModel> {
     if let Ok(m) = obj.cast::<Model>() {
-        return Ok(m.get().stored.clone());
+        return Ok(LoadedModel::Pins(m.get().stored.clone()));
+    }
+    if let Ok(m) = obj.cast::<ImageModel>() {
+        return Ok(LoadedModel::Image(m.get().stored().clone()));
     }
     let dir: PathBuf = obj
         .extract()
-        .map_err(|_| input("model must be a Model or the path of a model folder"))?;
-    StoredModel::load(&dir).map_err(store)
+        .map_err(|_| input("model must be a Model, an ImageModel or the path of a model folder"))?;
+    LoadedModel::load(&dir).map_err(store)
 }
 
 /// A shape argument: a built-in name ("disk", "flower", "trine",
@@ -97,7 +103,8 @@ pub fn run_dir(out: Option<PathBuf>) -> PyResult<(PathBuf, Option<tempfile::Temp
 /// Follow a contour, as ``tactrace follow``: in the simulated world, a
 /// calibrated sensor's (``sensor``) or the real-frame world (``replay``).
 ///
-/// ``model``: a ``Model`` or a model folder; ``shape``: a built-in name
+/// ``model``: a ``Model``, an ``ImageModel`` (the taps' frames in, as
+/// its training frames were made) or a model folder; ``shape``: a built-in name
 /// ("flower", ...), a CSV path or an N x 2 array (mm); ``out``: the run
 /// folder to write (config.toml, trajectory.csv, metrics.json, figures; as
 /// the CLI's ``--out``), or None for none; ``steps``, ``seed`` and
@@ -146,7 +153,7 @@ pub fn follow<'py>(
         cfg.replay = Some(replay_bank(r)?);
     }
     let (name, contour) = shape_contour(shape)?;
-    let model = stored_model(model)?;
+    let model = loaded_model(model)?;
     let world = cfg.world().open().map_err(lab)?;
     let res = run_world(py, world, &model, Some((&name, &contour)), (out, force))?.map_err(lab)?;
     if let Some(w) = res.replay.as_ref().and_then(|s| s.warning()) {
@@ -177,7 +184,7 @@ impl std::ops::Deref for Finished {
 pub fn run_world(
     py: Python<'_>,
     world: OpenWorld,
-    model: &StoredModel,
+    model: &LoadedModel,
     shape: Option<(&str, &Contour)>,
     (out, force): (Option<PathBuf>, bool),
 ) -> PyResult<tactrace_lab::Result<Finished>> {
@@ -192,7 +199,7 @@ pub fn run_world(
             warn: Some(&mut warn),
             ..RunHooks::default()
         };
-        tactrace_lab::follow::run(world, model, shape, (&dir, force), hooks)
+        tactrace_lab::follow::run_model(world, model, shape, (&dir, force), hooks)
     })?;
     for w in &warnings {
         warn(py, w)?;

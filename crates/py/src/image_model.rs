@@ -27,6 +27,11 @@ impl ImageModel {
             history: TrainingHistory::default(),
         }
     }
+
+    /// The model with its input recipe and training record.
+    pub(crate) fn stored(&self) -> &StoredImageModel {
+        &self.stored
+    }
 }
 
 #[pymethods]

@@ -12,7 +12,7 @@
 //! the exception becomes the cause of the `RunFailedError`. Other
 //! exceptions (KeyboardInterrupt, SystemExit) stop the call at once.
 use crate::errors::{lab, RunFailedError};
-use crate::follow::{follow_config, outcome_dict, run_world, shape_contour, stored_model};
+use crate::follow::{follow_config, loaded_model, outcome_dict, run_world, shape_contour};
 use crate::interrupt::raise;
 use crate::vision::to_frame;
 use pyo3::exceptions::PyException;
@@ -197,7 +197,7 @@ pub fn follow_rig<'py>(
     check: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let cfg = follow_config(config, steps, seed)?;
-    let model = stored_model(model)?;
+    let model = loaded_model(model)?;
     let shape = shape.map(shape_contour).transpose()?;
     let reference = to_frame(
         &sensor.bind(py).call_method0("capture")?,

@@ -65,7 +65,7 @@ def test_bad_follow_input_is_refused(sim_model, tmp_path):
         tactrace.follow(sim_model, "no-such-shape.csv")
     with pytest.raises(tactrace.InputError, match="unknown field|unknown"):
         tactrace.follow(sim_model, "flower", config={"follow": {"stepz": 3}})
-    with pytest.raises(ValueError, match="model must be a Model or the path"):
+    with pytest.raises(ValueError, match="model must be a Model, an ImageModel or the path"):
         tactrace.follow(3, "flower")
     (tmp_path / "taken").mkdir()
     (tmp_path / "taken" / "x").write_text("x")

@@ -202,7 +202,7 @@ class SimTacTip:
     def calibrated(self) -> bool: ...
 
 def follow(
-    model: Union[Model, StrPath],
+    model: Union[Model, ImageModel, StrPath],
     shape: Shape,
     out: Optional[StrPath] = None,
     steps: Optional[int] = None,
@@ -215,7 +215,7 @@ def follow(
     check: bool = True,
 ) -> dict[str, Any]: ...
 def follow_rig(
-    model: Union[Model, StrPath],
+    model: Union[Model, ImageModel, StrPath],
     arm: Any,
     sensor: Any,
     *,

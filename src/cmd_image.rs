@@ -26,12 +26,17 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         .into());
     }
     let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
-    let cfg = ti::resolve_image_config(kind, text.as_deref(), a.epochs).with_context(|| {
+    let mut cfg = ti::resolve_image_config(kind, text.as_deref(), a.epochs).with_context(|| {
         a.config
             .as_ref()
             .map(|p| p.display().to_string())
             .unwrap_or_default()
     })?;
+    if let Some(k) = a.ensemble {
+        // `--ensemble K` is the image model's `members = K`.
+        cfg.members = k;
+        cfg.validate().map_err(tactrace_learn::LearnError::from).map_err(LabError::from)?;
+    }
     let seed = a.seed.unwrap_or(0);
     if a.print_config {
         crate::say!("{}", toml::to_string(&cfg)?.trim_end());

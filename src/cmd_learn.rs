@@ -108,9 +108,11 @@ pub struct TrainArgs {
     #[arg(long)]
     pub(crate) epochs: Option<usize>,
     /// Train an ensemble of K members (a pin model's nets K times, from
-    /// seeds derived from the configuration's seed, in parallel), their
+    /// seeds derived from the configuration's seed, in parallel; an image
+    /// model's K networks from seeds seed, seed + 1, ...), their
     /// predictions averaged; saved as one model folder. Default: the
-    /// configuration's `ensemble` (1).
+    /// configuration's `ensemble` (pin models) or `members` (image
+    /// models), 1.
     #[arg(long, value_name = "K")]
     pub(crate) ensemble: Option<usize>,
     /// Seed of an image model's initialisation, shuffling and shifts
@@ -162,9 +164,6 @@ pub fn model_config(
 pub fn train(a: TrainArgs) -> Result<()> {
     let model = match a.model.pins() {
         Ok(model) => model,
-        Err(_) if a.ensemble.is_some() => {
-            return Err(LabError::Config("--ensemble is a pin model's".into()).into())
-        }
         Err(kind) => return crate::cmd_image::train(kind, a),
     };
     if a.seed.is_some() {

@@ -75,25 +75,32 @@ fn issue21_train_ensemble_saves_a_folder_every_command_loads() {
         assert_eq!(a, std::fs::read(t.join("m1").join(f)).unwrap(), "{f}");
     }
 
-    // Sizes out of range, and an image model, are bad input.
+    // Sizes out of range are bad input.
     for k in ["0", "65"] {
         let r = train(dir, "bad", &["--ensemble", k]);
         expect_code(&r, 2, "train --ensemble out of range");
         assert!(r.stderr.contains("ensemble"), "{}", r.stderr);
     }
-    let r = tactrace(
-        dir,
-        &[
+    // An image model takes --ensemble as its number of networks.
+    let conv = |k: &str, extra: &[&str]| {
+        let mut args = vec![
             "train",
             "--model",
             "conv-dennn",
             "--train",
             "ds",
             "--ensemble",
-            "2",
+            k,
             "--out",
             "c",
-        ],
-    );
-    expect_code(&r, 2, "train conv-dennn --ensemble");
+        ];
+        args.extend_from_slice(extra);
+        tactrace(dir, &args)
+    };
+    let r = conv("3", &["--print-config"]);
+    expect_code(&r, 0, "train conv-dennn --ensemble 3 --print-config");
+    assert!(r.stdout.contains("members = 3"), "{}", r.stdout);
+    let r = conv("33", &[]);
+    expect_code(&r, 2, "train conv-dennn --ensemble 33");
+    assert!(r.stderr.contains("members"), "{}", r.stderr);
 }

@@ -6,7 +6,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 /// Weights below this are dropped in the exact field (the field as it was
-/// before the cut; see [`Kernel::new`]).
+/// before the cut; see `Kernel::new`).
 pub const EXACT_TOLERANCE: f64 = 1e-4;
 
 /// Gaussian kernel weights between reference pins for one width, kept

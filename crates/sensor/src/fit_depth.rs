@@ -82,7 +82,7 @@ pub struct DepthScore {
 }
 
 /// How far (mm) the fit may move the edge offset from the sensor's own.
-pub const EDGE_REACH_MM: f64 = 2.0;
+pub const EDGE_REACH_MM: f64 = 4.0;
 
 impl DepthScore {
     /// The indentation depth (mm) at the labelled `dz`.
@@ -174,10 +174,12 @@ pub fn fit_depth(
     search: &DepthSearch,
 ) -> Result<DepthFit, SensorError> {
     TacTipModel::with_rest_pins(cfg.clone(), rest_px.to_vec())?;
-    let (lo, hi) = samples.iter().map(|s| s.tap.dz_mm).fold(
-        (f64::INFINITY, f64::NEG_INFINITY),
-        |(a, b), v| (a.min(v), b.max(v)),
-    );
+    let (lo, hi) = samples
+        .iter()
+        .map(|s| s.tap.dz_mm)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
     let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.0) };
     let varies = hi - lo > 1e-6;
     let k = &cfg.calibration;
@@ -199,7 +201,11 @@ pub fn fit_depth(
         };
         let inside = |v: f64| v > 0.0 && v <= deepest;
         let near = (edge - k.edge_offset_mm).abs() <= EDGE_REACH_MM;
-        if !inside(depth_lo) || !inside(depth_hi) || ln_slide.abs() > 3.0 || ln_rim.abs() > 2.0 || !near
+        if !inside(depth_lo)
+            || !inside(depth_hi)
+            || ln_slide.abs() > 3.0
+            || ln_rim.abs() > 2.0
+            || !near
         {
             return d;
         }

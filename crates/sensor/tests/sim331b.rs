@@ -4,7 +4,7 @@
 //! far behind a slide is recovered from its taps alone; a sensor whose
 //! taps the simulator already makes keeps its own values untouched.
 use tactrace_sensor::{
-    fit_depth, field_misfit, DepthSearch, EdgeTap, FitSample, Shear, TacTipConfig, TacTipModel,
+    field_misfit, fit_depth, DepthSearch, EdgeTap, FitSample, Shear, TacTipConfig, TacTipModel,
 };
 
 /// 30 taps of `truth`, labels spread over r in [-3, 3] mm, theta in

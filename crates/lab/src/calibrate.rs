@@ -295,8 +295,14 @@ fn fit_convention_and_depth(
     let deeper = depth.apply(sensor);
     let again = fit_convention(&deeper, rest, samples)?;
     let with = again.apply(&deeper);
-    let depth2 = fit_depth(&with, rest, samples)?;
+    let mut depth2 = fit_depth(&with, rest, samples)?;
     let physics = depth2.apply(&with);
+    // Recorded against the given sensor: the scales of both passes, its
+    // own values as the first pass scored them.
+    depth2.chosen.slide_scale *= depth.chosen.slide_scale;
+    depth2.chosen.rim_scale *= depth.chosen.rim_scale;
+    depth2.own = depth.own;
+    depth2.kept_own = false;
     Ok((again, depth2, physics))
 }
 

@@ -10,7 +10,7 @@
 //! mechanics were fitted on another sensor). The depth is modelled as
 //! `tap_depth_mm + depth_per_offset * dz`; this fit sets both
 //! from the taps, parametrised by the depths at the smallest and largest
-//! labelled `dz` (one depth when every tap has the same `dz`), with a
+//! labelled `dz`, with a
 //! scale of the skin's slide response (eq. S7: the stick gain and the
 //! slip limit together, so the skin's lag behind a slide scales by it)
 //! and a scale of the rim clamp's reach (eq. S8a: how far out from the
@@ -25,7 +25,8 @@
 //! Nelder-Mead over the depths, the logs of the two scales and the edge
 //! offset (kept within [`EDGE_REACH_MM`] of the sensor's own). The
 //! sensor's own values are kept unless the fit lowers the misfit by
-//! [`DepthSearch::min_gain`]. Pure, like [`crate::fit_joint`].
+//! [`DepthSearch::min_gain`], and when the taps' `dz` does not vary (no
+//! depth column) the fit is not run. Pure, like [`crate::fit_joint`].
 use crate::fit::FitSample;
 use crate::fit_convention::scores;
 use crate::nelder_mead::minimise;
@@ -227,6 +228,18 @@ pub fn fit_depth(
         rms_px,
         cosine,
     };
+    if !varies {
+        // No depth column (or one depth for every tap): the fit is not
+        // run, the sensor's own kept (a lone depth trades against the
+        // field correction, which a synthetic sensor showed).
+        return Ok(DepthFit {
+            kept_own: true,
+            own,
+            chosen: own,
+            dz_range: [lo, hi],
+            taps: samples.len(),
+        });
+    }
     let step = search.grid_step_mm.max(0.1);
     let grid: Vec<f64> = (1..)
         .map(|i| step * f64::from(i))

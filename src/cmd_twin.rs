@@ -351,6 +351,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
     }
     eprintln!("{}", got.layout.describe());
     eprintln!("{}", got.convention.describe());
+    eprintln!("{}", got.depth.describe());
     let c = &got.sensor.spec.calibration;
     eprintln!(
         "calibrated on {} of {} labelled taps ({} frames rejected) in {:.1} s into {}",

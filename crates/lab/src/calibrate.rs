@@ -21,7 +21,9 @@ use tactrace_calib::{
     calibrate, check_labels, field_stats, select_taps, CalibError, CalibrationPlan, Fields, Label,
     Selection, MIN_TAPS, RECOMMENDED_TAPS,
 };
-use tactrace_sensor::{ConventionFit, ConventionSearch, FitSample, TacTipConfig, TacTipModel};
+use tactrace_sensor::{
+    ConventionFit, ConventionSearch, DepthFit, DepthSearch, FitSample, TacTipConfig, TacTipModel,
+};
 use tactrace_store::collection::{EstimatedRest, Reference};
 use tactrace_store::sensor_file::{
     LabelColumnNames, SensorSpec, TrainingRecipe, SENSOR_FORMAT, SENSOR_FORMAT_VERSION,
@@ -74,6 +76,8 @@ pub struct Calibrated {
     pub estimated: Option<EstimatedRest>,
     /// The label convention found from the calibration taps.
     pub convention: ConventionFit,
+    /// The tap depth law and slide response found from them.
+    pub depth: DepthFit,
 }
 
 /// A held-out tap's fields before and after calibration (the tap of
@@ -154,8 +158,7 @@ pub fn calibrate_sensor(
     let real = import_rows(c, Some(&keep), progress)?;
     let samples = fit_samples(&real, &rows, &chosen);
     let rest = &real.data.meta.reference_pins;
-    let convention = fit_convention(sensor, rest, &samples)?;
-    let physics = convention.apply(sensor);
+    let (convention, depth, physics) = fit_convention_and_depth(sensor, rest, &samples)?;
     let physics = if cfg.fit_physics {
         fit_physics(&physics, rest, &samples)?
     } else {
@@ -220,6 +223,7 @@ pub fn calibrate_sensor(
         reference_pins: real.data.meta.reference_pins.clone(),
         calibration: record,
         convention: Some(convention.clone()),
+        depth: Some(depth.clone()),
     };
     let sensor = SensorFolder {
         spec,
@@ -242,6 +246,7 @@ pub fn calibrate_sensor(
         layout,
         estimated,
         convention,
+        depth,
     })
 }
 
@@ -269,6 +274,46 @@ fn fit_convention(
         samples,
         &convention_search(),
     )?)
+}
+
+/// The label convention, then the tap depth law, slide response and rim
+/// under it, then, when the depth changed, the convention again under
+/// the fitted depth (the convention's offsets are found on fields of the
+/// simulator's depth: a depth far from the sensor's leaves them weak) and
+/// the depth again under it: the two fits, and `sensor` with both.
+fn fit_convention_and_depth(
+    sensor: &TacTipConfig,
+    rest: &[[f64; 2]],
+    samples: &[FitSample],
+) -> Result<(ConventionFit, DepthFit, TacTipConfig)> {
+    let convention = fit_convention(sensor, rest, samples)?;
+    let with = convention.apply(sensor);
+    let depth = fit_depth(&with, rest, samples)?;
+    if depth.kept_own {
+        return Ok((convention, depth, with));
+    }
+    let deeper = depth.apply(sensor);
+    let again = fit_convention(&deeper, rest, samples)?;
+    let with = again.apply(&deeper);
+    let mut depth2 = fit_depth(&with, rest, samples)?;
+    let physics = depth2.apply(&with);
+    // Recorded against the given sensor: the scales of both passes, its
+    // own values as the first pass scored them.
+    depth2.chosen.slide_scale *= depth.chosen.slide_scale;
+    depth2.chosen.rim_scale *= depth.chosen.rim_scale;
+    depth2.own = depth.own;
+    depth2.kept_own = false;
+    Ok((again, depth2, physics))
+}
+
+/// The tap depth law and slide response of the calibration taps
+/// `samples` (pins in the order of `rest`), from `sensor`'s.
+fn fit_depth(sensor: &TacTipConfig, rest: &[[f64; 2]], samples: &[FitSample]) -> Result<DepthFit> {
+    let search = DepthSearch {
+        threads: rayon::current_num_threads(),
+        ..DepthSearch::default()
+    };
+    Ok(tactrace_sensor::fit_depth(sensor, rest, samples, &search)?)
 }
 
 /// The real fields of the `chosen` rows with their labelled taps, for the

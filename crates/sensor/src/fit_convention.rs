@@ -322,7 +322,7 @@ fn with_convention(cfg: &TacTipConfig, c: &ConventionScore) -> TacTipConfig {
 
 /// [per-coordinate RMS pin misfit (px), mean per-tap cosine] of `model`
 /// over the samples, the taps split over `threads`.
-fn scores(model: &TacTipModel, samples: &[FitSample], threads: usize) -> [f64; 2] {
+pub(crate) fn scores(model: &TacTipModel, samples: &[FitSample], threads: usize) -> [f64; 2] {
     let chunk = samples.len().div_ceil(threads.max(1)).max(1);
     let sums = std::thread::scope(|scope| {
         let handles: Vec<_> = samples

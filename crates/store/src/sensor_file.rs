@@ -92,6 +92,11 @@ pub struct SensorSpec {
     /// in sensor folders written before it was estimated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub convention: Option<tactrace_sensor::ConventionFit>,
+    /// How `calibrate` found the tap depth law and the slide response (in
+    /// `sensor.calibration` and `sensor.mechanics`) from the calibration
+    /// taps. Absent in sensor folders written before they were fitted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth: Option<tactrace_sensor::DepthFit>,
 }
 
 /// A calibrated sensor in memory.

@@ -1,0 +1,279 @@
+//! The tap depth, the slide response and the rim of a user's sensor
+//! found from its labelled taps (docs/calibration.md, "Tap depth, slide
+//! response and rim").
+//!
+//! How deep a labelled tap presses the dome differs between collections:
+//! a depth column may be an offset from a nominal depth (the shared
+//! 127-pin set) or the absolute depth of each tap (the shared 331-pin
+//! set, 3-5 mm, where the mean pin displacement triples over that range),
+//! and the simulator's depth scale is its own (its compliance and
+//! mechanics were fitted on another sensor). The depth is modelled as
+//! `tap_depth_mm + depth_per_offset * dz`; this fit sets both
+//! from the taps, parametrised by the depths at the smallest and largest
+//! labelled `dz`, with a
+//! scale of the skin's slide response (eq. S7: the stick gain and the
+//! slip limit together, so the skin's lag behind a slide scales by it)
+//! and a scale of the rim clamp's reach (eq. S8a: how far out from the
+//! pole the pins still move; on the 331-pin set the outer rings move
+//! twice as far as the built-in clamp lets them), with the edge offset
+//! refined by the same misfit (the convention's cosine finds it on
+//! fields of the wrong depth: depth and edge position both set how much
+//! of the dome is pressed).
+//! Unlike the label convention ([`crate::fit_convention`]), these set how
+//! far the pins move, so they are judged by the RMS misfit of the fields
+//! (each tap with its slide): a coarse grid of the two depths, then
+//! Nelder-Mead over the depths, the logs of the two scales and the edge
+//! offset (kept within [`EDGE_REACH_MM`] of the sensor's own). The
+//! sensor's own values are kept unless the fit lowers the misfit by
+//! [`DepthSearch::min_gain`], and when the taps' `dz` does not vary (no
+//! depth column) the fit is not run. Pure, like [`crate::fit_joint`].
+use crate::fit::FitSample;
+use crate::fit_convention::scores;
+use crate::nelder_mead::minimise;
+use crate::{SensorError, TacTipConfig, TacTipModel};
+use serde::{Deserialize, Serialize};
+
+/// How to search for the depth and slide response.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DepthSearch {
+    /// Step of the coarse grid of depths, mm (from one step to the
+    /// model's deepest resolved indentation).
+    pub grid_step_mm: f64,
+    /// Nelder-Mead steps refining the best grid point.
+    pub iterations: usize,
+    /// Relative fall of the RMS misfit below the sensor's own needed to
+    /// change it (0.05: 5 %).
+    pub min_gain: f64,
+    /// Threads the taps are simulated on.
+    pub threads: usize,
+}
+
+impl Default for DepthSearch {
+    /// 1 mm grid, 100 refining steps, 5 % gain, one thread.
+    fn default() -> Self {
+        Self {
+            grid_step_mm: 1.0,
+            iterations: 100,
+            min_gain: 0.05,
+            threads: 1,
+        }
+    }
+}
+
+/// One depth law and slide response, and how well they match the taps.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DepthScore {
+    /// Indentation depth at `dz = 0`, mm (`calibration.tap_depth_mm`).
+    pub tap_depth_mm: f64,
+    /// Depth change per unit of the labelled `dz` (`calibration.depth_per_offset`).
+    pub depth_per_offset: f64,
+    /// The slide response's scale against the given sensor's (stick gain
+    /// and slip limit both multiplied by it).
+    pub slide_scale: f64,
+    /// The rim clamp's reach against the given sensor's
+    /// (`mechanics.rim_clamp_mm` multiplied by it).
+    pub rim_scale: f64,
+    /// Added to the labelled edge position, mm (`calibration.edge_offset_mm`).
+    pub edge_offset_mm: f64,
+    /// Per-coordinate RMS pin misfit over the taps, px.
+    pub rms_px: f64,
+    /// Mean per-tap cosine between the simulated and measured fields.
+    pub cosine: f64,
+}
+
+/// How far (mm) the fit may move the edge offset from the sensor's own.
+pub const EDGE_REACH_MM: f64 = 4.0;
+
+impl DepthScore {
+    /// The indentation depth (mm) at the labelled `dz`.
+    pub fn depth_at(&self, dz: f64) -> f64 {
+        self.tap_depth_mm + self.depth_per_offset * dz
+    }
+}
+
+/// What [`fit_depth`] found.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DepthFit {
+    /// True when the sensor's own depth law and slide response were kept.
+    pub kept_own: bool,
+    /// The sensor's own, scored on the taps.
+    pub own: DepthScore,
+    /// The one used (`own` when kept).
+    pub chosen: DepthScore,
+    /// The smallest and largest labelled `dz` of the taps.
+    pub dz_range: [f64; 2],
+    /// Taps it was judged on.
+    pub taps: usize,
+}
+
+impl DepthFit {
+    /// One line for the user.
+    pub fn describe(&self) -> String {
+        let c = &self.chosen;
+        let [lo, hi] = self.dz_range;
+        let depths = if hi > lo {
+            format!(
+                "{:.2} mm at dz {lo:.2}, {:.2} mm at dz {hi:.2}",
+                c.depth_at(lo),
+                c.depth_at(hi)
+            )
+        } else {
+            format!("{:.2} mm", c.depth_at(lo))
+        };
+        let what = if self.kept_own {
+            "the sensor's own kept"
+        } else {
+            "fitted to the taps"
+        };
+        format!(
+            "tap depth, slide response and rim ({what}, {} taps): depth {depths}, \
+             slide response x{:.2}, rim clamp's reach x{:.2}, edge offset {:.2} mm; \
+             field RMS {:.3} px (cosine {:.3}), the sensor's own {:.3} px ({:.3})",
+            self.taps,
+            c.slide_scale,
+            c.rim_scale,
+            c.edge_offset_mm,
+            c.rms_px,
+            c.cosine,
+            self.own.rms_px,
+            self.own.cosine
+        )
+    }
+
+    /// `cfg` with the chosen depth law and slide response; `cfg` itself
+    /// when its own were kept.
+    pub fn apply(&self, cfg: &TacTipConfig) -> TacTipConfig {
+        if self.kept_own {
+            return cfg.clone();
+        }
+        with_depth(cfg, &self.chosen)
+    }
+}
+
+/// `cfg` with the depth law and slide scale of `d`.
+fn with_depth(cfg: &TacTipConfig, d: &DepthScore) -> TacTipConfig {
+    let mut out = cfg.clone();
+    out.calibration.tap_depth_mm = d.tap_depth_mm;
+    out.calibration.depth_per_offset = d.depth_per_offset;
+    out.mechanics.stick_gain *= d.slide_scale;
+    out.mechanics.shear_limit_mm *= d.slide_scale;
+    out.mechanics.rim_clamp_mm *= d.rim_scale;
+    out.calibration.edge_offset_mm = d.edge_offset_mm;
+    out
+}
+
+/// Fit the depth law and slide response of the measured `samples` (pins
+/// in the order of `rest_px`, each tap with its labelled `dz` and slide)
+/// from `cfg`; see the module header. Errors when `cfg` and `rest_px`
+/// make no model.
+pub fn fit_depth(
+    cfg: &TacTipConfig,
+    rest_px: &[[f64; 2]],
+    samples: &[FitSample],
+    search: &DepthSearch,
+) -> Result<DepthFit, SensorError> {
+    TacTipModel::with_rest_pins(cfg.clone(), rest_px.to_vec())?;
+    let (lo, hi) = samples
+        .iter()
+        .map(|s| s.tap.dz_mm)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.0) };
+    let varies = hi - lo > 1e-6;
+    let k = &cfg.calibration;
+    let deepest = cfg.mechanics.max_depth_mm;
+    let score = |depth_lo: f64, depth_hi: f64, [ln_slide, ln_rim, edge]: [f64; 3]| -> DepthScore {
+        let per = if varies {
+            (depth_hi - depth_lo) / (hi - lo)
+        } else {
+            k.depth_per_offset
+        };
+        let mut d = DepthScore {
+            tap_depth_mm: depth_lo - per * lo,
+            depth_per_offset: per,
+            slide_scale: ln_slide.exp(),
+            rim_scale: ln_rim.exp(),
+            edge_offset_mm: edge,
+            rms_px: f64::INFINITY,
+            cosine: -1.0,
+        };
+        let inside = |v: f64| v > 0.0 && v <= deepest;
+        let near = (edge - k.edge_offset_mm).abs() <= EDGE_REACH_MM;
+        if !inside(depth_lo)
+            || !inside(depth_hi)
+            || ln_slide.abs() > 3.0
+            || ln_rim.abs() > 2.0
+            || !near
+        {
+            return d;
+        }
+        if let Ok(m) = TacTipModel::with_rest_pins(with_depth(cfg, &d), rest_px.to_vec()) {
+            [d.rms_px, d.cosine] = scores(&m, samples, search.threads);
+        }
+        d
+    };
+    let own_lo = k.tap_depth_mm + k.depth_per_offset * lo;
+    let own_hi = k.tap_depth_mm + k.depth_per_offset * hi;
+    let model = TacTipModel::with_rest_pins(cfg.clone(), rest_px.to_vec())?;
+    let [rms_px, cosine] = scores(&model, samples, search.threads);
+    let own = DepthScore {
+        tap_depth_mm: k.tap_depth_mm,
+        depth_per_offset: k.depth_per_offset,
+        slide_scale: 1.0,
+        rim_scale: 1.0,
+        edge_offset_mm: k.edge_offset_mm,
+        rms_px,
+        cosine,
+    };
+    if !varies {
+        // No depth column (or one depth for every tap): the fit is not
+        // run, the sensor's own kept (a lone depth trades against the
+        // field correction, which a synthetic sensor showed).
+        return Ok(DepthFit {
+            kept_own: true,
+            own,
+            chosen: own,
+            dz_range: [lo, hi],
+            taps: samples.len(),
+        });
+    }
+    let step = search.grid_step_mm.max(0.1);
+    let grid: Vec<f64> = (1..)
+        .map(|i| step * f64::from(i))
+        .take_while(|&v| v <= deepest)
+        .collect();
+    let mut best = (own_lo, own_hi, own);
+    for &a in &grid {
+        let his: &[f64] = if varies { &grid } else { &[a] };
+        for &b in his {
+            let d = score(a, b, [0.0, 0.0, k.edge_offset_mm]);
+            if d.rms_px < best.2.rms_px {
+                best = (a, b, d);
+            }
+        }
+    }
+    let objective = |x: &[f64]| {
+        let b = if varies { x[1] } else { x[0] };
+        score(x[0], b, [x[2], x[3], x[4]]).rms_px
+    };
+    let x0 = [best.0, best.1, 0.0, 0.0, k.edge_offset_mm];
+    let first = [step / 2.0, step / 2.0, 0.3, 0.3, 0.5];
+    let (x, _) = minimise(&objective, &x0, &first, search.iterations);
+    let refined = score(x[0], if varies { x[1] } else { x[0] }, [x[2], x[3], x[4]]);
+    let chosen = if refined.rms_px < best.2.rms_px {
+        refined
+    } else {
+        best.2
+    };
+    let kept_own = chosen.rms_px >= own.rms_px * (1.0 - search.min_gain);
+    Ok(DepthFit {
+        kept_own,
+        own,
+        chosen: if kept_own { own } else { chosen },
+        dz_range: [lo, hi],
+        taps: samples.len(),
+    })
+}

@@ -35,7 +35,9 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
     if let Some(k) = a.ensemble {
         // `--ensemble K` is the image model's `members = K`.
         cfg.members = k;
-        cfg.validate().map_err(tactrace_learn::LearnError::from).map_err(LabError::from)?;
+        cfg.validate()
+            .map_err(tactrace_learn::LearnError::from)
+            .map_err(LabError::from)?;
     }
     let seed = a.seed.unwrap_or(0);
     if a.print_config {

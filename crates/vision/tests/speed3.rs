@@ -4,14 +4,12 @@
 //! tests fail when the data is absent unless TACTRACE_SKIP_REAL_DATA=1 (see
 //! `tactrace_testdata`).
 
-use std::path::{Path, PathBuf};
+mod common;
 
+use common::{difference, load, pngs, shear_set_331};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tactrace_vision::{
-    estimate_rest, inspect, BlobParams, Detection, Frame, KeyPoint, PinExtractor, PinTracker,
-    RestParams, SightParams, Tracked,
-};
+use tactrace_vision::{BlobParams, Frame, KeyPoint, PinExtractor, PinTracker};
 
 /// 331 pins on 10 concentric rings of 6k pins and the centre, 5 px apart.
 fn rings() -> Vec<[f64; 2]> {
@@ -25,19 +23,6 @@ fn rings() -> Vec<[f64; 2]> {
         }
     }
     pins
-}
-
-/// Largest pin coordinate difference, px (infinite when the matched flags
-/// differ).
-fn difference(a: &Tracked, b: &Tracked) -> f64 {
-    if a.pins.len() != b.pins.len() || a.matched != b.matched {
-        return f64::INFINITY;
-    }
-    a.pins
-        .iter()
-        .zip(&b.pins)
-        .flat_map(|(p, q)| [(p[0] - q[0]).abs(), (p[1] - q[1]).abs()])
-        .fold(0.0, f64::max)
 }
 
 /// A 331-pin ring layout sheared by up to a spacing with a bump, pins
@@ -91,24 +76,6 @@ fn issue21_cut_field_orders_a_sheared_331_pin_ring_as_the_exact_one() {
     assert!(right >= 18, "every pin on its own on {right} of 20 trials");
 }
 
-fn load(path: &Path) -> image::DynamicImage {
-    image::open(path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
-}
-
-/// The `.png` files of `dir` whose names start with `prefix`, sorted.
-fn pngs(dir: &Path, prefix: &str) -> Vec<PathBuf> {
-    let mut out: Vec<PathBuf> = std::fs::read_dir(dir)
-        .expect("frames folder")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            name.starts_with(prefix) && name.ends_with(".png")
-        })
-        .collect();
-    out.sort();
-    out
-}
-
 /// Every frame of the shared 127-pin set, read as `PinExtractor::extract`
 /// does: a 127-pin tracker orders the exact way by default (below
 /// `CUT_MIN_PINS`), so its pins are the exact ordering's, bit for bit.
@@ -147,36 +114,14 @@ fn issue21_cut_field_tracks_331_pin_frames_as_the_exact_one() {
     let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
         return;
     };
-    let train = pngs(&set.join("train/frames"), "image_");
-    let val = pngs(&set.join("val/frames"), "image_");
-    let every = |paths: &[PathBuf], k: usize| -> Vec<PathBuf> {
-        let step = paths.len().div_ceil(k).max(1);
-        paths.iter().step_by(step).cloned().collect()
-    };
-    let sample: Vec<Frame> = every(&train, 20)
-        .iter()
-        .map(|p| load(p).to_luma8())
-        .collect();
-    let found = inspect(&sample, None).expect("inspection");
-    let first = load(&train[0]);
-    let detector = SightParams {
-        preprocess: found.preprocess.clone(),
-        detect: found.detect.clone(),
-    }
-    .check(first.width(), first.height())
-    .expect("proposal");
-    let detect = |p: &PathBuf| detector.detect(&load(p)).expect("detect");
-    let fitting: Vec<Detection> = every(&train, 150).iter().map(detect).collect();
-    let rest = estimate_rest(&fitting, found.pins, &RestParams::default()).expect("rest");
-    let cut = PinTracker::new(rest.pins.clone()).expect("tracker");
-    let exact = PinTracker::new(rest.pins)
+    let (held, rest) = shear_set_331(&set);
+    let cut = PinTracker::new(rest.clone()).expect("tracker");
+    let exact = PinTracker::new(rest)
         .expect("tracker")
         .with_exact_field(true);
     let (mut full_cut, mut full_exact, mut changed) = (0, 0, 0);
-    let frames = every(&val, 600);
-    for path in &frames {
-        let detection = detect(path);
-        let (a, b) = (cut.track(&detection), exact.track(&detection));
+    for (path, detection) in &held {
+        let (a, b) = (cut.track(detection), exact.track(detection));
         assert_eq!(a.matched, b.matched, "{}", path.display());
         full_cut += usize::from(a.missing == 0);
         full_exact += usize::from(b.missing == 0);
@@ -184,8 +129,8 @@ fn issue21_cut_field_tracks_331_pin_frames_as_the_exact_one() {
     }
     assert_eq!(full_cut, full_exact, "fully tracked frames");
     assert!(
-        changed * 100 <= frames.len(),
+        changed * 100 <= held.len(),
         "{changed} of {} frames changed",
-        frames.len()
+        held.len()
     );
 }

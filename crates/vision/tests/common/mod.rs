@@ -1,0 +1,77 @@
+//! Set-ups shared by the ordering tests on the shared real sets
+//! (`speed.rs`, `speed3.rs`): frames read from a folder, the largest pin
+//! difference between two orderings, and the 331-pin shear set read as the
+//! inspection proposes.
+
+use std::path::{Path, PathBuf};
+
+use tactrace_vision::{estimate_rest, inspect, Detection, Frame, RestParams, SightParams, Tracked};
+
+/// The image at `path`, or a panic naming it.
+pub fn load(path: &Path) -> image::DynamicImage {
+    image::open(path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
+}
+
+/// The `.png` files of `dir` whose names start with `prefix`, sorted.
+pub fn pngs(dir: &Path, prefix: &str) -> Vec<PathBuf> {
+    let mut out: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("frames folder")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            name.starts_with(prefix) && name.ends_with(".png")
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// Largest coordinate difference between two orderings, px (infinite when
+/// their pin counts or matched flags differ).
+pub fn difference(a: &Tracked, b: &Tracked) -> f64 {
+    if a.pins.len() != b.pins.len() || a.matched != b.matched {
+        return f64::INFINITY;
+    }
+    a.pins
+        .iter()
+        .zip(&b.pins)
+        .flat_map(|(p, q)| [(p[0] - q[0]).abs(), (p[1] - q[1]).abs()])
+        .fold(0.0, f64::max)
+}
+
+/// About `k` of `paths`, evenly spaced.
+fn every(paths: &[PathBuf], k: usize) -> Vec<PathBuf> {
+    let step = paths.len().div_ceil(k).max(1);
+    paths.iter().step_by(step).cloned().collect()
+}
+
+/// The 331-pin shear set `set` read as the inspection of 20 train frames
+/// proposes: the detections of 600 held-out val frames and the rest layout
+/// estimated from 150 train taps.
+pub fn shear_set_331(set: &Path) -> (Vec<(PathBuf, Detection)>, Vec<[f64; 2]>) {
+    let train = pngs(&set.join("train/frames"), "image_");
+    let val = pngs(&set.join("val/frames"), "image_");
+    let sample: Vec<Frame> = every(&train, 20)
+        .iter()
+        .map(|p| load(p).to_luma8())
+        .collect();
+    let found = inspect(&sample, None).expect("inspection");
+    let first = load(&train[0]);
+    let detector = SightParams {
+        preprocess: found.preprocess.clone(),
+        detect: found.detect.clone(),
+    }
+    .check(first.width(), first.height())
+    .expect("proposal");
+    let detect = |p: &PathBuf| detector.detect(&load(p)).expect("detect");
+    let fitting: Vec<Detection> = every(&train, 150).iter().map(detect).collect();
+    let rest = estimate_rest(&fitting, found.pins, &RestParams::default()).expect("rest");
+    let held = every(&val, 600)
+        .into_iter()
+        .map(|p| {
+            let d = detect(&p);
+            (p, d)
+        })
+        .collect();
+    (held, rest.pins)
+}

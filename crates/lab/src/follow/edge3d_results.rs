@@ -25,7 +25,9 @@
 //! - `mean_abs_error`: the model's error per sensed component against the
 //!   true label (rz wrapped to +-180 deg).
 use super::edge3d::Edge3dConfig;
-use super::task3d_results::{pose_cells, wire_mesh, write_replay_page};
+use super::task3d_results::{
+    pose_cells, wire_mesh, write_replay_page, POSE_COLUMNS, REACHED_COLUMNS,
+};
 use crate::error::Result;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -119,7 +121,6 @@ impl EdgeCsv {
     /// `dir/trajectory.csv` with its header.
     pub fn create(dir: &Path, edge: &EdgeCurve, reference: [f64; 6]) -> Result<Self> {
         let mut rows = RowFile::create(&dir.join("trajectory.csv"))?;
-        let pose = ["x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"];
         let pred = ["x_pred_mm", "z_pred_mm", "rx_pred_deg", "ry_pred_deg"];
         let rest = [
             "rz_pred_deg",
@@ -130,14 +131,13 @@ impl EdgeCsv {
             "depth_true_mm",
             "rz_true_deg",
             "normal_error_deg",
-            "x_reached_mm",
-            "y_reached_mm",
-            "z_reached_mm",
-            "rx_reached_deg",
-            "ry_reached_deg",
-            "rz_reached_deg",
         ];
-        let header = ["step"].iter().chain(&pose).chain(&pred).chain(&rest);
+        let header = ["step"]
+            .iter()
+            .chain(&POSE_COLUMNS)
+            .chain(&pred)
+            .chain(&rest)
+            .chain(&REACHED_COLUMNS);
         rows.write_row(header.copied())?;
         Ok(Self {
             rows,

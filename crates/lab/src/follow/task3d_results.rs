@@ -85,22 +85,11 @@ pub struct TruthCsv {
     depth_mm: f64,
 }
 
-/// The trajectory's columns.
-const HEADER: [&str; 20] = [
-    "step",
-    "x_mm",
-    "y_mm",
-    "z_mm",
-    "rx_deg",
-    "ry_deg",
-    "rz_deg",
-    "z_pred_mm",
-    "rx_pred_deg",
-    "ry_pred_deg",
-    "mean_displacement_px",
-    "contact",
-    "depth_error_mm",
-    "normal_error_deg",
+/// A trajectory's commanded pose columns (every 3D run's).
+pub(super) const POSE_COLUMNS: [&str; 6] = ["x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"];
+
+/// A trajectory's last columns: the pose the arm reached (every 3D run's).
+pub(super) const REACHED_COLUMNS: [&str; 6] = [
     "x_reached_mm",
     "y_reached_mm",
     "z_reached_mm",
@@ -109,11 +98,27 @@ const HEADER: [&str; 20] = [
     "rz_reached_deg",
 ];
 
+/// A surface trajectory's columns between the pose and the reached pose.
+const SURFACE_COLUMNS: [&str; 7] = [
+    "z_pred_mm",
+    "rx_pred_deg",
+    "ry_pred_deg",
+    "mean_displacement_px",
+    "contact",
+    "depth_error_mm",
+    "normal_error_deg",
+];
+
 impl TruthCsv {
     /// `dir/trajectory.csv` with its header.
     pub fn create(dir: &Path, object: Surface, depth_mm: f64) -> Result<Self> {
         let mut rows = RowFile::create(&dir.join("trajectory.csv"))?;
-        rows.write_row(HEADER)?;
+        let header = ["step"]
+            .iter()
+            .chain(&POSE_COLUMNS)
+            .chain(&SURFACE_COLUMNS)
+            .chain(&REACHED_COLUMNS);
+        rows.write_row(header.copied())?;
         Ok(Self {
             rows,
             object,

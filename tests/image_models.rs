@@ -5,7 +5,6 @@
 //! `tests/util.rs`.
 mod util;
 use std::path::Path;
-use tactrace_store::{DatasetMeta, FramesInfo, ImageFrames, TapData};
 use util::{expect_code, import_real, json, real_paths, tactrace, train, TempDir};
 
 /// Side of the synthetic frames, px.
@@ -46,25 +45,7 @@ fn synthetic_dataset(dir: &Path, n: usize) {
         targets.extend(t);
         inputs.extend([cx as f32, cy as f32, 0.0, 0.0, 0.0, 0.0]);
     }
-    let meta: DatasetMeta = serde_json::from_value(serde_json::json!({
-        "source": "synthetic", "origin": "tests/image_models.rs", "seed": null,
-        "samples": n, "pins": 3, "targets": ["x (mm)", "angle (deg)"],
-        "target_names": ["x", "angle"], "target_units": ["mm", "deg"],
-        "target_circular": [false, true], "frames_with_missing_pins": 0,
-        "reference_pins": [[1.0, 1.0], [8.0, 8.0], [14.0, 2.0]],
-        "settings": {}, "tactrace_version": "test",
-    }))
-    .unwrap();
-    let data = TapData {
-        inputs,
-        targets,
-        meta,
-    };
-    let frames = ImageFrames {
-        info: FramesInfo::new(SIDE, SIDE, [SIDE, SIDE]),
-        pixels,
-    };
-    tactrace_store::write_dataset_with(dir, &data, &[], Some(&frames), false).unwrap();
+    util::write_spot_frames(dir, "tests/image_models.rs", SIDE, inputs, targets, pixels);
 }
 
 /// A small network for the 16 px frames.

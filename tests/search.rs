@@ -325,7 +325,6 @@ fn issue24_a_search_records_its_failed_trials_in_the_table_and_figure() {
 /// frame), targets `x` (mm) and `angle` (deg, circular): the spot's
 /// offset and direction from the centre; a dummy pin vector a row.
 fn frames_dataset(dir: &Path, n: usize) {
-    use tactrace_store::{DatasetMeta, FramesInfo, ImageFrames, TapData};
     const SIDE: usize = 16;
     let (mut inputs, mut targets, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
     let c = (SIDE as f64 - 1.0) / 2.0;
@@ -341,25 +340,7 @@ fn frames_dataset(dir: &Path, n: usize) {
         targets.extend([((cx - c) * 0.25) as f32, angle as f32]);
         inputs.extend([cx as f32, cy as f32, 0.0, 0.0, 0.0, 0.0]);
     }
-    let meta: DatasetMeta = serde_json::from_value(serde_json::json!({
-        "source": "synthetic", "origin": "tests/search.rs", "seed": null,
-        "samples": n, "pins": 3, "targets": ["x (mm)", "angle (deg)"],
-        "target_names": ["x", "angle"], "target_units": ["mm", "deg"],
-        "target_circular": [false, true], "frames_with_missing_pins": 0,
-        "reference_pins": [[1.0, 1.0], [8.0, 8.0], [14.0, 2.0]],
-        "settings": {}, "tactrace_version": "test",
-    }))
-    .unwrap();
-    let data = TapData {
-        inputs,
-        targets,
-        meta,
-    };
-    let frames = ImageFrames {
-        info: FramesInfo::new(SIDE, SIDE, [SIDE, SIDE]),
-        pixels,
-    };
-    tactrace_store::write_dataset_with(dir, &data, &[], Some(&frames), false).unwrap();
+    util::write_spot_frames(dir, "tests/search.rs", SIDE, inputs, targets, pixels);
 }
 
 /// A small network for the 16 px frames, the search's base.

@@ -262,3 +262,36 @@ pub fn import_real(dir: &Path, data: &Path, extra: &[&str], out: &str) -> Run {
     args.extend(["--out", out]);
     tactrace(dir, &args)
 }
+
+/// Writes a synthetic image dataset to `dir`: `side` x `side` frames
+/// `pixels`, 6 pin inputs and two targets a row, x (mm) and a circular
+/// angle (deg); `origin` names the test that made it.
+pub fn write_spot_frames(
+    dir: &Path,
+    origin: &str,
+    side: usize,
+    inputs: Vec<f32>,
+    targets: Vec<f32>,
+    pixels: Vec<u8>,
+) {
+    use tactrace_store::{DatasetMeta, FramesInfo, ImageFrames, TapData};
+    let meta: DatasetMeta = serde_json::from_value(serde_json::json!({
+        "source": "synthetic", "origin": origin, "seed": null,
+        "samples": targets.len() / 2, "pins": 3, "targets": ["x (mm)", "angle (deg)"],
+        "target_names": ["x", "angle"], "target_units": ["mm", "deg"],
+        "target_circular": [false, true], "frames_with_missing_pins": 0,
+        "reference_pins": [[1.0, 1.0], [8.0, 8.0], [14.0, 2.0]],
+        "settings": {}, "tactrace_version": "test",
+    }))
+    .unwrap();
+    let data = TapData {
+        inputs,
+        targets,
+        meta,
+    };
+    let frames = ImageFrames {
+        info: FramesInfo::new(side, side, [side, side]),
+        pixels,
+    };
+    tactrace_store::write_dataset_with(dir, &data, &[], Some(&frames), false).unwrap();
+}

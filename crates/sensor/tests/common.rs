@@ -107,3 +107,19 @@ pub fn centroids(frame: &Frame) -> Vec<([f64; 2], [f64; 2])> {
     }
     out
 }
+
+/// The calibration sample `model` gives for `tap`: the label and every
+/// pin's displacement from `rest`, px.
+pub fn fit_sample(
+    model: &TacTipModel,
+    rest: &[[f64; 2]],
+    tap: tactrace_sensor::EdgeTap,
+) -> tactrace_sensor::FitSample {
+    let disp = model
+        .edge_tap_pins(&tap)
+        .iter()
+        .zip(rest)
+        .map(|(p, r)| Some([p[0] - r[0], p[1] - r[1]]))
+        .collect();
+    tactrace_sensor::FitSample { tap, disp }
+}

@@ -3,6 +3,8 @@
 //! turn away, and put the object on the other side of the edge is
 //! recovered from its taps alone; a sensor labelled like the simulator
 //! keeps its own convention untouched.
+mod common;
+
 use tactrace_sensor::{
     fit_convention, wrap_deg, ConventionSearch, EdgeTap, FitSample, TacTipConfig, TacTipModel,
 };
@@ -19,13 +21,7 @@ fn taps(truth: &TacTipConfig) -> (Vec<[f64; 2]>, Vec<FitSample>) {
                 theta_deg: -180.0 + 15.0 * k as f64,
                 ..EdgeTap::default()
             };
-            let disp = model
-                .edge_tap_pins(&tap)
-                .iter()
-                .zip(&rest)
-                .map(|(p, r)| Some([p[0] - r[0], p[1] - r[1]]))
-                .collect();
-            FitSample { tap, disp }
+            common::fit_sample(&model, &rest, tap)
         })
         .collect();
     (rest, samples)

@@ -3,6 +3,8 @@
 //! tap depth (as the shared 331-pin set's) and whose skin lags half as
 //! far behind a slide is recovered from its taps alone; a sensor whose
 //! taps the simulator already makes keeps its own values untouched.
+mod common;
+
 use tactrace_sensor::{
     field_misfit, fit_depth, DepthSearch, EdgeTap, FitSample, Shear, TacTipConfig, TacTipModel,
 };
@@ -27,13 +29,7 @@ fn taps(truth: &TacTipConfig) -> (Vec<[f64; 2]>, Vec<FitSample>) {
                     drz_deg: -3.0 + 6.0 * u(23),
                 }),
             };
-            let disp = model
-                .edge_tap_pins(&tap)
-                .iter()
-                .zip(&rest)
-                .map(|(p, r)| Some([p[0] - r[0], p[1] - r[1]]))
-                .collect();
-            FitSample { tap, disp }
+            common::fit_sample(&model, &rest, tap)
         })
         .collect();
     (rest, samples)

@@ -270,7 +270,14 @@ pub fn train(a: TrainArgs) -> Result<()> {
     let model = StoredModel::new(model, data.meta.reference_pins.clone()).with_training(record);
     let dir = tr::save_model(&a.out, &model, &history, a.force, &extra)?;
     eprintln!("trained in {secs:.1} s; saved model to {}", dir.display());
-    if history.lr_halvings > 0 {
+    if history.member_lr_halvings.iter().any(|&h| h > 0) {
+        eprintln!(
+            "note: ensemble members diverged and restarted alone with their learning rates \
+             halved (per member: {:?}); the others kept their results; {} records the halvings",
+            history.member_lr_halvings,
+            dir.join("training.json").display()
+        );
+    } else if history.lr_halvings > 0 {
         eprintln!(
             "note: training diverged and was restarted with the learning rates halved {} time(s); \
              {} records the rates used",

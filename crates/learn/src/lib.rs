@@ -16,6 +16,7 @@ mod dataset;
 mod dennn;
 mod ep;
 mod error;
+mod fit_members;
 mod image_model;
 mod kernels;
 mod member;

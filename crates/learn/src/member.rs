@@ -9,9 +9,10 @@ use std::sync::OnceLock;
 impl PoseModel {
     /// Member `m` (from 0) of the ensemble as a single model: its nets,
     /// the shared standardiser, PCA and target scaling, and the
-    /// configuration with `ensemble = 1` and the member's seed
-    /// ([`ModelConfig::member_seed`]); the model itself for `m = 0` of a
-    /// single model. Error when `m` is not a member.
+    /// configuration with `ensemble = 1`, the member's seed
+    /// ([`ModelConfig::member_seed`]) and the rates it trained with (its
+    /// own halvings after a divergence applied); the model itself for
+    /// `m = 0` of a single model. Error when `m` is not a member.
     pub fn member(&self, m: usize) -> Result<PoseModel, LearnError> {
         let k = self.config.ensemble;
         if m >= k {
@@ -21,25 +22,42 @@ impl PoseModel {
             });
         }
         let per = self.nets.len() / k;
-        let nets = self.nets[m * per..(m + 1) * per]
+        let own = &self.nets[m * per..(m + 1) * per];
+        let nets = own
             .iter()
             .map(|n| FittedNet {
                 name: single_name(&n.name, k).to_string(),
+                lr_halvings: 0,
                 ..n.clone()
             })
             .collect();
+        let mut config = ModelConfig {
+            seed: self.config.member_seed(m),
+            ensemble: 1,
+            ..self.config.clone()
+        };
+        for _ in 0..own.first().map_or(0, |n| n.lr_halvings) {
+            config.scale_learning_rates(0.5);
+        }
         Ok(PoseModel {
-            config: ModelConfig {
-                seed: self.config.member_seed(m),
-                ensemble: 1,
-                ..self.config.clone()
-            },
+            config,
             standardiser: self.standardiser.clone(),
             targets: self.targets.clone(),
             nets,
             outputs: self.outputs.clone(),
             predictor: OnceLock::new(),
         })
+    }
+}
+
+impl PoseModel {
+    /// How often each member's learning rates were halved after it
+    /// diverged, beyond the configuration's rates (one entry a member; a
+    /// single model's configuration holds its rates, so its entry is 0).
+    pub fn member_lr_halvings(&self) -> Vec<usize> {
+        let k = self.config.ensemble;
+        let per = self.nets.len() / k;
+        (0..k).map(|m| self.nets[m * per].lr_halvings).collect()
     }
 }
 
@@ -70,6 +88,7 @@ mod tests {
             targets: vec![0, 1],
             pca: None,
             layers: Layers::from_parts(sizes, w, b).expect("layers"),
+            lr_halvings: 0,
         }
     }
 

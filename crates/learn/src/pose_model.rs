@@ -6,14 +6,14 @@
 //! the same model with its nets trained once per member (seeds derived
 //! from the run's) on the same standardiser, PCA and target scaling, the
 //! members' scaled outputs averaged.
-use crate::config::{ModelConfig, ModelKind, TargetScaling};
+use crate::config::{ModelConfig, ModelKind};
 use crate::dataset::Dataset;
 use crate::error::LearnError;
-use crate::pca::{Components, Pca};
+use crate::fit_members::{fit_members, net_inputs};
+use crate::pca::Pca;
 use crate::predict::Predictor;
 use crate::standardise::Standardiser;
 use crate::targets::{self, ModelTarget, Unit};
-use crate::trainer::{train_nets, NetData, Trainer};
 pub use crate::trainer::{EpochReport, NetEpoch, TrainingHistory};
 use crate::Layers;
 use std::sync::OnceLock;
@@ -28,6 +28,11 @@ pub(crate) struct FittedNet {
     /// `None` feeds the standardised displacements directly.
     pub pca: Option<Pca>,
     pub layers: Layers,
+    /// How often its member's learning rates were halved after a
+    /// divergence, beyond the model configuration's (an ensemble's member
+    /// that restarted alone; 0 for a single model, whose configuration
+    /// holds the rates it trained with).
+    pub lr_halvings: usize,
 }
 
 /// A trained pose model.
@@ -70,10 +75,12 @@ impl PoseModel {
 
     /// Fit a model of `outputs` (the columns of `train`'s targets, in
     /// order), reporting each net's loss on `val` per epoch (never used for
-    /// fitting). A divergence restarts the fit with halved learning rates
-    /// up to `cfg.divergence_retries` times (the history counts the
-    /// halvings; the model's config holds the rates used). An ensemble's
-    /// members train together, in parallel, and restart together.
+    /// fitting). A divergence restarts the diverged member alone with
+    /// halved learning rates up to `cfg.divergence_retries` times; the
+    /// other members keep their results (the history counts the halvings,
+    /// per member for an ensemble; a single model's config holds the rates
+    /// used, an ensemble's nets their member's halvings). An ensemble's
+    /// members train together, in parallel.
     pub fn fit_targets(
         cfg: &ModelConfig,
         outputs: &[ModelTarget],
@@ -101,104 +108,7 @@ impl PoseModel {
         }
         let train = encode(outputs, train)?;
         let val = val.map(|v| encode(outputs, v)).transpose()?;
-        let mut cfg = cfg.clone();
-        let mut halvings = 0;
-        loop {
-            match Self::fit_once(&cfg, outputs, &train, val.as_ref(), progress) {
-                Err(LearnError::Diverged { .. }) if halvings < cfg.divergence_retries => {
-                    cfg.scale_learning_rates(0.5);
-                    halvings += 1;
-                }
-                Ok((model, mut history)) => {
-                    history.lr_halvings = halvings;
-                    return Ok((model, history));
-                }
-                Err(e) => return Err(e),
-            }
-        }
-    }
-
-    /// One fit on the encoded targets `train` (and `val`).
-    fn fit_once(
-        cfg: &ModelConfig,
-        outputs: &[ModelTarget],
-        train: &Dataset,
-        val: Option<&Dataset>,
-        progress: &mut dyn FnMut(&EpochReport),
-    ) -> Result<(PoseModel, TrainingHistory), LearnError> {
-        cfg.validate()?;
-        cfg.check_samples(train.n, train.dim_x)?;
-        let encoded = targets::encoded_columns(outputs);
-        let standardiser = Standardiser::fit(&train.x, train.n, train.dim_x)?;
-        let targets = fit_target_scaling(cfg.target_scaling, train)?;
-        let z = standardiser.transform(&train.x);
-        let z_val = val.map(|v| standardiser.transform(&v.x));
-        let nets = cfg.nets_for(outputs);
-        let mut plans = Vec::with_capacity(nets.len());
-        for (name, which, net_cfg) in nets {
-            let cols: Vec<usize> = which.iter().flat_map(|&t| encoded[t].clone()).collect();
-            let pca = match net_cfg.n_components {
-                Some(c) => Some(Pca::fit(
-                    &z,
-                    train.n,
-                    train.dim_x,
-                    Components::Count(c),
-                    cfg.pc_scaling,
-                )?),
-                None => None,
-            };
-            plans.push((name, cols, pca, net_cfg));
-        }
-        let mut trainers = Vec::new();
-        let mut fitted = Vec::new();
-        for m in 0..cfg.ensemble {
-            // Member m: the single model's nets from the member's seed.
-            let member = ModelConfig {
-                seed: cfg.member_seed(m),
-                ..cfg.clone()
-            };
-            for (k, (name, cols, pca, net_cfg)) in plans.iter().enumerate() {
-                let name = member_name(name, m, cfg.ensemble);
-                let data = NetData::new(net_inputs(pca.as_ref(), &z), train, cols, &targets)?;
-                let val_data = match (val, &z_val) {
-                    (Some(v), Some(zv)) => Some(NetData::new(
-                        net_inputs(pca.as_ref(), zv),
-                        v,
-                        cols,
-                        &targets,
-                    )?),
-                    _ => None,
-                };
-                let mut sizes = vec![data.set.dim_x];
-                sizes.extend(&net_cfg.hidden);
-                sizes.push(cols.len());
-                let layers = Layers::new(&sizes, member.seed.wrapping_add(k as u64))?;
-                trainers.push(Trainer::new(
-                    &name, layers, &member, net_cfg, data, val_data, k as u64,
-                ));
-                fitted.push(FittedNet {
-                    name,
-                    targets: cols.clone(),
-                    pca: pca.clone(),
-                    layers: Layers::new(&sizes, 0)?,
-                });
-            }
-        }
-        let history = train_nets(&mut trainers, cfg.epochs, progress)?;
-        for (f, t) in fitted.iter_mut().zip(trainers) {
-            f.layers = t.into_layers();
-        }
-        Ok((
-            PoseModel {
-                config: cfg.clone(),
-                standardiser,
-                targets,
-                nets: fitted,
-                outputs: outputs.to_vec(),
-                predictor: OnceLock::new(),
-            },
-            history,
-        ))
+        fit_members(cfg, outputs, &train, val.as_ref(), progress)
     }
 
     /// Predict the edge pose `[r mm, theta deg]` from one displacement
@@ -382,24 +292,6 @@ impl PoseModel {
     }
 }
 
-/// A net's name in member `m` of an ensemble of `k`: the single model's
-/// name for `k = 1`, else `name#m` counting members from 1.
-fn member_name(name: &str, m: usize, k: usize) -> String {
-    if k == 1 {
-        name.to_string()
-    } else {
-        format!("{name}#{}", m + 1)
-    }
-}
-
-/// Project standardised rows through `pca`, or pass them through.
-fn net_inputs(pca: Option<&Pca>, z: &[f64]) -> Vec<f64> {
-    match pca {
-        Some(p) => p.transform(z),
-        None => z.to_vec(),
-    }
-}
-
 /// `data` with its targets encoded for the networks (a circular target as
 /// its sine and cosine); the same data when no target is circular.
 fn encode(outputs: &[ModelTarget], data: &Dataset) -> Result<Dataset, LearnError> {
@@ -412,15 +304,6 @@ fn encode(outputs: &[ModelTarget], data: &Dataset) -> Result<Dataset, LearnError
         targets::encode_into(outputs, data.y_row(i), &mut y);
     }
     Dataset::new(data.x.clone(), y, data.n, data.dim_x, width)
-}
-
-fn fit_target_scaling(scaling: TargetScaling, train: &Dataset) -> Result<Standardiser, LearnError> {
-    match scaling {
-        TargetScaling::Standardise => Standardiser::fit(&train.y, train.n, train.dim_y),
-        TargetScaling::None => {
-            Standardiser::from_parts(vec![0.0; train.dim_y], vec![1.0; train.dim_y])
-        }
-    }
 }
 
 /// The indices of the position (mm) and angle (deg) targets among

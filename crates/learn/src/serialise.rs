@@ -47,6 +47,14 @@ struct NetFile {
     targets: Vec<usize>,
     sizes: Vec<usize>,
     pca: Option<Pca>,
+    /// Its member's learning-rate halvings after a divergence, beyond the
+    /// configuration's (absent: none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    lr_halvings: usize,
+}
+
+fn is_zero(v: &usize) -> bool {
+    *v == 0
 }
 
 fn corrupt(reason: impl ToString) -> LearnError {
@@ -82,6 +90,7 @@ impl PoseModel {
                     targets: n.targets.clone(),
                     sizes: n.layers.sizes().to_vec(),
                     pca: n.pca.clone(),
+                    lr_halvings: n.lr_halvings,
                 })
                 .collect(),
             outputs: Some(self.outputs.clone()),
@@ -209,6 +218,14 @@ fn load_net(
         )?);
         b.push(read_f32(tensors, &tensor_name(k, "b", l), &[n.sizes[l]])?);
     }
+    if n.lr_halvings > crate::config::MAX_RETRIES {
+        return Err(corrupt(format!(
+            "net {}: {} learning-rate halvings exceed {}",
+            n.name,
+            n.lr_halvings,
+            crate::config::MAX_RETRIES
+        )));
+    }
     let layers = Layers::from_parts(n.sizes, w, b)?;
     if !layers.is_finite() {
         return Err(corrupt(format!("net {}: non-finite weights", n.name)));
@@ -218,6 +235,7 @@ fn load_net(
         targets: n.targets,
         pca: n.pca,
         layers,
+        lr_halvings: n.lr_halvings,
     })
 }
 

@@ -5,6 +5,7 @@ use crate::config::{anneal_factor, ModelConfig, ModelKind, NetConfig};
 use crate::dataset::Dataset;
 use crate::dennn::{DenNN, EpConfig};
 use crate::error::LearnError;
+use crate::fit_members::Failures;
 use crate::mlp::Mlp;
 use crate::net::{Layers, States};
 use crate::standardise::Standardiser;
@@ -42,9 +43,14 @@ pub struct EpochReport {
 pub struct TrainingHistory {
     pub epochs: Vec<EpochReport>,
     /// How often the learning rates were halved after a divergence
-    /// (`ModelConfig::divergence_retries`); the epochs are the last fit's.
+    /// (`ModelConfig::divergence_retries`; the most of any member); the
+    /// epochs are each net's last fit's.
     #[serde(default)]
     pub lr_halvings: usize,
+    /// An ensemble's halvings member by member (each diverged member
+    /// restarts alone); empty for a single model.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub member_lr_halvings: Vec<usize>,
 }
 
 /// One net's training inputs and scaled targets.
@@ -303,23 +309,46 @@ pub(crate) fn mean_loss(layers: &Layers, data: &Dataset) -> f64 {
 
 /// Train every net for `epochs`, the nets of an epoch in parallel (rayon;
 /// each net has its own data and random order, so the result does not
-/// depend on the threads). The first net's error in order is returned.
+/// depend on the threads nor on the other nets). Net `t` belongs to member
+/// `owner[t]`: a net that diverges stops its member's nets, the others go
+/// on. Returns each net's epochs (a failed member's cut short) and each
+/// failed member's first error (in net order within the epoch it failed).
 pub(crate) fn train_nets(
     trainers: &mut [Trainer],
+    owner: &[usize],
     epochs: usize,
     progress: &mut dyn FnMut(&EpochReport),
-) -> Result<TrainingHistory, LearnError> {
-    let mut history = TrainingHistory::default();
+) -> (Vec<Vec<NetEpoch>>, Failures) {
+    let mut history = vec![Vec::with_capacity(epochs); trainers.len()];
+    let mut failed = Failures::new();
     for epoch in 0..epochs {
-        let nets = trainers
+        let results = trainers
             .par_iter_mut()
-            .map(|t| t.epoch(epoch))
-            .collect::<Vec<_>>()
+            .enumerate()
+            .map(|(t, tr)| (!failed.contains_key(&owner[t])).then(|| tr.epoch(epoch)))
+            .collect::<Vec<_>>();
+        let mut done = Vec::new();
+        for (t, r) in results.into_iter().enumerate() {
+            match r {
+                Some(Ok(e)) => {
+                    history[t].push(e.clone());
+                    done.push((t, e));
+                }
+                Some(Err(e)) => {
+                    failed.entry(owner[t]).or_insert(e);
+                }
+                None => {}
+            }
+        }
+        if owner.iter().all(|m| failed.contains_key(m)) {
+            break;
+        }
+        let nets = done
             .into_iter()
-            .collect::<Result<Vec<_>, _>>()?;
-        let report = EpochReport { epoch, nets };
-        progress(&report);
-        history.epochs.push(report);
+            .filter(|(t, _)| !failed.contains_key(&owner[*t]))
+            .map(|(_, e)| e)
+            .collect();
+        progress(&EpochReport { epoch, nets });
     }
-    Ok(history)
+    (history, failed)
 }

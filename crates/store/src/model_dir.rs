@@ -158,7 +158,8 @@ fn read_pins(dir: &Path) -> Result<Vec<[f64; 2]>> {
 }
 
 /// Write a trained model (with the reference pins of its training data and,
-/// when known, the record of its training rows), its training history and
+/// when known, the record of its training rows, with an ensemble's
+/// per-member learning-rate halvings from `history`), its training history and
 /// `extra` text files `(name, contents)` into a staging folder for `dir`;
 /// the caller adds figures and commits it.
 pub fn stage_model(
@@ -175,9 +176,13 @@ pub fn stage_model(
     let pins = serde_json::to_string(&pins).expect("pins serialise");
     write_file(&stage.path().join(PINS), pins.as_bytes())?;
     let network = model.model.to_bytes().map_err(|e| network_error(dir, e))?;
+    let training = model.training.clone().map(|t| TrainingRecord {
+        member_lr_halvings: history.member_lr_halvings.clone(),
+        ..t
+    });
     let parts = CommonParts {
         network,
-        training: model.training.as_ref(),
+        training: training.as_ref(),
         history_csv: &history_csv(history),
         extra,
     };

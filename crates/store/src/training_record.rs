@@ -49,6 +49,11 @@ pub struct TrainingRecord {
     /// (`source` "real" with image names); empty otherwise.
     #[serde(default)]
     pub images: Vec<String>,
+    /// For an ensemble, how often each member's learning rates were
+    /// halved after it diverged (a member restarts alone, the others keep
+    /// their results); empty for a single model and in older folders.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub member_lr_halvings: Vec<usize>,
 }
 
 /// Which dataset: its content hash, size and where it was read from.
@@ -111,6 +116,7 @@ impl TrainingRecord {
             train_rows,
             row_hashes,
             images,
+            member_lr_halvings: Vec::new(),
         }
     }
 

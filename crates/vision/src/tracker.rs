@@ -346,8 +346,9 @@ impl PinTracker {
     }
 
     /// The coarse-to-fine stages and the fill of missing pins: from the
-    /// nearest-neighbour start where it holds (see `tracker/grid.rs`), else
-    /// every stage from the centroid shift.
+    /// nearest-neighbour start where it holds (no pin missing, or its first
+    /// matching settled; see `tracker/grid.rs`), else every stage from the
+    /// centroid shift.
     fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
         let grid = Grid::new(points, grid::CELL * self.spacing);
         if let (true, Some(grid)) = (self.nearest, &grid) {

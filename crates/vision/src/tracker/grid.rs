@@ -13,9 +13,13 @@
 //! nearest point within [`NEAREST_REACH`] when that point's nearest pin is
 //! it too; the field fitted to those pairs predicts every pin, and the
 //! narrow stages run from there. It is used only when at least
-//! [`NEAREST_MIN_SHARE`] of the pins pair up and the result turns no
-//! triangle over; otherwise the tracker runs every stage from the centroid
-//! shift, as it always did.
+//! [`NEAREST_MIN_SHARE`] of the pins pair up, the result turns no triangle
+//! over, and either no pin is missing or the first narrow matching is
+//! settled by [`NEAREST_MARGIN`] ([`PinTracker::settled`]: every later
+//! stage depends on the start only through that matching, so a settled one
+//! is what the full path finds unless its start moves the costs by the
+//! margin); otherwise the tracker runs every stage from the centroid shift,
+//! as it always did.
 
 use super::{PinTracker, Stage};
 

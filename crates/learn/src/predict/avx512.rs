@@ -6,13 +6,7 @@
 use std::arch::x86_64::*;
 
 use super::{InputMap, Predictor, Scratch, BLOCK};
-use crate::kernels::{panels, sigmoid, LANES, PANEL};
-
-/// `ln 2` split in two (as `kernels::exp_approx`).
-const LN2_HI: f32 = 0.693_359_4;
-const LN2_LO: f32 = -2.121_944_4e-4;
-/// Adding and removing `1.5 * 2^23` rounds to nearest.
-const ROUNDER: f32 = 12_582_912.0;
+use crate::kernels::{panels, sigmoid, PANEL};
 use crate::net::Layers;
 use crate::pose_model::PoseModel;
 
@@ -80,7 +74,7 @@ fn forward<const R: usize>(
             let (d_in, d_out) = (layers.sizes()[l - 1], layers.sizes()[l]);
             layer::<R>(layers, l, &a[..R * d_in], &mut b[..R * d_out]);
             if l < depth {
-                sigmoid16(&b[..R * d_out], &mut a[..R * d_out]);
+                sigmoid::<true>(&b[..R * d_out], &mut a[..R * d_out]);
             } else {
                 a[..R * d_out].copy_from_slice(&b[..R * d_out]);
             }
@@ -270,92 +264,5 @@ fn narrow<const R: usize>(wt: &[f32], b: &[f32], input: &[f32], out: &mut [f32])
         for (r, acc) in acc.iter().enumerate() {
             out[r * d_out + o] = b[o] + _mm512_reduce_add_ps(*acc);
         }
-    }
-}
-
-/// `kernels::sigmoid::<true>` sixteen values at a time, bit for bit: the
-/// same fused operations of `exp_approx` on every lane (kept in registers,
-/// where the AVX2 build goes through memory eight at a time), then the
-/// same `rcp` and Newton step on each half. The values after the last
-/// whole [`LANES`] go through the kernel itself (which divides exactly there).
-#[target_feature(enable = "avx512f,avx2,fma")]
-fn sigmoid16(src: &[f32], dst: &mut [f32]) {
-    let n = src.len().min(dst.len());
-    let body = n - n % LANES;
-    let (lo, hi) = (_mm512_set1_ps(-87.0), _mm512_set1_ps(88.0));
-    let log2e = _mm512_set1_ps(std::f32::consts::LOG2_E);
-    let rounder = _mm512_set1_ps(ROUNDER);
-    let (ln2_hi, ln2_lo) = (_mm512_set1_ps(LN2_HI), _mm512_set1_ps(LN2_LO));
-    let c = [1.0f32 / 720.0, 1.0 / 120.0, 1.0 / 24.0, 1.0 / 6.0, 0.5, 1.0, 1.0].map(|v| _mm512_set1_ps(v));
-    let one = _mm512_set1_ps(1.0);
-    let two = _mm256_set1_ps(2.0);
-    let bias = _mm512_set1_epi32(127);
-    for i in (0..body).step_by(16) {
-        // SAFETY: i + 16 <= body <= n, the length of both slices at least.
-        let x = unsafe { _mm512_loadu_ps(src[i..].as_ptr()) };
-        // exp(-x), as `exp_approx::<true>(-x)` (its clamp, then fused steps).
-        let x = _mm512_min_ps(_mm512_max_ps(_mm512_sub_ps(_mm512_setzero_ps(), x), lo), hi);
-        let t = _mm512_fmadd_ps(x, log2e, rounder);
-        let m = _mm512_sub_ps(t, rounder);
-        let r = _mm512_fnmadd_ps(m, ln2_hi, x);
-        let r = _mm512_fnmadd_ps(m, ln2_lo, r);
-        let mut p = _mm512_fmadd_ps(c[0], r, c[1]);
-        for &k in &c[2..] {
-            p = _mm512_fmadd_ps(p, r, k);
-        }
-        let bits = _mm512_slli_epi32::<23>(_mm512_add_epi32(_mm512_castps_si512(t), bias));
-        let den = _mm512_add_ps(one, _mm512_mul_ps(p, _mm512_castsi512_ps(bits)));
-        for half in 0..2 {
-            let den = if half == 0 {
-                _mm512_castps512_ps256(den)
-            } else {
-                _mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(_mm512_castps_pd(den)))
-            };
-            let r = _mm256_rcp_ps(den);
-            // r (2 - den r): one Newton step towards 1 / den.
-            let r = _mm256_mul_ps(r, _mm256_fnmadd_ps(den, r, two));
-            // SAFETY: i + 8 half + 8 <= n.
-            unsafe { _mm256_storeu_ps(dst[i + 8 * half..].as_mut_ptr(), r) };
-        }
-    }
-    sigmoid::<true>(&src[body..n], &mut dst[body..n]);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The sixteen-lane sigmoid gives the kernel's values bit for bit, on
-    /// lengths with and without a tail and on inputs up to the clamps.
-    #[test]
-    fn issue21_sigmoid16_equals_the_kernel_bit_for_bit() {
-        if !available() {
-            eprintln!("not run: this CPU has no AVX-512 (the path is not taken either)");
-            return;
-        }
-        let mut state = 21u32;
-        for n in [0, 1, 15, 16, 31, 32, 33, 1000, 8000, 8007] {
-            let src: Vec<f32> = (0..n)
-                .map(|k| {
-                    state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                    let u = (state >> 8) as f32 / (1u32 << 24) as f32;
-                    if k % 97 == 3 { 200.0 * (u - 0.5) } else { 24.0 * (u - 0.5) }
-                })
-                .collect();
-            let (mut want, mut got) = (vec![0.0f32; n], vec![0.0f32; n]);
-            // SAFETY: the CPU has AVX-512F, AVX2 and FMA (checked above).
-            unsafe {
-                kernel_fma(&src, &mut want);
-                sigmoid16(&src, &mut got);
-            }
-            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&got), bits(&want), "length {n}");
-        }
-    }
-
-    /// `sigmoid::<true>` compiled for FMA, as `forward` calls it.
-    #[target_feature(enable = "avx2,fma")]
-    fn kernel_fma(src: &[f32], dst: &mut [f32]) {
-        sigmoid::<true>(src, dst);
     }
 }

@@ -7,9 +7,14 @@
 //! p95 of each frame's best wall time. With `--compare`,
 //! each frame is also ordered with the exact (uncut) smooth field and the
 //! two are compared: fully tracked frames, pins' largest and mean change.
+//! With `--full`, the other tracker is instead the full coarse-to-fine path
+//! (no nearest-neighbour start); `--margin M|none` sets the default
+//! tracker's margin for keeping a nearest-neighbour start with pins missing
+//! (`PinTracker::with_nearest_margin`; `none`: never kept).
 //!
 //! `cargo run --release -p tactrace-vision --example order_timing -- \
-//!     --fit DIR --frames DIR [--rest-frames K] [--limit N] [--reps R] [--compare]`
+//!     --fit DIR --frames DIR [--rest-frames K] [--limit N] [--reps R] [--compare]
+//!     [--full] [--margin M|none]`
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -25,11 +30,13 @@ struct Args {
     limit: usize,
     reps: usize,
     compare: bool,
+    full: bool,
+    margin: Option<f64>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage = "usage: order_timing --fit DIR --frames DIR [--rest-frames K] [--limit N] \
-                 [--reps R] [--compare]";
+                 [--reps R] [--compare] [--full] [--margin M|none]";
     let mut args = std::env::args().skip(1);
     let mut a = Args {
         fit: PathBuf::new(),
@@ -38,6 +45,8 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         limit: usize::MAX,
         reps: 3,
         compare: false,
+        full: false,
+        margin: Some(0.25),
     };
     while let Some(arg) = args.next() {
         let mut value = || args.next().ok_or(usage);
@@ -48,6 +57,13 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--limit" => a.limit = value()?.parse()?,
             "--reps" => a.reps = value()?.parse::<usize>()?.max(1),
             "--compare" => a.compare = true,
+            "--full" => a.full = true,
+            "--margin" => {
+                a.margin = match value()?.as_str() {
+                    "none" => None,
+                    m => Some(m.parse()?),
+                }
+            }
             _ => return Err(usage.into()),
         }
     }
@@ -119,8 +135,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map(|p| Ok(detector.detect(&load(p)?)?))
         .collect::<Result<_, Box<dyn std::error::Error>>>()?;
     let rest = estimate_rest(&fitting, found.pins, &RestParams::default())?;
-    let tracker = PinTracker::new(rest.pins.clone())?;
-    let exact = PinTracker::new(rest.pins)?.with_exact_field(true);
+    let tracker = PinTracker::new(rest.pins.clone())?.with_nearest_margin(a.margin);
+    let exact = if a.full {
+        PinTracker::new(rest.pins)?.with_nearest_start(false)
+    } else {
+        PinTracker::new(rest.pins)?.with_exact_field(true)
+    };
+    let other = if a.full { "full" } else { "exact" };
     let paths: Vec<PathBuf> = pngs(&a.frames)?.into_iter().take(a.limit).collect();
     let detections: Vec<Detection> = paths
         .iter()
@@ -132,7 +153,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         detections.len(),
         a.frames.display()
     );
-    for (name, t) in [("cut", &tracker), ("exact", &exact)] {
+    for (name, t) in [("cut", &tracker), (other, &exact)] {
         let mut each = Vec::with_capacity(detections.len());
         let cpu = cpu_seconds();
         for d in &detections {
@@ -147,7 +168,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let cpu = (cpu_seconds() - cpu) * 1e6 / (a.reps * detections.len()) as f64;
         each.sort_by(f64::total_cmp);
         println!(
-            "{name:>5} field: ordering a frame: thread CPU mean {cpu:.1} us; wall (best of {}) \
+            "{name:>7}: ordering a frame: thread CPU mean {cpu:.1} us; wall (best of {}) \
              median {:.1} us, p95 {:.1} us",
             a.reps,
             percentile(&each, 0.5),
@@ -168,7 +189,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let coords = 2 * detections.len() * tracker.reference().len();
         println!(
-            "cut vs exact: fully tracked {} / {} frames (exact {}), matched flags differ on {} \
+            "default vs {other}: fully tracked {} / {} frames ({other} {}), matched flags differ on {} \
              frames, a pin moves more than 1e-6 px on {moved} frames, pins' largest change {most:.3e} px, mean {:.3e} px",
             full[0],
             detections.len(),

@@ -79,6 +79,10 @@ pub struct PinTracker {
     /// Whether the matching may start from nearest neighbours
     /// (`tracker/grid.rs`).
     nearest: bool,
+    /// Margin (in squared spacings) by which a nearest-neighbour start with
+    /// pins missing must settle every pairing; `None`: such starts are
+    /// never kept.
+    nearest_margin: Option<f64>,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -159,6 +163,7 @@ impl PinTracker {
             reference,
             spacing,
             nearest: true,
+            nearest_margin: Some(grid::NEAREST_MARGIN),
         })
     }
 
@@ -178,6 +183,16 @@ impl PinTracker {
     /// (`tests/speed.rs`), kept to check that.
     pub fn with_nearest_start(mut self, on: bool) -> Self {
         self.nearest = on;
+        self
+    }
+
+    /// This tracker keeping a nearest-neighbour start that leaves pins
+    /// missing only when its first matching is clear by `margin` squared
+    /// spacings (see `tracker/grid.rs`); `None` never keeps such a start
+    /// (the behaviour before the margin). Kept to measure the margin
+    /// against the full path (`examples/order_timing.rs`).
+    pub fn with_nearest_margin(mut self, margin: Option<f64>) -> Self {
+        self.nearest_margin = margin;
         self
     }
 
@@ -331,30 +346,38 @@ impl PinTracker {
     }
 
     /// The coarse-to-fine stages and the fill of missing pins: from the
-    /// nearest-neighbour start where it holds (see `tracker/grid.rs`), else
-    /// every stage from the centroid shift.
+    /// nearest-neighbour start where it holds (no pin missing, or its first
+    /// matching settled; see `tracker/grid.rs`), else every stage from the
+    /// centroid shift.
     fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
         let grid = Grid::new(points, grid::CELL * self.spacing);
         if let (true, Some(grid)) = (self.nearest, &grid) {
             if let Some(start) = self.nearest_start(points, grid) {
                 let after = &self.stages[grid::NEAREST_STAGE + 1..];
-                let (tracked, matches) = self.run_stages(start, after, points, Some(grid));
-                if tracked.missing == 0 && !self.folds.any_turned(&tracked.pins) {
+                let mut first = Vec::new();
+                let (tracked, matches) =
+                    self.run_stages(start.clone(), after, points, Some(grid), &mut first);
+                if !self.folds.any_turned(&tracked.pins)
+                    && (tracked.missing == 0
+                        || self.settled(&start, points, &first, after[0].gate, grid))
+                {
                     return (tracked, matches);
                 }
             }
         }
         let start = self.centroid_shift(points);
-        self.run_stages(start, &self.stages, points, grid.as_ref())
+        self.run_stages(start, &self.stages, points, grid.as_ref(), &mut Vec::new())
     }
 
-    /// `stages` from the predictions `predicted`, then the fill.
+    /// `stages` from the predictions `predicted`, then the fill; `first`
+    /// receives the first stage's matches.
     fn run_stages(
         &self,
         mut predicted: Vec<[f64; 2]>,
         stages: &[Stage],
         points: &[[f64; 2]],
         grid: Option<&Grid>,
+        first: &mut Vec<Option<usize>>,
     ) -> (Tracked, Vec<Option<usize>>) {
         let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
         let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
@@ -365,6 +388,9 @@ impl PinTracker {
                 None => Candidates::ByX(by_x.get_or_insert_with(|| ByX::new(points))),
             };
             matches = self.match_points(&predicted, points, source, stage.gate);
+            if first.is_empty() {
+                first.clone_from(&matches);
+            }
             observed = self.displacements(&matches, points);
             predicted = self.predict(&observed, &stage.kernel);
         }

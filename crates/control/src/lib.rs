@@ -20,5 +20,5 @@ pub use error::ControlError;
 
 pub use pbts::{next_pose, PbtsConfig, PbtsController, SensedPose};
 pub use policy::{CurvatureEstimate, PolicyConfig};
-pub use se3::{apply_servo, se3_error, Se3Config, Se3Controller};
+pub use se3::{apply_servo, heading_error_deg, se3_error, Se3Config, Se3Controller};
 pub use task::{Task, COMPONENTS};

@@ -51,6 +51,12 @@ use tactrace_arm::Pose;
 /// Anti-windup bounds of every preset: 5 mm, 45 deg (as the report's).
 const CLIP: [f64; 6] = [5.0, 5.0, 5.0, 45.0, 45.0, 45.0];
 
+/// The edge presets' bound on a move: 20 deg of turn about the sensor's
+/// axis a step (a tap whose rz is read half a turn away would otherwise
+/// turn the sensor by about 90 deg); the other bounds (5 mm, 45 deg) are
+/// above what the presets' gains can ask for.
+pub const EDGE_MOVE_CLIP: [f64; 6] = [5.0, 5.0, 5.0, 45.0, 45.0, 20.0];
+
 /// The SE(3) controller's settings; vectors are (x, y, z mm; rx, ry, rz
 /// deg). Built by a preset, [`Se3Config::new`] or deserialised (checked
 /// the same way; unknown fields refused, `kd` optional).
@@ -165,24 +171,32 @@ impl Se3Config {
     }
 
     /// edge_3d: the report's edge gains on x and rz with the surface
-    /// gains on z (our choice, not tuned): 1 mm step at 3 mm depth.
+    /// gains on z (our choice, not tuned): 1 mm step at 3 mm depth, the
+    /// turn bounded as edge_5d's.
     pub fn edge_3d() -> Self {
-        Self::preset(
-            Task::Edge3d,
-            [0.5, 1.0, 0.5, 0.0, 0.0, 0.5],
-            [0.3, 0.0, 0.3, 0.0, 0.0, 0.1],
-        )
+        Self {
+            move_clip: Some(EDGE_MOVE_CLIP),
+            ..Self::preset(
+                Task::Edge3d,
+                [0.5, 1.0, 0.5, 0.0, 0.0, 0.5],
+                [0.3, 0.0, 0.3, 0.0, 0.0, 0.1],
+            )
+        }
     }
 
     /// edge_5d: the report's edge gains on x and rz with the anchors'
     /// surface gains on z, rx, ry (our choice, not tuned): 1 mm step at
-    /// 3 mm depth.
+    /// 3 mm depth; each step turns the heading by at most 20 deg
+    /// ([`EDGE_MOVE_CLIP`]).
     pub fn edge_5d() -> Self {
-        Self::preset(
-            Task::Edge5d,
-            [0.5, 1.0, 0.5, 0.5, 0.5, 0.5],
-            [0.3, 0.0, 0.3, 0.1, 0.1, 0.1],
-        )
+        Self {
+            move_clip: Some(EDGE_MOVE_CLIP),
+            ..Self::preset(
+                Task::Edge5d,
+                [0.5, 1.0, 0.5, 0.5, 0.5, 0.5],
+                [0.3, 0.0, 0.3, 0.1, 0.1, 0.1],
+            )
+        }
     }
 
     fn preset(task: Task, kp: [f64; 6], ki: [f64; 6]) -> Self {

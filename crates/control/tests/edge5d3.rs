@@ -3,7 +3,9 @@
 //! each component of the move, `heading_deg` turns a surface run onto a
 //! direction of travel read from the commanded pose.
 use tactrace_arm::Pose;
-use tactrace_control::{heading_error_deg, ControlError, Se3Config, Se3Controller, Task};
+use tactrace_control::{
+    heading_error_deg, ControlError, Se3Config, Se3Controller, Task, EDGE_MOVE_CLIP,
+};
 use tactrace_shape3d::{HeightField, Object3d, Vec3};
 
 /// edge_5d with the rz move bounded to +-`rz` deg.
@@ -14,11 +16,19 @@ fn clipped_edge(rz: f64) -> Se3Config {
     }
 }
 
+/// edge_5d without a bound on the move (the preset before the bound).
+fn free_edge() -> Se3Config {
+    Se3Config {
+        move_clip: None,
+        ..Se3Config::edge_5d()
+    }
+}
+
 #[test]
 fn issue23_move_clip_bounds_a_misread_rotation() {
     // A tap read nearly half a turn away: the unbounded law turns by 85 deg.
     let misread = [0.0, 0.0, 3.0, 0.0, 0.0, 170.0];
-    let mut free = Se3Controller::try_new(Se3Config::edge_5d()).unwrap();
+    let mut free = Se3Controller::try_new(free_edge()).unwrap();
     let u = free.step(misread).unwrap();
     assert!(u[5].abs() > 80.0, "{u:?}");
     let mut c = Se3Controller::try_new(clipped_edge(20.0)).unwrap();
@@ -40,7 +50,7 @@ fn issue23_move_clip_leaves_moves_within_it_alone() {
         [-0.2, 0.0, 3.3, -1.0, 4.0, -9.0],
         [0.1, 0.0, 3.0, 0.5, 0.5, 2.0],
     ];
-    let mut free = Se3Controller::try_new(Se3Config::edge_5d()).unwrap();
+    let mut free = Se3Controller::try_new(free_edge()).unwrap();
     let mut c = Se3Controller::try_new(clipped_edge(20.0)).unwrap();
     for p in predictions {
         assert_eq!(free.step(p).unwrap(), c.step(p).unwrap());
@@ -64,9 +74,20 @@ heading_deg = 30.0
     // Round trip through the run folder's config.toml.
     let back: Se3Config = toml::from_str(&toml::to_string(&c).unwrap()).unwrap();
     assert_eq!(back, c);
-    // The presets have neither, and older configs without them still read.
-    assert_eq!(Se3Config::edge_5d().move_clip, None);
+    // The edge presets bound the turn to 20 deg a step; surface_3d holds
+    // no heading; configs without the keys still read (see the TOML above
+    // without them: neither set).
+    assert_eq!(Se3Config::edge_5d().move_clip, Some(EDGE_MOVE_CLIP));
+    assert_eq!(Se3Config::edge_3d().move_clip.unwrap()[5], 20.0);
+    assert_eq!(Se3Config::surface_3d().move_clip, None);
     assert_eq!(Se3Config::surface_3d().heading_deg, None);
+    let old = text
+        .lines()
+        .filter(|l| !l.starts_with("move_clip") && !l.starts_with("heading_deg"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let old: Se3Config = toml::from_str(&old).unwrap();
+    assert_eq!((old.move_clip, old.heading_deg), (None, None));
     let negative = Se3Config {
         move_clip: Some([1.0, 1.0, 1.0, 1.0, 1.0, -1.0]),
         ..Se3Config::edge_5d()

@@ -203,6 +203,11 @@ pub struct FollowTaskArgs {
     /// surface_3d only).
     #[arg(long, requires = "task", allow_negative_numbers = true)]
     heading: Option<f64>,
+    /// Hold this direction of travel, deg from +x (surface_3d only): the
+    /// controller turns the sensor about its axis onto it, with its rz
+    /// gains (default: none, the start's heading is kept as it comes).
+    #[arg(long, requires = "task", allow_negative_numbers = true)]
+    steer: Option<f64>,
     /// The path's length, mm (default 80; plane and ramp 40; surface_3d
     /// only).
     #[arg(long, requires = "task")]
@@ -248,6 +253,9 @@ pub fn follow(
     }
     cfg.path.heading_deg = a.heading.unwrap_or(cfg.path.heading_deg);
     cfg.path.length_mm = a.length.unwrap_or(cfg.path.length_mm);
+    if a.steer.is_some() {
+        cfg.controller.heading_deg = a.steer;
+    }
     cfg.seed = seed.unwrap_or(cfg.seed);
     cfg.validate()?;
     let surface = object(name)?;
@@ -332,9 +340,9 @@ fn follow_edge(
     use tactrace_control::Se3Config;
     use tactrace_lab::follow::edge3d::{edge_of, run_edge, Edge3dConfig};
     let task: Task = a.task.unwrap_or(TaskArg::Edge5d).into();
-    if a.heading.is_some() || a.length.is_some() || a.replay_data.is_some() {
+    if a.heading.is_some() || a.length.is_some() || a.steer.is_some() || a.replay_data.is_some() {
         return Err(LabError::Config(format!(
-            "--heading, --length and --replay-data are surface_3d's: {task} follows the edge round"
+            "--heading, --steer, --length and --replay-data are surface_3d's: {task} follows the edge round"
         ))
         .into());
     }

@@ -6,9 +6,13 @@ pub enum ControlError {
     /// A gain, reference or bound that is NaN or infinite.
     #[error("controller setting {field}[{index}] is not finite")]
     NonFinite { field: &'static str, index: usize },
-    /// A negative anti-windup bound.
-    #[error("integral_clip[{index}] = {value} must be >= 0")]
-    NegativeClip { index: usize, value: f64 },
+    /// A negative bound (anti-windup or the move's).
+    #[error("{field}[{index}] = {value} must be >= 0")]
+    NegativeClip {
+        field: &'static str,
+        index: usize,
+        value: f64,
+    },
     /// Policy settings that cannot work (see `PolicyConfig`).
     #[error("controller {reason}")]
     Policy { reason: String },

@@ -20,5 +20,7 @@ pub use error::ControlError;
 
 pub use pbts::{next_pose, PbtsConfig, PbtsController, SensedPose};
 pub use policy::{CurvatureEstimate, PolicyConfig};
-pub use se3::{apply_servo, se3_error, Se3Config, Se3Controller};
+pub use se3::{
+    apply_servo, heading_error_deg, se3_error, Se3Config, Se3Controller, EDGE_MOVE_CLIP,
+};
 pub use task::{Task, COMPONENTS};

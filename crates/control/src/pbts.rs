@@ -137,6 +137,7 @@ impl PbtsConfig {
         }
         if let Some(index) = self.integral_clip.iter().position(|v| *v < 0.0) {
             return Err(ControlError::NegativeClip {
+                field: "integral_clip",
                 index,
                 value: self.integral_clip[index],
             });

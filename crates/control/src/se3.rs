@@ -28,6 +28,19 @@
 //! (translation u[0..3] mm, rotation the rotation vector u[3..6] deg) is
 //! applied in the sensor frame: the new pose = current * T(u), a
 //! quaternion composition (eq. 5.7-5.8).
+//!
+//! # Bounded moves and a held heading
+//! Two optional settings beyond the field's controller. `move_clip`
+//! bounds each component of u to +-its value (mm, deg) after the law: a
+//! controller's choice of how far one step may go (a misread tap then
+//! turns or shifts the sensor by at most the bound, and the next tap
+//! corrects it), apart from the arm's step limits, which stay the safety
+//! check. `heading_deg` (tasks that do not sense rz: surface_3d) is a
+//! direction of travel in the work frame's xy plane: the rz error is then
+//! the angle about the sensor's axis from its y axis (the tangential step)
+//! to the line of the sensor's plane that runs over that direction seen
+//! from above, read from the commanded pose ([`heading_error_deg`]), with
+//! the rz gains.
 use crate::pbts::PbtsConfig;
 use crate::task::{Task, COMPONENTS};
 use crate::ControlError;
@@ -37,6 +50,12 @@ use tactrace_arm::Pose;
 
 /// Anti-windup bounds of every preset: 5 mm, 45 deg (as the report's).
 const CLIP: [f64; 6] = [5.0, 5.0, 5.0, 45.0, 45.0, 45.0];
+
+/// The edge presets' bound on a move: 20 deg of turn about the sensor's
+/// axis a step (a tap whose rz is read half a turn away would otherwise
+/// turn the sensor by about 90 deg); the other bounds (5 mm, 45 deg) are
+/// above what the presets' gains can ask for.
+pub const EDGE_MOVE_CLIP: [f64; 6] = [5.0, 5.0, 5.0, 45.0, 45.0, 20.0];
 
 /// The SE(3) controller's settings; vectors are (x, y, z mm; rx, ry, rz
 /// deg). Built by a preset, [`Se3Config::new`] or deserialised (checked
@@ -56,6 +75,13 @@ pub struct Se3Config {
     pub kd: [f64; 6],
     /// Each integral component is clipped to +-this (anti-windup).
     pub integral_clip: [f64; 6],
+    /// Each component of the move u is clipped to +-this (mm, deg);
+    /// `None`: unbounded (the presets).
+    pub move_clip: Option<[f64; 6]>,
+    /// The direction of travel to hold, deg from the work frame's +x
+    /// (only for a task that does not sense rz); `None`: the heading is
+    /// never turned.
+    pub heading_deg: Option<f64>,
 }
 
 /// The serialised form, checked on the way in.
@@ -69,6 +95,10 @@ struct RawSe3Config {
     #[serde(default)]
     kd: [f64; 6],
     integral_clip: [f64; 6],
+    #[serde(default)]
+    move_clip: Option<[f64; 6]>,
+    #[serde(default)]
+    heading_deg: Option<f64>,
 }
 
 impl TryFrom<RawSe3Config> for Se3Config {
@@ -82,6 +112,8 @@ impl TryFrom<RawSe3Config> for Se3Config {
             ki: r.ki,
             kd: r.kd,
             integral_clip: r.integral_clip,
+            move_clip: r.move_clip,
+            heading_deg: r.heading_deg,
         };
         config.validate()?;
         Ok(config)
@@ -104,6 +136,8 @@ impl Se3Config {
             ki,
             kd: [0.0; 6],
             integral_clip,
+            move_clip: None,
+            heading_deg: None,
         };
         config.validate()?;
         Ok(config)
@@ -137,24 +171,32 @@ impl Se3Config {
     }
 
     /// edge_3d: the report's edge gains on x and rz with the surface
-    /// gains on z (our choice, not tuned): 1 mm step at 3 mm depth.
+    /// gains on z (our choice, not tuned): 1 mm step at 3 mm depth, the
+    /// turn bounded as edge_5d's.
     pub fn edge_3d() -> Self {
-        Self::preset(
-            Task::Edge3d,
-            [0.5, 1.0, 0.5, 0.0, 0.0, 0.5],
-            [0.3, 0.0, 0.3, 0.0, 0.0, 0.1],
-        )
+        Self {
+            move_clip: Some(EDGE_MOVE_CLIP),
+            ..Self::preset(
+                Task::Edge3d,
+                [0.5, 1.0, 0.5, 0.0, 0.0, 0.5],
+                [0.3, 0.0, 0.3, 0.0, 0.0, 0.1],
+            )
+        }
     }
 
     /// edge_5d: the report's edge gains on x and rz with the anchors'
     /// surface gains on z, rx, ry (our choice, not tuned): 1 mm step at
-    /// 3 mm depth.
+    /// 3 mm depth; each step turns the heading by at most 20 deg
+    /// ([`EDGE_MOVE_CLIP`]).
     pub fn edge_5d() -> Self {
-        Self::preset(
-            Task::Edge5d,
-            [0.5, 1.0, 0.5, 0.5, 0.5, 0.5],
-            [0.3, 0.0, 0.3, 0.1, 0.1, 0.1],
-        )
+        Self {
+            move_clip: Some(EDGE_MOVE_CLIP),
+            ..Self::preset(
+                Task::Edge5d,
+                [0.5, 1.0, 0.5, 0.5, 0.5, 0.5],
+                [0.3, 0.0, 0.3, 0.1, 0.1, 0.1],
+            )
+        }
     }
 
     fn preset(task: Task, kp: [f64; 6], ki: [f64; 6]) -> Self {
@@ -165,6 +207,8 @@ impl Se3Config {
             ki,
             kd: [0.0; 6],
             integral_clip: CLIP,
+            move_clip: None,
+            heading_deg: None,
         }
     }
 
@@ -185,30 +229,55 @@ impl Se3Config {
             ki: pbts.ki,
             kd: pbts.kd,
             integral_clip: pbts.integral_clip,
+            move_clip: None,
+            heading_deg: None,
         })
     }
 
-    /// Check that every value is finite and the clip bounds non-negative.
+    /// Check that every value is finite, the clip bounds non-negative and
+    /// a heading only set for a task that does not sense rz.
     pub fn validate(&self) -> Result<(), ControlError> {
+        let heading = self.heading_deg.map(|h| [h]);
         let vectors = [
-            ("reference", &self.reference),
-            ("kp", &self.kp),
-            ("ki", &self.ki),
-            ("kd", &self.kd),
-            ("integral_clip", &self.integral_clip),
+            ("reference", &self.reference[..]),
+            ("kp", &self.kp[..]),
+            ("ki", &self.ki[..]),
+            ("kd", &self.kd[..]),
+            ("integral_clip", &self.integral_clip[..]),
+            (
+                "move_clip",
+                self.move_clip.as_ref().map_or(&[][..], |c| &c[..]),
+            ),
+            ("heading_deg", heading.as_ref().map_or(&[][..], |h| &h[..])),
         ];
         for (field, values) in vectors {
             if let Some(index) = values.iter().position(|v| !v.is_finite()) {
                 return Err(ControlError::NonFinite { field, index });
             }
         }
-        match self.integral_clip.iter().position(|v| *v < 0.0) {
-            Some(index) => Err(ControlError::NegativeClip {
-                index,
-                value: self.integral_clip[index],
-            }),
-            None => Ok(()),
+        let clips = [
+            ("integral_clip", Some(&self.integral_clip)),
+            ("move_clip", self.move_clip.as_ref()),
+        ];
+        for (field, clip) in clips {
+            if let Some(index) = clip.and_then(|c| c.iter().position(|v| *v < 0.0)) {
+                let value = clip.map_or(0.0, |c| c[index]);
+                return Err(ControlError::NegativeClip {
+                    field,
+                    index,
+                    value,
+                });
+            }
         }
+        if self.heading_deg.is_some() && self.task.sensed()[5] {
+            return Err(ControlError::Policy {
+                reason: format!(
+                    "heading_deg is for tasks that do not sense rz; {} senses it",
+                    self.task
+                ),
+            });
+        }
+        Ok(())
     }
 }
 
@@ -248,6 +317,30 @@ pub fn servo_transform(u: [f64; 6]) -> Isometry3<f64> {
 /// sensor frame at `current` (work frame), current * T(u).
 pub fn apply_servo(current: Pose, u: [f64; 6]) -> Pose {
     Pose::from_isometry(&(current.to_isometry() * servo_transform(u)))
+}
+
+/// The heading error of the sensor at `pose` (work frame) against the
+/// direction of travel `heading_deg` (deg from the work frame's +x in its
+/// xy plane): the signed angle, deg in (-180, 180], about the sensor's z
+/// axis from its y axis to the direction in the sensor's plane that runs
+/// over the heading seen from above (the plane's line within the vertical
+/// plane through the heading, pointing along it). Turning the sensor by it
+/// about its axis puts its tangential step over the heading. 0 when no
+/// such direction exists (the axis level and across the heading).
+pub fn heading_error_deg(pose: Pose, heading_deg: f64) -> f64 {
+    let r = pose.to_isometry().rotation;
+    let axis = r * Vector3::z();
+    let y = r * Vector3::y();
+    let h = heading_deg.to_radians();
+    let d = Vector3::new(h.cos(), h.sin(), 0.0);
+    let mut along = Vector3::z().cross(&d).cross(&axis);
+    if along.norm() < 1e-9 {
+        return 0.0;
+    }
+    if along.dot(&d) < 0.0 {
+        along = -along;
+    }
+    y.cross(&along).dot(&axis).atan2(y.dot(&along)).to_degrees()
 }
 
 /// The discrete PI(D) controller in SE(3); keeps the running integral and
@@ -299,18 +392,46 @@ impl Se3Controller {
     }
 
     /// One control step: the move u (x, y, z mm; rotation vector deg) in
-    /// the sensor frame for the latest prediction. A non-finite sensed
-    /// component is an error and leaves the state untouched.
+    /// the sensor frame for the latest prediction, each component within
+    /// `move_clip`. A non-finite sensed component is an error and leaves
+    /// the state untouched. A held heading needs the pose: see
+    /// [`Se3Controller::step_at`] (here its error is 0).
     pub fn step(&mut self, prediction: [f64; 6]) -> Result<[f64; 6], ControlError> {
+        self.check(prediction)?;
+        let error = self.error(prediction);
+        Ok(self.law(error))
+    }
+
+    /// [`Se3Controller::step`] at the commanded pose `current` (work
+    /// frame): with `heading_deg` set, the rz error is the heading's
+    /// ([`heading_error_deg`] of `current`).
+    pub fn step_at(
+        &mut self,
+        current: Pose,
+        prediction: [f64; 6],
+    ) -> Result<[f64; 6], ControlError> {
+        self.check(prediction)?;
+        let mut error = self.error(prediction);
+        if let Some(heading) = self.config.heading_deg {
+            error[5] = heading_error_deg(current, heading);
+        }
+        Ok(self.law(error))
+    }
+
+    fn check(&self, prediction: [f64; 6]) -> Result<(), ControlError> {
         let sensed = self.config.task.sensed();
-        if let Some(k) = (0..6).find(|&k| sensed[k] && !prediction[k].is_finite()) {
-            return Err(ControlError::NonFinitePrediction {
+        match (0..6).find(|&k| sensed[k] && !prediction[k].is_finite()) {
+            Some(k) => Err(ControlError::NonFinitePrediction {
                 component: COMPONENTS[k],
                 value: prediction[k],
-            });
+            }),
+            None => Ok(()),
         }
+    }
+
+    /// The PI(D) law on `error`, the move clipped.
+    fn law(&mut self, error: [f64; 6]) -> [f64; 6] {
         let c = &self.config;
-        let error = self.error(prediction);
         let previous = self.previous_error.unwrap_or(error);
         let mut u = [0.0; 6];
         for k in 0..6 {
@@ -321,13 +442,16 @@ impl Se3Controller {
             u[k] = c.kp[k] * error[k]
                 + c.ki[k] * self.integral[k]
                 + c.kd[k] * (error[k] - previous[k]);
+            if let Some(clip) = c.move_clip {
+                u[k] = u[k].clamp(-clip[k], clip[k]);
+            }
         }
         self.previous_error = Some(error);
-        Ok(u)
+        u
     }
 
     /// [`Se3Controller::step`] and the next commanded pose from `current`.
     pub fn next_pose(&mut self, current: Pose, prediction: [f64; 6]) -> Result<Pose, ControlError> {
-        Ok(apply_servo(current, self.step(prediction)?))
+        Ok(apply_servo(current, self.step_at(current, prediction)?))
     }
 }

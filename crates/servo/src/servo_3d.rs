@@ -10,7 +10,9 @@
 //! the tangential motion: the sensor slides along its own y axis, which
 //! the tilt corrections keep in the surface's tangent plane, so the path
 //! runs straight across the surface in the start's heading (rz is not
-//! sensed, so the heading is never turned).
+//! sensed, so the heading is not turned), or with the controller's
+//! `heading_deg` turned onto that direction of travel (the rz error then
+//! read from the commanded pose: `Se3Controller::step_at`).
 //!
 //! The edge tasks (edge_3d, edge_5d) run the same loop: rz is sensed, so
 //! the controller turns the heading onto the edge, and the constant step
@@ -275,7 +277,7 @@ pub fn servo_loop_3d_taps(
         };
         no_contact = if sensed.contact { 0 } else { no_contact + 1 };
         let u = if sensed.contact {
-            match controller.step(sensed.label) {
+            match controller.step_at(pose, sensed.label) {
                 Ok(u) => u,
                 Err(e) => return stop(step, Ending::Fault, format!("stopped at step {step}: {e}")),
             }

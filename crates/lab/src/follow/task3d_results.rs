@@ -16,7 +16,12 @@
 //!   points, step to step, all steps) over the planned length, at most 1;
 //! - `closed`: false (a path across a surface has no loop to close);
 //! - `mean_abs_error`: the model's error on each sensed component against
-//!   the true label (the pose in the feature frame at the nearest point).
+//!   the true label (the pose in the feature frame at the nearest point);
+//! - `heading_deg`, `mean_heading_error_deg`, `max_heading_error_deg`: the
+//!   direction of travel held (the controller's `heading_deg`, else the
+//!   path's start heading) and the angle, in the sensor's plane, from the
+//!   sensor's y axis (its tangential step) to it
+//!   (`tactrace_control::heading_error_deg`).
 use super::task3d::Surface3dConfig;
 use crate::error::Result;
 use serde::Serialize;
@@ -49,6 +54,11 @@ pub struct Surface3dMetrics {
     pub planned_length_mm: f64,
     /// The model's mean absolute error per sensed component (mm, deg).
     pub mean_abs_error: BTreeMap<&'static str, f64>,
+    /// The direction of travel held or started in, deg from +x.
+    pub heading_deg: f64,
+    /// The heading error's mean and max magnitude, deg.
+    pub mean_heading_error_deg: f64,
+    pub max_heading_error_deg: f64,
 }
 
 #[derive(Serialize)]
@@ -166,7 +176,7 @@ pub fn write_surface_results(
 ) -> Result<Surface3dMetrics> {
     let depth = cfg.controller.reference[2];
     let truths: Vec<Truth> = reached.iter().map(|p| truth(object, *p, depth)).collect();
-    let metrics = score(name, cfg, steps, &truths);
+    let metrics = score(name, cfg, steps, (&truths, reached));
     let doc = MetricsDocument {
         metrics: &metrics,
         ending: summary.ending,
@@ -235,9 +245,15 @@ fn score(
     name: &str,
     cfg: &Surface3dConfig,
     steps: &[Step3d],
-    truths: &[Truth],
+    (truths, reached): (&[Truth], &[Pose]),
 ) -> Surface3dMetrics {
     let settle = cfg.settle_steps.min(truths.len().saturating_sub(1));
+    let heading_deg = cfg.controller.heading_deg.unwrap_or(cfg.path.heading_deg);
+    let headings: Vec<f64> = reached[settle.min(reached.len())..]
+        .iter()
+        .map(|p| tactrace_control::heading_error_deg(*p, heading_deg).abs())
+        .collect();
+    let nh = headings.len().max(1) as f64;
     let scored = &truths[settle..];
     let n = scored.len().max(1) as f64;
     let mean = |f: &dyn Fn(&Truth) -> f64| scored.iter().map(f).sum::<f64>() / n;
@@ -272,6 +288,9 @@ fn score(
         path_length_mm,
         planned_length_mm: planned,
         mean_abs_error,
+        heading_deg,
+        mean_heading_error_deg: headings.iter().sum::<f64>() / nh,
+        max_heading_error_deg: headings.iter().copied().fold(0.0, f64::max),
     }
 }
 

@@ -18,7 +18,13 @@
 //! twice as far as the built-in clamp lets them), with the edge offset
 //! refined by the same misfit (the convention's cosine finds it on
 //! fields of the wrong depth: depth and edge position both set how much
-//! of the dome is pressed).
+//! of the dome is pressed), and, when the taps' labelled angles go
+//! round enough of the circle to tell it from the edge offset, the pivot
+//! offset (eq. L3: the dome centre's offset from the point the labelled
+//! pose turns about, which moves the edge by `pivot_x sin(yaw) + pivot_y
+//! cos(yaw)`; a rig other than the one the sensor's own was found on has
+//! its own, and over the full circle a wrong one is a position error of
+//! up to its length that changes with the angle).
 //! Unlike the label convention ([`crate::fit_convention`]), these set how
 //! far the pins move, so they are judged by the RMS misfit of the fields
 //! (each tap with its slide): a coarse grid of the two depths, then
@@ -76,6 +82,11 @@ pub struct DepthScore {
     pub rim_scale: f64,
     /// Added to the labelled edge position, mm (`calibration.edge_offset_mm`).
     pub edge_offset_mm: f64,
+    /// The pivot offset, sensor frame, mm (`calibration.pivot_x_mm`,
+    /// `pivot_y_mm`, eq. L3); absent in files written before it was
+    /// fitted.
+    #[serde(default)]
+    pub pivot_mm: Option<[f64; 2]>,
     /// Per-coordinate RMS pin misfit over the taps, px.
     pub rms_px: f64,
     /// Mean per-tap cosine between the simulated and measured fields.
@@ -84,6 +95,16 @@ pub struct DepthScore {
 
 /// How far (mm) the fit may move the edge offset from the sensor's own.
 pub const EDGE_REACH_MM: f64 = 4.0;
+
+/// How far (mm) the fit may move each pivot component from the sensor's own.
+pub const PIVOT_REACH_MM: f64 = 4.0;
+
+/// The pivot offset is fitted only when the mean resultant length of the
+/// taps' labelled angles is below this: over a narrow arc (the 127-pin
+/// set's +-45 deg gives 0.90) the pivot trades against the edge and angle
+/// offsets, over the circle (near 0) it is a distinct sinusoid in the
+/// angle.
+pub const PIVOT_MAX_RESULTANT: f64 = 0.5;
 
 impl DepthScore {
     /// The indentation depth (mm) at the labelled `dz`.
@@ -122,6 +143,10 @@ impl DepthFit {
         } else {
             format!("{:.2} mm", c.depth_at(lo))
         };
+        let pivot = match c.pivot_mm {
+            Some([x, y]) => format!(", pivot ({x:.2}, {y:.2}) mm"),
+            None => String::new(),
+        };
         let what = if self.kept_own {
             "the sensor's own kept"
         } else {
@@ -129,7 +154,7 @@ impl DepthFit {
         };
         format!(
             "tap depth, slide response and rim ({what}, {} taps): depth {depths}, \
-             slide response x{:.2}, rim clamp's reach x{:.2}, edge offset {:.2} mm; \
+             slide response x{:.2}, rim clamp's reach x{:.2}, edge offset {:.2} mm{pivot}; \
              field RMS {:.3} px (cosine {:.3}), the sensor's own {:.3} px ({:.3})",
             self.taps,
             c.slide_scale,
@@ -161,7 +186,21 @@ fn with_depth(cfg: &TacTipConfig, d: &DepthScore) -> TacTipConfig {
     out.mechanics.shear_limit_mm *= d.slide_scale;
     out.mechanics.rim_clamp_mm *= d.rim_scale;
     out.calibration.edge_offset_mm = d.edge_offset_mm;
+    if let Some([x, y]) = d.pivot_mm {
+        out.calibration.pivot_x_mm = x;
+        out.calibration.pivot_y_mm = y;
+    }
     out
+}
+
+/// Mean resultant length of the taps' labelled angles: 1 when they are
+/// all one angle, near 0 when they go round the circle evenly.
+fn angle_resultant(samples: &[FitSample]) -> f64 {
+    let (s, c) = samples.iter().fold((0.0, 0.0), |(s, c), x| {
+        let (a, b) = x.tap.theta_deg.to_radians().sin_cos();
+        (s + a, c + b)
+    });
+    s.hypot(c) / samples.len().max(1) as f64
 }
 
 /// Fit the depth law and slide response of the measured `samples` (pins
@@ -185,7 +224,11 @@ pub fn fit_depth(
     let varies = hi - lo > 1e-6;
     let k = &cfg.calibration;
     let deepest = cfg.mechanics.max_depth_mm;
-    let score = |depth_lo: f64, depth_hi: f64, [ln_slide, ln_rim, edge]: [f64; 3]| -> DepthScore {
+    let own_pivot = [k.pivot_x_mm, k.pivot_y_mm];
+    let fit_pivot = angle_resultant(samples) < PIVOT_MAX_RESULTANT;
+    // x = [ln slide scale, ln rim scale, edge offset, pivot x, pivot y].
+    let score = |depth_lo: f64, depth_hi: f64, x: [f64; 5]| -> DepthScore {
+        let [ln_slide, ln_rim, edge, px, py] = x;
         let per = if varies {
             (depth_hi - depth_lo) / (hi - lo)
         } else {
@@ -197,11 +240,14 @@ pub fn fit_depth(
             slide_scale: ln_slide.exp(),
             rim_scale: ln_rim.exp(),
             edge_offset_mm: edge,
+            pivot_mm: fit_pivot.then_some([px, py]),
             rms_px: f64::INFINITY,
             cosine: -1.0,
         };
         let inside = |v: f64| v > 0.0 && v <= deepest;
-        let near = (edge - k.edge_offset_mm).abs() <= EDGE_REACH_MM;
+        let near = (edge - k.edge_offset_mm).abs() <= EDGE_REACH_MM
+            && (px - own_pivot[0]).abs() <= PIVOT_REACH_MM
+            && (py - own_pivot[1]).abs() <= PIVOT_REACH_MM;
         if !inside(depth_lo)
             || !inside(depth_hi)
             || ln_slide.abs() > 3.0
@@ -225,6 +271,7 @@ pub fn fit_depth(
         slide_scale: 1.0,
         rim_scale: 1.0,
         edge_offset_mm: k.edge_offset_mm,
+        pivot_mm: fit_pivot.then_some(own_pivot),
         rms_px,
         cosine,
     };
@@ -249,20 +296,31 @@ pub fn fit_depth(
     for &a in &grid {
         let his: &[f64] = if varies { &grid } else { &[a] };
         for &b in his {
-            let d = score(a, b, [0.0, 0.0, k.edge_offset_mm]);
+            let d = score(
+                a,
+                b,
+                [0.0, 0.0, k.edge_offset_mm, own_pivot[0], own_pivot[1]],
+            );
             if d.rms_px < best.2.rms_px {
                 best = (a, b, d);
             }
         }
     }
-    let objective = |x: &[f64]| {
+    // The simplex moves the pivot only when it is fitted.
+    let at = |x: &[f64]| {
+        let pivot = if fit_pivot { [x[5], x[6]] } else { own_pivot };
         let b = if varies { x[1] } else { x[0] };
-        score(x[0], b, [x[2], x[3], x[4]]).rms_px
+        score(x[0], b, [x[2], x[3], x[4], pivot[0], pivot[1]])
     };
-    let x0 = [best.0, best.1, 0.0, 0.0, k.edge_offset_mm];
-    let first = [step / 2.0, step / 2.0, 0.3, 0.3, 0.5];
+    let objective = |x: &[f64]| at(x).rms_px;
+    let mut x0 = vec![best.0, best.1, 0.0, 0.0, k.edge_offset_mm];
+    let mut first = vec![step / 2.0, step / 2.0, 0.3, 0.3, 0.5];
+    if fit_pivot {
+        x0.extend(own_pivot);
+        first.extend([0.5, 0.5]);
+    }
     let (x, _) = minimise(&objective, &x0, &first, search.iterations);
-    let refined = score(x[0], if varies { x[1] } else { x[0] }, [x[2], x[3], x[4]]);
+    let refined = at(&x);
     let chosen = if refined.rms_px < best.2.rms_px {
         refined
     } else {

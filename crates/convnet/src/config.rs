@@ -180,6 +180,16 @@ pub struct ConvConfig {
     /// default, is one network (left out of the JSON then).
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub members: usize,
+    /// Two more input channels beside the frame, fixed for every frame:
+    /// each pixel's column and row scaled to [-1, 1] (CoordConv, Liu et
+    /// al. 2018), so the first layer can weigh where in the frame a
+    /// pattern lies. Off (false), the default, is left out of the JSON.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub coord_channels: bool,
+}
+
+fn is_false(v: &bool) -> bool {
+    !*v
 }
 
 fn one() -> usize {
@@ -228,6 +238,17 @@ impl ConvConfig {
             shift_augment: 0,
             input_noise: 0.0,
             members: 1,
+            coord_channels: false,
+        }
+    }
+
+    /// Input channels the first layer sees: the frame, and with
+    /// `coord_channels` its two coordinate planes.
+    pub fn input_channels(&self) -> usize {
+        if self.coord_channels {
+            3
+        } else {
+            1
         }
     }
 

@@ -112,14 +112,29 @@ impl Layout {
         dense: &[usize],
         outputs: usize,
     ) -> Result<Self, ConvError> {
-        if height == 0 || width == 0 || outputs == 0 {
+        Self::with_channels(1, (height, width), conv, dense, outputs)
+    }
+
+    /// [`Self::new`] for an input of `channels` planes of `(height,
+    /// width)` px (the frame first; more planes are the coordinate
+    /// channels, which the network fills itself).
+    pub fn with_channels(
+        channels: usize,
+        (height, width): (usize, usize),
+        conv: &[ConvSpec],
+        dense: &[usize],
+        outputs: usize,
+    ) -> Result<Self, ConvError> {
+        if channels == 0 || height == 0 || width == 0 || outputs == 0 {
             return Err(config_error(
                 "input",
-                format!("{height} x {width} px frames and {outputs} outputs: none may be 0"),
+                format!(
+                    "{channels} x {height} x {width} px inputs and {outputs} outputs: none may be 0"
+                ),
             ));
         }
         let mut layers = Vec::new();
-        let (mut c, mut h, mut w) = (1, height, width);
+        let (mut c, mut h, mut w) = (channels, height, width);
         for spec in conv {
             let shape = LayerShape::conv(c, h, w, spec)?;
             (c, h, w) = (shape.cout, shape.hout, shape.wout);
@@ -157,6 +172,11 @@ impl Layout {
     /// Input `(height, width)`, px.
     pub fn input_size(&self) -> (usize, usize) {
         (self.layers[0].hin, self.layers[0].win)
+    }
+
+    /// Input planes: 1, the frame, or 3 with the coordinate channels.
+    pub fn input_channels(&self) -> usize {
+        self.layers[0].cin
     }
 
     /// Output units (targets).

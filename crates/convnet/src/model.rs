@@ -62,7 +62,9 @@ impl ConvModel {
             }
         }
         let (h, w) = frames.size();
-        let layout = Layout::new(h, w, &config.conv, &config.dense, targets.dim())?;
+        let channels = config.input_channels();
+        let layout =
+            Layout::with_channels(channels, (h, w), &config.conv, &config.dense, targets.dim())?;
         let input = InputScaling::fit(frames, config.input_centring);
         let scaling = TargetScaling::fit(targets);
         let seeds: Vec<u64> = (0..config.members as u64)

@@ -20,6 +20,9 @@ use crate::workspace::Workspace;
 /// layer index `l` (0-based).
 pub(crate) fn predict_layer(net: &Network, ws: &mut Workspace, nb: usize, l: usize) {
     let shape = &net.layout.layers[l];
+    if l == 0 && shape.cin > 1 {
+        coordinate_planes(shape, nb, &mut ws.x);
+    }
     let input: &[f32] = if l == 0 { &ws.x } else { &ws.a[l - 1] };
     im2col(shape, nb, input, &mut ws.cols[l]);
     let n = nb * shape.positions();
@@ -28,6 +31,31 @@ pub(crate) fn predict_layer(net: &Network, ws: &mut Workspace, nb: usize, l: usi
     product(p, &net.params.weights[l], &ws.cols[l], m, k, n);
     for (row, &b) in p[..m * n].chunks_exact_mut(n).zip(&net.params.biases[l]) {
         row.iter_mut().for_each(|v| *v += b);
+    }
+}
+
+/// The coordinate channels of an `nb`-frame chunk, after its frames
+/// (channel 0): channel 1 holds each pixel's column, channel 2 its row,
+/// both scaled to [-1, 1]. They are clamped inputs like the frame, so the
+/// energy and its equilibria are unchanged (docs/learning.md).
+fn coordinate_planes(shape: &crate::layout::LayerShape, nb: usize, x: &mut [f32]) {
+    let (h, w) = (shape.hin, shape.win);
+    let scale = |i: usize, n: usize| {
+        if n > 1 {
+            2.0 * i as f32 / (n - 1) as f32 - 1.0
+        } else {
+            0.0
+        }
+    };
+    let plane = nb * h * w;
+    let (cols, rows) = x[plane..3 * plane].split_at_mut(plane);
+    for (k, (c, r)) in cols
+        .chunks_exact_mut(w)
+        .zip(rows.chunks_exact_mut(w))
+        .enumerate()
+    {
+        c.iter_mut().enumerate().for_each(|(i, v)| *v = scale(i, w));
+        r.fill(scale(k % h, h));
     }
 }
 

@@ -121,9 +121,9 @@ impl ConvModel {
             serde_json::from_value(value).map_err(|e| corrupt(format!("model json: {e}")))?;
         file.config.validate()?;
         let c = &file.config;
-        let layout = Layout::new(
-            file.input_height,
-            file.input_width,
+        let layout = Layout::with_channels(
+            c.input_channels(),
+            (file.input_height, file.input_width),
             &c.conv,
             &c.dense,
             file.outputs,

@@ -22,7 +22,8 @@ pub(crate) struct Saved {
 pub(crate) struct Workspace {
     /// Frames a chunk may hold.
     pub cap: usize,
-    /// The standardised input, `1 x nb x h x w`.
+    /// The standardised input, `channels x nb x h x w` (the frames, then
+    /// any coordinate planes).
     pub x: Vec<f32>,
     /// The standardised targets, `outputs x nb`.
     pub t: Vec<f32>,
@@ -54,10 +55,9 @@ impl Workspace {
         };
         let out = |l: usize| layout.layers[l].out_len() * cap;
         let cols = |l: usize| layout.layers[l].fan_in() * layout.layers[l].positions() * cap;
-        let (h, w) = layout.input_size();
         Workspace {
             cap,
-            x: vec![0.0; h * w * cap],
+            x: vec![0.0; layout.layers[0].in_len() * cap],
             t: vec![0.0; layout.outputs() * cap],
             s: per_layer(&out),
             p: per_layer(&out),

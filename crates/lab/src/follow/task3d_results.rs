@@ -17,6 +17,7 @@
 //! - `closed`: false (a path across a surface has no loop to close);
 //! - `mean_abs_error`: the model's error on each sensed component against
 //!   the true label (the pose in the feature frame at the nearest point).
+use super::recorder3d::StepRows;
 use super::task3d::Surface3dConfig;
 use crate::error::Result;
 use serde::Serialize;
@@ -125,10 +126,12 @@ impl TruthCsv {
             depth_mm,
         })
     }
+}
 
+impl StepRows for TruthCsv {
     /// One step's row: the commanded pose and prediction, then the truth
     /// at `reached` (the pose the arm reached) and that pose.
-    pub fn write(&mut self, s: &Step3d, reached: Pose) -> tactrace_store::Result<()> {
+    fn write(&mut self, s: &Step3d, reached: Pose) -> tactrace_store::Result<()> {
         let t = truth(&self.object, reached, self.depth_mm);
         let p = s.pose;
         let nums = [

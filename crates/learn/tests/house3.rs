@@ -25,3 +25,40 @@ fn issue21_correlated_rows_are_seeded_and_follow_their_targets() {
         }
     }
 }
+
+/// A model's two files in `tests/fixtures`: its JSON and its weights.
+fn fixture(name: &str) -> (String, Vec<u8>) {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let json = std::fs::read_to_string(dir.join(format!("{name}.json"))).expect("fixture json");
+    let weights = std::fs::read(dir.join(format!("{name}.safetensors"))).expect("fixture weights");
+    (json, weights)
+}
+
+/// The pin and image models' files share one safetensors writer and
+/// reader: files written before it (a PCA-DenNN of two nets; a conv-mlp
+/// of two networks with its mean frame) load, and save again to the
+/// same bytes.
+#[test]
+fn issue21_model_files_written_before_load_and_save_to_the_same_bytes() {
+    let (json, weights) = fixture("pin_model");
+    let pin = tactrace_learn::PoseModel::from_bytes(&json, &weights).expect("pin model");
+    assert_eq!(pin.to_bytes().expect("save"), (json, weights));
+    let (json, weights) = fixture("conv_model");
+    let conv = tactrace_convnet::ConvModel::from_bytes(&json, &weights).expect("image model");
+    assert_eq!(conv.to_bytes().expect("save"), (json, weights));
+}
+
+/// A weights file whose tensor has another shape, or is not safetensors,
+/// is a corrupt model naming the tensor, as before.
+#[test]
+fn issue21_a_tensor_of_another_shape_is_named() {
+    let (json, _) = fixture("pin_model");
+    let err = tactrace_learn::PoseModel::from_bytes(&json, b"not safetensors").expect_err("bad");
+    assert!(err.to_string().contains("weights: "), "{err}");
+    let (json, weights) = fixture("conv_model");
+    let wider = json.replace("\"outputs\": 2", "\"outputs\": 3");
+    assert_ne!(wider, json);
+    let err = tactrace_convnet::ConvModel::from_bytes(&wider, &weights).expect_err("bad shape");
+    let text = err.to_string();
+    assert!(text.contains("tensor ") && text.contains("expected F"), "{text}");
+}

@@ -60,5 +60,8 @@ fn issue21_a_tensor_of_another_shape_is_named() {
     assert_ne!(wider, json);
     let err = tactrace_convnet::ConvModel::from_bytes(&wider, &weights).expect_err("bad shape");
     let text = err.to_string();
-    assert!(text.contains("tensor ") && text.contains("expected F"), "{text}");
+    assert!(
+        text.contains("tensor ") && text.contains("expected F"),
+        "{text}"
+    );
 }

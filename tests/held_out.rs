@@ -6,37 +6,17 @@
 //! named. Each test runs the real binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{json, ok, real_data, tactrace, Run, TempDir};
+use util::{
+    collect, dataset_and_model, follow_disk_replay, import_labelled, json, ok, real_data,
+    real_paths, tactrace, Run, TempDir,
+};
 
 /// `ds` (60 simulated taps, seed 3) and `m`, trained on 45 of them with
 /// 15 held out (--val-fraction 0.25 --split-seed 3); returns train's
 /// output.
 fn dataset_and_held_out_model(dir: &Path) -> Run {
-    ok(
-        &tactrace(
-            dir,
-            &["collect", "--samples", "60", "--seed", "3", "--out", "ds"],
-        ),
-        "collect",
-    );
-    let r = tactrace(
-        dir,
-        &[
-            "train",
-            "--train",
-            "ds",
-            "--val-fraction",
-            "0.25",
-            "--split-seed",
-            "3",
-            "--epochs",
-            "2",
-            "--out",
-            "m",
-        ],
-    );
-    ok(&r, "train");
-    r
+    let split = ["--val-fraction", "0.25", "--split-seed", "3"];
+    dataset_and_model(dir, "60", &["--seed", "3"], &split)
 }
 
 fn validate(dir: &Path, args: &[&str]) -> Run {
@@ -102,21 +82,7 @@ fn issue20_validate_counts_the_rows_seen_in_training_in_any_copy() {
     ok(&r, "validate copy");
     assert_eq!(json(&r.stdout)["rows_seen_in_training"], 45);
     // Other taps: none seen, no warning.
-    ok(
-        &tactrace(
-            &t.0,
-            &[
-                "collect",
-                "--samples",
-                "20",
-                "--seed",
-                "9",
-                "--out",
-                "other",
-            ],
-        ),
-        "collect",
-    );
+    ok(&collect(&t.0, "20", &["--seed", "9"], "other"), "collect");
     let r = validate(&t.0, &["--data", "other"]);
     ok(&r, "validate other");
     assert_eq!(json(&r.stdout)["rows_seen_in_training"], 0);
@@ -171,21 +137,7 @@ fn issue20_validate_val_fraction_scores_exactly_the_held_out_rows() {
         "{}",
         r.stderr
     );
-    ok(
-        &tactrace(
-            &t.0,
-            &[
-                "collect",
-                "--samples",
-                "20",
-                "--seed",
-                "9",
-                "--out",
-                "other",
-            ],
-        ),
-        "collect",
-    );
+    ok(&collect(&t.0, "20", &["--seed", "9"], "other"), "collect");
     let r = validate(
         &t.0,
         &[
@@ -309,22 +261,8 @@ fn issue20_follow_replay_warns_when_the_bank_holds_training_frames() {
             .map(str::to_string),
     );
     std::fs::write(t.join("fit.csv"), part.join("\n") + "\n").unwrap();
-    let s = |p: &Path| p.to_str().unwrap().to_string();
-    let (frames, init) = (data.join("frames"), data.join("frames/init_0.png"));
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            &s(&frames),
-            "--targets",
-            "fit.csv",
-            "--reference",
-            &s(&init),
-            "--out",
-            "fit",
-        ],
-    );
+    let [frames, _, init] = real_paths(&data);
+    let r = import_labelled(&t.0, [&frames, "fit.csv", &init], &[], "fit");
     ok(&r, "import");
     ok(
         &tactrace(
@@ -339,22 +277,7 @@ fn issue20_follow_replay_warns_when_the_bank_holds_training_frames() {
         250,
         "real frames named"
     );
-    let follow = |extra: &[&str], out: &str| {
-        let base = [
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "disk",
-            "--replay",
-            &s(&data),
-            "--steps",
-            "8",
-            "--out",
-            out,
-        ];
-        tactrace(&t.0, &[&base[..], extra].concat())
-    };
+    let follow = |extra: &[&str], out: &str| follow_disk_replay(&t.0, "m", &data, "8", extra, out);
     let metrics = |run: &str| {
         let dir = [run.to_string(), format!("{run}.partial")]
             .into_iter()

@@ -4,18 +4,12 @@
 //! binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{expect_code, real_data, real_paths, tactrace, TempDir};
+use util::{collect, expect_code, import_labelled, real_data, real_paths, tactrace, twin, TempDir};
 
 /// A dataset `ds` of 40 simulated taps and a model `m` trained on it
 /// (2 epochs), in `dir`.
 fn dataset_and_model(dir: &Path) {
-    let r = tactrace(dir, &["collect", "--samples", "40", "--out", "ds"]);
-    expect_code(&r, 0, "collect");
-    let r = tactrace(
-        dir,
-        &["train", "--train", "ds", "--epochs", "2", "--out", "m"],
-    );
-    expect_code(&r, 0, "train");
+    util::dataset_and_model(dir, "40", &[], &[]);
 }
 
 /// The Bristol labels header (16 columns) and `rows` rows of labels.
@@ -47,7 +41,7 @@ fn bristol_targets(path: &Path, extra_column: Option<&str>, rows: usize) {
 #[test]
 fn issue20_training_refuses_too_few_samples_before_any_work() {
     let t = TempDir::new("fewsamples");
-    let r = tactrace(&t.0, &["collect", "--samples", "1", "--out", "one"]);
+    let r = collect(&t.0, "1", &[], "one");
     expect_code(&r, 0, "collect");
     let r = tactrace(&t.0, &["train", "--train", "one", "--out", "m"]);
     expect_code(&r, 2, "train on 1 sample");
@@ -60,7 +54,7 @@ fn issue20_training_refuses_too_few_samples_before_any_work() {
     assert!(r.stderr.contains("n_components = 35"), "{}", r.stderr);
     assert!(!t.join("m").exists());
     // 40 taps are enough, but not once a fifth is held out.
-    let r = tactrace(&t.0, &["collect", "--samples", "40", "--out", "ds"]);
+    let r = collect(&t.0, "40", &[], "ds");
     expect_code(&r, 0, "collect 40");
     let r = tactrace(
         &t.0,
@@ -120,7 +114,7 @@ fn issue20_a_setting_out_of_range_is_refused_naming_its_key() {
 #[test]
 fn issue20_a_loss_growing_far_beyond_the_means_is_a_divergence() {
     let t = TempDir::new("growingloss");
-    let r = tactrace(&t.0, &["collect", "--samples", "40", "--out", "ds"]);
+    let r = collect(&t.0, "40", &[], "ds");
     expect_code(&r, 0, "collect");
     std::fs::write(
         t.join("cfg.toml"),
@@ -195,38 +189,14 @@ fn issue20_a_label_column_named_twice_is_refused() {
     let t = TempDir::new("dupcolumn");
     bristol_targets(&t.join("targets.csv"), Some("pose_2"), 5);
     std::fs::create_dir_all(t.join("frames")).unwrap();
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.csv",
-            "--reference",
-            "ref.png",
-            "--out",
-            "x",
-        ],
-    );
+    let r = import_labelled(&t.0, ["frames", "targets.csv", "ref.png"], &[], "x");
     expect_code(&r, 2, "import");
     assert!(
         r.stderr.contains("`pose_2` appears 2 times"),
         "{}",
         r.stderr
     );
-    let r = tactrace(
-        &t.0,
-        &[
-            "twin",
-            "--targets",
-            "targets.csv",
-            "--reference",
-            "ref.png",
-            "--out",
-            "x",
-        ],
-    );
+    let r = twin(&t.0, ["targets.csv", "ref.png"], &[], "x");
     expect_code(&r, 2, "twin");
     assert!(
         r.stderr.contains("`pose_2` appears 2 times"),
@@ -242,21 +212,11 @@ fn issue20_a_wrong_column_lists_every_column_and_the_nearest() {
     let t = TempDir::new("wrongcolumn");
     bristol_targets(&t.join("targets.csv"), None, 5);
     std::fs::create_dir_all(t.join("frames")).unwrap();
-    let r = tactrace(
+    let r = import_labelled(
         &t.0,
-        &[
-            "import",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.csv",
-            "--reference",
-            "ref.png",
-            "--r-column",
-            "pose2",
-            "--out",
-            "x",
-        ],
+        ["frames", "targets.csv", "ref.png"],
+        &["--r-column", "pose2"],
+        "x",
     );
     expect_code(&r, 2, "wrong column");
     assert!(
@@ -278,19 +238,11 @@ fn issue20_frames_one_level_too_high_names_the_subfolder() {
     std::fs::create_dir_all(t.join("set/frames")).unwrap();
     bristol_targets(&t.join("set/targets.csv"), None, 3);
     std::fs::write(t.join("set/frames/frame_0_0.png"), b"a frame").unwrap();
-    let r = tactrace(
+    let r = import_labelled(
         &t.0,
-        &[
-            "import",
-            "--frames",
-            "set",
-            "--targets",
-            "set/targets.csv",
-            "--reference",
-            "set/frames/frame_0_0.png",
-            "--out",
-            "x",
-        ],
+        ["set", "set/targets.csv", "set/frames/frame_0_0.png"],
+        &[],
+        "x",
     );
     expect_code(&r, 2, "frames one level up");
     assert!(
@@ -310,21 +262,11 @@ fn issue20_a_pressed_reference_is_warned_about() {
     let pressed = data.join("frames/frame_1432_0.png").display().to_string();
     for (reference, warned) in [(&init, false), (&pressed, true)] {
         let out = if warned { "pressed" } else { "undeformed" };
-        let r = tactrace(
+        let r = import_labelled(
             &t.0,
-            &[
-                "import",
-                "--frames",
-                &frames,
-                "--targets",
-                &targets,
-                "--reference",
-                reference,
-                "--limit",
-                "200",
-                "--out",
-                out,
-            ],
+            [&frames, &targets, reference],
+            &["--limit", "200"],
+            out,
         );
         expect_code(&r, 0, out);
         assert_eq!(
@@ -360,21 +302,11 @@ fn issue20_twin_with_a_sensor_says_where_its_taps_come_from() {
         ],
     );
     expect_code(&r, 0, "calibrate");
-    let r = tactrace(
+    let r = twin(
         &t.0,
-        &[
-            "twin",
-            "--sensor",
-            "sensor",
-            "--targets",
-            &targets,
-            "--reference",
-            &init,
-            "--limit",
-            "30",
-            "--out",
-            "twin",
-        ],
+        [&targets, &init],
+        &["--sensor", "sensor", "--limit", "30"],
+        "twin",
     );
     expect_code(&r, 0, "twin --sensor");
     assert!(

@@ -10,7 +10,14 @@ use image::{GrayImage, Luma};
 use std::path::Path;
 use tactrace_lab::{follow::image_input_for, import_reader};
 use tactrace_store::{read_dataset, read_dataset_frames, SightFile, StoredImageModel};
-use util::{ok, tactrace, train, write_small_conv, TempDir};
+use util::{import_labelled, ok, tactrace, train, write_small_conv, Run, TempDir};
+
+/// `tactrace import` of the synthetic set `set/` (its first image the
+/// reference) into `d`, with `extra` arguments.
+fn import_set(dir: &Path, extra: &[&str]) -> Run {
+    let set = ["set/frames", "set/targets.csv", "set/frames/image_1.png"];
+    import_labelled(dir, set, extra, "d")
+}
 
 /// A 96 x 96 px synthetic TacTip: 61 pins on a hexagonal lattice of
 /// spacing 9 px, with a bright frame border outside the dome that the
@@ -80,24 +87,15 @@ fn issue22_an_image_model_is_fed_frames_made_as_its_frames_npy_rows() {
     std::fs::write(t.join("sensor.toml"), text).unwrap();
     let sensor = SightFile::read(&t.join("sensor.toml")).unwrap().sight();
     write_small_conv(&t.0);
-    let r = tactrace(
+    let r = import_set(
         &t.0,
         &[
-            "import",
-            "--frames",
-            "set/frames",
-            "--targets",
-            "set/targets.csv",
             "--image-column",
             "sensor_image",
             "--sensor",
             "sensor.toml",
-            "--reference",
-            "set/frames/image_1.png",
             "--frames-size",
             "16",
-            "--out",
-            "d",
         ],
     );
     ok(&r, "import --sensor --frames-size");
@@ -173,23 +171,9 @@ fn issue22_an_image_model_folder_without_the_record_still_loads() {
     let t = TempDir::new("issue22-old");
     write_set(&t.join("set"), 16);
     write_small_conv(&t.0);
-    let r = tactrace(
+    let r = import_set(
         &t.0,
-        &[
-            "import",
-            "--frames",
-            "set/frames",
-            "--targets",
-            "set/targets.csv",
-            "--image-column",
-            "sensor_image",
-            "--reference",
-            "set/frames/image_1.png",
-            "--frames-size",
-            "16",
-            "--out",
-            "d",
-        ],
+        &["--image-column", "sensor_image", "--frames-size", "16"],
     );
     ok(&r, "import without a sensor file");
     let meta = std::fs::read_to_string(t.join("d/meta.json")).unwrap();

@@ -5,7 +5,10 @@
 //! `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{expect_code, import_real, json, real_paths, tactrace, train, TempDir};
+use util::{
+    collect, expect_code, follow_disk_replay, import_real, json, real_paths, tactrace, train,
+    TempDir,
+};
 
 /// Side of the synthetic frames, px.
 const SIDE: usize = 16;
@@ -149,10 +152,7 @@ fn issue22_conv_models_train_on_frames_then_validate_and_predict() {
 #[test]
 fn issue22_an_image_model_refuses_a_dataset_of_pins_only() {
     let t = TempDir::new("issue22-pins-only");
-    let r = tactrace(
-        &t.0,
-        &["collect", "--samples", "20", "--seed", "1", "--out", "pins"],
-    );
+    let r = collect(&t.0, "20", &["--seed", "1"], "pins");
     expect_code(&r, 0, "collect");
     let r = train(&t.0, "conv-dennn", "pins", "1", "m", &[]);
     expect_code(&r, 2, "train conv-dennn on pins only");
@@ -248,22 +248,7 @@ fn issue22_follow_in_the_real_frame_world_with_an_image_model() {
     std::fs::write(t.join("small.toml"), SMALL).unwrap();
     let r = train(&t.0, "conv-mlp", "d", "3", "m", &["--config", "small.toml"]);
     expect_code(&r, 0, "train");
-    let r = tactrace(
-        &t.0,
-        &[
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "disk",
-            "--replay",
-            set.to_str().unwrap(),
-            "--steps",
-            "6",
-            "--out",
-            "run",
-        ],
-    );
+    let r = follow_disk_replay(&t.0, "m", &set, "6", &[], "run");
     // A barely trained model may lose the edge (exit 1): the run is whole either way.
     assert!(r.code == 0 || r.code == 1, "{}", r.stderr);
     let metrics = json(&std::fs::read_to_string(t.join("run/metrics.json")).unwrap());

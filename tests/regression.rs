@@ -2,22 +2,11 @@
 //! bug it pins down. They run the real binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{expect_code, tactrace, tactrace_head, TempDir};
+use util::{expect_code, import_labelled, tactrace, tactrace_head, twin, TempDir};
 
 /// A small dataset `ds` and a model `m` trained on it, in `dir`.
 fn dataset_and_model(dir: &Path) {
-    let r = tactrace(
-        dir,
-        &["collect", "--samples", "40", "--seed", "3", "--out", "ds"],
-    );
-    expect_code(&r, 0, "collect");
-    let r = tactrace(
-        dir,
-        &[
-            "train", "--model", "pdennn", "--train", "ds", "--epochs", "2", "--out", "m",
-        ],
-    );
-    expect_code(&r, 0, "train");
+    util::dataset_and_model(dir, "40", &["--seed", "3"], &["--model", "pdennn"]);
 }
 
 /// A closed contour CSV: a circle of `radius` about (`cx`, `cy`).
@@ -57,18 +46,7 @@ fn read_json(path: &Path) -> serde_json::Value {
 fn issue10_rig_file_with_only_the_tap_depth_keeps_the_defaults() {
     let t = TempDir::new("rigdefaults");
     std::fs::write(t.join("rig.toml"), "[tap]\ndepth_mm = 8.25\n").unwrap();
-    let r = tactrace(
-        &t.0,
-        &[
-            "collect",
-            "--config",
-            "rig.toml",
-            "--samples",
-            "10",
-            "--out",
-            "ds",
-        ],
-    );
+    let r = util::collect(&t.0, "10", &["--config", "rig.toml"], "ds");
     expect_code(&r, 0, "collect --config rig.toml");
     assert_eq!(read_json(&t.join("ds/meta.json"))["pins"], 127);
 }
@@ -78,18 +56,7 @@ fn issue10_rig_file_with_only_the_tap_depth_keeps_the_defaults() {
 fn issue10_a_closed_stdout_ends_quietly_with_0() {
     let t = TempDir::new("brokenpipe");
     // Enough rows (over 100 kB) that the pipe fills before the reader quits.
-    let r = tactrace(
-        &t.0,
-        &[
-            "collect",
-            "--samples",
-            "4000",
-            "--seed",
-            "2",
-            "--out",
-            "big",
-        ],
-    );
+    let r = util::collect(&t.0, "4000", &["--seed", "2"], "big");
     expect_code(&r, 0, "collect");
     let r = tactrace(
         &t.0,
@@ -357,17 +324,7 @@ fn issue10_a_frame_with_too_few_pins_is_bad_input() {
 #[test]
 fn issue10_import_with_a_bad_reference_fails_fast_naming_it() {
     let t = TempDir::new("badreference");
-    let r = tactrace(
-        &t.0,
-        &[
-            "collect",
-            "--samples",
-            "30",
-            "--out",
-            "sim",
-            "--save-frames",
-        ],
-    );
+    let r = util::collect(&t.0, "30", &["--save-frames"], "sim");
     expect_code(&r, 0, "collect --save-frames");
     let mut csv = String::from("image_name,pose_2,pose_6\n");
     for k in 0..30 {
@@ -376,20 +333,7 @@ fn issue10_import_with_a_bad_reference_fails_fast_naming_it() {
     std::fs::write(t.join("targets.csv"), csv).unwrap();
     noise_png(&t.join("noise.png"), 640, 480, 3);
     let import = |reference: &str, out: &str| {
-        tactrace(
-            &t.0,
-            &[
-                "import",
-                "--frames",
-                "sim/frames",
-                "--targets",
-                "targets.csv",
-                "--reference",
-                reference,
-                "--out",
-                out,
-            ],
-        )
+        import_labelled(&t.0, ["sim/frames", "targets.csv", reference], &[], out)
     };
     expect_code(
         &import("sim/frames/reference.png", "good"),
@@ -406,21 +350,11 @@ fn issue10_import_with_a_bad_reference_fails_fast_naming_it() {
     assert!(r.stderr.contains("--reference"), "{}", r.stderr);
     assert!(!t.join("bad").exists());
     // `twin` orders its simulated frames against the reference: the same.
-    let r = tactrace(
+    let r = twin(
         &t.0,
-        &[
-            "twin",
-            "--targets",
-            "targets.csv",
-            "--reference",
-            "noise.png",
-            "--dz-column",
-            "none",
-            "--shear-columns",
-            "none",
-            "--out",
-            "twin",
-        ],
+        ["targets.csv", "noise.png"],
+        &["--dz-column", "none", "--shear-columns", "none"],
+        "twin",
     );
     expect_code(&r, 2, "twin with noise as the reference");
     assert!(
@@ -445,20 +379,7 @@ fn issue10_a_json_targets_file_is_not_dumped_as_columns() {
     )
     .unwrap();
     std::fs::write(t.join("ref.png"), b"unused").unwrap();
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            "frames",
-            "--targets",
-            "targets.json",
-            "--reference",
-            "ref.png",
-            "--out",
-            "x",
-        ],
-    );
+    let r = import_labelled(&t.0, ["frames", "targets.json", "ref.png"], &[], "x");
     expect_code(&r, 2, "JSON targets");
     assert!(
         r.stderr
@@ -476,20 +397,7 @@ fn issue10_a_json_targets_file_is_not_dumped_as_columns() {
     // hid the right ones).
     let header: Vec<String> = (0..40).map(|k| format!("c{k}")).collect();
     std::fs::write(t.join("wide.csv"), header.join(",") + "\n").unwrap();
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            "frames",
-            "--targets",
-            "wide.csv",
-            "--reference",
-            "ref.png",
-            "--out",
-            "x",
-        ],
-    );
+    let r = import_labelled(&t.0, ["frames", "wide.csv", "ref.png"], &[], "x");
     expect_code(&r, 2, "wide CSV");
     assert!(
         r.stderr.contains("its 40 columns") && r.stderr.contains("`c39`"),

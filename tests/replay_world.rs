@@ -3,7 +3,10 @@
 //! part, and the bad inputs it refuses (exit code 2).
 mod util;
 use std::path::Path;
-use util::{real_data, tactrace, TempDir};
+use util::{
+    dataset_and_model, follow_disk_replay, import_labelled, real_data, real_paths, tactrace,
+    TempDir,
+};
 
 /// `part.csv`: the header and the rows of `targets.csv` among the first
 /// `rows` whose frame number N has N % 5 in `keep`.
@@ -32,23 +35,9 @@ fn a_model_trained_on_real_frames_follows_a_disk_answered_by_held_out_frames() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("replay");
     write_part(&data, &t.join("fit.csv"), 1500, &[2, 3, 4]);
-    let (frames, init) = (data.join("frames"), data.join("frames/init_0.png"));
-    let s = |p: &Path| p.to_str().unwrap().to_string();
-    let fit = s(&t.join("fit.csv"));
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            &s(&frames),
-            "--targets",
-            &fit,
-            "--reference",
-            &s(&init),
-            "--out",
-            "fit",
-        ],
-    );
+    let [frames, _, init] = real_paths(&data);
+    let fit = t.join("fit.csv").display().to_string();
+    let r = import_labelled(&t.0, [&frames, &fit, &init], &[], "fit");
     assert_eq!(r.code, 0, "{}", r.stderr);
     let r = tactrace(
         &t.0,
@@ -63,22 +52,7 @@ fn a_model_trained_on_real_frames_follows_a_disk_answered_by_held_out_frames() {
         ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
-    let follow = |extra: &[&str], out: &str| {
-        let base = [
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "disk",
-            "--replay",
-            &s(&data),
-            "--steps",
-            "60",
-            "--out",
-            out,
-        ];
-        tactrace(&t.0, &[&base[..], extra].concat())
-    };
+    let follow = |extra: &[&str], out: &str| follow_disk_replay(&t.0, "m", &data, "60", extra, out);
     let r = follow(&["--replay-keep", "N%5==0"], "run");
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(
@@ -174,29 +148,8 @@ fn a_model_trained_on_real_frames_follows_a_disk_answered_by_held_out_frames() {
 fn a_model_in_another_pin_order_is_refused() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("replay-pins");
-    let r = tactrace(&t.0, &["collect", "--samples", "40", "--out", "sim"]);
-    assert_eq!(r.code, 0, "{}", r.stderr);
-    let r = tactrace(
-        &t.0,
-        &["train", "--train", "sim", "--epochs", "2", "--out", "m"],
-    );
-    assert_eq!(r.code, 0, "{}", r.stderr);
-    let r = tactrace(
-        &t.0,
-        &[
-            "follow",
-            "--model",
-            "m",
-            "--shape",
-            "disk",
-            "--replay",
-            data.to_str().unwrap(),
-            "--steps",
-            "3",
-            "--out",
-            "run",
-        ],
-    );
+    dataset_and_model(&t.0, "40", &[], &[]);
+    let r = follow_disk_replay(&t.0, "m", &data, "3", &[], "run");
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(
         r.stderr

@@ -295,3 +295,81 @@ pub fn write_spot_frames(
     };
     tactrace_store::write_dataset_with(dir, &data, &[], Some(&frames), false).unwrap();
 }
+
+/// `tactrace collect --samples SAMPLES` with `extra` arguments into `out`
+/// (simulated taps).
+pub fn collect(dir: &Path, samples: &str, extra: &[&str], out: &str) -> Run {
+    let mut args = vec!["collect", "--samples", samples];
+    args.extend(extra);
+    args.extend(["--out", out]);
+    tactrace(dir, &args)
+}
+
+/// A dataset `ds` of `samples` simulated taps (`collect_extra` given to
+/// `collect`) and a model `m` trained on it for 2 epochs (`train_extra`
+/// given to `train`), both succeeding; returns train's run.
+pub fn dataset_and_model(
+    dir: &Path,
+    samples: &str,
+    collect_extra: &[&str],
+    train_extra: &[&str],
+) -> Run {
+    expect_code(&collect(dir, samples, collect_extra, "ds"), 0, "collect");
+    let mut args = vec!["train", "--train", "ds", "--epochs", "2"];
+    args.extend(train_extra);
+    args.extend(["--out", "m"]);
+    let r = tactrace(dir, &args);
+    expect_code(&r, 0, "train");
+    r
+}
+
+/// `tactrace import --frames FRAMES --targets TARGETS --reference
+/// REFERENCE` with `extra` arguments into `out`.
+pub fn import_labelled(
+    dir: &Path,
+    [frames, targets, reference]: [&str; 3],
+    extra: &[&str],
+    out: &str,
+) -> Run {
+    let mut args = vec![
+        "import",
+        "--frames",
+        frames,
+        "--targets",
+        targets,
+        "--reference",
+        reference,
+    ];
+    args.extend(extra);
+    args.extend(["--out", out]);
+    tactrace(dir, &args)
+}
+
+/// `tactrace twin --targets TARGETS --reference REFERENCE` with `extra`
+/// arguments into `out`.
+pub fn twin(dir: &Path, [targets, reference]: [&str; 2], extra: &[&str], out: &str) -> Run {
+    let mut args = vec!["twin", "--targets", targets, "--reference", reference];
+    args.extend(extra);
+    args.extend(["--out", out]);
+    tactrace(dir, &args)
+}
+
+/// `tactrace follow --model MODEL --shape disk --replay DATA --steps STEPS`
+/// (the real-frame world of the collection `data`) with `extra` arguments
+/// into `out`.
+pub fn follow_disk_replay(
+    dir: &Path,
+    model: &str,
+    data: &Path,
+    steps: &str,
+    extra: &[&str],
+    out: &str,
+) -> Run {
+    let data = data.display().to_string();
+    let mut args = vec![
+        "follow", "--model", model, "--shape", "disk", "--replay", &data, "--steps", steps,
+    ];
+    args.extend(extra);
+    args.extend(["--out", out]);
+    tactrace(dir, &args)
+}

@@ -16,6 +16,7 @@ mod gemm;
 mod im2col;
 mod layout;
 mod model;
+pub mod model_file;
 mod network;
 mod params;
 mod pass;

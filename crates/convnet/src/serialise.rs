@@ -10,11 +10,13 @@ use crate::config::ConvConfig;
 use crate::error::ConvError;
 use crate::layout::Layout;
 use crate::model::ConvModel;
+use crate::model_file::{
+    read_f32, read_f64, read_header, read_tensors, write_tensors, ModelFileError, Tensor,
+};
 use crate::network::Network;
 use crate::params::Parameters;
 use crate::scaling::{InputScaling, TargetScaling};
-use safetensors::tensor::TensorView;
-use safetensors::{Dtype, SafeTensors};
+use safetensors::SafeTensors;
 use serde::{Deserialize, Serialize};
 
 /// Identifies these model files.
@@ -40,12 +42,10 @@ fn corrupt(reason: impl ToString) -> ConvError {
     }
 }
 
-fn le_bytes(v: &[f32]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_le_bytes()).collect()
-}
-
-fn le_bytes_f64(v: &[f64]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+impl From<ModelFileError> for ConvError {
+    fn from(e: ModelFileError) -> Self {
+        corrupt(e.reason())
+    }
 }
 
 impl ConvModel {
@@ -62,55 +62,33 @@ impl ConvModel {
             outputs: self.outputs(),
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
-        let mut buffers = Vec::new();
+        let mut tensors = Vec::new();
         for (k, net) in self.nets.iter().enumerate() {
             let (p, prefix) = (&net.params, member_prefix(k));
             for (l, s) in net.layout.layers().iter().enumerate() {
+                let (w, b) = (format!("{prefix}W{}", l + 1), format!("{prefix}b{}", l + 1));
                 let shape = vec![s.cout, s.cin, s.kh, s.kw];
-                let (w, b) = (le_bytes(&p.weights[l]), le_bytes(&p.biases[l]));
-                buffers.push((format!("{prefix}W{}", l + 1), Dtype::F32, shape, w));
-                buffers.push((format!("{prefix}b{}", l + 1), Dtype::F32, vec![s.cout], b));
+                tensors.push(Tensor::f32(w, shape, &p.weights[l]));
+                tensors.push(Tensor::f32(b, vec![s.cout], &p.biases[l]));
             }
         }
         let (i, t) = (&self.input, &self.targets);
-        let f64s = |name: &str, shape: Vec<usize>, v: &[f64]| {
-            (name.to_string(), Dtype::F64, shape, le_bytes_f64(v))
-        };
-        buffers.push(f64s("input.mean", vec![1], &[i.mean]));
-        buffers.push(f64s("input.std", vec![1], &[i.std]));
+        tensors.push(Tensor::f64("input.mean", vec![1], &[i.mean]));
+        tensors.push(Tensor::f64("input.std", vec![1], &[i.std]));
         if !i.mean_frame.is_empty() {
             let frame: Vec<f64> = i.mean_frame.iter().map(|&v| v as f64).collect();
-            buffers.push(f64s(
-                "input.mean_frame",
-                vec![input_height, input_width],
-                &frame,
-            ));
+            let shape = vec![input_height, input_width];
+            tensors.push(Tensor::f64("input.mean_frame", shape, &frame));
         }
-        buffers.push(f64s("target.mean", vec![t.dim()], &t.mean));
-        buffers.push(f64s("target.std", vec![t.dim()], &t.std));
-        let views = buffers
-            .iter()
-            .map(|(name, dtype, shape, bytes)| {
-                TensorView::new(*dtype, shape.clone(), bytes).map(|v| (name.clone(), v))
-            })
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(corrupt)?;
-        let weights = safetensors::serialize(views, None).map_err(corrupt)?;
-        Ok((json, weights))
+        tensors.push(Tensor::f64("target.mean", vec![t.dim()], &t.mean));
+        tensors.push(Tensor::f64("target.std", vec![t.dim()], &t.std));
+        Ok((json, write_tensors(&tensors)?))
     }
 
     /// Rebuild a model from [`Self::to_bytes`] output. Another format
     /// version, truncated, inconsistent or non-finite data are errors.
     pub fn from_bytes(json: &str, safetensors: &[u8]) -> Result<Self, ConvError> {
-        let value: serde_json::Value =
-            serde_json::from_str(json).map_err(|e| corrupt(format!("model json: {e}")))?;
-        if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT) {
-            return Err(corrupt(format!("not a {FORMAT} file")));
-        }
-        let version = value
-            .get("version")
-            .and_then(|v| v.as_u64())
-            .ok_or_else(|| corrupt("model json has no version"))?;
+        let (value, version) = read_header(json, FORMAT)?;
         if version != CONV_FORMAT_VERSION as u64 {
             return Err(ConvError::Version {
                 found: version.min(u32::MAX as u64) as u32,
@@ -128,8 +106,7 @@ impl ConvModel {
             &c.dense,
             file.outputs,
         )?;
-        let tensors =
-            SafeTensors::deserialize(safetensors).map_err(|e| corrupt(format!("weights: {e}")))?;
+        let tensors = read_tensors(safetensors)?;
         let (input, targets) = read_scalings(&tensors, &file)?;
         let nets = (0..c.members)
             .map(|k| read_network(&tensors, &layout, c, k))
@@ -181,9 +158,9 @@ fn read_scalings(
 ) -> Result<(InputScaling, TargetScaling), ConvError> {
     let (h, w, k) = (file.input_height, file.input_width, file.outputs);
     let mean_frame = if tensors.names().contains(&"input.mean_frame") {
-        read(tensors, "input.mean_frame", Dtype::F64, &[h, w])?
-            .chunks_exact(8)
-            .map(|c| f64_of(c) as f32)
+        read_f64(tensors, "input.mean_frame", &[h, w])?
+            .into_iter()
+            .map(|v| v as f32)
             .collect()
     } else {
         Vec::new()
@@ -201,47 +178,4 @@ fn read_scalings(
         return Err(corrupt("scalings are not usable numbers"));
     }
     Ok((input, targets))
-}
-
-fn f64_of(c: &[u8]) -> f64 {
-    f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]])
-}
-
-fn read_f64(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f64>, ConvError> {
-    Ok(read(tensors, name, Dtype::F64, shape)?
-        .chunks_exact(8)
-        .map(f64_of)
-        .collect())
-}
-
-fn read_f32(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f32>, ConvError> {
-    Ok(read(tensors, name, Dtype::F32, shape)?
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect())
-}
-
-/// The bytes of tensor `name`, which must be of `dtype` and `shape`.
-fn read<'a>(
-    tensors: &'a SafeTensors,
-    name: &str,
-    dtype: Dtype,
-    shape: &[usize],
-) -> Result<&'a [u8], ConvError> {
-    let view = tensors
-        .tensor(name)
-        .map_err(|e| corrupt(format!("tensor {name}: {e}")))?;
-    if view.dtype() != dtype || view.shape() != shape {
-        let dims = |s: &[usize]| {
-            let parts: Vec<String> = s.iter().map(usize::to_string).collect();
-            parts.join(" x ")
-        };
-        return Err(corrupt(format!(
-            "tensor {name}: expected {dtype} {}, found {} {}",
-            dims(shape),
-            view.dtype(),
-            dims(view.shape())
-        )));
-    }
-    Ok(view.data())
 }

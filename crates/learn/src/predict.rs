@@ -271,14 +271,18 @@ fn madd64<const F: bool>(a: f64, b: f64, c: f64) -> f64 {
     }
 }
 
+/// The crate's test data (its integration tests' `mod support`).
+#[cfg(test)]
+#[path = "../tests/support/mod.rs"]
+mod test_support;
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::{ModelConfig, ModelKind, Preset};
     use crate::dataset::Dataset;
     use crate::net::States;
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use test_support as support;
 
     /// The prediction as it was computed before the fast path: one row,
     /// f64 standardisation and PCA, then each net's plain (unfused)
@@ -310,18 +314,8 @@ mod tests {
     /// A model of `kind` fitted for `epochs` on `n` random rows of `dim`
     /// correlated values (pin-displacement-like), with hidden sizes `hidden`.
     fn model(kind: ModelKind, dim: usize, hidden: &[usize], seed: u64) -> (PoseModel, Dataset) {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let n = 120;
-        let mut x = Vec::with_capacity(n * dim);
-        let mut y = Vec::with_capacity(2 * n);
-        for _ in 0..n {
-            let (a, b): (f32, f32) = (rng.random_range(-5.0..5.0), rng.random_range(-45.0..45.0));
-            for j in 0..dim {
-                let phase = j as f32 * 0.37;
-                x.push(a * phase.sin() + 0.1 * b * phase.cos() + rng.random_range(-0.2..0.2));
-            }
-            y.extend([a, b]);
-        }
+        let (x, y) = support::correlated_rows(n, dim, seed);
         let data = Dataset::new(x, y, n, dim, 2).expect("data");
         let mut cfg = ModelConfig::preset(kind, Preset::Default);
         cfg.set_epochs(2);

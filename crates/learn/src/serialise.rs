@@ -11,9 +11,11 @@ use crate::pca::Pca;
 use crate::pose_model::{FittedNet, PoseModel};
 use crate::standardise::Standardiser;
 use crate::targets::{check_targets as check_outputs, edge_targets, ModelTarget};
-use safetensors::tensor::TensorView;
-use safetensors::{Dtype, SafeTensors};
+use safetensors::SafeTensors;
 use serde::{Deserialize, Serialize};
+use tactrace_convnet::model_file::{
+    read_f32, read_header, read_tensors, write_tensors, ModelFileError, Tensor,
+};
 
 /// Identifies our model files.
 const FORMAT: &str = "tactrace-pose-model";
@@ -67,8 +69,10 @@ fn tensor_name(net: usize, what: &str, l: usize) -> String {
     format!("net{net}.{what}{l}")
 }
 
-fn le_bytes(v: &[f32]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+impl From<ModelFileError> for LearnError {
+    fn from(e: ModelFileError) -> Self {
+        corrupt(e.reason())
+    }
 }
 
 impl PoseModel {
@@ -96,45 +100,26 @@ impl PoseModel {
             outputs: Some(self.outputs.clone()),
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
-        let mut buffers = Vec::new();
+        let mut tensors = Vec::new();
         for (k, net) in self.nets.iter().enumerate() {
             let sizes = net.layers.sizes();
             for l in 1..sizes.len() {
-                buffers.push((
-                    tensor_name(k, "W", l),
+                let (w, b) = (tensor_name(k, "W", l), tensor_name(k, "b", l));
+                tensors.push(Tensor::f32(
+                    w,
                     vec![sizes[l - 1], sizes[l]],
-                    le_bytes(&net.layers.weight(l)),
+                    &net.layers.weight(l),
                 ));
-                buffers.push((
-                    tensor_name(k, "b", l),
-                    vec![sizes[l]],
-                    le_bytes(net.layers.bias(l)),
-                ));
+                tensors.push(Tensor::f32(b, vec![sizes[l]], net.layers.bias(l)));
             }
         }
-        let views = buffers
-            .iter()
-            .map(|(name, shape, bytes)| {
-                TensorView::new(Dtype::F32, shape.clone(), bytes).map(|v| (name.clone(), v))
-            })
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(corrupt)?;
-        let weights = safetensors::serialize(views, None).map_err(corrupt)?;
-        Ok((json, weights))
+        Ok((json, write_tensors(&tensors)?))
     }
 
     /// Rebuild a model from [`Self::to_bytes`] output. Another format
     /// version, truncated or inconsistent data are errors.
     pub fn from_bytes(json: &str, safetensors: &[u8]) -> Result<Self, LearnError> {
-        let value: serde_json::Value =
-            serde_json::from_str(json).map_err(|e| corrupt(format!("model json: {e}")))?;
-        if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT) {
-            return Err(corrupt(format!("not a {FORMAT} file")));
-        }
-        let version = value
-            .get("version")
-            .and_then(|v| v.as_u64())
-            .ok_or_else(|| corrupt("model json has no version"))?;
+        let (value, version) = read_header(json, FORMAT)?;
         if !(OLDEST_VERSION as u64..=FORMAT_VERSION as u64).contains(&version) {
             return Err(LearnError::Version {
                 found: version.min(u32::MAX as u64) as u32,
@@ -158,8 +143,7 @@ impl PoseModel {
         if standardiser.dim() != file.input_dim || targets.dim() != width {
             return Err(corrupt("standardiser dimensions disagree with the model"));
         }
-        let tensors =
-            SafeTensors::deserialize(safetensors).map_err(|e| corrupt(format!("weights: {e}")))?;
+        let tensors = read_tensors(safetensors)?;
         let nets = file
             .nets
             .into_iter()
@@ -237,29 +221,6 @@ fn load_net(
         layers,
         lr_halvings: n.lr_halvings,
     })
-}
-
-fn read_f32(tensors: &SafeTensors, name: &str, shape: &[usize]) -> Result<Vec<f32>, LearnError> {
-    let view = tensors
-        .tensor(name)
-        .map_err(|e| corrupt(format!("tensor {name}: {e}")))?;
-    if view.dtype() != Dtype::F32 || view.shape() != shape {
-        let dims = |s: &[usize]| {
-            let parts: Vec<String> = s.iter().map(usize::to_string).collect();
-            parts.join(" x ")
-        };
-        return Err(corrupt(format!(
-            "tensor {name}: expected f32 {}, found {} {}",
-            dims(shape),
-            view.dtype(),
-            dims(view.shape())
-        )));
-    }
-    Ok(view
-        .data()
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect())
 }
 
 /// The nets are `members` equal parts (an ensemble's members, in order),

@@ -17,6 +17,7 @@
 //! the pins; the run is scored against the edge afterwards
 //! ([`super::edge3d_results`]).
 use super::edge3d_results::{write_edge_results, Edge3dMetrics, EdgeCsv};
+use super::recorder3d::{Recorded3d, Recorder3d};
 use super::sim3d::{sim_3d, Sim3d};
 use super::RunFolder;
 use crate::error::{LabError, Result};
@@ -191,23 +192,10 @@ pub fn run_edge(
         lift_mm: cfg.rig.tap.height_mm,
         closure: Some([cfg.close_radius_mm, cfg.min_excursion_mm]),
     };
-    let mut csv = EdgeCsv::create(run.path(), &edge, cfg.controller.reference)?;
-    let mut steps = Vec::new();
-    let mut reached = Vec::new();
+    let csv = EdgeCsv::create(run.path(), &edge, cfg.controller.reference)?;
+    let mut recorder = Recorder3d::new(csv, probe, progress, false);
     let summary = {
-        let mut sink = |s: &Step3d, _field: &[f32]| -> tactrace_servo::Result<()> {
-            // The arm is still at the tap's pose: what it physically reached.
-            let at = probe.actual();
-            csv.write(s, at)
-                .map_err(|e| tactrace_servo::ServoError::Sink {
-                    step: s.step,
-                    source: Box::new(e),
-                })?;
-            progress(s);
-            steps.push(s.clone());
-            reached.push(at);
-            Ok(())
-        };
+        let mut sink = |s: &Step3d, field: &[f32]| recorder.record(s, field);
         servo_loop_3d(
             &mut arm,
             &mut sensor,
@@ -217,6 +205,7 @@ pub fn run_edge(
             &mut sink,
         )?
     };
+    let Recorded3d { steps, reached, .. } = recorder.finish();
     let metrics = write_edge_results(
         run.path(),
         (name, object, &edge),

@@ -25,6 +25,7 @@
 //! - `mean_abs_error`: the model's error per sensed component against the
 //!   true label (rz wrapped to +-180 deg).
 use super::edge3d::Edge3dConfig;
+use super::recorder3d::StepRows;
 use super::task3d_results::{
     pose_cells, wire_mesh, write_replay_page, POSE_COLUMNS, REACHED_COLUMNS,
 };
@@ -145,10 +146,12 @@ impl EdgeCsv {
             reference,
         })
     }
+}
 
+impl StepRows for EdgeCsv {
     /// One step's row: the commanded pose and prediction, then the truth
     /// at `reached` (the pose the arm reached) and that pose.
-    pub fn write(&mut self, s: &Step3d, reached: Pose) -> tactrace_store::Result<()> {
+    fn write(&mut self, s: &Step3d, reached: Pose) -> tactrace_store::Result<()> {
         let t = edge_truth(&self.edge, reached, self.reference);
         let (p, l) = (s.pose, s.label);
         let nums = [

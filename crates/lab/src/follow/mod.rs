@@ -15,6 +15,7 @@
 mod config;
 pub mod edge3d;
 pub mod edge3d_results;
+mod recorder3d;
 mod results;
 mod sim3d;
 pub mod surface_replay;

@@ -11,6 +11,7 @@
 //! real tap); the run folder adds
 //! `answers.csv` (each tap's row, image and label distance) and
 //! `replay.json` (the label distances and the distinct rows).
+use super::recorder3d::{Recorded3d, Recorder3d};
 use super::sim3d::sim_arm_3d;
 use super::task3d::{start_pose, Surface3dConfig, Surface3dOutcome};
 use super::task3d_results::{write_surface_results, TruthCsv};
@@ -67,7 +68,7 @@ pub fn run_surface_replay(
         lift_mm: cfg.rig.tap.height_mm,
         closure: None,
     };
-    let mut csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
+    let csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
     let mut answers: Vec<SurfaceAnswer> = Vec::new();
     let mut tap = || -> tactrace_servo::Result<tactrace_servo::Sensed> {
         let pose = probe.actual();
@@ -79,27 +80,16 @@ pub fn run_surface_replay(
         answers.push(answer);
         perception.perceive_field(field)
     };
-    let mut steps = Vec::new();
-    let mut reached = Vec::new();
-    let mut fields = Vec::new();
-    let probe_after = probe.clone();
+    let mut recorder = Recorder3d::new(csv, probe.clone(), progress, true);
     let summary = {
-        let mut sink = |s: &Step3d, field: &[f32]| -> tactrace_servo::Result<()> {
-            // The arm is still at the tap's pose: what it physically reached.
-            let at = probe_after.actual();
-            csv.write(s, at)
-                .map_err(|e| tactrace_servo::ServoError::Sink {
-                    step: s.step,
-                    source: Box::new(e),
-                })?;
-            progress(s);
-            steps.push(s.clone());
-            reached.push(at);
-            fields.push(field.to_vec());
-            Ok(())
-        };
+        let mut sink = |s: &Step3d, field: &[f32]| recorder.record(s, field);
         servo_loop_3d_taps(&mut arm, &mut tap, &mut controller, &loop_cfg, &mut sink)?
     };
+    let Recorded3d {
+        steps,
+        reached,
+        fields,
+    } = recorder.finish();
     let metrics = write_surface_results(
         run.path(),
         (name, object),

@@ -11,6 +11,7 @@
 //! the tilt (`max_tilt_deg`: a larger tilt is refused and ends the run).
 //! The model sees only the pins; the run is scored against the object
 //! afterwards ([`super::task3d_results`]).
+use super::recorder3d::{Recorded3d, Recorder3d};
 use super::sim3d::{sim_3d, Sim3d};
 use super::task3d_results::{write_surface_results, Surface3dMetrics, TruthCsv};
 use super::RunFolder;
@@ -204,25 +205,10 @@ pub fn run_surface(
         lift_mm: cfg.rig.tap.height_mm,
         closure: None,
     };
-    let mut csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
-    let mut steps = Vec::new();
-    let mut reached = Vec::new();
-    let mut fields = Vec::new();
+    let csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
+    let mut recorder = Recorder3d::new(csv, probe, progress, true);
     let summary = {
-        let mut sink = |s: &Step3d, field: &[f32]| -> tactrace_servo::Result<()> {
-            // The arm is still at the tap's pose: what it physically reached.
-            let at = probe.actual();
-            csv.write(s, at)
-                .map_err(|e| tactrace_servo::ServoError::Sink {
-                    step: s.step,
-                    source: Box::new(e),
-                })?;
-            progress(s);
-            steps.push(s.clone());
-            reached.push(at);
-            fields.push(field.to_vec());
-            Ok(())
-        };
+        let mut sink = |s: &Step3d, field: &[f32]| recorder.record(s, field);
         servo_loop_3d(
             &mut arm,
             &mut sensor,
@@ -232,6 +218,11 @@ pub fn run_surface(
             &mut sink,
         )?
     };
+    let Recorded3d {
+        steps,
+        reached,
+        fields,
+    } = recorder.finish();
     let metrics = write_surface_results(
         run.path(),
         (name, object),

@@ -22,6 +22,7 @@
 //!   path's start heading) and the angle, in the sensor's plane, from the
 //!   sensor's y axis (its tangential step) to it
 //!   (`tactrace_control::heading_error_deg`).
+use super::recorder3d::StepRows;
 use super::task3d::Surface3dConfig;
 use crate::error::Result;
 use serde::Serialize;
@@ -135,10 +136,12 @@ impl TruthCsv {
             depth_mm,
         })
     }
+}
 
+impl StepRows for TruthCsv {
     /// One step's row: the commanded pose and prediction, then the truth
     /// at `reached` (the pose the arm reached) and that pose.
-    pub fn write(&mut self, s: &Step3d, reached: Pose) -> tactrace_store::Result<()> {
+    fn write(&mut self, s: &Step3d, reached: Pose) -> tactrace_store::Result<()> {
         let t = truth(&self.object, reached, self.depth_mm);
         let p = s.pose;
         let nums = [

@@ -1,0 +1,27 @@
+//! Test data for the learning crate's tests, written once: the integration
+//! tests take it as `mod support;`, the library's own unit tests by path.
+//! It names only outside crates (no `tactrace_learn` or `crate` paths), so
+//! it compiles in both.
+#![allow(dead_code)]
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// `n` rows of `dim` correlated values (pin-displacement-like) and their
+/// two targets, row-major: a position in mm in -5..5 and an angle in deg in
+/// -45..45, each row a smooth function of them plus uniform noise of
+/// +-0.2; seeded by `seed`. Returns `(x, y)` (`n * dim` and `2 * n`
+/// values), for `Dataset::new(x, y, n, dim, 2)`.
+pub fn correlated_rows(n: usize, dim: usize, seed: u64) -> (Vec<f32>, Vec<f32>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut x = Vec::with_capacity(n * dim);
+    let mut y = Vec::with_capacity(2 * n);
+    for _ in 0..n {
+        let (a, b): (f32, f32) = (rng.random_range(-5.0..5.0), rng.random_range(-45.0..45.0));
+        for j in 0..dim {
+            let phase = j as f32 * 0.37;
+            x.push(a * phase.sin() + 0.1 * b * phase.cos() + rng.random_range(-0.2..0.2));
+        }
+        y.extend([a, b]);
+    }
+    (x, y)
+}

@@ -271,10 +271,14 @@ pub fn train(a: TrainArgs) -> Result<()> {
     let dir = tr::save_model(&a.out, &model, &history, a.force, &extra)?;
     eprintln!("trained in {secs:.1} s; saved model to {}", dir.display());
     if history.member_lr_halvings.iter().any(|&h| h > 0) {
+        let restarted: Vec<String> = (history.member_lr_halvings.iter().enumerate())
+            .filter(|(_, &h)| h > 0)
+            .map(|(m, h)| format!("member {} halved {h} time(s)", m + 1))
+            .collect();
         eprintln!(
             "note: ensemble members diverged and restarted alone with their learning rates \
-             halved (per member: {:?}); the others kept their results; {} records the halvings",
-            history.member_lr_halvings,
+             halved ({}); the others kept their results; {} records the halvings",
+            restarted.join(", "),
             dir.join("training.json").display()
         );
     } else if history.lr_halvings > 0 {

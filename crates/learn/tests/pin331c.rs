@@ -2,24 +2,14 @@
 //! member that diverges restarts alone, from its own seed, with its rates
 //! halved; the other members keep their results, so every member is bit
 //! for bit the model its seed gives alone.
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+mod support;
+
 use tactrace_learn::{Dataset, LearnError, ModelConfig, ModelKind, PoseModel, Preset};
 
-/// `n` random rows of `dim` correlated values and their two targets (a
-/// position in mm and an angle in deg), a smooth function of them.
+/// `n` rows of `dim` correlated values and their two targets (a position
+/// in mm and an angle in deg), a smooth function of them.
 fn data(n: usize, dim: usize, seed: u64) -> Dataset {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut x = Vec::with_capacity(n * dim);
-    let mut y = Vec::with_capacity(2 * n);
-    for _ in 0..n {
-        let (a, b): (f32, f32) = (rng.random_range(-5.0..5.0), rng.random_range(-45.0..45.0));
-        for j in 0..dim {
-            let phase = j as f32 * 0.37;
-            x.push(a * phase.sin() + 0.1 * b * phase.cos() + rng.random_range(-0.2..0.2));
-        }
-        y.extend([a, b]);
-    }
+    let (x, y) = support::correlated_rows(n, dim, seed);
     Dataset::new(x, y, n, dim, 2).expect("data")
 }
 

@@ -6,24 +6,10 @@
 
 mod common;
 
-use common::{difference, load, pngs, shear_set_331};
+use common::{difference, load, pngs, rings, shear_set_331};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_vision::{BlobParams, Frame, KeyPoint, PinExtractor, PinTracker};
-
-/// 331 pins on 10 concentric rings of 6k pins and the centre, 5 px apart.
-fn rings() -> Vec<[f64; 2]> {
-    let mut pins = vec![[64.0, 64.0]];
-    for k in 1..=10 {
-        let count = 6 * k;
-        for m in 0..count {
-            let a = std::f64::consts::TAU * f64::from(m) / f64::from(count);
-            let r = 5.0 * f64::from(k);
-            pins.push([64.0 + r * a.cos(), 64.0 + r * a.sin()]);
-        }
-    }
-    pins
-}
 
 /// A 331-pin ring layout sheared by up to a spacing with a bump, pins
 /// dropped and jittered, keypoints shuffled: the cut field matches every

@@ -6,23 +6,12 @@
 //! frame by frame on both parts of the 331-pin set, by
 //! `examples/order_timing.rs --full --compare`.
 
+mod common;
+
+use common::rings;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_vision::{KeyPoint, PinTracker};
-
-/// 331 pins: a centre pin and rings k = 1..=10 of 6k pins, 5 px apart.
-fn rings() -> Vec<[f64; 2]> {
-    let mut pins = vec![[64.0, 64.0]];
-    for k in 1..=10u32 {
-        let count = 6 * k;
-        for m in 0..count {
-            let a = std::f64::consts::TAU * f64::from(m) / f64::from(count);
-            let r = 5.0 * f64::from(k);
-            pins.push([64.0 + r * a.cos(), 64.0 + r * a.sin()]);
-        }
-    }
-    pins
-}
 
 /// A tap's keypoints: the layout sheared and bumped, with pins dropped and
 /// a few neighbouring pairs merged into one point at their midpoint (as

@@ -1,7 +1,10 @@
 //! Set-ups shared by the ordering tests on the shared real sets
 //! (`speed.rs`, `speed3.rs`): frames read from a folder, the largest pin
 //! difference between two orderings, and the 331-pin shear set read as the
-//! inspection proposes.
+//! inspection proposes; and the 331-pin ring layout of the synthetic
+//! ordering tests (`speed3.rs`, `speed4.rs`). Not every file that shares
+//! it uses every set-up.
+#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
@@ -74,4 +77,19 @@ pub fn shear_set_331(set: &Path) -> (Vec<(PathBuf, Detection)>, Vec<[f64; 2]>) {
         })
         .collect();
     (held, rest.pins)
+}
+
+/// The 331-pin ring layout: a centre pin and ten rings of 6k pins, 5 px
+/// apart, centred at (64, 64) (`speed3.rs`, `speed4.rs`).
+pub fn rings() -> Vec<[f64; 2]> {
+    let mut pins = vec![[64.0, 64.0]];
+    for k in 1..=10 {
+        let count = 6 * k;
+        for m in 0..count {
+            let a = std::f64::consts::TAU * f64::from(m) / f64::from(count);
+            let r = 5.0 * f64::from(k);
+            pins.push([64.0 + r * a.cos(), 64.0 + r * a.sin()]);
+        }
+    }
+    pins
 }

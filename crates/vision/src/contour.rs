@@ -7,7 +7,7 @@
 
 /// Pixel offsets of the eight chain directions, counter-clockwise on screen
 /// starting east: E, NE, N, NW, W, SW, S, SE (image y grows downwards).
-pub(crate) const DIRECTIONS: [(isize, isize); 8] = [
+const DIRECTIONS: [(isize, isize); 8] = [
     (1, 0),
     (1, -1),
     (0, -1),

@@ -94,7 +94,8 @@ impl RunDetector {
                 continue;
             }
             // Euler number (runs minus touching pairs, for 8-connected
-            // white) 1: no hole, so the outer border is the only contour.
+            // white; the tests check it against the tracer's hole borders)
+            // 1: no hole, so the outer border is the only contour.
             if self.count[i] == self.touching[i] + 1 {
                 let (x, y) = (self.runs[i].x0 as usize, self.runs[i].y as usize);
                 let points = self.frame.outer_border_at(x, y);
@@ -114,9 +115,9 @@ impl RunDetector {
     }
 
     /// Joins the runs into 8-connected components (union-find over runs
-    /// of adjacent rows): afterwards each run's `parent` is its
-    /// component's first run (the root), whose `count` and `touching` are
-    /// the component's.
+    /// of adjacent rows): afterwards a component's first run (its root) is
+    /// the only run that is its own `parent`, and the root's `count` and
+    /// `touching` are the component's.
     fn join(&mut self) {
         let runs = &self.runs;
         self.parent.clear();

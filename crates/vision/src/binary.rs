@@ -14,6 +14,7 @@ use crate::blob::{colour_passes, measure_shape, KeyPoint, Scratch};
 use crate::contour::ContourScanner;
 use crate::grouping::{joins, keypoint_of, Centre, Grouper};
 use crate::params::BlobParams;
+use crate::runs::RunDetector;
 
 /// Whether every level in `lo..=hi` binarises `pixels` (white above the
 /// level) to the same image: no pixel value lies in `(lo, hi]`.
@@ -49,8 +50,35 @@ pub(crate) fn detect_unchanging(
         return Vec::new();
     };
     let found = found_centres(pixels, width, height, level, p);
+    group_unchanging(found, width, height, levels.len(), p)
+}
+
+/// [`detect_unchanging`] with the contours found from pixel runs
+/// (`runs.rs`) instead of the full-frame raster scan: the same keypoints,
+/// bit for bit.
+pub(crate) fn detect_unchanging_by_runs(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    levels: &[i16],
+    p: &BlobParams,
+) -> Vec<KeyPoint> {
+    let Some(&level) = levels.first() else {
+        return Vec::new();
+    };
+    let found = RUNS.with_borrow_mut(|runs| runs.centres(pixels, width, height, level, p));
+    group_unchanging(found, width, height, levels.len(), p)
+}
+
+/// The keypoints of the same `found` list at each of `n` thresholds.
+fn group_unchanging(
+    found: Vec<Centre>,
+    width: usize,
+    height: usize,
+    n: usize,
+    p: &BlobParams,
+) -> Vec<KeyPoint> {
     let min_dist = f64::from(p.min_dist_between_blobs);
-    let n = levels.len();
     if apart(&found, min_dist) {
         if n < p.min_repeatability {
             return Vec::new();
@@ -93,6 +121,8 @@ fn found_centres(
 }
 
 thread_local! {
+    /// The run-based contour finder's buffers, kept between frames.
+    static RUNS: std::cell::RefCell<RunDetector> = std::cell::RefCell::new(RunDetector::default());
     /// The full-frame scanner, kept between frames of the same size (its
     /// label image and point buffers are the bulk of the allocations).
     static SCANNER: std::cell::RefCell<ContourScanner> =
@@ -188,6 +218,14 @@ mod tests {
             let want = detect_blobs_by_threshold(&frame, &p);
             let got = detect_unchanging(frame.as_raw(), size as usize, size as usize, &levels, &p);
             assert_eq!(got, want, "case {case}");
+            let by_runs = detect_unchanging_by_runs(
+                frame.as_raw(),
+                size as usize,
+                size as usize,
+                &levels,
+                &p,
+            );
+            assert_eq!(by_runs, want, "case {case}: from runs");
             let found = found_centres(frame.as_raw(), size as usize, size as usize, levels[0], &p);
             let min_dist = f64::from(p.min_dist_between_blobs);
             branches[usize::from(apart(&found, min_dist))] += usize::from(!found.is_empty());

@@ -82,6 +82,35 @@ impl ContourScanner {
         self.labels.resize(self.stride * (height + 2), 0);
     }
 
+    /// Makes pixels `x0..=x1` of row `y` of the current image (window
+    /// coordinates) white (`value` 1) or background (0): a blank image of
+    /// [`ContourScanner::reset_window`] filled run by run, or blanked again
+    /// run by run (a border walk marks only white pixels).
+    pub fn set_labels(&mut self, y: usize, x0: usize, x1: usize, value: i8) {
+        let start = (y + 1) * self.stride + 1;
+        self.labels[start + x0..=start + x1].fill(value);
+    }
+
+    /// Makes this a blank (all zero) `width` x `height` image, reusing its
+    /// buffers: the start of filling it run by run with
+    /// [`ContourScanner::set_labels`].
+    pub fn clear(&mut self, width: usize, height: usize) {
+        self.reset_window(width, height, [0, 0]);
+    }
+
+    /// Follows the outer border that the raster scan would start at pixel
+    /// (x, y), the first pixel of a white component in raster order, and
+    /// returns its points: the contour [`ContourScanner::trace_all`] gives
+    /// that component (its only one when it has no hole), found without
+    /// the scan. Other contours traced before are forgotten.
+    pub fn outer_border_at(&mut self, x: usize, y: usize) -> &[[i32; 2]] {
+        self.points.clear();
+        self.spans.clear();
+        let at = (y + 1) * self.stride + x + 1;
+        self.follow_border(at, WEST, at);
+        &self.points
+    }
+
     /// Binarises a window of grey levels (row-major, `width * height`,
     /// negative outside the component of interest): white where the value
     /// exceeds `level`, which must be at least -1.

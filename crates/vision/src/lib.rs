@@ -27,12 +27,13 @@ mod params;
 pub mod preprocess;
 mod reader;
 mod rest;
+mod runs;
 mod shape;
 mod spots;
 mod tracker;
 
 pub use assign::{assign, Assignment, Edge};
-pub use blob::{detect_blobs, Frame, KeyPoint};
+pub use blob::{detect_blobs, detect_blobs_by_runs, Frame, KeyPoint};
 pub use detection::{Detection, Detector, DetectorParams};
 pub use error::VisionError;
 pub use extractor::PinExtractor;

@@ -23,7 +23,8 @@
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
 //! learning_rate, final_lr_fraction, weight_decay, shift_augment, input_noise, members,
-//! coord_channels (true|false), beta, sweeps,
+//! coord_channels (true|false), weight_average (the moving average's
+//! decay per step), beta, sweeps,
 //! activation (sigmoid|tanh|relu), input_centring (global|mean_frame), conv (e.g. 16k5s2,32k3s2), dense
 //! (e.g. 256 or 256,64 or none). Prints per epoch the training loss, the
 //! select part's mean absolute errors, the wall time and this process's
@@ -165,6 +166,7 @@ fn set(cfg: &mut ConvConfig, kv: &str) -> Result<(), Box<dyn Error>> {
         "input_noise" => cfg.input_noise = v.parse()?,
         "members" => cfg.members = v.parse()?,
         "coord_channels" => cfg.coord_channels = v.parse()?,
+        "weight_average" => cfg.weight_average = Some(v.parse()?),
         "beta" => cfg.ep.beta = v.parse()?,
         "sweeps" => {
             cfg.ep.clamped_phase = ClampedPhase::Sweeps {

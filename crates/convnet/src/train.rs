@@ -4,12 +4,15 @@
 //! (EP estimate or backprop) into its own buffer; the buffers are added in
 //! chunk order and Adam takes one step. Nothing is allocated inside the
 //! epoch loop, and the result does not depend on the number of threads.
+//! With `weight_average`, each network also keeps a moving average of its
+//! parameters after every step; the average is what is scored and kept.
 use crate::adam::Adam;
 use crate::config::{ConvConfig, ModelKind};
 use crate::data::{Frames, Targets};
 use crate::ep::{backprop_gradient, ep_gradient};
 use crate::error::ConvError;
 use crate::network::Network;
+use crate::params::Parameters;
 use crate::predict::{predict_all, prediction_pool};
 use crate::scaling::{InputScaling, TargetScaling};
 use crate::workspace::Workspace;
@@ -73,6 +76,9 @@ struct Member {
     adam: Adam,
     order: Vec<usize>,
     rng: ChaCha8Rng,
+    /// The moving average of the parameters (`weight_average`), from the
+    /// initial weights.
+    average: Option<Parameters>,
 }
 
 impl Member {
@@ -86,6 +92,7 @@ impl Member {
             adam: Adam::new(&net.layout),
             order: (0..data.frames.count()).collect(),
             rng: ChaCha8Rng::seed_from_u64(data.seed.wrapping_add(SHUFFLE_STREAM)),
+            average: config.weight_average.map(|_| net.params.clone()),
         }
     }
 
@@ -110,8 +117,18 @@ impl Member {
                 lr,
                 epoch,
             );
+            if let (Some(avg), Some(keep)) = (&mut self.average, config.weight_average) {
+                avg.blend(&net.params, keep as f32);
+            }
         }
         total / self.order.len() as f64
+    }
+
+    /// Exchange the network's parameters with the average (if kept).
+    fn swap_average(&mut self, net: &mut Network) {
+        if let Some(avg) = &mut self.average {
+            std::mem::swap(avg, &mut net.params);
+        }
     }
 }
 
@@ -151,8 +168,10 @@ pub(crate) fn train(
         }
         let validation = validation.map(|(frames, targets)| {
             mean.fill(0.0);
-            for net in nets.iter() {
+            for (net, member) in nets.iter_mut().zip(&mut members) {
+                member.swap_average(net);
                 predict_all(net, input, scaling, &frames, &mut predict_pool, &mut one);
+                member.swap_average(net);
                 for (m, v) in mean.iter_mut().zip(&one) {
                     *m += v / count;
                 }
@@ -167,6 +186,9 @@ pub(crate) fn train(
         };
         on_epoch(&report);
         history.epochs.push(report);
+    }
+    for (net, member) in nets.iter_mut().zip(&mut members) {
+        member.swap_average(net);
     }
     Ok(history)
 }

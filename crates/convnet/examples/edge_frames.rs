@@ -24,7 +24,7 @@
 //! `--set` changes one value: epochs, batch_size, chunk_size,
 //! learning_rate, final_lr_fraction, weight_decay, shift_augment, input_noise, members,
 //! coord_channels (true|false), weight_average (the moving average's
-//! decay per step), beta, sweeps,
+//! decay per step), dense_dropout, channel_dropout, beta, sweeps,
 //! activation (sigmoid|tanh|relu), input_centring (global|mean_frame), conv (e.g. 16k5s2,32k3s2), dense
 //! (e.g. 256 or 256,64 or none). Prints per epoch the training loss, the
 //! select part's mean absolute errors, the wall time and this process's
@@ -167,6 +167,8 @@ fn set(cfg: &mut ConvConfig, kv: &str) -> Result<(), Box<dyn Error>> {
         "members" => cfg.members = v.parse()?,
         "coord_channels" => cfg.coord_channels = v.parse()?,
         "weight_average" => cfg.weight_average = Some(v.parse()?),
+        "dense_dropout" => cfg.dense_dropout = v.parse()?,
+        "channel_dropout" => cfg.channel_dropout = v.parse()?,
         "beta" => cfg.ep.beta = v.parse()?,
         "sweeps" => {
             cfg.ep.clamped_phase = ClampedPhase::Sweeps {

@@ -195,6 +195,21 @@ pub struct ConvConfig {
     /// default, is left out of the JSON.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub weight_average: Option<f64>,
+    /// Dropout on the dense hidden layers: each training frame drops every
+    /// unit with this probability, one mask held through the free and both
+    /// nudged phases (docs/learning.md, "Dropout"); none at prediction.
+    /// 0, the default, is off and left out of the JSON.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub dense_dropout: f64,
+    /// Channel dropout on the convolutional layers: each training frame
+    /// drops whole feature maps with this probability, held like
+    /// `dense_dropout`'s mask. 0, the default, is off and left out.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub channel_dropout: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 fn is_false(v: &bool) -> bool {
@@ -249,6 +264,8 @@ impl ConvConfig {
             members: 1,
             coord_channels: false,
             weight_average: None,
+            dense_dropout: 0.0,
+            channel_dropout: 0.0,
         }
     }
 
@@ -296,6 +313,14 @@ impl ConvConfig {
                     "weight_average",
                     format!("{d} is not in [0, 1)"),
                 ));
+            }
+        }
+        for (field, p) in [
+            ("dense_dropout", self.dense_dropout),
+            ("channel_dropout", self.channel_dropout),
+        ] {
+            if !(0.0..0.95).contains(&p) {
+                return Err(config_error(field, format!("{p} is not in [0, 0.95)")));
             }
         }
         if !(self.weight_decay >= 0.0 && self.weight_decay.is_finite()) {

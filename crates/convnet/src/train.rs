@@ -9,6 +9,7 @@
 use crate::adam::Adam;
 use crate::config::{ConvConfig, ModelKind};
 use crate::data::{Frames, Targets};
+use crate::dropout;
 use crate::ep::{backprop_gradient, ep_gradient};
 use crate::error::ConvError;
 use crate::network::Network;
@@ -29,6 +30,10 @@ pub const DIVERGENCE_FACTOR: f64 = 1000.0;
 /// Added to the seed for the shuffling stream, so it differs from the
 /// initialisation's.
 const SHUFFLE_STREAM: u64 = 0x9e37_79b9_7f4a_7c15;
+
+/// Mixed into the seed for the dropout masks' draws, so they differ from
+/// the input noise's.
+const DROPOUT_STREAM: u64 = 0x5851_f42d_4c95_7f2d;
 
 /// Figures on held-out frames after an epoch.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -86,7 +91,11 @@ impl Member {
         let chunks = config.batch_size.div_ceil(config.chunk_size);
         Member {
             pool: (0..chunks)
-                .map(|_| Workspace::for_training(&net.layout, config.chunk_size))
+                .map(|_| {
+                    let mut ws = Workspace::for_training(&net.layout, config.chunk_size);
+                    dropout::enable(&mut ws, &net.layout, config);
+                    ws
+                })
                 .collect(),
             losses: vec![0.0f64; chunks],
             adam: Adam::new(&net.layout),
@@ -252,6 +261,10 @@ fn chunk_gradient(
         }
         if config.input_noise > 0.0 {
             add_noise(x, config.input_noise as f32, mix(data.seed, epoch, i));
+        }
+        if config.dense_dropout > 0.0 || config.channel_dropout > 0.0 {
+            let key = mix(data.seed ^ DROPOUT_STREAM, epoch, i);
+            dropout::draw(ws, &net.layout, config, (nb, b), key);
         }
         for (j, &v) in data.targets.row(i).iter().enumerate() {
             ws.t[j * nb + b] = data.scaling.scale(j, v);

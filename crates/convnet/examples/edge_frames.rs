@@ -7,7 +7,7 @@
 //!
 //! `cargo run --release -p tactrace-convnet --example edge_frames -- \
 //!     [--data DIR] [--model conv-dennn|conv-mlp|both] [--size 64] [--seed 0] \
-//!     [--config JSON] [--set KEY=VALUE]... [--save DIR] [--load DIR] [--score]`
+//!     [--config JSON] [--set KEY=VALUE]... [--save DIR] [--load DIR] [--score] [--fit-select]`
 //!
 //! `--save DIR` writes each trained model to `DIR/<model>.json` and
 //! `DIR/<model>.safetensors`; `--load DIR` trains nothing and scores the
@@ -19,6 +19,11 @@
 //! `--tta R` scores the mean prediction over the frame moved by every
 //! shift in `-R..=R` px in x and y (edge pixels repeated), for one loaded
 //! model or an ensemble.
+//!
+//! `--fit-select` fits on N % 5 in {1, 2, 3, 4} (the fit and select
+//! parts together, for a final fit with settings already chosen on the
+//! select part; nothing is scored during training), so `--score` then
+//! shows what the larger training set gives.
 //!
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
@@ -202,6 +207,7 @@ struct Args {
     score: bool,
     ensemble: Vec<PathBuf>,
     tta: usize,
+    fit_select: bool,
 }
 
 fn parse_args() -> Result<Args, Box<dyn Error>> {
@@ -217,6 +223,7 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
         score: false,
         ensemble: Vec::new(),
         tta: 0,
+        fit_select: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -238,6 +245,7 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
             "--save" => a.save = Some(PathBuf::from(value()?)),
             "--load" => a.load = Some(PathBuf::from(value()?)),
             "--score" => a.score = true,
+            "--fit-select" => a.fit_select = true,
             "--ensemble" => a.ensemble = value()?.split(',').map(PathBuf::from).collect(),
             "--tta" => a.tta = value()?.parse()?,
             other => return Err(format!("unknown argument {other}").into()),
@@ -282,7 +290,10 @@ fn train(
         );
     };
     let (ff, ft) = fit.views(args.size)?;
-    let select = Some(parts[1].views(args.size)?);
+    let select = match args.fit_select {
+        true => None,
+        false => Some(parts[1].views(args.size)?),
+    };
     let (model, _) = ConvModel::fit_with(&ff, &ft, &cfg, args.seed, select, &mut report)?;
     Ok(model)
 }
@@ -393,7 +404,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     let (wall, cpu) = (Instant::now(), cpu_seconds());
     let parts = load(&dir, args.size)?;
     let mut fit = Part::new();
-    for p in &parts[2..] {
+    let first = if args.fit_select { 1 } else { 2 };
+    for p in &parts[first..] {
         fit.pixels.extend(&p.pixels);
         fit.targets.extend(&p.targets);
         fit.count += p.count;
@@ -424,8 +436,13 @@ fn main() -> Result<(), Box<dyn Error>> {
         };
         let (sf, st) = parts[1].views(args.size)?;
         let s = model.score(&sf, &st)?;
+        let select = if args.fit_select {
+            "select part (in the fit)"
+        } else {
+            "select part"
+        };
         println!(
-            "{} select part (N % 5 = 1, {} frames): {:.4} mm / {:.3} deg; {:.0} s wall, {:.0} s CPU",
+            "{} {select} (N % 5 = 1, {} frames): {:.4} mm / {:.3} deg; {:.0} s wall, {:.0} s CPU",
             kind.name(),
             parts[1].count,
             s.mae[0],

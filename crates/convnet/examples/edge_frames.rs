@@ -7,7 +7,7 @@
 //!
 //! `cargo run --release -p tactrace-convnet --example edge_frames -- \
 //!     [--data DIR] [--model conv-dennn|conv-mlp|both] [--size 64] [--seed 0] \
-//!     [--config JSON] [--set KEY=VALUE]... [--save DIR] [--load DIR] [--score]`
+//!     [--config JSON] [--set KEY=VALUE]... [--save DIR] [--load DIR] [--score] [--fit-select]`
 //!
 //! `--save DIR` writes each trained model to `DIR/<model>.json` and
 //! `DIR/<model>.safetensors`; `--load DIR` trains nothing and scores the
@@ -20,10 +20,16 @@
 //! shift in `-R..=R` px in x and y (edge pixels repeated), for one loaded
 //! model or an ensemble.
 //!
+//! `--fit-select` fits on N % 5 in {1, 2, 3, 4} (the fit and select
+//! parts together, for a final fit with settings already chosen on the
+//! select part; nothing is scored during training), so `--score` then
+//! shows what the larger training set gives.
+//!
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
 //! learning_rate, final_lr_fraction, weight_decay, shift_augment, input_noise, members,
-//! coord_channels (true|false), beta, sweeps,
+//! coord_channels (true|false), weight_average (the moving average's
+//! decay per step), dense_dropout, channel_dropout, beta, sweeps,
 //! activation (sigmoid|tanh|relu), input_centring (global|mean_frame), conv (e.g. 16k5s2,32k3s2), dense
 //! (e.g. 256 or 256,64 or none). Prints per epoch the training loss, the
 //! select part's mean absolute errors, the wall time and this process's
@@ -165,6 +171,9 @@ fn set(cfg: &mut ConvConfig, kv: &str) -> Result<(), Box<dyn Error>> {
         "input_noise" => cfg.input_noise = v.parse()?,
         "members" => cfg.members = v.parse()?,
         "coord_channels" => cfg.coord_channels = v.parse()?,
+        "weight_average" => cfg.weight_average = Some(v.parse()?),
+        "dense_dropout" => cfg.dense_dropout = v.parse()?,
+        "channel_dropout" => cfg.channel_dropout = v.parse()?,
         "beta" => cfg.ep.beta = v.parse()?,
         "sweeps" => {
             cfg.ep.clamped_phase = ClampedPhase::Sweeps {
@@ -198,6 +207,7 @@ struct Args {
     score: bool,
     ensemble: Vec<PathBuf>,
     tta: usize,
+    fit_select: bool,
 }
 
 fn parse_args() -> Result<Args, Box<dyn Error>> {
@@ -213,6 +223,7 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
         score: false,
         ensemble: Vec::new(),
         tta: 0,
+        fit_select: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -234,6 +245,7 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
             "--save" => a.save = Some(PathBuf::from(value()?)),
             "--load" => a.load = Some(PathBuf::from(value()?)),
             "--score" => a.score = true,
+            "--fit-select" => a.fit_select = true,
             "--ensemble" => a.ensemble = value()?.split(',').map(PathBuf::from).collect(),
             "--tta" => a.tta = value()?.parse()?,
             other => return Err(format!("unknown argument {other}").into()),
@@ -278,7 +290,10 @@ fn train(
         );
     };
     let (ff, ft) = fit.views(args.size)?;
-    let select = Some(parts[1].views(args.size)?);
+    let select = match args.fit_select {
+        true => None,
+        false => Some(parts[1].views(args.size)?),
+    };
     let (model, _) = ConvModel::fit_with(&ff, &ft, &cfg, args.seed, select, &mut report)?;
     Ok(model)
 }
@@ -389,7 +404,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     let (wall, cpu) = (Instant::now(), cpu_seconds());
     let parts = load(&dir, args.size)?;
     let mut fit = Part::new();
-    for p in &parts[2..] {
+    let first = if args.fit_select { 1 } else { 2 };
+    for p in &parts[first..] {
         fit.pixels.extend(&p.pixels);
         fit.targets.extend(&p.targets);
         fit.count += p.count;
@@ -420,8 +436,13 @@ fn main() -> Result<(), Box<dyn Error>> {
         };
         let (sf, st) = parts[1].views(args.size)?;
         let s = model.score(&sf, &st)?;
+        let select = if args.fit_select {
+            "select part (in the fit)"
+        } else {
+            "select part"
+        };
         println!(
-            "{} select part (N % 5 = 1, {} frames): {:.4} mm / {:.3} deg; {:.0} s wall, {:.0} s CPU",
+            "{} {select} (N % 5 = 1, {} frames): {:.4} mm / {:.3} deg; {:.0} s wall, {:.0} s CPU",
             kind.name(),
             parts[1].count,
             s.mae[0],

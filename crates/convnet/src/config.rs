@@ -186,6 +186,30 @@ pub struct ConvConfig {
     /// pattern lies. Off (false), the default, is left out of the JSON.
     #[serde(default, skip_serializing_if = "is_false")]
     pub coord_channels: bool,
+    /// The weights kept for prediction: with `Some(d)`, an exponential
+    /// moving average of each network's parameters over the optimiser's
+    /// steps, `avg <- d avg + (1 - d) theta` from the initial weights, is
+    /// what the model saves and predicts with (and what the validation
+    /// frames are scored with after each epoch); the learning rule and its
+    /// updates are unchanged. `Some(0)` is the plain model; `None`, the
+    /// default, is left out of the JSON.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weight_average: Option<f64>,
+    /// Dropout on the dense hidden layers: each training frame drops every
+    /// unit with this probability, one mask held through the free and both
+    /// nudged phases (docs/learning.md, "Dropout"); none at prediction.
+    /// 0, the default, is off and left out of the JSON.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub dense_dropout: f64,
+    /// Channel dropout on the convolutional layers: each training frame
+    /// drops whole feature maps with this probability, held like
+    /// `dense_dropout`'s mask. 0, the default, is off and left out.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub channel_dropout: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 fn is_false(v: &bool) -> bool {
@@ -239,6 +263,9 @@ impl ConvConfig {
             input_noise: 0.0,
             members: 1,
             coord_channels: false,
+            weight_average: None,
+            dense_dropout: 0.0,
+            channel_dropout: 0.0,
         }
     }
 
@@ -279,6 +306,22 @@ impl ConvConfig {
                 "input_noise",
                 format!("{} is not in [0, 10]", self.input_noise),
             ));
+        }
+        if let Some(d) = self.weight_average {
+            if !(0.0..1.0).contains(&d) {
+                return Err(config_error(
+                    "weight_average",
+                    format!("{d} is not in [0, 1)"),
+                ));
+            }
+        }
+        for (field, p) in [
+            ("dense_dropout", self.dense_dropout),
+            ("channel_dropout", self.channel_dropout),
+        ] {
+            if !(0.0..0.95).contains(&p) {
+                return Err(config_error(field, format!("{p} is not in [0, 0.95)")));
+            }
         }
         if !(self.weight_decay >= 0.0 && self.weight_decay.is_finite()) {
             return Err(config_error(

@@ -10,6 +10,7 @@ mod activation;
 mod adam;
 mod config;
 mod data;
+mod dropout;
 mod ep;
 mod error;
 mod gemm;

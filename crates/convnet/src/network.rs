@@ -128,9 +128,45 @@ impl Network {
     /// The output of `n` frames (`n x h x w`), frame by frame: the
     /// feed-forward pass, which is the free phase's equilibrium.
     pub fn feed_forward(&self, x: &[f32], n: usize) -> Result<Vec<f32>, ConvError> {
+        self.feed_forward_masked(x, n, &[])
+    }
+
+    /// [`Self::feed_forward`] with dropout masks: `masks[l]` multiplies
+    /// layer `l`'s rates (0-based, frame by frame, `n x out_len`; an empty
+    /// vector, or a missing entry, is no mask).
+    pub fn feed_forward_masked(
+        &self,
+        x: &[f32],
+        n: usize,
+        masks: &[Vec<f32>],
+    ) -> Result<Vec<f32>, ConvError> {
         let mut ws = self.load(x, None, n)?;
+        self.load_masks(&mut ws, masks, n)?;
         free_phase(self, &mut ws, n, FreePhase::FeedForward);
         Ok(self.output_of(&ws, n))
+    }
+
+    /// Check the masks' shapes and put them in `ws`.
+    fn load_masks(
+        &self,
+        ws: &mut Workspace,
+        masks: &[Vec<f32>],
+        n: usize,
+    ) -> Result<(), ConvError> {
+        if masks.len() > self.layout.depth() {
+            return Err(ConvError::Shape {
+                what: "dropout masks (one a layer)",
+                expected: self.layout.depth(),
+                got: masks.len(),
+            });
+        }
+        for (m, shape) in masks.iter().zip(&self.layout.layers) {
+            if !m.is_empty() {
+                check_len("dropout mask", m.len(), n * shape.out_len())?;
+            }
+        }
+        crate::dropout::load(ws, &self.layout, masks, n);
+        Ok(())
     }
 
     /// The gradient of `sum 0.5 ||y - t||^2` over `n` frames, or its EP
@@ -142,7 +178,21 @@ impl Network {
         n: usize,
         rule: Rule,
     ) -> Result<Parameters, ConvError> {
+        self.gradient_masked(x, t, n, rule, &[])
+    }
+
+    /// [`Self::gradient`] of the network with dropout masks `masks` (as
+    /// [`Self::feed_forward_masked`]), held through every phase.
+    pub fn gradient_masked(
+        &self,
+        x: &[f32],
+        t: &[f32],
+        n: usize,
+        rule: Rule,
+        masks: &[Vec<f32>],
+    ) -> Result<Parameters, ConvError> {
         let mut ws = self.load(x, Some(t), n)?;
+        self.load_masks(&mut ws, masks, n)?;
         match rule {
             Rule::Backprop => backprop_gradient(self, &mut ws, n),
             Rule::Ep(ep) => {

@@ -56,6 +56,17 @@ impl Parameters {
         }
     }
 
+    /// `self = keep self + (1 - keep) other` (same shape): one step of an
+    /// exponential moving average toward `other`.
+    pub fn blend(&mut self, other: &Parameters, keep: f32) {
+        let take = 1.0 - keep;
+        for (a, b) in self.values_mut().zip(other.values()) {
+            a.iter_mut()
+                .zip(b)
+                .for_each(|(a, &b)| *a = keep * *a + take * b);
+        }
+    }
+
     /// `self *= k`.
     pub fn scale(&mut self, k: f32) {
         self.values_mut()

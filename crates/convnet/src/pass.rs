@@ -8,6 +8,9 @@
 //!   and positions (one product with the im2col matrix transposed), and
 //!   `dE/db(l) = -sum e(l)`.
 //!
+//! With dropout a layer's rates and its top-down input are multiplied by
+//! its mask (`crate::dropout`).
+//!
 //! With the energy `E = 1/2 sum_l ||e(l)||^2` these are the terms of
 //! `dE/ds` and `dE/dW` (Scellier and Bengio 2017, eqs. 2 and 13, for this
 //! energy; docs/learning.md).
@@ -23,7 +26,19 @@ pub(crate) fn predict_layer(net: &Network, ws: &mut Workspace, nb: usize, l: usi
     if l == 0 && shape.cin > 1 {
         coordinate_planes(shape, nb, &mut ws.x);
     }
-    let input: &[f32] = if l == 0 { &ws.x } else { &ws.a[l - 1] };
+    let input: &[f32] = match l {
+        0 => &ws.x,
+        _ if ws.mask[l - 1].is_empty() => &ws.a[l - 1],
+        _ => {
+            // Dropout: the layer above reads the masked rates.
+            let (m, a) = (&ws.mask[l - 1], &ws.a[l - 1]);
+            let out = &mut ws.masked[l - 1];
+            out.iter_mut()
+                .zip(m.iter().zip(a))
+                .for_each(|(o, (m, a))| *o = m * a);
+            &ws.masked[l - 1]
+        }
+    };
     im2col(shape, nb, input, &mut ws.cols[l]);
     let n = nb * shape.positions();
     let (m, k) = (shape.cout, shape.fan_in());
@@ -99,6 +114,13 @@ pub(crate) fn send_down(net: &Network, ws: &mut Workspace, nb: usize, l: usize, 
     col2im(shape, nb, &ws.dcols, dst);
     net.activation
         .times_slope(&ws.a[l - 1][..len], &mut dst[..len]);
+    let mask = &ws.mask[l - 1];
+    if !mask.is_empty() {
+        dst[..len]
+            .iter_mut()
+            .zip(&mask[..len])
+            .for_each(|(d, m)| *d *= m);
+    }
 }
 
 /// `grad += coeff (e(l) cols(l)^T, sum e(l))` for every layer: `coeff =

@@ -4,12 +4,16 @@
 //! (EP estimate or backprop) into its own buffer; the buffers are added in
 //! chunk order and Adam takes one step. Nothing is allocated inside the
 //! epoch loop, and the result does not depend on the number of threads.
+//! With `weight_average`, each network also keeps a moving average of its
+//! parameters after every step; the average is what is scored and kept.
 use crate::adam::Adam;
 use crate::config::{ConvConfig, ModelKind};
 use crate::data::{Frames, Targets};
+use crate::dropout;
 use crate::ep::{backprop_gradient, ep_gradient};
 use crate::error::ConvError;
 use crate::network::Network;
+use crate::params::Parameters;
 use crate::predict::{predict_all, prediction_pool};
 use crate::scaling::{InputScaling, TargetScaling};
 use crate::workspace::Workspace;
@@ -26,6 +30,10 @@ pub const DIVERGENCE_FACTOR: f64 = 1000.0;
 /// Added to the seed for the shuffling stream, so it differs from the
 /// initialisation's.
 const SHUFFLE_STREAM: u64 = 0x9e37_79b9_7f4a_7c15;
+
+/// Mixed into the seed for the dropout masks' draws, so they differ from
+/// the input noise's.
+const DROPOUT_STREAM: u64 = 0x5851_f42d_4c95_7f2d;
 
 /// Figures on held-out frames after an epoch.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -73,6 +81,9 @@ struct Member {
     adam: Adam,
     order: Vec<usize>,
     rng: ChaCha8Rng,
+    /// The moving average of the parameters (`weight_average`), from the
+    /// initial weights.
+    average: Option<Parameters>,
 }
 
 impl Member {
@@ -80,12 +91,17 @@ impl Member {
         let chunks = config.batch_size.div_ceil(config.chunk_size);
         Member {
             pool: (0..chunks)
-                .map(|_| Workspace::for_training(&net.layout, config.chunk_size))
+                .map(|_| {
+                    let mut ws = Workspace::for_training(&net.layout, config.chunk_size);
+                    dropout::enable(&mut ws, &net.layout, config);
+                    ws
+                })
                 .collect(),
             losses: vec![0.0f64; chunks],
             adam: Adam::new(&net.layout),
             order: (0..data.frames.count()).collect(),
             rng: ChaCha8Rng::seed_from_u64(data.seed.wrapping_add(SHUFFLE_STREAM)),
+            average: config.weight_average.map(|_| net.params.clone()),
         }
     }
 
@@ -110,8 +126,18 @@ impl Member {
                 lr,
                 epoch,
             );
+            if let (Some(avg), Some(keep)) = (&mut self.average, config.weight_average) {
+                avg.blend(&net.params, keep as f32);
+            }
         }
         total / self.order.len() as f64
+    }
+
+    /// Exchange the network's parameters with the average (if kept).
+    fn swap_average(&mut self, net: &mut Network) {
+        if let Some(avg) = &mut self.average {
+            std::mem::swap(avg, &mut net.params);
+        }
     }
 }
 
@@ -151,8 +177,10 @@ pub(crate) fn train(
         }
         let validation = validation.map(|(frames, targets)| {
             mean.fill(0.0);
-            for net in nets.iter() {
+            for (net, member) in nets.iter_mut().zip(&mut members) {
+                member.swap_average(net);
                 predict_all(net, input, scaling, &frames, &mut predict_pool, &mut one);
+                member.swap_average(net);
                 for (m, v) in mean.iter_mut().zip(&one) {
                     *m += v / count;
                 }
@@ -167,6 +195,9 @@ pub(crate) fn train(
         };
         on_epoch(&report);
         history.epochs.push(report);
+    }
+    for (net, member) in nets.iter_mut().zip(&mut members) {
+        member.swap_average(net);
     }
     Ok(history)
 }
@@ -230,6 +261,10 @@ fn chunk_gradient(
         }
         if config.input_noise > 0.0 {
             add_noise(x, config.input_noise as f32, mix(data.seed, epoch, i));
+        }
+        if config.dense_dropout > 0.0 || config.channel_dropout > 0.0 {
+            let key = mix(data.seed ^ DROPOUT_STREAM, epoch, i);
+            dropout::draw(ws, &net.layout, config, (nb, b), key);
         }
         for (j, &v) in data.targets.row(i).iter().enumerate() {
             ws.t[j * nb + b] = data.scaling.scale(j, v);

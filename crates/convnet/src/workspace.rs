@@ -45,6 +45,13 @@ pub(crate) struct Workspace {
     pub saved: Option<Saved>,
     /// Gradient (or its EP estimate) summed over the chunk's frames.
     pub grad: Option<Parameters>,
+    /// Each layer's dropout mask `m(l)` (0 or `1 / (1 - p)` a unit, held
+    /// through every phase of a frame), empty where there is no dropout
+    /// (always at prediction).
+    pub mask: Vec<Vec<f32>>,
+    /// Scratch for the masked rates `m(l) . phi(s(l))` the layer above
+    /// reads, beside each mask.
+    pub masked: Vec<Vec<f32>>,
 }
 
 impl Workspace {
@@ -68,6 +75,8 @@ impl Workspace {
             dcols: Vec::new(),
             saved: None,
             grad: None,
+            mask: vec![Vec::new(); layout.depth()],
+            masked: vec![Vec::new(); layout.depth()],
         }
     }
 

@@ -12,7 +12,7 @@ use crate::assign::{assign_usable, Edge, EdgeRows};
 use crate::blob::KeyPoint;
 use crate::detection::Detection;
 use crate::error::VisionError;
-use crate::field::{smooth_field, Kernel, Observations, EXACT_TOLERANCE};
+use crate::field::{fill_missing, smooth_field, Kernel, Observations, EXACT_TOLERANCE};
 use crate::fold::FoldCheck;
 use crate::merged::Cluster;
 
@@ -83,6 +83,9 @@ pub struct PinTracker {
     /// pins missing must settle every pairing; `None`: such starts are
     /// never kept.
     nearest_margin: Option<f64>,
+    /// Whether the speed cuts that change no pin are on
+    /// ([`PinTracker::with_speed_cuts`]).
+    cuts: bool,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -164,6 +167,7 @@ impl PinTracker {
             spacing,
             nearest: true,
             nearest_margin: Some(grid::NEAREST_MARGIN),
+            cuts: true,
         })
     }
 
@@ -193,6 +197,16 @@ impl PinTracker {
     /// against the full path (`examples/order_timing.rs`).
     pub fn with_nearest_margin(mut self, margin: Option<f64>) -> Self {
         self.nearest_margin = margin;
+        self
+    }
+
+    /// This tracker with the speed cuts that change no pin on (the
+    /// default) or off: the last stage's field computed only at the
+    /// missing pins. Off, the ordering is computed as before them, to the
+    /// same pins bit for bit; kept to check that (`tests/order331.rs`,
+    /// `examples/order_timing.rs --plain`).
+    pub fn with_speed_cuts(mut self, on: bool) -> Self {
+        self.cuts = on;
         self
     }
 
@@ -382,7 +396,7 @@ impl PinTracker {
         let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
         let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
         let mut by_x = None;
-        for stage in stages {
+        for (s, stage) in stages.iter().enumerate() {
             let source = match grid.filter(|_| self.uses_grid(stage)) {
                 Some(g) => Candidates::Grid(g),
                 None => Candidates::ByX(by_x.get_or_insert_with(|| ByX::new(points))),
@@ -392,7 +406,12 @@ impl PinTracker {
                 first.clone_from(&matches);
             }
             observed = self.displacements(&matches, points);
-            predicted = self.predict(&observed, &stage.kernel);
+            predicted = if s + 1 < stages.len() || !self.cuts {
+                self.predict(&observed, &stage.kernel)
+            } else {
+                // The last field only fills the missing pins (`finish`).
+                self.fill(&observed, &stage.kernel)
+            };
         }
         let tracked = self.finish(&matches, &observed, &predicted, points.len());
         (tracked, matches)
@@ -499,6 +518,17 @@ impl PinTracker {
     /// Every pin's position under the field fitted to `observed`.
     fn predict(&self, observed: &Observations, kernel: &Kernel) -> Vec<[f64; 2]> {
         smooth_field(&self.reference, observed, kernel, PRIOR_WEIGHT)
+            .iter()
+            .zip(&self.reference)
+            .map(|(d, r)| [r[0] + d[0], r[1] + d[1]])
+            .collect()
+    }
+
+    /// Missing pins where the field fitted to `observed` puts them, the
+    /// others at their observation: [`PinTracker::predict`] where
+    /// [`PinTracker::finish`] reads it (`field::fill_missing`).
+    fn fill(&self, observed: &Observations, kernel: &Kernel) -> Vec<[f64; 2]> {
+        fill_missing(&self.reference, observed, kernel, PRIOR_WEIGHT)
             .iter()
             .zip(&self.reference)
             .map(|(d, r)| [r[0] + d[0], r[1] + d[1]])

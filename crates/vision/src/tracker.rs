@@ -202,7 +202,8 @@ impl PinTracker {
 
     /// This tracker with the speed cuts that change no pin on (the
     /// default) or off: the last stage's field computed only at the
-    /// missing pins. Off, the ordering is computed as before them, to the
+    /// missing pins; the widest stage's candidates taken from the grid.
+    /// Off, the ordering is computed as before them, to the
     /// same pins bit for bit; kept to check that (`tests/order331.rs`,
     /// `examples/order_timing.rs --plain`).
     pub fn with_speed_cuts(mut self, on: bool) -> Self {
@@ -289,10 +290,19 @@ impl PinTracker {
         if missing_in.iter().all(|&m| m == 0) {
             return first;
         }
-        let owner: Vec<Option<usize>> = points
-            .iter()
-            .map(|q| owning_cluster(q, clusters, &missing_in))
-            .collect();
+        let owner: Vec<Option<usize>> = if self.cuts {
+            let with_missing: Vec<usize> =
+                (0..clusters.len()).filter(|&c| missing_in[c] > 0).collect();
+            points
+                .iter()
+                .map(|q| owning_cluster_among(q, clusters, &with_missing))
+                .collect()
+        } else {
+            points
+                .iter()
+                .map(|q| owning_cluster(q, clusters, &missing_in))
+                .collect()
+        };
         let mut retry: Vec<[f64; 2]> = points
             .iter()
             .zip(&owner)
@@ -328,16 +338,22 @@ impl PinTracker {
     fn missing_per_cluster(&self, tracked: &Tracked, clusters: &[Cluster]) -> Vec<usize> {
         let reach2 = (CLUSTER_REACH * self.spacing).powi(2);
         let mut counts = vec![0; clusters.len()];
+        let bounds: Vec<[f64; 4]> = clusters.iter().map(bounds).collect();
         for (pin, _) in tracked
             .pins
             .iter()
             .zip(&tracked.matched)
             .filter(|(_, m)| !**m)
         {
+            // Only a cluster within reach counts, so those whose box is
+            // out of reach (no pixel nearer than the box) are skipped:
+            // the first nearest within reach is the same.
             let nearest = clusters
                 .iter()
-                .map(|c| c.distance2(*pin))
+                .zip(&bounds)
                 .enumerate()
+                .filter(|(_, (_, b))| !self.cuts || box_distance2(b, pin) < reach2)
+                .map(|(k, (c, _))| (k, c.distance2(*pin)))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((c, d2)) = nearest {
                 if d2 < reach2 {
@@ -597,6 +613,40 @@ fn finite_centres(keypoints: &[KeyPoint]) -> Vec<[f64; 2]> {
 fn owning_cluster(point: &[f64; 2], clusters: &[Cluster], missing_in: &[usize]) -> Option<usize> {
     let (x, y) = (point[0].round() as i32, point[1].round() as i32);
     (0..clusters.len()).find(|&c| missing_in[c] > 0 && clusters[c].contains(x, y))
+}
+
+/// The first of the clusters `among` (indices, ascending) whose pixel
+/// holds `point`: [`owning_cluster`] with the clusters without missing
+/// pins left out beforehand.
+fn owning_cluster_among(point: &[f64; 2], clusters: &[Cluster], among: &[usize]) -> Option<usize> {
+    let (x, y) = (point[0].round() as i32, point[1].round() as i32);
+    among.iter().copied().find(|&c| clusters[c].contains(x, y))
+}
+
+/// A cluster's pixel centres' box: min x, min y, max x, max y (an empty
+/// cluster's box is inverted: [`box_distance2`] to it is infinite).
+fn bounds(cluster: &Cluster) -> [f64; 4] {
+    cluster.pixels.iter().fold(
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ],
+        |b, q| {
+            let (x, y) = (f64::from(q[0]), f64::from(q[1]));
+            [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)]
+        },
+    )
+}
+
+/// Squared distance from `p` to the box `b`: never above the squared
+/// distance to any pixel centre inside it, as `Cluster::distance2` rounds
+/// it (rounding is monotone), so a box out of reach holds no pixel within it.
+fn box_distance2(b: &[f64; 4], p: &[f64; 2]) -> f64 {
+    let dx = (b[0] - p[0]).max(p[0] - b[2]).max(0.0);
+    let dy = (b[1] - p[1]).max(p[1] - b[3]).max(0.0);
+    dx * dx + dy * dy
 }
 
 fn centroid(points: &[[f64; 2]]) -> Option<[f64; 2]> {

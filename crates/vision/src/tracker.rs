@@ -464,7 +464,15 @@ impl PinTracker {
         } else {
             f64::MAX / 4.0
         };
-        let mut rows = EdgeRows::with_capacity(predicted.len(), 16 * predicted.len());
+        // Room for the candidates within the gate (about 3.6 (gate /
+        // spacing)^2 a pin on a hexagonal layout) and the "unassigned"
+        // edge, so the widest stage does not grow the buffer.
+        let per_pin = if self.cuts {
+            16.max((4.0 * (gate / self.spacing).powi(2)) as usize + 8)
+        } else {
+            16
+        };
+        let mut rows = EdgeRows::with_capacity(predicted.len(), per_pin * predicted.len());
         let mut candidates = vec![0u64; points.len().div_ceil(64)];
         let mut costs = vec![0.0; points.len()];
         for p in predicted {

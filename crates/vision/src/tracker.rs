@@ -203,8 +203,9 @@ impl PinTracker {
 
     /// This tracker with the speed cuts that change no pin on (the
     /// default) or off: the last stage's field computed only at the
-    /// missing pins; the widest stage's candidates taken from the grid.
-    /// Off, the ordering is computed as before them, to the
+    /// missing pins; the widest stage's candidates taken from the grid
+    /// and its edge buffer sized for its gate; the split pass's cluster
+    /// lookups pruned (`tracker/split.rs`). Off, the ordering is computed as before them, to the
     /// same pins bit for bit; kept to check that (`tests/order331.rs`,
     /// `examples/order_timing.rs --plain`).
     pub fn with_speed_cuts(mut self, on: bool) -> Self {

@@ -2,19 +2,28 @@
 //! 21, item 6): the sensor proposed from 20 frames of the fitting part, the
 //! rest layout estimated from `--rest-frames` of its taps (as
 //! `tests/speed.rs` does), then every frame of `--frames` detected once
-//! and ordered `--reps` times: the mean thread CPU time a frame (the time a
+//! and ordered `--reps` times (0: not timed): the mean thread CPU time a frame (the time a
 //! loaded machine makes the thread wait is not counted) and the median and
 //! p95 of each frame's best wall time. With `--compare`,
-//! each frame is also ordered with the exact (uncut) smooth field and the
+//! each frame is also ordered (and timed) with the exact (uncut) smooth field and the
 //! two are compared: fully tracked frames, pins' largest and mean change.
 //! With `--full`, the other tracker is instead the full coarse-to-fine path
 //! (no nearest-neighbour start); `--margin M|none` sets the default
 //! tracker's margin for keeping a nearest-neighbour start with pins missing
-//! (`PinTracker::with_nearest_margin`; `none`: never kept).
+//! (`PinTracker::with_nearest_margin`; `none`: never kept). With `--plain`,
+//! the other tracker is the one without the speed cuts that change no pin
+//! (`PinTracker::with_speed_cuts(false)`). With `--dump
+//! FILE`, every frame's pins from the default tracker are written to FILE
+//! bit for bit (per pin x and y as little-endian f64 bits and the matched
+//! flag; per frame the missing and extra counts), so two versions of the
+//! tracker compare with `cmp`.
+//!
+//! Instruction counts of the ordering alone: `valgrind --tool=callgrind
+//! --toggle-collect='*time_frames*' target/release/examples/order_timing ...`.
 //!
 //! `cargo run --release -p tactrace-vision --example order_timing -- \
 //!     --fit DIR --frames DIR [--rest-frames K] [--limit N] [--reps R] [--compare]
-//!     [--full] [--margin M|none]`
+//!     [--full] [--plain] [--margin M|none] [--dump FILE]`
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -31,12 +40,14 @@ struct Args {
     reps: usize,
     compare: bool,
     full: bool,
+    plain: bool,
     margin: Option<f64>,
+    dump: Option<PathBuf>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage = "usage: order_timing --fit DIR --frames DIR [--rest-frames K] [--limit N] \
-                 [--reps R] [--compare] [--full] [--margin M|none]";
+                 [--reps R] [--compare] [--full] [--plain] [--margin M|none] [--dump FILE]";
     let mut args = std::env::args().skip(1);
     let mut a = Args {
         fit: PathBuf::new(),
@@ -46,7 +57,9 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         reps: 3,
         compare: false,
         full: false,
+        plain: false,
         margin: Some(0.25),
+        dump: None,
     };
     while let Some(arg) = args.next() {
         let mut value = || args.next().ok_or(usage);
@@ -55,9 +68,11 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--frames" => a.frames = value()?.into(),
             "--rest-frames" => a.rest_frames = value()?.parse()?,
             "--limit" => a.limit = value()?.parse()?,
-            "--reps" => a.reps = value()?.parse::<usize>()?.max(1),
+            "--reps" => a.reps = value()?.parse()?,
             "--compare" => a.compare = true,
             "--full" => a.full = true,
+            "--plain" => a.plain = true,
+            "--dump" => a.dump = Some(value()?.into()),
             "--margin" => {
                 a.margin = match value()?.as_str() {
                     "none" => None,
@@ -111,6 +126,39 @@ fn change(a: &Tracked, b: &Tracked) -> (f64, f64, bool) {
     (most, sum, a.matched == b.matched)
 }
 
+/// Every frame's pins, bit for bit (see the module docs).
+fn dump(path: &Path, tracker: &PinTracker, detections: &[Detection]) -> std::io::Result<()> {
+    let mut out = Vec::new();
+    for d in detections {
+        let t = tracker.track(d);
+        for (p, &m) in t.pins.iter().zip(&t.matched) {
+            out.extend_from_slice(&p[0].to_bits().to_le_bytes());
+            out.extend_from_slice(&p[1].to_bits().to_le_bytes());
+            out.push(u8::from(m));
+        }
+        out.extend_from_slice(&(t.missing as u32).to_le_bytes());
+        out.extend_from_slice(&(t.extra as u32).to_le_bytes());
+    }
+    std::fs::write(path, out)
+}
+
+/// Each frame's best wall time of `reps` orderings, us. Not inlined, so
+/// that callgrind can count it alone (`--toggle-collect='*time_frames*'`).
+#[inline(never)]
+fn time_frames(tracker: &PinTracker, detections: &[Detection], reps: usize) -> Vec<f64> {
+    let mut each = Vec::with_capacity(detections.len());
+    for d in detections {
+        let mut best = f64::INFINITY;
+        for _ in 0..reps {
+            let start = Instant::now();
+            std::hint::black_box(tracker.track(std::hint::black_box(d)));
+            best = best.min(start.elapsed().as_secs_f64());
+        }
+        each.push(best * 1e6);
+    }
+    each
+}
+
 fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
@@ -136,12 +184,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect::<Result<_, Box<dyn std::error::Error>>>()?;
     let rest = estimate_rest(&fitting, found.pins, &RestParams::default())?;
     let tracker = PinTracker::new(rest.pins.clone())?.with_nearest_margin(a.margin);
-    let exact = if a.full {
-        PinTracker::new(rest.pins)?.with_nearest_start(false)
+    let (exact, other) = if a.full {
+        (
+            PinTracker::new(rest.pins)?.with_nearest_start(false),
+            "full",
+        )
+    } else if a.plain {
+        (PinTracker::new(rest.pins)?.with_speed_cuts(false), "plain")
     } else {
-        PinTracker::new(rest.pins)?.with_exact_field(true)
+        (PinTracker::new(rest.pins)?.with_exact_field(true), "exact")
     };
-    let other = if a.full { "full" } else { "exact" };
     let paths: Vec<PathBuf> = pngs(&a.frames)?.into_iter().take(a.limit).collect();
     let detections: Vec<Detection> = paths
         .iter()
@@ -153,18 +205,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         detections.len(),
         a.frames.display()
     );
-    for (name, t) in [("cut", &tracker), (other, &exact)] {
-        let mut each = Vec::with_capacity(detections.len());
+    if let Some(path) = &a.dump {
+        dump(path, &tracker, &detections)?;
+        println!("pins of every frame written to {}", path.display());
+    }
+    let timed = match (a.reps, a.compare || a.full || a.plain) {
+        (0, _) => 0,
+        (_, false) => 1,
+        (_, true) => 2,
+    };
+    for (name, t) in [("cut", &tracker), (other, &exact)].into_iter().take(timed) {
         let cpu = cpu_seconds();
-        for d in &detections {
-            let mut best = f64::INFINITY;
-            for _ in 0..a.reps {
-                let start = Instant::now();
-                std::hint::black_box(t.track(std::hint::black_box(d)));
-                best = best.min(start.elapsed().as_secs_f64());
-            }
-            each.push(best * 1e6);
-        }
+        let mut each = time_frames(t, &detections, a.reps);
         let cpu = (cpu_seconds() - cpu) * 1e6 / (a.reps * detections.len()) as f64;
         each.sort_by(f64::total_cmp);
         println!(

@@ -12,12 +12,13 @@ use crate::assign::{assign_usable, Edge, EdgeRows};
 use crate::blob::KeyPoint;
 use crate::detection::Detection;
 use crate::error::VisionError;
-use crate::field::{smooth_field, Kernel, Observations, EXACT_TOLERANCE};
+use crate::field::{fill_missing, smooth_field, Kernel, Observations, EXACT_TOLERANCE};
 use crate::fold::FoldCheck;
 use crate::merged::Cluster;
 
 mod grid;
 mod repair;
+mod split;
 
 use grid::Grid;
 
@@ -83,6 +84,9 @@ pub struct PinTracker {
     /// pins missing must settle every pairing; `None`: such starts are
     /// never kept.
     nearest_margin: Option<f64>,
+    /// Whether the speed cuts that change no pin are on
+    /// ([`PinTracker::with_speed_cuts`]).
+    cuts: bool,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -164,6 +168,7 @@ impl PinTracker {
             spacing,
             nearest: true,
             nearest_margin: Some(grid::NEAREST_MARGIN),
+            cuts: true,
         })
     }
 
@@ -193,6 +198,18 @@ impl PinTracker {
     /// against the full path (`examples/order_timing.rs`).
     pub fn with_nearest_margin(mut self, margin: Option<f64>) -> Self {
         self.nearest_margin = margin;
+        self
+    }
+
+    /// This tracker with the speed cuts that change no pin on (the
+    /// default) or off: the last stage's field computed only at the
+    /// missing pins; the widest stage's candidates taken from the grid
+    /// and its edge buffer sized for its gate; the split pass's cluster
+    /// lookups pruned (`tracker/split.rs`). Off, the ordering is computed as before them, to the
+    /// same pins bit for bit; kept to check that (`tests/order331.rs`,
+    /// `examples/order_timing.rs --plain`).
+    pub fn with_speed_cuts(mut self, on: bool) -> Self {
+        self.cuts = on;
         self
     }
 
@@ -260,80 +277,6 @@ impl PinTracker {
         }
     }
 
-    /// The rest of [`PinTracker::order_with_clusters`] after `first` (on
-    /// the same keypoints): the same result.
-    pub fn split_pass(&self, first: FirstPass, clusters: &[Cluster]) -> Tracked {
-        let FirstPass {
-            points,
-            tracked: first,
-            sources,
-        } = first;
-        if first.missing == 0 || clusters.is_empty() {
-            return first;
-        }
-        let missing_in = self.missing_per_cluster(&first, clusters);
-        if missing_in.iter().all(|&m| m == 0) {
-            return first;
-        }
-        let owner: Vec<Option<usize>> = points
-            .iter()
-            .map(|q| owning_cluster(q, clusters, &missing_in))
-            .collect();
-        let mut retry: Vec<[f64; 2]> = points
-            .iter()
-            .zip(&owner)
-            .filter(|(_, o)| o.is_none())
-            .map(|(q, _)| *q)
-            .collect();
-        for (c, cluster) in clusters
-            .iter()
-            .enumerate()
-            .filter(|(c, _)| missing_in[*c] > 0)
-        {
-            let held = sources
-                .iter()
-                .flatten()
-                .filter(|&&k| owner[k] == Some(c))
-                .count();
-            retry.extend(cluster.split(held + missing_in[c]));
-        }
-        let (second, _) = self.order_points(&retry);
-        let (kept, kept_points) = if second.matched_count() >= first.matched_count() {
-            (second, retry)
-        } else {
-            (first, points.clone())
-        };
-        if self.folds.any_turned(&kept.pins) {
-            return self.resplit(kept, &kept_points, &points, clusters);
-        }
-        kept
-    }
-
-    /// For each cluster, how many missing pins are predicted on or next to
-    /// it (each missing pin counts for its nearest cluster only).
-    fn missing_per_cluster(&self, tracked: &Tracked, clusters: &[Cluster]) -> Vec<usize> {
-        let reach2 = (CLUSTER_REACH * self.spacing).powi(2);
-        let mut counts = vec![0; clusters.len()];
-        for (pin, _) in tracked
-            .pins
-            .iter()
-            .zip(&tracked.matched)
-            .filter(|(_, m)| !**m)
-        {
-            let nearest = clusters
-                .iter()
-                .map(|c| c.distance2(*pin))
-                .enumerate()
-                .min_by(|a, b| a.1.total_cmp(&b.1));
-            if let Some((c, d2)) = nearest {
-                if d2 < reach2 {
-                    counts[c] += 1;
-                }
-            }
-        }
-        counts
-    }
-
     /// The coarse-to-fine matching on finite points, then, only if a
     /// neighbour triangle has turned over, the local repair
     /// ([`PinTracker::unfold`]); also returns, per pin, the index of its point.
@@ -382,7 +325,7 @@ impl PinTracker {
         let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
         let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
         let mut by_x = None;
-        for stage in stages {
+        for (s, stage) in stages.iter().enumerate() {
             let source = match grid.filter(|_| self.uses_grid(stage)) {
                 Some(g) => Candidates::Grid(g),
                 None => Candidates::ByX(by_x.get_or_insert_with(|| ByX::new(points))),
@@ -392,7 +335,12 @@ impl PinTracker {
                 first.clone_from(&matches);
             }
             observed = self.displacements(&matches, points);
-            predicted = self.predict(&observed, &stage.kernel);
+            predicted = if s + 1 < stages.len() || !self.cuts {
+                self.predict(&observed, &stage.kernel)
+            } else {
+                // The last field only fills the missing pins (`finish`).
+                self.fill(&observed, &stage.kernel)
+            };
         }
         let tracked = self.finish(&matches, &observed, &predicted, points.len());
         (tracked, matches)
@@ -429,7 +377,15 @@ impl PinTracker {
         } else {
             f64::MAX / 4.0
         };
-        let mut rows = EdgeRows::with_capacity(predicted.len(), 16 * predicted.len());
+        // Room for the candidates within the gate (about 3.6 (gate /
+        // spacing)^2 a pin on a hexagonal layout) and the "unassigned"
+        // edge, so the widest stage does not grow the buffer.
+        let per_pin = if self.cuts {
+            16.max((4.0 * (gate / self.spacing).powi(2)) as usize + 8)
+        } else {
+            16
+        };
+        let mut rows = EdgeRows::with_capacity(predicted.len(), per_pin * predicted.len());
         let mut candidates = vec![0u64; points.len().div_ceil(64)];
         let mut costs = vec![0.0; points.len()];
         for p in predicted {
@@ -505,6 +461,17 @@ impl PinTracker {
             .collect()
     }
 
+    /// Missing pins where the field fitted to `observed` puts them, the
+    /// others at their observation: [`PinTracker::predict`] where
+    /// [`PinTracker::finish`] reads it (`field::fill_missing`).
+    fn fill(&self, observed: &Observations, kernel: &Kernel) -> Vec<[f64; 2]> {
+        fill_missing(&self.reference, observed, kernel, PRIOR_WEIGHT)
+            .iter()
+            .zip(&self.reference)
+            .map(|(d, r)| [r[0] + d[0], r[1] + d[1]])
+            .collect()
+    }
+
     /// Matched pins at their points, the others at `predicted`.
     fn finish(
         &self,
@@ -561,12 +528,6 @@ fn finite_centres(keypoints: &[KeyPoint]) -> Vec<[f64; 2]> {
         .filter(|k| k.x.is_finite() && k.y.is_finite())
         .map(|k| [k.x, k.y])
         .collect()
-}
-
-/// The cluster (among those with missing pins) whose pixel holds `point`.
-fn owning_cluster(point: &[f64; 2], clusters: &[Cluster], missing_in: &[usize]) -> Option<usize> {
-    let (x, y) = (point[0].round() as i32, point[1].round() as i32);
-    (0..clusters.len()).find(|&c| missing_in[c] > 0 && clusters[c].contains(x, y))
 }
 
 fn centroid(points: &[[f64; 2]]) -> Option<[f64; 2]> {

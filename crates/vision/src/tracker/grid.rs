@@ -25,9 +25,15 @@ use super::{PinTracker, Stage};
 
 /// Grid cell side, in reference spacings.
 pub(super) const CELL: f64 = 0.5;
-/// Widest gate (spacings) matched through the grid; wider gates scan the
-/// x-sorted points (a wide gate box covers many cells).
-pub(super) const GRID_GATE: f64 = 1.5;
+/// Widest gate (spacings) matched through the grid: every stage's (the
+/// widest, 3 spacings, visits about 40 points a pin through 13 rows of
+/// cells where the x-window of the sorted points held about 100 on a
+/// 331-pin frame). A point set whose grid cannot be built scans the
+/// x-sorted points.
+pub(super) const GRID_GATE: f64 = 3.0;
+/// [`GRID_GATE`] with the speed cuts off ([`PinTracker::with_speed_cuts`]):
+/// wider gates scan the x-sorted points, as before (the same edges).
+const PLAIN_GRID_GATE: f64 = 1.5;
 /// Radius (spacings) within which a pin and a point are nearest neighbours.
 const NEAREST_REACH: f64 = 0.5;
 /// Share of pins that must pair up for the nearest-neighbour start.
@@ -240,7 +246,12 @@ impl PinTracker {
 
     /// Whether `stage` matches through the grid (see [`GRID_GATE`]).
     pub(super) fn uses_grid(&self, stage: &Stage) -> bool {
-        stage.gate <= GRID_GATE * self.spacing
+        let widest = if self.cuts {
+            GRID_GATE
+        } else {
+            PLAIN_GRID_GATE
+        };
+        stage.gate <= widest * self.spacing
     }
 }
 

@@ -1,0 +1,144 @@
+//! The speed cuts of the 331-pin ordering (issue 21, item 6) change no
+//! pin: the default tracker against the same tracker with the cuts off
+//! (`PinTracker::with_speed_cuts(false)`, the ordering computed as
+//! before them), bit for bit, on synthetic ring and hexagonal taps and on
+//! the shared 331-pin shear set and 127-pin edge set. The real-data tests
+//! fail when the data is absent unless TACTRACE_SKIP_REAL_DATA=1 (see
+//! `tactrace_testdata`). Every frame of both parts of the 331-pin set is
+//! compared by `examples/order_timing.rs --plain --compare` and `--dump`.
+
+mod common;
+
+use common::{load, pngs, rings, shear_set_331};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use tactrace_vision::{BlobParams, Frame, KeyPoint, PinExtractor, PinTracker, Tracked};
+
+/// `a` and `b` the same, bit for bit (pins, flags and counts).
+fn assert_same(a: &Tracked, b: &Tracked, what: &str) {
+    let bits = |t: &Tracked| -> Vec<[u64; 2]> {
+        t.pins
+            .iter()
+            .map(|p| [p[0].to_bits(), p[1].to_bits()])
+            .collect()
+    };
+    assert_eq!(bits(a), bits(b), "{what}: pins differ");
+    assert_eq!(a.matched, b.matched, "{what}: matched flags differ");
+    assert_eq!((a.missing, a.extra), (b.missing, b.extra), "{what}");
+}
+
+/// A tap on `reference` (spacing `s` px, centre `c`): sheared and bumped,
+/// pins dropped, neighbouring pairs merged at their midpoint, shuffled.
+fn tap(reference: &[[f64; 2]], s: f64, c: f64, rng: &mut ChaCha8Rng) -> Vec<KeyPoint> {
+    let shear = rng.random_range(-0.15..0.15);
+    let bump = s * rng.random_range(0.0..0.5);
+    let mut points: Vec<[f64; 2]> = reference
+        .iter()
+        .map(|r| {
+            let (x, y) = (r[0] - c, r[1] - c);
+            let g = bump * (-(x * x + y * y) / (12.0 * s * s)).exp();
+            let j = 0.06 * s;
+            [
+                r[0] + shear * y + g + rng.random_range(-j..j),
+                r[1] + 0.5 * g + rng.random_range(-j..j),
+            ]
+        })
+        .collect();
+    for _ in 0..rng.random_range(0..5) {
+        let i = rng.random_range(0..points.len() - 1);
+        let (a, b) = (points[i], points[i + 1]);
+        points[i] = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        points[i + 1] = [f64::NAN, f64::NAN];
+    }
+    let mut keypoints: Vec<KeyPoint> = points
+        .iter()
+        .filter(|p| p[0].is_finite() && rng.random_bool(0.96))
+        .map(|p| KeyPoint {
+            x: p[0],
+            y: p[1],
+            size: 2.5,
+        })
+        .collect();
+    keypoints.sort_by_key(|k| (k.x * 7919.0) as i64 % 331);
+    keypoints
+}
+
+/// A 127-pin hexagonal lattice, 11 px apart, centred at (100, 100).
+fn hexagon() -> Vec<[f64; 2]> {
+    let mut pins = Vec::new();
+    for q in -6i32..=6 {
+        for r in -6i32..=6 {
+            if (q + r).abs() <= 6 && pins.len() < 127 {
+                let (q, r) = (f64::from(q), f64::from(r));
+                pins.push([100.0 + 11.0 * (q + 0.5 * r), 100.0 + 11.0 * 0.866 * r]);
+            }
+        }
+    }
+    pins
+}
+
+/// On 80 synthetic taps of each layout (331-pin rings, 127-pin lattice)
+/// with pins missing and merged, the cuts give the same pins bit for bit.
+#[test]
+fn issue21_speed_cuts_order_synthetic_taps_bit_for_bit() {
+    for (reference, s, c) in [(rings(), 5.0, 64.0), (hexagon(), 11.0, 100.0)] {
+        let fast = PinTracker::new(reference.clone()).expect("tracker");
+        let plain = PinTracker::new(reference.clone())
+            .expect("tracker")
+            .with_speed_cuts(false);
+        let mut rng = ChaCha8Rng::seed_from_u64(331);
+        let mut missing = 0;
+        for trial in 0..80 {
+            let keypoints = tap(&reference, s, c, &mut rng);
+            let (a, b) = (fast.order(&keypoints), plain.order(&keypoints));
+            missing += usize::from(b.missing > 0);
+            assert_same(&a, &b, &format!("{} pins, trial {trial}", reference.len()));
+        }
+        assert!(missing >= 20, "only {missing} taps with pins missing");
+    }
+}
+
+/// 600 held-out frames of the 331-pin shear set (val part), as
+/// `tests/speed.rs` reads them: the same pins bit for bit with the cuts.
+#[test]
+fn issue21_speed_cuts_order_331_pin_frames_bit_for_bit() {
+    let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
+        return;
+    };
+    let (held, rest) = shear_set_331(&set);
+    let fast = PinTracker::new(rest.clone()).expect("tracker");
+    let plain = PinTracker::new(rest)
+        .expect("tracker")
+        .with_speed_cuts(false);
+    let mut split = 0;
+    for (path, detection) in &held {
+        let (a, b) = (fast.track(detection), plain.track(detection));
+        split += usize::from(!detection.clusters.is_empty());
+        assert_same(&a, &b, &path.display().to_string());
+    }
+    assert!(split >= 100, "only {split} frames with touching pins");
+}
+
+/// Every 5th frame of the shared 127-pin set, as `PinExtractor::extract`
+/// reads it: the same pins bit for bit with the cuts.
+#[test]
+fn issue21_speed_cuts_order_127_pin_frames_bit_for_bit() {
+    let Some(set) = tactrace_testdata::real_edge_set() else {
+        return;
+    };
+    let dir = set.join("frames");
+    let params = BlobParams::preset("real256").expect("preset");
+    let reference = load(&dir.join("init_0.png")).to_luma8();
+    let fast = PinExtractor::from_reference_frame(&reference, params.clone()).expect("reference");
+    let mut plain = PinExtractor::from_reference_frame(&reference, params).expect("reference");
+    plain.tracker = plain.tracker.with_speed_cuts(false);
+    let frames = pngs(&dir, "frame_");
+    assert!(frames.len() > 3700, "{} frames", frames.len());
+    for path in frames.iter().step_by(5) {
+        let frame: Frame = load(path).to_luma8();
+        match (fast.extract(&frame), plain.extract(&frame)) {
+            (Ok(a), Ok(b)) => assert_same(&a, &b, &path.display().to_string()),
+            (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", path.display()),
+        }
+    }
+}

@@ -31,7 +31,9 @@ KINDS = [
     ("raylet", "raylet"),
     ("log_monitor", "log_monitor"),
     ("dashboard/agent.py", "dashboard_agent"),
+    ("ray::DashboardAgent", "dashboard_agent"),
     ("runtime_env/agent", "runtime_env_agent"),
+    ("ray::RuntimeEnvAgent", "runtime_env_agent"),
     ("autoscaler/_private/monitor", "autoscaler_monitor"),
     ("dashboard/dashboard.py", "dashboard"),
     ("ray::", "worker"),
@@ -114,9 +116,10 @@ def main():
     while not stop:
         time.sleep(args.interval)
         for pid, ticks in sample(sessions).items():
-            if pid not in kinds:
-                kinds[pid] = kind(pid)
-                first.setdefault(pid, 0)
+            # Looked at again each time: a worker just forked by its raylet
+            # shows the raylet's command line until it runs its own.
+            kinds[pid] = kind(pid) or kinds.get(pid)
+            first.setdefault(pid, 0)
             last[pid] = ticks
     totals = {}
     for pid, ticks in last.items():

@@ -216,6 +216,21 @@ def test_issue24_workers_build_once_and_time_their_calls(cluster, work, sim_set,
     assert s["round_trip"] >= s["evaluation"] > 0
 
 
+def test_issue24_a_large_batch_goes_in_chunks_with_the_local_results(cluster, work, sim_set,
+                                                                    monkeypatch):
+    space = Path(__file__).resolve().parents[3] / "configs" / "search" / "pdennn.toml"
+    args = ["search", "--train", sim_set, "--space", space, "--trials", 16, "--epochs", 1,
+            "--startup", 16, "--batch", 16, "--seed", 5]
+    run_cli(*args, "--out", work / "chunked-local")
+    timings = work / "chunked.jsonl"
+    monkeypatch.setenv("TACTRACE_RAY_TIMINGS", str(timings))
+    run_cli(*args, "--out", work / "chunked-ray", *ray_args(cluster))
+    assert trials(work / "chunked-ray") == trials(work / "chunked-local")
+    calls, _ = ray_timings.read(timings)
+    # 16 configurations on 2 workers: 8 calls of 2.
+    assert sorted(c["configs"] for c in calls) == [2] * 8
+
+
 def test_issue24_chunks_cover_a_batch_in_order():
     from tactrace.ray_executor import CHUNKS_PER_WORKER, chunks
 

@@ -126,12 +126,19 @@ class _Pool:
     def __init__(self, ray, cpus):
         self.ray, self.cpus, self.workers = ray, cpus, []
         self.why = f"the cluster has fewer than {cpus} CPUs free"
+        self.seen_cpus = None
         self.actor = ray.remote(_Worker).options(num_cpus=cpus, max_restarts=0,
                                                   max_task_retries=0)
 
     def grow(self):
-        """Start workers for the cluster's CPUs not yet used; how many run."""
-        wanted = int(self.ray.cluster_resources().get("CPU", 0) // self.cpus)
+        """Start workers for the cluster's CPUs not yet used (once per size
+        of the cluster: workers that found no room are not tried again
+        until it changes); how many run."""
+        total = self.ray.cluster_resources().get("CPU", 0)
+        if total == self.seen_cpus:
+            return len(self.workers)
+        self.seen_cpus = total
+        wanted = int(total // self.cpus)
         new = [self.actor.remote(self.cpus) for _ in range(max(0, wanted - len(self.workers)))]
         if new:
             refs = {w.ready.remote(): w for w in new}

@@ -114,8 +114,8 @@ impl ExecutorArgs {
                 });
                 let info = ray.connect().map_err(tactrace_lab::LabError::from)?;
                 eprintln!(
-                    "Ray cluster at {}: {} nodes, {} CPUs",
-                    self.ray_address, info.nodes, info.cpus
+                    "Ray cluster at {}: {} nodes, {} CPUs, {} workers",
+                    self.ray_address, info.nodes, info.cpus, info.workers
                 );
                 Exec::Ray(ray)
             }

@@ -2,7 +2,7 @@
 //! name, their context and configuration checked, and a Ray executor that
 //! cannot start refused as bad input. (The round trip through a real Ray
 //! cluster is crates/py/tests/test_ray.py.)
-use tactrace_lab::remote::{evaluate, Exec, RayExecutor, RaySettings, RemoteError};
+use tactrace_lab::remote::{evaluate, prepare, Exec, RayExecutor, RaySettings, RemoteError};
 use tactrace_lab::search::PoseTrial;
 use tactrace_lab::LabError;
 use tactrace_optim::{Evaluation, Executor};
@@ -83,4 +83,27 @@ fn issue24_a_ray_executor_without_its_interpreter_is_bad_input() {
         Exec::Local.run(&Twice, &[1.0, 2.5]).unwrap(),
         vec![2.0, 5.0]
     );
+}
+
+#[test]
+fn issue24_a_worker_prepares_only_what_it_could_evaluate() {
+    let e = prepare("no.such.evaluation", "{}").unwrap_err();
+    assert!(e.is_bad_input());
+    assert!(matches!(remote(e), RemoteError::UnknownEvaluation { .. }));
+    for name in [
+        PoseTrial::NAME,
+        tactrace_lab::transfer_fit::TransferTrial::NAME,
+        tactrace_lab::tune::TuneTrial::NAME,
+        tactrace_lab::tune::HeldOutTrial::NAME,
+    ] {
+        let e = prepare(name, "[1, 2]").unwrap_err();
+        assert!(e.is_bad_input(), "{name}: {e}");
+        assert!(
+            matches!(remote(e), RemoteError::Json { what: "context", ref evaluation, .. } if evaluation == name)
+        );
+    }
+    let context =
+        r#"{"train": "/no/such/dataset", "data_sha256": "x", "val_fraction": 0.25, "seed": 0}"#;
+    let e = prepare(PoseTrial::NAME, context).unwrap_err();
+    assert!(e.is_bad_input(), "{e}");
 }

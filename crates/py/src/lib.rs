@@ -47,5 +47,6 @@ fn _tactrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(follow::follow, m)?)?;
     m.add_function(wrap_pyfunction!(rig::follow_rig, m)?)?;
     m.add_function(wrap_pyfunction!(remote::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(remote::prepare, m)?)?;
     Ok(())
 }

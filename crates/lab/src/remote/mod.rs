@@ -1,7 +1,7 @@
 //! Evaluations run elsewhere: the executor the commands choose
 //! ([`Exec`]: this machine or a Ray cluster) and the worker's side
-//! ([`evaluate`]: an evaluation rebuilt from its name and context, then
-//! run on one configuration).
+//! ([`prepare`] and [`evaluate`]: an evaluation rebuilt from its name and
+//! context, then run on one configuration).
 //!
 //! A remote batch crosses two processes as JSON text: the command writes
 //! the evaluation's name, its context (data paths and fixed settings,
@@ -74,13 +74,39 @@ pub fn evaluate(name: &str, context: &str, config: &str) -> Result<String> {
     }
 }
 
+/// Build the evaluation named `name` from `context` and keep it for the
+/// calls of [`evaluate`] that follow (reading its data now, not inside the
+/// first evaluation); whether it was built now (false: it was kept from
+/// before). What a remote worker calls before its first configuration, so
+/// that the start-up is timed apart from the evaluations.
+pub fn prepare(name: &str, context: &str) -> Result<bool> {
+    use crate::search::PoseTrial;
+    use crate::transfer_fit::TransferTrial;
+    use crate::tune::{HeldOutTrial, TuneTrial};
+    match name {
+        PoseTrial::NAME => keep(context, PoseTrial::from_context),
+        TransferTrial::NAME => keep(context, TransferTrial::from_context),
+        TuneTrial::NAME => keep(context, TuneTrial::from_context),
+        HeldOutTrial::NAME => keep(context, HeldOutTrial::from_context),
+        _ => Err(RemoteError::UnknownEvaluation { name: name.into() }.into()),
+    }
+}
+
+/// The evaluation of `context` built and kept; whether it was built now.
+fn keep<E: Evaluation + Send + Sync + 'static>(
+    context: &str,
+    make: fn(&str) -> Result<E>,
+) -> Result<bool> {
+    built(E::NAME, context, || make(context)).map(|(_, fresh)| fresh)
+}
+
 /// The evaluation of `context` (built, or the one built last), run on
 /// `config`.
 fn run_one<E>(context: &str, config: &str, make: fn(&str) -> Result<E>) -> Result<String>
 where
     E: Evaluation<Error = LabError> + Send + 'static,
 {
-    let evaluation = built(E::NAME, context, || make(context))?;
+    let (evaluation, _) = built(E::NAME, context, || make(context))?;
     let json = |what, source| RemoteError::Json {
         evaluation: E::NAME.into(),
         what,
@@ -97,17 +123,17 @@ type Built = (String, String, Arc<dyn Any + Send + Sync>);
 static LAST_BUILT: Mutex<Option<Built>> = Mutex::new(None);
 
 /// The evaluation `name` of `context`: the one kept from the last call
-/// when it was the same, else made (and kept).
+/// when it was the same, else made (and kept); and whether it was made now.
 fn built<E: Send + Sync + 'static>(
     name: &str,
     context: &str,
     make: impl FnOnce() -> Result<E>,
-) -> Result<Arc<E>> {
+) -> Result<(Arc<E>, bool)> {
     let last = LAST_BUILT.lock().unwrap_or_else(|p| p.into_inner()).clone();
     if let Some((n, c, e)) = last {
         if n == name && c == context {
             if let Ok(e) = e.downcast::<E>() {
-                return Ok(e);
+                return Ok((e, false));
             }
         }
     }
@@ -115,7 +141,7 @@ fn built<E: Send + Sync + 'static>(
     let kept: Arc<dyn Any + Send + Sync> = made.clone();
     *LAST_BUILT.lock().unwrap_or_else(|p| p.into_inner()) =
         Some((name.to_string(), context.to_string(), kept));
-    Ok(made)
+    Ok((made, true))
 }
 
 /// `value` as the JSON of a context; a failure names the evaluation.

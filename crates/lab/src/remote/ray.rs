@@ -1,6 +1,7 @@
 //! The Ray executor: a batch handed to the Python package's
 //! `tactrace.ray_executor` (one process per executor, started at the first
-//! batch), which submits one Ray task per configuration to the cluster
+//! batch), which hands the configurations to its Ray workers (one actor
+//! per `cpus_per_task` CPUs of the cluster, kept for the executor's life)
 //! and answers with the scores in order.
 //!
 //! The pipe carries one JSON line each way. First the process says
@@ -49,6 +50,10 @@ pub struct ClusterInfo {
     pub nodes: usize,
     /// CPUs in all.
     pub cpus: f64,
+    /// Worker processes started for the evaluations (one per
+    /// `cpus_per_task` CPUs), each keeping its evaluation built.
+    #[serde(default)]
+    pub workers: usize,
 }
 
 /// A line from the process.

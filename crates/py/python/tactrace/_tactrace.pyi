@@ -231,3 +231,9 @@ def evaluate(name: str, context: str, config: str) -> str:
     """Run the named Rust evaluation, rebuilt from its JSON context, on one
     JSON configuration; the score as JSON (a remote executor's worker)."""
     ...
+
+def prepare(name: str, context: str) -> bool:
+    """Build the named Rust evaluation from its JSON context and keep it for
+    the `evaluate` calls that follow; True when built now, False when kept
+    from an earlier call in this process (a remote executor's worker)."""
+    ...

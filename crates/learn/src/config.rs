@@ -134,6 +134,14 @@ pub struct ModelConfig {
     /// the seed; never at prediction. 0 (the default, not written): none.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub input_noise: f64,
+    /// Weight of every circular target's (sine, cosine) pair in the
+    /// training loss, against 1 for the other targets: the pair's scaled
+    /// values are multiplied by it (their scaling divided by it, so every
+    /// prediction reads back the same way and the angle's `atan2` is
+    /// unchanged), which weights their squared errors by its square.
+    /// 1 (the default, not written): no weighting.
+    #[serde(default = "one_f64", skip_serializing_if = "is_one_f64")]
+    pub circular_weight: f64,
     /// The single net of DisDenNN / PcaDenNN (outputs r and theta).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<NetConfig>,
@@ -288,6 +296,13 @@ impl ModelConfig {
                 format!("{} must lie in [0, {MAX_INPUT_NOISE}]", self.input_noise),
             ));
         }
+        let w = self.circular_weight;
+        if !(w.is_finite() && (1.0 / MAX_CIRCULAR_WEIGHT..=MAX_CIRCULAR_WEIGHT).contains(&w)) {
+            return Err(config_err(
+                "circular_weight",
+                format!("{w} must lie in [1/{MAX_CIRCULAR_WEIGHT}, {MAX_CIRCULAR_WEIGHT}]"),
+            ));
+        }
         if self.divergence_retries > MAX_RETRIES {
             let n = self.divergence_retries;
             return Err(config_err(
@@ -397,6 +412,18 @@ fn is_one(k: &usize) -> bool {
 /// unit spread, so 10 drowns them.
 pub const MAX_INPUT_NOISE: f64 = 10.0;
 
+/// Largest circular weight ([`ModelConfig::circular_weight`]), and the
+/// inverse of the smallest.
+pub const MAX_CIRCULAR_WEIGHT: f64 = 100.0;
+
+fn one_f64() -> f64 {
+    1.0
+}
+
+fn is_one_f64(v: &f64) -> bool {
+    *v == 1.0
+}
+
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
@@ -501,6 +528,7 @@ fn report(kind: ModelKind) -> ModelConfig {
         anneal_fraction: 0.0,
         ensemble: 1,
         input_noise: 0.0,
+        circular_weight: 1.0,
         pose: None,
         position: None,
         angle: None,

@@ -3,6 +3,7 @@
 //! local weight update. Kept apart from the [`crate::DenNN`] type so the hot
 //! loop reads top to bottom.
 use crate::closed_form::{closed_form_outputs, step_one_output, step_two_outputs};
+use crate::deep_clamp::{clamp_linearised_deep, solve_in_place};
 use crate::dennn::{ClampedPhase, EpConfig, FreePhase, LrScaling, SampleStats};
 use crate::kernels::{dot, dot3, sigmoid, sum_squares_f64};
 use crate::net::{Layers, States};
@@ -56,7 +57,7 @@ pub(crate) fn step_general<const F: bool>(
         ClampedPhase::Linearised if n == 2 && !layers.is_row_major(2) => {
             clamp_linearised::<F>(layers, st, t, beta)
         }
-        ClampedPhase::Linearised => clamp_euler::<F>(layers, st, 20, 0.5),
+        ClampedPhase::Linearised => clamp_linearised_deep::<F>(layers, st, t, beta),
         ClampedPhase::Euler { n_i, dt } => clamp_euler::<F>(layers, st, n_i, dt as f32),
     }
     let mut energy = 0.5
@@ -200,19 +201,7 @@ fn solve_output_error<const F: bool>(
         }
     }
     b.iter_mut().zip(rhs).for_each(|(b, &r)| *b = r as f64);
-    for p in 0..k {
-        for r in p + 1..k {
-            let f = a[r * k + p] / a[p * k + p];
-            for q in p..k {
-                a[r * k + q] -= f * a[p * k + q];
-            }
-            b[r] -= f * b[p];
-        }
-    }
-    for p in (0..k).rev() {
-        let tail: f64 = (p + 1..k).map(|q| a[p * k + q] * b[q]).sum();
-        b[p] = (b[p] - tail) / a[p * k + p];
-    }
+    solve_in_place(a, b, k);
     e2.iter_mut()
         .zip(b.iter())
         .for_each(|(e, b)| *e = *b as f32);

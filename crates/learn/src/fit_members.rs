@@ -92,6 +92,7 @@ impl<'a> Shared<'a> {
     ) -> Result<Self, LearnError> {
         let encoded = targets::encoded_columns(outputs);
         let targets = fit_target_scaling(cfg, train)?;
+        let targets = weight_circular(targets, cfg.circular_weight, outputs, &encoded)?;
         let z = standardiser.transform(&train.x);
         let z_val = val.map(|v| standardiser.transform(&v.x));
         let mut plans = Vec::new();
@@ -270,6 +271,26 @@ fn fit_target_scaling(cfg: &ModelConfig, train: &Dataset) -> Result<Standardiser
             Standardiser::from_parts(vec![0.0; train.dim_y], vec![1.0; train.dim_y])
         }
     }
+}
+
+/// `scaling` with every circular target's encoded columns weighted by
+/// `w` ([`ModelConfig::circular_weight`]): their spread divided by it.
+fn weight_circular(
+    scaling: Standardiser,
+    w: f64,
+    outputs: &[ModelTarget],
+    encoded: &[Vec<usize>],
+) -> Result<Standardiser, LearnError> {
+    if w == 1.0 {
+        return Ok(scaling);
+    }
+    let mut std = scaling.std().to_vec();
+    for (t, cols) in outputs.iter().zip(encoded) {
+        if t.circular {
+            cols.iter().for_each(|&c| std[c] /= w);
+        }
+    }
+    Standardiser::from_parts(scaling.mean().to_vec(), std)
 }
 
 /// Each member's first divergence, by member.

@@ -13,6 +13,7 @@
 mod closed_form;
 mod config;
 mod dataset;
+mod deep_clamp;
 mod dennn;
 mod ep;
 mod error;

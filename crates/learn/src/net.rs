@@ -295,6 +295,9 @@ pub(crate) struct States {
     pub scratch: Vec<f32>,
     /// `k x k` matrix and `k` right-hand side of the output-error system.
     pub system: Vec<f64>,
+    /// The deep clamped phase's per-layer slopes and output Jacobians
+    /// (`crate::deep_clamp`), sized on first use.
+    pub deep: Vec<Vec<f32>>,
 }
 
 impl States {
@@ -309,6 +312,7 @@ impl States {
             nudged: vec![0.0; sizes.last().copied().unwrap_or(0)],
             scratch: vec![0.0; sizes.get(1).copied().unwrap_or(0)],
             system: vec![0.0; sizes.last().map_or(0, |k| k * k + k)],
+            deep: Vec::new(),
         }
     }
 }

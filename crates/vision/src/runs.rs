@@ -9,7 +9,7 @@
 //! walk). A component with holes (the rim, specks) is traced in a window
 //! of its own as before. Every contour is measured by the same functions,
 //! so the blobs are the full-frame tracer's, bit for bit (the tests here,
-//! in `binary.rs` and `tests/issue21_speed5.rs`).
+//! in `binary.rs` and `tests/runs.rs`).
 
 use crate::blob::{colour_passes, measure_shape, Scratch};
 use crate::contour::ContourScanner;

@@ -50,18 +50,7 @@ pub struct KeyPoint {
 /// same image at every threshold and takes a shorter, equivalent path
 /// (`binary.rs`).
 pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
-    let (width, height) = (img.width() as usize, img.height() as usize);
-    let levels: Vec<i16> = p.thresholds().into_iter().map(level_of).collect();
-    let (Some(&lo), Some(&hi)) = (levels.iter().min(), levels.iter().max()) else {
-        return Vec::new();
-    };
-    if width == 0 || height == 0 {
-        return Vec::new();
-    }
-    if same_at_levels(img.as_raw(), lo, hi) {
-        return detect_unchanging(img.as_raw(), width, height, &levels, p);
-    }
-    detect_blobs_by_threshold(img, p)
+    detect_with(img, p, detect_unchanging)
 }
 
 /// [`detect_blobs`] with another way to the same contours on binary
@@ -74,6 +63,15 @@ pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
 /// and shape measures dominate), so an option, not the default. Frames
 /// with grey levels between the thresholds take [`detect_blobs`]'s path.
 pub fn detect_blobs_by_runs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
+    detect_with(img, p, detect_unchanging_by_runs)
+}
+
+/// A detector of binary frames: pixels, width, height, threshold levels.
+type BinaryPath = fn(&[u8], usize, usize, &[i16], &BlobParams) -> Vec<KeyPoint>;
+
+/// The path both detectors share: binary frames (the same image at every
+/// threshold) go to `binary_path`, others threshold by threshold.
+fn detect_with(img: &Frame, p: &BlobParams, binary_path: BinaryPath) -> Vec<KeyPoint> {
     let (width, height) = (img.width() as usize, img.height() as usize);
     let levels: Vec<i16> = p.thresholds().into_iter().map(level_of).collect();
     let (Some(&lo), Some(&hi)) = (levels.iter().min(), levels.iter().max()) else {
@@ -83,7 +81,7 @@ pub fn detect_blobs_by_runs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
         return Vec::new();
     }
     if same_at_levels(img.as_raw(), lo, hi) {
-        return detect_unchanging_by_runs(img.as_raw(), width, height, &levels, p);
+        return binary_path(img.as_raw(), width, height, &levels, p);
     }
     detect_blobs_by_threshold(img, p)
 }

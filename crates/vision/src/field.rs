@@ -372,27 +372,46 @@ mod tests {
 
     /// The source-by-source (vectorised) sums equal the pin-by-pin ones
     /// bit for bit, on a jittered grid with random gaps and residuals.
+    /// Each pin of `layout` moved by up to `jitter` in x and y.
+    fn jittered(layout: &[[f64; 2]], jitter: f64, rng: &mut impl rand::Rng) -> Vec<[f64; 2]> {
+        layout
+            .iter()
+            .map(|r| {
+                [
+                    r[0] + rng.random_range(-jitter..jitter),
+                    r[1] + rng.random_range(-jitter..jitter),
+                ]
+            })
+            .collect()
+    }
+
+    /// Each pin seen with probability `seen`, displaced by up to `reach`.
+    fn observed_at_random(
+        reference: &[[f64; 2]],
+        seen: f64,
+        reach: f64,
+        rng: &mut impl rand::Rng,
+    ) -> Vec<Option<[f64; 2]>> {
+        reference
+            .iter()
+            .map(|_| {
+                rng.random_bool(seen).then(|| {
+                    [
+                        rng.random_range(-reach..reach),
+                        rng.random_range(-reach..reach),
+                    ]
+                })
+            })
+            .collect()
+    }
+
     #[test]
     fn banded_sums_equal_pin_by_pin_sums() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
         for _ in 0..50 {
-            let reference: Vec<[f64; 2]> = grid()
-                .iter()
-                .map(|r| {
-                    [
-                        r[0] + rng.random_range(-2.0..2.0),
-                        r[1] + rng.random_range(-2.0..2.0),
-                    ]
-                })
-                .collect();
-            let observed: Vec<Option<[f64; 2]>> = reference
-                .iter()
-                .map(|_| {
-                    rng.random_bool(0.8)
-                        .then(|| [rng.random_range(-9.0..9.0), rng.random_range(-9.0..9.0)])
-                })
-                .collect();
+            let reference = jittered(&grid(), 2.0, &mut rng);
+            let observed = observed_at_random(&reference, 0.8, 9.0, &mut rng);
             let kernel = Kernel::new(&reference, rng.random_range(5.0..30.0), EXACT_TOLERANCE);
             let prior = rng.random_range(0.0..0.5);
             let got = smooth_field(&reference, &observed, &kernel, prior);
@@ -430,22 +449,8 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(331);
         for trial in 0..40 {
             let layout = if trial % 2 == 0 { grid() } else { rings() };
-            let reference: Vec<[f64; 2]> = layout
-                .iter()
-                .map(|r| {
-                    [
-                        r[0] + rng.random_range(-0.5..0.5),
-                        r[1] + rng.random_range(-0.5..0.5),
-                    ]
-                })
-                .collect();
-            let observed: Vec<Option<[f64; 2]>> = reference
-                .iter()
-                .map(|_| {
-                    rng.random_bool(0.9)
-                        .then(|| [rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0)])
-                })
-                .collect();
+            let reference = jittered(&layout, 0.5, &mut rng);
+            let observed = observed_at_random(&reference, 0.9, 3.0, &mut rng);
             let spacing = if trial % 2 == 0 { 10.0 } else { 5.0 };
             let tolerance = if trial % 4 < 2 { EXACT_TOLERANCE } else { 1e-2 };
             let sigma = spacing * rng.random_range(0.8..2.5);

@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{load, pngs, rings, shear_set_331};
+use common::{load, merged_dropped_shuffled, pngs, rings, shear_set_331};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_vision::{BlobParams, Frame, KeyPoint, PinExtractor, PinTracker, Tracked};
@@ -32,7 +32,7 @@ fn assert_same(a: &Tracked, b: &Tracked, what: &str) {
 fn tap(reference: &[[f64; 2]], s: f64, c: f64, rng: &mut ChaCha8Rng) -> Vec<KeyPoint> {
     let shear = rng.random_range(-0.15..0.15);
     let bump = s * rng.random_range(0.0..0.5);
-    let mut points: Vec<[f64; 2]> = reference
+    let points: Vec<[f64; 2]> = reference
         .iter()
         .map(|r| {
             let (x, y) = (r[0] - c, r[1] - c);
@@ -44,23 +44,7 @@ fn tap(reference: &[[f64; 2]], s: f64, c: f64, rng: &mut ChaCha8Rng) -> Vec<KeyP
             ]
         })
         .collect();
-    for _ in 0..rng.random_range(0..5) {
-        let i = rng.random_range(0..points.len() - 1);
-        let (a, b) = (points[i], points[i + 1]);
-        points[i] = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
-        points[i + 1] = [f64::NAN, f64::NAN];
-    }
-    let mut keypoints: Vec<KeyPoint> = points
-        .iter()
-        .filter(|p| p[0].is_finite() && rng.random_bool(0.96))
-        .map(|p| KeyPoint {
-            x: p[0],
-            y: p[1],
-            size: 2.5,
-        })
-        .collect();
-    keypoints.sort_by_key(|k| (k.x * 7919.0) as i64 % 331);
-    keypoints
+    merged_dropped_shuffled(points, 5, 0.96, rng)
 }
 
 /// A 127-pin hexagonal lattice, 11 px apart, centred at (100, 100).

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::rings;
+use common::{merged_dropped_shuffled, rings};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_vision::{KeyPoint, PinTracker};
@@ -19,7 +19,7 @@ use tactrace_vision::{KeyPoint, PinTracker};
 fn tap(reference: &[[f64; 2]], rng: &mut ChaCha8Rng) -> Vec<KeyPoint> {
     let shear = rng.random_range(-0.15..0.15);
     let bump = rng.random_range(0.0..2.5);
-    let mut points: Vec<[f64; 2]> = reference
+    let points: Vec<[f64; 2]> = reference
         .iter()
         .map(|r| {
             let (x, y) = (r[0] - 64.0, r[1] - 64.0);
@@ -30,23 +30,7 @@ fn tap(reference: &[[f64; 2]], rng: &mut ChaCha8Rng) -> Vec<KeyPoint> {
             ]
         })
         .collect();
-    for _ in 0..rng.random_range(0..4) {
-        let i = rng.random_range(0..points.len() - 1);
-        let (a, b) = (points[i], points[i + 1]);
-        points[i] = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
-        points[i + 1] = [f64::NAN, f64::NAN];
-    }
-    let mut keypoints: Vec<KeyPoint> = points
-        .iter()
-        .filter(|p| p[0].is_finite() && rng.random_bool(0.97))
-        .map(|p| KeyPoint {
-            x: p[0],
-            y: p[1],
-            size: 2.5,
-        })
-        .collect();
-    keypoints.sort_by_key(|k| (k.x * 7919.0) as i64 % 331);
-    keypoints
+    merged_dropped_shuffled(points, 4, 0.97, rng)
 }
 
 /// On 60 synthetic taps with pins missing, the default tracker (the

@@ -2,7 +2,8 @@
 //! (`speed.rs`, `speed3.rs`): frames read from a folder, the largest pin
 //! difference between two orderings, and the 331-pin shear set read as the
 //! inspection proposes; and the 331-pin ring layout of the synthetic
-//! ordering tests (`speed3.rs`, `speed4.rs`). Not every file that shares
+//! ordering tests (`speed3.rs`, `speed4.rs`, `order331.rs`) and their
+//! synthetic taps' merged and missed pins. Not every file that shares
 //! it uses every set-up.
 #![allow(dead_code)]
 
@@ -92,4 +93,32 @@ pub fn rings() -> Vec<[f64; 2]> {
         }
     }
     pins
+}
+
+/// A synthetic tap's keypoints from its pin `points`: up to `max_merges`
+/// neighbouring pairs merged into one blob (touching pins), each other pin
+/// kept with probability `keep` (missed pins), in a scrambled order.
+pub fn merged_dropped_shuffled(
+    mut points: Vec<[f64; 2]>,
+    max_merges: usize,
+    keep: f64,
+    rng: &mut impl rand::Rng,
+) -> Vec<tactrace_vision::KeyPoint> {
+    for _ in 0..rng.random_range(0..max_merges) {
+        let i = rng.random_range(0..points.len() - 1);
+        let (a, b) = (points[i], points[i + 1]);
+        points[i] = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        points[i + 1] = [f64::NAN, f64::NAN];
+    }
+    let mut keypoints: Vec<tactrace_vision::KeyPoint> = points
+        .iter()
+        .filter(|p| p[0].is_finite() && rng.random_bool(keep))
+        .map(|p| tactrace_vision::KeyPoint {
+            x: p[0],
+            y: p[1],
+            size: 2.5,
+        })
+        .collect();
+    keypoints.sort_by_key(|k| (k.x * 7919.0) as i64 % 331);
+    keypoints
 }

@@ -5,6 +5,9 @@
 //! (finite differences); a unit dropped in every frame learns nothing; a
 //! fit with dropout is seeded, thread-count independent, and predicts
 //! with no mask.
+mod common;
+
+use common::{tiny_config, SIDE};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_convnet::{
@@ -151,8 +154,6 @@ fn issue22_a_unit_dropped_in_every_frame_learns_nothing() {
     }
 }
 
-const SIDE: usize = 12;
-
 fn fit(config: &ConvConfig, threads: usize) -> ConvModel {
     let count = 32;
     let (mut pixels, mut targets) = (Vec::new(), Vec::new());
@@ -173,16 +174,7 @@ fn fit(config: &ConvConfig, threads: usize) -> ConvModel {
 }
 
 fn config(kind: ModelKind, dense: f64, channel: f64) -> ConvConfig {
-    let mut c = ConvConfig::new(kind);
-    c.conv = vec![ConvSpec {
-        channels: 4,
-        kernel: 3,
-        stride: 2,
-    }];
-    c.dense = vec![8];
-    c.epochs = 3;
-    c.batch_size = 12;
-    c.chunk_size = 4;
+    let mut c = tiny_config(kind);
     c.dense_dropout = dense;
     c.channel_dropout = channel;
     c

@@ -4,42 +4,19 @@
 //! differs from the noiseless one, never touches prediction, is refused
 //! out of range, and a model saved before the setting existed still loads
 //! (no noise).
-use tactrace_convnet::{ConvConfig, ConvError, ConvModel, ConvSpec, Frames, ModelKind, Targets};
+mod common;
 
-const SIDE: usize = 12;
-
-/// `count` frames with a bright pixel pair at a place that moves with the
-/// frame's index; targets its column and row.
-fn frames(count: usize) -> (Vec<u8>, Vec<f64>) {
-    let (mut pixels, mut targets) = (Vec::new(), Vec::new());
-    for k in 0..count {
-        let (cx, cy) = (1 + (k * 7) % (SIDE - 3), 1 + (k * 5) % (SIDE - 2));
-        let mut f = vec![10u8; SIDE * SIDE];
-        f[cy * SIDE + cx] = 240;
-        f[cy * SIDE + cx + 1] = 200;
-        pixels.extend(f);
-        targets.extend([cx as f64, cy as f64]);
-    }
-    (pixels, targets)
-}
+use common::{moving_pair_frames, tiny_config, SIDE};
+use tactrace_convnet::{ConvConfig, ConvError, ConvModel, Frames, ModelKind, Targets};
 
 fn config(kind: ModelKind, noise: f64) -> ConvConfig {
-    let mut c = ConvConfig::new(kind);
-    c.conv = vec![ConvSpec {
-        channels: 4,
-        kernel: 3,
-        stride: 2,
-    }];
-    c.dense = vec![8];
-    c.epochs = 3;
-    c.batch_size = 12;
-    c.chunk_size = 4;
+    let mut c = tiny_config(kind);
     c.input_noise = noise;
     c
 }
 
 fn fit(config: &ConvConfig, threads: usize) -> ConvModel {
-    let (pixels, targets) = frames(40);
+    let (pixels, targets) = moving_pair_frames(40);
     let f = Frames::new(&pixels, 40, SIDE, SIDE).unwrap();
     let t = Targets::new(&targets, 40, 2).unwrap();
     let pool = rayon::ThreadPoolBuilder::new()
@@ -58,7 +35,7 @@ fn issue22_input_noise_is_seeded_and_only_in_training() {
         let plain = fit(&config(kind, 0.0), 1);
         assert_ne!(noisy.network().parameters(), plain.network().parameters());
         // Prediction draws no noise: the same frame, the same numbers.
-        let (pixels, _) = frames(1);
+        let (pixels, _) = moving_pair_frames(1);
         assert_eq!(
             noisy.predict(&pixels).unwrap(),
             noisy.predict(&pixels).unwrap()

@@ -4,38 +4,19 @@
 //! the plain model bit for bit; on a tiny run of two steps the average
 //! equals its definition `d^2 theta0 + d (1 - d) theta1 + (1 - d) theta2`;
 //! it survives saving; out-of-range decays are refused.
+mod common;
+
+use common::{moving_pair_frames, tiny_config, SIDE};
 use tactrace_convnet::{
-    ConvConfig, ConvError, ConvModel, ConvSpec, Frames, ModelKind, Network, Parameters, Targets,
+    ConvConfig, ConvError, ConvModel, Frames, ModelKind, Network, Parameters, Targets,
 };
 
-const SIDE: usize = 12;
 const COUNT: usize = 24;
-
-/// `count` frames with a bright pixel pair at a place that moves with the
-/// frame's index; targets its column and row.
-fn frames(count: usize) -> (Vec<u8>, Vec<f64>) {
-    let (mut pixels, mut targets) = (Vec::new(), Vec::new());
-    for k in 0..count {
-        let (cx, cy) = (1 + (k * 7) % (SIDE - 3), 1 + (k * 5) % (SIDE - 2));
-        let mut f = vec![10u8; SIDE * SIDE];
-        f[cy * SIDE + cx] = 240;
-        f[cy * SIDE + cx + 1] = 200;
-        pixels.extend(f);
-        targets.extend([cx as f64, cy as f64]);
-    }
-    (pixels, targets)
-}
 
 /// One batch an epoch (the batch holds every frame), so an epoch is one
 /// optimiser step.
 fn config(kind: ModelKind, epochs: usize, average: Option<f64>) -> ConvConfig {
-    let mut c = ConvConfig::new(kind);
-    c.conv = vec![ConvSpec {
-        channels: 4,
-        kernel: 3,
-        stride: 2,
-    }];
-    c.dense = vec![8];
+    let mut c = tiny_config(kind);
     c.epochs = epochs;
     c.batch_size = COUNT;
     c.chunk_size = 8;
@@ -45,7 +26,7 @@ fn config(kind: ModelKind, epochs: usize, average: Option<f64>) -> ConvConfig {
 }
 
 fn fit(config: &ConvConfig) -> ConvModel {
-    let (pixels, targets) = frames(COUNT);
+    let (pixels, targets) = moving_pair_frames(COUNT);
     let f = Frames::new(&pixels, COUNT, SIDE, SIDE).unwrap();
     let t = Targets::new(&targets, COUNT, 2).unwrap();
     ConvModel::fit(&f, &t, config, 5).unwrap().0

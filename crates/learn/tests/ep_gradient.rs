@@ -2,16 +2,10 @@
 //! points along the backprop gradient (ERRATA: eta beta grad / (1 + a) for one
 //! output), the Euler free phase settles on the feed-forward pass, and Euler
 //! steps lower the energy of eq. 3.10.
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use tactrace_learn::{ClampedPhase, DenNN, EpConfig, FreePhase, Layers, LrScaling, Mlp};
+mod support;
 
-fn sample(dim_x: usize, dim_y: usize, seed: u64) -> (Vec<f32>, Vec<f32>) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let x = (0..dim_x).map(|_| rng.random_range(-1.0..1.0)).collect();
-    let t = (0..dim_y).map(|_| rng.random_range(-1.0..1.0)).collect();
-    (x, t)
-}
+use support::{cosine, sample};
+use tactrace_learn::{ClampedPhase, DenNN, EpConfig, FreePhase, Layers, LrScaling, Mlp};
 
 /// All parameters, canonical orientation, flattened.
 fn flat(layers: &Layers) -> Vec<f64> {
@@ -25,13 +19,6 @@ fn flat(layers: &Layers) -> Vec<f64> {
 
 fn delta(before: &[f64], after: &Layers) -> Vec<f64> {
     flat(after).iter().zip(before).map(|(a, b)| a - b).collect()
-}
-
-fn cosine(a: &[f64], b: &[f64]) -> f64 {
-    let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
-    let na: f64 = a.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let nb: f64 = b.iter().map(|x| x * x).sum::<f64>().sqrt();
-    dot / (na * nb)
 }
 
 /// Parameter change of one EP step and of one backprop step from the same

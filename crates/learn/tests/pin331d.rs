@@ -9,17 +9,11 @@ mod support;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use support::{cosine, sample};
 use tactrace_learn::{
     mean_absolute_error, target_mae, ClampedPhase, Dataset, DenNN, EpConfig, Layers, Mlp,
     ModelConfig, ModelKind, ModelTarget, PoseModel, Preset, Unit,
 };
-
-fn sample(dim_x: usize, dim_y: usize, seed: u64) -> (Vec<f32>, Vec<f32>) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let x = (0..dim_x).map(|_| rng.random_range(-1.0..1.0)).collect();
-    let t = (0..dim_y).map(|_| rng.random_range(-1.0..1.0)).collect();
-    (x, t)
-}
 
 /// All parameters, canonical orientation, flattened.
 fn flat(layers: &Layers) -> Vec<f64> {
@@ -29,13 +23,6 @@ fn flat(layers: &Layers) -> Vec<f64> {
         out.extend(layers.bias(l).iter().map(|&v| v as f64));
     }
     out
-}
-
-fn cosine(a: &[f64], b: &[f64]) -> f64 {
-    let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
-    let na: f64 = a.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let nb: f64 = b.iter().map(|x| x * x).sum::<f64>().sqrt();
-    dot / (na * nb)
 }
 
 /// The parameter change of one EP step with `clamped` from seeded weights.

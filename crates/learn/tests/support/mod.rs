@@ -25,3 +25,20 @@ pub fn correlated_rows(n: usize, dim: usize, seed: u64) -> (Vec<f32>, Vec<f32>) 
     }
     (x, y)
 }
+
+/// An input of `dim_x` and a target of `dim_y` values, each uniform in
+/// -1..1, seeded by `seed`: one sample for the gradient checks.
+pub fn sample(dim_x: usize, dim_y: usize, seed: u64) -> (Vec<f32>, Vec<f32>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let x = (0..dim_x).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let t = (0..dim_y).map(|_| rng.random_range(-1.0..1.0)).collect();
+    (x, t)
+}
+
+/// The cosine of the angle between `a` and `b`.
+pub fn cosine(a: &[f64], b: &[f64]) -> f64 {
+    let dot: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+    let na: f64 = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let nb: f64 = b.iter().map(|x| x * x).sum::<f64>().sqrt();
+    dot / (na * nb)
+}

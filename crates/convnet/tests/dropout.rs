@@ -7,39 +7,15 @@
 //! with no mask.
 mod common;
 
-use common::{tiny_config, SIDE};
+use common::{random, small_net, tiny_config, SIDE};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_convnet::{
-    Activation, ClampedPhase, ConvConfig, ConvError, ConvModel, ConvSpec, EpSettings, Frames,
-    FreePhase, Layout, ModelKind, Network, Nudging, Parameters, Rule, Targets,
+    Activation, ClampedPhase, ConvConfig, ConvError, ConvModel, EpSettings, Frames, FreePhase,
+    ModelKind, Network, Nudging, Parameters, Rule, Targets,
 };
 
 const N: usize = 3;
-
-/// 12 x 12 input, convolutions of 3 and 4 maps (stride 1, 2), a dense
-/// layer of 10, `outputs` linear units.
-fn small_net(activation: Activation, seed: u64) -> Network {
-    let conv = [
-        ConvSpec {
-            channels: 3,
-            kernel: 3,
-            stride: 1,
-        },
-        ConvSpec {
-            channels: 4,
-            kernel: 3,
-            stride: 2,
-        },
-    ];
-    let layout = Layout::new(12, 12, &conv, &[10], 2).expect("valid layout");
-    Network::new(layout, activation, seed)
-}
-
-fn random(n: usize, seed: u64) -> Vec<f32> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..n).map(|_| rng.random_range(-1.0..1.0)).collect()
-}
 
 /// Masks (frame by frame) for layer 1 (channels, p = 0.5) and layer 2
 /// (dense units, p = 0.5, unit 0 dropped in every frame); scale 2 kept.
@@ -89,7 +65,7 @@ fn issue22_ep_update_with_a_dropout_mask_approaches_the_masked_backprop_gradient
         .into_iter()
         .enumerate()
     {
-        let net = small_net(act, 20 + k as u64);
+        let net = small_net(act, 2, 20 + k as u64);
         let m = masks(&net, 3 + k as u64);
         let bp = net.gradient_masked(&x, &t, N, Rule::Backprop, &m).unwrap();
         let plain = net.gradient(&x, &t, N, Rule::Backprop).unwrap();
@@ -109,7 +85,7 @@ fn issue22_ep_update_with_a_dropout_mask_approaches_the_masked_backprop_gradient
 fn issue22_masked_backprop_is_the_masked_networks_gradient() {
     let x = random(N * 144, 4);
     let t = random(N * 2, 5);
-    let mut net = small_net(Activation::Tanh, 7);
+    let mut net = small_net(Activation::Tanh, 2, 7);
     let m = masks(&net, 8);
     let bp = net.gradient_masked(&x, &t, N, Rule::Backprop, &m).unwrap();
     let h = 1e-2f32;
@@ -140,7 +116,7 @@ fn issue22_masked_backprop_is_the_masked_networks_gradient() {
 fn issue22_a_unit_dropped_in_every_frame_learns_nothing() {
     let x = random(N * 144, 6);
     let t = random(N * 2, 7);
-    let net = small_net(Activation::Tanh, 9);
+    let net = small_net(Activation::Tanh, 2, 9);
     let m = masks(&net, 10);
     let fan_in = net.layout().layers()[2].fan_in();
     for rule in [Rule::Backprop, ep(0.1)] {

@@ -3,6 +3,9 @@
 //! phase relaxes to the feed-forward output; the clamped sweeps reach the
 //! same equilibrium as the Euler relaxation; a convolution equals its
 //! dense matrix; backprop agrees with finite differences.
+mod common;
+
+use common::{random, small_net};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_convnet::{
@@ -11,30 +14,6 @@ use tactrace_convnet::{
 };
 
 const ACTIVATIONS: [Activation; 3] = [Activation::Tanh, Activation::Sigmoid, Activation::Relu];
-
-/// A small net: 12 x 12 input, two convolutions (stride 1 and 2), one
-/// dense hidden layer, `outputs` linear units.
-fn small_net(activation: Activation, outputs: usize, seed: u64) -> Network {
-    let conv = [
-        ConvSpec {
-            channels: 3,
-            kernel: 3,
-            stride: 1,
-        },
-        ConvSpec {
-            channels: 4,
-            kernel: 3,
-            stride: 2,
-        },
-    ];
-    let layout = Layout::new(12, 12, &conv, &[10], outputs).expect("valid layout");
-    Network::new(layout, activation, seed)
-}
-
-fn random(n: usize, seed: u64) -> Vec<f32> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..n).map(|_| rng.random_range(-1.0..1.0)).collect()
-}
 
 fn ep(beta: f64, nudging: Nudging, clamped_phase: ClampedPhase) -> Rule {
     Rule::Ep(EpSettings {

@@ -1,10 +1,13 @@
-//! Set-ups shared by the image-model training tests (`issue22_noise.rs`,
-//! `weight_average.rs`, `dropout.rs`): tiny frames whose bright spot
-//! moves with the frame's index, and a tiny one-convolution network.
+//! Set-ups shared by the image-model tests (`issue22_noise.rs`,
+//! `weight_average.rs`, `dropout.rs`, `issue22_theory.rs`): tiny frames
+//! whose bright spot moves with the frame's index, a tiny one-convolution
+//! training configuration, and the small net of the gradient checks.
 //! Not every file that shares it uses every set-up.
 #![allow(dead_code)]
 
-use tactrace_convnet::{ConvConfig, ConvSpec, ModelKind};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use tactrace_convnet::{Activation, ConvConfig, ConvSpec, Layout, ModelKind, Network};
 
 /// The side of the tiny frames, px.
 pub const SIDE: usize = 12;
@@ -38,4 +41,29 @@ pub fn tiny_config(kind: ModelKind) -> ConvConfig {
     c.batch_size = 12;
     c.chunk_size = 4;
     c
+}
+
+/// A small net: 12 x 12 input, two convolutions (3 and 4 maps, stride 1
+/// and 2), one dense hidden layer of 10, `outputs` linear units.
+pub fn small_net(activation: Activation, outputs: usize, seed: u64) -> Network {
+    let conv = [
+        ConvSpec {
+            channels: 3,
+            kernel: 3,
+            stride: 1,
+        },
+        ConvSpec {
+            channels: 4,
+            kernel: 3,
+            stride: 2,
+        },
+    ];
+    let layout = Layout::new(12, 12, &conv, &[10], outputs).expect("valid layout");
+    Network::new(layout, activation, seed)
+}
+
+/// `n` values uniform in -1..1, seeded by `seed`.
+pub fn random(n: usize, seed: u64) -> Vec<f32> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n).map(|_| rng.random_range(-1.0..1.0)).collect()
 }

@@ -507,6 +507,13 @@ fn main() -> Result<(), Box<dyn Error>> {
         parts[0].count,
         s = args.size
     );
+    if args.augment.copies > 0 {
+        let (a, j) = (&args.augment, &args.augment.jitter);
+        println!(
+            "augment: {} copies a fit frame, edge_flip {}, pin_drop {}, max_pin_area {} px, seed {}",
+            a.copies, j.edge_flip, j.pin_drop, j.max_pin_area, a.seed
+        );
+    }
     if !args.ensemble.is_empty() || args.tta > 0 {
         return score_saved(&args, &parts);
     }

@@ -25,6 +25,13 @@
 //! select part; nothing is scored during training), so `--score` then
 //! shows what the larger training set gives.
 //!
+//! `--augment K` adds K training copies of every fit frame, each jittered
+//! at 256 px before area averaging ([`PoseKeepingJitter`]: `--edge-flip Q`,
+//! the probability a blob's boundary pixel flips, default 0.1;
+//! `--pin-drop P`, the probability a pin is erased, default 0.05;
+//! `--max-pin-area A` px, default 80), each copy from a seed of the frame
+//! number, the copy and `--augment-seed` (default 0).
+//!
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
 //! learning_rate, final_lr_fraction, weight_decay, shift_augment, input_noise, members,
@@ -38,7 +45,8 @@ use std::error::Error;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use tactrace_convnet::{
-    Activation, ClampedPhase, ConvConfig, ConvModel, ConvSpec, Frames, ModelKind, Targets,
+    Activation, ClampedPhase, ConvConfig, ConvModel, ConvSpec, Frames, ModelKind,
+    PoseKeepingJitter, Targets,
 };
 
 struct Part {
@@ -99,8 +107,50 @@ fn downsample(src: &[u8], side: usize, size: usize) -> Result<Vec<u8>, Box<dyn E
     Ok(out)
 }
 
-/// The five parts (index N % 5) of the set in `dir`.
-fn load(dir: &Path, size: usize) -> Result<Vec<Part>, Box<dyn Error>> {
+/// Training copies of the fit frames: how many a frame, how, which seed.
+struct Augment {
+    copies: usize,
+    jitter: PoseKeepingJitter,
+    seed: u64,
+}
+
+/// `--picture FILE`: frame `name` beside one jittered copy (seed 0),
+/// each at full size and area-averaged to `size` (shown enlarged), as a
+/// PNG, to look at what the network is given.
+fn picture(
+    dir: &Path,
+    name: &str,
+    aug: &Augment,
+    size: usize,
+    out: &Path,
+) -> Result<(), Box<dyn Error>> {
+    let img = image::open(dir.join("frames").join(name))?.to_luma8();
+    let side = img.width() as usize;
+    let copy = aug.jitter.apply(img.as_raw(), (side, side), 0);
+    let f = side / size;
+    let mut sheet = image::GrayImage::new(2 * side as u32, 2 * side as u32);
+    for (col, frame) in [img.as_raw().clone(), copy].iter().enumerate() {
+        let small = downsample(frame, side, size)?;
+        for (i, (&full, y)) in frame.iter().zip(0..).enumerate() {
+            let (y, x) = (y / side, i % side);
+            let at = (col * side + x) as u32;
+            sheet.put_pixel(at, y as u32, image::Luma([full]));
+            let grey = small[(y / f) * size + x / f];
+            sheet.put_pixel(at, (side + y) as u32, image::Luma([grey]));
+        }
+    }
+    sheet.save(out)?;
+    Ok(())
+}
+
+/// The five parts (index N % 5) of the set in `dir`, then a sixth: the
+/// `aug` copies of the frames of the parts in `fit_parts`.
+fn load(
+    dir: &Path,
+    size: usize,
+    aug: &Augment,
+    fit_parts: &[usize],
+) -> Result<Vec<Part>, Box<dyn Error>> {
     let csv = std::fs::read_to_string(dir.join("targets.csv"))?;
     let mut lines = csv.lines();
     let header: Vec<&str> = lines
@@ -115,7 +165,7 @@ fn load(dir: &Path, size: usize) -> Result<Vec<Part>, Box<dyn Error>> {
             .ok_or(format!("targets.csv has no column {name}"))
     };
     let (c_name, c_r, c_t) = (col("image_name")?, col("pose_2")?, col("pose_6")?);
-    let mut parts: Vec<Part> = (0..5).map(|_| Part::new()).collect();
+    let mut parts: Vec<Part> = (0..6).map(|_| Part::new()).collect();
     for line in lines.filter(|l| !l.trim().is_empty()) {
         let cells: Vec<&str> = line.split(',').collect();
         let name = cells[c_name];
@@ -129,12 +179,25 @@ fn load(dir: &Path, size: usize) -> Result<Vec<Part>, Box<dyn Error>> {
         if w != h {
             return Err(format!("{name}: {w} x {h} px is not square").into());
         }
-        let part = &mut parts[number % 5];
-        part.pixels
-            .extend(downsample(img.as_raw(), w as usize, size)?);
-        part.targets.push(cells[c_r].trim().parse()?);
-        part.targets.push(cells[c_t].trim().parse()?);
-        part.count += 1;
+        let (r, theta): (f64, f64) = (cells[c_r].trim().parse()?, cells[c_t].trim().parse()?);
+        let side = w as usize;
+        let add = |part: &mut Part, pixels: &[u8]| -> Result<(), Box<dyn Error>> {
+            part.pixels.extend(downsample(pixels, side, size)?);
+            part.targets.extend([r, theta]);
+            part.count += 1;
+            Ok(())
+        };
+        add(&mut parts[number % 5], img.as_raw())?;
+        if fit_parts.contains(&(number % 5)) {
+            for copy in 0..aug.copies {
+                let seed = aug.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                    ^ ((number as u64) << 8 | copy as u64);
+                add(
+                    &mut parts[5],
+                    &aug.jitter.apply(img.as_raw(), (side, side), seed),
+                )?;
+            }
+        }
     }
     Ok(parts)
 }
@@ -208,6 +271,8 @@ struct Args {
     ensemble: Vec<PathBuf>,
     tta: usize,
     fit_select: bool,
+    augment: Augment,
+    picture: Option<PathBuf>,
 }
 
 fn parse_args() -> Result<Args, Box<dyn Error>> {
@@ -224,6 +289,16 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
         ensemble: Vec::new(),
         tta: 0,
         fit_select: false,
+        augment: Augment {
+            copies: 0,
+            jitter: PoseKeepingJitter {
+                edge_flip: 0.1,
+                pin_drop: 0.05,
+                max_pin_area: 80,
+            },
+            seed: 0,
+        },
+        picture: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -248,6 +323,12 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
             "--fit-select" => a.fit_select = true,
             "--ensemble" => a.ensemble = value()?.split(',').map(PathBuf::from).collect(),
             "--tta" => a.tta = value()?.parse()?,
+            "--picture" => a.picture = Some(PathBuf::from(value()?)),
+            "--augment" => a.augment.copies = value()?.parse()?,
+            "--augment-seed" => a.augment.seed = value()?.parse()?,
+            "--edge-flip" => a.augment.jitter.edge_flip = value()?.parse()?,
+            "--pin-drop" => a.augment.jitter.pin_drop = value()?.parse()?,
+            "--max-pin-area" => a.augment.jitter.max_pin_area = value()?.parse()?,
             other => return Err(format!("unknown argument {other}").into()),
         }
     }
@@ -402,23 +483,37 @@ fn main() -> Result<(), Box<dyn Error>> {
         None => tactrace_testdata::real_edge_set().ok_or("no data")?,
     };
     let (wall, cpu) = (Instant::now(), cpu_seconds());
-    let parts = load(&dir, args.size)?;
-    let mut fit = Part::new();
+    if let Some(out) = &args.picture {
+        return picture(&dir, "frame_1002_0.png", &args.augment, args.size, out);
+    }
     let first = if args.fit_select { 1 } else { 2 };
+    let fit_parts: Vec<usize> = (first..5).collect();
+    let j = args.augment.jitter;
+    PoseKeepingJitter::new(j.edge_flip, j.pin_drop, j.max_pin_area)?;
+    let parts = load(&dir, args.size, &args.augment, &fit_parts)?;
+    let mut fit = Part::new();
     for p in &parts[first..] {
         fit.pixels.extend(&p.pixels);
         fit.targets.extend(&p.targets);
         fit.count += p.count;
     }
     println!(
-        "loaded {} frames at {s} x {s} px in {:.1} s (fit {}, select {}, score {})",
-        parts.iter().map(|p| p.count).sum::<usize>(),
+        "loaded {} frames at {s} x {s} px in {:.1} s (fit {} with {} copies, select {}, score {})",
+        parts[..5].iter().map(|p| p.count).sum::<usize>(),
         wall.elapsed().as_secs_f64(),
         fit.count,
+        parts[5].count,
         parts[1].count,
         parts[0].count,
         s = args.size
     );
+    if args.augment.copies > 0 {
+        let (a, j) = (&args.augment, &args.augment.jitter);
+        println!(
+            "augment: {} copies a fit frame, edge_flip {}, pin_drop {}, max_pin_area {} px, seed {}",
+            a.copies, j.edge_flip, j.pin_drop, j.max_pin_area, a.seed
+        );
+    }
     if !args.ensemble.is_empty() || args.tta > 0 {
         return score_saved(&args, &parts);
     }

@@ -8,6 +8,7 @@
 //! equations and the choices.
 mod activation;
 mod adam;
+mod augment;
 mod config;
 mod data;
 mod dropout;
@@ -38,6 +39,7 @@ pub mod kernels {
     pub use crate::im2col::{col2im, im2col};
 }
 
+pub use augment::PoseKeepingJitter;
 pub use config::{
     Activation, ClampedPhase, ConvConfig, ConvSpec, EpSettings, FreePhase, InputCentring,
     ModelKind, Nudging,

@@ -6,14 +6,15 @@
 //!
 //! Prints mean microseconds per frame (thread CPU time, and wall time) for blob detection, ordering (tracker)
 //! and the whole `PinExtractor::extract` (detect + order + cluster split when
-//! pins are missing), and `runs` the same detection from pixel runs
-//! (`detect_blobs_by_runs`); `--only` times one of them. `--dump` writes every keypoint and ordered pin with
+//! pins are missing), and `threshold` the same detection threshold by
+//! threshold (`detect_blobs_by_threshold`, the reference); `--only` times
+//! one of them. `--dump` writes every keypoint and ordered pin with
 //! full precision, to check that a change leaves the results bit-identical.
 
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use tactrace_vision::{detect_blobs, detect_blobs_by_runs, BlobParams, Frame, PinExtractor};
+use tactrace_vision::{detect_blobs, detect_blobs_by_threshold, BlobParams, Frame, PinExtractor};
 
 struct Args {
     params: BlobParams,
@@ -26,7 +27,7 @@ struct Args {
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage =
-        "usage: extract_timing <preset|file.toml> <reference.png> [--reps N] [--dump F] [--only detect|runs|order|extract] <png>...";
+        "usage: extract_timing <preset|file.toml> <reference.png> [--reps N] [--dump F] [--only detect|threshold|order|extract] <png>...";
     let mut args = std::env::args().skip(1);
     let which = args.next().ok_or(usage)?;
     let params = if which.ends_with(".toml") {
@@ -99,8 +100,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let detect_us = time_per_frame(&a.frames, reps("detect"), |i| {
         std::hint::black_box(detect_blobs(&a.frames[i].1, &a.params));
     });
-    let runs_us = time_per_frame(&a.frames, reps("runs"), |i| {
-        std::hint::black_box(detect_blobs_by_runs(&a.frames[i].1, &a.params));
+    let threshold_us = time_per_frame(&a.frames, reps("threshold"), |i| {
+        std::hint::black_box(detect_blobs_by_threshold(&a.frames[i].1, &a.params));
     });
     let order_us = time_per_frame(&a.frames, reps("order"), |i| {
         std::hint::black_box(extractor.tracker.order(&keypoints[i]));
@@ -118,8 +119,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("per frame: CPU us (wall us)");
     println!("detect:  {:.1} ({:.1})", detect_us.0, detect_us.1);
     println!(
-        "runs:    {:.1} ({:.1}) the same blobs from pixel runs",
-        runs_us.0, runs_us.1
+        "threshold: {:.1} ({:.1}) the same blobs threshold by threshold",
+        threshold_us.0, threshold_us.1
     );
     println!("order:   {:.1} ({:.1})", order_us.0, order_us.1);
     println!(

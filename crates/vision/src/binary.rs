@@ -2,16 +2,15 @@
 //! threshold (report ch. 4.1). The real TacTip frames and tactrace's
 //! simulated ones are already binary (0 or 255), so every threshold of the
 //! sweep sees the same white set, traces the same contours and finds the
-//! same centres. The contours are then traced and measured once, over the
-//! whole frame, and the grouping across thresholds is built directly when
+//! same centres. The contours are then found and measured once, from the
+//! frame's pixel runs (`runs.rs`), and the grouping across thresholds is built directly when
 //! it is trivial: when no two centres are close enough to join each other's
 //! group, OpenCV's rule gives every centre a group of its own holding one
 //! copy of it per threshold. Otherwise the general grouping runs on the one
 //! list of centres. Same keypoints, bit for bit, as the threshold-by-threshold
 //! path (see the tests here and `detect_blobs`).
 
-use crate::blob::{colour_passes, measure_shape, KeyPoint, Scratch};
-use crate::contour::ContourScanner;
+use crate::blob::KeyPoint;
 use crate::grouping::{joins, keypoint_of, Centre, Grouper};
 use crate::params::BlobParams;
 use crate::runs::RunDetector;
@@ -37,8 +36,9 @@ pub(crate) fn same_at_levels(pixels: &[u8], lo: i16, hi: i16) -> bool {
 
 /// [`crate::detect_blobs`] for a `width` x `height` frame that binarises the
 /// same at all `levels` (the floors of the thresholds, see
-/// [`same_at_levels`]): one full-frame border following and shape pass at
-/// `levels[0]`, then the grouping of `levels.len()` identical lists.
+/// [`same_at_levels`]): the contours found from the pixel runs and measured
+/// once at `levels[0]` (`runs.rs`; the same list as tracing the whole
+/// binarised frame), then the grouping of `levels.len()` identical lists.
 pub(crate) fn detect_unchanging(
     pixels: &[u8],
     width: usize,
@@ -50,23 +50,6 @@ pub(crate) fn detect_unchanging(
         return Vec::new();
     };
     let found = found_centres(pixels, width, height, level, p);
-    group_unchanging(found, width, height, levels.len(), p)
-}
-
-/// [`detect_unchanging`] with the contours found from pixel runs
-/// (`runs.rs`) instead of the full-frame raster scan: the same keypoints,
-/// bit for bit.
-pub(crate) fn detect_unchanging_by_runs(
-    pixels: &[u8],
-    width: usize,
-    height: usize,
-    levels: &[i16],
-    p: &BlobParams,
-) -> Vec<KeyPoint> {
-    let Some(&level) = levels.first() else {
-        return Vec::new();
-    };
-    let found = RUNS.with_borrow_mut(|runs| runs.centres(pixels, width, height, level, p));
     group_unchanging(found, width, height, levels.len(), p)
 }
 
@@ -104,29 +87,13 @@ fn found_centres(
     level: i16,
     p: &BlobParams,
 ) -> Vec<Centre> {
-    SCANNER.with_borrow_mut(|scanner| {
-        if scanner.size() != (width, height) {
-            *scanner = ContourScanner::new(width, height);
-        }
-        // Every pixel is rewritten; the zero frame around them never is.
-        scanner.binarise_above(pixels, level);
-        scanner.trace_all();
-        let mut scratch = Scratch::default();
-        scanner
-            .contours()
-            .filter_map(|contour| measure_shape(contour, p, &mut scratch))
-            .filter(|c| colour_passes(c, pixels, width, height, level, p))
-            .collect()
-    })
+    RUNS.with_borrow_mut(|runs| runs.centres(pixels, width, height, level, p))
 }
 
 thread_local! {
-    /// The run-based contour finder's buffers, kept between frames.
+    /// The run-based contour finder's buffers (its binary frame, runs and
+    /// points), kept between frames.
     static RUNS: std::cell::RefCell<RunDetector> = std::cell::RefCell::new(RunDetector::default());
-    /// The full-frame scanner, kept between frames of the same size (its
-    /// label image and point buffers are the bulk of the allocations).
-    static SCANNER: std::cell::RefCell<ContourScanner> =
-        std::cell::RefCell::new(ContourScanner::new(0, 0));
 }
 
 /// True when the grouping of the same `found` list at every threshold is
@@ -218,14 +185,6 @@ mod tests {
             let want = detect_blobs_by_threshold(&frame, &p);
             let got = detect_unchanging(frame.as_raw(), size as usize, size as usize, &levels, &p);
             assert_eq!(got, want, "case {case}");
-            let by_runs = detect_unchanging_by_runs(
-                frame.as_raw(),
-                size as usize,
-                size as usize,
-                &levels,
-                &p,
-            );
-            assert_eq!(by_runs, want, "case {case}: from runs");
             let found = found_centres(frame.as_raw(), size as usize, size as usize, levels[0], &p);
             let min_dist = f64::from(p.min_dist_between_blobs);
             branches[usize::from(apart(&found, min_dist))] += usize::from(!found.is_empty());

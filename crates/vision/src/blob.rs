@@ -6,14 +6,14 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::binary::{detect_unchanging, detect_unchanging_by_runs, same_at_levels};
+use crate::binary::{detect_unchanging, same_at_levels};
 use crate::components::label_components;
 use crate::contour::ContourScanner;
 use crate::grouping::{Centre, Grouper};
 use crate::params::BlobParams;
 use crate::shape::{
     circularity, hull_area_upper_bound, hull_area_with, median_radius, perimeter, HullScratch,
-    Moments,
+    MedianScratch, Moments, Octagon,
 };
 
 /// An 8-bit grey camera frame.
@@ -48,30 +48,14 @@ pub struct KeyPoint {
 /// A frame with no grey level between the first and the last threshold
 /// (a binary frame, as the real and simulated TacTip frames are) gives the
 /// same image at every threshold and takes a shorter, equivalent path
-/// (`binary.rs`).
+/// (`binary.rs`): its white pixels read as runs and joined into components
+/// in one pass, the components the area filter surely rejects dropped from
+/// their runs, each other hole-free component's outer border walked from
+/// its first pixel, only components with holes traced in a window
+/// (`runs.rs`). The same keypoints, bit for bit, as
+/// [`detect_blobs_by_threshold`] (tested on synthetic frames and every
+/// frame of the shared 127-pin set).
 pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
-    detect_with(img, p, detect_unchanging)
-}
-
-/// [`detect_blobs`] with another way to the same contours on binary
-/// frames: the white pixels read as runs and joined into components in one
-/// pass, each hole-free component's outer border walked from its first
-/// pixel, only components with holes traced in a window (`runs.rs`),
-/// instead of the raster scan of the whole binarised frame. The same
-/// keypoints, bit for bit (tested on synthetic frames and every frame of
-/// the shared 127-pin set); not faster on those frames (the border walks
-/// and shape measures dominate), so an option, not the default. Frames
-/// with grey levels between the thresholds take [`detect_blobs`]'s path.
-pub fn detect_blobs_by_runs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
-    detect_with(img, p, detect_unchanging_by_runs)
-}
-
-/// A detector of binary frames: pixels, width, height, threshold levels.
-type BinaryPath = fn(&[u8], usize, usize, &[i16], &BlobParams) -> Vec<KeyPoint>;
-
-/// The path both detectors share: binary frames (the same image at every
-/// threshold) go to `binary_path`, others threshold by threshold.
-fn detect_with(img: &Frame, p: &BlobParams, binary_path: BinaryPath) -> Vec<KeyPoint> {
     let (width, height) = (img.width() as usize, img.height() as usize);
     let levels: Vec<i16> = p.thresholds().into_iter().map(level_of).collect();
     let (Some(&lo), Some(&hi)) = (levels.iter().min(), levels.iter().max()) else {
@@ -81,7 +65,7 @@ fn detect_with(img: &Frame, p: &BlobParams, binary_path: BinaryPath) -> Vec<KeyP
         return Vec::new();
     }
     if same_at_levels(img.as_raw(), lo, hi) {
-        return binary_path(img.as_raw(), width, height, &levels, p);
+        return detect_unchanging(img.as_raw(), width, height, &levels, p);
     }
     detect_blobs_by_threshold(img, p)
 }
@@ -92,8 +76,12 @@ fn level_of(t: f64) -> i16 {
     t.floor().clamp(-1.0, 255.0) as i16
 }
 
-/// [`detect_blobs`] threshold by threshold, for any frame.
-pub(crate) fn detect_blobs_by_threshold(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
+/// [`detect_blobs`] threshold by threshold, the general path, which it
+/// takes for frames with grey levels between the thresholds: binarised
+/// and traced per component of the lowest threshold, a component re-traced
+/// only when some of its pixels change side. On binary frames, the
+/// reference [`detect_blobs`]'s shorter path is checked against.
+pub fn detect_blobs_by_threshold(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
     let (width, height) = (img.width() as usize, img.height() as usize);
     let thresholds = p.thresholds();
     if width == 0 || height == 0 || thresholds.is_empty() {
@@ -180,7 +168,7 @@ pub(crate) fn colour_passes(
 /// Reusable buffers for the shape measures.
 #[derive(Default)]
 pub(crate) struct Scratch {
-    radii: Vec<f64>,
+    radii: MedianScratch,
     hull: HullScratch,
 }
 
@@ -212,6 +200,17 @@ pub(crate) fn measure_shape(
     p: &BlobParams,
     scratch: &mut Scratch,
 ) -> Option<Centre> {
+    measure_shape_in(contour, None, p, scratch)
+}
+
+/// [`measure_shape`] with the contour's octagon (the extremes of x, y,
+/// x + y and x - y over its points) when it is known already.
+pub(crate) fn measure_shape_in(
+    contour: &[[i32; 2]],
+    octagon: Option<&Octagon>,
+    p: &BlobParams,
+    scratch: &mut Scratch,
+) -> Option<Centre> {
     let moments = Moments::of_polygon(contour);
     let area = moments.m00;
     if p.filter_by_area && !within(area, p.min_area, p.max_area) {
@@ -234,7 +233,7 @@ pub(crate) fn measure_shape(
         }
         confidence = ratio * ratio;
     }
-    if p.filter_by_convexity && !surely_convex_enough(contour, area, p) {
+    if p.filter_by_convexity && !surely_convex_enough(contour, octagon, area, p) {
         let hull = hull_area_with(contour, &mut scratch.hull);
         if hull.abs() < f64::EPSILON || !within(area / hull, p.min_convexity, p.max_convexity) {
             return None;
@@ -259,9 +258,15 @@ pub(crate) fn measure_shape(
 /// non-degenerate lattice hull has area >= 1/2, so `area / hull <= 2 area`.
 /// (area > 0 rules out a degenerate hull: collinear points enclose nothing.)
 /// Saves the exact hull for most pins.
-fn surely_convex_enough(contour: &[[i32; 2]], area: f64, p: &BlobParams) -> bool {
+fn surely_convex_enough(
+    contour: &[[i32; 2]],
+    octagon: Option<&Octagon>,
+    area: f64,
+    p: &BlobParams,
+) -> bool {
     let (min, max) = (f64::from(p.min_convexity), f64::from(p.max_convexity));
-    min > 0.0 && area > 0.0 && 2.0 * area < max && area / hull_area_upper_bound(contour) >= min
+    let bound = || octagon.map_or_else(|| hull_area_upper_bound(contour), Octagon::area);
+    min > 0.0 && area > 0.0 && 2.0 * area < max && area / bound() >= min
 }
 
 /// OpenCV's range test: NaN-tolerant `!(v < min || v >= max)`.

@@ -91,6 +91,14 @@ impl ContourScanner {
         self.labels[start + x0..=start + x1].fill(value);
     }
 
+    /// Row `y` of the current image's labels (window coordinates), to be
+    /// written whole as 1 (white) or 0 (background): a frame filled row
+    /// by row needs no clearing (a border walk marks only white pixels).
+    pub fn row_mut(&mut self, y: usize) -> &mut [i8] {
+        let start = (y + 1) * self.stride + 1;
+        &mut self.labels[start..start + self.width]
+    }
+
     /// Makes this a blank (all zero) `width` x `height` image, reusing its
     /// buffers: the start of filling it run by run with
     /// [`ContourScanner::set_labels`].
@@ -149,6 +157,7 @@ impl ContourScanner {
     /// Binarises `pixels` (row-major, `width * height`): white where the
     /// value exceeds `level` (at least -1), i.e. `THRESH_BINARY` at any
     /// threshold whose floor is `level`.
+    #[cfg(test)]
     pub fn binarise_above(&mut self, pixels: &[u8], level: i16) {
         for (y, row) in pixels
             .chunks_exact(self.width)
@@ -242,6 +251,7 @@ impl ContourScanner {
 
     /// The traced contours, each a closed sequence of pixel coordinates, in
     /// OpenCV's order (the reverse of their discovery in raster order).
+    #[cfg(test)]
     pub fn contours(&self) -> impl Iterator<Item = &[[i32; 2]]> {
         self.spans
             .iter()

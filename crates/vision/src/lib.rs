@@ -33,7 +33,7 @@ mod spots;
 mod tracker;
 
 pub use assign::{assign, Assignment, Edge};
-pub use blob::{detect_blobs, detect_blobs_by_runs, Frame, KeyPoint};
+pub use blob::{detect_blobs, detect_blobs_by_threshold, Frame, KeyPoint};
 pub use detection::{Detection, Detector, DetectorParams};
 pub use error::VisionError;
 pub use extractor::PinExtractor;

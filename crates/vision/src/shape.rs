@@ -172,13 +172,59 @@ pub fn hull_area_upper_bound(points: &[[i32; 2]]) -> f64 {
     let Some(&[x, y]) = points.first() else {
         return f64::INFINITY;
     };
-    let [mut x0, mut x1, mut y0, mut y1] = [x, x, y, y].map(i64::from);
-    let [mut s0, mut s1, mut d0, mut d1] = [x + y, x + y, x - y, x - y].map(i64::from);
+    let mut octagon = Octagon::row(y, x, x);
     for &[x, y] in points {
-        let (x, y) = (i64::from(x), i64::from(y));
-        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
-        (s0, s1, d0, d1) = (s0.min(x + y), s1.max(x + y), d0.min(x - y), d1.max(x - y));
+        octagon.add_row(y, x, x);
     }
+    octagon.area()
+}
+
+/// The extreme values of x, y, x + y and x - y over a set of pixels,
+/// `[min, max]` each: the octagon of [`hull_area_upper_bound`]. Taken
+/// over a hole-free component's pixels it is the one of its outer border
+/// (every extreme pixel has a background 4-neighbour, so lies on it).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Octagon {
+    pub x: [i64; 2],
+    pub y: [i64; 2],
+    pub sum: [i64; 2],
+    pub diff: [i64; 2],
+}
+
+impl Octagon {
+    /// The octagon of pixels `x0..=x1` of row `y`.
+    pub fn row(y: i32, x0: i32, x1: i32) -> Self {
+        let (y, x0, x1) = (i64::from(y), i64::from(x0), i64::from(x1));
+        Self {
+            x: [x0, x1],
+            y: [y, y],
+            sum: [x0 + y, x1 + y],
+            diff: [x0 - y, x1 - y],
+        }
+    }
+
+    /// Adds pixels `x0..=x1` of row `y` (x0 <= x1): their extremes are at
+    /// the ends.
+    pub fn add_row(&mut self, y: i32, x0: i32, x1: i32) {
+        let (y, x0, x1) = (i64::from(y), i64::from(x0), i64::from(x1));
+        self.x = [self.x[0].min(x0), self.x[1].max(x1)];
+        self.y = [self.y[0].min(y), self.y[1].max(y)];
+        self.sum = [self.sum[0].min(x0 + y), self.sum[1].max(x1 + y)];
+        self.diff = [self.diff[0].min(x0 - y), self.diff[1].max(x1 - y)];
+    }
+
+    /// The octagon's area (infinite when its corner cuts overlap).
+    pub fn area(&self) -> f64 {
+        let ([x0, x1], [y0, y1]) = (self.x, self.y);
+        let ([s0, s1], [d0, d1]) = (self.sum, self.diff);
+        octagon_area([x0, x1, y0, y1], [s0, s1, d0, d1])
+    }
+}
+
+/// The area of the box `[x0, x1, y0, y1]` with its corners cut by the
+/// lines x + y = s0, s1 and x - y = d0, d1 (`[s0, s1, d0, d1]`);
+/// infinite when the cuts overlap.
+fn octagon_area([x0, x1, y0, y1]: [i64; 4], [s0, s1, d0, d1]: [i64; 4]) -> f64 {
     let (w, h) = (x1 - x0, y1 - y0);
     // Legs of the corner triangles cut off: top-left, top-right,
     // bottom-left, bottom-right (y down).
@@ -195,31 +241,49 @@ fn turn(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
+/// Reusable buffers for [`median_radius`].
+#[derive(Default)]
+pub struct MedianScratch {
+    keys: Vec<u64>,
+    band: Vec<f64>,
+}
+
 /// Median distance from `centre` to the contour points (mean of the two
 /// middle values for an even count): OpenCV's blob radius, as the values
-/// `hypot` gives. The middle ranks are selected on squared distances; only
-/// the points whose squared distance is within a relative 1e-9 of the
-/// middle ones (far above rounding error, so every other point is surely
-/// nearer or farther) get `hypot`, and the exact middle values are picked
-/// among those.
-pub fn median_radius(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f64>) -> f64 {
+/// `hypot` gives. The middle ranks are selected on squared distances (by
+/// their bit patterns, which order finite non-negative floats as their
+/// values); only the points whose squared distance is within a relative
+/// 1e-9 of the middle ones (far above rounding error, so every other point
+/// is surely nearer or farther) get `hypot`, and the exact middle values
+/// are picked among those.
+pub fn median_radius(points: &[[i32; 2]], centre: [f64; 2], s: &mut MedianScratch) -> f64 {
     let n = points.len();
     if n == 0 {
         return 0.0;
     }
-    let offsets = |&[x, y]: &[i32; 2]| (f64::from(x) - centre[0], f64::from(y) - centre[1]);
-    scratch.clear();
-    scratch.extend(points.iter().map(offsets).map(|(dx, dy)| dx * dx + dy * dy));
-    let (lower_rank, upper_rank) = ((n - 1) / 2, n / 2);
-    let (below, &mut upper_d2, _) = scratch.select_nth_unstable_by(upper_rank, f64::total_cmp);
-    let lower_d2 = if lower_rank == upper_rank {
-        upper_d2
-    } else {
-        below.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-    };
-    if !(lower_d2.is_finite() && upper_d2.is_finite()) {
-        return exact_median(points, centre, scratch);
+    if !(centre[0].is_finite() && centre[1].is_finite()) {
+        return exact_median(points, centre, &mut s.band);
     }
+    let offsets = |&[x, y]: &[i32; 2]| (f64::from(x) - centre[0], f64::from(y) - centre[1]);
+    s.keys.clear();
+    s.keys.extend(
+        points
+            .iter()
+            .map(offsets)
+            .map(|(dx, dy)| (dx * dx + dy * dy).to_bits()),
+    );
+    let (lower_rank, upper_rank) = ((n - 1) / 2, n / 2);
+    let (below, &mut upper_bits, _) = s.keys.select_nth_unstable(upper_rank);
+    let lower_bits = if lower_rank == upper_rank {
+        upper_bits
+    } else {
+        below.iter().copied().max().unwrap_or(upper_bits)
+    };
+    let (lower_d2, upper_d2) = (f64::from_bits(lower_bits), f64::from_bits(upper_bits));
+    if !(lower_d2.is_finite() && upper_d2.is_finite()) {
+        return exact_median(points, centre, &mut s.band);
+    }
+    let scratch = &mut s.band;
     let (lo, hi) = (lower_d2 * (1.0 - 1e-9), upper_d2 * (1.0 + 1e-9));
     let mut nearer = 0;
     scratch.clear();
@@ -371,7 +435,7 @@ mod tests {
     #[test]
     fn median_radius_matches_sorting() {
         let pts = [[0, 0], [3, 0], [0, 4], [5, 5], [1, 1], [2, 7]];
-        let mut scratch = Vec::new();
+        let mut scratch = MedianScratch::default();
         for n in 1..=pts.len() {
             let c = [0.7, 1.3];
             let mut d: Vec<f64> = pts[..n]
@@ -388,7 +452,7 @@ mod tests {
     fn banded_median_radius_equals_full_sort_on_random_sets() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let mut a = Vec::new();
+        let mut a = MedianScratch::default();
         let mut b = Vec::new();
         for _ in 0..2000 {
             let n = rng.random_range(1..40);

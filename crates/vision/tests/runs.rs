@@ -1,8 +1,9 @@
-//! The run-based contour finder of binary frames (`runs.rs`,
-//! `detect_blobs_by_runs`) against the reference, the whole binarised
-//! frame traced by border following (`detect_blobs`): the same keypoints,
-//! bit for bit, on synthetic frames and on every frame of the shared
-//! 127-pin set. The shared-set test fails when the data is absent unless
+//! The blob detector's path for binary frames (`detect_blobs`: contours
+//! from pixel runs, `runs.rs`, and the grouping built once, `binary.rs`)
+//! against the reference, the frame binarised and traced threshold by
+//! threshold (`detect_blobs_by_threshold`): the same keypoints, bit for
+//! bit, on synthetic frames and on every frame of the shared 127-pin set.
+//! The shared-set test fails when the data is absent unless
 //! TACTRACE_SKIP_REAL_DATA=1 (see `tactrace_testdata`).
 
 mod common;
@@ -10,7 +11,7 @@ mod common;
 use common::{load, pngs};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tactrace_vision::{detect_blobs, detect_blobs_by_runs, BlobParams, Frame, KeyPoint};
+use tactrace_vision::{detect_blobs, detect_blobs_by_threshold, BlobParams, Frame, KeyPoint};
 
 /// Bit patterns of every keypoint, so that -0.0 / 0.0 or NaNs cannot hide
 /// a difference.
@@ -62,8 +63,8 @@ fn pin_frame(rng: &mut ChaCha8Rng, size: u32) -> Frame {
 }
 
 /// Synthetic binary frames under several presets and merge distances
-/// (white and dark blobs): the run-based finder gives the tracer's
-/// keypoints exactly.
+/// (white and dark blobs): the run-based path gives the threshold-by-
+/// threshold tracer's keypoints exactly.
 #[test]
 fn issue21_run_detector_equals_the_traced_detector_on_synthetic_frames() {
     let mut rng = ChaCha8Rng::seed_from_u64(2121);
@@ -77,8 +78,8 @@ fn issue21_run_detector_equals_the_traced_detector_on_synthetic_frames() {
             if rng.random_bool(0.3) {
                 p.blob_color = 255 - p.blob_color;
             }
-            let want = detect_blobs(&frame, &p);
-            let got = detect_blobs_by_runs(&frame, &p);
+            let want = detect_blobs_by_threshold(&frame, &p);
+            let got = detect_blobs(&frame, &p);
             assert_eq!(bits(&got), bits(&want), "case {case} preset {preset}");
             found += got.len();
         }
@@ -100,7 +101,10 @@ fn issue21_run_detector_equals_the_traced_detector_on_every_shared_127_pin_frame
     let mut pins = 0;
     for path in &frames {
         let frame: Frame = load(path).to_luma8();
-        let (got, want) = (detect_blobs_by_runs(&frame, &p), detect_blobs(&frame, &p));
+        let (got, want) = (
+            detect_blobs(&frame, &p),
+            detect_blobs_by_threshold(&frame, &p),
+        );
         assert_eq!(bits(&got), bits(&want), "{}", path.display());
         pins += got.len();
     }

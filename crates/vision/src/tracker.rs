@@ -205,7 +205,9 @@ impl PinTracker {
     /// default) or off: the last stage's field computed only at the
     /// missing pins; the widest stage's candidates taken from the grid
     /// and its edge buffer sized for its gate; the split pass's cluster
-    /// lookups pruned (`tracker/split.rs`). Off, the ordering is computed as before them, to the
+    /// lookups pruned (`tracker/split.rs`); an unsettled nearest-neighbour
+    /// start with fewer points than pins dropped right after its first
+    /// matching (`PinTracker::coarse_to_fine`). Off, the ordering is computed as before them, to the
     /// same pins bit for bit; kept to check that (`tests/order331.rs`,
     /// `examples/order_timing.rs --plain`).
     pub fn with_speed_cuts(mut self, on: bool) -> Self {

@@ -335,7 +335,7 @@ pub fn fit_affine(reference: &[[f64; 2]], observed: &Observations) -> Affine {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn grid() -> Vec<[f64; 2]> {
@@ -486,7 +486,7 @@ mod tests {
 
     /// 331 pins on 10 concentric rings of 6k pins (and the centre), about
     /// 5 px apart, as the 331-pin TacTip.
-    fn rings() -> Vec<[f64; 2]> {
+    pub(crate) fn rings() -> Vec<[f64; 2]> {
         let mut pins = vec![[64.0, 64.0]];
         for k in 1..=10 {
             let count = 6 * k;

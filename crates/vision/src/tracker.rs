@@ -205,7 +205,9 @@ impl PinTracker {
     /// default) or off: the last stage's field computed only at the
     /// missing pins; the widest stage's candidates taken from the grid
     /// and its edge buffer sized for its gate; the split pass's cluster
-    /// lookups pruned (`tracker/split.rs`). Off, the ordering is computed as before them, to the
+    /// lookups pruned (`tracker/split.rs`); an unsettled nearest-neighbour
+    /// start with fewer points than pins dropped right after its first
+    /// matching (`PinTracker::coarse_to_fine`). Off, the ordering is computed as before them, to the
     /// same pins bit for bit; kept to check that (`tests/order331.rs`,
     /// `examples/order_timing.rs --plain`).
     pub fn with_speed_cuts(mut self, on: bool) -> Self {
@@ -291,37 +293,55 @@ impl PinTracker {
     /// The coarse-to-fine stages and the fill of missing pins: from the
     /// nearest-neighbour start where it holds (no pin missing, or its first
     /// matching settled; see `tracker/grid.rs`), else every stage from the
-    /// centroid shift.
+    /// centroid shift. With fewer points than pins some pin is missing
+    /// whatever the stages match (the matching is one to one), so the start
+    /// holds only if its first matching is settled: that is checked before
+    /// the later stages run, and an unsettled start goes to the centroid
+    /// shift at once (the same result, without the stages it would drop).
     fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
         let grid = Grid::new(points, grid::CELL * self.spacing);
         if let (true, Some(grid)) = (self.nearest, &grid) {
             if let Some(start) = self.nearest_start(points, grid) {
                 let after = &self.stages[grid::NEAREST_STAGE + 1..];
-                let mut first = Vec::new();
-                let (tracked, matches) =
-                    self.run_stages(start.clone(), after, points, Some(grid), &mut first);
-                if !self.folds.any_turned(&tracked.pins)
-                    && (tracked.missing == 0
-                        || self.settled(&start, points, &first, after[0].gate, grid))
-                {
-                    return (tracked, matches);
+                let must_miss = points.len() < self.reference.len();
+                let settled = |first: &[Option<usize>]| {
+                    self.settled(&start, points, first, after[0].gate, grid)
+                };
+                // The first matching, when whether it settles is left until
+                // after the stages (`None`: checked already, and settled).
+                let mut first = None;
+                let early = |matches: &[Option<usize>]| {
+                    if must_miss && self.cuts {
+                        return settled(matches);
+                    }
+                    first = Some(matches.to_vec());
+                    true
+                };
+                let run = self.run_stages(start.clone(), after, points, Some(grid), early);
+                if let Some((tracked, matches)) = run {
+                    let holds = tracked.missing == 0 || first.as_deref().is_none_or(settled);
+                    if !self.folds.any_turned(&tracked.pins) && holds {
+                        return (tracked, matches);
+                    }
                 }
             }
         }
         let start = self.centroid_shift(points);
-        self.run_stages(start, &self.stages, points, grid.as_ref(), &mut Vec::new())
+        self.run_stages(start, &self.stages, points, grid.as_ref(), |_| true)
+            .expect("every stage runs when the first matching goes on")
     }
 
-    /// `stages` from the predictions `predicted`, then the fill; `first`
-    /// receives the first stage's matches.
+    /// `stages` from the predictions `predicted`, then the fill; `go_on`
+    /// sees the first stage's matches and stops the stages (`None`) when
+    /// it says no.
     fn run_stages(
         &self,
         mut predicted: Vec<[f64; 2]>,
         stages: &[Stage],
         points: &[[f64; 2]],
         grid: Option<&Grid>,
-        first: &mut Vec<Option<usize>>,
-    ) -> (Tracked, Vec<Option<usize>>) {
+        mut go_on: impl FnMut(&[Option<usize>]) -> bool,
+    ) -> Option<(Tracked, Vec<Option<usize>>)> {
         let mut observed: Vec<Option<[f64; 2]>> = vec![None; self.reference.len()];
         let mut matches: Vec<Option<usize>> = vec![None; self.reference.len()];
         let mut by_x = None;
@@ -331,8 +351,8 @@ impl PinTracker {
                 None => Candidates::ByX(by_x.get_or_insert_with(|| ByX::new(points))),
             };
             matches = self.match_points(&predicted, points, source, stage.gate);
-            if first.is_empty() {
-                first.clone_from(&matches);
+            if s == 0 && !go_on(&matches) {
+                return None;
             }
             observed = self.displacements(&matches, points);
             predicted = if s + 1 < stages.len() || !self.cuts {
@@ -343,7 +363,7 @@ impl PinTracker {
             };
         }
         let tracked = self.finish(&matches, &observed, &predicted, points.len());
-        (tracked, matches)
+        Some((tracked, matches))
     }
 
     /// Reference moved by the difference of the two point sets' centroids.

@@ -326,3 +326,79 @@ mod tests {
         assert!(!settled(&never, &points, &matches));
     }
 }
+
+#[cfg(test)]
+mod early_tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// A tap on the 331-pin rings (5 px apart): a shear, jitter, and
+    /// `merged` neighbouring pairs seen as one point at their midpoint, so
+    /// there are fewer points than pins.
+    fn merged_tap(reference: &[[f64; 2]], merged: usize, rng: &mut impl Rng) -> Vec<[f64; 2]> {
+        let shear = rng.random_range(-0.12..0.12);
+        let mut points: Vec<[f64; 2]> = reference
+            .iter()
+            .map(|r| {
+                let j = 0.3;
+                let y = r[1] - 64.0;
+                [
+                    r[0] + shear * y + rng.random_range(-j..j),
+                    r[1] + rng.random_range(-j..j),
+                ]
+            })
+            .collect();
+        for _ in 0..merged {
+            let a = rng.random_range(0..points.len());
+            let near = (0..points.len()).filter(|&b| b != a).min_by(|&b, &c| {
+                let d = |k: usize| (points[k][0] - points[a][0]).hypot(points[k][1] - points[a][1]);
+                d(b).total_cmp(&d(c))
+            });
+            if let Some(b) = near {
+                let mid = [
+                    0.5 * (points[a][0] + points[b][0]),
+                    0.5 * (points[a][1] + points[b][1]),
+                ];
+                points[a] = mid;
+                points.remove(b);
+            }
+        }
+        points
+    }
+
+    /// With fewer points than pins, an unsettled nearest-neighbour start
+    /// goes to the full path before its later stages: the pins are those of
+    /// the order of checks without that cut (the speed cuts off), bit for
+    /// bit, and such taps occur (the early branch is taken).
+    #[test]
+    fn issue21_unsettled_start_with_fewer_points_falls_back_early_bit_for_bit() {
+        let reference = crate::field::tests::rings();
+        let fast = PinTracker::new(reference.clone()).expect("tracker");
+        let plain = PinTracker::new(reference.clone())
+            .expect("tracker")
+            .with_speed_cuts(false);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3310);
+        let mut early = 0;
+        for trial in 0..60 {
+            let points = merged_tap(&reference, 1 + trial % 6, &mut rng);
+            assert!(points.len() < reference.len());
+            let grid = Grid::new(&points, CELL * fast.spacing).expect("grid");
+            if let Some(start) = fast.nearest_start(&points, &grid) {
+                let after = &fast.stages[NEAREST_STAGE + 1..];
+                let mut settled = true;
+                let _ = fast.run_stages(start.clone(), after, &points, Some(&grid), |m| {
+                    settled = fast.settled(&start, &points, m, after[0].gate, &grid);
+                    false
+                });
+                early += usize::from(!settled);
+            }
+            let (a, b) = (fast.order_points(&points), plain.order_points(&points));
+            let bits = |t: &super::super::Tracked| -> Vec<[u64; 2]> {
+                t.pins.iter().map(|p| p.map(f64::to_bits)).collect()
+            };
+            assert_eq!(bits(&a.0), bits(&b.0), "trial {trial}");
+            assert_eq!((a.0.matched, a.1), (b.0.matched, b.1), "trial {trial}");
+        }
+        assert!(early >= 5, "only {early} of 60 taps had an unsettled start");
+    }
+}

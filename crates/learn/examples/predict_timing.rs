@@ -1,14 +1,16 @@
 //! Timing of a saved pose model's batch prediction (issue 21, item 6), the
 //! figure `tactrace bench` reports as `batch_us`, without the rest of the
 //! bench: thread CPU time and best wall time a sample over `--reps` runs
-//! of `PoseModel::predict_rows` on `--rows` seeded rows.
+//! of `PoseModel::predict_rows` on `--rows` seeded rows, and the FMA
+//! bound of a prediction at this machine's measured peak
+//! (`measure_fma_peak`, best of 20 rounds).
 //!
 //! `cargo run --release -p tactrace-learn --example predict_timing -- \
 //!     MODEL_DIR [--rows N] [--reps R]`
 
 use std::time::Instant;
 
-use tactrace_learn::PoseModel;
+use tactrace_learn::{measure_fma_peak, PoseModel};
 
 /// Seconds this thread has run on a CPU (Linux; 0 elsewhere).
 fn cpu_seconds() -> f64 {
@@ -54,5 +56,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cpu = (cpu_seconds() - cpu) / (reps * rows) as f64 * 1e6;
     let wall = best / rows as f64 * 1e6;
     println!("{rows} rows x {reps} reps: thread CPU {cpu:.3} us a sample, best wall {wall:.3} us a sample");
+    let peak = measure_fma_peak(20);
+    let (f64_ops, f32_ops) = model.multiply_adds();
+    let bound = peak.seconds((f64_ops, f32_ops)) * 1e6;
+    println!(
+        "FMA peak {:.1} G/s f32, {:.1} G/s f64; bound of a prediction ({f64_ops} f64 + {f32_ops} f32 \
+         multiply-adds) {bound:.3} us; best wall / bound {:.2}",
+        peak.f32_per_second / 1e9,
+        peak.f64_per_second / 1e9,
+        wall / bound
+    );
     Ok(())
 }

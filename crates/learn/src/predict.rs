@@ -26,14 +26,38 @@ mod avx512;
 /// Rows fed forward together.
 pub(crate) const BLOCK: usize = 8;
 
+/// Columns of the projection the AVX-512 path keeps in registers at a
+/// time (five vectors of eight f64).
+pub(crate) const PROJECTION_COLUMNS: usize = 40;
+
+/// `a` (`k x dim`, row-major) transposed to `dim x kp`, each row's `k`
+/// values followed by zeros up to `kp`, the next multiple of
+/// [`PROJECTION_COLUMNS`].
+fn transposed_padded(a: &[f64], k: usize, dim: usize) -> Vec<f64> {
+    let kp = k.next_multiple_of(PROJECTION_COLUMNS);
+    let mut at = vec![0.0; dim * kp];
+    for (j, row) in a.chunks_exact(dim).enumerate() {
+        for (i, &v) in row.iter().enumerate() {
+            at[i * kp + j] = v;
+        }
+    }
+    at
+}
+
 /// How a net's inputs come from a displacement vector.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum InputMap {
     /// The standardised displacements: `(v - mean) / std`.
     Standardised { mean: Vec<f64>, std: Vec<f64> },
     /// Standardisation and PCA folded: `u = A v + c`, `A` row-major
-    /// `k x dim`.
-    Projected { a: Vec<f64>, c: Vec<f64> },
+    /// `k x dim`; `at` is `A` transposed, `dim` rows of its `k` columns
+    /// zero-padded to a multiple of [`PROJECTION_COLUMNS`] (the layout
+    /// the AVX-512 path reads).
+    Projected {
+        a: Vec<f64>,
+        c: Vec<f64>,
+        at: Vec<f64>,
+    },
 }
 
 impl InputMap {
@@ -80,7 +104,8 @@ impl Predictor {
                         }
                         c.push(offset);
                     }
-                    InputMap::Projected { a, c }
+                    let at = transposed_padded(&a, c.len(), dim);
+                    InputMap::Projected { a, c, at }
                 }
             };
             let k = maps.iter().position(|m| *m == map).unwrap_or_else(|| {
@@ -236,7 +261,7 @@ fn input_map<const F: bool>(map: &InputMap, x: &[f64], values: &mut [f32]) {
                 *v = ((x - m) / s) as f32;
             }
         }
-        InputMap::Projected { a, c } => {
+        InputMap::Projected { a, c, .. } => {
             for ((v, aj), &cj) in values.iter_mut().zip(a.chunks_exact(x.len())).zip(c) {
                 *v = (dot64::<F>(aj, x) + cj) as f32;
             }

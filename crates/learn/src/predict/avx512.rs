@@ -5,7 +5,7 @@
 
 use std::arch::x86_64::*;
 
-use super::{InputMap, Predictor, Scratch, BLOCK};
+use super::{InputMap, Predictor, Scratch, BLOCK, PROJECTION_COLUMNS};
 use crate::kernels::{panels, sigmoid, PANEL};
 use crate::net::Layers;
 use crate::pose_model::PoseModel;
@@ -60,7 +60,7 @@ fn forward<const R: usize>(
                     }
                 }
             }
-            InputMap::Projected { a, c } => project::<R>(a, c, &s.x[..R * dim], values),
+            InputMap::Projected { at, c, .. } => project::<R>(at, c, &s.x[..R * dim], values),
         }
     }
     let mut scaled = [[0.0f64; 2]; R];
@@ -92,35 +92,61 @@ fn forward<const R: usize>(
 }
 
 /// `values[r][j] = a_j . x_r + c_j` (f64 sums, f32 results) for the `R`
-/// rows of `x` and the rows `a_j` of `a`.
+/// rows of `x`, from `A` transposed and padded (`at`, see
+/// `InputMap::Projected`): the columns along the vector lanes, so each
+/// row of `at` loaded feeds every row of a group of four (one) and no
+/// sum is reduced across lanes.
 #[target_feature(enable = "avx512f,avx2,fma")]
-fn project<const R: usize>(a: &[f64], c: &[f64], x: &[f64], values: &mut [f32]) {
+fn project<const R: usize>(at: &[f64], c: &[f64], x: &[f64], values: &mut [f32]) {
     let dim = x.len() / R;
     let k = c.len();
-    let (body, tail) = (dim - dim % 8, (dim % 8) as u8);
-    let mask: __mmask8 = (1u16 << tail).wrapping_sub(1) as u8;
-    for (j, (aj, &cj)) in a.chunks_exact(dim).zip(c).enumerate() {
-        let mut acc = [_mm512_setzero_pd(); R];
-        for i in (0..body).step_by(8) {
-            // SAFETY: i + 8 <= body <= dim, the length of `aj` and of each
-            // row of `x`.
-            let w = unsafe { _mm512_loadu_pd(aj[i..].as_ptr()) };
-            for (r, acc) in acc.iter_mut().enumerate() {
-                let xr = unsafe { _mm512_loadu_pd(x[r * dim + i..].as_ptr()) };
-                *acc = _mm512_fmadd_pd(w, xr, *acc);
+    let kp = at.len() / dim;
+    for g in (0..kp).step_by(PROJECTION_COLUMNS) {
+        let columns = (at, kp, g);
+        if R == 1 {
+            project_group::<1>(columns, x, c, values);
+            continue;
+        }
+        for (x, values) in x.chunks_exact(4 * dim).zip(values.chunks_exact_mut(4 * k)) {
+            project_group::<4>(columns, x, c, values);
+        }
+    }
+}
+
+/// Columns `g..g + 40` (those below `k`) of [`project`] for the `Q` rows
+/// of `x`: the sums held in `Q x 5` registers down the rows of `at`
+/// (`dim x kp`).
+#[target_feature(enable = "avx512f,avx2,fma")]
+fn project_group<const Q: usize>(
+    (at, kp, g): (&[f64], usize, usize),
+    x: &[f64],
+    c: &[f64],
+    values: &mut [f32],
+) {
+    const V: usize = PROJECTION_COLUMNS / 8;
+    let dim = x.len() / Q;
+    let k = c.len();
+    let mut acc = [[_mm512_setzero_pd(); V]; Q];
+    for (i, row) in at.chunks_exact(kp).enumerate() {
+        let row = &row[g..g + PROJECTION_COLUMNS];
+        // SAFETY: `row` holds 8 V values.
+        let w: [__m512d; V] =
+            std::array::from_fn(|t| unsafe { _mm512_loadu_pd(row[8 * t..].as_ptr()) });
+        for (q, acc) in acc.iter_mut().enumerate() {
+            let v = _mm512_set1_pd(x[q * dim + i]);
+            for (acc, w) in acc.iter_mut().zip(&w) {
+                *acc = _mm512_fmadd_pd(v, *w, *acc);
             }
         }
-        if tail > 0 {
-            // SAFETY: the mask reads only the last `tail` values of `aj`
-            // and of each row of `x`.
-            let w = unsafe { _mm512_maskz_loadu_pd(mask, aj[body..].as_ptr()) };
-            for (r, acc) in acc.iter_mut().enumerate() {
-                let xr = unsafe { _mm512_maskz_loadu_pd(mask, x[r * dim + body..].as_ptr()) };
-                *acc = _mm512_fmadd_pd(w, xr, *acc);
-            }
+    }
+    let mut sums = [0.0f64; PROJECTION_COLUMNS];
+    for (q, acc) in acc.iter().enumerate() {
+        for (t, acc) in acc.iter().enumerate() {
+            // SAFETY: `sums` holds 8 V values.
+            unsafe { _mm512_storeu_pd(sums[8 * t..].as_mut_ptr(), *acc) };
         }
-        for (r, acc) in acc.iter().enumerate() {
-            values[r * k + j] = (_mm512_reduce_add_pd(*acc) + cj) as f32;
+        for j in g..k.min(g + PROJECTION_COLUMNS) {
+            values[q * k + j] = (sums[j - g] + c[j]) as f32;
         }
     }
 }
@@ -264,5 +290,46 @@ fn narrow<const R: usize>(wt: &[f32], b: &[f32], input: &[f32], out: &mut [f32])
         for (r, acc) in acc.iter().enumerate() {
             out[r * d_out + o] = b[o] + _mm512_reduce_add_ps(*acc);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The projection from `A` transposed and padded, by groups of 40
+    /// columns (45 columns: a full group and a short one), one row and
+    /// blocks of eight, equals the plain sums `a_j . x_r + c_j` (f64) to
+    /// the f32 it returns.
+    #[test]
+    fn projection_by_column_groups_equals_the_plain_sums() {
+        if !available() {
+            eprintln!("SKIPPED: no AVX-512 on this CPU");
+            return;
+        }
+        let (k, dim) = (45, 37);
+        let value = |i: usize| ((i * 7919 % 1013) as f64 / 1013.0 - 0.5) * 3.0;
+        let a: Vec<f64> = (0..k * dim).map(value).collect();
+        let c: Vec<f64> = (0..k).map(|j| value(j + 5)).collect();
+        let x: Vec<f64> = (0..BLOCK * dim).map(|i| value(i + 11)).collect();
+        let at = super::super::transposed_padded(&a, k, dim);
+        assert_eq!(at.len(), dim * 2 * PROJECTION_COLUMNS);
+        let plain: Vec<f32> = (0..BLOCK * k)
+            .map(|rj| {
+                let (r, j) = (rj / k, rj % k);
+                let dot: f64 = (0..dim).map(|i| a[j * dim + i] * x[r * dim + i]).sum();
+                (dot + c[j]) as f32
+            })
+            .collect();
+        let mut block = vec![0.0f32; BLOCK * k];
+        let mut one = vec![0.0f32; k];
+        // SAFETY: the CPU has AVX-512F, AVX2 and FMA (checked above).
+        unsafe {
+            project::<BLOCK>(&at, &c, &x, &mut block);
+            project::<1>(&at, &c, &x[..dim], &mut one);
+        }
+        let close = |u: f32, v: f32| (u - v).abs() <= 1e-6 * v.abs().max(1.0);
+        assert!(block.iter().zip(&plain).all(|(&u, &v)| close(u, v)));
+        assert!(one.iter().zip(&plain[..k]).all(|(&u, &v)| close(u, v)));
     }
 }

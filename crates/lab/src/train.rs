@@ -83,11 +83,12 @@ pub fn train_with_validation(
         check_same_targets(&outputs, &data_targets(v)?)?;
     }
     let mut cb = |r: &tactrace_learn::EpochReport| progress(r.epoch + 1);
-    Ok(PoseModel::fit_targets(
+    Ok(PoseModel::fit_targets_on_pins(
         cfg,
         &outputs,
         &ds,
         vs.as_ref(),
+        Some(&data.meta.reference_pins),
         &mut cb,
     )?)
 }

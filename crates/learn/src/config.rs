@@ -4,6 +4,7 @@
 use crate::dennn::{ClampedPhase, FreePhase, LrScaling};
 use crate::error::LearnError;
 use crate::pca::PcScaling;
+use crate::pin_features::PinFeatures;
 use crate::targets::{ModelTarget, Unit};
 use serde::{Deserialize, Serialize};
 
@@ -142,6 +143,11 @@ pub struct ModelConfig {
     /// 1 (the default, not written): no weighting.
     #[serde(default = "one_f64", skip_serializing_if = "is_one_f64")]
     pub circular_weight: f64,
+    /// What the nets see of a tap ([`PinFeatures`]: the displacements, or
+    /// with every pin's displacement gradient beside them); the default
+    /// (not written): the displacements.
+    #[serde(default, skip_serializing_if = "PinFeatures::is_displacements")]
+    pub pin_features: PinFeatures,
     /// The single net of DisDenNN / PcaDenNN (outputs r and theta).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<NetConfig>,
@@ -529,6 +535,7 @@ fn report(kind: ModelKind) -> ModelConfig {
         ensemble: 1,
         input_noise: 0.0,
         circular_weight: 1.0,
+        pin_features: PinFeatures::Displacements,
         pose: None,
         position: None,
         angle: None,

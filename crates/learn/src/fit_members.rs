@@ -216,6 +216,7 @@ impl<'a> Shared<'a> {
             targets: self.targets,
             nets,
             outputs: self.outputs.to_vec(),
+            features: None,
             predictor: OnceLock::new(),
         })
     }

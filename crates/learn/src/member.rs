@@ -45,6 +45,7 @@ impl PoseModel {
             targets: self.targets.clone(),
             nets,
             outputs: self.outputs.clone(),
+            features: self.features.clone(),
             predictor: OnceLock::new(),
         })
     }
@@ -115,6 +116,7 @@ mod tests {
             targets: Standardiser::from_parts(vec![0.0; 2], vec![1.0; 2]).expect("targets"),
             nets,
             outputs: vec![ModelTarget::circular("pose_6")],
+            features: None,
             predictor: Default::default(),
         }
     }

@@ -11,6 +11,7 @@ use crate::dataset::Dataset;
 use crate::error::LearnError;
 use crate::fit_members::{fit_members, net_inputs};
 use crate::pca::Pca;
+use crate::pin_features::{FeatureMap, PinFeatures};
 use crate::predict::Predictor;
 use crate::standardise::Standardiser;
 use crate::targets::{self, ModelTarget, Unit};
@@ -46,6 +47,9 @@ pub struct PoseModel {
     pub(crate) nets: Vec<FittedNet>,
     /// What it predicts, in order.
     pub(crate) outputs: Vec<ModelTarget>,
+    /// The features the nets see, when not the displacements themselves
+    /// ([`crate::PinFeatures`]); the standardiser is fitted on them.
+    pub(crate) features: Option<FeatureMap>,
     /// The fast prediction path of an edge model (`[r mm, theta deg]`,
     /// neither circular), laid out at the first prediction.
     pub(crate) predictor: OnceLock<Predictor>,
@@ -82,6 +86,43 @@ impl PoseModel {
     /// used, an ensemble's nets their member's halvings). An ensemble's
     /// members train together, in parallel.
     pub fn fit_targets(
+        cfg: &ModelConfig,
+        outputs: &[ModelTarget],
+        train: &Dataset,
+        val: Option<&Dataset>,
+        progress: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(PoseModel, TrainingHistory), LearnError> {
+        Self::fit_targets_on_pins(cfg, outputs, train, val, None, progress)
+    }
+
+    /// As [`Self::fit_targets`], for data whose displacements are laid
+    /// out against `reference_pins` (px, in input order): the layout
+    /// [`ModelConfig::pin_features`] other than the displacements needs
+    /// (an error without it), recorded in the model.
+    pub fn fit_targets_on_pins(
+        cfg: &ModelConfig,
+        outputs: &[ModelTarget],
+        train: &Dataset,
+        val: Option<&Dataset>,
+        reference_pins: Option<&[[f64; 2]]>,
+        progress: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(PoseModel, TrainingHistory), LearnError> {
+        let Some(map) = feature_map(cfg.pin_features, reference_pins, train.dim_x)? else {
+            return Self::fit_displacements(cfg, outputs, train, val, progress);
+        };
+        let featured =
+            |d: &Dataset| Dataset::new(map.rows(&d.x), d.y.clone(), d.n, map.output_dim(), d.dim_y);
+        let train = featured(train)?;
+        let val = val.map(featured).transpose()?;
+        let (mut model, history) =
+            Self::fit_displacements(cfg, outputs, &train, val.as_ref(), progress)?;
+        model.features = Some(map);
+        model.predictor = OnceLock::new();
+        Ok((model, history))
+    }
+
+    /// Fit on the rows of `train` as the nets' inputs (before standardising).
+    fn fit_displacements(
         cfg: &ModelConfig,
         outputs: &[ModelTarget],
         train: &Dataset,
@@ -134,8 +175,15 @@ impl PoseModel {
         if self.is_plain_edge() {
             return self.predict(displacement).map(|p| p.to_vec());
         }
-        let mut z = vec![0.0f64; self.input_dim()];
-        self.standardiser.transform_into(displacement, &mut z);
+        let mut z = vec![0.0f64; self.standardiser.dim()];
+        match &self.features {
+            Some(map) => {
+                let mut features = Vec::with_capacity(map.output_dim());
+                map.extend(displacement, &mut features);
+                self.standardiser.transform_into(&features, &mut z);
+            }
+            None => self.standardiser.transform_into(displacement, &mut z),
+        }
         let width = self.targets.dim();
         let mut scaled = vec![0.0f64; width];
         for net in &self.nets {
@@ -195,6 +243,7 @@ impl PoseModel {
         matches!(self.outputs.as_slice(), [r, t]
             if r.unit == Unit::Mm && t.unit == Unit::Deg && !r.circular && !t.circular)
             && self.targets.dim() == 2
+            && self.features.is_none()
     }
 
     fn check_dim(&self, got: usize) -> Result<(), LearnError> {
@@ -270,7 +319,16 @@ impl PoseModel {
 
     /// Displacement-vector length the model expects.
     pub fn input_dim(&self) -> usize {
-        self.standardiser.dim()
+        self.features
+            .as_ref()
+            .map_or(self.standardiser.dim(), FeatureMap::input_dim)
+    }
+
+    /// What the nets see of a tap ([`ModelConfig::pin_features`]).
+    pub fn pin_features(&self) -> PinFeatures {
+        self.features
+            .as_ref()
+            .map_or(PinFeatures::Displacements, FeatureMap::kind)
     }
 
     /// The configuration it was trained with.
@@ -326,4 +384,27 @@ pub(crate) fn edge_roles_of(outputs: &[ModelTarget]) -> Result<[usize; 2], Learn
                 .join(", "),
         }),
     }
+}
+
+/// The feature map `kind` needs over `reference_pins` for inputs of
+/// `dim_x` values; `None` for the displacements themselves.
+fn feature_map(
+    kind: PinFeatures,
+    reference_pins: Option<&[[f64; 2]]>,
+    dim_x: usize,
+) -> Result<Option<FeatureMap>, LearnError> {
+    if kind.is_displacements() {
+        return Ok(None);
+    }
+    let pins = reference_pins.ok_or_else(|| LearnError::Config {
+        field: "pin_features",
+        reason: "features beyond the displacements need the reference pins".into(),
+    })?;
+    if 2 * pins.len() != dim_x {
+        return Err(LearnError::DimensionMismatch {
+            expected: 2 * pins.len(),
+            got: dim_x,
+        });
+    }
+    FeatureMap::new(kind, pins).map(Some)
 }

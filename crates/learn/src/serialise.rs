@@ -8,6 +8,7 @@ use crate::config::{ModelConfig, ModelKind};
 use crate::error::LearnError;
 use crate::net::Layers;
 use crate::pca::Pca;
+use crate::pin_features::FeatureMap;
 use crate::pose_model::{FittedNet, PoseModel};
 use crate::standardise::Standardiser;
 use crate::targets::{check_targets as check_outputs, edge_targets, ModelTarget};
@@ -40,6 +41,10 @@ struct ModelFile {
     /// The targets predicted (absent in version 2: the edge task's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     outputs: Option<Vec<ModelTarget>>,
+    /// The features the nets see, when not the displacements: their
+    /// kind and the reference pins (absent: the displacements).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    features: Option<FeatureMap>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -98,6 +103,7 @@ impl PoseModel {
                 })
                 .collect(),
             outputs: Some(self.outputs.clone()),
+            features: self.features.clone(),
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
         let mut tensors = Vec::new();
@@ -129,6 +135,7 @@ impl PoseModel {
         let file: ModelFile =
             serde_json::from_value(value).map_err(|e| corrupt(format!("model json: {e}")))?;
         file.config.validate()?;
+        let feature_dim = check_features(&file)?;
         let standardiser = Standardiser::from_parts(
             file.standardiser.mean().to_vec(),
             file.standardiser.std().to_vec(),
@@ -140,7 +147,7 @@ impl PoseModel {
         let outputs = file.outputs.unwrap_or_else(edge_targets);
         check_outputs(&outputs).map_err(|e| corrupt(format!("model json: {e}")))?;
         let width: usize = outputs.iter().map(ModelTarget::width).sum();
-        if standardiser.dim() != file.input_dim || targets.dim() != width {
+        if standardiser.dim() != feature_dim || targets.dim() != width {
             return Err(corrupt("standardiser dimensions disagree with the model"));
         }
         let tensors = read_tensors(safetensors)?;
@@ -148,7 +155,7 @@ impl PoseModel {
             .nets
             .into_iter()
             .enumerate()
-            .map(|(k, n)| load_net(k, n, &tensors, file.input_dim))
+            .map(|(k, n)| load_net(k, n, &tensors, feature_dim))
             .collect::<Result<Vec<_>, _>>()?;
         check_targets(&nets, width, file.config.ensemble)?;
         Ok(PoseModel {
@@ -157,8 +164,29 @@ impl PoseModel {
             targets,
             nets,
             outputs,
+            features: file.features,
             predictor: Default::default(),
         })
+    }
+}
+
+/// The nets' input length of `file` (its features' or its displacements'),
+/// after checking its features against its configuration and input length.
+fn check_features(file: &ModelFile) -> Result<usize, LearnError> {
+    let kind = file.features.as_ref().map(FeatureMap::kind);
+    if kind.unwrap_or_default() != file.config.pin_features {
+        return Err(corrupt(
+            "the model's features disagree with its configuration's pin_features",
+        ));
+    }
+    match &file.features {
+        Some(map) if map.input_dim() != file.input_dim => Err(corrupt(format!(
+            "features over {} reference pins, but the model takes {} inputs",
+            map.input_dim() / 2,
+            file.input_dim
+        ))),
+        Some(map) => Ok(map.output_dim()),
+        None => Ok(file.input_dim),
     }
 }
 

@@ -1,5 +1,5 @@
-//! Set-ups shared by the image-model tests (`issue22_noise.rs`,
-//! `weight_average.rs`, `dropout.rs`, `issue22_theory.rs`): tiny frames
+//! Set-ups shared by the image-model tests (`input_noise.rs`,
+//! `weight_average.rs`, `dropout.rs`, `theory.rs`): tiny frames
 //! whose bright spot moves with the frame's index, a tiny one-convolution
 //! training configuration, and the small net of the gradient checks.
 //! Not every file that shares it uses every set-up.

@@ -5,7 +5,7 @@
 //! nothing moved; a simulation command keeps the default Ctrl-C.
 mod util;
 
-use std::os::unix::process::ExitStatusExt;
+use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::OnceLock;
@@ -273,7 +273,20 @@ fn issue20_a_fault_on_the_way_to_the_start_exits_1_and_a_start_too_far_exits_2()
 #[test]
 fn issue20_a_simulation_command_keeps_the_default_ctrl_c() {
     let t = TempDir::new("sim-ctrl-c");
-    let child = Command::new(env!("CARGO_BIN_EXE_tactrace"))
+    let mut command = Command::new(env!("CARGO_BIN_EXE_tactrace"));
+    // A terminal's Ctrl-C reaches a command whose SIGINT is at its default
+    // action; a test run started in the background by a non-interactive
+    // shell (`.ci/run &`) would pass it on ignored, and the default kept
+    // would then be "ignored". Start the child as a terminal would.
+    // SAFETY: between fork and exec only `signal`, which is
+    // async-signal-safe, is called.
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+            Ok(())
+        });
+    }
+    let child = command
         .args(["collect", "--samples", "1000000", "--out", "big"])
         .current_dir(&t.0)
         .stdin(Stdio::null())

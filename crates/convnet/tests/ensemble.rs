@@ -4,7 +4,9 @@
 //! model of its seed; the mean is what every prediction path returns;
 //! the files keep every network, and a one-network model's files are as
 //! they were before ensembles.
-use tactrace_convnet::{ConvConfig, ConvError, ConvModel, ConvSpec, Frames, ModelKind, Targets};
+mod common;
+
+use tactrace_convnet::{ConvConfig, ConvError, ConvModel, Frames, ModelKind, Targets};
 
 const SIDE: usize = 12;
 
@@ -33,17 +35,13 @@ fn spots(count: usize, seed: u64) -> (Vec<u8>, Vec<f64>) {
     (pixels, targets)
 }
 
+/// The shared tiny configuration with a wider dense layer, 4 epochs of
+/// batches of 8 and `members` networks.
 fn config(kind: ModelKind, members: usize) -> ConvConfig {
-    let mut c = ConvConfig::new(kind);
-    c.conv = vec![ConvSpec {
-        channels: 4,
-        kernel: 3,
-        stride: 2,
-    }];
+    let mut c = common::tiny_config(kind);
     c.dense = vec![12];
     c.epochs = 4;
     c.batch_size = 8;
-    c.chunk_size = 4;
     c.learning_rate = 3e-3;
     c.members = members;
     c

@@ -1,0 +1,202 @@
+//! One input plane zero-padded by `pad` on every side and split by phase:
+//! padded pixel `(Y, X)` goes to phase `(Y % stride, X % stride)`, row
+//! `Y / stride`, column `X / stride`. Output `(oy, ox)` of kernel offset
+//! `(ky, kx)` reads padded pixel `(oy stride + ky, ox stride + kx)`, which
+//! is phase `(ky % stride, kx % stride)`, row `oy + ky / stride`, column
+//! `ox + kx / stride`: a row of outputs reads `wout` contiguous values,
+//! always inside the buffer, so im2col copies (and col2im adds) whole rows
+//! without a bounds test or a strided access.
+use crate::layout::LayerShape;
+
+/// The split layout of one layer's input plane.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Phases {
+    stride: usize,
+    pad: usize,
+    hin: usize,
+    win: usize,
+    /// Rows of one phase.
+    rows: usize,
+    /// Columns of one phase (the distance between its rows).
+    pub cols: usize,
+}
+
+impl Phases {
+    #[inline(always)]
+    pub fn new(s: &LayerShape) -> Self {
+        Phases {
+            stride: s.stride,
+            pad: s.pad,
+            hin: s.hin,
+            win: s.win,
+            rows: (s.hin + 2 * s.pad).div_ceil(s.stride),
+            cols: (s.win + 2 * s.pad).div_ceil(s.stride),
+        }
+    }
+
+    /// Values of the buffer: `stride^2` phases of `rows x cols`.
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.stride * self.stride * self.rows * self.cols
+    }
+
+    /// Where kernel offset `(ky, kx)`'s first output row reads (row `oy`:
+    /// `oy * cols` further on).
+    #[inline(always)]
+    pub fn tap(&self, ky: usize, kx: usize) -> usize {
+        let st = self.stride;
+        (((ky % st) * st + kx % st) * self.rows + ky / st) * self.cols + kx / st
+    }
+
+    /// `buf = split(plane)` at the input's places (`plane` is `hin x
+    /// win`); the padding is left as it is.
+    #[inline(always)]
+    pub fn split(&self, plane: &[f32], buf: &mut [f32]) {
+        for rx in 0..self.stride {
+            let Some((lo, hi, first)) = self.columns(rx) else {
+                continue;
+            };
+            for ry in 0..self.stride {
+                for y in 0..self.rows {
+                    if let Some((row, at)) = self.row(rx, ry, y) {
+                        let src = &plane[row * self.win..][..self.win];
+                        gather(&mut buf[at + lo..at + hi], &src[first..], self.stride);
+                    }
+                }
+            }
+        }
+    }
+
+    /// `plane = merge(buf)`, the inverse of [`Self::split`] (the padding
+    /// is dropped).
+    #[inline(always)]
+    pub fn merge(&self, buf: &[f32], plane: &mut [f32]) {
+        for rx in 0..self.stride {
+            let Some((lo, hi, first)) = self.columns(rx) else {
+                continue;
+            };
+            for ry in 0..self.stride {
+                for y in 0..self.rows {
+                    if let Some((row, at)) = self.row(rx, ry, y) {
+                        let dst = &mut plane[row * self.win..][..self.win];
+                        let src = &buf[at + lo..at + hi];
+                        scatter(&mut dst[first..], src, self.stride);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The columns `lo..hi` of phase column `rx` that hold input, the
+    /// first of them input column `first` (then `first + stride`, ...);
+    /// `None` if none does.
+    #[inline(always)]
+    fn columns(&self, rx: usize) -> Option<(usize, usize, usize)> {
+        let (st, pad) = (self.stride, self.pad);
+        let hi = (pad + self.win)
+            .saturating_sub(rx)
+            .div_ceil(st)
+            .min(self.cols);
+        let lo = pad.saturating_sub(rx).div_ceil(st).min(hi);
+        (lo < hi).then(|| (lo, hi, lo * st + rx - pad))
+    }
+
+    /// Row `y` of phase `(ry, rx)`: the input row it holds and where it
+    /// starts in the buffer; `None` for a row of padding.
+    #[inline(always)]
+    fn row(&self, rx: usize, ry: usize, y: usize) -> Option<(usize, usize)> {
+        let (st, pad) = (self.stride, self.pad);
+        let py = y * st + ry;
+        let at = ((ry * st + rx) * self.rows + y) * self.cols;
+        (py >= pad && py - pad < self.hin).then_some((py - pad, at))
+    }
+}
+
+/// `dst[r][..w] = src[r * pitch..][..w]`, `dst` holding whole rows of `w`
+/// (fixed-length copies for the usual widths, so each row is a few vector
+/// moves, not a call).
+#[inline(always)]
+pub(crate) fn copy_rows(dst: &mut [f32], src: &[f32], w: usize, pitch: usize) {
+    match w {
+        8 => copy_fixed::<8>(dst, src, pitch),
+        16 => copy_fixed::<16>(dst, src, pitch),
+        32 => copy_fixed::<32>(dst, src, pitch),
+        _ => {
+            for (r, d) in dst.chunks_exact_mut(w).enumerate() {
+                d.copy_from_slice(&src[r * pitch..][..w]);
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn copy_fixed<const W: usize>(dst: &mut [f32], src: &[f32], pitch: usize) {
+    for (r, d) in dst.chunks_exact_mut(W).enumerate() {
+        let s = &src[r * pitch..][..W];
+        for i in 0..W {
+            d[i] = s[i];
+        }
+    }
+}
+
+/// `dst[r * pitch..][..w] += src[r][..w]`, `src` holding whole rows of `w`.
+#[inline(always)]
+pub(crate) fn add_rows(dst: &mut [f32], src: &[f32], w: usize, pitch: usize) {
+    match w {
+        8 => add_fixed::<8>(dst, src, pitch),
+        16 => add_fixed::<16>(dst, src, pitch),
+        32 => add_fixed::<32>(dst, src, pitch),
+        _ => {
+            for (r, s) in src.chunks_exact(w).enumerate() {
+                let d = &mut dst[r * pitch..][..w];
+                d.iter_mut().zip(s).for_each(|(d, s)| *d += *s);
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn add_fixed<const W: usize>(dst: &mut [f32], src: &[f32], pitch: usize) {
+    for (r, s) in src.chunks_exact(W).enumerate() {
+        let d = &mut dst[r * pitch..][..W];
+        for i in 0..W {
+            d[i] += s[i];
+        }
+    }
+}
+
+/// `dst[i * stride] = src[i]`.
+#[inline(always)]
+fn scatter(dst: &mut [f32], src: &[f32], stride: usize) {
+    if stride == 1 {
+        dst[..src.len()].copy_from_slice(src);
+        return;
+    }
+    for (d, v) in dst.iter_mut().step_by(stride).zip(src) {
+        *d = *v;
+    }
+}
+
+/// `dst[i] = src[i * stride]`.
+#[inline(always)]
+fn gather(dst: &mut [f32], src: &[f32], stride: usize) {
+    if stride == 2 {
+        // Whole pairs, so the compiler loads vectors and keeps the even
+        // lanes; the last pixel may have no partner.
+        let full = dst.len().min(src.len() / 2);
+        for (d, pair) in dst[..full].iter_mut().zip(src.chunks_exact(2)) {
+            *d = pair[0];
+        }
+        if full < dst.len() {
+            dst[full] = src[2 * full];
+        }
+        return;
+    }
+    if stride == 1 {
+        dst.copy_from_slice(&src[..dst.len()]);
+        return;
+    }
+    for (d, c) in dst.iter_mut().zip(src.chunks(stride)) {
+        *d = c[0];
+    }
+}

@@ -132,7 +132,7 @@ fn peak() -> f64 {
     let n = 1024;
     let a: Vec<f32> = (0..n * n).map(|i| (i % 7) as f32 * 0.1).collect();
     let mut c = vec![0.0f32; n * n];
-    let secs = best(5, || product(&mut c, &a, &a, n, n, n));
+    let secs = best(15, || product(&mut c, &a, &a, n, n, n));
     gflops(2.0 * (n * n * n) as f64, secs)
 }
 
@@ -165,7 +165,7 @@ fn layer_times(s: &LayerShape, nb: usize, act: Activation) -> (LayerTimes, f64) 
     let (mut rate_out, mut errors, mut soma) =
         (vec![0.0; m * n], vec![0.0; m * n], vec![0.0; m * n]);
     let reps = ((2e8 / (2.0 * (m * k * n) as f64)) as usize).clamp(3, 200);
-    let time = |f: &mut dyn FnMut()| best(5, || (0..reps).for_each(|_| f())) / reps as f64;
+    let time = |f: &mut dyn FnMut()| best(9, || (0..reps).for_each(|_| f())) / reps as f64;
     let forward = time(&mut || {
         im2col(s, nb, &input, &mut cols);
         product(&mut out, &w, &cols, m, k, n);

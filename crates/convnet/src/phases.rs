@@ -52,6 +52,10 @@ impl Phases {
     /// win`); the padding is left as it is.
     #[inline(always)]
     pub fn split(&self, plane: &[f32], buf: &mut [f32]) {
+        if self.stride == 2 {
+            self.split_pairs(plane, buf);
+            return;
+        }
         for rx in 0..self.stride {
             let Some((lo, hi, first)) = self.columns(rx) else {
                 continue;
@@ -71,6 +75,10 @@ impl Phases {
     /// is dropped).
     #[inline(always)]
     pub fn merge(&self, buf: &[f32], plane: &mut [f32]) {
+        if self.stride == 2 {
+            self.merge_pairs(buf, plane);
+            return;
+        }
         for rx in 0..self.stride {
             let Some((lo, hi, first)) = self.columns(rx) else {
                 continue;
@@ -83,6 +91,55 @@ impl Phases {
                         scatter(&mut dst[first..], src, self.stride);
                     }
                 }
+            }
+        }
+    }
+
+    /// [`Self::split`] at stride 2, a row at a time (see
+    /// [`Self::merge_pairs`]): one pass over the row fills both runs.
+    #[inline(always)]
+    fn split_pairs(&self, plane: &[f32], buf: &mut [f32]) {
+        let pad = self.pad;
+        let (half_up, half_down) = (self.win.div_ceil(2), self.win / 2);
+        for (iy, row) in plane.chunks_exact(self.win).take(self.hin).enumerate() {
+            let (ry, y) = ((iy + pad) % 2, (iy + pad) / 2);
+            let even_at = self.start(ry, pad % 2, y) + pad / 2;
+            let odd_at = self.start(ry, (pad + 1) % 2, y) + (pad + 1) / 2;
+            let (even, odd) = two_runs(buf, (even_at, half_up), (odd_at, half_down));
+            for ((s, a), b) in row.chunks_exact(2).zip(even.iter_mut()).zip(odd) {
+                *a = s[0];
+                *b = s[1];
+            }
+            if self.win % 2 == 1 {
+                even[half_down] = row[self.win - 1];
+            }
+        }
+    }
+
+    /// Where row `y` of phase `(ry, rx)` starts in the buffer.
+    #[inline(always)]
+    fn start(&self, ry: usize, rx: usize, y: usize) -> usize {
+        ((ry * self.stride + rx) * self.rows + y) * self.cols
+    }
+
+    /// [`Self::merge`] at stride 2, a row at a time: input column `2i`
+    /// is phase column `pad % 2`'s value `i + pad / 2`, column `2i + 1`
+    /// phase column `(pad + 1) % 2`'s value `i + (pad + 1) / 2`, so a row
+    /// interleaves two contiguous runs (vector shuffles, not a strided
+    /// store a value at a time).
+    #[inline(always)]
+    fn merge_pairs(&self, buf: &[f32], plane: &mut [f32]) {
+        let pad = self.pad;
+        for (iy, row) in plane.chunks_exact_mut(self.win).take(self.hin).enumerate() {
+            let (ry, y) = ((iy + pad) % 2, (iy + pad) / 2);
+            let even = &buf[self.start(ry, pad % 2, y) + pad / 2..][..self.win.div_ceil(2)];
+            let odd = &buf[self.start(ry, (pad + 1) % 2, y) + (pad + 1) / 2..][..self.win / 2];
+            for ((d, a), b) in row.chunks_exact_mut(2).zip(even).zip(odd) {
+                d[0] = *a;
+                d[1] = *b;
+            }
+            if self.win % 2 == 1 {
+                row[self.win - 1] = even[self.win / 2];
             }
         }
     }
@@ -107,8 +164,21 @@ impl Phases {
     fn row(&self, rx: usize, ry: usize, y: usize) -> Option<(usize, usize)> {
         let (st, pad) = (self.stride, self.pad);
         let py = y * st + ry;
-        let at = ((ry * st + rx) * self.rows + y) * self.cols;
+        let at = self.start(ry, rx, y);
         (py >= pad && py - pad < self.hin).then_some((py - pad, at))
+    }
+}
+
+/// The runs `buf[a.0..][..a.1]` and `buf[b.0..][..b.1]`, which do not
+/// overlap (they lie in different phases), both to write.
+#[inline(always)]
+fn two_runs(buf: &mut [f32], a: (usize, usize), b: (usize, usize)) -> (&mut [f32], &mut [f32]) {
+    if a.0 < b.0 {
+        let (low, high) = buf.split_at_mut(b.0);
+        (&mut low[a.0..][..a.1], &mut high[..b.1])
+    } else {
+        let (low, high) = buf.split_at_mut(a.0);
+        (&mut high[..a.1], &mut low[b.0..][..b.1])
     }
 }
 

@@ -21,7 +21,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
 use tactrace_convnet::kernels::{
-    add_product_nt, col2im_times_slope, im2col, product, product_tn, settle, Errors,
+    add_product_nt, col2im_times_slope, im2col, product, product_tn, settle, Errors, Settle,
 };
 use tactrace_convnet::{
     Activation, ConvConfig, ConvModel, Frames, LayerShape, Layout, ModelKind, Targets,
@@ -169,8 +169,15 @@ fn layer_times(s: &LayerShape, nb: usize, act: Activation) -> (LayerTimes, f64) 
     let forward = time(&mut || {
         im2col(s, nb, &input, &mut cols);
         product(&mut out, &w, &cols, m, k, n);
-        let (p, e, a) = (&mut out, &mut errors, Some(&mut rate_out[..]));
-        settle(act, Some(&bias), Errors::Zero, p, e, &mut soma, a);
+        settle(Settle {
+            activation: act,
+            bias: Some(&bias),
+            errors: Errors::Zero,
+            p: &mut out,
+            e: &mut errors,
+            s: &mut soma,
+            a: Some(&mut rate_out),
+        });
     });
     let forward_gemm = time(&mut || product(&mut out, &w, &cols, m, k, n));
     let back = time(&mut || {

@@ -41,7 +41,7 @@ pub mod kernels {
     pub use crate::activation::{rates, times_slope};
     pub use crate::gemm::{add_product_nt, product, product_tn};
     pub use crate::im2col::{col2im, col2im_times_slope, im2col};
-    pub use crate::settle::{settle, Errors};
+    pub use crate::settle::{settle, Errors, Settle};
 }
 
 pub use augment::PoseKeepingJitter;

@@ -17,7 +17,7 @@
 use crate::gemm::{add_product_nt, product, product_tn};
 use crate::im2col::{col2im_times_slope, im2col};
 use crate::network::Network;
-use crate::settle::{settle, Errors};
+use crate::settle::{settle, Errors, Settle};
 use crate::workspace::Workspace;
 
 /// `cols(l) = im2col(phi(s(l-1)))` and `p(l) = W(l) cols(l) + b(l)` for
@@ -105,9 +105,15 @@ fn settle_with(
     errors: Errors,
 ) {
     let len = net.layout.layers[l].out_len() * nb;
-    let rates = (l + 1 < net.layout.depth()).then(|| &mut ws.a[l][..len]);
-    let (p, e, s) = (&mut ws.p[l][..len], &mut ws.e[l][..len], &mut ws.s[l]);
-    settle(net.activation, bias, errors, p, e, s, rates);
+    settle(Settle {
+        activation: net.activation,
+        bias,
+        errors,
+        p: &mut ws.p[l][..len],
+        e: &mut ws.e[l],
+        s: &mut ws.s[l],
+        a: (l + 1 < net.layout.depth()).then(|| &mut ws.a[l][..]),
+    });
 }
 
 /// The free phase's equilibrium, the feed-forward pass: every `e(l) = 0`,

@@ -56,18 +56,13 @@ impl Phases {
             self.split_pairs(plane, buf);
             return;
         }
-        for rx in 0..self.stride {
-            let Some((lo, hi, first)) = self.columns(rx) else {
-                continue;
-            };
-            for ry in 0..self.stride {
-                for y in 0..self.rows {
-                    if let Some((row, at)) = self.row(rx, ry, y) {
-                        let src = &plane[row * self.win..][..self.win];
-                        gather(&mut buf[at + lo..at + hi], &src[first..], self.stride);
-                    }
-                }
-            }
+        for run in self.runs() {
+            let src = &plane[run.row * self.win..][..self.win];
+            gather(
+                &mut buf[run.at..][..run.len],
+                &src[run.first..],
+                self.stride,
+            );
         }
     }
 
@@ -79,19 +74,13 @@ impl Phases {
             self.merge_pairs(buf, plane);
             return;
         }
-        for rx in 0..self.stride {
-            let Some((lo, hi, first)) = self.columns(rx) else {
-                continue;
-            };
-            for ry in 0..self.stride {
-                for y in 0..self.rows {
-                    if let Some((row, at)) = self.row(rx, ry, y) {
-                        let dst = &mut plane[row * self.win..][..self.win];
-                        let src = &buf[at + lo..at + hi];
-                        scatter(&mut dst[first..], src, self.stride);
-                    }
-                }
-            }
+        for run in self.runs() {
+            let dst = &mut plane[run.row * self.win..][..self.win];
+            scatter(
+                &mut dst[run.first..],
+                &buf[run.at..][..run.len],
+                self.stride,
+            );
         }
     }
 
@@ -104,7 +93,7 @@ impl Phases {
         for (iy, row) in plane.chunks_exact(self.win).take(self.hin).enumerate() {
             let (ry, y) = ((iy + pad) % 2, (iy + pad) / 2);
             let even_at = self.start(ry, pad % 2, y) + pad / 2;
-            let odd_at = self.start(ry, (pad + 1) % 2, y) + (pad + 1) / 2;
+            let odd_at = self.start(ry, (pad + 1) % 2, y) + pad.div_ceil(2);
             let (even, odd) = two_runs(buf, (even_at, half_up), (odd_at, half_down));
             for ((s, a), b) in row.chunks_exact(2).zip(even.iter_mut()).zip(odd) {
                 *a = s[0];
@@ -124,7 +113,7 @@ impl Phases {
 
     /// [`Self::merge`] at stride 2, a row at a time: input column `2i`
     /// is phase column `pad % 2`'s value `i + pad / 2`, column `2i + 1`
-    /// phase column `(pad + 1) % 2`'s value `i + (pad + 1) / 2`, so a row
+    /// phase column `(pad + 1) % 2`'s value `i + pad.div_ceil(2)`, so a row
     /// interleaves two contiguous runs (vector shuffles, not a strided
     /// store a value at a time).
     #[inline(always)]
@@ -133,7 +122,7 @@ impl Phases {
         for (iy, row) in plane.chunks_exact_mut(self.win).take(self.hin).enumerate() {
             let (ry, y) = ((iy + pad) % 2, (iy + pad) / 2);
             let even = &buf[self.start(ry, pad % 2, y) + pad / 2..][..self.win.div_ceil(2)];
-            let odd = &buf[self.start(ry, (pad + 1) % 2, y) + (pad + 1) / 2..][..self.win / 2];
+            let odd = &buf[self.start(ry, (pad + 1) % 2, y) + pad.div_ceil(2)..][..self.win / 2];
             for ((d, a), b) in row.chunks_exact_mut(2).zip(even).zip(odd) {
                 d[0] = *a;
                 d[1] = *b;
@@ -142,6 +131,24 @@ impl Phases {
                 row[self.win - 1] = even[self.win / 2];
             }
         }
+    }
+
+    /// Every phase row's run of input values (any stride; stride 2 has
+    /// its own loops by pairs).
+    fn runs(&self) -> impl Iterator<Item = Run> + '_ {
+        let columns = (0..self.stride).filter_map(move |rx| Some((rx, self.columns(rx)?)));
+        columns.flat_map(move |(rx, (lo, hi, first))| {
+            let rows = (0..self.stride).flat_map(move |ry| (0..self.rows).map(move |y| (ry, y)));
+            rows.filter_map(move |(ry, y)| {
+                let (row, at) = self.row(rx, ry, y)?;
+                Some(Run {
+                    row,
+                    at: at + lo,
+                    len: hi - lo,
+                    first,
+                })
+            })
+        })
     }
 
     /// The columns `lo..hi` of phase column `rx` that hold input, the
@@ -167,6 +174,16 @@ impl Phases {
         let at = self.start(ry, rx, y);
         (py >= pad && py - pad < self.hin).then_some((py - pad, at))
     }
+}
+
+/// One phase row's input values: `len` of them from `at` in the buffer,
+/// input row `row`'s columns `first, first + stride, ...`.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    row: usize,
+    at: usize,
+    len: usize,
+    first: usize,
 }
 
 /// The runs `buf[a.0..][..a.1]` and `buf[b.0..][..b.1]`, which do not
@@ -202,10 +219,7 @@ pub(crate) fn copy_rows(dst: &mut [f32], src: &[f32], w: usize, pitch: usize) {
 #[inline(always)]
 fn copy_fixed<const W: usize>(dst: &mut [f32], src: &[f32], pitch: usize) {
     for (r, d) in dst.chunks_exact_mut(W).enumerate() {
-        let s = &src[r * pitch..][..W];
-        for i in 0..W {
-            d[i] = s[i];
-        }
+        d.copy_from_slice(&src[r * pitch..][..W]);
     }
 }
 

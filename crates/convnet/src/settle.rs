@@ -18,34 +18,46 @@ pub enum Errors {
     Held,
 }
 
+/// One layer's values to settle, and how (see [`settle`]).
+#[derive(Debug)]
+pub struct Settle<'a> {
+    /// The rate function `phi`.
+    pub activation: Activation,
+    /// One bias a row (rows of `p.len() / bias.len()` values), added to
+    /// `p` first; `None` adds nothing.
+    pub bias: Option<&'a [f32]>,
+    /// What the errors are.
+    pub errors: Errors,
+    /// The layer's product, then its prediction `p`.
+    pub p: &'a mut [f32],
+    /// The errors `e` (at least as long as `p`).
+    pub e: &'a mut [f32],
+    /// The potentials `s = p + e` (at least as long as `p`).
+    pub s: &'a mut [f32],
+    /// The rates `phi(s)` (at least as long as `p`); `None` at the output.
+    pub a: Option<&'a mut [f32]>,
+}
+
 dispatched! {
-    /// `p += b` (with `bias`: one value a row, `p.len() / bias.len()`
-    /// long), `e = 0` (with [`Errors::Zero`]), `s = p + e` and, with `a`,
-    /// `a = phi(s)`, in one pass; in the widest build the processor runs.
-    /// Panics when `e`, `s` or `a` is shorter than `p`.
-    pub fn settle(
-        activation: Activation,
-        bias: Option<&[f32]>,
-        errors: Errors,
-        p: &mut [f32],
-        e: &mut [f32],
-        s: &mut [f32],
-        a: Option<&mut [f32]>,
-    ) => settle_portable;
+    /// `p += b`, `e = 0` (with [`Errors::Zero`]), `s = p + e` and, with
+    /// rates, `a = phi(s)`, in one pass; in the widest build the processor
+    /// runs. Panics when `e`, `s` or `a` is shorter than `p`.
+    pub fn settle(step: Settle<'_>) => settle_portable;
 }
 
 /// The body of [`settle`]: the activation and the two choices are taken
 /// out of the loop, so each of its builds is one straight vector loop.
 #[inline(always)]
-pub(crate) fn settle_portable(
-    activation: Activation,
-    bias: Option<&[f32]>,
-    errors: Errors,
-    p: &mut [f32],
-    e: &mut [f32],
-    s: &mut [f32],
-    a: Option<&mut [f32]>,
-) {
+pub(crate) fn settle_portable(step: Settle<'_>) {
+    let Settle {
+        activation,
+        bias,
+        errors,
+        p,
+        e,
+        s,
+        a,
+    } = step;
     let len = p.len();
     let (e, s) = (&mut e[..len], &mut s[..len]);
     let Some(a) = a else {
@@ -168,7 +180,15 @@ mod tests {
                     let (mut p2, mut e2) = (p1.clone(), e1.clone());
                     let (want_s, want_a) = separate(act, b, errors, &mut p1, &mut e1);
                     let (mut s, mut a) = (vec![9.0; rows * n], vec![9.0; rows * n]);
-                    settle(act, b, errors, &mut p2, &mut e2, &mut s, Some(&mut a));
+                    settle(Settle {
+                        activation: act,
+                        bias: b,
+                        errors,
+                        p: &mut p2,
+                        e: &mut e2,
+                        s: &mut s,
+                        a: Some(&mut a),
+                    });
                     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                     assert_eq!(bits(&p1), bits(&p2), "{act:?} {errors:?}");
                     assert_eq!(bits(&e1), bits(&e2));
@@ -176,7 +196,15 @@ mod tests {
                     assert_eq!(bits(&want_a), bits(&a));
                     let (mut p3, mut e3) = (values(0.37), values(0.11));
                     let mut s3 = vec![9.0; rows * n];
-                    settle_portable(act, b, errors, &mut p3, &mut e3, &mut s3, None);
+                    settle_portable(Settle {
+                        activation: act,
+                        bias: b,
+                        errors,
+                        p: &mut p3,
+                        e: &mut e3,
+                        s: &mut s3,
+                        a: None,
+                    });
                     assert_eq!(bits(&want_s), bits(&s3), "no rates");
                 }
             }

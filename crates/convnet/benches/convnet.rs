@@ -3,8 +3,9 @@
 //! 1. training samples/s of `conv-dennn` and `conv-mlp` (default
 //!    configuration, 64 x 64 frames), one thread and every thread;
 //! 2. the convolution layers against the GEMM they are built on: each conv
-//!    layer's forward (im2col, product, bias, rate), down pass (product
-//!    with `W^T`, col2im, slope; none into the input) and weight term
+//!    layer's forward (im2col, product, then bias, potentials and rates in
+//!    one pass), down pass (product with `W^T`, then col2im and slope in
+//!    one pass; none into the input) and weight term
 //!    (`e cols^T`) on one chunk, against the bare products of the same
 //!    shapes, and against a large square product (this machine's GEMM
 //!    peak, same library, one thread);
@@ -20,7 +21,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
 use tactrace_convnet::kernels::{
-    add_product_nt, col2im, im2col, product, product_tn, rates, times_slope,
+    add_product_nt, col2im_times_slope, im2col, product, product_tn, settle, Errors, Settle,
 };
 use tactrace_convnet::{
     Activation, ConvConfig, ConvModel, Frames, LayerShape, Layout, ModelKind, Targets,
@@ -131,16 +132,18 @@ fn peak() -> f64 {
     let n = 1024;
     let a: Vec<f32> = (0..n * n).map(|i| (i % 7) as f32 * 0.1).collect();
     let mut c = vec![0.0f32; n * n];
-    let secs = best(5, || product(&mut c, &a, &a, n, n, n));
+    let secs = best(15, || product(&mut c, &a, &a, n, n, n));
     gflops(2.0 * (n * n * n) as f64, secs)
 }
 
 /// Seconds of one conv layer's passes on an `nb`-frame chunk, each
 /// beside the bare product inside it.
 struct LayerTimes {
-    /// im2col, product, bias, rate; and the product alone.
+    /// im2col, product, then bias, potentials and rates; and the product
+    /// alone.
     forward: (f64, f64),
-    /// Product with `W^T`, col2im, slope; and the product alone.
+    /// Product with `W^T`, then col2im and the slope; and the product
+    /// alone.
     down: (f64, f64),
     /// The weight term `e cols^T` (a bare product).
     weights: f64,
@@ -159,22 +162,27 @@ fn layer_times(s: &LayerShape, nb: usize, act: Activation) -> (LayerTimes, f64) 
         vec![0.0; m * n],
         vec![0.0; s.in_len() * nb],
     );
-    let mut rate_out = vec![0.0; m * n];
+    let (mut rate_out, mut errors, mut soma) =
+        (vec![0.0; m * n], vec![0.0; m * n], vec![0.0; m * n]);
     let reps = ((2e8 / (2.0 * (m * k * n) as f64)) as usize).clamp(3, 200);
-    let time = |f: &mut dyn FnMut()| best(5, || (0..reps).for_each(|_| f())) / reps as f64;
+    let time = |f: &mut dyn FnMut()| best(9, || (0..reps).for_each(|_| f())) / reps as f64;
     let forward = time(&mut || {
         im2col(s, nb, &input, &mut cols);
         product(&mut out, &w, &cols, m, k, n);
-        for (row, &b) in out.chunks_exact_mut(n).zip(&bias) {
-            row.iter_mut().for_each(|v| *v += b);
-        }
-        rates(act, &out, &mut rate_out);
+        settle(Settle {
+            activation: act,
+            bias: Some(&bias),
+            errors: Errors::Zero,
+            p: &mut out,
+            e: &mut errors,
+            s: &mut soma,
+            a: Some(&mut rate_out),
+        });
     });
     let forward_gemm = time(&mut || product(&mut out, &w, &cols, m, k, n));
     let back = time(&mut || {
         product_tn(&mut cols, &w, &e, m, k, n);
-        col2im(s, nb, &cols, &mut down);
-        times_slope(act, &rate, &mut down);
+        col2im_times_slope(s, nb, &cols, &mut down, act, &rate);
     });
     let back_gemm = time(&mut || product_tn(&mut cols, &w, &e, m, k, n));
     let mut grad = vec![0.0; m * k];

@@ -4,8 +4,11 @@
 //! only its potentials and rates. The sigmoid and tanh are built on a
 //! polynomial exponential that the compiler vectorises (the library's
 //! `exp` and `tanh` are scalar calls, and cost as much as a layer's
-//! matrix product).
+//! matrix product), each built for AVX-512, AVX2 and the baseline
+//! (`crate::simd`). [`settle`] is a layer's whole step after its product,
+//! in one pass: bias, potentials and rates.
 use crate::config::Activation;
+use crate::simd::dispatched;
 
 /// `e^x` (x clamped to +-87), relative error below 3e-7: `x = n ln 2 + f`
 /// with `n` the nearest integer to `x / ln 2` and `|f| <= ln 2 / 2`
@@ -49,53 +52,54 @@ pub(crate) fn sigmoid_fast(x: f32) -> f32 {
     1.0 / (1.0 + exp_fast(-x))
 }
 
-/// `out = phi(s)` built for AVX2 (8 lanes; no fused multiply-adds, so
-/// the numbers are the same as the portable build's).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn apply_avx2(activation: Activation, s: &[f32], out: &mut [f32]) {
-    activation.apply_portable(s, out)
+dispatched! {
+    /// `out = phi(s)`, in the widest build the processor runs.
+    fn apply_dispatched(activation: Activation, s: &[f32], out: &mut [f32]) => apply_portable;
+}
+
+dispatched! {
+    /// `g *= phi'(s)` with `rate = phi(s)`, in the widest build.
+    fn times_slope_dispatched(activation: Activation, rate: &[f32], g: &mut [f32]) => times_slope_portable;
+}
+
+#[inline(always)]
+fn apply_portable(activation: Activation, s: &[f32], out: &mut [f32]) {
+    match activation {
+        Activation::Sigmoid => out
+            .iter_mut()
+            .zip(s)
+            .for_each(|(o, &s)| *o = sigmoid_fast(s)),
+        Activation::Tanh => out.iter_mut().zip(s).for_each(|(o, &s)| *o = tanh_fast(s)),
+        Activation::Relu => out.iter_mut().zip(s).for_each(|(o, &s)| *o = s.max(0.0)),
+    }
+}
+
+#[inline(always)]
+pub(crate) fn times_slope_portable(activation: Activation, rate: &[f32], g: &mut [f32]) {
+    match activation {
+        Activation::Sigmoid => g
+            .iter_mut()
+            .zip(rate)
+            .for_each(|(g, &p)| *g *= p * (1.0 - p)),
+        Activation::Tanh => g.iter_mut().zip(rate).for_each(|(g, &p)| *g *= 1.0 - p * p),
+        Activation::Relu => g
+            .iter_mut()
+            .zip(rate)
+            .for_each(|(g, &p)| *g = if p > 0.0 { *g } else { 0.0 }),
+    }
 }
 
 impl Activation {
-    /// `out = phi(s)`, with the AVX2 build where the processor has it.
+    /// `out = phi(s)`.
     #[inline]
     pub(crate) fn apply(self, s: &[f32], out: &mut [f32]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked just above).
-            unsafe { apply_avx2(self, s, out) };
-            return;
-        }
-        self.apply_portable(s, out)
-    }
-
-    #[inline(always)]
-    fn apply_portable(self, s: &[f32], out: &mut [f32]) {
-        match self {
-            Activation::Sigmoid => out
-                .iter_mut()
-                .zip(s)
-                .for_each(|(o, &s)| *o = sigmoid_fast(s)),
-            Activation::Tanh => out.iter_mut().zip(s).for_each(|(o, &s)| *o = tanh_fast(s)),
-            Activation::Relu => out.iter_mut().zip(s).for_each(|(o, &s)| *o = s.max(0.0)),
-        }
+        apply_dispatched(self, s, out)
     }
 
     /// `g *= phi'(s)`, with `rate = phi(s)`.
     #[inline]
     pub(crate) fn times_slope(self, rate: &[f32], g: &mut [f32]) {
-        match self {
-            Activation::Sigmoid => g
-                .iter_mut()
-                .zip(rate)
-                .for_each(|(g, &p)| *g *= p * (1.0 - p)),
-            Activation::Tanh => g.iter_mut().zip(rate).for_each(|(g, &p)| *g *= 1.0 - p * p),
-            Activation::Relu => g
-                .iter_mut()
-                .zip(rate)
-                .for_each(|(g, &p)| *g = if p > 0.0 { *g } else { 0.0 }),
-        }
+        times_slope_dispatched(self, rate, g)
     }
 
     /// The initialisation gain: weights are uniform in
@@ -148,13 +152,18 @@ mod tests {
     }
 
     #[test]
-    fn issue22_dispatched_rates_equal_the_portable_ones_bit_for_bit() {
+    fn dispatched_rates_and_slopes_equal_the_portable_ones_bit_for_bit() {
         let s: Vec<f32> = (-4000..4000).map(|i| i as f32 * 7e-3 + 1e-4).collect();
+        let rate: Vec<f32> = s.iter().map(|v| (v * 0.2).sin()).collect();
         for act in [Activation::Sigmoid, Activation::Tanh, Activation::Relu] {
             let (mut a, mut b) = (vec![0.0; s.len()], vec![0.0; s.len()]);
             act.apply(&s, &mut a);
-            act.apply_portable(&s, &mut b);
+            apply_portable(act, &s, &mut b);
             assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+            let (mut g, mut h) = (s.clone(), s.clone());
+            act.times_slope(&rate, &mut g);
+            times_slope_portable(act, &rate, &mut h);
+            assert!(g.iter().zip(&h).all(|(x, y)| x.to_bits() == y.to_bits()));
         }
     }
 }

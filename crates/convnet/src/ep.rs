@@ -127,10 +127,6 @@ pub(crate) fn sweep(net: &Network, ws: &mut Workspace, nb: usize, beta: f32) {
         send_down(net, ws, nb, l, false);
     }
     for l in 0..=last {
-        // The input never moves, so the first layer's prediction stands.
-        if l > 0 {
-            predict_layer(net, ws, nb, l);
-        }
         settle_layer(net, ws, nb, l);
     }
 }

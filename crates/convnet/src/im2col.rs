@@ -6,25 +6,69 @@
 //!
 //! Tensors of a chunk of `nb` frames are stored `channels x nb x h x w`, so
 //! one layer's product is the next layer's input without reordering.
+//!
+//! Both go through one input plane at a time, zero-padded and split by
+//! phase (`crate::phases`): there, what one kernel offset reads for a row
+//! of outputs is `wout` contiguous values, with no bounds to test, so
+//! every row is one straight vector copy (or add). Each is built for
+//! AVX-512, AVX2 and the baseline (`crate::simd`); the sums of `col2im`
+//! are taken in the same order as before, so the numbers are unchanged.
+use crate::activation::times_slope_portable;
+use crate::config::Activation;
 use crate::layout::LayerShape;
+use crate::phases::{add_rows, copy_rows, Phases};
+use crate::simd::dispatched;
 
-/// Output columns `ox` whose input column `ox * stride + kx - pad` lies
-/// inside `0..win`.
-#[inline]
-fn valid_columns(s: &LayerShape, kx: usize) -> (usize, usize) {
-    let lo = s.pad.saturating_sub(kx).div_ceil(s.stride);
-    if s.win + s.pad <= kx {
-        return (lo.min(s.wout), lo.min(s.wout));
-    }
-    let hi = ((s.win - 1 + s.pad - kx) / s.stride + 1).min(s.wout);
-    (lo.min(hi), hi)
+thread_local! {
+    /// One padded input plane split by phase, reused.
+    static PHASES: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// `cols = im2col(input)`: `input` is `cin x nb x hin x win`, `cols`
-/// (at least `fan_in * nb * positions` long) becomes `fan_in x (nb *
-/// positions)`, row `(c, ky, kx)`, column `(frame, oy, ox)`. Panics when
-/// a slice is shorter than the shape says.
-pub fn im2col(s: &LayerShape, nb: usize, input: &[f32], cols: &mut [f32]) {
+dispatched! {
+    /// `cols = im2col(input)`: `input` is `cin x nb x hin x win`, `cols`
+    /// (at least `fan_in * nb * positions` long) becomes `fan_in x (nb *
+    /// positions)`, row `(c, ky, kx)`, column `(frame, oy, ox)`. Panics
+    /// when a slice is shorter than the shape says.
+    pub fn im2col(s: &LayerShape, nb: usize, input: &[f32], cols: &mut [f32]) => im2col_body;
+}
+
+dispatched! {
+    /// `grad = col2im(cols) . phi'`, with the slope `phi'` of `activation`
+    /// taken from `rate = phi(s)` (`rate` as long as `grad`): a layer's
+    /// top-down input in one pass ([`col2im`], then the slope, pixel by
+    /// pixel while its plane is in the cache).
+    fn col2im_dispatched(
+        s: &LayerShape,
+        nb: usize,
+        cols: &[f32],
+        grad: &mut [f32],
+        slope: Option<(Activation, &[f32])>,
+    ) => col2im_body;
+}
+
+/// `grad = col2im(cols)`, the transpose of [`im2col`]: every column entry
+/// added back onto the input pixel it was copied from. `grad` (`cin x nb
+/// x hin x win`) is overwritten.
+pub fn col2im(s: &LayerShape, nb: usize, cols: &[f32], grad: &mut [f32]) {
+    col2im_dispatched(s, nb, cols, grad, None)
+}
+
+/// [`col2im`] times the slope `phi'(s)` of `activation`, read from `rate =
+/// phi(s)` (as long as `grad`): `grad = col2im(cols) . phi'`, the same
+/// numbers as [`col2im`] followed by the slope, in one pass.
+pub fn col2im_times_slope(
+    s: &LayerShape,
+    nb: usize,
+    cols: &[f32],
+    grad: &mut [f32],
+    activation: Activation,
+    rate: &[f32],
+) {
+    col2im_dispatched(s, nb, cols, grad, Some((activation, rate)))
+}
+
+#[inline(always)]
+fn im2col_body(s: &LayerShape, nb: usize, input: &[f32], cols: &mut [f32]) {
     let n = nb * s.positions();
     let plane = s.hin * s.win;
     if s.is_dense() {
@@ -38,49 +82,36 @@ pub fn im2col(s: &LayerShape, nb: usize, input: &[f32], cols: &mut [f32]) {
         }
         return;
     }
+    let phases = Phases::new(s);
+    let mut buf = PHASES.take();
+    // The padding stays zero: every plane writes only the input's places.
+    buf.clear();
+    buf.resize(phases.len(), 0.0);
+    let positions = s.positions();
     for c in 0..s.cin {
-        for ky in 0..s.kh {
-            for kx in 0..s.kw {
-                let row = &mut cols[((c * s.kh + ky) * s.kw + kx) * n..][..n];
-                let (lo, hi) = valid_columns(s, kx);
-                for b in 0..nb {
-                    let src_plane = &input[(c * nb + b) * plane..][..plane];
-                    for oy in 0..s.hout {
-                        let dst = &mut row[(b * s.hout + oy) * s.wout..][..s.wout];
-                        let iy = oy * s.stride + ky;
-                        if iy < s.pad || iy - s.pad >= s.hin {
-                            dst.fill(0.0);
-                            continue;
-                        }
-                        let src = &src_plane[(iy - s.pad) * s.win..][..s.win];
-                        // The padding, if any (a call to fill costs more
-                        // than the short copy).
-                        if lo > 0 {
-                            dst[..lo].fill(0.0);
-                        }
-                        if hi < s.wout {
-                            dst[hi..].fill(0.0);
-                        }
-                        if lo == hi {
-                            continue;
-                        }
-                        let first = lo * s.stride + kx - s.pad;
-                        if s.stride == 1 {
-                            dst[lo..hi].copy_from_slice(&src[first..first + hi - lo]);
-                        } else {
-                            gather(&mut dst[lo..hi], &src[first..], s.stride);
-                        }
-                    }
+        for b in 0..nb {
+            phases.split(&input[(c * nb + b) * plane..][..plane], &mut buf);
+            for ky in 0..s.kh {
+                for kx in 0..s.kw {
+                    let row = ((c * s.kh + ky) * s.kw + kx) * n + b * positions;
+                    let src = &buf[phases.tap(ky, kx)..];
+                    copy_rows(&mut cols[row..][..positions], src, s.wout, phases.cols);
                 }
             }
         }
     }
+    PHASES.set(buf);
 }
 
-/// `grad = col2im(cols)`, the transpose of [`im2col`]: every column entry
-/// added back onto the input pixel it was copied from. `grad` (`cin x nb
-/// x hin x win`) is overwritten.
-pub fn col2im(s: &LayerShape, nb: usize, cols: &[f32], grad: &mut [f32]) {
+#[inline(always)]
+fn col2im_body(
+    s: &LayerShape,
+    nb: usize,
+    cols: &[f32],
+    grad: &mut [f32],
+    slope: Option<(Activation, &[f32])>,
+) {
+    let n = nb * s.positions();
     let plane = s.hin * s.win;
     if s.is_dense() {
         for c in 0..s.cin {
@@ -91,113 +122,136 @@ pub fn col2im(s: &LayerShape, nb: usize, cols: &[f32], grad: &mut [f32]) {
                 }
             }
         }
-        return;
-    }
-    if s.stride == 1 {
-        col2im_planes(s, nb, cols, grad, None);
-        return;
-    }
-    PHASES.with_borrow_mut(|phases| {
-        let len = s.stride * s.hin * s.win.div_ceil(s.stride);
-        if phases.len() < len {
-            phases.resize(len, 0.0);
+        if let Some((activation, rate)) = slope {
+            let len = s.in_len() * nb;
+            times_slope_portable(activation, &rate[..len], &mut grad[..len]);
         }
-        col2im_planes(s, nb, cols, grad, Some(&mut phases[..len]));
-    });
-}
-
-thread_local! {
-    /// One input plane split by column phase (`x % stride`), reused.
-    static PHASES: std::cell::RefCell<Vec<f32>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
-/// The body of [`col2im`], one input plane at a time (it stays in the
-/// first-level cache while every kernel offset adds onto it). Without
-/// `phases` (stride 1) the sums go straight into the plane; with them,
-/// into the plane split by column phase `x % stride`, where the columns
-/// one kernel offset reaches are contiguous (a strided scatter-add would
-/// store into what the next offset loads, which the processor cannot
-/// forward), and the phases are interleaved into the plane at the end.
-fn col2im_planes(
-    s: &LayerShape,
-    nb: usize,
-    cols: &[f32],
-    grad: &mut [f32],
-    mut phases: Option<&mut [f32]>,
-) {
-    let n = nb * s.positions();
-    let plane = s.hin * s.win;
-    let wp = s.win.div_ceil(s.stride);
+        return;
+    }
+    let phases = Phases::new(s);
+    let mut kept = PHASES.take();
+    kept.resize(phases.len(), 0.0);
+    let buf = &mut kept[..phases.len()];
+    let positions = s.positions();
     for c in 0..s.cin {
         for b in 0..nb {
-            let dst_plane = &mut grad[(c * nb + b) * plane..][..plane];
-            let target: &mut [f32] = match phases.as_deref_mut() {
-                Some(p) => p,
-                None => dst_plane,
-            };
-            target.fill(0.0);
+            // Each pixel's terms are added in kernel-offset order, from 0.
+            buf.fill(0.0);
             for ky in 0..s.kh {
                 for kx in 0..s.kw {
-                    let row = &cols[((c * s.kh + ky) * s.kw + kx) * n..][..n];
-                    let (lo, hi) = valid_columns(s, kx);
-                    if lo == hi {
-                        continue;
-                    }
-                    let first = lo * s.stride + kx - s.pad;
-                    // Where the first valid column lands in `target`.
-                    let (phase, column) = (first % s.stride, first / s.stride);
-                    for oy in 0..s.hout {
-                        let iy = oy * s.stride + ky;
-                        if iy < s.pad || iy - s.pad >= s.hin {
+                    let row = ((c * s.kh + ky) * s.kw + kx) * n + b * positions;
+                    let dst = &mut buf[phases.tap(ky, kx)..];
+                    add_rows(dst, &cols[row..][..positions], s.wout, phases.cols);
+                }
+            }
+            let at = (c * nb + b) * plane;
+            let dst = &mut grad[at..][..plane];
+            phases.merge(buf, dst);
+            if let Some((activation, rate)) = slope {
+                times_slope_portable(activation, &rate[at..][..plane], dst);
+            }
+        }
+    }
+    PHASES.set(kept);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `cols` from the definition: row `(c, ky, kx)`, column `(b, oy, ox)`
+    /// holds input pixel `(c, b, oy stride + ky - pad, ox stride + kx -
+    /// pad)`, or 0 outside the input.
+    fn by_definition(s: &LayerShape, nb: usize, x: &[f32]) -> Vec<f32> {
+        let n = nb * s.positions();
+        let mut cols = vec![0.0; s.fan_in() * n];
+        for c in 0..s.cin {
+            for (ky, kx) in (0..s.kh).flat_map(|ky| (0..s.kw).map(move |kx| (ky, kx))) {
+                for b in 0..nb {
+                    for (oy, ox) in (0..s.hout).flat_map(|oy| (0..s.wout).map(move |ox| (oy, ox))) {
+                        let iy = (oy * s.stride + ky) as isize - s.pad as isize;
+                        let ix = (ox * s.stride + kx) as isize - s.pad as isize;
+                        if iy < 0 || ix < 0 || iy >= s.hin as isize || ix >= s.win as isize {
                             continue;
                         }
-                        let src = &row[(b * s.hout + oy) * s.wout..][lo..hi];
-                        let at = if s.stride == 1 {
-                            (iy - s.pad) * s.win + first
-                        } else {
-                            (phase * s.hin + iy - s.pad) * wp + column
-                        };
-                        let dst = &mut target[at..at + src.len()];
-                        dst.iter_mut().zip(src).for_each(|(d, v)| *d += *v);
+                        let src = ((c * nb + b) * s.hin + iy as usize) * s.win + ix as usize;
+                        let row = (c * s.kh + ky) * s.kw + kx;
+                        cols[row * n + (b * s.hout + oy) * s.wout + ox] = x[src];
                     }
                 }
             }
-            if let Some(p) = phases.as_deref() {
-                interleave(s, p, &mut grad[(c * nb + b) * plane..][..plane]);
+        }
+        cols
+    }
+
+    fn shapes() -> Vec<LayerShape> {
+        let conv = |cin, hin, win, cout, k, stride| {
+            let pad = k / 2;
+            LayerShape {
+                cin,
+                hin,
+                win,
+                cout,
+                hout: (hin + 2 * pad - k) / stride + 1,
+                wout: (win + 2 * pad - k) / stride + 1,
+                kh: k,
+                kw: k,
+                stride,
+                pad,
+            }
+        };
+        // The default layers (rows of 32, 16 and 8), and odd sizes,
+        // strides 1-3, an even kernel.
+        vec![
+            conv(1, 64, 64, 2, 5, 2),
+            conv(2, 32, 32, 2, 3, 2),
+            conv(3, 16, 16, 2, 3, 2),
+            conv(2, 13, 10, 2, 5, 2),
+            conv(2, 7, 9, 2, 3, 1),
+            conv(1, 11, 8, 2, 4, 3),
+            conv(2, 5, 6, 2, 1, 1),
+        ]
+    }
+
+    fn values(len: usize, k: f32) -> Vec<f32> {
+        (0..len).map(|i| (i as f32 * k).sin()).collect()
+    }
+
+    #[test]
+    fn im2col_equals_its_definition_and_col2im_is_its_transpose() {
+        let nb = 3;
+        for s in shapes() {
+            let x = values(s.in_len() * nb, 0.7);
+            let mut cols = vec![f32::NAN; s.fan_in() * nb * s.positions()];
+            im2col(&s, nb, &x, &mut cols);
+            assert_eq!(cols, by_definition(&s, nb, &x), "{s:?}");
+            // <col2im(y), x> = <y, im2col(x)>.
+            let y = values(cols.len(), 0.3);
+            let mut g = vec![f32::NAN; x.len()];
+            col2im(&s, nb, &y, &mut g);
+            let lhs: f64 = g.iter().zip(&x).map(|(a, b)| (a * b) as f64).sum();
+            let rhs: f64 = y.iter().zip(&cols).map(|(a, b)| (a * b) as f64).sum();
+            assert!(
+                (lhs - rhs).abs() < 1e-4 * rhs.abs().max(1.0),
+                "{s:?}: {lhs} {rhs}"
+            );
+        }
+    }
+
+    #[test]
+    fn col2im_times_slope_equals_col2im_then_the_slope_bit_for_bit() {
+        let nb = 2;
+        for s in shapes() {
+            let y = values(s.fan_in() * nb * s.positions(), 0.3);
+            let rate = values(s.in_len() * nb, 0.9);
+            for act in [Activation::Sigmoid, Activation::Tanh, Activation::Relu] {
+                let (mut want, mut got) = (vec![0.0; rate.len()], vec![0.0; rate.len()]);
+                col2im(&s, nb, &y, &mut want);
+                act.times_slope(&rate, &mut want);
+                col2im_times_slope(&s, nb, &y, &mut got, act, &rate);
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&want), bits(&got), "{s:?} {act:?}");
             }
         }
-    }
-}
-
-/// `plane[y][x] = phases[x % stride][y][x / stride]`.
-fn interleave(s: &LayerShape, phases: &[f32], plane: &mut [f32]) {
-    let wp = s.win.div_ceil(s.stride);
-    for (y, row) in plane.chunks_exact_mut(s.win).enumerate() {
-        for r in 0..s.stride {
-            let src = &phases[(r * s.hin + y) * wp..][..wp];
-            for (d, v) in row[r..].iter_mut().step_by(s.stride).zip(src) {
-                *d = *v;
-            }
-        }
-    }
-}
-
-/// `dst[i] = src[i * stride]`.
-#[inline(always)]
-fn gather(dst: &mut [f32], src: &[f32], stride: usize) {
-    if stride == 2 {
-        // Whole pairs, so the compiler loads vectors and keeps the even
-        // lanes; the last pixel may have no partner.
-        let full = dst.len().min(src.len() / 2);
-        for (d, pair) in dst[..full].iter_mut().zip(src.chunks_exact(2)) {
-            *d = pair[0];
-        }
-        if full < dst.len() {
-            dst[full] = src[2 * full];
-        }
-        return;
-    }
-    for (d, c) in dst.iter_mut().zip(src.chunks(stride)) {
-        *d = c[0];
     }
 }

@@ -22,21 +22,26 @@ pub mod model_file;
 mod network;
 mod params;
 mod pass;
+mod phases;
 mod predict;
 mod resample;
 mod scaling;
 mod serialise;
+mod settle;
+mod simd;
 mod train;
 mod workspace;
 
 /// The building blocks of a layer as a matrix product, public for the
 /// bench and for tests: im2col and its transpose, and the three products
 /// (forward `W cols`, down `W^T e`, weights `e cols^T`), single-threaded,
-/// and the rate and slope steps.
+/// and the steps around them: a layer's bias, potentials and rates in one
+/// pass after its product ([`kernels::settle`]), col2im with the slope.
 pub mod kernels {
     pub use crate::activation::{rates, times_slope};
     pub use crate::gemm::{add_product_nt, product, product_tn};
-    pub use crate::im2col::{col2im, im2col};
+    pub use crate::im2col::{col2im, col2im_times_slope, im2col};
+    pub use crate::settle::{settle, Errors, Settle};
 }
 
 pub use augment::PoseKeepingJitter;

@@ -15,13 +15,25 @@
 //! `dE/ds` and `dE/dW` (Scellier and Bengio 2017, eqs. 2 and 13, for this
 //! energy; docs/learning.md).
 use crate::gemm::{add_product_nt, product, product_tn};
-use crate::im2col::{col2im, im2col};
+use crate::im2col::{col2im_times_slope, im2col};
 use crate::network::Network;
+use crate::settle::{settle, Errors, Settle};
 use crate::workspace::Workspace;
 
 /// `cols(l) = im2col(phi(s(l-1)))` and `p(l) = W(l) cols(l) + b(l)` for
 /// layer index `l` (0-based).
 pub(crate) fn predict_layer(net: &Network, ws: &mut Workspace, nb: usize, l: usize) {
+    layer_product(net, ws, nb, l);
+    let n = nb * net.layout.layers[l].positions();
+    let rows = ws.p[l].chunks_exact_mut(n);
+    for (row, &b) in rows.zip(&net.params.biases[l]) {
+        row.iter_mut().for_each(|v| *v += b);
+    }
+}
+
+/// `cols(l) = im2col(phi(s(l-1)))` and `p(l) = W(l) cols(l)`, the bias
+/// still to add (by [`settle_layer`] or [`predict_layer`]).
+fn layer_product(net: &Network, ws: &mut Workspace, nb: usize, l: usize) {
     let shape = &net.layout.layers[l];
     if l == 0 && shape.cin > 1 {
         coordinate_planes(shape, nb, &mut ws.x);
@@ -44,9 +56,6 @@ pub(crate) fn predict_layer(net: &Network, ws: &mut Workspace, nb: usize, l: usi
     let (m, k) = (shape.cout, shape.fan_in());
     let p = &mut ws.p[l];
     product(p, &net.params.weights[l], &ws.cols[l], m, k, n);
-    for (row, &b) in p[..m * n].chunks_exact_mut(n).zip(&net.params.biases[l]) {
-        row.iter_mut().for_each(|v| *v += b);
-    }
 }
 
 /// The coordinate channels of an `nb`-frame chunk, after its frames
@@ -74,26 +83,46 @@ fn coordinate_planes(shape: &crate::layout::LayerShape, nb: usize, x: &mut [f32]
     }
 }
 
-/// `s(l) = p(l) + e(l)` and, below the output, `phi(s(l))`.
+/// Layer `l` settles on the layer below as it now is: for `l >= 1` its
+/// prediction `p(l)` anew, then `s(l) = p(l) + e(l)` and, below the
+/// output, `phi(s(l))`, in one pass after the product. The first layer's
+/// input never moves, so its prediction stands.
 pub(crate) fn settle_layer(net: &Network, ws: &mut Workspace, nb: usize, l: usize) {
-    let len = net.layout.layers[l].out_len() * nb;
-    let (s, p, e) = (&mut ws.s[l][..len], &ws.p[l][..len], &ws.e[l][..len]);
-    s.iter_mut()
-        .zip(p.iter().zip(e))
-        .for_each(|(s, (p, e))| *s = p + e);
-    if l + 1 < net.layout.depth() {
-        net.activation.apply(s, &mut ws.a[l][..len]);
+    if l > 0 {
+        layer_product(net, ws, nb, l);
     }
+    let bias = (l > 0).then_some(&net.params.biases[l][..]);
+    settle_with(net, ws, nb, l, bias, Errors::Held);
+}
+
+/// [`settle`] on layer `l`'s buffers (`bias`: add it to `p(l)` first).
+fn settle_with(
+    net: &Network,
+    ws: &mut Workspace,
+    nb: usize,
+    l: usize,
+    bias: Option<&[f32]>,
+    errors: Errors,
+) {
+    let len = net.layout.layers[l].out_len() * nb;
+    settle(Settle {
+        activation: net.activation,
+        bias,
+        errors,
+        p: &mut ws.p[l][..len],
+        e: &mut ws.e[l],
+        s: &mut ws.s[l],
+        a: (l + 1 < net.layout.depth()).then(|| &mut ws.a[l][..]),
+    });
 }
 
 /// The free phase's equilibrium, the feed-forward pass: every `e(l) = 0`,
 /// `s(l) = p(l)`.
 pub(crate) fn feed_forward(net: &Network, ws: &mut Workspace, nb: usize) {
     for l in 0..net.layout.depth() {
-        predict_layer(net, ws, nb, l);
-        let len = net.layout.layers[l].out_len() * nb;
-        ws.e[l][..len].fill(0.0);
-        settle_layer(net, ws, nb, l);
+        layer_product(net, ws, nb, l);
+        let bias = &net.params.biases[l][..];
+        settle_with(net, ws, nb, l, Some(bias), Errors::Zero);
     }
 }
 
@@ -111,9 +140,8 @@ pub(crate) fn send_down(net: &Network, ws: &mut Workspace, nb: usize, l: usize, 
     } else {
         &mut ws.e[l - 1]
     };
-    col2im(shape, nb, &ws.dcols, dst);
-    net.activation
-        .times_slope(&ws.a[l - 1][..len], &mut dst[..len]);
+    let rate = &ws.a[l - 1][..len];
+    col2im_times_slope(shape, nb, &ws.dcols, dst, net.activation, rate);
     let mask = &ws.mask[l - 1];
     if !mask.is_empty() {
         dst[..len]

@@ -35,11 +35,26 @@ struct Run {
 /// than ending the run (a zero weight adds an exact zero to a finite sum).
 const GAP: usize = 3;
 
+/// Below this many pins every source's kept weights are one run, the
+/// dropped ones between them stored as zeros (at most `n^2` weights: 16129
+/// for 127 pins): the sums run over a few long runs, vectorised, rather
+/// than one short run per row of the layout, to the same values bit for bit.
+pub const ONE_RUN_MAX_PINS: usize = 200;
+
 impl Kernel {
     /// Weights `exp(-|r_i - r_j|^2 / (2 sigma^2))`, dropped below
     /// `tolerance` (the tracker's exact field drops them below
     /// [`EXACT_TOLERANCE`]).
+    /// Below [`ONE_RUN_MAX_PINS`] pins each source's weights are one run.
     pub fn new(reference: &[[f64; 2]], sigma: f64, tolerance: f64) -> Self {
+        let n = reference.len();
+        let gap = if n < ONE_RUN_MAX_PINS { n } else { GAP };
+        Self::with_gap(reference, sigma, tolerance, gap)
+    }
+
+    /// [`Kernel::new`] with runs broken where more than `gap` weights in a
+    /// row are dropped.
+    fn with_gap(reference: &[[f64; 2]], sigma: f64, tolerance: f64, gap: usize) -> Self {
         let n = reference.len();
         let scale = -0.5 / (sigma * sigma);
         let (mut starts, mut runs, mut weights) = (vec![0u32], Vec::new(), Vec::new());
@@ -54,7 +69,7 @@ impl Kernel {
             while let Some(lo) = row[i..].iter().position(|w| *w > 0.0).map(|k| i + k) {
                 let mut hi = lo + 1; // one past the last kept weight of the run
                 let mut k = hi;
-                while k < n && k - hi <= GAP {
+                while k < n && k - hi <= gap {
                     if row[k] > 0.0 {
                         hi = k + 1;
                     }
@@ -125,18 +140,20 @@ pub fn smooth_field(
     prior: f64,
 ) -> Vec<[f64; 2]> {
     let affine = fit_affine(reference, observed);
-    // Residuals of the matched pins only, in pin order.
-    let residual: Vec<(usize, [f64; 2])> = reference
-        .iter()
-        .zip(observed)
-        .enumerate()
-        .filter_map(|(j, (r, o))| {
-            o.map(|d| {
-                let a = affine.apply(*r);
-                (j, [d[0] - a[0], d[1] - a[1]])
-            })
-        })
-        .collect();
+    // Residuals of the matched pins only, in pin order (room for all).
+    let mut residual: Vec<(usize, [f64; 2])> = Vec::with_capacity(reference.len());
+    residual.extend(
+        reference
+            .iter()
+            .zip(observed)
+            .enumerate()
+            .filter_map(|(j, (r, o))| {
+                o.map(|d| {
+                    let a = affine.apply(*r);
+                    (j, [d[0] - a[0], d[1] - a[1]])
+                })
+            }),
+    );
     let n = reference.len();
     let (mut sx, mut sy, mut sw) = (vec![0.0; n], vec![0.0; n], vec![prior; n]);
     if kernel.n == n {
@@ -231,8 +248,22 @@ pub fn fill_missing(
 }
 
 /// Adds one source's residual `r`, weighted by a run of its weights `w`,
-/// to the sums (x, y, weight) of the run's target pins.
+/// to the sums (x, y, weight) of the run's target pins: four pins a step
+/// where the processor has AVX ([`add_run_avx`]), else as
+/// [`add_run_plain`]; the same products and sums, rounded the same, so the
+/// same values bit for bit (a multiply then an add, never fused).
 fn add_run(w: &[f64], r: [f64; 2], x: &mut [f64], y: &mut [f64], s: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the processor has AVX (checked just above).
+        unsafe { add_run_avx(w, r, x, y, s) };
+        return;
+    }
+    add_run_plain(w, r, x, y, s);
+}
+
+/// [`add_run`] one pin at a time.
+fn add_run_plain(w: &[f64], r: [f64; 2], x: &mut [f64], y: &mut [f64], s: &mut [f64]) {
     let len = w.len().min(x.len()).min(y.len()).min(s.len());
     let (w, x, y, s) = (&w[..len], &mut x[..len], &mut y[..len], &mut s[..len]);
     for k in 0..len {
@@ -240,6 +271,51 @@ fn add_run(w: &[f64], r: [f64; 2], x: &mut [f64], y: &mut [f64], s: &mut [f64]) 
         y[k] += w[k] * r[1];
         s[k] += w[k];
     }
+}
+
+/// [`add_run`] four pins a step in AVX registers (a multiply, then an add:
+/// each lane rounds as [`add_run_plain`] does), the rest one at a time.
+///
+/// # Safety
+/// The processor must have AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn add_run_avx(w: &[f64], r: [f64; 2], x: &mut [f64], y: &mut [f64], s: &mut [f64]) {
+    use std::arch::x86_64::{
+        _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_set1_pd, _mm256_storeu_pd,
+    };
+    let len = w.len().min(x.len()).min(y.len()).min(s.len());
+    let (w, x, y, s) = (&w[..len], &mut x[..len], &mut y[..len], &mut s[..len]);
+    let (rx, ry) = (_mm256_set1_pd(r[0]), _mm256_set1_pd(r[1]));
+    let whole = len / 4 * 4;
+    for k in (0..whole).step_by(4) {
+        // SAFETY: k + 4 <= len, the length of all four slices, so every
+        // load and store is in bounds (no alignment needed).
+        unsafe {
+            let wk = _mm256_loadu_pd(w.as_ptr().add(k));
+            let (px, py, ps) = (
+                x.as_mut_ptr().add(k),
+                y.as_mut_ptr().add(k),
+                s.as_mut_ptr().add(k),
+            );
+            _mm256_storeu_pd(
+                px,
+                _mm256_add_pd(_mm256_loadu_pd(px), _mm256_mul_pd(wk, rx)),
+            );
+            _mm256_storeu_pd(
+                py,
+                _mm256_add_pd(_mm256_loadu_pd(py), _mm256_mul_pd(wk, ry)),
+            );
+            _mm256_storeu_pd(ps, _mm256_add_pd(_mm256_loadu_pd(ps), wk));
+        }
+    }
+    add_run_plain(
+        &w[whole..],
+        r,
+        &mut x[whole..],
+        &mut y[whole..],
+        &mut s[whole..],
+    );
 }
 
 #[cfg(test)]
@@ -290,11 +366,14 @@ impl Affine {
 /// Least-squares affine displacement; a pure translation when the matched
 /// pins are fewer than three or collinear; zero when none is matched.
 pub fn fit_affine(reference: &[[f64; 2]], observed: &Observations) -> Affine {
-    let pairs: Vec<([f64; 2], [f64; 2])> = reference
-        .iter()
-        .zip(observed)
-        .filter_map(|(r, o)| o.map(|d| (*r, d)))
-        .collect();
+    // Sized for every pin up front: collecting the filter would regrow.
+    let mut pairs: Vec<([f64; 2], [f64; 2])> = Vec::with_capacity(reference.len());
+    pairs.extend(
+        reference
+            .iter()
+            .zip(observed)
+            .filter_map(|(r, o)| o.map(|d| (*r, d))),
+    );
     if pairs.is_empty() {
         return Affine::zero();
     }
@@ -437,6 +516,65 @@ pub(crate) mod tests {
                 let base = affine.apply(*r);
                 assert_eq!(got[i], [base[0] + local[0], base[1] + local[1]]);
             }
+        }
+    }
+
+    /// A source's weights as one run (the default below
+    /// [`ONE_RUN_MAX_PINS`] pins) give the field and the fill of short runs
+    /// (a run broken after [`GAP`] dropped weights), bit for bit, on
+    /// jittered grids with and without missing pins.
+    #[test]
+    fn one_run_a_source_gives_the_short_runs_field_bit_for_bit() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(127);
+        let mut broken = 0;
+        let bits =
+            |v: Vec<[f64; 2]>| -> Vec<[u64; 2]> { v.iter().map(|p| p.map(f64::to_bits)).collect() };
+        for _ in 0..40 {
+            let reference = jittered(&grid(), 2.0, &mut rng);
+            assert!(reference.len() < ONE_RUN_MAX_PINS);
+            let observed = observed_at_random(&reference, 0.8, 9.0, &mut rng);
+            let sigma = rng.random_range(3.0..30.0);
+            let one = Kernel::new(&reference, sigma, EXACT_TOLERANCE);
+            let short = Kernel::with_gap(&reference, sigma, EXACT_TOLERANCE, GAP);
+            assert_eq!(one.runs.len(), reference.len(), "one run a source");
+            broken += usize::from(short.runs.len() > one.runs.len());
+            let prior = rng.random_range(0.0..0.5);
+            assert_eq!(
+                bits(smooth_field(&reference, &observed, &one, prior)),
+                bits(smooth_field(&reference, &observed, &short, prior))
+            );
+            assert_eq!(
+                bits(fill_missing(&reference, &observed, &one, prior)),
+                bits(fill_missing(&reference, &observed, &short, prior))
+            );
+        }
+        assert!(broken >= 10, "only {broken} kernels had short runs");
+    }
+
+    /// The sums of a run four pins a step (AVX, where the processor has
+    /// it) are those of one pin at a time, bit for bit, for runs of every
+    /// length up to 23, signed residuals and sums of any sign and size.
+    #[test]
+    fn run_sums_by_four_equal_one_at_a_time_bit_for_bit() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        for len in 0..24 {
+            let value = |rng: &mut rand_chacha::ChaCha8Rng| {
+                rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-8..8))
+            };
+            let w: Vec<f64> = (0..len).map(|_| rng.random_range(0.0..1.0)).collect();
+            let r = [value(&mut rng), value(&mut rng)];
+            let start: Vec<f64> = (0..3 * len).map(|_| value(&mut rng)).collect();
+            let (mut a, mut b) = (start.clone(), start);
+            let (ax, rest) = a.split_at_mut(len);
+            let (ay, az) = rest.split_at_mut(len);
+            add_run(&w, r, ax, ay, az);
+            let (bx, rest) = b.split_at_mut(len);
+            let (by, bz) = rest.split_at_mut(len);
+            add_run_plain(&w, r, bx, by, bz);
+            let bits = |v: &[f64]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "length {len}");
         }
     }
 

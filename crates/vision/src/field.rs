@@ -288,7 +288,8 @@ unsafe fn add_run_avx(w: &[f64], r: [f64; 2], x: &mut [f64], y: &mut [f64], s: &
     let (w, x, y, s) = (&w[..len], &mut x[..len], &mut y[..len], &mut s[..len]);
     let (rx, ry) = (_mm256_set1_pd(r[0]), _mm256_set1_pd(r[1]));
     let whole = len / 4 * 4;
-    for k in (0..whole).step_by(4) {
+    let mut k = 0;
+    while k < whole {
         // SAFETY: k + 4 <= len, the length of all four slices, so every
         // load and store is in bounds (no alignment needed).
         unsafe {
@@ -308,6 +309,7 @@ unsafe fn add_run_avx(w: &[f64], r: [f64; 2], x: &mut [f64], y: &mut [f64], s: &
             );
             _mm256_storeu_pd(ps, _mm256_add_pd(_mm256_loadu_pd(ps), wk));
         }
+        k += 4;
     }
     add_run_plain(
         &w[whole..],

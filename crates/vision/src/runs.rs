@@ -321,7 +321,7 @@ fn white_runs(
             // Every pixel is above.
             labels.fill(1);
             masks.fill(u64::MAX);
-            if width % 64 != 0 {
+            if !width.is_multiple_of(64) {
                 masks[width / 64] = u64::MAX >> (64 - width % 64);
             }
         } else {

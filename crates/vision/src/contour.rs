@@ -110,12 +110,14 @@ impl ContourScanner {
     /// (x, y), the first pixel of a white component in raster order, and
     /// returns its points: the contour [`ContourScanner::trace_all`] gives
     /// that component (its only one when it has no hole), found without
-    /// the scan. Other contours traced before are forgotten.
+    /// the scan. Other contours traced before are forgotten. The walk
+    /// writes no marks into the labels (only the raster scan reads them;
+    /// every walk reads a label only as zero or not).
     pub fn outer_border_at(&mut self, x: usize, y: usize) -> &[[i32; 2]] {
         self.points.clear();
         self.spans.clear();
         let at = (y + 1) * self.stride + x + 1;
-        self.follow_border(at, WEST, at);
+        self.follow_border::<false>(at, WEST, at);
         &self.points
     }
 
@@ -215,9 +217,9 @@ impl ContourScanner {
                     let here = self.labels[at];
                     let left = self.labels[at - 1];
                     if here == UNVISITED && left == 0 {
-                        self.follow_border(at, WEST, at);
+                        self.follow_border::<true>(at, WEST, at);
                     } else if here == 0 && left >= UNVISITED {
-                        self.follow_border(at - 1, EAST, at);
+                        self.follow_border::<true>(at - 1, EAST, at);
                     }
                 }
                 i += n;
@@ -300,15 +302,18 @@ impl ContourScanner {
     }
 
     /// Follows one border from `start`, whose neighbour in direction
-    /// `empty_side` is background (west for outer borders, east for holes).
-    fn follow_border(&mut self, start: usize, empty_side: usize, trigger: usize) {
+    /// `empty_side` is background (west for outer borders, east for holes);
+    /// `MARK`: whether the walk marks the labels for the raster scan.
+    fn follow_border<const MARK: bool>(&mut self, start: usize, empty_side: usize, trigger: usize) {
         let first = self.points.len();
         match self.first_neighbour(start, empty_side) {
             None => {
-                self.labels[start] = RIGHT_BOUND;
+                if MARK {
+                    self.labels[start] = RIGHT_BOUND;
+                }
                 self.push_point(start);
             }
-            Some((last, direction)) => self.walk(start, last, direction),
+            Some((last, direction)) => self.walk::<MARK>(start, last, direction),
         }
         self.spans.push(Span {
             start: first,
@@ -336,8 +341,9 @@ impl ContourScanner {
 
     /// The border walk proper: at each pixel search counter-clockwise from the
     /// previous pixel for the next white one, until the walk is about to
-    /// repeat its first move. Marks pixels whose east side was seen empty.
-    fn walk(&mut self, start: usize, last: usize, first_direction: usize) {
+    /// repeat its first move. With `MARK`, marks pixels whose east side was
+    /// seen empty (and the others visited).
+    fn walk<const MARK: bool>(&mut self, start: usize, last: usize, first_direction: usize) {
         let mut current = start;
         // Full-image coordinates of `current`, moved along with it.
         let mut xy = self.full_xy(start);
@@ -352,10 +358,12 @@ impl ContourScanner {
                 }
             };
             direction &= 7;
-            if direction >= 1 && direction <= back {
-                self.labels[current] = RIGHT_BOUND;
-            } else if self.labels[current] == UNVISITED {
-                self.labels[current] = VISITED;
+            if MARK {
+                if direction >= 1 && direction <= back {
+                    self.labels[current] = RIGHT_BOUND;
+                } else if self.labels[current] == UNVISITED {
+                    self.labels[current] = VISITED;
+                }
             }
             self.points.push(xy);
             if next == start && current == last {

@@ -5,6 +5,10 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+mod sums;
+
+use sums::add_run;
+
 /// Weights below this are dropped in the exact field (the field as it was
 /// before the cut; see `Kernel::new`).
 pub const EXACT_TOLERANCE: f64 = 1e-4;
@@ -35,11 +39,26 @@ struct Run {
 /// than ending the run (a zero weight adds an exact zero to a finite sum).
 const GAP: usize = 3;
 
+/// Below this many pins every source's kept weights are one run, the
+/// dropped ones between them stored as zeros (at most `n^2` weights: 16129
+/// for 127 pins): the sums run over a few long runs, vectorised, rather
+/// than one short run per row of the layout, to the same values bit for bit.
+pub const ONE_RUN_MAX_PINS: usize = 200;
+
 impl Kernel {
     /// Weights `exp(-|r_i - r_j|^2 / (2 sigma^2))`, dropped below
     /// `tolerance` (the tracker's exact field drops them below
     /// [`EXACT_TOLERANCE`]).
+    /// Below [`ONE_RUN_MAX_PINS`] pins each source's weights are one run.
     pub fn new(reference: &[[f64; 2]], sigma: f64, tolerance: f64) -> Self {
+        let n = reference.len();
+        let gap = if n < ONE_RUN_MAX_PINS { n } else { GAP };
+        Self::with_gap(reference, sigma, tolerance, gap)
+    }
+
+    /// [`Kernel::new`] with runs broken where more than `gap` weights in a
+    /// row are dropped.
+    fn with_gap(reference: &[[f64; 2]], sigma: f64, tolerance: f64, gap: usize) -> Self {
         let n = reference.len();
         let scale = -0.5 / (sigma * sigma);
         let (mut starts, mut runs, mut weights) = (vec![0u32], Vec::new(), Vec::new());
@@ -54,7 +73,7 @@ impl Kernel {
             while let Some(lo) = row[i..].iter().position(|w| *w > 0.0).map(|k| i + k) {
                 let mut hi = lo + 1; // one past the last kept weight of the run
                 let mut k = hi;
-                while k < n && k - hi <= GAP {
+                while k < n && k - hi <= gap {
                     if row[k] > 0.0 {
                         hi = k + 1;
                     }
@@ -125,18 +144,20 @@ pub fn smooth_field(
     prior: f64,
 ) -> Vec<[f64; 2]> {
     let affine = fit_affine(reference, observed);
-    // Residuals of the matched pins only, in pin order.
-    let residual: Vec<(usize, [f64; 2])> = reference
-        .iter()
-        .zip(observed)
-        .enumerate()
-        .filter_map(|(j, (r, o))| {
-            o.map(|d| {
-                let a = affine.apply(*r);
-                (j, [d[0] - a[0], d[1] - a[1]])
-            })
-        })
-        .collect();
+    // Residuals of the matched pins only, in pin order (room for all).
+    let mut residual: Vec<(usize, [f64; 2])> = Vec::with_capacity(reference.len());
+    residual.extend(
+        reference
+            .iter()
+            .zip(observed)
+            .enumerate()
+            .filter_map(|(j, (r, o))| {
+                o.map(|d| {
+                    let a = affine.apply(*r);
+                    (j, [d[0] - a[0], d[1] - a[1]])
+                })
+            }),
+    );
     let n = reference.len();
     let (mut sx, mut sy, mut sw) = (vec![0.0; n], vec![0.0; n], vec![prior; n]);
     if kernel.n == n {
@@ -230,18 +251,6 @@ pub fn fill_missing(
         .collect()
 }
 
-/// Adds one source's residual `r`, weighted by a run of its weights `w`,
-/// to the sums (x, y, weight) of the run's target pins.
-fn add_run(w: &[f64], r: [f64; 2], x: &mut [f64], y: &mut [f64], s: &mut [f64]) {
-    let len = w.len().min(x.len()).min(y.len()).min(s.len());
-    let (w, x, y, s) = (&w[..len], &mut x[..len], &mut y[..len], &mut s[..len]);
-    for k in 0..len {
-        x[k] += w[k] * r[0];
-        y[k] += w[k] * r[1];
-        s[k] += w[k];
-    }
-}
-
 #[cfg(test)]
 /// Kernel-weighted sums (x, y, weight) of the matched residuals
 /// `(pin, residual)` at one pin, `weights` indexed by source pin, the
@@ -290,11 +299,14 @@ impl Affine {
 /// Least-squares affine displacement; a pure translation when the matched
 /// pins are fewer than three or collinear; zero when none is matched.
 pub fn fit_affine(reference: &[[f64; 2]], observed: &Observations) -> Affine {
-    let pairs: Vec<([f64; 2], [f64; 2])> = reference
-        .iter()
-        .zip(observed)
-        .filter_map(|(r, o)| o.map(|d| (*r, d)))
-        .collect();
+    // Sized for every pin up front: collecting the filter would regrow.
+    let mut pairs: Vec<([f64; 2], [f64; 2])> = Vec::with_capacity(reference.len());
+    pairs.extend(
+        reference
+            .iter()
+            .zip(observed)
+            .filter_map(|(r, o)| o.map(|d| (*r, d))),
+    );
     if pairs.is_empty() {
         return Affine::zero();
     }
@@ -438,6 +450,39 @@ pub(crate) mod tests {
                 assert_eq!(got[i], [base[0] + local[0], base[1] + local[1]]);
             }
         }
+    }
+
+    /// A source's weights as one run (the default below
+    /// [`ONE_RUN_MAX_PINS`] pins) give the field and the fill of short runs
+    /// (a run broken after [`GAP`] dropped weights), bit for bit, on
+    /// jittered grids with and without missing pins.
+    #[test]
+    fn one_run_a_source_gives_the_short_runs_field_bit_for_bit() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(127);
+        let mut broken = 0;
+        let bits =
+            |v: Vec<[f64; 2]>| -> Vec<[u64; 2]> { v.iter().map(|p| p.map(f64::to_bits)).collect() };
+        for _ in 0..40 {
+            let reference = jittered(&grid(), 2.0, &mut rng);
+            assert!(reference.len() < ONE_RUN_MAX_PINS);
+            let observed = observed_at_random(&reference, 0.8, 9.0, &mut rng);
+            let sigma = rng.random_range(3.0..30.0);
+            let one = Kernel::new(&reference, sigma, EXACT_TOLERANCE);
+            let short = Kernel::with_gap(&reference, sigma, EXACT_TOLERANCE, GAP);
+            assert_eq!(one.runs.len(), reference.len(), "one run a source");
+            broken += usize::from(short.runs.len() > one.runs.len());
+            let prior = rng.random_range(0.0..0.5);
+            assert_eq!(
+                bits(smooth_field(&reference, &observed, &one, prior)),
+                bits(smooth_field(&reference, &observed, &short, prior))
+            );
+            assert_eq!(
+                bits(fill_missing(&reference, &observed, &one, prior)),
+                bits(fill_missing(&reference, &observed, &short, prior))
+            );
+        }
+        assert!(broken >= 10, "only {broken} kernels had short runs");
     }
 
     /// The fill at missing pins is the full field there, bit for bit, on

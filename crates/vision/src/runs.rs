@@ -28,21 +28,62 @@ struct Run {
     x1: u32,
 }
 
+/// What [`RunDetector::join`] sums over a component's runs.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sums {
+    /// Its runs.
+    count: u32,
+    /// Its pairs of touching runs (one row apart).
+    touching: u32,
+    /// The unit squares whose four corners are its pixels.
+    blocks: u32,
+    /// The extremes of x, y, x + y and x - y over its pixels (its box and
+    /// its outer border's octagon).
+    octagon: Octagon,
+}
+
+impl Sums {
+    /// The sums of one run, pixels `x0..=x1` of row `y`.
+    fn of_run(r: Run) -> Self {
+        Self {
+            count: 1,
+            touching: 0,
+            blocks: 0,
+            octagon: Octagon::row(r.y as i32, r.x0 as i32, r.x1 as i32),
+        }
+    }
+
+    /// Adds run `r`, which touches `touching` runs of the row above
+    /// sharing `blocks` squares of four pixels with them.
+    /// Runs come in raster order, so `r`'s row is the component's lowest.
+    fn add_run(&mut self, r: Run, touching: u32, blocks: u32) {
+        self.count += 1;
+        self.touching += touching;
+        self.blocks += blocks;
+        let o = &mut self.octagon;
+        let (y, x0, x1) = (i64::from(r.y), i64::from(r.x0), i64::from(r.x1));
+        o.x = [o.x[0].min(x0), o.x[1].max(x1)];
+        o.y[1] = y;
+        o.sum = [o.sum[0].min(x0 + y), o.sum[1].max(x1 + y)];
+        o.diff = [o.diff[0].min(x0 - y), o.diff[1].max(x1 - y)];
+    }
+
+    /// Adds another component's sums.
+    fn merge(&mut self, other: &Self) {
+        self.count += other.count;
+        self.touching += other.touching;
+        self.blocks += other.blocks;
+        self.octagon.merge(&other.octagon);
+    }
+}
+
 /// Reusable buffers of [`RunDetector::centres`].
 pub(crate) struct RunDetector {
     runs: Vec<Run>,
     parent: Vec<u32>,
-    /// Per root (a component's first run): its number of runs.
-    count: Vec<u32>,
-    /// Per run, then summed into each root: pairs of touching runs (one
-    /// row apart) whose lower run it is.
-    touching: Vec<u32>,
-    /// Per run, then summed into each root: the unit squares between it
-    /// and the runs above whose four corners are white pixels.
-    blocks: Vec<u32>,
-    /// Per root: the extremes of x, y, x + y and x - y over the
-    /// component's pixels (its box and its outer border's octagon).
-    octagons: Vec<Octagon>,
+    /// Per root (a component's first run): the component's sums (stale
+    /// at other runs).
+    sums: Vec<Sums>,
     grouped: Vec<Run>,
     found: Vec<(usize, Centre)>,
     /// The whole binary frame (its outer borders are walked on it).
@@ -57,10 +98,7 @@ impl Default for RunDetector {
         Self {
             runs: Vec::new(),
             parent: Vec::new(),
-            count: Vec::new(),
-            touching: Vec::new(),
-            blocks: Vec::new(),
-            octagons: Vec::new(),
+            sums: Vec::new(),
             grouped: Vec::new(),
             found: Vec::new(),
             frame: ContourScanner::new(0, 0),
@@ -105,13 +143,14 @@ impl RunDetector {
             // Euler number (runs minus touching pairs, for 8-connected
             // white; the tests check it against the tracer's hole borders)
             // 1: no hole, so the outer border is the only contour.
-            if self.count[i] == self.touching[i] + 1 {
+            let sums = &self.sums[i];
+            if sums.count == sums.touching + 1 {
                 if self.area_rejects(i, p) {
                     continue;
                 }
                 let (x, y) = (self.runs[i].x0 as usize, self.runs[i].y as usize);
                 let points = self.frame.outer_border_at(x, y);
-                let octagon = Some(&self.octagons[i]);
+                let octagon = Some(&self.sums[i].octagon);
                 if let Some(c) = measure_shape_in(points, octagon, p, &mut self.shape) {
                     if colour_passes(&c, pixels, width, height, level, p) {
                         self.found.push((y * width + x, c));
@@ -139,71 +178,65 @@ impl RunDetector {
         if !p.filter_by_area {
             return false;
         }
-        let Octagon { x, y, .. } = self.octagons[root];
+        let Sums {
+            blocks, octagon, ..
+        } = self.sums[root];
+        let Octagon { x, y, .. } = octagon;
         let most = (x[1] - x[0]) as f64 * (y[1] - y[0]) as f64;
-        let least = f64::from(self.blocks[root]);
+        let least = f64::from(blocks);
         most < f64::from(p.min_area) || least >= f64::from(p.max_area)
     }
 
     /// Joins the runs into 8-connected components (union-find over runs
-    /// of adjacent rows): afterwards a component's first run (its root) is
-    /// the only run that is its own `parent`, and the root's `count`,
-    /// `touching`, `blocks` and `octagons` are the component's.
+    /// of adjacent rows, in one pass): afterwards a component's first run
+    /// (its root) is the only run that is its own `parent`, and the root's
+    /// `sums` are the component's. Each run is added to its root's sums as
+    /// it is joined, and when two components meet the later root's sums
+    /// are added to the earlier one's.
     fn join(&mut self) {
-        let runs = &self.runs;
-        self.parent.clear();
-        self.parent.extend(0..runs.len() as u32);
-        self.touching.clear();
-        self.touching.resize(runs.len(), 0);
-        self.blocks.clear();
-        self.blocks.resize(runs.len(), 0);
-        let (mut above, mut row_start) = (0, 0);
-        for i in 0..runs.len() {
-            if i > 0 && runs[i].y != runs[i - 1].y {
-                above = if runs[i].y == runs[i - 1].y + 1 {
+        let Self {
+            runs, parent, sums, ..
+        } = self;
+        let n = runs.len();
+        parent.clear();
+        parent.resize(n, 0);
+        sums.resize(n, Sums::default());
+        let (mut above, mut row_start, mut row_y) = (0, 0, u32::MAX);
+        for (i, &r) in runs.iter().enumerate() {
+            if r.y != row_y {
+                above = if r.y == row_y.wrapping_add(1) {
                     row_start
                 } else {
                     i
                 };
-                row_start = i;
+                (row_start, row_y) = (i, r.y);
             }
-            let r = runs[i];
             // Runs of the row above, in x order: skip those ending left of
-            // this one's reach, stop at the first starting right of it.
-            let mut j = above;
-            while j < row_start {
-                let q = runs[j];
-                j += 1;
-                if q.x1 + 1 < r.x0 {
-                    above = j;
-                    continue;
-                }
+            // this one's reach; those after, up to the first starting right
+            // of it, touch it.
+            while above < row_start && runs[above].x1 + 1 < r.x0 {
+                above += 1;
+            }
+            let (mut root, mut touching, mut blocks) = (i, 0, 0);
+            for (j, q) in runs[above..row_start].iter().enumerate() {
                 if q.x0 > r.x1 + 1 {
                     break;
                 }
-                union(&mut self.parent, i, j - 1);
-                self.touching[i] += 1;
+                let top = find(parent, above + j);
+                root = if touching == 0 {
+                    top
+                } else {
+                    merge(parent, sums, root, top)
+                };
+                touching += 1;
                 // x and x + 1 in both runs: a square of four white pixels.
-                self.blocks[i] += q.x1.min(r.x1).saturating_sub(q.x0.max(r.x0));
+                blocks += q.x1.min(r.x1).saturating_sub(q.x0.max(r.x0));
             }
-        }
-        // Roots are first runs; count each root's runs, touching pairs
-        // and squares, and its octagon.
-        self.count.clear();
-        self.count.resize(runs.len(), 0);
-        self.octagons.resize(runs.len(), Octagon::default());
-        for (i, r) in runs.iter().enumerate() {
-            // Parents have smaller indices and are done: one step to the root.
-            let root = self.parent[self.parent[i] as usize] as usize;
-            self.parent[i] = root as u32;
-            self.count[root] += 1;
-            let (y, x0, x1) = (r.y as i32, r.x0 as i32, r.x1 as i32);
+            parent[i] = root as u32;
             if root == i {
-                self.octagons[i] = Octagon::row(y, x0, x1);
+                sums[i] = Sums::of_run(r);
             } else {
-                self.touching[root] += self.touching[i];
-                self.blocks[root] += self.blocks[i];
-                self.octagons[root].add_row(y, x0, x1);
+                sums[root].add_run(r, touching, blocks);
             }
         }
     }
@@ -262,9 +295,9 @@ impl RunDetector {
 
 /// The runs of pixels above `level` (at least -1), row by row, and the
 /// binary image into `frame` (`width` x `height`; 1 white, 0 background,
-/// every label rewritten): each row is read 64 pixels at a time into a bit
-/// mask and its labels ([`above_mask`]), and the mask's runs of ones are
-/// found by bit counting.
+/// every label rewritten): each row is read into bit masks and its labels
+/// ([`row_mask`]), and the runs start and end where a bit differs from the
+/// one before it ([`row_runs`]).
 fn white_runs(
     pixels: &[u8],
     width: usize,
@@ -277,101 +310,111 @@ fn white_runs(
     if width == 0 {
         return;
     }
-    // v > level for u8 v: all when level < 0, none from 255.
-    let (lvl, all) = (level.clamp(0, 254) as u8, level < 0);
+    let mut masks = vec![0u64; width.div_ceil(64)];
     for (y, row) in pixels.chunks_exact(width).take(height).enumerate() {
         let labels = frame.row_mut(y);
         if level >= 255 {
             labels.fill(0);
             continue;
         }
-        let mut open: Option<usize> = None;
-        for (c, block) in row.chunks(64).enumerate() {
-            let out = &mut labels[c * 64..c * 64 + block.len()];
-            let mask = if all {
-                out.fill(1);
-                u64::MAX >> (64 - block.len())
-            } else {
-                above_mask(block, lvl, out)
-            };
-            let base = c * 64;
-            let mut at = 0;
-            // Alternate: skip zeros, then ones, closing and opening runs.
-            while at < block.len() {
-                let rest = mask >> at;
-                if open.is_none() {
-                    if rest == 0 {
-                        break;
-                    }
-                    at += rest.trailing_zeros() as usize;
-                    open = Some(base + at);
-                } else {
-                    let ones = (!rest).trailing_zeros() as usize;
-                    if at + ones >= block.len() {
-                        break;
-                    }
-                    at += ones;
-                    push_run(runs, y, open.take(), base + at);
-                }
+        if level < 0 {
+            // Every pixel is above.
+            labels.fill(1);
+            masks.fill(u64::MAX);
+            if !width.is_multiple_of(64) {
+                masks[width / 64] = u64::MAX >> (64 - width % 64);
             }
+        } else {
+            row_mask(row, level as u8, labels, &mut masks);
         }
-        push_run(runs, y, open, width);
+        row_runs(&masks, y as u32, width as u32, runs);
     }
 }
 
-/// Bit `i` set, and `out[i]` 1 (else 0), where `block[i] > lvl` (`block`
-/// and `out` of the same length, at most 64 pixels): 16 pixels a vector
-/// compare on x86_64 (SSE2, part of its baseline), one at a time elsewhere
-/// and for the tail.
-fn above_mask(block: &[u8], lvl: u8, out: &mut [i8]) -> u64 {
-    let mut mask = 0u64;
+/// Bit `x % 64` of `masks[x / 64]` set, and `labels[x]` 1 (else 0), where
+/// `row[x] > lvl` (`lvl` < 255; `row` and `labels` of the same length, at
+/// most 64 bits a mask; the bits past the row cleared): 64 pixels a step in
+/// four 16-pixel vector compares on x86_64 (SSE2, part of its baseline),
+/// one at a time elsewhere and for the tail.
+fn row_mask(row: &[u8], lvl: u8, labels: &mut [i8], masks: &mut [u64]) {
+    let n = row.len().min(labels.len()).min(64 * masks.len());
+    masks.fill(0);
     #[cfg(target_arch = "x86_64")]
     let done = {
         use std::arch::x86_64::{
             _mm_and_si128, _mm_cmpeq_epi8, _mm_loadu_si128, _mm_max_epu8, _mm_movemask_epi8,
             _mm_set1_epi8, _mm_storeu_si128,
         };
-        for (c, (chunk, dst)) in block
-            .chunks_exact(16)
-            .zip(out.chunks_exact_mut(16))
-            .enumerate()
-        {
-            // SAFETY: SSE2 is in the x86_64 baseline, so these intrinsics
-            // exist on every x86_64 CPU; `chunk` holds the 16 bytes loaded
-            // and `dst` the 16 stored (no alignment needed). v > lvl <=>
-            // max(v, lvl + 1) == v (lvl < 255: checked by the caller).
-            let hits = unsafe {
-                let v = _mm_loadu_si128(chunk.as_ptr().cast());
-                let bound = _mm_set1_epi8((lvl + 1) as i8);
-                let hit = _mm_cmpeq_epi8(_mm_max_epu8(v, bound), v);
-                _mm_storeu_si128(
-                    dst.as_mut_ptr().cast(),
-                    _mm_and_si128(hit, _mm_set1_epi8(1)),
-                );
-                _mm_movemask_epi8(hit)
-            };
-            mask |= u64::from(hits as u16) << (16 * c);
+        let (src, dst) = (row.as_ptr(), labels.as_mut_ptr());
+        for (w, mask) in masks.iter_mut().enumerate().take(n / 64) {
+            let mut bits = 0u64;
+            for q in 0..4 {
+                let at = 64 * w + 16 * q;
+                // SAFETY: SSE2 is in the x86_64 baseline, so these
+                // intrinsics exist on every x86_64 CPU; at + 16 <= 64 (w + 1)
+                // <= n, within `row` and `labels`, so the 16 bytes loaded
+                // and stored are in bounds (no alignment needed).
+                // v > lvl <=> max(v, lvl + 1) == v (lvl < 255).
+                let hits = unsafe {
+                    let v = _mm_loadu_si128(src.add(at).cast());
+                    let hit = _mm_cmpeq_epi8(_mm_max_epu8(v, _mm_set1_epi8((lvl + 1) as i8)), v);
+                    _mm_storeu_si128(dst.add(at).cast(), _mm_and_si128(hit, _mm_set1_epi8(1)));
+                    _mm_movemask_epi8(hit)
+                };
+                bits |= u64::from(hits as u16) << (16 * q);
+            }
+            *mask = bits;
         }
-        block.len() / 16 * 16
+        n / 64 * 64
     };
     #[cfg(not(target_arch = "x86_64"))]
     let done = 0;
-    for (i, (&v, d)) in block.iter().zip(out.iter_mut()).enumerate().skip(done) {
-        *d = i8::from(v > lvl);
-        mask |= u64::from(v > lvl) << i;
+    for x in done..n {
+        let white = row[x] > lvl;
+        labels[x] = i8::from(white);
+        masks[x / 64] |= u64::from(white) << (x % 64);
     }
-    mask
 }
 
-/// Adds the run `x0..end` of row `y` when one is open.
-fn push_run(runs: &mut Vec<Run>, y: usize, x0: Option<usize>, end: usize) {
-    if let Some(x0) = x0 {
+/// The runs of row `y` (`width` pixels, bit `x % 64` of `masks[x / 64]`
+/// set where pixel x is white, no bit set past the row) appended to `runs`:
+/// a run starts or ends at every bit that differs from the bit before it
+/// (the one before the row counts as clear).
+fn row_runs(masks: &[u64], y: u32, width: u32, runs: &mut Vec<Run>) {
+    let mut open: Option<u32> = None;
+    let mut carry = 0;
+    for (c, &mask) in masks.iter().enumerate() {
+        let mut steps = mask ^ ((mask << 1) | carry);
+        carry = mask >> 63;
+        while steps != 0 {
+            let x = 64 * c as u32 + steps.trailing_zeros();
+            steps &= steps - 1;
+            match open.take() {
+                None => open = Some(x),
+                Some(x0) => runs.push(Run { y, x0, x1: x - 1 }),
+            }
+        }
+    }
+    if let Some(x0) = open {
         runs.push(Run {
-            y: y as u32,
-            x0: x0 as u32,
-            x1: (end - 1) as u32,
+            y,
+            x0,
+            x1: width - 1,
         });
     }
+}
+
+/// Joins the components of roots `a` and `b`: the earlier root stays
+/// (roots are first runs) and takes the other's sums; returns it.
+fn merge(parent: &mut [u32], sums: &mut [Sums], a: usize, b: usize) -> usize {
+    if a == b {
+        return a;
+    }
+    let (keep, gone) = (a.min(b), a.max(b));
+    parent[gone] = keep as u32;
+    let other = sums[gone];
+    sums[keep].merge(&other);
+    keep
 }
 
 fn find(parent: &mut [u32], mut i: usize) -> usize {
@@ -380,16 +423,6 @@ fn find(parent: &mut [u32], mut i: usize) -> usize {
         i = parent[i] as usize;
     }
     i
-}
-
-fn union(parent: &mut [u32], a: usize, b: usize) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    // The smaller index stays root, so roots are first runs.
-    if ra < rb {
-        parent[rb] = ra as u32;
-    } else {
-        parent[ra] = rb as u32;
-    }
 }
 
 #[cfg(test)]
@@ -471,13 +504,13 @@ mod tests {
                     .to_vec();
                 assert_eq!(got, want.1, "case {case} component at {start:?}");
                 // Holes: as many as the Euler number says.
-                let holes = (d.touching[i] + 1 - d.count[i]) as usize;
+                let holes = (d.sums[i].touching + 1 - d.sums[i].count) as usize;
                 if holes == 0 {
                     check_area_bounds(&d, i, &got);
                     // The octagon of the runs is the border's.
                     let mut octagon = Octagon::row(got[0][1], got[0][0], got[0][0]);
                     got.iter().for_each(|&[x, y]| octagon.add_row(y, x, x));
-                    assert_eq!(d.octagons[i], octagon, "case {case} at {start:?}");
+                    assert_eq!(d.sums[i].octagon, octagon, "case {case} at {start:?}");
                 }
                 contours += 1 + holes;
                 walked += 1;
@@ -502,9 +535,9 @@ mod tests {
     /// both it does not.
     fn check_area_bounds(d: &RunDetector, root: usize, border: &[[i32; 2]]) {
         let area = Moments::of_polygon(border).m00;
-        let Octagon { x, y, .. } = d.octagons[root];
+        let Octagon { x, y, .. } = d.sums[root].octagon;
         let most = (x[1] - x[0]) as f64 * (y[1] - y[0]) as f64;
-        let least = f64::from(d.blocks[root]);
+        let least = f64::from(d.sums[root].blocks);
         assert!(least <= area && area <= most, "{least} <= {area} <= {most}");
         let filter = |min_area: f64, max_area: f64| BlobParams {
             min_area: min_area as f32,

@@ -213,6 +213,15 @@ impl Octagon {
         self.diff = [self.diff[0].min(x0 - y), self.diff[1].max(x1 - y)];
     }
 
+    /// Adds every pixel of `other`: the extremes of both.
+    pub fn merge(&mut self, other: &Self) {
+        let lo_hi = |a: [i64; 2], b: [i64; 2]| [a[0].min(b[0]), a[1].max(b[1])];
+        self.x = lo_hi(self.x, other.x);
+        self.y = lo_hi(self.y, other.y);
+        self.sum = lo_hi(self.sum, other.sum);
+        self.diff = lo_hi(self.diff, other.diff);
+    }
+
     /// The octagon's area (infinite when its corner cuts overlap).
     pub fn area(&self) -> f64 {
         let ([x0, x1], [y0, y1]) = (self.x, self.y);

@@ -5,6 +5,7 @@ use crate::dennn::{ClampedPhase, FreePhase, LrScaling};
 use crate::error::LearnError;
 use crate::pca::PcScaling;
 use crate::pin_features::PinFeatures;
+use crate::rotations::Rotations;
 use crate::targets::{ModelTarget, Unit};
 use serde::{Deserialize, Serialize};
 
@@ -148,6 +149,11 @@ pub struct ModelConfig {
     /// (not written): the displacements.
     #[serde(default, skip_serializing_if = "PinFeatures::is_displacements")]
     pub pin_features: PinFeatures,
+    /// Train on every tap and its copies turned by the pin layout's
+    /// symmetry ([`Rotations`]); none (the default, not written) trains on
+    /// the taps as read.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotations: Option<Rotations>,
     /// The single net of DisDenNN / PcaDenNN (outputs r and theta).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<NetConfig>,
@@ -308,6 +314,9 @@ impl ModelConfig {
                 "circular_weight",
                 format!("{w} must lie in [1/{MAX_CIRCULAR_WEIGHT}, {MAX_CIRCULAR_WEIGHT}]"),
             ));
+        }
+        if let Some(r) = &self.rotations {
+            r.validate()?;
         }
         if self.divergence_retries > MAX_RETRIES {
             let n = self.divergence_retries;
@@ -536,6 +545,7 @@ fn report(kind: ModelKind) -> ModelConfig {
         input_noise: 0.0,
         circular_weight: 1.0,
         pin_features: PinFeatures::Displacements,
+        rotations: None,
         pose: None,
         position: None,
         angle: None,

@@ -13,6 +13,7 @@ use crate::fit_members::{fit_members, net_inputs};
 use crate::pca::Pca;
 use crate::pin_features::{FeatureMap, PinFeatures};
 use crate::predict::Predictor;
+use crate::rotations;
 use crate::standardise::Standardiser;
 use crate::targets::{self, ModelTarget, Unit};
 pub use crate::trainer::{EpochReport, NetEpoch, TrainingHistory};
@@ -97,8 +98,10 @@ impl PoseModel {
 
     /// As [`Self::fit_targets`], for data whose displacements are laid
     /// out against `reference_pins` (px, in input order): the layout
-    /// [`ModelConfig::pin_features`] other than the displacements needs
-    /// (an error without it), recorded in the model.
+    /// [`ModelConfig::pin_features`] other than the displacements and
+    /// [`ModelConfig::rotations`] need (an error without it), recorded in
+    /// the model for the features. With `rotations` the model is fitted on
+    /// `train` and its turned copies (`val` as given).
     pub fn fit_targets_on_pins(
         cfg: &ModelConfig,
         outputs: &[ModelTarget],
@@ -107,6 +110,8 @@ impl PoseModel {
         reference_pins: Option<&[[f64; 2]]>,
         progress: &mut dyn FnMut(&EpochReport),
     ) -> Result<(PoseModel, TrainingHistory), LearnError> {
+        let turned = turned_training_data(cfg, outputs, train, reference_pins)?;
+        let train = turned.as_ref().unwrap_or(train);
         let Some(map) = feature_map(cfg.pin_features, reference_pins, train.dim_x)? else {
             return Self::fit_displacements(cfg, outputs, train, val, progress);
         };
@@ -384,6 +389,24 @@ pub(crate) fn edge_roles_of(outputs: &[ModelTarget]) -> Result<[usize; 2], Learn
                 .join(", "),
         }),
     }
+}
+
+/// `train` with its copies turned by `cfg.rotations` over `reference_pins`;
+/// `None` without rotations.
+fn turned_training_data(
+    cfg: &ModelConfig,
+    outputs: &[ModelTarget],
+    train: &Dataset,
+    reference_pins: Option<&[[f64; 2]]>,
+) -> Result<Option<Dataset>, LearnError> {
+    let Some(rot) = &cfg.rotations else {
+        return Ok(None);
+    };
+    let pins = reference_pins.ok_or_else(|| LearnError::Config {
+        field: "rotations",
+        reason: "turned copies of the taps need the reference pins".into(),
+    })?;
+    rotations::turned_copies(train, outputs, rot, pins).map(Some)
 }
 
 /// The feature map `kind` needs over `reference_pins` for inputs of

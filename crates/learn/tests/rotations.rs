@@ -1,0 +1,213 @@
+//! Turned copies of the training taps (`rotations`): on a hexagonal layout
+//! a turn by 60 deg carries every pin onto a pin, the copy of an edge's
+//! displacement field is the field of the edge turned, and six turns give
+//! the tap back; layouts without the symmetry and bad settings are refused.
+use tactrace_learn::{
+    turned_copies, Dataset, LearnError, ModelConfig, ModelKind, ModelTarget, PoseModel, Preset,
+    Rotations, Unit,
+};
+
+const SPACING: f64 = 4.5;
+const CENTRE: [f64; 2] = [63.0, 64.0];
+
+/// A hexagonal layout of `rings` rings about `CENTRE` (331 pins for 10).
+fn hex_layout(rings: i32) -> Vec<[f64; 2]> {
+    let mut pins = Vec::new();
+    for a in -rings..=rings {
+        for b in -rings..=rings {
+            if (a + b).abs() <= rings {
+                let (a, b) = (f64::from(a), f64::from(b));
+                let x = CENTRE[0] + SPACING * (a + 0.5 * b);
+                let y = CENTRE[1] + SPACING * (0.75f64.sqrt() * b);
+                pins.push([x, y]);
+            }
+        }
+    }
+    pins
+}
+
+/// The displacements of a toy edge: its labelled angle `theta` (deg) is
+/// the image angle of its normal negated (the image's y axis points
+/// down), its signed distance `r` (px here) from the centre; every pin on
+/// the far side moves along the normal by its depth past the edge.
+fn edge_field(pins: &[[f64; 2]], r: f64, theta: f64) -> Vec<f32> {
+    let (s, c) = (-theta).to_radians().sin_cos();
+    let n = pins.len();
+    let mut d = vec![0.0f32; 2 * n];
+    for (i, p) in pins.iter().enumerate() {
+        let depth = (p[0] - CENTRE[0]) * c + (p[1] - CENTRE[1]) * s - r;
+        if depth > 0.0 {
+            d[i] = (0.1 * depth * c) as f32;
+            d[n + i] = (0.1 * depth * s) as f32;
+        }
+    }
+    d
+}
+
+fn edges(pins: &[[f64; 2]], poses: &[(f64, f64)]) -> Dataset {
+    let x: Vec<f32> = poses
+        .iter()
+        .flat_map(|&(r, t)| edge_field(pins, r, t))
+        .collect();
+    let y: Vec<f32> = poses
+        .iter()
+        .flat_map(|&(r, t)| [r as f32, t as f32])
+        .collect();
+    Dataset::new(x, y, poses.len(), 2 * pins.len(), 2).unwrap()
+}
+
+fn circular_edge() -> Vec<ModelTarget> {
+    vec![
+        ModelTarget::new("pose_2", Unit::Mm),
+        ModelTarget {
+            circular: true,
+            ..ModelTarget::new("pose_6", Unit::Deg)
+        },
+    ]
+}
+
+const SIX: Rotations = Rotations {
+    order: 6,
+    angle_sign: -1,
+};
+
+#[test]
+fn a_turned_edge_is_the_edge_turned_and_keeps_its_distance() {
+    let pins = hex_layout(10);
+    assert_eq!(pins.len(), 331);
+    let poses = [(3.0, 170.0), (-7.5, -20.0), (0.0, 95.0)];
+    let data = edges(&pins, &poses);
+    let out = turned_copies(&data, &circular_edge(), &SIX, &pins).unwrap();
+    assert_eq!(out.n, 6 * poses.len());
+    assert_eq!(
+        &out.x[..data.x.len()],
+        &data.x[..],
+        "the taps come first, as read"
+    );
+    for k in 1..6 {
+        for (i, &(r, theta)) in poses.iter().enumerate() {
+            let row = k * poses.len() + i;
+            let want = tactrace_learn::wrap_deg(theta - 60.0 * k as f64);
+            let y = out.y_row(row);
+            assert_eq!(f64::from(y[0]), r, "a turn keeps the signed distance");
+            assert!(
+                (f64::from(y[1]) - want).abs() < 1e-3,
+                "turn {k}: {} vs {want}",
+                y[1]
+            );
+            let expect = edge_field(&pins, r, want);
+            let worst = out
+                .x_row(row)
+                .iter()
+                .zip(&expect)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0f32, f32::max);
+            assert!(worst < 1e-4, "turn {k}, tap {i}: field off by {worst}");
+        }
+    }
+}
+
+#[test]
+fn the_angle_moves_the_other_way_with_the_other_sign() {
+    let pins = hex_layout(4);
+    let data = edges(&pins, &[(1.0, 179.0)]);
+    let plus = Rotations {
+        angle_sign: 1,
+        ..SIX
+    };
+    let out = turned_copies(&data, &circular_edge(), &plus, &pins).unwrap();
+    let angles: Vec<f32> = (0..6).map(|k| out.y_row(k)[1]).collect();
+    let want = [179.0, -121.0, -61.0, -1.0, 59.0, 119.0];
+    for (a, w) in angles.iter().zip(want) {
+        assert!((a - w).abs() < 1e-3, "{angles:?}");
+    }
+}
+
+#[test]
+fn a_pure_shift_turns_as_a_vector_at_every_pin() {
+    let pins = hex_layout(3);
+    let n = pins.len();
+    let mut x = vec![1.0f32; n];
+    x.extend(vec![0.0f32; n]);
+    let data = Dataset::new(x, vec![0.0, 10.0], 1, 2 * n, 2).unwrap();
+    let out = turned_copies(&data, &circular_edge(), &SIX, &pins).unwrap();
+    let row = out.x_row(1);
+    let (s, c) = 60f64.to_radians().sin_cos();
+    for i in 0..n {
+        assert!((f64::from(row[i]) - c).abs() < 1e-6 && (f64::from(row[n + i]) - s).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn a_layout_without_the_symmetry_is_refused_by_name() {
+    let square: Vec<[f64; 2]> = (0..25)
+        .map(|i| [f64::from(i % 5) * SPACING, f64::from(i / 5) * SPACING])
+        .collect();
+    let data = Dataset::new(vec![0.0; 50], vec![0.0, 0.0], 1, 50, 2).unwrap();
+    let err = turned_copies(&data, &circular_edge(), &SIX, &square).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            LearnError::Config {
+                field: "rotations",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(err.to_string().contains("not symmetric"), "{err}");
+    let four = Rotations { order: 4, ..SIX };
+    assert_eq!(
+        turned_copies(&data, &circular_edge(), &four, &square)
+            .unwrap()
+            .n,
+        4
+    );
+}
+
+#[test]
+fn bad_settings_are_refused_and_the_default_writes_nothing() {
+    let mut cfg = ModelConfig::preset(ModelKind::PcaDenNN, Preset::Default);
+    assert!(cfg.rotations.is_none());
+    let plain = toml::to_string(&cfg).unwrap();
+    assert!(!plain.contains("rotations"));
+    for bad in [(1, -1), (13, 1), (6, 0), (6, 2)] {
+        cfg.rotations = Some(Rotations {
+            order: bad.0,
+            angle_sign: bad.1,
+        });
+        let err = cfg.validate().unwrap_err();
+        assert!(err.to_string().contains("rotations"), "{bad:?}: {err}");
+    }
+    cfg.rotations = Some(SIX);
+    let text = toml::to_string(&cfg).unwrap();
+    let back: ModelConfig = toml::from_str(&text).unwrap();
+    assert_eq!(back.rotations, Some(SIX));
+}
+
+#[test]
+fn a_fit_with_rotations_needs_the_reference_pins() {
+    let pins = hex_layout(2);
+    let poses: Vec<(f64, f64)> = (0..12)
+        .map(|i| (0.5 * f64::from(i % 3), 30.0 * f64::from(i)))
+        .collect();
+    let data = edges(&pins, &poses);
+    let mut cfg = ModelConfig::preset(ModelKind::PcaDenNN, Preset::Default);
+    cfg.rotations = Some(SIX);
+    cfg.epochs = 2;
+    if let Some(net) = cfg.pose.as_mut() {
+        net.hidden = vec![8];
+        net.n_components = Some(4);
+    }
+    let err = PoseModel::fit_targets(&cfg, &circular_edge(), &data, None, &mut |_| {}).unwrap_err();
+    assert!(err.to_string().contains("reference pins"), "{err}");
+    let fitted = PoseModel::fit_targets_on_pins(
+        &cfg,
+        &circular_edge(),
+        &data,
+        None,
+        Some(&pins),
+        &mut |_| {},
+    );
+    assert!(fitted.is_ok(), "{:?}", fitted.err().map(|e| e.to_string()));
+}

@@ -6,33 +6,14 @@
 //! depth law and records no gain.
 mod common;
 
-use tactrace_sensor::{
-    fit_depth, DepthSearch, EdgeTap, FitSample, Shear, TacTipConfig, TacTipModel,
-};
+use tactrace_sensor::{fit_depth, DepthSearch, FitSample, TacTipConfig};
 
-/// 30 taps of `truth`, labels spread over r in [-3, 3] mm, theta in
-/// [-60, 60] deg, dz in [3, 5] and slides of up to 2 mm and 2 deg.
+/// 30 taps of `truth`, theta in [-60, 60] deg, slides of up to 2 mm
+/// and 2 deg ([`common::depth_taps`]).
 fn taps(truth: &TacTipConfig) -> (Vec<[f64; 2]>, Vec<FitSample>) {
-    let model = TacTipModel::new(truth.clone()).unwrap();
-    let rest = model.rest_pins().to_vec();
-    let n = 30;
-    let samples = (0..n)
-        .map(|k| {
-            let u = |m: usize| ((k * m) % n) as f64 / (n - 1) as f64;
-            let tap = EdgeTap {
-                r_mm: -3.0 + 6.0 * u(7),
-                theta_deg: -60.0 + 120.0 * u(11),
-                dz_mm: 3.0 + 2.0 * u(13),
-                shear: Some(Shear {
-                    dx_mm: -2.0 + 4.0 * u(17),
-                    dy_mm: -2.0 + 4.0 * u(19),
-                    drz_deg: -2.0 + 4.0 * u(23),
-                }),
-            };
-            common::fit_sample(&model, &rest, tap)
-        })
-        .collect();
-    (rest, samples)
+    common::depth_taps(truth, 30, 2.0, |k| {
+        -60.0 + 120.0 * common::spread(k, 11, 30)
+    })
 }
 
 /// The default sensor pressed to the labelled depth with the field's

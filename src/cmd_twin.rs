@@ -313,6 +313,11 @@ pub struct CalibrateArgs {
     /// one (up to a minute more).
     #[arg(long)]
     fit_physics: bool,
+    /// Press each calibration tap to its labelled depth (the depth column
+    /// read as the absolute depth, mm) and fit the field's gain instead
+    /// of the depth law (docs/calibration.md, "The labelled depth").
+    #[arg(long)]
+    labelled_depth: bool,
     /// The sensor folder to write.
     #[arg(long)]
     out: PathBuf,
@@ -332,6 +337,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
         allowed_rows: None,
         score_rows: None,
         fit_physics: a.fit_physics,
+        labelled_depth: a.labelled_depth,
     };
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let t0 = std::time::Instant::now();

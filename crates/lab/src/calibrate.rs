@@ -55,6 +55,10 @@ pub struct CalibrateConfig {
     /// taps (`tactrace_sensor::fit_joint`) before the field correction:
     /// for a sensor unlike the shared one (`--fit-physics`).
     pub fit_physics: bool,
+    /// Press each calibration tap to its labelled depth column and fit
+    /// the field's gain instead of the depth law
+    /// (`tactrace_sensor::DepthSearch::labelled_depth`, `--labelled-depth`).
+    pub labelled_depth: bool,
 }
 
 /// A fitted sensor and what the calibration saw.
@@ -158,7 +162,8 @@ pub fn calibrate_sensor(
     let real = import_rows(c, Some(&keep), progress)?;
     let samples = fit_samples(&real, &rows, &chosen);
     let rest = &real.data.meta.reference_pins;
-    let (convention, depth, physics) = fit_convention_and_depth(sensor, rest, &samples)?;
+    let (convention, depth, physics) =
+        fit_convention_and_depth(sensor, rest, &samples, cfg.labelled_depth)?;
     let physics = if cfg.fit_physics {
         fit_physics(&physics, rest, &samples)?
     } else {
@@ -285,32 +290,44 @@ fn fit_convention_and_depth(
     sensor: &TacTipConfig,
     rest: &[[f64; 2]],
     samples: &[FitSample],
+    labelled_depth: bool,
 ) -> Result<(ConventionFit, DepthFit, TacTipConfig)> {
     let convention = fit_convention(sensor, rest, samples)?;
     let with = convention.apply(sensor);
-    let depth = fit_depth(&with, rest, samples)?;
+    let depth = fit_depth(&with, rest, samples, labelled_depth)?;
     if depth.kept_own {
         return Ok((convention, depth, with));
     }
     let deeper = depth.apply(sensor);
     let again = fit_convention(&deeper, rest, samples)?;
     let with = again.apply(&deeper);
-    let mut depth2 = fit_depth(&with, rest, samples)?;
+    let mut depth2 = fit_depth(&with, rest, samples, labelled_depth)?;
     let physics = depth2.apply(&with);
     // Recorded against the given sensor: the scales of both passes, its
     // own values as the first pass scored them.
     depth2.chosen.slide_scale *= depth.chosen.slide_scale;
     depth2.chosen.rim_scale *= depth.chosen.rim_scale;
+    if let (Some(g2), Some(g1)) = (&mut depth2.chosen.field_gain, depth.chosen.field_gain) {
+        *g2 *= g1;
+    }
     depth2.own = depth.own;
     depth2.kept_own = false;
     Ok((again, depth2, physics))
 }
 
 /// The tap depth law and slide response of the calibration taps
-/// `samples` (pins in the order of `rest`), from `sensor`'s.
-fn fit_depth(sensor: &TacTipConfig, rest: &[[f64; 2]], samples: &[FitSample]) -> Result<DepthFit> {
+/// `samples` (pins in the order of `rest`), from `sensor`'s; with
+/// `labelled_depth`, the field's gain under the labelled depth instead
+/// of the depth law.
+fn fit_depth(
+    sensor: &TacTipConfig,
+    rest: &[[f64; 2]],
+    samples: &[FitSample],
+    labelled_depth: bool,
+) -> Result<DepthFit> {
     let search = DepthSearch {
         threads: rayon::current_num_threads(),
+        labelled_depth,
         ..DepthSearch::default()
     };
     Ok(tactrace_sensor::fit_depth(sensor, rest, samples, &search)?)

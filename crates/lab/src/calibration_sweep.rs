@@ -139,6 +139,7 @@ fn run_case(
         allowed_rows: Some(rows_in(split, split.training, case.pool.1)?),
         score_rows: Some(rows_in(split, split.validation, case.scored.1)?),
         fit_physics: false,
+        labelled_depth: false,
     };
     let got = calibrate_sensor(&ccfg, &cfg.follow.rig.sensor, &|| {})?;
     let dir = out.join("calibration").join(case.folder);

@@ -24,6 +24,7 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
         allowed_rows: None,
         score_rows: None,
         fit_physics: false,
+        labelled_depth: false,
     };
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     let record = &got.sensor.spec.calibration;
@@ -110,6 +111,7 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
         allowed_rows: None,
         score_rows: None,
         fit_physics: false,
+        labelled_depth: false,
     };
     let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {})
         .err()

@@ -29,6 +29,7 @@ fn calibrated_sensor(dir: &std::path::Path) -> SensorFolder {
         allowed_rows: None,
         score_rows: None,
         fit_physics: false,
+        labelled_depth: false,
     };
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     got.sensor.write(&dir.join("sensor"), false).unwrap();
@@ -102,6 +103,7 @@ fn calibrate_80(twin: LabelledCollection, fit_physics: bool) -> CalibrateConfig 
         allowed_rows: None,
         score_rows: None,
         fit_physics,
+        labelled_depth: false,
     }
 }
 

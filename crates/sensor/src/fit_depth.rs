@@ -33,6 +33,14 @@
 //! sensor's own values are kept unless the fit lowers the misfit by
 //! [`DepthSearch::min_gain`], and when the taps' `dz` does not vary (no
 //! depth column) the fit is not run. Pure, like [`crate::fit_joint`].
+//!
+//! With [`DepthSearch::labelled_depth`] every tap presses to its labelled
+//! `dz` (`tap_depth_mm` 0, `depth_per_offset` 1: a depth column that is
+//! the absolute depth) and the field's gain `g` is fitted in the depth
+//! law's place: the gel flow's layer thickness divided by `g` and the
+//! lift gain multiplied by it (eqs. S6, S8), so the pins move `g` times
+//! as far for the same contact patch (docs/calibration.md, "The labelled
+//! depth").
 use crate::fit::FitSample;
 use crate::fit_convention::scores;
 use crate::nelder_mead::minimise;
@@ -52,16 +60,21 @@ pub struct DepthSearch {
     pub min_gain: f64,
     /// Threads the taps are simulated on.
     pub threads: usize,
+    /// Press each tap to its labelled `dz` and fit the field's gain
+    /// instead of the depth law (see the module header).
+    pub labelled_depth: bool,
 }
 
 impl Default for DepthSearch {
-    /// 1 mm grid, 100 refining steps, 5 % gain, one thread.
+    /// 1 mm grid, 100 refining steps, 5 % gain, one thread, the depth
+    /// law fitted.
     fn default() -> Self {
         Self {
             grid_step_mm: 1.0,
             iterations: 100,
             min_gain: 0.05,
             threads: 1,
+            labelled_depth: false,
         }
     }
 }
@@ -87,6 +100,11 @@ pub struct DepthScore {
     /// fitted.
     #[serde(default)]
     pub pivot_mm: Option<[f64; 2]>,
+    /// The field's gain against the given sensor's (layer thickness
+    /// divided by it, lift gain multiplied), when fitted
+    /// ([`DepthSearch::labelled_depth`]); absent otherwise.
+    #[serde(default)]
+    pub field_gain: Option<f64>,
     /// Per-coordinate RMS pin misfit over the taps, px.
     pub rms_px: f64,
     /// Mean per-tap cosine between the simulated and measured fields.
@@ -143,10 +161,13 @@ impl DepthFit {
         } else {
             format!("{:.2} mm", c.depth_at(lo))
         };
-        let pivot = match c.pivot_mm {
+        let mut pivot = match c.pivot_mm {
             Some([x, y]) => format!(", pivot ({x:.2}, {y:.2}) mm"),
             None => String::new(),
         };
+        if let Some(g) = c.field_gain {
+            pivot.push_str(&format!(", field gain x{g:.2}"));
+        }
         let what = if self.kept_own {
             "the sensor's own kept"
         } else {
@@ -190,8 +211,15 @@ fn with_depth(cfg: &TacTipConfig, d: &DepthScore) -> TacTipConfig {
         out.calibration.pivot_x_mm = x;
         out.calibration.pivot_y_mm = y;
     }
+    if let Some(g) = d.field_gain {
+        out.mechanics.layer_thickness_mm /= g;
+        out.mechanics.lift_gain *= g;
+    }
     out
 }
+
+/// Field gains the labelled-depth search starts from (its coarse grid).
+const GAIN_GRID: [f64; 5] = [0.5, 0.7, 1.0, 1.4, 2.0];
 
 /// Mean resultant length of the taps' labelled angles: 1 when they are
 /// all one angle, near 0 when they go round the circle evenly.
@@ -226,9 +254,11 @@ pub fn fit_depth(
     let deepest = cfg.mechanics.max_depth_mm;
     let own_pivot = [k.pivot_x_mm, k.pivot_y_mm];
     let fit_pivot = angle_resultant(samples) < PIVOT_MAX_RESULTANT;
-    // x = [ln slide scale, ln rim scale, edge offset, pivot x, pivot y].
-    let score = |depth_lo: f64, depth_hi: f64, x: [f64; 5]| -> DepthScore {
-        let [ln_slide, ln_rim, edge, px, py] = x;
+    let labelled = search.labelled_depth;
+    // x = [ln slide scale, ln rim scale, edge offset, pivot x, pivot y,
+    // ln field gain (read only with the labelled depth)].
+    let score = |depth_lo: f64, depth_hi: f64, x: [f64; 6]| -> DepthScore {
+        let [ln_slide, ln_rim, edge, px, py, ln_gain] = x;
         let per = if varies {
             (depth_hi - depth_lo) / (hi - lo)
         } else {
@@ -241,6 +271,7 @@ pub fn fit_depth(
             rim_scale: ln_rim.exp(),
             edge_offset_mm: edge,
             pivot_mm: fit_pivot.then_some([px, py]),
+            field_gain: labelled.then_some(ln_gain.exp()),
             rms_px: f64::INFINITY,
             cosine: -1.0,
         };
@@ -252,6 +283,7 @@ pub fn fit_depth(
             || !inside(depth_hi)
             || ln_slide.abs() > 3.0
             || ln_rim.abs() > 2.0
+            || ln_gain.abs() > 2.0
             || !near
         {
             return d;
@@ -272,6 +304,7 @@ pub fn fit_depth(
         rim_scale: 1.0,
         edge_offset_mm: k.edge_offset_mm,
         pivot_mm: fit_pivot.then_some(own_pivot),
+        field_gain: None,
         rms_px,
         cosine,
     };
@@ -288,43 +321,69 @@ pub fn fit_depth(
         });
     }
     let step = search.grid_step_mm.max(0.1);
-    let grid: Vec<f64> = (1..)
-        .map(|i| step * f64::from(i))
-        .take_while(|&v| v <= deepest)
-        .collect();
-    let mut best = (own_lo, own_hi, own);
-    for &a in &grid {
-        let his: &[f64] = if varies { &grid } else { &[a] };
-        for &b in his {
-            let d = score(
-                a,
-                b,
-                [0.0, 0.0, k.edge_offset_mm, own_pivot[0], own_pivot[1]],
-            );
-            if d.rms_px < best.2.rms_px {
-                best = (a, b, d);
-            }
-        }
-    }
+    // The coarse start: a grid of the two depths, or with the labelled
+    // depth of the field's gain; `head` is its length in the simplex.
+    let starts: Vec<[f64; 2]> = if labelled {
+        GAIN_GRID.iter().map(|g| [g.ln(), 0.0]).collect()
+    } else {
+        let grid: Vec<f64> = (1..)
+            .map(|i| step * f64::from(i))
+            .take_while(|&v| v <= deepest)
+            .collect();
+        grid.iter()
+            .flat_map(|&a| grid.iter().map(move |&b| [a, b]))
+            .collect()
+    };
+    let head = if labelled { 1 } else { 2 };
     // The simplex moves the pivot only when it is fitted.
     let at = |x: &[f64]| {
-        let pivot = if fit_pivot { [x[5], x[6]] } else { own_pivot };
-        let b = if varies { x[1] } else { x[0] };
-        score(x[0], b, [x[2], x[3], x[4], pivot[0], pivot[1]])
+        let rest = &x[head..];
+        let pivot = if fit_pivot {
+            [rest[3], rest[4]]
+        } else {
+            own_pivot
+        };
+        let (a, b, ln_gain) = if labelled {
+            (lo, hi, x[0])
+        } else {
+            (x[0], x[1], 0.0)
+        };
+        score(
+            a,
+            b,
+            [rest[0], rest[1], rest[2], pivot[0], pivot[1], ln_gain],
+        )
     };
+    let tail = [0.0, 0.0, k.edge_offset_mm];
+    // The sensor's own law (the gain 1 with the labelled depth) unless a
+    // start beats it.
+    let mut best = (if labelled { [0.0; 2] } else { [own_lo, own_hi] }, own);
+    for start in &starts {
+        let x: Vec<f64> = start[..head]
+            .iter()
+            .chain(&tail)
+            .chain(&own_pivot)
+            .copied()
+            .collect();
+        let d = at(&x);
+        if d.rms_px < best.1.rms_px {
+            best = (*start, d);
+        }
+    }
     let objective = |x: &[f64]| at(x).rms_px;
-    let mut x0 = vec![best.0, best.1, 0.0, 0.0, k.edge_offset_mm];
-    let mut first = vec![step / 2.0, step / 2.0, 0.3, 0.3, 0.5];
+    let mut x0: Vec<f64> = best.0[..head].iter().chain(&tail).copied().collect();
+    let mut first = vec![if labelled { 0.2 } else { step / 2.0 }; head];
+    first.extend([0.3, 0.3, 0.5]);
     if fit_pivot {
         x0.extend(own_pivot);
         first.extend([0.5, 0.5]);
     }
     let (x, _) = minimise(&objective, &x0, &first, search.iterations);
     let refined = at(&x);
-    let chosen = if refined.rms_px < best.2.rms_px {
+    let chosen = if refined.rms_px < best.1.rms_px {
         refined
     } else {
-        best.2
+        best.1
     };
     let kept_own = chosen.rms_px >= own.rms_px * (1.0 - search.min_gain);
     Ok(DepthFit {

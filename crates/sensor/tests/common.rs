@@ -123,3 +123,40 @@ pub fn fit_sample(
         .collect();
     tactrace_sensor::FitSample { tap, disp }
 }
+
+/// `n` taps of `truth` with their fields against its rest pins: r in
+/// [-3, 3] mm, dz in [3, 5], slides of up to `slide` mm and deg, the
+/// angle of tap `k` from `theta(k)`; each label spread over its range by
+/// [`spread`] with its own stride.
+pub fn depth_taps(
+    truth: &TacTipConfig,
+    n: usize,
+    slide: f64,
+    theta: impl Fn(usize) -> f64,
+) -> (Vec<[f64; 2]>, Vec<tactrace_sensor::FitSample>) {
+    let model = TacTipModel::new(truth.clone()).unwrap();
+    let rest = model.rest_pins().to_vec();
+    let samples = (0..n)
+        .map(|k| {
+            let span = |m: usize| -slide + 2.0 * slide * spread(k, m, n);
+            let tap = tactrace_sensor::EdgeTap {
+                r_mm: -3.0 + 6.0 * spread(k, 7, n),
+                theta_deg: theta(k),
+                dz_mm: 3.0 + 2.0 * spread(k, 13, n),
+                shear: Some(tactrace_sensor::Shear {
+                    dx_mm: span(17),
+                    dy_mm: span(19),
+                    drz_deg: span(23),
+                }),
+            };
+            fit_sample(&model, &rest, tap)
+        })
+        .collect();
+    (rest, samples)
+}
+
+/// Tap `k` of `n`'s place in [0, 1] with stride `m` (coprime to `n`,
+/// so the taps cover the range evenly and the labels do not move together).
+pub fn spread(k: usize, m: usize, n: usize) -> f64 {
+    ((k * m) % n) as f64 / (n - 1) as f64
+}

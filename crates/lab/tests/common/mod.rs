@@ -95,5 +95,6 @@ pub fn calibration(
         allowed_rows: None,
         score_rows: None,
         fit_physics: false,
+        labelled_depth: false,
     }
 }

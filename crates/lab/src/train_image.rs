@@ -81,6 +81,31 @@ pub fn train_image(
     )?)
 }
 
+/// [`train_image`] from the fitted model `start` instead of fresh
+/// weights (`train --init`): its networks, scalings and targets kept,
+/// `cfg`'s schedule; `data` must have `start`'s targets and `cfg` its
+/// networks ([`ImageModel::fine_tune`]).
+pub fn fine_tune_image(
+    start: &ImageModel,
+    cfg: &ConvConfig,
+    seed: u64,
+    (data, frames): (&TapData, &ImageFrames),
+    val: Option<(&TapData, &ImageFrames)>,
+    on_epoch: &mut dyn FnMut(&EpochReport),
+) -> Result<(ImageModel, TrainingHistory)> {
+    named_targets(start.outputs(), data)?;
+    let val = match val {
+        Some((v, f)) => {
+            named_targets(start.outputs(), v)?;
+            same_size(frames, f)?;
+            Some((view(f)?, v.targets.as_slice()))
+        }
+        None => None,
+    };
+    let train = view(frames)?;
+    Ok(start.fine_tune(&train, &data.targets, cfg, seed, val, on_epoch)?)
+}
+
 fn same_size(a: &ImageFrames, b: &ImageFrames) -> Result<()> {
     if (a.info.height, a.info.width) == (b.info.height, b.info.width) {
         return Ok(());

@@ -95,6 +95,38 @@ impl ImageModel {
         ))
     }
 
+    /// This model trained further on `frames` and their target rows
+    /// `values` (in [`Self::outputs`]' order and units) by `config`'s
+    /// rule and schedule from `seed` ([`ConvModel::fine_tune_with`]: its
+    /// networks, scalings and targets kept; `config` must describe the
+    /// same networks): pretrain on one set of frames, fine-tune on another.
+    pub fn fine_tune(
+        &self,
+        frames: &Frames,
+        values: &[f32],
+        config: &ConvConfig,
+        seed: u64,
+        validation: Option<(Frames, &[f32])>,
+        on_epoch: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(Self, TrainingHistory), LearnError> {
+        let (outputs, w) = (&self.outputs, width(&self.outputs));
+        let encoded = encode(outputs, values, frames.count())?;
+        let train = Targets::new(&encoded, frames.count(), w)?;
+        let val = match validation {
+            Some((vf, vv)) => Some((vf, encode(outputs, vv, vf.count())?)),
+            None => None,
+        };
+        let val_views = match &val {
+            Some((vf, enc)) => Some((*vf, Targets::new(enc, vf.count(), w)?)),
+            None => None,
+        };
+        let (conv, history) = self
+            .conv
+            .fine_tune_with(frames, &train, config, seed, val_views, on_epoch)?;
+        let outputs = outputs.clone();
+        Ok((Self { conv, outputs }, history))
+    }
+
     /// Every target, in [`Self::outputs`]' order and units (circular
     /// angles within (-180, 180] deg), for one frame of the input size.
     pub fn predict_targets(&self, frame: &[u8]) -> Result<Vec<f64>, LearnError> {

@@ -8,27 +8,9 @@ mod util;
 use std::path::Path;
 use util::{expect_code, json, tactrace, train, TempDir};
 
-/// Side of the synthetic frames, px.
-const SIDE: usize = 16;
-
-/// `n` frames with a bright spot at a spread of places; targets its
-/// offset from the centre (mm, 0.25 mm a px) and direction (deg).
+/// The synthetic dataset of `n` frames in `dir`.
 fn dataset(dir: &Path, n: usize) {
-    let (mut inputs, mut targets, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
-    let c = (SIDE as f64 - 1.0) / 2.0;
-    for k in 0..n {
-        let cx = 3.5 + 9.0 * (k as f64 * 0.618_034).fract();
-        let cy = 3.5 + 9.0 * (k as f64 * 0.414_214 + 0.3).fract();
-        pixels.extend((0..SIDE * SIDE).map(|i| {
-            let (y, x) = ((i / SIDE) as f64, (i % SIDE) as f64);
-            let d2 = (x - cx).powi(2) + (y - cy).powi(2);
-            (20.0 + 220.0 * (-d2 / 4.0).exp()).round() as u8
-        }));
-        let angle = (cy - c).atan2(cx - c).to_degrees();
-        targets.extend([((cx - c) * 0.25) as f32, angle as f32]);
-        inputs.extend([cx as f32, cy as f32, 0.0, 0.0, 0.0, 0.0]);
-    }
-    util::write_spot_frames(dir, "tests/image_init.rs", SIDE, inputs, targets, pixels);
+    util::spot_frames_dataset(dir, "tests/image_init.rs", n);
 }
 
 const SMALL: &str = "dense = [16]\nlearning_rate = 0.003\nbatch_size = 8\n\
@@ -36,19 +18,8 @@ const SMALL: &str = "dense = [16]\nlearning_rate = 0.003\nbatch_size = 8\n\
 
 /// The x MAE of `model` on the held-out quarter of `ds`.
 fn x_mae(dir: &Path, model: &str) -> f64 {
-    let r = tactrace(
-        dir,
-        &[
-            "validate",
-            "--model",
-            model,
-            "--data",
-            "ds",
-            "--val-fraction",
-            "0.25",
-            "--json",
-        ],
-    );
+    let data = ["--data", "ds", "--val-fraction", "0.25", "--json"];
+    let r = tactrace(dir, &[&["validate", "--model", model], &data[..]].concat());
     expect_code(&r, 0, "validate");
     json(&r.stdout)["per_target"]["x"]["mae"].as_f64().unwrap()
 }

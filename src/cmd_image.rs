@@ -6,13 +6,13 @@ use crate::cmd_learn::{PredictArgs, PresetArg, TrainArgs};
 use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::{Context, Result};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use tactrace_convnet::ModelKind;
 use tactrace_lab::{import_reader, train as tr, train_image as ti, LabError};
 use tactrace_servo::ImageInput;
 use tactrace_store::{
-    check_output_dir, fsutil, read_dataset, ImageFrames, LoadedModel, SightFile, StoredImageModel,
-    TapData,
+    check_output_dir, fsutil, read_dataset, FramesInfo, ImageFrames, LoadedModel, SightFile,
+    StoredImageModel, TapData,
 };
 
 /// Train the image model `kind` as `a` says.
@@ -48,7 +48,9 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         .add("--train", &a.train)
         .opt("--val", a.val.as_deref())
         .opt("--config", a.config.as_deref())
+        .opt("--init", a.init.as_deref())
         .check_apart("--out", &a.out)?;
+    let start = a.init.as_deref().map(start_model).transpose()?;
     let _out = check_output_dir(&a.out, a.force)?;
     let all = read_dataset(&a.train)?;
     let all_frames = ti::data_frames(&all, &a.train)?;
@@ -101,13 +103,14 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
             )
         });
     };
-    let (model, history) = ti::train_image(
-        &cfg,
-        seed,
-        (&split.train, &train_frames),
-        pair,
-        &mut on_epoch,
-    )?;
+    let data = (&split.train, &train_frames);
+    let (model, history) = match &start {
+        Some((_, s)) => {
+            same_frames(s, &all_frames.info)?;
+            ti::fine_tune_image(s.model(), &cfg, seed, data, pair, &mut on_epoch)?
+        }
+        None => ti::train_image(&cfg, seed, data, pair, &mut on_epoch)?,
+    };
     pb.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     let stored = StoredImageModel::new(model, all_frames.info.clone()).with_training(split.record);
@@ -117,13 +120,11 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         env!("CARGO_PKG_VERSION"),
         toml::to_string(&cfg)?
     );
-    let dir = ti::save_image_model(
-        &a.out,
-        &stored,
-        &history,
-        a.force,
-        &[("config.toml", resolved)],
-    )?;
+    let mut extra = vec![("config.toml", resolved)];
+    if let Some((path, s)) = &start {
+        extra.push(("init.toml", init_record(path, s)?));
+    }
+    let dir = ti::save_image_model(&a.out, &stored, &history, a.force, &extra)?;
     eprintln!(
         "trained {} in {secs:.1} s ({} epochs, seed {seed}); saved model to {}",
         kind.name(),
@@ -143,6 +144,60 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The image model `train --init` starts from, with its folder.
+fn start_model(dir: &Path) -> Result<(PathBuf, StoredImageModel)> {
+    match LoadedModel::load(dir)? {
+        LoadedModel::Image(m) => Ok((dir.to_path_buf(), m)),
+        LoadedModel::Pins(_) => Err(LabError::Config(format!(
+            "--init {}: a pin model; an image model starts only from an image model",
+            dir.display()
+        ))
+        .into()),
+    }
+}
+
+/// Refuse training frames made otherwise than the starting model's (size
+/// or sensor preprocessing): its weights read frames made its way.
+fn same_frames(start: &StoredImageModel, frames: &FramesInfo) -> Result<()> {
+    let (s, f) = (start.frames(), frames);
+    if (s.height, s.width, &s.preprocess) == (f.height, f.width, &f.preprocess) {
+        return Ok(());
+    }
+    Err(LabError::Config(format!(
+        "--init's model reads {} x {} px frames{}; --train's are {} x {} px{}: import \
+         them the same way (--frames-size, the sensor's preprocessing)",
+        s.height,
+        s.width,
+        preprocessed(s),
+        f.height,
+        f.width,
+        preprocessed(f)
+    ))
+    .into())
+}
+
+fn preprocessed(f: &FramesInfo) -> &'static str {
+    match f.preprocess {
+        Some(_) => " (preprocessed by a sensor's settings)",
+        None => " (no preprocessing recorded)",
+    }
+}
+
+/// `init.toml` of a model fine-tuned from `start` (folder `dir`): the
+/// folder as given to --init, its kind, seed and configuration.
+fn init_record(dir: &Path, start: &StoredImageModel) -> Result<String> {
+    let net = start.model().network();
+    let mut record = toml::Table::new();
+    record.insert("model".into(), dir.display().to_string().into());
+    record.insert("kind".into(), start.model().kind_name().into());
+    record.insert("seed".into(), toml::Value::Integer(net.seed() as i64));
+    record.insert("config".into(), toml::Value::try_from(net.config())?);
+    Ok(format!(
+        "# the model this one started from (train --init), then fine-tuned\n{}",
+        toml::to_string(&record)?
+    ))
 }
 
 /// `predict` with an image model: one frame (`--image`, made as the

@@ -119,6 +119,13 @@ pub struct TrainArgs {
     /// (pin models take theirs from --config).
     #[arg(long)]
     pub(crate) seed: Option<u64>,
+    /// Start an image model from the trained image model in this folder
+    /// instead of fresh weights, and fine-tune it on --train (its networks,
+    /// pixel and target scalings kept; --config / --epochs give the new
+    /// schedule, and must describe the same networks). Recorded in the new
+    /// model folder's init.toml. Default: fresh weights.
+    #[arg(long, value_name = "MODEL")]
+    pub(crate) init: Option<PathBuf>,
     /// Hyper-parameter preset the --config file is laid over (pin models).
     #[arg(long, value_enum, default_value = "default")]
     pub(crate) preset: PresetArg,
@@ -169,6 +176,14 @@ pub fn train(a: TrainArgs) -> Result<()> {
     if a.seed.is_some() {
         return Err(LabError::Config(
             "--seed is an image model's; a pin model takes its seeds from --config".into(),
+        )
+        .into());
+    }
+    if a.init.is_some() {
+        return Err(LabError::Config(
+            "--init starts an image model (conv-dennn, conv-mlp) from another; a pin model \
+             always trains from fresh weights"
+                .into(),
         )
         .into());
     }

@@ -321,28 +321,6 @@ fn issue24_a_search_records_its_failed_trials_in_the_table_and_figure() {
     assert!(best.contains("output_learning_rate = 5.0"), "{best}");
 }
 
-/// A dataset of `n` synthetic 16 px frames in `dir` (a bright spot a
-/// frame), targets `x` (mm) and `angle` (deg, circular): the spot's
-/// offset and direction from the centre; a dummy pin vector a row.
-fn frames_dataset(dir: &Path, n: usize) {
-    const SIDE: usize = 16;
-    let (mut inputs, mut targets, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
-    let c = (SIDE as f64 - 1.0) / 2.0;
-    for k in 0..n {
-        let cx = 3.5 + 9.0 * (k as f64 * 0.618_034).fract();
-        let cy = 3.5 + 9.0 * (k as f64 * 0.414_214 + 0.3).fract();
-        pixels.extend((0..SIDE * SIDE).map(|i| {
-            let (y, x) = ((i / SIDE) as f64, (i % SIDE) as f64);
-            let d2 = (x - cx).powi(2) + (y - cy).powi(2);
-            (20.0 + 220.0 * (-d2 / 4.0).exp()).round() as u8
-        }));
-        let angle = (cy - c).atan2(cx - c).to_degrees();
-        targets.extend([((cx - c) * 0.25) as f32, angle as f32]);
-        inputs.extend([cx as f32, cy as f32, 0.0, 0.0, 0.0, 0.0]);
-    }
-    util::write_spot_frames(dir, "tests/search.rs", SIDE, inputs, targets, pixels);
-}
-
 /// A small network for the 16 px frames, the search's base.
 const SMALL_CONV: &str = "dense = [16]\nbatch_size = 8\n\
                           [[conv]]\nchannels = 6\nkernel = 3\nstride = 2\n\
@@ -351,7 +329,7 @@ const SMALL_CONV: &str = "dense = [16]\nbatch_size = 8\n\
 #[test]
 fn issue24_search_of_an_image_model_on_its_frames() {
     let t = TempDir::new("search-image");
-    frames_dataset(&t.join("frames"), 80);
+    util::spot_frames_dataset(&t.join("frames"), "tests/search.rs", 80);
     std::fs::write(t.join("small.toml"), SMALL_CONV).unwrap();
     dataset(&t.0);
     for kind in ["conv-dennn", "conv-mlp"] {

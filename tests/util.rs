@@ -263,6 +263,29 @@ pub fn import_real(dir: &Path, data: &Path, extra: &[&str], out: &str) -> Run {
     tactrace(dir, &args)
 }
 
+/// A dataset of `n` synthetic 16 px frames in `dir` (a bright spot a
+/// frame), targets `x` (mm, 0.25 mm a px) and `angle` (deg, circular):
+/// the spot's offset and direction from the centre; a dummy pin vector a
+/// row; `origin` names the test that made it.
+pub fn spot_frames_dataset(dir: &Path, origin: &str, n: usize) {
+    const SIDE: usize = 16;
+    let (mut inputs, mut targets, mut pixels) = (Vec::new(), Vec::new(), Vec::new());
+    let c = (SIDE as f64 - 1.0) / 2.0;
+    for k in 0..n {
+        let cx = 3.5 + 9.0 * (k as f64 * 0.618_034).fract();
+        let cy = 3.5 + 9.0 * (k as f64 * 0.414_214 + 0.3).fract();
+        pixels.extend((0..SIDE * SIDE).map(|i| {
+            let (y, x) = ((i / SIDE) as f64, (i % SIDE) as f64);
+            let d2 = (x - cx).powi(2) + (y - cy).powi(2);
+            (20.0 + 220.0 * (-d2 / 4.0).exp()).round() as u8
+        }));
+        let angle = (cy - c).atan2(cx - c).to_degrees();
+        targets.extend([((cx - c) * 0.25) as f32, angle as f32]);
+        inputs.extend([cx as f32, cy as f32, 0.0, 0.0, 0.0, 0.0]);
+    }
+    write_spot_frames(dir, origin, SIDE, inputs, targets, pixels);
+}
+
 /// Writes a synthetic image dataset to `dir`: `side` x `side` frames
 /// `pixels`, 6 pin inputs and two targets a row, x (mm) and a circular
 /// angle (deg); `origin` names the test that made it.

@@ -32,6 +32,23 @@
 //! `--max-pin-area A` px, default 80), each copy from a seed of the frame
 //! number, the copy and `--augment-seed` (default 0).
 //!
+//! `--sim DIR` (repeatable) adds a dataset folder's frames and targets
+//! (`tactrace twin --frames-size 64` of the fit part's labels with a
+//! sensor calibrated on fit taps: simulated frames) to the fit frames;
+//! `--sim-only` fits on them alone (the real fit frames left out), still
+//! scored on the real select part. `--init DIR` starts from the `--model`
+//! saved in DIR (`--save`) and fine-tunes it
+//! ([`ConvModel::fine_tune_with`]: its networks and scalings kept, the
+//! schedule of `--config` / `--set`). `--picture FILE` with `--sim DIR`
+//! writes the first simulated frames beside the real fit frames of the
+//! same labels, at the input size, to look at.
+//!
+//! `--mask-radius R` blacks out, in every frame (real and simulated), the
+//! pixels whose centre lies R px (of the input size) or farther from the
+//! frame's centre: the skin's rim and the stray blobs in the corners,
+//! which the real frames show and the simulator does not draw (29 at
+//! 64 px keeps every pin of the 127-pin set).
+//!
 //! `--config` is a [`ConvConfig`] as JSON (the printed one is a start);
 //! `--set` changes one value: epochs, batch_size, chunk_size,
 //! learning_rate, final_lr_fraction, weight_decay, shift_augment, input_noise, members,
@@ -41,6 +58,9 @@
 //! (e.g. 256 or 256,64 or none). Prints per epoch the training loss, the
 //! select part's mean absolute errors, the wall time and this process's
 //! CPU time (user + system, all threads).
+#[path = "support/dataset_frames.rs"]
+mod dataset_frames;
+
 use std::error::Error;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -137,6 +157,66 @@ fn picture(
             sheet.put_pixel(at, y as u32, image::Luma([full]));
             let grey = small[(y / f) * size + x / f];
             sheet.put_pixel(at, (side + y) as u32, image::Luma([grey]));
+        }
+    }
+    sheet.save(out)?;
+    Ok(())
+}
+
+/// Black out every pixel of the `size x size` frames `pixels` whose
+/// centre is `radius` px or farther from the frame's centre.
+fn mask_outside(pixels: &mut [u8], size: usize, radius: f64) {
+    let c = size as f64 / 2.0;
+    for frame in pixels.chunks_exact_mut(size * size) {
+        for (i, p) in frame.iter_mut().enumerate() {
+            let (x, y) = ((i % size) as f64 + 0.5 - c, (i / size) as f64 + 0.5 - c);
+            if x.hypot(y) >= radius {
+                *p = 0;
+            }
+        }
+    }
+}
+
+/// `--picture` with `--sim`: the first 8 simulated frames (top row of
+/// each pair) above the real fit frame with the nearest labels (r mm,
+/// theta deg), at `size` px enlarged 4 times, as a PNG.
+fn sim_picture(
+    parts: &[Part],
+    sim: &dataset_frames::DatasetFrames,
+    size: usize,
+    out: &Path,
+) -> Result<(), Box<dyn Error>> {
+    let (zoom, shown) = (4usize, sim.count.min(8));
+    let side = size * zoom;
+    let mut sheet = image::GrayImage::new((shown * side) as u32, (2 * side) as u32);
+    let real: Vec<&Part> = parts[2..5].iter().collect();
+    for k in 0..shown {
+        let t = &sim.targets[k * 2..k * 2 + 2];
+        let mut best = (f64::INFINITY, &real[0].pixels[..0]);
+        for p in &real {
+            for (i, rt) in p.targets.chunks_exact(2).enumerate() {
+                let d = (rt[0] - t[0]).abs() + (rt[1] - t[1]).abs() / 10.0;
+                if d < best.0 {
+                    best = (d, &p.pixels[i * size * size..(i + 1) * size * size]);
+                }
+            }
+        }
+        let simulated = &sim.pixels[k * size * size..(k + 1) * size * size];
+        println!(
+            "pair {k}: r {:.2} mm, theta {:.1} deg (label distance {:.3})",
+            t[0], t[1], best.0
+        );
+        for (row, frame) in [simulated, best.1].iter().enumerate() {
+            for y in 0..side {
+                for x in 0..side {
+                    let v = frame[(y / zoom) * size + x / zoom];
+                    sheet.put_pixel(
+                        (k * side + x) as u32,
+                        (row * side + y) as u32,
+                        image::Luma([v]),
+                    );
+                }
+            }
         }
     }
     sheet.save(out)?;
@@ -273,6 +353,10 @@ struct Args {
     fit_select: bool,
     augment: Augment,
     picture: Option<PathBuf>,
+    sim: Vec<PathBuf>,
+    sim_only: bool,
+    init: Option<PathBuf>,
+    mask_radius: Option<f64>,
 }
 
 fn parse_args() -> Result<Args, Box<dyn Error>> {
@@ -299,6 +383,10 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
             seed: 0,
         },
         picture: None,
+        sim: Vec::new(),
+        sim_only: false,
+        init: None,
+        mask_radius: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -324,6 +412,10 @@ fn parse_args() -> Result<Args, Box<dyn Error>> {
             "--ensemble" => a.ensemble = value()?.split(',').map(PathBuf::from).collect(),
             "--tta" => a.tta = value()?.parse()?,
             "--picture" => a.picture = Some(PathBuf::from(value()?)),
+            "--sim" => a.sim.push(PathBuf::from(value()?)),
+            "--sim-only" => a.sim_only = true,
+            "--init" => a.init = Some(PathBuf::from(value()?)),
+            "--mask-radius" => a.mask_radius = Some(value()?.parse()?),
             "--augment" => a.augment.copies = value()?.parse()?,
             "--augment-seed" => a.augment.seed = value()?.parse()?,
             "--edge-flip" => a.augment.jitter.edge_flip = value()?.parse()?,
@@ -375,7 +467,13 @@ fn train(
         true => None,
         false => Some(parts[1].views(args.size)?),
     };
-    let (model, _) = ConvModel::fit_with(&ff, &ft, &cfg, args.seed, select, &mut report)?;
+    let (model, _) = match &args.init {
+        Some(dir) => {
+            let start = load_model(dir, kind)?;
+            start.fine_tune_with(&ff, &ft, &cfg, args.seed, select, &mut report)?
+        }
+        None => ConvModel::fit_with(&ff, &ft, &cfg, args.seed, select, &mut report)?,
+    };
     Ok(model)
 }
 
@@ -483,6 +581,17 @@ fn main() -> Result<(), Box<dyn Error>> {
         None => tactrace_testdata::real_edge_set().ok_or("no data")?,
     };
     let (wall, cpu) = (Instant::now(), cpu_seconds());
+    if let (Some(out), false) = (&args.picture, args.sim.is_empty()) {
+        let mut parts = load(&dir, args.size, &args.augment, &[])?;
+        let mut sim = dataset_frames::read(&args.sim[0])?;
+        if let Some(r) = args.mask_radius {
+            parts
+                .iter_mut()
+                .for_each(|p| mask_outside(&mut p.pixels, args.size, r));
+            mask_outside(&mut sim.pixels, args.size, r);
+        }
+        return sim_picture(&parts, &sim, args.size, out);
+    }
     if let Some(out) = &args.picture {
         return picture(&dir, "frame_1002_0.png", &args.augment, args.size, out);
     }
@@ -490,12 +599,37 @@ fn main() -> Result<(), Box<dyn Error>> {
     let fit_parts: Vec<usize> = (first..5).collect();
     let j = args.augment.jitter;
     PoseKeepingJitter::new(j.edge_flip, j.pin_drop, j.max_pin_area)?;
-    let parts = load(&dir, args.size, &args.augment, &fit_parts)?;
+    let mut parts = load(&dir, args.size, &args.augment, &fit_parts)?;
+    if let Some(r) = args.mask_radius {
+        parts
+            .iter_mut()
+            .for_each(|p| mask_outside(&mut p.pixels, args.size, r));
+    }
     let mut fit = Part::new();
-    for p in &parts[first..] {
+    for p in parts[first..].iter().filter(|_| !args.sim_only) {
         fit.pixels.extend(&p.pixels);
         fit.targets.extend(&p.targets);
         fit.count += p.count;
+    }
+    for d in &args.sim {
+        let mut sim = dataset_frames::read(d)?;
+        if let Some(r) = args.mask_radius {
+            mask_outside(&mut sim.pixels, args.size, r);
+        }
+        if sim.side != args.size || sim.dim != 2 {
+            return Err(format!(
+                "{}: frames of {} px and {} targets, not {} px and 2",
+                d.display(),
+                sim.side,
+                sim.dim,
+                args.size
+            )
+            .into());
+        }
+        println!("simulated frames: {} from {}", sim.count, d.display());
+        fit.pixels.extend(&sim.pixels);
+        fit.targets.extend(&sim.targets);
+        fit.count += sim.count;
     }
     println!(
         "loaded {} frames at {s} x {s} px in {:.1} s (fit {} with {} copies, select {}, score {})",

@@ -14,6 +14,7 @@ mod data;
 mod dropout;
 mod ep;
 mod error;
+mod fine_tune;
 mod gemm;
 mod im2col;
 mod layout;

@@ -6,7 +6,7 @@ use crate::error::{LabError, Result};
 use crate::train::{data_targets, held_out_rows, named_targets, score_predictions, Validation};
 use std::path::{Path, PathBuf};
 use tactrace_convnet::{ConvConfig, EpochReport, Frames, ModelKind, TrainingHistory};
-use tactrace_learn::ImageModel;
+use tactrace_learn::{ImageModel, ModelTarget};
 use tactrace_store::{stage_image_model, ImageFrames, LoadedModel, StoredImageModel, TapData};
 
 /// The configuration of an image model of `kind`: its defaults, then the
@@ -59,17 +59,7 @@ pub fn train_image(
     on_epoch: &mut dyn FnMut(&EpochReport),
 ) -> Result<(ImageModel, TrainingHistory)> {
     let outputs = data_targets(data)?;
-    if let Some((v, _)) = val {
-        named_targets(&outputs, v)?;
-    }
-    let val = match val {
-        Some((v, f)) => {
-            same_size(frames, f)?;
-            Some((view(f)?, v.targets.as_slice()))
-        }
-        None => None,
-    };
-    let train = view(frames)?;
+    let (train, val) = views(&outputs, frames, val)?;
     Ok(ImageModel::fit(
         &train,
         &data.targets,
@@ -79,6 +69,45 @@ pub fn train_image(
         val,
         on_epoch,
     )?)
+}
+
+/// [`train_image`] from the fitted model `start` instead of fresh
+/// weights (`train --init`): its networks, scalings and targets kept,
+/// `cfg`'s schedule; `data` must have `start`'s targets and `cfg` its
+/// networks ([`ImageModel::fine_tune`]).
+pub fn fine_tune_image(
+    start: &ImageModel,
+    cfg: &ConvConfig,
+    seed: u64,
+    (data, frames): (&TapData, &ImageFrames),
+    val: Option<(&TapData, &ImageFrames)>,
+    on_epoch: &mut dyn FnMut(&EpochReport),
+) -> Result<(ImageModel, TrainingHistory)> {
+    named_targets(start.outputs(), data)?;
+    let (train, val) = views(start.outputs(), frames, val)?;
+    Ok(start.fine_tune(&train, &data.targets, cfg, seed, val, on_epoch)?)
+}
+
+/// The validation frames and their target rows, as the image model takes them.
+type ValView<'a> = (Frames<'a>, &'a [f32]);
+
+/// Views of the training `frames` and of the validation rows' frames and
+/// targets, the validation set checked to have the targets `outputs` and
+/// frames of the training frames' size.
+fn views<'a>(
+    outputs: &[ModelTarget],
+    frames: &'a ImageFrames,
+    val: Option<(&'a TapData, &'a ImageFrames)>,
+) -> Result<(Frames<'a>, Option<ValView<'a>>)> {
+    let val = match val {
+        Some((v, f)) => {
+            named_targets(outputs, v)?;
+            same_size(frames, f)?;
+            Some((view(f)?, v.targets.as_slice()))
+        }
+        None => None,
+    };
+    Ok((view(frames)?, val))
 }
 
 fn same_size(a: &ImageFrames, b: &ImageFrames) -> Result<()> {

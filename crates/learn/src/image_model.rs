@@ -58,6 +58,32 @@ fn width(outputs: &[ModelTarget]) -> usize {
     outputs.iter().map(ModelTarget::width).sum()
 }
 
+/// Run `fit` on the encoded targets of the training rows `values` (one a
+/// frame of `frames`) and of the validation frames' rows.
+fn with_encoded(
+    outputs: &[ModelTarget],
+    frames: &Frames,
+    values: &[f32],
+    validation: Option<(Frames, &[f32])>,
+    fit: impl FnOnce(
+        &Targets,
+        Option<(Frames, Targets)>,
+    ) -> Result<(ConvModel, TrainingHistory), tactrace_convnet::ConvError>,
+) -> Result<(ConvModel, TrainingHistory), LearnError> {
+    let w = width(outputs);
+    let encoded = encode(outputs, values, frames.count())?;
+    let train = Targets::new(&encoded, frames.count(), w)?;
+    let val = match validation {
+        Some((vf, vv)) => Some((vf, encode(outputs, vv, vf.count())?)),
+        None => None,
+    };
+    let val_views = match &val {
+        Some((vf, enc)) => Some((*vf, Targets::new(enc, vf.count(), w)?)),
+        None => None,
+    };
+    Ok(fit(&train, val_views)?)
+}
+
 impl ImageModel {
     /// Fit a model of `config` on `frames` and their targets `values`
     /// (`count x T`, in `outputs`' order and units) from `seed`, scoring
@@ -73,19 +99,9 @@ impl ImageModel {
         on_epoch: &mut dyn FnMut(&EpochReport),
     ) -> Result<(Self, TrainingHistory), LearnError> {
         targets::check_targets(outputs)?;
-        let w = width(outputs);
-        let encoded = encode(outputs, values, frames.count())?;
-        let train = Targets::new(&encoded, frames.count(), w)?;
-        let val = match validation {
-            Some((vf, vv)) => Some((vf, encode(outputs, vv, vf.count())?)),
-            None => None,
-        };
-        let val_views = match &val {
-            Some((vf, enc)) => Some((*vf, Targets::new(enc, vf.count(), w)?)),
-            None => None,
-        };
-        let (conv, history) =
-            ConvModel::fit_with(frames, &train, config, seed, val_views, on_epoch)?;
+        let (conv, history) = with_encoded(outputs, frames, values, validation, |t, v| {
+            ConvModel::fit_with(frames, t, config, seed, v, on_epoch)
+        })?;
         Ok((
             Self {
                 conv,
@@ -93,6 +109,29 @@ impl ImageModel {
             },
             history,
         ))
+    }
+
+    /// This model trained further on `frames` and their target rows
+    /// `values` (in [`Self::outputs`]' order and units) by `config`'s
+    /// rule and schedule from `seed` ([`ConvModel::fine_tune_with`]: its
+    /// networks, scalings and targets kept; `config` must describe the
+    /// same networks): pretrain on one set of frames, fine-tune on another.
+    pub fn fine_tune(
+        &self,
+        frames: &Frames,
+        values: &[f32],
+        config: &ConvConfig,
+        seed: u64,
+        validation: Option<(Frames, &[f32])>,
+        on_epoch: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(Self, TrainingHistory), LearnError> {
+        let outputs = &self.outputs;
+        let (conv, history) = with_encoded(outputs, frames, values, validation, |t, v| {
+            self.conv
+                .fine_tune_with(frames, t, config, seed, v, on_epoch)
+        })?;
+        let outputs = outputs.clone();
+        Ok((Self { conv, outputs }, history))
     }
 
     /// Every target, in [`Self::outputs`]' order and units (circular

@@ -15,6 +15,7 @@ mod dropout;
 mod ep;
 mod error;
 mod gemm;
+mod hybrid;
 mod im2col;
 mod layout;
 mod model;
@@ -42,7 +43,7 @@ pub mod kernels {
 pub use augment::PoseKeepingJitter;
 pub use config::{
     Activation, ClampedPhase, ConvConfig, ConvSpec, EpSettings, FreePhase, InputCentring,
-    ModelKind, Nudging,
+    InputKind, ModelKind, Nudging,
 };
 pub use data::{Frames, Targets};
 pub use error::ConvError;

@@ -41,10 +41,16 @@ pub fn data_frames(data: &TapData, dir: &Path) -> Result<ImageFrames> {
     })
 }
 
-/// A view of `frames` for the network.
-fn view(frames: &ImageFrames) -> Result<Frames<'_>> {
+/// A view of `frames` for the network, each frame with its row's pin
+/// displacement vector from `data` (read by a pins-and-pixels model).
+pub fn view<'a>(frames: &'a ImageFrames, data: &'a TapData) -> Result<Frames<'a>> {
     let (h, w) = (frames.info.height, frames.info.width);
-    Ok(Frames::new(&frames.pixels, frames.count(), h, w)
+    let view = Frames::new(&frames.pixels, frames.count(), h, w);
+    Ok(view
+        .and_then(|v| match data.dim() {
+            0 => Ok(v),
+            dim => v.with_pins(&data.inputs, dim),
+        })
         .map_err(tactrace_learn::LearnError::from)?)
 }
 
@@ -65,11 +71,11 @@ pub fn train_image(
     let val = match val {
         Some((v, f)) => {
             same_size(frames, f)?;
-            Some((view(f)?, v.targets.as_slice()))
+            Some((view(f, v)?, v.targets.as_slice()))
         }
         None => None,
     };
-    let train = view(frames)?;
+    let train = view(frames, data)?;
     Ok(ImageModel::fit(
         &train,
         &data.targets,
@@ -113,7 +119,7 @@ pub fn validate_image(
         });
     }
     let targets = named_targets(net.outputs(), data)?;
-    let predicted = net.predict_batch(&view(frames)?)?;
+    let predicted = net.predict_batch(&view(frames, data)?)?;
     let mut v = score_predictions(targets, data, predicted, net.edge_roles().ok())?;
     v.rows_seen_in_training = model.training().map(|t| t.rows_seen(data));
     Ok(v)

@@ -6,7 +6,8 @@
 //! An image model reads the frame's pixels instead, made as its training
 //! frames were ([`ImageInput`]: the dataset's preprocessing, then
 //! area-averaged to its input size); the pins still say whether the tap
-//! made contact.
+//! made contact, and a pins-and-pixels image model reads the frame's
+//! displacement vector beside its pixels.
 //!
 //! A follow run that keeps every tap's displacement vector asks for it
 //! ([`Perception::displacement`]) before the loop perceives the same
@@ -93,6 +94,13 @@ impl Perception {
                 expected.0, expected.1, got.0, got.1
             )));
         }
+        let pins = 2 * reader.tracker().reference().len();
+        if model.pin_inputs() > 0 && model.pin_inputs() != pins {
+            return Err(ServoError::InputSize {
+                expected: model.pin_inputs(),
+                got: pins,
+            });
+        }
         Ok(Self {
             reader,
             model: Reader::Image(model, input),
@@ -161,7 +169,9 @@ impl Perception {
             / p.max(1) as f64;
         let [r, theta] = match &self.model {
             Reader::Pins(model) => model.predict(&disp)?,
-            Reader::Image(model, input) => model.predict(&input.of_frame(frame)?)?,
+            Reader::Image(model, input) => {
+                model.predict_with_pins(&input.of_frame(frame)?, &disp)?
+            }
         };
         let (r, theta) = LabelConvention::edge_pose_of(self.labels.as_ref(), r, theta);
         Ok(Percept {

@@ -8,10 +8,10 @@
 //! for bit, and refuses frames without their pins.
 mod common;
 
-use common::{random, tiny_config};
+use common::{ep_rule, random, small_conv, tiny_config};
 use tactrace_convnet::{
-    Activation, ClampedPhase, ConvConfig, ConvError, ConvModel, ConvSpec, EpSettings, Frames,
-    FreePhase, InputKind, Layout, ModelKind, Network, Nudging, Rule, Targets,
+    Activation, ConvConfig, ConvError, ConvModel, Frames, InputKind, Layout, ModelKind, Network,
+    Rule, Targets,
 };
 
 /// Pin values a frame in the small net.
@@ -20,29 +20,8 @@ const PINS: usize = 6;
 /// The small net of the theory tests, 12 x 12 px, two convolutions and a
 /// dense layer of 10, with `PINS` side inputs on the dense layer.
 fn hybrid_layout() -> Layout {
-    let conv = [
-        ConvSpec {
-            channels: 3,
-            kernel: 3,
-            stride: 1,
-        },
-        ConvSpec {
-            channels: 4,
-            kernel: 3,
-            stride: 2,
-        },
-    ];
-    let plain = Layout::new(12, 12, &conv, &[10], 2).expect("layout");
+    let plain = Layout::new(12, 12, &small_conv(), &[10], 2).expect("layout");
     plain.with_side_inputs(2, PINS).expect("side inputs")
-}
-
-fn ep(beta: f64) -> Rule {
-    Rule::Ep(EpSettings {
-        beta,
-        nudging: Nudging::Symmetric,
-        free_phase: FreePhase::FeedForward,
-        clamped_phase: ClampedPhase::Sweeps { iterations: 1 },
-    })
 }
 
 /// The pins' columns of the dense layer's weights (`cout x fan_in`, the
@@ -71,7 +50,7 @@ fn ep_update_of_a_hybrid_net_points_along_the_backprop_gradient() {
         let net = Network::new(hybrid_layout(), act, 20 + k as u64);
         let (x, z, t) = (random(n * 144, 1), random(n * PINS, 2), random(n * 2, 3));
         let bp = net.gradient_pins((&x, &z), &t, n, Rule::Backprop).unwrap();
-        let est = net.gradient_pins((&x, &z), &t, n, ep(0.01)).unwrap();
+        let est = net.gradient_pins((&x, &z), &t, n, ep_rule(0.01)).unwrap();
         assert!(est.cosine(&bp) > 0.99, "{act:?}: {}", est.cosine(&bp));
         let (wb, we) = (&bp.weights[2], &est.weights[2]);
         let pins = cosine(&pin_columns(&net, we), &pin_columns(&net, wb));
@@ -118,25 +97,7 @@ fn backprop_gradient_of_the_pin_weights_matches_finite_differences() {
 fn zero_pin_weights_give_the_pixels_only_output() {
     let n = 2;
     let hybrid = Network::new(hybrid_layout(), Activation::Tanh, 9);
-    let plain_layout = Layout::new(
-        12,
-        12,
-        &[
-            ConvSpec {
-                channels: 3,
-                kernel: 3,
-                stride: 1,
-            },
-            ConvSpec {
-                channels: 4,
-                kernel: 3,
-                stride: 2,
-            },
-        ],
-        &[10],
-        2,
-    )
-    .unwrap();
+    let plain_layout = Layout::new(12, 12, &small_conv(), &[10], 2).unwrap();
     let mut params = hybrid.parameters().clone();
     let s = hybrid.layout().layers()[2];
     params.weights[2] = params.weights[2]

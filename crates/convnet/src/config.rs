@@ -50,6 +50,26 @@ pub enum InputCentring {
     MeanFrame,
 }
 
+/// What the network reads.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InputKind {
+    /// The frame alone. Default.
+    #[default]
+    Pixels,
+    /// The frame, and the tap's pin displacement vector (standardised per
+    /// column on the training rows) appended to the flattened output of
+    /// the last convolution, as the first dense layer's input
+    /// (docs/learning.md, "Pins and pixels").
+    PinsAndPixels,
+}
+
+impl InputKind {
+    fn is_pixels(&self) -> bool {
+        *self == InputKind::Pixels
+    }
+}
+
 /// The learning rule.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -206,6 +226,10 @@ pub struct ConvConfig {
     /// `dense_dropout`'s mask. 0, the default, is off and left out.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub channel_dropout: f64,
+    /// What the network reads: `pixels` (the default, left out of the
+    /// JSON) or `pins_and_pixels`.
+    #[serde(default, skip_serializing_if = "InputKind::is_pixels")]
+    pub input: InputKind,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -266,6 +290,7 @@ impl ConvConfig {
             weight_average: None,
             dense_dropout: 0.0,
             channel_dropout: 0.0,
+            input: InputKind::Pixels,
         }
     }
 

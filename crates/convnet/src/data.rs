@@ -1,7 +1,9 @@
 //! Borrowed views of what a model learns from: grey frames (u8, `count x
 //! height x width`, the layout of a dataset's `frames.npy`) and their
 //! targets (f64, `count x dim`, frame by frame, in millimetres and
-//! degrees as the caller's labels are).
+//! degrees as the caller's labels are). Frames may carry each tap's pin
+//! displacement vector beside them (f32, `count x dim`, px), which a
+//! pins-and-pixels model reads too.
 use crate::error::ConvError;
 
 /// `count` grey frames of `height x width` px, row-major, frame after frame.
@@ -11,6 +13,8 @@ pub struct Frames<'a> {
     count: usize,
     height: usize,
     width: usize,
+    /// Each frame's pin displacement vector (`count x dim`), if given.
+    pins: Option<(&'a [f32], usize)>,
 }
 
 impl<'a> Frames<'a> {
@@ -47,7 +51,42 @@ impl<'a> Frames<'a> {
             count,
             height,
             width,
+            pins: None,
         })
+    }
+
+    /// The same frames with each one's pin displacement vector: `values`
+    /// holds `count x dim` finite numbers, frame by frame (`dim >= 1`).
+    pub fn with_pins(self, values: &'a [f32], dim: usize) -> Result<Self, ConvError> {
+        if dim == 0 || values.len() != self.count * dim {
+            return Err(ConvError::Shape {
+                what: "pin values (one row a frame)",
+                expected: self.count * dim.max(1),
+                got: values.len(),
+            });
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(ConvError::PinNonFinite {
+                row: i / dim,
+                column: i % dim,
+                value: values[i] as f64,
+            });
+        }
+        Ok(Frames {
+            pins: Some((values, dim)),
+            ..self
+        })
+    }
+
+    /// Values of each frame's pin vector, 0 when the frames carry none.
+    pub fn pin_dim(&self) -> usize {
+        self.pins.map_or(0, |(_, d)| d)
+    }
+
+    /// Frame `i`'s pin displacement vector, if the frames carry them
+    /// (panics when `i >= count`).
+    pub fn pins(&self, i: usize) -> Option<&'a [f32]> {
+        self.pins.map(|(v, d)| &v[i * d..(i + 1) * d])
     }
 
     /// Number of frames.

@@ -24,6 +24,19 @@ pub enum ConvError {
         column: usize,
         value: f64,
     },
+    /// A pin value is NaN or infinite.
+    #[error("pin value {column} of frame {row} is not a finite number ({value})")]
+    PinNonFinite {
+        row: usize,
+        column: usize,
+        value: f64,
+    },
+    /// A pins-and-pixels model was given frames without each one's pin
+    /// displacement vector (`got` 0), or vectors of another length.
+    #[error(
+        "the model reads {expected} pin values a frame beside its pixels, the frames carry {got}"
+    )]
+    PinCount { expected: usize, got: usize },
     /// A frame of another size than the model's input.
     #[error("frame size {got_height} x {got_width} px, the model takes {height} x {width} px")]
     FrameSize {

@@ -198,6 +198,7 @@ mod tests {
                 kw: k,
                 stride,
                 pad,
+                side_inputs: 0,
             }
         };
         // The default layers (rows of 32, 16 and 8), and odd sizes,

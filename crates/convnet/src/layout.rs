@@ -23,6 +23,11 @@ pub struct LayerShape {
     pub kw: usize,
     pub stride: usize,
     pub pad: usize,
+    /// Values appended to the window after the `cin x kh x kw` ones: the
+    /// pin displacement vector on the first dense layer of a
+    /// pins-and-pixels model (clamped inputs, like the frame), 0
+    /// elsewhere.
+    pub side_inputs: usize,
 }
 
 impl LayerShape {
@@ -46,6 +51,7 @@ impl LayerShape {
             kw: k,
             stride: s,
             pad,
+            side_inputs: 0,
         })
     }
 
@@ -62,11 +68,19 @@ impl LayerShape {
             kw: win,
             stride: 1,
             pad: 0,
+            side_inputs: 0,
         }
     }
 
-    /// The fan-in: rows of the im2col matrix, columns of `W(l)`.
+    /// The fan-in: rows of the im2col matrix, columns of `W(l)` (the
+    /// window, then any side inputs).
     pub fn fan_in(&self) -> usize {
+        self.window() + self.side_inputs
+    }
+
+    /// Values of one window of the layer below (`cin x kh x kw`): the
+    /// im2col rows that come from it.
+    pub fn window(&self) -> usize {
         self.cin * self.kh * self.kw
     }
 
@@ -157,6 +171,29 @@ impl Layout {
             }
         }
         Ok(Layout { layers })
+    }
+
+    /// The same layers with `count` side inputs (the pin displacement
+    /// vector) appended to the input of layer `layer`, which must be a
+    /// dense one (the first after the convolutions: concatenated after
+    /// the flatten).
+    pub fn with_side_inputs(mut self, layer: usize, count: usize) -> Result<Self, ConvError> {
+        let Some(shape) = self.layers.get_mut(layer).filter(|s| s.is_dense()) else {
+            return Err(config_error(
+                "input",
+                format!("layer {layer} is not a dense layer to take side inputs"),
+            ));
+        };
+        if count > MAX_VALUES / shape.cout.max(1) {
+            return Err(config_error("input", format!("{count} side inputs")));
+        }
+        shape.side_inputs = count;
+        Ok(self)
+    }
+
+    /// Side inputs (pins) the network takes, 0 for a pixels-only one.
+    pub fn side_inputs(&self) -> usize {
+        self.layers.iter().map(|s| s.side_inputs).sum()
     }
 
     /// The layers, input side first.

@@ -16,6 +16,7 @@ mod ep;
 mod error;
 mod fine_tune;
 mod gemm;
+mod hybrid;
 mod im2col;
 mod layout;
 mod model;
@@ -48,7 +49,7 @@ pub mod kernels {
 pub use augment::PoseKeepingJitter;
 pub use config::{
     Activation, ClampedPhase, ConvConfig, ConvSpec, EpSettings, FreePhase, InputCentring,
-    ModelKind, Nudging,
+    InputKind, ModelKind, Nudging,
 };
 pub use data::{Frames, Targets};
 pub use error::ConvError;

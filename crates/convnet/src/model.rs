@@ -4,7 +4,7 @@
 use crate::config::ConvConfig;
 use crate::data::{Frames, Targets};
 use crate::error::ConvError;
-use crate::layout::Layout;
+use crate::hybrid;
 use crate::network::Network;
 use crate::predict::{forward_frames, predict_all, prediction_pool, unscaled_output, Predictor};
 use crate::scaling::{InputScaling, TargetScaling};
@@ -61,11 +61,12 @@ impl ConvModel {
                 });
             }
         }
-        let (h, w) = frames.size();
-        let channels = config.input_channels();
-        let layout =
-            Layout::with_channels(channels, (h, w), &config.conv, &config.dense, targets.dim())?;
-        let input = InputScaling::fit(frames, config.input_centring);
+        let mut input = InputScaling::fit(frames, config.input_centring);
+        input.pins = hybrid::fit_pins(frames, config)?;
+        if let Some((vf, _)) = &validation {
+            hybrid::check_pins(&input, vf)?;
+        }
+        let layout = hybrid::layout_for(config, frames.size(), targets.dim(), input.pin_count())?;
         let scaling = TargetScaling::fit(targets);
         let seeds: Vec<u64> = (0..config.members as u64)
             .map(|k| seed.wrapping_add(k))
@@ -111,12 +112,37 @@ impl ConvModel {
         frame: &[u8],
         out: &mut [f64],
     ) -> Result<(), ConvError> {
+        self.predict_pins_with(predictor, frame, None, out)
+    }
+
+    /// The N outputs for one frame and its pin displacement vector
+    /// `pins` (as the training frames carried them; ignored by a model
+    /// of pixels only, required by a pins-and-pixels one).
+    pub fn predict_with_pins(&self, frame: &[u8], pins: &[f32]) -> Result<Vec<f64>, ConvError> {
+        let mut out = vec![0.0; self.outputs()];
+        self.predict_pins_with(&mut self.predictor(), frame, Some(pins), &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Self::predict_with_pins`] on reusable buffers, into `out`;
+    /// `pins` may be `None` for a model of pixels only.
+    pub fn predict_pins_with(
+        &self,
+        predictor: &mut Predictor,
+        frame: &[u8],
+        pins: Option<&[f32]>,
+        out: &mut [f64],
+    ) -> Result<(), ConvError> {
         let (h, w) = self.input_size();
-        let frames = Frames::new(frame, 1, h, w).map_err(|_| ConvError::Shape {
+        let mut frames = Frames::new(frame, 1, h, w).map_err(|_| ConvError::Shape {
             what: "frame pixels",
             expected: h * w,
             got: frame.len(),
         })?;
+        if let (Some(p), true) = (pins, self.pin_inputs() > 0) {
+            frames = frames.with_pins(p, p.len())?;
+        }
+        hybrid::check_pins(&self.input, &frames)?;
         if out.len() != self.outputs() {
             return Err(ConvError::Shape {
                 what: "outputs",
@@ -154,6 +180,7 @@ impl ConvModel {
     /// shared among the threads of the current rayon pool.
     pub fn predict_batch(&self, frames: &Frames) -> Result<Vec<f64>, ConvError> {
         check_size(self.input_size(), frames.size())?;
+        hybrid::check_pins(&self.input, frames)?;
         let mut out = vec![0.0; frames.count() * self.outputs()];
         let mut pool = prediction_pool(&self.nets[0]);
         let (first, others) = self.nets.split_first().expect("a model has a network");
@@ -214,6 +241,11 @@ impl ConvModel {
     /// Frame `(height, width)` it takes, px.
     pub fn input_size(&self) -> (usize, usize) {
         self.nets[0].layout.input_size()
+    }
+
+    /// Pin values a frame it reads beside the pixels (0: pixels only).
+    pub fn pin_inputs(&self) -> usize {
+        self.input.pin_count()
     }
 
     /// Number of outputs N.

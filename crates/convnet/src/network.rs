@@ -109,11 +109,30 @@ impl Network {
     /// A workspace holding `n` frames `x` (`n x h x w`) and targets `t`
     /// (`n x outputs`, frame by frame) in the chunk layout.
     fn load(&self, x: &[f32], t: Option<&[f32]>, n: usize) -> Result<Workspace, ConvError> {
+        self.load_pins(x, &[], t, n)
+    }
+
+    /// [`Self::load`] with each frame's standardised pins `z` (`n x P`,
+    /// frame by frame; empty for a network of pixels only).
+    fn load_pins(
+        &self,
+        x: &[f32],
+        z: &[f32],
+        t: Option<&[f32]>,
+        n: usize,
+    ) -> Result<Workspace, ConvError> {
         let (h, w) = self.layout.input_size();
         let k = self.layout.outputs();
+        let p = self.layout.side_inputs();
         check_len("frames", x.len(), n * h * w)?;
+        check_len("pins", z.len(), n * p)?;
         let mut ws = Workspace::for_training(&self.layout, n.max(1));
         ws.x[..n * h * w].copy_from_slice(x);
+        for (b, row) in z.chunks_exact(p.max(1)).enumerate() {
+            row.iter()
+                .enumerate()
+                .for_each(|(j, &v)| ws.pins[j * n + b] = v);
+        }
         if let Some(t) = t {
             check_len("targets", t.len(), n * k)?;
             for b in 0..n {
@@ -169,6 +188,27 @@ impl Network {
         Ok(())
     }
 
+    /// [`Self::feed_forward`] of a pins-and-pixels network: `n` frames `x`
+    /// and their standardised pins `z` (`n x P`, frame by frame).
+    pub fn feed_forward_pins(&self, x: &[f32], z: &[f32], n: usize) -> Result<Vec<f32>, ConvError> {
+        let mut ws = self.load_pins(x, z, None, n)?;
+        free_phase(self, &mut ws, n, FreePhase::FeedForward);
+        Ok(self.output_of(&ws, n))
+    }
+
+    /// [`Self::gradient`] of a pins-and-pixels network: `n` frames `x`,
+    /// their standardised pins `z` (`n x P`) and targets `t`.
+    pub fn gradient_pins(
+        &self,
+        (x, z): (&[f32], &[f32]),
+        t: &[f32],
+        n: usize,
+        rule: Rule,
+    ) -> Result<Parameters, ConvError> {
+        let mut ws = self.load_pins(x, z, Some(t), n)?;
+        self.gradient_of(&mut ws, n, rule)
+    }
+
     /// The gradient of `sum 0.5 ||y - t||^2` over `n` frames, or its EP
     /// estimate.
     pub fn gradient(
@@ -193,11 +233,21 @@ impl Network {
     ) -> Result<Parameters, ConvError> {
         let mut ws = self.load(x, Some(t), n)?;
         self.load_masks(&mut ws, masks, n)?;
+        self.gradient_of(&mut ws, n, rule)
+    }
+
+    /// The gradient (or its estimate) of the `n` frames loaded in `ws`.
+    fn gradient_of(
+        &self,
+        ws: &mut Workspace,
+        n: usize,
+        rule: Rule,
+    ) -> Result<Parameters, ConvError> {
         match rule {
-            Rule::Backprop => backprop_gradient(self, &mut ws, n),
+            Rule::Backprop => backprop_gradient(self, ws, n),
             Rule::Ep(ep) => {
                 ep.validate()?;
-                ep_gradient(self, &mut ws, n, &ep)
+                ep_gradient(self, ws, n, &ep)
             }
         };
         Ok(ws

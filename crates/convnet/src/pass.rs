@@ -8,6 +8,9 @@
 //!   and positions (one product with the im2col matrix transposed), and
 //!   `dE/db(l) = -sum e(l)`.
 //!
+//! A pins-and-pixels model's first dense layer has the pins as the last
+//! rows of its im2col matrix (`crate::hybrid`).
+//!
 //! With dropout a layer's rates and its top-down input are multiplied by
 //! its mask (`crate::dropout`).
 //!
@@ -52,6 +55,9 @@ fn layer_product(net: &Network, ws: &mut Workspace, nb: usize, l: usize) {
         }
     };
     im2col(shape, nb, input, &mut ws.cols[l]);
+    if shape.side_inputs > 0 {
+        crate::hybrid::append_pins(shape, nb, &ws.pins, &mut ws.cols[l]);
+    }
     let n = nb * shape.positions();
     let (m, k) = (shape.cout, shape.fan_in());
     let p = &mut ws.p[l];

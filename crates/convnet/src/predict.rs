@@ -20,7 +20,8 @@ pub struct Predictor {
     pub(crate) member: Vec<f64>,
 }
 
-/// Standardise frames `first..first + nb` of `frames` into `ws.x` and run
+/// Standardise frames `first..first + nb` of `frames` into `ws.x` (and
+/// their pins into `ws.pins`, for a pins-and-pixels model) and run
 /// the feed-forward pass; the outputs are left in the last layer's `s`
 /// (`outputs x nb`, scaled units).
 pub(crate) fn forward_frames(
@@ -36,6 +37,7 @@ pub(crate) fn forward_frames(
     for b in 0..nb {
         input.apply(frames.frame(first + b), &mut ws.x[b * hw..(b + 1) * hw]);
     }
+    crate::hybrid::load_pins(input, frames, first..first + nb, nb, &mut ws.pins);
     feed_forward(net, ws, nb);
 }
 

@@ -20,6 +20,10 @@ pub struct InputScaling {
     /// Per-pixel means (`height x width`), or empty.
     #[serde(default)]
     pub mean_frame: Vec<f32>,
+    /// The pin displacement vector's per-column standardisation (a
+    /// pins-and-pixels model), `None` for a model of pixels only.
+    #[serde(default)]
+    pub pins: Option<TargetScaling>,
 }
 
 impl InputScaling {
@@ -56,6 +60,7 @@ impl InputScaling {
                 InputCentring::Global => Vec::new(),
                 InputCentring::MeanFrame => centre.iter().map(|&c| c as f32).collect(),
             },
+            pins: None,
         }
     }
 
@@ -107,6 +112,12 @@ impl InputScaling {
             && self.std > 0.0
             && (self.mean_frame.is_empty() || self.mean_frame.len() == pixels)
             && self.mean_frame.iter().all(|m| m.is_finite())
+            && self.pins.as_ref().is_none_or(TargetScaling::is_valid)
+    }
+
+    /// Pin values a frame the model reads, 0 for pixels only.
+    pub fn pin_count(&self) -> usize {
+        self.pins.as_ref().map_or(0, TargetScaling::dim)
     }
 }
 

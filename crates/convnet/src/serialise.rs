@@ -2,13 +2,15 @@
 //! seed, input size, outputs) plus safetensors bytes: `W1, b1, W2, ...`
 //! (each `W(l)` as `cout x cin x kh x kw`, a dense layer's window covering
 //! its whole input; f32; an ensemble's other networks as `net2.W1`, ...) and the scalings (`input.mean`, `input.std`,
-//! `input.mean_frame` when used, `target.mean`, `target.std`; f64, so a
+//! `input.mean_frame` when used, `input.pins.mean` and `input.pins.std`
+//! for a pins-and-pixels model, whose first dense layer's `W` is stored
+//! `cout x fan_in` with the pins' columns last, `target.mean`, `target.std`; f64, so a
 //! reloaded model predicts bit for bit as the saved one). Pure: the
 //! caller writes the files, as with the pin models' `model.json` and
 //! `model.safetensors`.
 use crate::config::ConvConfig;
 use crate::error::ConvError;
-use crate::layout::Layout;
+use crate::layout::{LayerShape, Layout};
 use crate::model::ConvModel;
 use crate::model_file::{
     read_f32, read_f64, read_header, read_tensors, write_tensors, ModelFileError, Tensor,
@@ -34,6 +36,22 @@ struct ModelFile {
     input_height: usize,
     input_width: usize,
     outputs: usize,
+    /// Pin values a frame (a pins-and-pixels model; 0, left out, else).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pins: usize,
+}
+
+fn is_zero(v: &usize) -> bool {
+    *v == 0
+}
+
+/// How a layer's weights are stored: `cout x cin x kh x kw`, or `cout x
+/// fan_in` when side inputs (pins) follow the window.
+fn weight_shape(s: &LayerShape) -> Vec<usize> {
+    match s.side_inputs {
+        0 => vec![s.cout, s.cin, s.kh, s.kw],
+        _ => vec![s.cout, s.fan_in()],
+    }
 }
 
 fn corrupt(reason: impl ToString) -> ConvError {
@@ -60,6 +78,7 @@ impl ConvModel {
             input_height,
             input_width,
             outputs: self.outputs(),
+            pins: self.pin_inputs(),
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
         let mut tensors = Vec::new();
@@ -67,8 +86,7 @@ impl ConvModel {
             let (p, prefix) = (&net.params, member_prefix(k));
             for (l, s) in net.layout.layers().iter().enumerate() {
                 let (w, b) = (format!("{prefix}W{}", l + 1), format!("{prefix}b{}", l + 1));
-                let shape = vec![s.cout, s.cin, s.kh, s.kw];
-                tensors.push(Tensor::f32(w, shape, &p.weights[l]));
+                tensors.push(Tensor::f32(w, weight_shape(s), &p.weights[l]));
                 tensors.push(Tensor::f32(b, vec![s.cout], &p.biases[l]));
             }
         }
@@ -79,6 +97,10 @@ impl ConvModel {
             let frame: Vec<f64> = i.mean_frame.iter().map(|&v| v as f64).collect();
             let shape = vec![input_height, input_width];
             tensors.push(Tensor::f64("input.mean_frame", shape, &frame));
+        }
+        if let Some(pins) = &i.pins {
+            tensors.push(Tensor::f64("input.pins.mean", vec![pins.dim()], &pins.mean));
+            tensors.push(Tensor::f64("input.pins.std", vec![pins.dim()], &pins.std));
         }
         tensors.push(Tensor::f64("target.mean", vec![t.dim()], &t.mean));
         tensors.push(Tensor::f64("target.std", vec![t.dim()], &t.std));
@@ -99,13 +121,8 @@ impl ConvModel {
             serde_json::from_value(value).map_err(|e| corrupt(format!("model json: {e}")))?;
         file.config.validate()?;
         let c = &file.config;
-        let layout = Layout::with_channels(
-            c.input_channels(),
-            (file.input_height, file.input_width),
-            &c.conv,
-            &c.dense,
-            file.outputs,
-        )?;
+        let size = (file.input_height, file.input_width);
+        let layout = crate::hybrid::layout_for(c, size, file.outputs, file.pins)?;
         let tensors = read_tensors(safetensors)?;
         let (input, targets) = read_scalings(&tensors, &file)?;
         let nets = (0..c.members)
@@ -141,7 +158,7 @@ fn read_network(
     let prefix = member_prefix(k);
     let mut params = Parameters::zeros(layout);
     for (l, s) in layout.layers().iter().enumerate() {
-        let w_shape = [s.cout, s.cin, s.kh, s.kw];
+        let w_shape = weight_shape(s);
         params.weights[l] = read_f32(tensors, &format!("{prefix}W{}", l + 1), &w_shape)?;
         params.biases[l] = read_f32(tensors, &format!("{prefix}b{}", l + 1), &[s.cout])?;
     }
@@ -169,6 +186,13 @@ fn read_scalings(
         mean: read_f64(tensors, "input.mean", &[1])?[0],
         std: read_f64(tensors, "input.std", &[1])?[0],
         mean_frame,
+        pins: match file.pins {
+            0 => None,
+            p => Some(TargetScaling {
+                mean: read_f64(tensors, "input.pins.mean", &[p])?,
+                std: read_f64(tensors, "input.pins.std", &[p])?,
+            }),
+        },
     };
     let targets = TargetScaling {
         mean: read_f64(tensors, "target.mean", &[k])?,

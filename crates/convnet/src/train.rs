@@ -270,6 +270,13 @@ fn chunk_gradient(
             ws.t[j * nb + b] = data.scaling.scale(j, v);
         }
     }
+    crate::hybrid::load_pins(
+        &data.input,
+        &data.frames,
+        idx.iter().copied(),
+        nb,
+        &mut ws.pins,
+    );
     if let Some(g) = ws.grad.as_mut() {
         g.clear();
     }

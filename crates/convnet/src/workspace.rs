@@ -25,6 +25,9 @@ pub(crate) struct Workspace {
     /// The standardised input, `channels x nb x h x w` (the frames, then
     /// any coordinate planes).
     pub x: Vec<f32>,
+    /// The standardised pins of a pins-and-pixels model, `P x nb` (empty
+    /// for pixels only).
+    pub pins: Vec<f32>,
     /// The standardised targets, `outputs x nb`.
     pub t: Vec<f32>,
     /// Somatic potentials `s(l)` (index `l - 1`).
@@ -65,6 +68,7 @@ impl Workspace {
         Workspace {
             cap,
             x: vec![0.0; layout.layers[0].in_len() * cap],
+            pins: vec![0.0; layout.side_inputs() * cap],
             t: vec![0.0; layout.outputs() * cap],
             s: per_layer(&out),
             p: per_layer(&out),

@@ -7,12 +7,12 @@
 //! with no mask.
 mod common;
 
-use common::{random, small_net, tiny_config, SIDE};
+use common::{ep_rule, random, small_net, tiny_config, SIDE};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tactrace_convnet::{
-    Activation, ClampedPhase, ConvConfig, ConvError, ConvModel, EpSettings, Frames, FreePhase,
-    ModelKind, Network, Nudging, Parameters, Rule, Targets,
+    Activation, ConvConfig, ConvError, ConvModel, Frames, ModelKind, Network, Parameters, Rule,
+    Targets,
 };
 
 const N: usize = 3;
@@ -40,15 +40,6 @@ fn masks(net: &Network, seed: u64) -> Vec<Vec<f32>> {
     out
 }
 
-fn ep(beta: f64) -> Rule {
-    Rule::Ep(EpSettings {
-        beta,
-        nudging: Nudging::Symmetric,
-        free_phase: FreePhase::FeedForward,
-        clamped_phase: ClampedPhase::Sweeps { iterations: 1 },
-    })
-}
-
 fn loss(net: &Network, x: &[f32], t: &[f32], m: &[Vec<f32>]) -> f64 {
     let y = net.feed_forward_masked(x, N, m).unwrap();
     y.iter()
@@ -74,7 +65,7 @@ fn issue22_ep_update_with_a_dropout_mask_approaches_the_masked_backprop_gradient
             "{act:?}: the mask changes nothing"
         );
         for beta in [0.05, 0.01] {
-            let est = net.gradient_masked(&x, &t, N, ep(beta), &m).unwrap();
+            let est = net.gradient_masked(&x, &t, N, ep_rule(beta), &m).unwrap();
             let cos = est.cosine(&bp);
             assert!(cos > 0.99, "{act:?} beta {beta}: cosine {cos}");
         }
@@ -119,7 +110,7 @@ fn issue22_a_unit_dropped_in_every_frame_learns_nothing() {
     let net = small_net(Activation::Tanh, 2, 9);
     let m = masks(&net, 10);
     let fan_in = net.layout().layers()[2].fan_in();
-    for rule in [Rule::Backprop, ep(0.1)] {
+    for rule in [Rule::Backprop, ep_rule(0.1)] {
         let g: Parameters = net.gradient_masked(&x, &t, N, rule, &m).unwrap();
         // Unit 0 of the dense layer (layer index 2): its incoming weights,
         // its bias and its outgoing weights get no update.

@@ -41,10 +41,16 @@ pub fn data_frames(data: &TapData, dir: &Path) -> Result<ImageFrames> {
     })
 }
 
-/// A view of `frames` for the network.
-fn view(frames: &ImageFrames) -> Result<Frames<'_>> {
+/// A view of `frames` for the network, each frame with its row's pin
+/// displacement vector from `data` (read by a pins-and-pixels model).
+pub fn view<'a>(frames: &'a ImageFrames, data: &'a TapData) -> Result<Frames<'a>> {
     let (h, w) = (frames.info.height, frames.info.width);
-    Ok(Frames::new(&frames.pixels, frames.count(), h, w)
+    let view = Frames::new(&frames.pixels, frames.count(), h, w);
+    Ok(view
+        .and_then(|v| match data.dim() {
+            0 => Ok(v),
+            dim => v.with_pins(&data.inputs, dim),
+        })
         .map_err(tactrace_learn::LearnError::from)?)
 }
 
@@ -59,7 +65,7 @@ pub fn train_image(
     on_epoch: &mut dyn FnMut(&EpochReport),
 ) -> Result<(ImageModel, TrainingHistory)> {
     let outputs = data_targets(data)?;
-    let (train, val) = views(&outputs, frames, val)?;
+    let (train, val) = views(&outputs, (data, frames), val)?;
     Ok(ImageModel::fit(
         &train,
         &data.targets,
@@ -84,7 +90,7 @@ pub fn fine_tune_image(
     on_epoch: &mut dyn FnMut(&EpochReport),
 ) -> Result<(ImageModel, TrainingHistory)> {
     named_targets(start.outputs(), data)?;
-    let (train, val) = views(start.outputs(), frames, val)?;
+    let (train, val) = views(start.outputs(), (data, frames), val)?;
     Ok(start.fine_tune(&train, &data.targets, cfg, seed, val, on_epoch)?)
 }
 
@@ -96,18 +102,18 @@ type ValView<'a> = (Frames<'a>, &'a [f32]);
 /// frames of the training frames' size.
 fn views<'a>(
     outputs: &[ModelTarget],
-    frames: &'a ImageFrames,
+    (data, frames): (&'a TapData, &'a ImageFrames),
     val: Option<(&'a TapData, &'a ImageFrames)>,
 ) -> Result<(Frames<'a>, Option<ValView<'a>>)> {
     let val = match val {
         Some((v, f)) => {
             named_targets(outputs, v)?;
             same_size(frames, f)?;
-            Some((view(f)?, v.targets.as_slice()))
+            Some((view(f, v)?, v.targets.as_slice()))
         }
         None => None,
     };
-    Ok((view(frames)?, val))
+    Ok((view(frames, data)?, val))
 }
 
 fn same_size(a: &ImageFrames, b: &ImageFrames) -> Result<()> {
@@ -142,7 +148,7 @@ pub fn validate_image(
         });
     }
     let targets = named_targets(net.outputs(), data)?;
-    let predicted = net.predict_batch(&view(frames)?)?;
+    let predicted = net.predict_batch(&view(frames, data)?)?;
     let mut v = score_predictions(targets, data, predicted, net.edge_roles().ok())?;
     v.rows_seen_in_training = model.training().map(|t| t.rows_seen(data));
     Ok(v)

@@ -141,6 +141,33 @@ impl ImageModel {
         Ok(targets::decode(&self.outputs, &encoded))
     }
 
+    /// [`Self::predict_targets`] of one frame and its pin displacement
+    /// vector `pins` (x of every pin, then y, px, in the training
+    /// dataset's pin order): read by a pins-and-pixels model, ignored by
+    /// one of pixels only.
+    pub fn predict_targets_with_pins(
+        &self,
+        frame: &[u8],
+        pins: &[f32],
+    ) -> Result<Vec<f64>, LearnError> {
+        let encoded = self.conv.predict_with_pins(frame, pins)?;
+        Ok(targets::decode(&self.outputs, &encoded))
+    }
+
+    /// The edge pose `[r mm, theta deg]` of one frame and its pins
+    /// (as [`Self::predict_targets_with_pins`]), refused
+    /// ([`LearnError::NotAnEdgeModel`]) for a model of other targets.
+    pub fn predict_with_pins(&self, frame: &[u8], pins: &[f32]) -> Result<[f64; 2], LearnError> {
+        let [r, theta] = self.edge_roles()?;
+        let values = self.predict_targets_with_pins(frame, pins)?;
+        Ok([values[r], values[theta]])
+    }
+
+    /// Pin values a frame it reads beside the pixels (0: pixels only).
+    pub fn pin_inputs(&self) -> usize {
+        self.conv.pin_inputs()
+    }
+
     /// The edge pose `[r mm, theta deg]` of one frame, refused
     /// ([`LearnError::NotAnEdgeModel`]) for a model of other targets.
     pub fn predict(&self, frame: &[u8]) -> Result<[f64; 2], LearnError> {

@@ -6,7 +6,8 @@
 //! An image model reads the frame's pixels instead, made as its training
 //! frames were ([`ImageInput`]: the dataset's preprocessing, then
 //! area-averaged to its input size); the pins still say whether the tap
-//! made contact.
+//! made contact, and a pins-and-pixels image model reads the frame's
+//! displacement vector beside its pixels.
 //!
 //! A follow run that keeps every tap's displacement vector asks for it
 //! ([`Perception::displacement`]) before the loop perceives the same
@@ -93,6 +94,13 @@ impl Perception {
                 expected.0, expected.1, got.0, got.1
             )));
         }
+        let pins = 2 * reader.tracker().reference().len();
+        if model.pin_inputs() > 0 && model.pin_inputs() != pins {
+            return Err(ServoError::InputSize {
+                expected: model.pin_inputs(),
+                got: pins,
+            });
+        }
         Ok(Self {
             reader,
             model: Reader::Image(model, input),
@@ -161,7 +169,9 @@ impl Perception {
             / p.max(1) as f64;
         let [r, theta] = match &self.model {
             Reader::Pins(model) => model.predict(&disp)?,
-            Reader::Image(model, input) => model.predict(&input.of_frame(frame)?)?,
+            Reader::Image(model, input) => {
+                model.predict_with_pins(&input.of_frame(frame)?, &disp)?
+            }
         };
         let (r, theta) = LabelConvention::edge_pose_of(self.labels.as_ref(), r, theta);
         Ok(Percept {
@@ -217,6 +227,52 @@ mod tests {
             Perception::new(extractor, model, 0.5).expect("perception"),
             frames,
         )
+    }
+
+    /// A pins-and-pixels image model of 8 x 8 px frames taking `pins`
+    /// values a frame (an untrained tiny net: only the wiring matters).
+    fn hybrid_image_model(pins: usize) -> ImageModel {
+        use tactrace_convnet::{ConvConfig, Frames, InputKind, ModelKind as Kind};
+        let n = 8;
+        let pixels: Vec<u8> = (0..n * 64).map(|k| (k * 37 % 251) as u8).collect();
+        let values: Vec<f32> = (0..n * pins).map(|k| (k % 5) as f32 - 2.0).collect();
+        let frames = Frames::new(&pixels, n, 8, 8)
+            .and_then(|f| f.with_pins(&values, pins))
+            .expect("frames");
+        let targets: Vec<f32> = (0..2 * n).map(|k| k as f32).collect();
+        let mut cfg = ConvConfig::new(Kind::ConvMlp);
+        (cfg.conv, cfg.dense, cfg.epochs, cfg.input) =
+            (vec![], vec![4], 1, InputKind::PinsAndPixels);
+        let outputs = tactrace_learn::edge_targets();
+        ImageModel::fit(&frames, &targets, &outputs, &cfg, 1, None, &mut |_| {})
+            .expect("model")
+            .0
+    }
+
+    /// The follow perception gives a pins-and-pixels image model the
+    /// tap's displacement vector beside its pixels, and refuses a model
+    /// of another pin count.
+    #[test]
+    fn a_pins_and_pixels_model_reads_the_taps_pins() {
+        let reader = || perception_and_frames().0.reader;
+        let [a, b] = perception_and_frames().1;
+        let pins = 2 * reader().tracker().reference().len();
+        let input = || ImageInput::new(None, (8, 8)).expect("input");
+        let model = hybrid_image_model(pins);
+        let hybrid = Perception::with_image_model(reader(), model.clone(), input(), 0.5)
+            .expect("perception");
+        for frame in [&a, &b] {
+            let percept = hybrid.perceive(frame).expect("percept");
+            let disp = hybrid.displacement(frame).expect("pins");
+            let small = input().of_frame(frame).expect("pixels");
+            let want = model.predict_with_pins(&small, &disp).expect("pose");
+            assert_eq!([percept.r_mm, percept.theta_deg], want);
+        }
+        let other = hybrid_image_model(pins - 2);
+        assert!(matches!(
+            Perception::with_image_model(reader(), other, input(), 0.5),
+            Err(ServoError::InputSize { .. })
+        ));
     }
 
     /// A follow run's field recorder asks for a frame's displacement, then

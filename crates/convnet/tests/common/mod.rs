@@ -1,5 +1,6 @@
 //! Set-ups shared by the image-model tests (`input_noise.rs`,
-//! `weight_average.rs`, `dropout.rs`, `theory.rs`): tiny frames
+//! `weight_average.rs`, `dropout.rs`, `theory.rs`,
+//! `pins_and_pixels.rs`): tiny frames
 //! whose bright spot moves with the frame's index, a tiny one-convolution
 //! training configuration, and the small net of the gradient checks.
 //! Not every file that shares it uses every set-up.
@@ -7,7 +8,10 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tactrace_convnet::{Activation, ConvConfig, ConvSpec, Layout, ModelKind, Network};
+use tactrace_convnet::{
+    Activation, ClampedPhase, ConvConfig, ConvSpec, EpSettings, FreePhase, Layout, ModelKind,
+    Network, Nudging, Rule,
+};
 
 /// The side of the tiny frames, px.
 pub const SIDE: usize = 12;
@@ -43,10 +47,10 @@ pub fn tiny_config(kind: ModelKind) -> ConvConfig {
     c
 }
 
-/// A small net: 12 x 12 input, two convolutions (3 and 4 maps, stride 1
-/// and 2), one dense hidden layer of 10, `outputs` linear units.
-pub fn small_net(activation: Activation, outputs: usize, seed: u64) -> Network {
-    let conv = [
+/// The two convolutions of the small net: 3 maps 3 x 3 stride 1, then 4
+/// maps 3 x 3 stride 2 (12 x 12 -> 6 x 6).
+pub fn small_conv() -> [ConvSpec; 2] {
+    [
         ConvSpec {
             channels: 3,
             kernel: 3,
@@ -57,9 +61,25 @@ pub fn small_net(activation: Activation, outputs: usize, seed: u64) -> Network {
             kernel: 3,
             stride: 2,
         },
-    ];
-    let layout = Layout::new(12, 12, &conv, &[10], outputs).expect("valid layout");
+    ]
+}
+
+/// A small net: 12 x 12 input, [`small_conv`], one dense hidden layer of
+/// 10, `outputs` linear units.
+pub fn small_net(activation: Activation, outputs: usize, seed: u64) -> Network {
+    let layout = Layout::new(12, 12, &small_conv(), &[10], outputs).expect("valid layout");
     Network::new(layout, activation, seed)
+}
+
+/// The EP rule at `beta`: symmetric nudging, the feed-forward free
+/// phase, one sweep a clamped phase (the defaults but beta).
+pub fn ep_rule(beta: f64) -> Rule {
+    Rule::Ep(EpSettings {
+        beta,
+        nudging: Nudging::Symmetric,
+        free_phase: FreePhase::FeedForward,
+        clamped_phase: ClampedPhase::Sweeps { iterations: 1 },
+    })
 }
 
 /// `n` values uniform in -1..1, seeded by `seed`.

@@ -70,7 +70,7 @@ mod tests {
     /// Issue 20: there were no shell completions. Each shell's script
     /// names every subcommand, nested ones included, and their options.
     #[test]
-    fn issue20_every_shells_script_mentions_every_subcommand() {
+    fn every_shells_script_mentions_every_subcommand() {
         let mut all = Vec::new();
         names(&Cli::command(), &mut all);
         assert!(all.len() > 20, "{all:?}");

@@ -436,7 +436,7 @@ fn problem(found: &Found) -> Option<String> {
 /// command line of README.md and docs/*.md names existing subcommands and
 /// options, and the shell lines parse.
 #[test]
-fn issue20_every_documented_command_parses() {
+fn every_documented_command_parses() {
     let mut checked = 0;
     let mut problems = Vec::new();
     for file in documents() {
@@ -458,7 +458,7 @@ fn issue20_every_documented_command_parses() {
 
 /// The checker itself: synopsis notation, variables and pipes.
 #[test]
-fn issue20_the_doc_command_checker_reads_synopses_and_shell() {
+fn the_doc_command_checker_reads_synopses_and_shell() {
     let mut vars = HashMap::new();
     learn_vars("T=target/release/tactrace; D=../data", &mut vars);
     let cmds = commands_of_line("$T validate --model m --data $D/val | head # note", &vars);

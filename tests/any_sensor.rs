@@ -201,7 +201,7 @@ fn check_counts(m: &serde_json::Value, n: usize, pins: usize) {
 }
 
 #[test]
-fn issue21_inspect_on_a_ring_sensor_writes_a_sensor_file_import_reads_with_no_reference() {
+fn inspect_on_a_ring_sensor_writes_a_sensor_file_import_reads_with_no_reference() {
     let tmp = TempDir::new("rings");
     let s = rings();
     write_set(&s, &tmp.join("set"), 40);
@@ -224,7 +224,7 @@ fn issue21_inspect_on_a_ring_sensor_writes_a_sensor_file_import_reads_with_no_re
 }
 
 #[test]
-fn issue21_inspect_on_a_lattice_sensor_writes_a_sensor_file_import_reads_with_no_reference() {
+fn inspect_on_a_lattice_sensor_writes_a_sensor_file_import_reads_with_no_reference() {
     let tmp = TempDir::new("lattice");
     write_set(&lattice(), &tmp.join("set"), 30);
     let (text, m) = inspect_and_import(&tmp, 30);
@@ -262,7 +262,7 @@ fn issue21_inspect_on_a_lattice_sensor_writes_a_sensor_file_import_reads_with_no
 }
 
 #[test]
-fn issue21_a_raw_colour_frame_with_no_sensor_file_fails_early_suggesting_sensor_inspect() {
+fn a_raw_colour_frame_with_no_sensor_file_fails_early_suggesting_sensor_inspect() {
     let tmp = TempDir::new("colour");
     let frames = tmp.join("frames");
     std::fs::create_dir_all(&frames).unwrap();
@@ -302,7 +302,7 @@ fn issue21_a_raw_colour_frame_with_no_sensor_file_fails_early_suggesting_sensor_
 }
 
 #[test]
-fn issue21_the_shared_331_pin_set_imports_fully_tracked_with_nothing_hand_written() {
+fn the_shared_331_pin_set_imports_fully_tracked_with_nothing_hand_written() {
     let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "train/targets.csv")
     else {
         return;

@@ -40,7 +40,7 @@ fn names_both_layouts(stderr: &str) {
 }
 
 #[test]
-fn issue21_twin_with_a_dataset_reference_writes_the_datasets_pin_order() {
+fn twin_with_a_dataset_reference_writes_the_datasets_pin_order() {
     let t = TempDir::new("twin-dataset");
     ring_taps(&t.0, 60);
     ok(&import_taps(&t.0, &[], "ds"), "import");
@@ -60,7 +60,7 @@ fn issue21_twin_with_a_dataset_reference_writes_the_datasets_pin_order() {
 }
 
 #[test]
-fn issue21_calibrate_without_an_undeformed_frame_then_twin_in_its_pin_order() {
+fn calibrate_without_an_undeformed_frame_then_twin_in_its_pin_order() {
     let t = TempDir::new("calibrate-estimated");
     ring_taps(&t.0, 80);
     let run = calibrate_taps(&t.0, "40", &[]);
@@ -97,7 +97,7 @@ fn held_out_rms(output: &str) -> (f64, f64) {
 }
 
 #[test]
-fn issue21_the_shared_331_pin_set_calibrates_with_nothing_hand_written() {
+fn the_shared_331_pin_set_calibrates_with_nothing_hand_written() {
     let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "train/targets.csv")
     else {
         return;
@@ -165,7 +165,7 @@ fn issue21_the_shared_331_pin_set_calibrates_with_nothing_hand_written() {
 }
 
 #[test]
-fn issue21_a_sensor_calibrated_without_an_undeformed_frame_collects_and_follows() {
+fn a_sensor_calibrated_without_an_undeformed_frame_collects_and_follows() {
     let t = TempDir::new("sensor-estimated-runs");
     ring_taps(&t.0, 60);
     ok(&calibrate_taps(&t.0, "30", &[]), "calibrate");
@@ -189,7 +189,7 @@ fn issue21_a_sensor_calibrated_without_an_undeformed_frame_collects_and_follows(
 /// the other side: `calibrate` finds the convention from the taps, says
 /// so and records it in `sensor.toml`.
 #[test]
-fn issue21_calibrate_estimates_and_records_the_label_convention() {
+fn calibrate_estimates_and_records_the_label_convention() {
     let t = TempDir::new("calibrate-convention");
     let own = TacTipConfig::default();
     let mut truth = own.clone();

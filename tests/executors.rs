@@ -86,7 +86,7 @@ fn tuning(t: &TempDir) -> (TuneConfig, SimFollowConfig, StoredModel) {
 }
 
 #[test]
-fn issue24_tune_runs_its_start_and_judgement_through_the_executor() {
+fn tune_runs_its_start_and_judgement_through_the_executor() {
     let t = TempDir::new("tune-exec");
     let (cfg, base, model) = tuning(&t);
     let m = t.join("m");
@@ -135,7 +135,7 @@ fn issue24_tune_runs_its_start_and_judgement_through_the_executor() {
 }
 
 #[test]
-fn issue24_a_tuning_whose_every_candidate_failed_is_a_failed_run() {
+fn a_tuning_whose_every_candidate_failed_is_a_failed_run() {
     let t = TempDir::new("tune-fail");
     let (cfg, base, model) = tuning(&t);
     let out = t.join("tuned");
@@ -162,7 +162,7 @@ fn issue24_a_tuning_whose_every_candidate_failed_is_a_failed_run() {
 }
 
 #[test]
-fn issue24_a_sim_fit_whose_every_candidate_failed_is_a_failed_run() {
+fn a_sim_fit_whose_every_candidate_failed_is_a_failed_run() {
     use tactrace_lab::transfer_fit::{fit_transfer, TransferFitConfig};
     use tactrace_store::collection::RowSelection;
     use tactrace_store::LabelledCollection;

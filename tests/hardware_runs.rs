@@ -235,17 +235,17 @@ fn interrupt_follow(tag: &str, signals: &[&str], code: i32) {
 }
 
 #[test]
-fn issue20_sigint_mid_follow_sends_stopl_keeps_the_partial_run_and_exits_130() {
+fn sigint_mid_follow_sends_stopl_keeps_the_partial_run_and_exits_130() {
     interrupt_follow("sigint", &["-INT"], 130);
 }
 
 #[test]
-fn issue20_sigterm_twice_mid_follow_stops_the_arm_first_and_exits_143() {
+fn sigterm_twice_mid_follow_stops_the_arm_first_and_exits_143() {
     interrupt_follow("sigterm", &["-TERM", "-TERM"], 143);
 }
 
 #[test]
-fn issue20_a_fault_on_the_way_to_the_start_exits_1_and_a_start_too_far_exits_2() {
+fn a_fault_on_the_way_to_the_start_exits_1_and_a_start_too_far_exits_2() {
     let t = TempDir::new("start-fault");
     let frozen = fake(400.0, 0.0, FakeBehaviour::ProtectiveStopOnMove);
     write_rig(&t.0, &frozen);
@@ -271,7 +271,7 @@ fn issue20_a_fault_on_the_way_to_the_start_exits_1_and_a_start_too_far_exits_2()
 }
 
 #[test]
-fn issue20_a_simulation_command_keeps_the_default_ctrl_c() {
+fn a_simulation_command_keeps_the_default_ctrl_c() {
     let t = TempDir::new("sim-ctrl-c");
     let mut command = Command::new(env!("CARGO_BIN_EXE_tactrace"));
     // A terminal's Ctrl-C reaches a command whose SIGINT is at its default

@@ -27,7 +27,7 @@ fn validate(dir: &Path, args: &[&str]) -> Run {
 }
 
 #[test]
-fn issue20_a_model_folder_records_the_rows_it_trained_on() {
+fn a_model_folder_records_the_rows_it_trained_on() {
     let t = TempDir::new("record");
     dataset_and_held_out_model(&t.0);
     let rec = json(&std::fs::read_to_string(t.join("m/training.json")).unwrap());
@@ -61,7 +61,7 @@ fn issue20_a_model_folder_records_the_rows_it_trained_on() {
 }
 
 #[test]
-fn issue20_validate_counts_the_rows_seen_in_training_in_any_copy() {
+fn validate_counts_the_rows_seen_in_training_in_any_copy() {
     let t = TempDir::new("seen");
     dataset_and_held_out_model(&t.0);
     let r = validate(&t.0, &["--data", "ds"]);
@@ -90,7 +90,7 @@ fn issue20_validate_counts_the_rows_seen_in_training_in_any_copy() {
 }
 
 #[test]
-fn issue20_validate_val_fraction_scores_exactly_the_held_out_rows() {
+fn validate_val_fraction_scores_exactly_the_held_out_rows() {
     let t = TempDir::new("heldout");
     let trained = dataset_and_held_out_model(&t.0);
     let r = validate(
@@ -180,7 +180,7 @@ fn issue20_validate_val_fraction_scores_exactly_the_held_out_rows() {
 }
 
 #[test]
-fn issue20_older_model_folders_load_and_say_unknown() {
+fn older_model_folders_load_and_say_unknown() {
     let t = TempDir::new("older");
     dataset_and_held_out_model(&t.0);
     std::fs::remove_file(t.join("m/training.json")).unwrap();
@@ -216,7 +216,7 @@ fn issue20_older_model_folders_load_and_say_unknown() {
 }
 
 #[test]
-fn issue20_a_folder_of_the_wrong_kind_is_named_with_what_was_expected() {
+fn a_folder_of_the_wrong_kind_is_named_with_what_was_expected() {
     let t = TempDir::new("kinds");
     dataset_and_held_out_model(&t.0);
     let r = tactrace(&t.0, &["validate", "--model", "ds", "--data", "ds"]);
@@ -244,7 +244,7 @@ fn issue20_a_folder_of_the_wrong_kind_is_named_with_what_was_expected() {
 /// `follow --replay` with a bank holding frames the model trained on
 /// warns (stderr and metrics.json); with held-out frames only, it does not.
 #[test]
-fn issue20_follow_replay_warns_when_the_bank_holds_training_frames() {
+fn follow_replay_warns_when_the_bank_holds_training_frames() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("replay-seen");
     // The first 250 labelled rows whose frame number N has N % 5 != 0.

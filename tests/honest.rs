@@ -39,7 +39,7 @@ fn bristol_targets(path: &Path, extra_column: Option<&str>, rows: usize) {
 
 /// Item "useless results": `collect --samples 1` then `train` exited 0.
 #[test]
-fn issue20_training_refuses_too_few_samples_before_any_work() {
+fn training_refuses_too_few_samples_before_any_work() {
     let t = TempDir::new("fewsamples");
     let r = collect(&t.0, "1", &[], "one");
     expect_code(&r, 0, "collect");
@@ -82,7 +82,7 @@ fn issue20_training_refuses_too_few_samples_before_any_work() {
 /// `anneal_fraction = nan` trained, exited 0 and saved a model that did not
 /// load; the `n_components` error named `hidden`.
 #[test]
-fn issue20_a_setting_out_of_range_is_refused_naming_its_key() {
+fn a_setting_out_of_range_is_refused_naming_its_key() {
     let t = TempDir::new("badsetting");
     let cases = [
         ("anneal_fraction = nan\n", "anneal_fraction"),
@@ -112,7 +112,7 @@ fn issue20_a_setting_out_of_range_is_refused_naming_its_key() {
 /// `[position] hidden = []` reached a loss of 7e56 and was saved (only a
 /// NaN or infinite loss counted as diverged).
 #[test]
-fn issue20_a_loss_growing_far_beyond_the_means_is_a_divergence() {
+fn a_loss_growing_far_beyond_the_means_is_a_divergence() {
     let t = TempDir::new("growingloss");
     let r = collect(&t.0, "40", &[], "ds");
     expect_code(&r, 0, "collect");
@@ -141,7 +141,7 @@ fn issue20_a_loss_growing_far_beyond_the_means_is_a_divergence() {
 
 /// `validate` printed NaN MAEs with exit 0 on a degenerate model/dataset.
 #[test]
-fn issue20_validate_never_reports_a_nan_error_as_success() {
+fn validate_never_reports_a_nan_error_as_success() {
     let t = TempDir::new("nanmae");
     dataset_and_model(&t.0);
     // A dataset whose first row is finite but far beyond any float the
@@ -185,7 +185,7 @@ fn issue20_validate_never_reports_a_nan_error_as_success() {
 /// A targets.csv with a duplicate column name silently used the first
 /// (all r labels 0).
 #[test]
-fn issue20_a_label_column_named_twice_is_refused() {
+fn a_label_column_named_twice_is_refused() {
     let t = TempDir::new("dupcolumn");
     bristol_targets(&t.join("targets.csv"), Some("pose_2"), 5);
     std::fs::create_dir_all(t.join("frames")).unwrap();
@@ -208,7 +208,7 @@ fn issue20_a_label_column_named_twice_is_refused() {
 
 /// A wrong column name printed a truncated header that hid the right ones.
 #[test]
-fn issue20_a_wrong_column_lists_every_column_and_the_nearest() {
+fn a_wrong_column_lists_every_column_and_the_nearest() {
     let t = TempDir::new("wrongcolumn");
     bristol_targets(&t.join("targets.csv"), None, 5);
     std::fs::create_dir_all(t.join("frames")).unwrap();
@@ -233,7 +233,7 @@ fn issue20_a_wrong_column_lists_every_column_and_the_nearest() {
 
 /// `--frames` pointing one level above the frames folder gave no hint.
 #[test]
-fn issue20_frames_one_level_too_high_names_the_subfolder() {
+fn frames_one_level_too_high_names_the_subfolder() {
     let t = TempDir::new("framesup");
     std::fs::create_dir_all(t.join("set/frames")).unwrap();
     bristol_targets(&t.join("set/targets.csv"), None, 3);
@@ -255,7 +255,7 @@ fn issue20_frames_one_level_too_high_names_the_subfolder() {
 
 /// A deformed frame given as `--reference` was accepted silently.
 #[test]
-fn issue20_a_pressed_reference_is_warned_about() {
+fn a_pressed_reference_is_warned_about() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("pressedref");
     let [frames, targets, init] = real_paths(&data);
@@ -281,7 +281,7 @@ fn issue20_a_pressed_reference_is_warned_about() {
 /// `twin` printed "simulated 13186 labelled taps" from 3762 rows without
 /// saying why.
 #[test]
-fn issue20_twin_with_a_sensor_says_where_its_taps_come_from() {
+fn twin_with_a_sensor_says_where_its_taps_come_from() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("twincount");
     let [frames, targets, init] = real_paths(&data);
@@ -321,7 +321,7 @@ fn issue20_twin_with_a_sensor_says_where_its_taps_come_from() {
 /// `[sensor.camera] width = 0` exited 1 from collect and follow but 2 from
 /// sensor render; a NaN tap depth stopped a follow run as a fault (1).
 #[test]
-fn issue20_an_invalid_configuration_exits_2_from_every_command() {
+fn an_invalid_configuration_exits_2_from_every_command() {
     let t = TempDir::new("configcodes");
     dataset_and_model(&t.0);
     let tables = [
@@ -388,7 +388,7 @@ fn issue20_an_invalid_configuration_exits_2_from_every_command() {
 /// 28)`. A file-size limit makes writing the dataset fail with an I/O
 /// error wrapped by the npy writer, which repeats its cause.
 #[test]
-fn issue20_an_io_cause_is_printed_once() {
+fn an_io_cause_is_printed_once() {
     let t = TempDir::new("causeonce");
     let out = std::process::Command::new("sh")
         .arg("-c")
@@ -410,7 +410,7 @@ fn issue20_an_io_cause_is_printed_once() {
 /// `StepsDone`): no `{:?}` formats a message outside tests. (The Python
 /// package, its own workspace, is not scanned here.)
 #[test]
-fn issue20_no_debug_formatting_in_messages() {
+fn no_debug_formatting_in_messages() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut dirs = vec![root.join("src")];
     for entry in std::fs::read_dir(root.join("crates")).unwrap() {
@@ -469,7 +469,7 @@ fn issue20_no_debug_formatting_in_messages() {
 /// it is committed to `OUT`: a run that ended (however) is complete in
 /// `OUT`, and the README and ARCHITECTURE say so.
 #[test]
-fn issue20_a_failed_follow_run_is_in_out_as_the_docs_say() {
+fn a_failed_follow_run_is_in_out_as_the_docs_say() {
     let t = TempDir::new("failedrunout");
     dataset_and_model(&t.0);
     // A contour in metres: the sensor loses contact at once.

@@ -68,7 +68,7 @@ fn write_set(dir: &Path, n: usize) {
 }
 
 #[test]
-fn issue22_an_image_model_is_fed_frames_made_as_its_frames_npy_rows() {
+fn an_image_model_is_fed_frames_made_as_its_frames_npy_rows() {
     let t = TempDir::new("issue22-sight");
     write_set(&t.join("set"), 24);
     let r = tactrace(
@@ -167,7 +167,7 @@ fn issue22_an_image_model_is_fed_frames_made_as_its_frames_npy_rows() {
 /// A model folder written before `frames.json` recorded the preprocessing
 /// loads, and its frames are made as before: grey as they are, averaged.
 #[test]
-fn issue22_an_image_model_folder_without_the_record_still_loads() {
+fn an_image_model_folder_without_the_record_still_loads() {
     let t = TempDir::new("issue22-old");
     write_set(&t.join("set"), 16);
     write_small_conv(&t.0);

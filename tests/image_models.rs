@@ -57,7 +57,7 @@ const SMALL: &str = "dense = [16]\nlearning_rate = 0.003\nbatch_size = 8\n\
                      [[conv]]\nchannels = 8\nkernel = 3\nstride = 2\n";
 
 #[test]
-fn issue22_conv_models_train_on_frames_then_validate_and_predict() {
+fn conv_models_train_on_frames_then_validate_and_predict() {
     let t = TempDir::new("issue22-train");
     synthetic_dataset(&t.join("ds"), 240);
     std::fs::write(t.join("small.toml"), SMALL).unwrap();
@@ -150,7 +150,7 @@ fn issue22_conv_models_train_on_frames_then_validate_and_predict() {
 }
 
 #[test]
-fn issue22_an_image_model_refuses_a_dataset_of_pins_only() {
+fn an_image_model_refuses_a_dataset_of_pins_only() {
     let t = TempDir::new("issue22-pins-only");
     let r = collect(&t.0, "20", &["--seed", "1"], "pins");
     expect_code(&r, 0, "collect");
@@ -165,7 +165,7 @@ fn issue22_an_image_model_refuses_a_dataset_of_pins_only() {
 }
 
 #[test]
-fn issue22_import_keeps_the_frames_as_images_of_the_size_asked() {
+fn import_keeps_the_frames_as_images_of_the_size_asked() {
     let Some(set) = tactrace_testdata::real_edge_set() else {
         return;
     };
@@ -229,7 +229,7 @@ fn issue22_import_keeps_the_frames_as_images_of_the_size_asked() {
 /// world whose frames are of another size than the model's training
 /// frames is refused before anything moves.
 #[test]
-fn issue22_follow_in_the_real_frame_world_with_an_image_model() {
+fn follow_in_the_real_frame_world_with_an_image_model() {
     let Some(set) = tactrace_testdata::real_edge_set() else {
         return;
     };
@@ -284,7 +284,7 @@ fn issue22_follow_in_the_real_frame_world_with_an_image_model() {
 /// `reproduce --image-model` trains and follows on real frames: without
 /// `--real` it is refused before any work.
 #[test]
-fn issue22_reproduce_image_model_needs_real_frames() {
+fn reproduce_image_model_needs_real_frames() {
     let t = TempDir::new("issue22-reproduce");
     let r = tactrace(&t.0, &["reproduce", "--image-model", "--out", "rep"]);
     expect_code(&r, 2, "reproduce --image-model without --real");

@@ -87,7 +87,7 @@ fn local_references(text: &str) -> Vec<String> {
 /// document links to or names a missing file (the shared data folder
 /// beside the repository excepted), and the user docs say what they mean.
 #[test]
-fn issue20_docs_have_no_machine_paths_issue_numbers_or_missing_files() {
+fn docs_have_no_machine_paths_issue_numbers_or_missing_files() {
     let mut problems = Vec::new();
     for file in markdown_files() {
         let text = std::fs::read_to_string(&file).unwrap();
@@ -131,7 +131,7 @@ fn issue20_docs_have_no_machine_paths_issue_numbers_or_missing_files() {
 /// Issue 20: no LICENSE files although Cargo.toml declares MIT OR
 /// Apache-2.0, no CITATION.cff, no CHANGELOG.
 #[test]
-fn issue20_licence_citation_and_changelog_are_present() {
+fn licence_citation_and_changelog_are_present() {
     let read = |f: &str| std::fs::read_to_string(repo().join(f)).unwrap_or_default();
     assert!(read("Cargo.toml").contains("license = \"MIT OR Apache-2.0\""));
     let mit = read("LICENSE-MIT");
@@ -158,7 +158,7 @@ fn issue20_licence_citation_and_changelog_are_present() {
 /// Issue 20: `sensors/` (where `calibrate --out sensors/mine` writes) was
 /// not git-ignored.
 #[test]
-fn issue20_sensor_folders_are_git_ignored() {
+fn sensor_folders_are_git_ignored() {
     let ignore = std::fs::read_to_string(repo().join(".gitignore")).unwrap();
     let rules: Vec<&str> = ignore.lines().map(str::trim).collect();
     for folder in ["sensors", "runs", "data", "models"] {
@@ -173,7 +173,7 @@ fn issue20_sensor_folders_are_git_ignored() {
 /// Issue 20: no shell completions. `tactrace completions bash` prints a
 /// script bash accepts; an unknown shell is bad input (exit 2).
 #[test]
-fn issue20_completions_print_a_script_bash_accepts() {
+fn completions_print_a_script_bash_accepts() {
     let t = TempDir::new("completions");
     for shell in ["bash", "zsh", "fish"] {
         let r = tactrace(&t.0, &["completions", shell]);
@@ -238,7 +238,7 @@ fn my_data(data: &Path, dir: &Path, stride: usize) {
 /// and follow the disk in the real-frame world with a page that names the
 /// answering frames.
 #[test]
-fn issue20_the_getting_started_guide_runs_as_written() {
+fn the_getting_started_guide_runs_as_written() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("guide");
     my_data(&data, &t.0, 2);

@@ -65,7 +65,7 @@ fn tactrace_within(dir: &Path, args: &[&str], limit: Duration) -> Run {
 /// another run holds is refused (exit 2, naming its pid), with or without
 /// `--force`, and touches nothing.
 #[test]
-fn issue20_a_run_into_an_output_another_run_writes_is_refused() {
+fn a_run_into_an_output_another_run_writes_is_refused() {
     let t = TempDir::new("locked");
     dataset_and_model(&t.0);
     fs::create_dir(t.join("out.partial")).unwrap();
@@ -107,7 +107,7 @@ fn issue20_a_run_into_an_output_another_run_writes_is_refused() {
 /// first is surely running is refused with the first one's pid, and the
 /// first's partial run is left alone.
 #[test]
-fn issue20_a_second_follow_is_refused_while_the_first_runs() {
+fn a_second_follow_is_refused_while_the_first_runs() {
     let t = TempDir::new("twofollows");
     dataset_and_model(&t.0);
     let long = [
@@ -147,7 +147,7 @@ fn issue20_a_second_follow_is_refused_while_the_first_runs() {
 /// their files without `--force`; every single-file output now refuses an
 /// existing one (exit 2, saying to add --force).
 #[test]
-fn issue20_every_file_output_obeys_force() {
+fn every_file_output_obeys_force() {
     let t = TempDir::new("fileforce");
     dataset_and_model(&t.0);
     let render = |r: &str, force: bool| {
@@ -214,7 +214,7 @@ fn issue20_every_file_output_obeys_force() {
 /// `--force` would delete with it, is refused (exit 2) and nothing is
 /// touched.
 #[test]
-fn issue20_an_output_in_or_around_an_input_is_refused() {
+fn an_output_in_or_around_an_input_is_refused() {
     let t = TempDir::new("overlap");
     dataset_and_model(&t.0);
     let mut csv = String::from("image_name,pose_2,pose_6\n");
@@ -290,7 +290,7 @@ fn issue20_an_output_in_or_around_an_input_is_refused() {
 /// aborted validate, train and predict (exit 134); now exit 2 naming the
 /// file and the sizes.
 #[test]
-fn issue20_a_dataset_claiming_more_than_its_file_holds_is_bad_input() {
+fn a_dataset_claiming_more_than_its_file_holds_is_bad_input() {
     let t = TempDir::new("npybomb");
     dataset_and_model(&t.0);
     fs::create_dir(t.join("bomb")).unwrap();
@@ -329,7 +329,7 @@ fn issue20_a_dataset_claiming_more_than_its_file_holds_is_bad_input() {
 /// 1e-6` and `dome_radius_mm = 1e9` aborted; they are refused with the
 /// bound in the message.
 #[test]
-fn issue20_configs_implying_huge_grids_are_refused_with_the_bound() {
+fn configs_implying_huge_grids_are_refused_with_the_bound() {
     let t = TempDir::new("gridbomb");
     let cases = [
         (
@@ -371,7 +371,7 @@ fn issue20_configs_implying_huge_grids_are_refused_with_the_bound() {
 /// regular file is expected is refused at once (exit 2).
 #[cfg(unix)]
 #[test]
-fn issue20_a_fifo_or_device_for_an_input_file_is_refused_at_once() {
+fn a_fifo_or_device_for_an_input_file_is_refused_at_once() {
     let t = TempDir::new("fifo");
     let r = tactrace(
         &t.0,
@@ -434,7 +434,7 @@ fn issue20_a_fifo_or_device_for_an_input_file_is_refused_at_once() {
 /// collection now starts (buffers grow as taps come); bench's taps are
 /// bounded (exit 2).
 #[test]
-fn issue20_huge_counts_on_the_command_line_do_not_abort() {
+fn huge_counts_on_the_command_line_do_not_abort() {
     let t = TempDir::new("counts");
     let r = tactrace(&t.0, &["bench", "--taps", "100000000000"]);
     expect_code(&r, 2, "bench --taps 1e11");

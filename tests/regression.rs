@@ -43,7 +43,7 @@ fn read_json(path: &Path) -> serde_json::Value {
 /// Item 1: a rig file naming only `[tap] depth_mm` (at its default) was
 /// read without the defaults ("the reference needs at least 3 pins").
 #[test]
-fn issue10_rig_file_with_only_the_tap_depth_keeps_the_defaults() {
+fn rig_file_with_only_the_tap_depth_keeps_the_defaults() {
     let t = TempDir::new("rigdefaults");
     std::fs::write(t.join("rig.toml"), "[tap]\ndepth_mm = 8.25\n").unwrap();
     let r = util::collect(&t.0, "10", &["--config", "rig.toml"], "ds");
@@ -53,7 +53,7 @@ fn issue10_rig_file_with_only_the_tap_depth_keeps_the_defaults() {
 
 /// Item 2: `tactrace predict ... | head -2` panicked on the broken pipe.
 #[test]
-fn issue10_a_closed_stdout_ends_quietly_with_0() {
+fn a_closed_stdout_ends_quietly_with_0() {
     let t = TempDir::new("brokenpipe");
     // Enough rows (over 100 kB) that the pipe fills before the reader quits.
     let r = util::collect(&t.0, "4000", &["--seed", "2"], "big");
@@ -81,7 +81,7 @@ fn issue10_a_closed_stdout_ends_quietly_with_0() {
 
 /// Item 3: `follow` overwrote an existing `--out` and left partial folders.
 #[test]
-fn issue10_follow_refuses_an_existing_out_without_force() {
+fn follow_refuses_an_existing_out_without_force() {
     let t = TempDir::new("followforce");
     dataset_and_model(&t.0);
     let follow = ["follow", "--model", "m", "--shape", "disk", "--out", "run"];
@@ -109,7 +109,7 @@ fn issue10_follow_refuses_an_existing_out_without_force() {
 
 /// Item 3: `reproduce` overwrote an existing `--out`.
 #[test]
-fn issue10_reproduce_refuses_an_existing_out_without_force() {
+fn reproduce_refuses_an_existing_out_without_force() {
     let t = TempDir::new("reproforce");
     let config = "train_samples = 40\nval_samples = 20\nepochs = 1\nreport_steps = false\n\
                   [follow.follow]\nmax_steps = 5\n";
@@ -144,7 +144,7 @@ fn issue10_reproduce_refuses_an_existing_out_without_force() {
 /// Item 4: a follow that lost contact after 3 steps on a contour in metres
 /// exited 0 with coverage 1.0; a 5 mm disk exited 0.
 #[test]
-fn issue10_a_run_that_does_not_complete_exits_1_with_honest_metrics() {
+fn a_run_that_does_not_complete_exits_1_with_honest_metrics() {
     let t = TempDir::new("failedrun");
     dataset_and_model(&t.0);
     circle_csv(&t.join("metres.csv"), 0.0, 0.0, 0.05);
@@ -187,7 +187,7 @@ fn issue10_a_run_that_does_not_complete_exits_1_with_honest_metrics() {
 
 /// Item 5: a missing contour CSV was reported as an unknown shape name.
 #[test]
-fn issue10_a_missing_contour_csv_is_not_an_unknown_shape() {
+fn a_missing_contour_csv_is_not_an_unknown_shape() {
     let t = TempDir::new("missingcsv");
     let render = |shape: &str| {
         tactrace(
@@ -210,7 +210,7 @@ fn issue10_a_missing_contour_csv_is_not_an_unknown_shape() {
 
 /// Item 6: the operating system's message was printed twice.
 #[test]
-fn issue10_an_os_error_is_printed_once() {
+fn an_os_error_is_printed_once() {
     let t = TempDir::new("oserror");
     dataset_and_model(&t.0);
     let cases: [&[&str]; 5] = [
@@ -277,7 +277,7 @@ fn issue10_an_os_error_is_printed_once() {
 
 /// Item 7: a frame with too few pins exited 1 (a failed run), not 2.
 #[test]
-fn issue10_a_frame_with_too_few_pins_is_bad_input() {
+fn a_frame_with_too_few_pins_is_bad_input() {
     let t = TempDir::new("fewpins");
     dataset_and_model(&t.0);
     let render = |args: &[&str]| {
@@ -322,7 +322,7 @@ fn issue10_a_frame_with_too_few_pins_is_bad_input() {
 
 /// Item 8: `import` with a bad reference read every frame, then blamed them.
 #[test]
-fn issue10_import_with_a_bad_reference_fails_fast_naming_it() {
+fn import_with_a_bad_reference_fails_fast_naming_it() {
     let t = TempDir::new("badreference");
     let r = util::collect(&t.0, "30", &["--save-frames"], "sim");
     expect_code(&r, 0, "collect --save-frames");
@@ -367,7 +367,7 @@ fn issue10_import_with_a_bad_reference_fails_fast_naming_it() {
 
 /// Item 9: a JSON file given as `--targets` was dumped as its "columns".
 #[test]
-fn issue10_a_json_targets_file_is_not_dumped_as_columns() {
+fn a_json_targets_file_is_not_dumped_as_columns() {
     let t = TempDir::new("jsontargets");
     let json = serde_json::json!({
         "frames": (0..200).map(|k| format!("frame_{k}.png")).collect::<Vec<_>>(),
@@ -408,7 +408,7 @@ fn issue10_a_json_targets_file_is_not_dumped_as_columns() {
 
 /// Item 10: an unreachable contour printed a Rust debug struct (`Pose { x: .. }`).
 #[test]
-fn issue10_an_unreachable_contour_prints_no_debug_struct() {
+fn an_unreachable_contour_prints_no_debug_struct() {
     let t = TempDir::new("unreachable");
     dataset_and_model(&t.0);
     std::fs::write(
@@ -433,7 +433,7 @@ fn issue10_an_unreachable_contour_prints_no_debug_struct() {
 /// Item 11: a plot that could not be written became a configuration error
 /// (exit 2, as for bad input); it is a failed run (exit 1).
 #[test]
-fn issue10_an_output_that_cannot_be_written_exits_1() {
+fn an_output_that_cannot_be_written_exits_1() {
     let t = TempDir::new("cannotwrite");
     dataset_and_model(&t.0);
     // A folder where the figure file should be (--force: replacing an
@@ -476,7 +476,7 @@ fn issue10_an_output_that_cannot_be_written_exits_1() {
 
 /// Item 12: `sensor pins` on noise reported 495 "pins", exit 0, no warning.
 #[test]
-fn issue10_sensor_pins_warns_when_the_count_is_not_the_sensors() {
+fn sensor_pins_warns_when_the_count_is_not_the_sensors() {
     let t = TempDir::new("pinscount");
     noise_png(&t.join("noise.png"), 640, 480, 5);
     let r = tactrace(&t.0, &["sensor", "render", "--r", "2", "--out", "tap.png"]);
@@ -499,7 +499,7 @@ fn issue10_sensor_pins_warns_when_the_count_is_not_the_sensors() {
 
 /// Item 13: `sensor render --depth 50` silently gave the 8 mm image.
 #[test]
-fn issue10_render_refuses_depths_outside_the_contact_model() {
+fn render_refuses_depths_outside_the_contact_model() {
     let t = TempDir::new("renderdepth");
     let render = |args: &[&str]| {
         tactrace(
@@ -529,7 +529,7 @@ fn issue10_render_refuses_depths_outside_the_contact_model() {
 
 /// Item 14: `bench --real-frames` without `--model` ignored the folder.
 #[test]
-fn issue10_bench_real_frames_without_model_is_bad_input() {
+fn bench_real_frames_without_model_is_bad_input() {
     let t = TempDir::new("benchreal");
     std::fs::create_dir_all(t.join("frames")).unwrap();
     let r = tactrace(&t.0, &["bench", "--taps", "1", "--real-frames", "frames"]);
@@ -541,7 +541,7 @@ fn issue10_bench_real_frames_without_model_is_bad_input() {
 /// Item 15: two unrelated `CameraConfig` types; the rig file's `[camera]`
 /// table is now a `FrameSourceConfig`, under the same table name.
 #[test]
-fn issue10_the_rig_files_camera_table_is_a_frame_source() {
+fn the_rig_files_camera_table_is_a_frame_source() {
     use tactrace_lab::hardware::{FrameSourceConfig, HardwareConfig};
     let text = "[arm]\nhost = \"192.0.2.1\"\n[camera.folder]\npath = \"frames\"\n\
                 [workspace]\nmin = [-50.0, -50.0, -15.0]\nmax = [50.0, 50.0, 20.0]\n\

@@ -334,7 +334,7 @@ fn camera_list_and_grab_say_clearly_when_there_is_no_camera() {
 /// tool at NaN in the work frame). Both are not ready, exit 1, with the
 /// reason; nothing is commanded.
 #[test]
-fn issue20_rig_check_is_not_ready_far_from_the_start_or_on_an_impossible_state() {
+fn rig_check_is_not_ready_far_from_the_start_or_on_an_impossible_state() {
     let dir = TempDir::new("rig-check-issue20");
     let frames = reference_frame(&dir);
     let cases = [
@@ -388,7 +388,7 @@ fn issue20_rig_check_is_not_ready_far_from_the_start_or_on_an_impossible_state()
 /// Issue 20: `camera grab` on a path that is no camera exited 1 (a failed
 /// run); it is bad input, 2, saying so, and the file is untouched.
 #[test]
-fn issue20_camera_grab_on_a_non_camera_path_exits_2() {
+fn camera_grab_on_a_non_camera_path_exits_2() {
     let dir = TempDir::new("camera-not");
     std::fs::write(dir.join("notes.txt"), b"not a camera").unwrap();
     let folder = dir.0.display().to_string();
@@ -418,7 +418,7 @@ fn rig_table(dir: &TempDir) -> toml::Table {
 /// as the tables do; a rig file giving both ways exits 2 before anything
 /// is touched.
 #[test]
-fn issue21_rig_check_reads_the_camera_through_a_sensor_file() {
+fn rig_check_reads_the_camera_through_a_sensor_file() {
     let dir = TempDir::new("rig-check-sensor");
     let frames = reference_frame(&dir);
     let ur = fake_ur();

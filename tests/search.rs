@@ -57,7 +57,7 @@ fn trials(dir: &Path) -> Vec<serde_json::Value> {
 }
 
 #[test]
-fn issue24_search_writes_its_outputs_and_a_config_train_accepts() {
+fn search_writes_its_outputs_and_a_config_train_accepts() {
     let t = TempDir::new("search-out");
     dataset(&t.0);
     let space = space();
@@ -110,7 +110,7 @@ fn issue24_search_writes_its_outputs_and_a_config_train_accepts() {
 }
 
 #[test]
-fn issue24_search_is_seeded() {
+fn search_is_seeded() {
     let t = TempDir::new("search-seed");
     dataset(&t.0);
     let space = space();
@@ -153,7 +153,7 @@ fn kill_after_trials(dir: &Path, args: &[&str], lines: usize) {
 }
 
 #[test]
-fn issue24_search_killed_and_resumed_gives_the_uninterrupted_trials() {
+fn search_killed_and_resumed_gives_the_uninterrupted_trials() {
     let t = TempDir::new("search-resume");
     dataset(&t.0);
     let space = space();
@@ -189,7 +189,7 @@ fn issue24_search_killed_and_resumed_gives_the_uninterrupted_trials() {
 }
 
 #[test]
-fn issue24_a_bad_space_is_refused_before_any_work() {
+fn a_bad_space_is_refused_before_any_work() {
     let t = TempDir::new("search-bad");
     dataset(&t.0);
     for (name, body) in [
@@ -234,7 +234,7 @@ fn issue24_a_bad_space_is_refused_before_any_work() {
 /// Issue 24: `--executor ray` with an interpreter that does not exist is
 /// bad input (exit 2), named, before anything is written.
 #[test]
-fn issue24_search_on_ray_without_its_interpreter_is_refused() {
+fn search_on_ray_without_its_interpreter_is_refused() {
     let t = TempDir::new("search-ray-no-python");
     dataset(&t.0);
     let space = space();
@@ -263,7 +263,7 @@ fn output_rate_space(dir: &Path, body: &str) -> String {
 }
 
 #[test]
-fn issue24_a_search_whose_every_trial_diverged_fails_without_a_best() {
+fn a_search_whose_every_trial_diverged_fails_without_a_best() {
     let t = TempDir::new("search-diverged");
     dataset(&t.0);
     let space = output_rate_space(&t.0, "low = 1e6\nhigh = 1e8\nlog = true\n");
@@ -283,7 +283,7 @@ fn issue24_a_search_whose_every_trial_diverged_fails_without_a_best() {
 }
 
 #[test]
-fn issue24_a_search_records_its_failed_trials_in_the_table_and_figure() {
+fn a_search_records_its_failed_trials_in_the_table_and_figure() {
     let t = TempDir::new("search-some-failed");
     dataset(&t.0);
     let space = output_rate_space(&t.0, "choices = [5.0, 1e8]\n");
@@ -327,7 +327,7 @@ const SMALL_CONV: &str = "dense = [16]\nbatch_size = 8\n\
                           [[conv]]\nchannels = 8\nkernel = 3\nstride = 2\n";
 
 #[test]
-fn issue24_search_of_an_image_model_on_its_frames() {
+fn search_of_an_image_model_on_its_frames() {
     let t = TempDir::new("search-image");
     util::spot_frames_dataset(&t.join("frames"), "tests/search.rs", 80);
     std::fs::write(t.join("small.toml"), SMALL_CONV).unwrap();

@@ -91,7 +91,7 @@ fn sim_fit_writes_a_usable_rig_file_reproducibly_and_refuses_bad_input() {
 /// pressed this hard is refused as bad input (lighter ones pass the layout
 /// fit and get the import's "looks pressed" warning on stderr).
 #[test]
-fn issue20_sim_fit_refuses_a_pressed_reference() {
+fn sim_fit_refuses_a_pressed_reference() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("sim-fit-pressed");
     let [frames, targets, _] = real_paths(&data);

@@ -11,7 +11,7 @@ use util::{
 };
 
 #[test]
-fn issue22_collect_frames_size_writes_the_rendered_frames_and_trains_an_image_model() {
+fn collect_frames_size_writes_the_rendered_frames_and_trains_an_image_model() {
     let t = TempDir::new("issue22-collect-frames");
     write_small_conv(&t.0);
     let r = tactrace(
@@ -70,7 +70,7 @@ fn issue22_collect_frames_size_writes_the_rendered_frames_and_trains_an_image_mo
 }
 
 #[test]
-fn issue22_collect_frames_size_is_refused_where_it_cannot_apply() {
+fn collect_frames_size_is_refused_where_it_cannot_apply() {
     let t = TempDir::new("issue22-collect-frames-bad");
     for args in [
         &["--frames-size", "2"][..],
@@ -86,7 +86,7 @@ fn issue22_collect_frames_size_is_refused_where_it_cannot_apply() {
 }
 
 #[test]
-fn issue22_twin_frames_size_trains_on_simulated_frames_and_validates_on_real_ones() {
+fn twin_frames_size_trains_on_simulated_frames_and_validates_on_real_ones() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("issue22-twin-frames");
     write_small_conv(&t.0);

@@ -66,7 +66,7 @@ fn calibrated(t: &TempDir) {
 }
 
 #[test]
-fn issue21_a_small_pin_sensor_follows_a_disk_and_benches_with_a_pin_model() {
+fn a_small_pin_sensor_follows_a_disk_and_benches_with_a_pin_model() {
     let t = TempDir::new("small-pins-follow");
     calibrated(&t);
     let run = tactrace(
@@ -88,7 +88,7 @@ fn issue21_a_small_pin_sensor_follows_a_disk_and_benches_with_a_pin_model() {
 /// pins with the sensor's small-pin detector over its own rest pins
 /// (the blob detector finds none of these pins).
 #[test]
-fn issue21_a_small_pin_sensor_follows_a_disk_with_an_image_model() {
+fn a_small_pin_sensor_follows_a_disk_with_an_image_model() {
     let t = TempDir::new("small-pins-image");
     calibrated(&t);
     let run = import_taps(

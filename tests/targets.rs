@@ -31,7 +31,7 @@ const SMALL: &str = "[position]\nn_components = 10\nhidden = [32]\nlearning_rate
     learning_rate = 18.0\noutput_learning_rate = 5.0\nbeta = 1.0\n";
 
 #[test]
-fn issue21_three_targets_import_train_validate_and_import_like() {
+fn three_targets_import_train_validate_and_import_like() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("targets3");
     part_csv(&data, &t.join("fit.csv"), &[2, 3, 4], 60);
@@ -222,7 +222,7 @@ fn issue21_three_targets_import_train_validate_and_import_like() {
 }
 
 #[test]
-fn issue21_an_edge_model_folder_of_format_2_loads_and_scores_the_same() {
+fn an_edge_model_folder_of_format_2_loads_and_scores_the_same() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("format2");
     part_csv(&data, &t.join("fit.csv"), &[2, 3, 4], 50);
@@ -284,7 +284,7 @@ fn import_fit(t: &TempDir, data: &Path, extra: &[&str]) -> Run {
 /// target: `search.csv` has an error column a target and the score is the
 /// sum of the three errors over their goals (`goals` in the search file).
 #[test]
-fn issue21_train_search_scores_every_target() {
+fn train_search_scores_every_target() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("search3");
     part_csv(&data, &t.join("fit.csv"), &[2, 3, 4], 80);

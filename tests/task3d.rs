@@ -14,7 +14,7 @@ const SMALL: &str =
     "[position]\nn_components = 10\nhidden = [16]\n\n[angle]\nn_components = 10\nhidden = [16]\n";
 
 #[test]
-fn issue23_collect_train_validate_follow_surface_3d_end_to_end() {
+fn collect_train_validate_follow_surface_3d_end_to_end() {
     let t = TempDir::new("surface3d");
     let collect = |seed: &str, n: &str, out: &str| {
         tactrace(
@@ -159,7 +159,7 @@ fn issue23_collect_train_validate_follow_surface_3d_end_to_end() {
 /// `--task edge_2d` is the planar task as before: the same trajectory,
 /// byte for byte, as a run without the flag.
 #[test]
-fn issue23_planar_task_flag_gives_the_identical_run() {
+fn planar_task_flag_gives_the_identical_run() {
     let t = TempDir::new("planar");
     ok(
         &tactrace(&t.0, &["collect", "--samples", "60", "--out", "d"]),
@@ -201,7 +201,7 @@ fn issue23_planar_task_flag_gives_the_identical_run() {
 /// numbers too); `follow --task edge_5d` refuses an object without an
 /// edge and the surface task's path flags before anything runs (exit 2).
 #[test]
-fn issue23_edge_5d_collect_flags_and_follow_refusals() {
+fn edge_5d_collect_flags_and_follow_refusals() {
     let t = TempDir::new("edge5d");
     let r = tactrace(
         &t.0,

@@ -171,7 +171,7 @@ fn reporting(mode: LimitMode, current: Pose) -> LimitedArm<Reporting> {
 /// since `NaN > max_step` is false. Every such current pose must refuse,
 /// in both modes, and nothing may reach the arm.
 #[test]
-fn issue20_a_nan_inf_or_huge_current_pose_refuses_every_move() {
+fn a_nan_inf_or_huge_current_pose_refuses_every_move() {
     let target = Pose::planar(1.0, 2.0, 3.0, 4.0);
     let non_finite = [
         Pose::planar(f64::NAN, f64::NAN, f64::NAN, 0.0),
@@ -218,7 +218,7 @@ fn issue20_a_nan_inf_or_huge_current_pose_refuses_every_move() {
 /// Issue 20: NaN-proof comparisons in the rule itself, on finite poses
 /// whose steps overflow to infinity or whose box check sees a NaN.
 #[test]
-fn issue20_the_refuse_rule_refuses_infinite_steps_and_clamp_never_leaves_the_box() {
+fn the_refuse_rule_refuses_infinite_steps_and_clamp_never_leaves_the_box() {
     let ws = Workspace::default();
     let at = |x: f64| FinitePose::new(Pose::planar(x, 0.0, 0.0, 0.0)).unwrap();
     let err = ws.check_move(at(1e300), at(0.0)).unwrap_err();

@@ -42,7 +42,7 @@ fn same(a: Pose, b: Pose) -> bool {
 }
 
 #[test]
-fn issue23_tilted_poses_compose_and_relate() {
+fn tilted_poses_compose_and_relate() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     for _ in 0..500 {
         let (a, b) = (random_pose(&mut rng, 89.0), random_pose(&mut rng, 89.0));
@@ -61,7 +61,7 @@ fn issue23_tilted_poses_compose_and_relate() {
 }
 
 #[test]
-fn issue23_rotation_step_is_the_relative_rotation_angle() {
+fn rotation_step_is_the_relative_rotation_angle() {
     let ws = workspace();
     let check =
         |a: Pose, b: Pose| ws.check_move(FinitePose::new(a).unwrap(), FinitePose::new(b).unwrap());
@@ -84,7 +84,7 @@ fn issue23_rotation_step_is_the_relative_rotation_angle() {
 }
 
 #[test]
-fn issue23_clamp_turns_along_the_shortest_rotation() {
+fn clamp_turns_along_the_shortest_rotation() {
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     for _ in 0..200 {
         let start = Pose {
@@ -116,7 +116,7 @@ fn issue23_clamp_turns_along_the_shortest_rotation() {
 }
 
 #[test]
-fn issue23_tilt_is_bounded_when_asked() {
+fn tilt_is_bounded_when_asked() {
     assert_eq!(tilt_deg(Pose::planar(1.0, 2.0, 3.0, 123.0)), 0.0);
     assert!((tilt_deg(Pose::new(0.0, 0.0, 0.0, 30.0, 0.0, 77.0)) - 30.0).abs() < 1e-9);
     let both = (30f64.to_radians().cos() * 40f64.to_radians().cos())
@@ -168,7 +168,7 @@ fn issue23_tilt_is_bounded_when_asked() {
 }
 
 #[test]
-fn issue23_sim_arm_reaches_tilted_poses() {
+fn sim_arm_reaches_tilted_poses() {
     let cfg = SimArmConfig {
         repeatability_mm: 0.05,
         repeatability_deg: 0.1,

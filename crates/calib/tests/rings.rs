@@ -54,7 +54,7 @@ fn field(pins: &[[f64; 2]], rest: &[[f64; 2]]) -> Vec<f32> {
 }
 
 #[test]
-fn issue21_a_rings_sensor_is_laid_out_paired_and_calibrated() {
+fn a_rings_sensor_is_laid_out_paired_and_calibrated() {
     let truth = ring_sensor();
     let mut rng = ChaCha8Rng::seed_from_u64(21);
     // The measured rest pins: in the order a detector met them, each a

@@ -49,7 +49,7 @@ fn assert_same_steps(pbts: PbtsConfig, sequence: &[SensedPose]) {
 }
 
 #[test]
-fn issue23_planar_case_gives_the_report_controllers_steps() {
+fn planar_case_gives_the_report_controllers_steps() {
     // A recorded sequence: large errors that saturate the anti-windup,
     // then small ones that unwind it.
     let mut rng = ChaCha8Rng::seed_from_u64(23);
@@ -76,7 +76,7 @@ fn issue23_planar_case_gives_the_report_controllers_steps() {
 }
 
 #[test]
-fn issue23_planar_closed_loop_round_the_disk_is_unchanged() {
+fn planar_closed_loop_round_the_disk_is_unchanged() {
     let disk = builtin_shape(BuiltinShape::Disk);
     let (p0, n0) = disk.at_arc_length(0.0);
     let yaw = n0.y.atan2(n0.x).to_degrees();
@@ -98,7 +98,7 @@ fn issue23_planar_closed_loop_round_the_disk_is_unchanged() {
 }
 
 #[test]
-fn issue23_error_is_the_relative_transform() {
+fn error_is_the_relative_transform() {
     let reference = [0.0, 1.0, 3.0, 0.0, 0.0, 0.0];
     assert!(close(se3_error(reference, reference), [0.0; 6], 1e-12));
     // Too shallow by 2 mm: move 2 mm down the sensor's (upward) z axis.
@@ -140,7 +140,7 @@ fn issue23_error_is_the_relative_transform() {
 }
 
 #[test]
-fn issue23_tasks_sense_their_components_only() {
+fn tasks_sense_their_components_only() {
     assert_eq!(Task::Edge2d.sensed_names(), ["x", "rz"]);
     assert_eq!(Task::Surface3d.sensed_names(), ["z", "rx", "ry"]);
     assert_eq!(Task::Edge3d.sensed_names(), ["x", "z", "rz"]);
@@ -167,7 +167,7 @@ fn issue23_tasks_sense_their_components_only() {
 }
 
 #[test]
-fn issue23_surface_3d_gains_and_anti_windup() {
+fn surface_3d_gains_and_anti_windup() {
     let mut c = Se3Controller::try_new(Se3Config::surface_3d()).unwrap();
     // 1 mm too shallow, tilted 4 deg about x: first step Kp e + Ki e.
     let u = c.step([0.0, 0.0, 2.0, 4.0, 0.0, 0.0]).unwrap();
@@ -181,7 +181,7 @@ fn issue23_surface_3d_gains_and_anti_windup() {
 }
 
 #[test]
-fn issue23_configs_are_checked() {
+fn configs_are_checked() {
     let s = Se3Config::surface_3d();
     assert_eq!(s.reference, [0.0, 1.0, 3.0, 0.0, 0.0, 0.0]);
     assert_eq!(s.kp, [1.0, 1.0, 0.5, 0.5, 0.5, 1.0]);

@@ -52,7 +52,7 @@ fn follow(surface: &dyn Object3d, start: Pose, steps: usize, settle: usize) -> R
 }
 
 #[test]
-fn issue23_oracle_loop_settles_on_a_tilted_plane() {
+fn oracle_loop_settles_on_a_tilted_plane() {
     let ramp = HeightField::ramp(0.0, 20.0, 60.0).unwrap();
     // 1 mm above the surface, level, heading along +y.
     let start = Pose::new(0.0, 0.0, 1.0, 0.0, 0.0, 0.0);
@@ -75,7 +75,7 @@ fn issue23_oracle_loop_settles_on_a_tilted_plane() {
 }
 
 #[test]
-fn issue23_oracle_loop_follows_the_saddle() {
+fn oracle_loop_follows_the_saddle() {
     let saddle = HeightField::saddle(40.0).unwrap();
     // Start off the surface and tilted 10 deg against it, heading diagonally.
     let start = Pose::new(

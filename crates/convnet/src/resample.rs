@@ -61,7 +61,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue22_an_integer_factor_averages_blocks() {
+    fn an_integer_factor_averages_blocks() {
         // 4 x 4 -> 2 x 2: each output the mean of a 2 x 2 block.
         let src = [
             0, 2, 10, 10, //
@@ -75,7 +75,7 @@ mod tests {
     }
 
     #[test]
-    fn issue22_a_fractional_factor_weights_partly_covered_pixels() {
+    fn a_fractional_factor_weights_partly_covered_pixels() {
         // 3 px -> 2 px: [a, b/2] and [b/2, c], each over 1.5 px.
         let src = [0, 90, 180];
         assert_eq!(area_resample(&src, (1, 3), (1, 2)), vec![30, 150]);

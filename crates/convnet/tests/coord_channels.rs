@@ -31,7 +31,7 @@ fn random(n: usize, seed: u64) -> Vec<f32> {
 }
 
 #[test]
-fn issue22_coord_layout_has_three_input_planes() {
+fn coord_layout_has_three_input_planes() {
     let layout = Layout::with_channels(3, (SIDE, SIDE), &conv(), &[6], 2).unwrap();
     let plain = Layout::new(SIDE, SIDE, &conv(), &[6], 2).unwrap();
     assert_eq!(layout.input_channels(), 3);
@@ -45,7 +45,7 @@ fn issue22_coord_layout_has_three_input_planes() {
 }
 
 #[test]
-fn issue22_coord_planes_reach_the_first_layer() {
+fn coord_planes_reach_the_first_layer() {
     // A blank frame: without the planes every position of the first layer
     // would see the same window (but for the zero padding at the border);
     // with them, changing only the weights on the planes moves the output.
@@ -77,7 +77,7 @@ fn issue22_coord_planes_reach_the_first_layer() {
 }
 
 #[test]
-fn issue22_coord_ep_estimate_matches_backprop() {
+fn coord_ep_estimate_matches_backprop() {
     let net = coord_net(7);
     let n = 3;
     let x = random(n * SIDE * SIDE, 1);
@@ -111,7 +111,7 @@ fn spots(count: usize) -> (Vec<u8>, Vec<f64>) {
 }
 
 #[test]
-fn issue22_coord_model_round_trips_through_its_file() {
+fn coord_model_round_trips_through_its_file() {
     let (pixels, targets) = spots(32);
     let frames = Frames::new(&pixels, 32, SIDE, SIDE).unwrap();
     let targets = Targets::new(&targets, 32, 2).unwrap();

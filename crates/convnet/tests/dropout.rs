@@ -49,7 +49,7 @@ fn loss(net: &Network, x: &[f32], t: &[f32], m: &[Vec<f32>]) -> f64 {
 }
 
 #[test]
-fn issue22_ep_update_with_a_dropout_mask_approaches_the_masked_backprop_gradient() {
+fn ep_update_with_a_dropout_mask_approaches_the_masked_backprop_gradient() {
     let x = random(N * 144, 1);
     let t = random(N * 2, 2);
     for (k, act) in [Activation::Tanh, Activation::Sigmoid, Activation::Relu]
@@ -73,7 +73,7 @@ fn issue22_ep_update_with_a_dropout_mask_approaches_the_masked_backprop_gradient
 }
 
 #[test]
-fn issue22_masked_backprop_is_the_masked_networks_gradient() {
+fn masked_backprop_is_the_masked_networks_gradient() {
     let x = random(N * 144, 4);
     let t = random(N * 2, 5);
     let mut net = small_net(Activation::Tanh, 2, 7);
@@ -104,7 +104,7 @@ fn issue22_masked_backprop_is_the_masked_networks_gradient() {
 }
 
 #[test]
-fn issue22_a_unit_dropped_in_every_frame_learns_nothing() {
+fn a_unit_dropped_in_every_frame_learns_nothing() {
     let x = random(N * 144, 6);
     let t = random(N * 2, 7);
     let net = small_net(Activation::Tanh, 2, 9);
@@ -148,7 +148,7 @@ fn config(kind: ModelKind, dense: f64, channel: f64) -> ConvConfig {
 }
 
 #[test]
-fn issue22_dropout_fit_is_seeded_and_only_in_training() {
+fn dropout_fit_is_seeded_and_only_in_training() {
     for kind in [ModelKind::ConvDennn, ModelKind::ConvMlp] {
         let dropped = fit(&config(kind, 0.3, 0.2), 1);
         let again = fit(&config(kind, 0.3, 0.2), 3);

@@ -57,7 +57,7 @@ fn fit(kind: ModelKind, members: usize, seed: u64) -> ConvModel {
 }
 
 #[test]
-fn issue22_each_member_is_the_one_network_model_of_its_seed_and_the_model_predicts_their_mean() {
+fn each_member_is_the_one_network_model_of_its_seed_and_the_model_predicts_their_mean() {
     let (pixels, _) = spots(20, 9);
     let frames = Frames::new(&pixels, 20, SIDE, SIDE).unwrap();
     for kind in [ModelKind::ConvMlp, ModelKind::ConvDennn] {
@@ -95,7 +95,7 @@ fn issue22_each_member_is_the_one_network_model_of_its_seed_and_the_model_predic
 }
 
 #[test]
-fn issue22_the_history_scores_the_ensemble_on_the_validation_frames() {
+fn the_history_scores_the_ensemble_on_the_validation_frames() {
     let (pixels, targets) = spots(64, 3);
     let frames = Frames::new(&pixels, 64, SIDE, SIDE).unwrap();
     let targets = Targets::new(&targets, 64, 2).unwrap();
@@ -116,7 +116,7 @@ fn issue22_the_history_scores_the_ensemble_on_the_validation_frames() {
 }
 
 #[test]
-fn issue22_an_ensemble_saves_every_network_and_a_single_network_file_is_unchanged() {
+fn an_ensemble_saves_every_network_and_a_single_network_file_is_unchanged() {
     let ensemble = fit(ModelKind::ConvMlp, 2, 0);
     let (json, tensors) = ensemble.to_bytes().unwrap();
     assert!(json.contains("\"members\": 2"), "{json}");
@@ -147,7 +147,7 @@ fn issue22_an_ensemble_saves_every_network_and_a_single_network_file_is_unchange
 }
 
 #[test]
-fn issue22_members_out_of_range_are_refused() {
+fn members_out_of_range_are_refused() {
     for members in [0, 33] {
         let err = config(ModelKind::ConvMlp, members).validate().unwrap_err();
         assert!(err.to_string().contains("members"), "{err}");

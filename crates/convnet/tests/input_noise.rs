@@ -27,7 +27,7 @@ fn fit(config: &ConvConfig, threads: usize) -> ConvModel {
 }
 
 #[test]
-fn issue22_input_noise_is_seeded_and_only_in_training() {
+fn input_noise_is_seeded_and_only_in_training() {
     for kind in [ModelKind::ConvDennn, ModelKind::ConvMlp] {
         let noisy = fit(&config(kind, 0.5), 1);
         let again = fit(&config(kind, 0.5), 3);
@@ -44,7 +44,7 @@ fn issue22_input_noise_is_seeded_and_only_in_training() {
 }
 
 #[test]
-fn issue22_input_noise_out_of_range_is_refused_and_old_models_load() {
+fn input_noise_out_of_range_is_refused_and_old_models_load() {
     for bad in [-0.1, f64::NAN, 11.0] {
         let err = config(ModelKind::ConvMlp, bad).validate().unwrap_err();
         assert!(matches!(err, ConvError::Config { .. }), "{err}");

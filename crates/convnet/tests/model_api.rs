@@ -70,7 +70,7 @@ fn fit_with(config: ConvConfig, seed: u64) -> (ConvModel, tactrace_convnet::Trai
 }
 
 #[test]
-fn issue22_both_rules_learn_where_a_spot_is() {
+fn both_rules_learn_where_a_spot_is() {
     let (pixels, targets) = spots(160, 1);
     let seen = Frames::new(&pixels, 160, SIDE, SIDE).unwrap();
     let seen_t = Targets::new(&targets, 160, 3).unwrap();
@@ -112,7 +112,7 @@ fn issue22_both_rules_learn_where_a_spot_is() {
 }
 
 #[test]
-fn issue22_seeded_fits_reproduce_whatever_the_thread_count() {
+fn seeded_fits_reproduce_whatever_the_thread_count() {
     for kind in [ModelKind::ConvDennn, ModelKind::ConvMlp] {
         // With the shifts drawn per frame and epoch, and an uneven last
         // batch and chunk (160 frames, batches of 16 in chunks of 4 -> 48
@@ -138,7 +138,7 @@ fn issue22_seeded_fits_reproduce_whatever_the_thread_count() {
 }
 
 #[test]
-fn issue22_twins_start_from_the_same_weights() {
+fn twins_start_from_the_same_weights() {
     // One epoch at a negligible step size: both kinds keep their start,
     // which must be the same for the same seed.
     let (pixels, targets) = spots(8, 1);
@@ -169,7 +169,7 @@ fn issue22_twins_start_from_the_same_weights() {
 }
 
 #[test]
-fn issue22_model_round_trips_through_json_and_safetensors() {
+fn model_round_trips_through_json_and_safetensors() {
     let (model, _) = fit(ModelKind::ConvDennn, 4);
     let (json, weights) = model.to_bytes().unwrap();
     let back = ConvModel::from_bytes(&json, &weights).unwrap();
@@ -206,7 +206,7 @@ fn issue22_model_round_trips_through_json_and_safetensors() {
 }
 
 #[test]
-fn issue22_bad_input_is_a_typed_error() {
+fn bad_input_is_a_typed_error() {
     let (pixels, targets) = spots(10, 1);
     let frames = Frames::new(&pixels, 10, SIDE, SIDE).unwrap();
     let t = Targets::new(&targets, 10, 3).unwrap();
@@ -274,7 +274,7 @@ fn issue22_bad_input_is_a_typed_error() {
 }
 
 #[test]
-fn issue22_a_diverging_fit_is_an_error_not_a_model() {
+fn a_diverging_fit_is_an_error_not_a_model() {
     let mut cfg = small_config(ModelKind::ConvMlp);
     cfg.learning_rate = 1e6;
     cfg.final_lr_fraction = 1.0;

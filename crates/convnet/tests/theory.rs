@@ -33,7 +33,7 @@ fn rel_error(a: &Parameters, b: &Parameters) -> f64 {
 }
 
 #[test]
-fn issue22_ep_update_approaches_the_backprop_gradient_as_beta_shrinks() {
+fn ep_update_approaches_the_backprop_gradient_as_beta_shrinks() {
     let n = 3;
     for (k, &act) in ACTIVATIONS.iter().enumerate() {
         let net = small_net(act, 2, 10 + k as u64);
@@ -69,7 +69,7 @@ fn issue22_ep_update_approaches_the_backprop_gradient_as_beta_shrinks() {
 }
 
 #[test]
-fn issue22_symmetric_nudging_removes_the_first_order_bias() {
+fn symmetric_nudging_removes_the_first_order_bias() {
     let n = 3;
     let net = small_net(Activation::Tanh, 2, 3);
     let x = random(n * 144, 4);
@@ -99,7 +99,7 @@ fn issue22_symmetric_nudging_removes_the_first_order_bias() {
 }
 
 #[test]
-fn issue22_free_phase_relaxes_to_the_feed_forward_output() {
+fn free_phase_relaxes_to_the_feed_forward_output() {
     // With the dendritic energy every error vanishes at the minimum, so
     // the Euler dynamics from zero potentials end at the feed-forward pass.
     for (k, &act) in ACTIVATIONS.iter().enumerate() {
@@ -139,7 +139,7 @@ fn issue22_free_phase_relaxes_to_the_feed_forward_output() {
 }
 
 #[test]
-fn issue22_clamped_sweeps_reach_the_euler_equilibrium() {
+fn clamped_sweeps_reach_the_euler_equilibrium() {
     let net = small_net(Activation::Sigmoid, 2, 8);
     let n = 2;
     let x = random(n * 144, 9);
@@ -212,7 +212,7 @@ fn dense_matrix(s: &LayerShape, w: &[f32]) -> Vec<f32> {
 }
 
 #[test]
-fn issue22_convolution_equals_its_dense_matrix() {
+fn convolution_equals_its_dense_matrix() {
     // Odd and even sizes, strides 1-3, kernels 1-5, several channels, and
     // the dense layers (a window covering the whole input).
     let conv = [
@@ -266,7 +266,7 @@ fn issue22_convolution_equals_its_dense_matrix() {
 }
 
 #[test]
-fn issue22_backprop_gradient_matches_finite_differences() {
+fn backprop_gradient_matches_finite_differences() {
     let n = 2;
     for (k, &act) in ACTIVATIONS.iter().enumerate() {
         let mut net = small_net(act, 2, 50 + k as u64);

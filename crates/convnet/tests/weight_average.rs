@@ -37,7 +37,7 @@ fn bits(p: &Parameters) -> Vec<u32> {
 }
 
 #[test]
-fn issue22_weight_average_of_decay_zero_is_the_plain_model_bit_for_bit() {
+fn weight_average_of_decay_zero_is_the_plain_model_bit_for_bit() {
     for kind in [ModelKind::ConvDennn, ModelKind::ConvMlp] {
         let mut plain = config(kind, 3, None);
         plain.batch_size = 8;
@@ -52,7 +52,7 @@ fn issue22_weight_average_of_decay_zero_is_the_plain_model_bit_for_bit() {
 }
 
 #[test]
-fn issue22_weight_average_equals_its_definition_on_two_steps() {
+fn weight_average_equals_its_definition_on_two_steps() {
     let d = 0.6f64;
     for kind in [ModelKind::ConvDennn, ModelKind::ConvMlp] {
         // theta0: the initial weights; theta1: after one step (a one-epoch
@@ -83,7 +83,7 @@ fn issue22_weight_average_equals_its_definition_on_two_steps() {
 }
 
 #[test]
-fn issue22_weight_average_survives_saving_and_is_checked() {
+fn weight_average_survives_saving_and_is_checked() {
     let model = fit(&config(ModelKind::ConvMlp, 2, Some(0.5)));
     let (json, tensors) = model.to_bytes().unwrap();
     assert!(json.contains("\"weight_average\": 0.5"), "{json}");

@@ -101,7 +101,7 @@ fn distance_is_euclidean_in_position() {
 /// (`Pose { x: .. }`), and a pose table in a configuration accepted keys it
 /// does not have.
 #[test]
-fn issue20_a_pose_reads_as_millimetres_and_degrees_and_refuses_unknown_keys() {
+fn a_pose_reads_as_millimetres_and_degrees_and_refuses_unknown_keys() {
     let p = Pose::new(1.0, -2.5, 300.0, 0.0, 90.0, -45.25);
     assert_eq!(
         p.to_string(),

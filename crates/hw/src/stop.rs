@@ -153,7 +153,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue20_the_first_request_is_kept_and_idle_checks_halt() {
+    fn the_first_request_is_kept_and_idle_checks_halt() {
         let flag = StopFlag::new();
         assert_eq!(flag.requested(), None);
         assert!(flag.check_idle().is_ok());

@@ -36,7 +36,7 @@ fn refused_state(err: &HwError) -> bool {
 }
 
 #[test]
-fn issue20_an_impossible_state_is_a_fault_and_nothing_moves() {
+fn an_impossible_state_is_a_fault_and_nothing_moves() {
     let faults = [
         (
             FakeStateFault::HugePosition,
@@ -81,7 +81,7 @@ fn issue20_an_impossible_state_is_a_fault_and_nothing_moves() {
 }
 
 #[test]
-fn issue20_a_stop_request_mid_move_sends_stopl_and_nothing_more() {
+fn a_stop_request_mid_move_sends_stopl_and_nothing_more() {
     let server = fake(FakeUrOptions {
         state: StateInterface::Rtde,
         speed_mm_s: 20.0,
@@ -136,7 +136,7 @@ fn issue20_a_stop_request_mid_move_sends_stopl_and_nothing_more() {
 }
 
 #[test]
-fn issue20_an_rtde_text_flood_keeps_only_the_newest_messages() {
+fn an_rtde_text_flood_keeps_only_the_newest_messages() {
     let flood = 100_000;
     let server = FakeRtdeServer::start(
         0,
@@ -164,7 +164,7 @@ fn issue20_an_rtde_text_flood_keeps_only_the_newest_messages() {
 }
 
 #[test]
-fn issue20_a_flooding_rtde_controller_still_gives_states() {
+fn a_flooding_rtde_controller_still_gives_states() {
     // The fake serves one client: one for the probe, one for the arm.
     let flooding = || {
         fake(FakeUrOptions {
@@ -187,7 +187,7 @@ fn issue20_a_flooding_rtde_controller_still_gives_states() {
 }
 
 #[test]
-fn issue20_an_endless_dashboard_reply_is_refused_at_the_line_limit() {
+fn an_endless_dashboard_reply_is_refused_at_the_line_limit() {
     let fake = FakeDashboard::start(
         FakeDashboardState {
             endless_greeting: true,

@@ -49,7 +49,7 @@ fn tilted_poses() -> Vec<Pose> {
 }
 
 #[test]
-fn issue23_tool_vector_round_trips_tilted_poses() {
+fn tool_vector_round_trips_tilted_poses() {
     for pose in tilted_poses() {
         let v = pose_to_tool_vector(pose);
         // The rotation vector's length is the angle of the rotation.
@@ -72,7 +72,7 @@ fn issue23_tool_vector_round_trips_tilted_poses() {
 }
 
 #[test]
-fn issue23_work_frame_round_trips_tilted_poses() {
+fn work_frame_round_trips_tilted_poses() {
     let work = Pose::new(288.0, 0.0, -100.0, 180.0, 0.0, -90.0);
     for pose in tilted_poses() {
         let base = work_to_base(work, pose);
@@ -83,7 +83,7 @@ fn issue23_work_frame_round_trips_tilted_poses() {
 }
 
 #[test]
-fn issue23_fake_ur5_reaches_tilted_poses() {
+fn fake_ur5_reaches_tilted_poses() {
     let server = FakeUrController::start(FakeUrOptions {
         behaviour: FakeBehaviour::Follow,
         lifetime: Duration::from_secs(15),

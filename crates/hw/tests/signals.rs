@@ -19,7 +19,7 @@ fn wait_for(flag: &StopFlag) -> Option<StopSignal> {
 }
 
 #[test]
-fn issue20_sigint_sets_the_stop_flag_and_a_second_waits_for_the_halt() {
+fn sigint_sets_the_stop_flag_and_a_second_waits_for_the_halt() {
     let flag = StopFlag::on_signals().unwrap();
     assert_eq!(flag.requested(), None);
     signal_hook::low_level::raise(SIGINT).unwrap();

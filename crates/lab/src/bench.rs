@@ -360,7 +360,7 @@ mod tests {
     /// it counts: the projection once (both nets share it), every layer of
     /// both nets.
     #[test]
-    fn issue21_bench_times_the_prediction_against_its_multiply_adds() {
+    fn bench_times_the_prediction_against_its_multiply_adds() {
         let model = small_pdennn();
         let f = bench(&RigConfig::default(), 3, Some(&model)).expect("bench");
         let p = f.prediction.expect("prediction figures with a model");

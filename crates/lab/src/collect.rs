@@ -484,7 +484,7 @@ mod tests {
     /// Taps on all cores give the dataset of one thread, bit for bit
     /// (more taps than a batch, frames kept).
     #[test]
-    fn issue21_collect_on_two_threads_equals_one_thread_bit_for_bit() {
+    fn collect_on_two_threads_equals_one_thread_bit_for_bit() {
         let cfg = CollectConfig {
             samples: TAPS_PER_BATCH + 9,
             seed: 5,

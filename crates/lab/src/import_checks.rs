@@ -152,7 +152,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_reference_that_frames_contract_against_is_called_pressed() {
+    fn a_reference_that_frames_contract_against_is_called_pressed() {
         let undeformed: Vec<f64> = (0..50).map(|k| 0.01 + 0.001 * k as f64).collect();
         let (reference, inputs) = rows(&undeformed);
         let path = Path::new("init_0.png");

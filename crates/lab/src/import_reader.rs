@@ -281,7 +281,7 @@ mod tests {
     /// Without a sensor file, import reads the 127-pin set as before the
     /// reader (the blob detector's `PinExtractor`), bit for bit.
     #[test]
-    fn issue21_import_without_a_sensor_file_reads_frames_as_the_pin_extractor_did() {
+    fn import_without_a_sensor_file_reads_frames_as_the_pin_extractor_did() {
         let Some(set) = tactrace_testdata::real_edge_set() else {
             return;
         };

@@ -46,7 +46,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue20_the_first_value_that_is_not_a_number_is_named() {
+    fn the_first_value_that_is_not_a_number_is_named() {
         let ok = [("a", 1.0), ("b", 0.0)];
         require_finite("x", &ok, "").unwrap();
         let bad = [("a", 1.0), ("position MAE", f64::NAN), ("c", f64::INFINITY)];
@@ -59,7 +59,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_run_without_a_step_has_no_metric_to_report() {
+    fn a_run_without_a_step_has_no_metric_to_report() {
         let disk = tactrace_geometry::builtin_shape(tactrace_geometry::BuiltinShape::Disk);
         let empty = tactrace_servo::evaluate(&disk, &[], 3.0, 10.0);
         let err = require_finite_run("disk", &empty).unwrap_err();

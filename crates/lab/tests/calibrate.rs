@@ -140,7 +140,7 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
 /// key but lands in the last table, `[calibration.held_out_after]`) was
 /// accepted: every table of the file refuses unknown keys now.
 #[test]
-fn issue20_an_unknown_key_anywhere_in_sensor_toml_is_refused() {
+fn an_unknown_key_anywhere_in_sensor_toml_is_refused() {
     let root = tempfile::tempdir().unwrap();
     let cfg = common::calibration(distorted_sensor_set(root.path(), 40), 20);
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();

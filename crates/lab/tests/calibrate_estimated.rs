@@ -27,7 +27,7 @@ fn ring_sensor() -> TacTipConfig {
 const R_MAX: f64 = 25.0;
 
 #[test]
-fn issue21_calibrate_from_an_estimated_rest_layout_on_a_ring_sensor() {
+fn calibrate_from_an_estimated_rest_layout_on_a_ring_sensor() {
     let root = tempfile::tempdir().unwrap();
     let taps = sensor_set_over(root.path(), 160, ring_sensor(), R_MAX);
     // No undeformed frame: the rest layout is estimated from the taps.
@@ -80,7 +80,7 @@ fn issue21_calibrate_from_an_estimated_rest_layout_on_a_ring_sensor() {
 }
 
 #[test]
-fn issue21_an_uncalibrated_twin_is_laid_out_like_the_estimated_rest_pins() {
+fn an_uncalibrated_twin_is_laid_out_like_the_estimated_rest_pins() {
     let root = tempfile::tempdir().unwrap();
     let taps = sensor_set_over(root.path(), 40, ring_sensor(), R_MAX);
     let estimate = taps.with_reference(Reference::Estimate { pins: None });

@@ -17,7 +17,7 @@ fn object(name: &str) -> Surface {
 }
 
 #[test]
-fn issue23_edge_truth_of_the_start_is_the_reference() {
+fn edge_truth_of_the_start_is_the_reference() {
     let foil = object("foil");
     let edge = edge_of(&foil, "foil").unwrap();
     let cfg = Edge3dConfig::default();
@@ -34,7 +34,7 @@ fn issue23_edge_truth_of_the_start_is_the_reference() {
 }
 
 #[test]
-fn issue23_edge_5d_follows_a_curved_rim_and_writes_metrics() {
+fn edge_5d_follows_a_curved_rim_and_writes_metrics() {
     let disk = object("disk");
     // Taps near the poses a run meets (x +-3 mm, tilts +-8, rz +-30 deg).
     let collect = Collect3dConfig {

@@ -187,7 +187,7 @@ fn partial(out: &Path) -> PathBuf {
 }
 
 #[test]
-fn issue20_an_impossible_state_moves_nothing_and_is_a_fault() {
+fn an_impossible_state_moves_nothing_and_is_a_fault() {
     let faults = [
         FakeStateFault::HugePosition,
         FakeStateFault::HugeRotation,
@@ -220,7 +220,7 @@ fn issue20_an_impossible_state_moves_nothing_and_is_a_fault() {
 }
 
 #[test]
-fn issue20_a_frozen_arm_or_a_protective_stop_on_the_way_to_the_start_is_a_fault() {
+fn a_frozen_arm_or_a_protective_stop_on_the_way_to_the_start_is_a_fault() {
     for behaviour in [
         FakeBehaviour::IgnoreMoves,
         FakeBehaviour::ProtectiveStopOnMove,
@@ -255,7 +255,7 @@ fn issue20_a_frozen_arm_or_a_protective_stop_on_the_way_to_the_start_is_a_fault(
 }
 
 #[test]
-fn issue20_a_start_beyond_the_step_limit_is_the_set_up_and_moves_nothing() {
+fn a_start_beyond_the_step_limit_is_the_set_up_and_moves_nothing() {
     let (x, y, angle) = fixture().edge;
     let fake = fake_at(x + 66.0, y, angle, FakeUrOptions::default());
     let run = follow_on(&rig_file(&fake), &StopFlag::new(), None);
@@ -275,7 +275,7 @@ fn issue20_a_start_beyond_the_step_limit_is_the_set_up_and_moves_nothing() {
 }
 
 #[test]
-fn issue20_a_stop_mid_follow_sends_stopl_and_keeps_the_steps_in_partial() {
+fn a_stop_mid_follow_sends_stopl_and_keeps_the_steps_in_partial() {
     let fake = fake_near_start(FakeUrOptions {
         state: StateInterface::Rtde,
         ..FakeUrOptions::default()
@@ -312,7 +312,7 @@ fn issue20_a_stop_mid_follow_sends_stopl_and_keeps_the_steps_in_partial() {
 }
 
 #[test]
-fn issue20_a_stop_before_the_arm_is_connected_moves_nothing() {
+fn a_stop_before_the_arm_is_connected_moves_nothing() {
     let fake = fake_near_start(FakeUrOptions::default());
     let stop = StopFlag::new();
     stop.request(StopSignal::Terminate);
@@ -336,7 +336,7 @@ fn issue20_a_stop_before_the_arm_is_connected_moves_nothing() {
 }
 
 #[test]
-fn issue20_a_stop_mid_collection_sends_stopl_and_ends_it() {
+fn a_stop_mid_collection_sends_stopl_and_ends_it() {
     let f = fixture();
     let fake = {
         let sim = SimFollowConfig::default();
@@ -378,7 +378,7 @@ fn issue20_a_stop_mid_collection_sends_stopl_and_ends_it() {
 }
 
 #[test]
-fn issue20_rig_check_is_not_ready_on_an_impossible_state_or_a_start_too_far() {
+fn rig_check_is_not_ready_on_an_impossible_state_or_a_start_too_far() {
     let (x, y, angle) = fixture().edge;
     let dashboard =
         FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();

@@ -15,7 +15,7 @@ fn remote(e: LabError) -> RemoteError {
 }
 
 #[test]
-fn issue24_a_worker_refuses_an_unknown_evaluation_and_a_bad_context() {
+fn a_worker_refuses_an_unknown_evaluation_and_a_bad_context() {
     let e = evaluate("no.such.evaluation", "{}", "{}").unwrap_err();
     assert!(e.is_bad_input());
     assert!(
@@ -46,7 +46,7 @@ fn issue24_a_worker_refuses_an_unknown_evaluation_and_a_bad_context() {
 }
 
 #[test]
-fn issue24_a_ray_executor_without_its_interpreter_is_bad_input() {
+fn a_ray_executor_without_its_interpreter_is_bad_input() {
     let ray = RayExecutor::new(RaySettings {
         address: "127.0.0.1:1".into(),
         python: "/no/such/python3".into(),
@@ -86,7 +86,7 @@ fn issue24_a_ray_executor_without_its_interpreter_is_bad_input() {
 }
 
 #[test]
-fn issue24_a_worker_prepares_only_what_it_could_evaluate() {
+fn a_worker_prepares_only_what_it_could_evaluate() {
     let e = prepare("no.such.evaluation", "{}").unwrap_err();
     assert!(e.is_bad_input());
     assert!(matches!(remote(e), RemoteError::UnknownEvaluation { .. }));

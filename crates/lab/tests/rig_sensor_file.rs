@@ -106,7 +106,7 @@ fn rig_folder(dir: &Path) -> std::path::PathBuf {
 }
 
 #[test]
-fn issue21_the_rig_camera_reads_a_raw_colour_frame_through_a_sensor_file() {
+fn the_rig_camera_reads_a_raw_colour_frame_through_a_sensor_file() {
     let dir = tempfile::tempdir().unwrap();
     let frames = rig_folder(dir.path());
     let rig = dir.path().join("rig.toml");
@@ -153,7 +153,7 @@ fn issue21_the_rig_camera_reads_a_raw_colour_frame_through_a_sensor_file() {
 }
 
 #[test]
-fn issue21_a_camera_image_of_another_size_than_the_sensor_files_is_refused() {
+fn a_camera_image_of_another_size_than_the_sensor_files_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let frames = rig_folder(dir.path());
     std::fs::remove_file(frames.join("cam_0.png")).unwrap();
@@ -168,7 +168,7 @@ fn issue21_a_camera_image_of_another_size_than_the_sensor_files_is_refused() {
 }
 
 #[test]
-fn issue21_a_sensor_file_and_the_rigs_own_tables_together_are_refused() {
+fn a_sensor_file_and_the_rigs_own_tables_together_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let frames = rig_folder(dir.path());
     for table in ["[preprocess]\nmedian_blur = 3", "[blob]\nmin_area = 4.0"] {
@@ -222,7 +222,7 @@ fn small_pin_frames(n: usize) -> (Frame, Vec<Frame>) {
 /// detector, against the pins it found in the frame taken at the start,
 /// exactly as the detector reads the same frames off the rig.
 #[test]
-fn issue21_a_small_pin_sensor_file_on_the_rig_runs_its_taps_on_the_fake_ur5() {
+fn a_small_pin_sensor_file_on_the_rig_runs_its_taps_on_the_fake_ur5() {
     let dir = tempfile::tempdir().unwrap();
     let frames = dir.path().join("frames");
     std::fs::create_dir_all(&frames).unwrap();

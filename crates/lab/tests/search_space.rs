@@ -15,7 +15,7 @@ fn shipped(name: &str) -> SpaceFile {
 }
 
 #[test]
-fn issue24_shipped_search_spaces_parse_and_fit_their_models() {
+fn shipped_search_spaces_parse_and_fit_their_models() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/search");
     let mut seen = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
@@ -77,7 +77,7 @@ fn data(n: usize, seed: u64) -> Dataset {
 }
 
 #[test]
-fn issue24_a_trial_is_pure_and_the_local_executor_changes_nothing() {
+fn a_trial_is_pure_and_the_local_executor_changes_nothing() {
     let trial = PoseTrial::new(data(80, 1), data(30, 2), edge_targets()).unwrap();
     let space = shipped("pdennn.toml");
     let mut base = ModelConfig::preset(ModelKind::PDenNN, Preset::Default);

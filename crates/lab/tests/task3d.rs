@@ -37,7 +37,7 @@ fn data() -> &'static TapData {
 }
 
 #[test]
-fn issue23_collect_surface_3d_writes_named_targets_in_the_anchors_ranges() {
+fn collect_surface_3d_writes_named_targets_in_the_anchors_ranges() {
     let d = data();
     let c = &d.meta.target_columns;
     assert_eq!(c.target_names, ["z", "rx", "ry"]);
@@ -77,7 +77,7 @@ fn issue23_collect_surface_3d_writes_named_targets_in_the_anchors_ranges() {
 }
 
 #[test]
-fn issue23_collect_edge_5d_on_the_foil_writes_five_targets_rz_circular() {
+fn collect_edge_5d_on_the_foil_writes_five_targets_rz_circular() {
     let cfg = Collect3dConfig {
         samples: 40,
         seed: 4,
@@ -113,7 +113,7 @@ fn issue23_collect_edge_5d_on_the_foil_writes_five_targets_rz_circular() {
 }
 
 #[test]
-fn issue23_follow_surface_3d_on_a_plane_writes_metrics_and_figures() {
+fn follow_surface_3d_on_a_plane_writes_metrics_and_figures() {
     let cfg = resolve_config(
         ModelKind::DisDenNN,
         Preset::Default,
@@ -181,7 +181,7 @@ fn issue23_follow_surface_3d_on_a_plane_writes_metrics_and_figures() {
 /// in answers.csv with its labels and label distance, and the run is
 /// scored as a simulated one.
 #[test]
-fn issue23_surface_replay_answers_every_tap_from_the_bank() {
+fn surface_replay_answers_every_tap_from_the_bank() {
     use tactrace_lab::follow::surface_replay::run_surface_replay;
     use tactrace_lab::world::SurfaceBank;
     let cfg = resolve_config(

@@ -93,7 +93,7 @@ fn run_steps(
 }
 
 #[test]
-fn issue21_the_simulated_world_runs_a_few_steps() {
+fn the_simulated_world_runs_a_few_steps() {
     let (_, _, model) = simulated();
     let root = tempfile::tempdir().unwrap();
     let cfg = SimFollowConfig::default();
@@ -106,7 +106,7 @@ fn issue21_the_simulated_world_runs_a_few_steps() {
 /// The calibrated sensor's folder is read once, when its world is opened:
 /// the run works on without it.
 #[test]
-fn issue21_the_calibrated_world_reads_its_sensor_once_and_runs() {
+fn the_calibrated_world_reads_its_sensor_once_and_runs() {
     let root = tempfile::tempdir().unwrap();
     let taps = common::distorted_sensor_set(&root.path().join("taps"), 40);
     let cfg = common::calibration(taps, 20);
@@ -147,7 +147,7 @@ fn issue21_the_calibrated_world_reads_its_sensor_once_and_runs() {
 }
 
 #[test]
-fn issue21_the_replay_world_answers_from_the_shared_set() {
+fn the_replay_world_answers_from_the_shared_set() {
     let Some(data) = tactrace_testdata::real_edge_set() else {
         return;
     };
@@ -180,7 +180,7 @@ fn issue21_the_replay_world_answers_from_the_shared_set() {
 }
 
 #[test]
-fn issue21_the_hardware_world_runs_on_the_fake_ur5_and_a_folder_camera() {
+fn the_hardware_world_runs_on_the_fake_ur5_and_a_folder_camera() {
     let (data, frames, model) = simulated();
     let root = tempfile::tempdir().unwrap();
     let folder = root.path().join("frames");

@@ -614,7 +614,7 @@ mod anneal_tests {
     use super::*;
 
     #[test]
-    fn issue21_the_default_first_layer_rate_is_36() {
+    fn the_default_first_layer_rate_is_36() {
         // Chosen on the select parts (docs/learning.md); the output rate
         // and the DisDenNN's own rates are unchanged.
         for kind in [ModelKind::PDenNN, ModelKind::Mlp, ModelKind::PcaDenNN] {

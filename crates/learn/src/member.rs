@@ -122,7 +122,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_an_ensembles_circular_target_averages_across_the_wrap() {
+    fn an_ensembles_circular_target_averages_across_the_wrap() {
         // 179 and -179 deg: the circular mean is 180, the mean of the
         // numbers 0. Also off the wrap, and after a save and load.
         for (angles, mean) in [([179.0, -179.0], 180.0), ([-170.0, 150.0], 170.0)] {

@@ -395,7 +395,7 @@ mod tests {
     /// and short: the fast path gives the plain path's predictions within
     /// 1e-5 of the targets' spread.
     #[test]
-    fn issue21_fast_predictions_equal_the_plain_path_within_1e_5() {
+    fn fast_predictions_equal_the_plain_path_within_1e_5() {
         let cases: [(ModelKind, usize, &[usize]); 6] = [
             (ModelKind::PDenNN, 254, &[1000]),
             (ModelKind::PcaDenNN, 254, &[1000]),

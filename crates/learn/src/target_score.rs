@@ -131,7 +131,7 @@ mod tests {
     use crate::targets::Unit;
 
     #[test]
-    fn issue21_circular_spread_wraps_and_plain_spread_is_the_std() {
+    fn circular_spread_wraps_and_plain_spread_is_the_std() {
         let a = ModelTarget::circular("a");
         // Bunched round +-180: the wrapped spread is small, the linear std huge.
         let near = [179.0f32, -179.0, 178.0, -178.0];
@@ -149,7 +149,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_score_sums_every_target_over_its_scale() {
+    fn score_sums_every_target_over_its_scale() {
         let targets = [
             ModelTarget::new("r", Unit::Mm),
             ModelTarget::circular("a"),

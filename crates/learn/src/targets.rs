@@ -189,7 +189,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue21_a_circular_target_round_trips_through_sin_and_cos() {
+    fn a_circular_target_round_trips_through_sin_and_cos() {
         let targets = vec![ModelTarget::new("d", Unit::Mm), ModelTarget::circular("a")];
         assert_eq!(encoded_columns(&targets), vec![vec![0], vec![1, 2]]);
         for deg in [-179.5f32, -90.0, 0.0, 45.0, 179.9, 180.0] {
@@ -208,7 +208,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_wrapped_errors_of_circular_targets() {
+    fn wrapped_errors_of_circular_targets() {
         let a = ModelTarget::circular("a");
         assert!((a.abs_error(179.0, -179.0) - 2.0).abs() < 1e-12);
         assert!((a.abs_error(-170.0, 170.0) - 20.0).abs() < 1e-12);
@@ -227,7 +227,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_target_lists_are_checked() {
+    fn target_lists_are_checked() {
         assert!(check_targets(&[]).is_err());
         let twice = [
             ModelTarget::new("a", Unit::Mm),

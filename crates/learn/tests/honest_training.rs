@@ -27,7 +27,7 @@ fn pdennn() -> ModelConfig {
 }
 
 #[test]
-fn issue20_an_anneal_fraction_that_is_not_in_0_1_is_refused_naming_the_key() {
+fn an_anneal_fraction_that_is_not_in_0_1_is_refused_naming_the_key() {
     for bad in [f64::NAN, f64::INFINITY, -0.1, 1.5] {
         let mut cfg = pdennn();
         cfg.anneal_fraction = bad;
@@ -52,7 +52,7 @@ fn issue20_an_anneal_fraction_that_is_not_in_0_1_is_refused_naming_the_key() {
 }
 
 #[test]
-fn issue20_errors_of_a_nets_table_name_the_net_and_the_key() {
+fn errors_of_a_nets_table_name_the_net_and_the_key() {
     let mut cfg = pdennn();
     cfg.angle.as_mut().unwrap().n_components = Some(1 << 20);
     let err = cfg.validate().expect_err("too many components");
@@ -75,7 +75,7 @@ fn issue20_errors_of_a_nets_table_name_the_net_and_the_key() {
 }
 
 #[test]
-fn issue20_too_few_samples_for_the_components_are_refused_before_training() {
+fn too_few_samples_for_the_components_are_refused_before_training() {
     let cfg = {
         let mut c = pdennn();
         c.epochs = 1;
@@ -118,7 +118,7 @@ fn issue20_too_few_samples_for_the_components_are_refused_before_training() {
 /// `[position] hidden = []` once reached a loss of 7e56 and was saved:
 /// only a NaN or infinite loss counted as diverged.
 #[test]
-fn issue20_a_loss_far_above_the_means_is_a_divergence_while_still_finite() {
+fn a_loss_far_above_the_means_is_a_divergence_while_still_finite() {
     let data = synthetic(200, 16, 3);
     let mut cfg = ModelConfig::preset(ModelKind::Mlp, Preset::Default);
     cfg.epochs = 3;

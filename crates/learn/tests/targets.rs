@@ -68,7 +68,7 @@ fn truth(ds: &Dataset) -> Vec<Vec<f64>> {
 }
 
 #[test]
-fn issue21_every_kind_fits_three_targets_and_round_trips_them() {
+fn every_kind_fits_three_targets_and_round_trips_them() {
     let data = three_targets(300, 1);
     let outputs = targets(true);
     for kind in [
@@ -107,7 +107,7 @@ fn issue21_every_kind_fits_three_targets_and_round_trips_them() {
 }
 
 #[test]
-fn issue21_a_full_circle_angle_is_learnt_as_sin_cos_where_a_scalar_fails() {
+fn a_full_circle_angle_is_learnt_as_sin_cos_where_a_scalar_fails() {
     let train = three_targets(1500, 2);
     let test = three_targets(400, 3);
     let mae = |circular: bool| {
@@ -136,7 +136,7 @@ fn issue21_a_full_circle_angle_is_learnt_as_sin_cos_where_a_scalar_fails() {
 }
 
 #[test]
-fn issue21_a_version_2_model_file_loads_as_the_edge_task() {
+fn a_version_2_model_file_loads_as_the_edge_task() {
     let data = {
         let three = three_targets(120, 4);
         let y: Vec<f32> = (0..three.n)
@@ -169,7 +169,7 @@ fn issue21_a_version_2_model_file_loads_as_the_edge_task() {
 /// configuration fitted alone, and its score is the sum of each error over
 /// its spread (the circular spread wrapped) or over the goals given.
 #[test]
-fn issue21_search_scores_all_n_targets_circular_ones_wrapped() {
+fn search_scores_all_n_targets_circular_ones_wrapped() {
     use tactrace_learn::{hyperparameter_search, SearchSpace, TargetScale};
     let data = three_targets(240, 5);
     let (train, val) = data.split(0.75, 6);

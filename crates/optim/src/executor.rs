@@ -100,7 +100,7 @@ mod tests {
     }
 
     #[test]
-    fn issue24_local_executor_keeps_the_order_of_the_batch() {
+    fn local_executor_keeps_the_order_of_the_batch() {
         let configs: Vec<(f64, u64)> = (0..50).map(|k| (k as f64, k % 3)).collect();
         let got = Local.run(&Square, &configs).unwrap();
         let want: Vec<f64> = configs
@@ -111,7 +111,7 @@ mod tests {
     }
 
     #[test]
-    fn issue24_local_executor_returns_an_evaluations_own_error() {
+    fn local_executor_returns_an_evaluations_own_error() {
         let configs = [(1.0, 0), (-2.0, 0), (3.0, 0)];
         match Local.run(&Square, &configs) {
             Err(RunError::Evaluation(Negative(x))) => assert_eq!(x, -2.0),

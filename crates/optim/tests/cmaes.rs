@@ -96,7 +96,7 @@ fn bad_set_ups_and_generations_are_refused() {
 /// --population`) aborted on allocating its weights; it is refused with
 /// the bound.
 #[test]
-fn issue20_a_huge_population_is_refused_with_the_bound() {
+fn a_huge_population_is_refused_with_the_bound() {
     let cfg = |population: usize| CmaesConfig {
         start: vec![0.0; 3],
         sigma: 1.0,

@@ -95,7 +95,7 @@ fn mean(xs: impl Iterator<Item = f64>) -> f64 {
 }
 
 #[test]
-fn issue24_tpe_beats_random_search_on_branin() {
+fn tpe_beats_random_search_on_branin() {
     let seeds = 0..8;
     let tpe = mean(
         seeds
@@ -110,7 +110,7 @@ fn issue24_tpe_beats_random_search_on_branin() {
 }
 
 #[test]
-fn issue24_tpe_beats_random_search_on_a_mixed_space() {
+fn tpe_beats_random_search_on_a_mixed_space() {
     let seeds = 0..8;
     let tpe = mean(seeds.clone().map(|s| tpe_best(mixed_space(), mixed, s, 80)));
     let random = mean(seeds.map(|s| random_best(mixed_space(), mixed, s, 80)));
@@ -119,7 +119,7 @@ fn issue24_tpe_beats_random_search_on_a_mixed_space() {
 }
 
 #[test]
-fn issue24_tpe_is_a_function_of_seed_and_history() {
+fn tpe_is_a_function_of_seed_and_history() {
     let run = |seed| {
         let tpe = Tpe::new(
             mixed_space(),
@@ -160,7 +160,7 @@ fn issue24_tpe_is_a_function_of_seed_and_history() {
 }
 
 #[test]
-fn issue24_tpe_refuses_bad_spaces() {
+fn tpe_refuses_bad_spaces() {
     for bad in [
         vec![Domain::Float {
             low: 0.0,

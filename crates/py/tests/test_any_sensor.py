@@ -94,7 +94,7 @@ def sensor_file(ring_set) -> Path:
 TARGETS = ["depth:mm", "rx:deg", "ry:deg"]
 
 
-def test_issue21_inspect_finds_the_331_pins_on_rings_as_the_cli(ring_set, sensor_file):
+def test_inspect_finds_the_331_pins_on_rings_as_the_cli(ring_set, sensor_file):
     out = ring_set / "py-sensor.toml"
     found = tactrace.inspect_sensor(ring_set / "frames", out=out, picture=ring_set / "py.png")
     assert found["sensor"]["pins"] == 331
@@ -109,7 +109,7 @@ def test_issue21_inspect_finds_the_331_pins_on_rings_as_the_cli(ring_set, sensor
         tactrace.inspect_sensor(ring_set / "frames", out=out)
 
 
-def test_issue21_preprocess_equals_the_cli(ring_set, sensor_file):
+def test_preprocess_equals_the_cli(ring_set, sensor_file):
     frame = ring_set / "frames" / "image_3.png"
     cli = ring_set / "pre-cli.png"
     run_cli("sensor", "preprocess", frame, "--sensor", sensor_file, "--out", cli)
@@ -138,7 +138,7 @@ def test_issue21_preprocess_equals_the_cli(ring_set, sensor_file):
         tactrace.preprocess(colour[:120], sensor_file)
 
 
-def test_issue21_import_with_named_targets_matches_the_cli(ring_set, sensor_file):
+def test_import_with_named_targets_matches_the_cli(ring_set, sensor_file):
     common = ["--frames", ring_set / "frames", "--targets", ring_set / "labels.csv",
               "--image-column", "image", "--sensor", sensor_file]
     targets = [a for t in TARGETS for a in ("--target", t)]
@@ -176,7 +176,7 @@ def test_issue21_import_with_named_targets_matches_the_cli(ring_set, sensor_file
                                 ring_set / "bad", like=ring_set / "py-data", target=TARGETS)
 
 
-def test_issue21_n_output_predictions_are_named_as_the_cli_prints_them(ring_set, sensor_file):
+def test_n_output_predictions_are_named_as_the_cli_prints_them(ring_set, sensor_file):
     data = ring_set / "named-data"
     tactrace.import_dataset(ring_set / "frames", ring_set / "labels.csv", data,
                             target=TARGETS, image_column="image", sensor=sensor_file)

@@ -28,7 +28,7 @@ def image_model(tmp_path_factory):
     return model, model.save(work / "model")
 
 
-def test_issue22_python_follows_with_an_image_model_as_the_cli_does(image_model, tmp_path):
+def test_python_follows_with_an_image_model_as_the_cli_does(image_model, tmp_path):
     model, folder = image_model
     run = tactrace.follow(model, "disk", out=tmp_path / "py", steps=8, seed=3)
     assert run["steps"] == 8 and run["ending"] == "steps_done"
@@ -46,7 +46,7 @@ def test_issue22_python_follows_with_an_image_model_as_the_cli_does(image_model,
     np.testing.assert_array_equal(again["theta_pred_deg"], run["theta_pred_deg"])
 
 
-def test_issue22_the_perception_reads_pixels_not_pins(image_model, sim_model):
+def test_the_perception_reads_pixels_not_pins(image_model, sim_model):
     model, _ = image_model
     pixels = tactrace.follow(model, "disk", steps=8, seed=3)
     pins = tactrace.follow(sim_model, "disk", steps=8, seed=3)
@@ -56,6 +56,6 @@ def test_issue22_the_perception_reads_pixels_not_pins(image_model, sim_model):
     assert pixels["r_pred_mm"][0] != pins["r_pred_mm"][0]
 
 
-def test_issue22_follow_refuses_what_is_not_a_model():
+def test_follow_refuses_what_is_not_a_model():
     with pytest.raises(tactrace.InputError, match="an ImageModel"):
         tactrace.follow(3.5, "disk", steps=2)

@@ -12,7 +12,7 @@ import tactrace
 from conftest import real_edge_set, run_cli
 
 
-def test_issue20_predict_needs_the_pin_order(sim_set, sim_model):
+def test_predict_needs_the_pin_order(sim_set, sim_model):
     inputs, targets, meta = tactrace.load_dataset(sim_set)
     model = tactrace.load_model(sim_model)
     with pytest.raises(tactrace.InputError, match="pin order of the inputs is needed"):
@@ -39,7 +39,7 @@ def test_issue20_predict_needs_the_pin_order(sim_set, sim_model):
         model.predict(sim_set, reference_pins=meta["reference_pins"])
 
 
-def test_issue20_validate_takes_a_dataset_and_counts_training_rows(sim_set, sim_model, work):
+def test_validate_takes_a_dataset_and_counts_training_rows(sim_set, sim_model, work):
     model = tactrace.load_model(sim_model)
     cli = json.loads(run_cli("validate", "--model", sim_model, "--data", sim_set,
                              "--json").stdout)
@@ -52,7 +52,7 @@ def test_issue20_validate_takes_a_dataset_and_counts_training_rows(sim_set, sim_
     assert got["rows_seen_in_training"] == 0 and got["samples"] == 50
 
 
-def test_issue20_python_training_records_its_rows_as_the_cli(sim_set, work, tmp_path):
+def test_python_training_records_its_rows_as_the_cli(sim_set, work, tmp_path):
     cli_dir = work / "model_split_5"
     run_cli("train", "--train", sim_set, "--epochs", 3, "--val-fraction", 0.2,
             "--split-seed", 5, "--out", cli_dir)
@@ -82,7 +82,7 @@ def test_issue20_python_training_records_its_rows_as_the_cli(sim_set, work, tmp_
     assert got == model.validation
 
 
-def test_issue20_wrong_folders_are_named_alike(sim_set, sim_model):
+def test_wrong_folders_are_named_alike(sim_set, sim_model):
     with pytest.raises(tactrace.InputError) as err:
         tactrace.load_dataset(sim_model)
     assert "not a dataset directory: this is a model folder" in str(err.value)
@@ -112,7 +112,7 @@ def real_model(work, real_set):
     return out
 
 
-def test_issue20_follow_in_a_calibrated_sensor_as_the_cli(real_model, calibrated_sensor,
+def test_follow_in_a_calibrated_sensor_as_the_cli(real_model, calibrated_sensor,
                                                           work, tmp_path):
     cli_dir = work / "sensor_run"
     run_cli("follow", "--model", real_model, "--sensor", calibrated_sensor, "--shape",
@@ -126,7 +126,7 @@ def test_issue20_follow_in_a_calibrated_sensor_as_the_cli(real_model, calibrated
         tactrace.follow(real_model, "disk", steps=2)
 
 
-def test_issue20_follow_in_the_real_frame_world_as_the_cli(real_model, real_set, work,
+def test_follow_in_the_real_frame_world_as_the_cli(real_model, real_set, work,
                                                          tmp_path):
     data = real_edge_set()
     cli_dir = work / "replay_run"

@@ -27,7 +27,7 @@ SMALL = {"dense": [16], "conv": [{"channels": 6, "kernel": 3, "stride": 2},
                                  {"channels": 8, "kernel": 3, "stride": 2}]}
 
 
-def test_issue22_frames_npy_is_uint8_n_by_size_and_described_in_meta(image_set):
+def test_frames_npy_is_uint8_n_by_size_and_described_in_meta(image_set):
     frames = np.load(image_set / "frames.npy")
     meta = json.loads((image_set / "meta.json").read_text())
     assert frames.dtype == np.uint8
@@ -41,7 +41,7 @@ def test_issue22_frames_npy_is_uint8_n_by_size_and_described_in_meta(image_set):
     assert np.abs(frames[0].astype(np.float64) - blocks).max() <= 0.5 + 1e-9
 
 
-def test_issue22_train_load_and_predict_an_image_model(image_set, tmp_path):
+def test_train_load_and_predict_an_image_model(image_set, tmp_path):
     model = tactrace.train("conv-mlp", str(image_set), epochs=3, seed=2, config=SMALL,
                            val_fraction=0.25)
     assert isinstance(model, tactrace.ImageModel)
@@ -68,6 +68,6 @@ def test_issue22_train_load_and_predict_an_image_model(image_set, tmp_path):
     assert got["rows_seen_in_training"] == cli["rows_seen_in_training"] == 60
 
 
-def test_issue22_an_image_model_needs_a_dataset_with_frames(sim_set):
+def test_an_image_model_needs_a_dataset_with_frames(sim_set):
     with pytest.raises(tactrace.InputError, match="frames.npy"):
         tactrace.train("conv-dennn", str(sim_set), epochs=1)

@@ -141,7 +141,7 @@ def test_errors_carry_the_cli_messages(sim_set, tmp_path):
     assert got.stderr.strip() == f"error: {err.value}"
 
 
-def test_issue20_python_messages_have_no_rust_debug_values():
+def test_python_messages_have_no_rust_debug_values():
     """Shapes read as numpy prints them; names are quoted once, not Rust-escaped."""
     import numpy as np
 

@@ -114,7 +114,7 @@ def trials(folder: Path):
     return rows
 
 
-def test_issue24_search_on_ray_gives_the_local_trials(cluster, work, sim_set):
+def test_search_on_ray_gives_the_local_trials(cluster, work, sim_set):
     space = Path(__file__).resolve().parents[3] / "configs" / "search" / "pdennn.toml"
     args = ["search", "--train", sim_set, "--space", space, "--trials", 4, "--epochs", 3,
             "--startup", 2, "--batch", 2]
@@ -127,7 +127,7 @@ def test_issue24_search_on_ray_gives_the_local_trials(cluster, work, sim_set):
         (work / "search-local" / "best.toml").read_text()
 
 
-def test_issue24_sim_fit_on_ray_gives_the_local_candidates(cluster, work):
+def test_sim_fit_on_ray_gives_the_local_candidates(cluster, work):
     data = real_edge_set()
     args = ["sim-fit", "--frames", data / "frames", "--targets", data / "targets.csv",
             "--reference", data / "frames" / "init_0.png", "--limit", 60, "--generations", 1,
@@ -141,7 +141,7 @@ def test_issue24_sim_fit_on_ray_gives_the_local_candidates(cluster, work):
         (work / "fit-local" / "sensor.toml").read_text()
 
 
-def test_issue24_ray_executor_refuses_what_cannot_run(work, sim_set):
+def test_ray_executor_refuses_what_cannot_run(work, sim_set):
     space = Path(__file__).resolve().parents[3] / "configs" / "search" / "pdennn.toml"
     args = ["search", "--train", sim_set, "--space", space, "--trials", 2, "--epochs", 2]
     missing = run_cli(*args, "--out", work / "no-python", "--executor", "ray",
@@ -170,7 +170,7 @@ def node_processes():
     return found
 
 
-def test_issue24_lean_nodes_run_without_monitors_or_metrics(cluster):
+def test_lean_nodes_run_without_monitors_or_metrics(cluster):
     procs = node_processes()
     text = b"\n".join(procs.values()).decode(errors="replace")
     raylets = [p for p, c in procs.items() if c.split(b" ")[0].endswith(b"/raylet")]
@@ -188,7 +188,7 @@ def test_issue24_lean_nodes_run_without_monitors_or_metrics(cluster):
         assert f"{key}={value}".encode() in environ, key
 
 
-def test_issue24_workers_build_once_and_time_their_calls(cluster, work, sim_set, monkeypatch):
+def test_workers_build_once_and_time_their_calls(cluster, work, sim_set, monkeypatch):
     space = Path(__file__).resolve().parents[3] / "configs" / "search" / "pdennn.toml"
     args = ["search", "--train", sim_set, "--space", space, "--trials", 6, "--epochs", 2,
             "--startup", 2, "--batch", 2, "--seed", 9]
@@ -216,7 +216,7 @@ def test_issue24_workers_build_once_and_time_their_calls(cluster, work, sim_set,
     assert s["round_trip"] >= s["evaluation"] > 0
 
 
-def test_issue24_a_large_batch_goes_in_chunks_with_the_local_results(cluster, work, sim_set,
+def test_a_large_batch_goes_in_chunks_with_the_local_results(cluster, work, sim_set,
                                                                     monkeypatch):
     space = Path(__file__).resolve().parents[3] / "configs" / "search" / "pdennn.toml"
     args = ["search", "--train", sim_set, "--space", space, "--trials", 16, "--epochs", 1,
@@ -231,7 +231,7 @@ def test_issue24_a_large_batch_goes_in_chunks_with_the_local_results(cluster, wo
     assert sorted(c["configs"] for c in calls) == [2] * 8
 
 
-def test_issue24_chunks_cover_a_batch_in_order():
+def test_chunks_cover_a_batch_in_order():
     from tactrace.ray_executor import CHUNKS_PER_WORKER, chunks
 
     # A batch of a few per worker goes one configuration at a time.
@@ -245,7 +245,7 @@ def test_issue24_chunks_cover_a_batch_in_order():
     assert len(got) >= 3 * CHUNKS_PER_WORKER and max(map(len, got)) == 1001 // 12
 
 
-def test_issue24_timings_summary_adds_up(tmp_path):
+def test_timings_summary_adds_up(tmp_path):
     rows = [
         # worker a: two calls of one batch, built on the first
         {"batch": 1, "worker": "h:1", "configs": 1, "built": True, "sent": 10.0,

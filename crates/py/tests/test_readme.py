@@ -31,7 +31,7 @@ def readme_python_snippet() -> str:
     return readme_python_snippets()[0]
 
 
-def test_issue20_the_readme_snippet_runs_after_the_main_job(tmp_path):
+def test_the_readme_snippet_runs_after_the_main_job(tmp_path):
     snippet = readme_python_snippet()
     read = set(re.findall(r'"(runs/[^"]+)"', snippet))
     assert read == {"runs/reproduce/data/val", "runs/reproduce/models/pdennn"}, read
@@ -47,7 +47,7 @@ def test_issue20_the_readme_snippet_runs_after_the_main_job(tmp_path):
     assert lines[-1].startswith("True "), "the flower closed: " + got.stdout
 
 
-def test_issue21_the_readme_sensor_snippet_runs_on_raw_frames(tmp_path):
+def test_the_readme_sensor_snippet_runs_on_raw_frames(tmp_path):
     from test_any_sensor import camera_frame, write_png
     import numpy as np
 

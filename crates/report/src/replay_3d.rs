@@ -79,7 +79,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue23_the_3d_page_holds_its_data_and_loads_nothing() {
+    fn the_3d_page_holds_its_data_and_loads_nothing() {
         let steps = vec![Replay3dStep {
             pose: [0.0, 0.0, -3.0, 0.0, 0.0, 1.0],
             label: [0.0, 0.0, 3.0, 0.1, -0.2, 0.0],

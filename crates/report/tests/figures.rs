@@ -8,7 +8,7 @@ use tactrace_report::figures::{model_on_data_title, predicted_vs_true, Predicted
 /// no error. Each panel now names the model's kind, its folder and the
 /// dataset, and shows its mean absolute error with its unit.
 #[test]
-fn issue20_validation_plots_name_the_model_and_data_and_show_the_mae() {
+fn validation_plots_name_the_model_and_data_and_show_the_mae() {
     let title = model_on_data_title(
         ModelKind::PDenNN,
         Path::new("models/pdennn/"),

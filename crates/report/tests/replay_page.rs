@@ -176,7 +176,7 @@ fn frame_png(shade: u8) -> Vec<u8> {
 /// in mm over the data with a scale bar, and `#frame` names the answering
 /// frame and its label distance.
 #[test]
-fn issue20_the_page_has_mm_axes_a_scale_bar_and_names_the_answering_frame() {
+fn the_page_has_mm_axes_a_scale_bar_and_names_the_answering_frame() {
     let Some(browser) = chromium() else {
         eprintln!("{SKIPPED}");
         return;

@@ -272,7 +272,7 @@ mod tests {
     /// field is the same sum in another order (equal to the kernels'
     /// f32 rounding).
     #[test]
-    fn issue23_a_tilted_plane_s_field_turns_with_the_tilt() {
+    fn a_tilted_plane_s_field_turns_with_the_tilt() {
         let plane = HeightField::ramp(0.0, 0.0, 0.0).unwrap();
         let mut rings = TacTipConfig::default();
         rings.geometry.layout = crate::PinLayout::Rings;

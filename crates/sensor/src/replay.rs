@@ -135,7 +135,7 @@ mod tests {
     /// and the preprocessing stage use (`grey_of`, OpenCV's weights), not
     /// by the image crate's own (which differs on this frame).
     #[test]
-    fn issue21_a_colour_frame_is_read_grey_as_import_reads_it() {
+    fn a_colour_frame_is_read_grey_as_import_reads_it() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("colour.png");
         let image = image::RgbImage::from_fn(7, 5, |x, y| {

@@ -91,7 +91,7 @@ fn wrong_rest_layouts_are_rejected() {
 /// they are refused with the bound, and the spacing the message suggests
 /// is accepted.
 #[test]
-fn issue20_configs_implying_huge_tables_are_refused_with_the_bound() {
+fn configs_implying_huge_tables_are_refused_with_the_bound() {
     let suggested = |err: &SensorError| -> f64 {
         let msg = err.to_string();
         let tail = msg.rsplit("at least ").next().unwrap();

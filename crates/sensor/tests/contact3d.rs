@@ -51,7 +51,7 @@ const SHEARS: [Option<Shear>; 2] = [
 ];
 
 #[test]
-fn issue23_a_flat_surface_at_zero_tilt_is_the_planar_full_press() {
+fn a_flat_surface_at_zero_tilt_is_the_planar_full_press() {
     for model in models() {
         for height in [0.0, 7.5] {
             let floor = HeightField::ramp(height, 0.0, 0.0).unwrap();
@@ -97,7 +97,7 @@ fn rim_poses(contour: &Contour) -> Vec<(Vec2, f64, f64)> {
 }
 
 #[test]
-fn issue23_a_3d_edge_at_zero_tilt_is_the_planar_edge_contact() {
+fn a_3d_edge_at_zero_tilt_is_the_planar_edge_contact() {
     let h = 200.0;
     let square = Contour::new(vec![
         Vec2::new(-h, -h),
@@ -126,7 +126,7 @@ fn issue23_a_3d_edge_at_zero_tilt_is_the_planar_edge_contact() {
 }
 
 #[test]
-fn issue23_a_tilted_sensor_on_a_plane_is_a_level_sensor_on_the_tilted_ramp() {
+fn a_tilted_sensor_on_a_plane_is_a_level_sensor_on_the_tilted_ramp() {
     // Turning the whole scene about the pole by the sensor's inverse
     // rotation: the plane z = 0 becomes the plane of normal n = R^-1 z
     // whose signed distance from the pole is still -depth.
@@ -161,7 +161,7 @@ fn issue23_a_tilted_sensor_on_a_plane_is_a_level_sensor_on_the_tilted_ramp() {
 }
 
 #[test]
-fn issue23_a_deeper_press_moves_the_pins_more_at_any_tilt() {
+fn a_deeper_press_moves_the_pins_more_at_any_tilt() {
     let model = TacTipModel::new(TacTipConfig::default()).unwrap();
     let objects: Vec<(&str, Box<dyn Object3d>, Vec3)> = vec![
         (
@@ -209,7 +209,7 @@ fn issue23_a_deeper_press_moves_the_pins_more_at_any_tilt() {
 }
 
 #[test]
-fn issue23_the_simulated_tactip_over_an_object_renders_the_3d_contact() {
+fn the_simulated_tactip_over_an_object_renders_the_3d_contact() {
     let mut cfg = TacTipConfig::default();
     cfg.nuisance.pin_jitter_px = 0.3;
     let model = TacTipModel::new(cfg).unwrap();
@@ -263,7 +263,7 @@ fn box_mesh(h: f64, top: f64) -> tactrace_shape3d::TriangleMesh {
 /// anti-aliasing): at every tilt the fields agree within the patch's
 /// resolution, and moving into the object presses more.
 #[test]
-fn issue23_an_extruded_rim_presses_like_the_mesh_of_the_same_box_at_any_tilt() {
+fn an_extruded_rim_presses_like_the_mesh_of_the_same_box_at_any_tilt() {
     let model = TacTipModel::new(TacTipConfig::default()).unwrap();
     let (h, top) = (40.0, 10.0);
     let square = Contour::new(vec![
@@ -308,7 +308,7 @@ fn issue23_an_extruded_rim_presses_like_the_mesh_of_the_same_box_at_any_tilt() {
 }
 
 #[test]
-fn issue23_an_edge_tap_in_the_rim_frame_at_zero_tilt_is_the_planar_edge_tap() {
+fn an_edge_tap_in_the_rim_frame_at_zero_tilt_is_the_planar_edge_tap() {
     let model = TacTipModel::new(TacTipConfig::default()).unwrap();
     let height = 8.0;
     for shape in [BuiltinShape::Flower, BuiltinShape::Teardrop] {
@@ -329,7 +329,7 @@ fn issue23_an_edge_tap_in_the_rim_frame_at_zero_tilt_is_the_planar_edge_tap() {
 }
 
 #[test]
-fn issue23_the_mesh_of_a_surface_presses_like_the_surface() {
+fn the_mesh_of_a_surface_presses_like_the_surface() {
     let model = TacTipModel::new(TacTipConfig::default()).unwrap();
     for surface in [
         HeightField::saddle(60.0).unwrap(),

@@ -36,7 +36,7 @@ fn search() -> ConventionSearch {
 }
 
 #[test]
-fn issue21_a_sensor_labelled_another_way_round_has_its_convention_recovered() {
+fn a_sensor_labelled_another_way_round_has_its_convention_recovered() {
     let own = TacTipConfig::default();
     let mut truth = own.clone();
     let k = &mut truth.calibration;
@@ -77,7 +77,7 @@ fn issue21_a_sensor_labelled_another_way_round_has_its_convention_recovered() {
 }
 
 #[test]
-fn issue21_a_sensor_labelled_like_the_simulator_keeps_its_convention() {
+fn a_sensor_labelled_like_the_simulator_keeps_its_convention() {
     let own = TacTipConfig::default();
     let (rest, samples) = taps(&own);
     let fit = fit_convention(&own, &rest, &samples, &search()).unwrap();

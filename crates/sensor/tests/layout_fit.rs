@@ -50,7 +50,7 @@ fn turn(a: f64, b: f64, period: f64) -> f64 {
 }
 
 #[test]
-fn issue21_a_rendered_rings_sensor_is_fitted_as_rings() {
+fn a_rendered_rings_sensor_is_fitted_as_rings() {
     for rings in [5, 10] {
         let truth = other_sensor(PinLayout::Rings, rings);
         let pins = seen_pins(&truth);
@@ -80,7 +80,7 @@ fn issue21_a_rendered_rings_sensor_is_fitted_as_rings() {
 }
 
 #[test]
-fn issue21_a_rendered_lattice_is_fitted_as_a_lattice() {
+fn a_rendered_lattice_is_fitted_as_a_lattice() {
     for rings in [4, 8] {
         let mut truth = other_sensor(PinLayout::Hex, rings);
         truth.camera.height_mm = TacTipConfig::default().camera.height_mm;
@@ -103,7 +103,7 @@ fn issue21_a_rendered_lattice_is_fitted_as_a_lattice() {
 }
 
 #[test]
-fn issue21_a_rings_sensor_that_already_fits_keeps_its_configuration() {
+fn a_rings_sensor_that_already_fits_keeps_its_configuration() {
     let base = other_sensor(PinLayout::Rings, 10);
     let pins = TacTipModel::new(base.clone()).unwrap().rest_pins().to_vec();
     let fit = fit_layouts(&base, &pins, (320, 240)).unwrap();
@@ -113,7 +113,7 @@ fn issue21_a_rings_sensor_that_already_fits_keeps_its_configuration() {
 }
 
 #[test]
-fn issue21_pins_that_fit_no_layout_are_refused_with_both_residuals() {
+fn pins_that_fit_no_layout_are_refused_with_both_residuals() {
     // 127 points scattered at random over the frame.
     let mut k = 1u64;
     let mut next = || {
@@ -159,7 +159,7 @@ fn fitting_frames(dir: &Path, k: usize) -> Vec<PathBuf> {
 }
 
 #[test]
-fn issue21_the_shared_331_pin_sensor_fits_concentric_rings_and_not_a_lattice() {
+fn the_shared_331_pin_sensor_fits_concentric_rings_and_not_a_lattice() {
     use tactrace_vision::{estimate_rest, inspect, Frame, RestParams, SightParams};
     let Some(set) =
         tactrace_testdata::shared_set("tactip331-edge2d-shear", "train/frames/image_1.png")

@@ -27,7 +27,7 @@ fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 #[test]
-fn issue21_ring_k_holds_6k_pins_on_a_circle_of_radius_k_spacings() {
+fn ring_k_holds_6k_pins_on_a_circle_of_radius_k_spacings() {
     let s = 2.5;
     for n in [1, 3, 10] {
         let pins = concentric_rings(n, s, &[]);
@@ -57,7 +57,7 @@ fn issue21_ring_k_holds_6k_pins_on_a_circle_of_radius_k_spacings() {
 }
 
 #[test]
-fn issue21_the_nearest_pin_is_one_to_1_05_spacings_away_in_either_layout_whatever_the_phases() {
+fn the_nearest_pin_is_one_to_1_05_spacings_away_in_either_layout_whatever_the_phases() {
     // What the rest-pin matching's limit (half the local spacing) rests on.
     let s = 3.0;
     let phases = [7.0, -11.0, 2.5, 13.0, -4.0, 0.5];
@@ -89,7 +89,7 @@ fn issue21_the_nearest_pin_is_one_to_1_05_spacings_away_in_either_layout_whateve
 }
 
 #[test]
-fn issue21_rings_are_six_fold_and_mirror_symmetric_and_phases_turn_each_ring() {
+fn rings_are_six_fold_and_mirror_symmetric_and_phases_turn_each_ring() {
     let s = 2.0;
     let plain = concentric_rings(5, s, &[]);
     let has = |pins: &[[f64; 2]], p: [f64; 2]| pins.iter().any(|q| distance(*q, p) < 1e-9);
@@ -112,7 +112,7 @@ fn issue21_rings_are_six_fold_and_mirror_symmetric_and_phases_turn_each_ring() {
 }
 
 #[test]
-fn issue21_the_layout_is_chosen_by_the_configuration_and_hex_stays_the_default() {
+fn the_layout_is_chosen_by_the_configuration_and_hex_stays_the_default() {
     let hex = TacTipConfig::default();
     assert_eq!(hex.geometry.layout, PinLayout::Hex);
     assert_eq!(skin_pins(&hex.geometry), hex_lattice(6, 4.243));
@@ -135,7 +135,7 @@ fn issue21_the_layout_is_chosen_by_the_configuration_and_hex_stays_the_default()
 }
 
 #[test]
-fn issue21_ring_phases_must_fit_a_rings_layout() {
+fn ring_phases_must_fit_a_rings_layout() {
     let refused = |cfg: TacTipConfig, why: &str| {
         let err = TacTipModel::new(cfg).expect_err(why);
         assert!(
@@ -175,7 +175,7 @@ fn projected(cfg: &TacTipConfig, g: [f64; 2]) -> [f64; 2] {
 }
 
 #[test]
-fn issue21_a_rendered_rings_sensor_shows_its_pins_where_the_projection_puts_them() {
+fn a_rendered_rings_sensor_shows_its_pins_where_the_projection_puts_them() {
     let mut phases: Vec<f64> = (0..10).map(|k| 0.7 * k as f64 - 2.0).collect();
     phases[0] = 25.0;
     let mut cfg = rings_config(10, phases);
@@ -200,7 +200,7 @@ fn issue21_a_rendered_rings_sensor_shows_its_pins_where_the_projection_puts_them
 }
 
 #[test]
-fn issue21_turning_a_rings_sensor_by_60_degrees_permutes_and_turns_its_field() {
+fn turning_a_rings_sensor_by_60_degrees_permutes_and_turns_its_field() {
     // As for the lattice (tests/mechanics.rs): zero-phase rings and the
     // contact patch are both symmetric under 60 degree turns.
     let model = TacTipModel::new(rings_config(8, Vec::new())).unwrap();
@@ -218,7 +218,7 @@ fn issue21_turning_a_rings_sensor_by_60_degrees_permutes_and_turns_its_field() {
 }
 
 #[test]
-fn issue21_measured_rings_pins_keep_their_order_and_a_stray_pin_names_the_layout() {
+fn measured_rings_pins_keep_their_order_and_a_stray_pin_names_the_layout() {
     let model = TacTipModel::new(rings_config(10, vec![3.0; 10])).unwrap();
     let mut measured: Vec<[f64; 2]> = model
         .rest_pins()

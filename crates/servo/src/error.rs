@@ -112,7 +112,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_an_io_cause_is_printed_once() {
+    fn an_io_cause_is_printed_once() {
         let io = std::io::Error::from_raw_os_error(28);
         let wrapped = std::io::Error::other(Repeats(io));
         let err = super::ServoError::Sink {

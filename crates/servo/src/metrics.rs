@@ -280,7 +280,7 @@ mod tests {
     /// its x axis is now the arc length in mm, and each value belongs to
     /// the contour point at that arc length.
     #[test]
-    fn issue20_l2_curve_points_sit_at_their_arc_length() {
+    fn l2_curve_points_sit_at_their_arc_length() {
         let contour = Contour::new(circle(50.0, 2000)).unwrap();
         let arc = l2_curve_arc_mm(&contour, 1000);
         assert_eq!(arc.len(), 1000);

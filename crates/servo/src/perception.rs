@@ -279,7 +279,7 @@ mod tests {
     /// the loop perceives it: one extraction, the same percept as without
     /// the recorder; another frame is never answered with the kept pins.
     #[test]
-    fn issue21_a_frame_recorded_then_perceived_is_extracted_once() {
+    fn a_frame_recorded_then_perceived_is_extracted_once() {
         let (p, [a, b]) = perception_and_frames();
         let alone = p.perceive(&a).expect("percept");
         assert_eq!(p.extractions.load(Ordering::Relaxed), 1);

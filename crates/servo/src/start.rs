@@ -124,7 +124,7 @@ mod tests {
     /// Issue 20: `[start] offset_mm = nan` exited 2 but read "NaN mm from
     /// the edge"; every start value that is not a number names its key.
     #[test]
-    fn issue20_a_start_value_that_is_not_a_number_names_its_key() {
+    fn a_start_value_that_is_not_a_number_names_its_key() {
         let corners = [(0.0, 0.0), (40.0, 0.0), (40.0, 40.0), (0.0, 40.0)];
         let square = Contour::new(corners.iter().map(|&(x, y)| Vec2::new(x, y)).collect()).unwrap();
         for (key, cfg) in [

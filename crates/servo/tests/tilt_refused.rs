@@ -67,7 +67,7 @@ fn parts(targets: Vec<ModelTarget>) -> (PinExtractor, Frame, PoseModel) {
 }
 
 #[test]
-fn issue23_tilt_too_large_ends_the_planar_loop_as_a_refused_move() {
+fn tilt_too_large_ends_the_planar_loop_as_a_refused_move() {
     let (extractor, frame, model) = parts(vec![
         ModelTarget::new("r", Unit::Mm),
         ModelTarget::new("theta", Unit::Deg),
@@ -101,7 +101,7 @@ fn issue23_tilt_too_large_ends_the_planar_loop_as_a_refused_move() {
 }
 
 #[test]
-fn issue23_tilt_too_large_ends_the_surface_loop_as_a_refused_move() {
+fn tilt_too_large_ends_the_surface_loop_as_a_refused_move() {
     let targets = vec![
         ModelTarget::new("z", Unit::Mm),
         ModelTarget::new("rx", Unit::Deg),

@@ -153,7 +153,7 @@ mod tests {
     /// Every built-in name builds; a mesh file is known by its extension;
     /// anything else is no object.
     #[test]
-    fn issue23_named_objects_and_mesh_files() {
+    fn named_objects_and_mesh_files() {
         for name in OBJECT_NAMES.split(", ") {
             let cfg = ObjectConfig::named(name).unwrap_or_else(|| panic!("{name}"));
             cfg.build().unwrap_or_else(|e| panic!("{name}: {e}"));

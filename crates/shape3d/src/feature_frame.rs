@@ -81,7 +81,7 @@ mod tests {
 
     /// A label placed on a ramp by its feature frame reads back as itself.
     #[test]
-    fn issue23_label_round_trips_through_the_feature_frame() {
+    fn label_round_trips_through_the_feature_frame() {
         let ramp = HeightField::ramp(2.0, 20.0, 30.0).unwrap();
         let q = surface_point(&ramp, 5.0, -3.0).unwrap();
         assert!(ramp.signed_distance(q).abs() < 1e-9);

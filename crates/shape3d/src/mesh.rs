@@ -259,7 +259,7 @@ mod tests {
 
     /// The hierarchy finds the same distance as visiting every triangle.
     #[test]
-    fn issue23_the_bvh_finds_the_nearest_triangle() {
+    fn the_bvh_finds_the_nearest_triangle() {
         let mesh =
             TriangleMesh::from_heights(20.0, 0.7, |x, y| 2.0 * (0.2 * x).sin() * (0.15 * y).cos())
                 .unwrap();

@@ -23,7 +23,7 @@ fn close(got: f64, want: f64, tol: f64, what: &str) {
 }
 
 #[test]
-fn issue23_signed_distance_sign_and_magnitude_on_known_points() {
+fn signed_distance_sign_and_magnitude_on_known_points() {
     let (cx, cy, r) = DISK;
     let d = disk(10.0);
     // The polygon is within 0.001 mm of the circle.
@@ -151,7 +151,7 @@ fn around(q: Vec3, n: Vec3) -> [Vec3; 2] {
 }
 
 #[test]
-fn issue23_normals_of_analytic_surfaces_equal_the_distance_gradient() {
+fn normals_of_analytic_surfaces_equal_the_distance_gradient() {
     let mut cases: Vec<(String, Box<dyn Object3d>, Vec<Vec3>)> = Vec::new();
     let grid: Vec<(f64, f64)> = (-3..=3)
         .flat_map(|i| (-3..=3).map(move |j| (7.0 * i as f64 + 0.3, 6.0 * j as f64 - 0.2)))
@@ -235,7 +235,7 @@ fn issue23_normals_of_analytic_surfaces_equal_the_distance_gradient() {
 }
 
 #[test]
-fn issue23_the_mesh_of_a_sampled_surface_agrees_with_its_formula_within_the_resolution() {
+fn the_mesh_of_a_sampled_surface_agrees_with_its_formula_within_the_resolution() {
     for (name, hf) in [
         ("saddle", HeightField::saddle(50.0).unwrap()),
         ("wave", HeightField::wave(1.5, 40.0, 30.0).unwrap()),
@@ -268,7 +268,7 @@ fn issue23_the_mesh_of_a_sampled_surface_agrees_with_its_formula_within_the_reso
 }
 
 #[test]
-fn issue23_an_extruded_disk_has_a_flat_top_and_its_rim_is_the_circle() {
+fn an_extruded_disk_has_a_flat_top_and_its_rim_is_the_circle() {
     let (cx, cy, r) = DISK;
     let h = 12.0;
     let d = disk(h);
@@ -329,7 +329,7 @@ fn issue23_an_extruded_disk_has_a_flat_top_and_its_rim_is_the_circle() {
 }
 
 #[test]
-fn issue23_column_tops_lie_on_the_surface_at_any_tilt() {
+fn column_tops_lie_on_the_surface_at_any_tilt() {
     let objects: Vec<(&str, Box<dyn Object3d>)> = vec![
         (
             "ramp",
@@ -392,7 +392,7 @@ fn cube_stl() -> String {
 }
 
 #[test]
-fn issue23_meshes_read_from_stl_and_obj_give_a_cube_s_distances() {
+fn meshes_read_from_stl_and_obj_give_a_cube_s_distances() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cube.stl");
     std::fs::write(&path, cube_stl()).unwrap();
@@ -450,7 +450,7 @@ fn issue23_meshes_read_from_stl_and_obj_give_a_cube_s_distances() {
 }
 
 #[test]
-fn issue23_object_configs_parse_build_and_refuse_what_is_wrong() {
+fn object_configs_parse_build_and_refuse_what_is_wrong() {
     let text = r#"
         [[object]]
         kind = "extruded"

@@ -56,7 +56,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue21_fields_are_quoted_only_where_needed() {
+    fn fields_are_quoted_only_where_needed() {
         let mut t = CsvText::new();
         t.row(["step", "frame"]).row(["0", "a,b.png"]).row(["1"]);
         assert_eq!(t.into_string(), "step,frame\n0,\"a,b.png\"\n1\n");

@@ -52,7 +52,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue20_a_folder_of_another_kind_is_named() {
+    fn a_folder_of_another_kind_is_named() {
         let tmp = tempfile::tempdir().unwrap();
         let model = tmp.path().join("m");
         std::fs::create_dir(&model).unwrap();

@@ -322,7 +322,7 @@ mod tests {
     /// `--force`, so a second run (or another program) that made the
     /// output meanwhile lost it.
     #[test]
-    fn issue20_commit_never_replaces_an_output_that_appeared_without_force() {
+    fn commit_never_replaces_an_output_that_appeared_without_force() {
         let root = tempfile::tempdir().unwrap();
         let target = root.path().join("ds");
         let stage = StagedDir::new(&target, false).unwrap();
@@ -355,7 +355,7 @@ mod tests {
     /// Issue 20: `new_keeping_partial` deleted the `OUT.partial` of a run
     /// still writing it.
     #[test]
-    fn issue20_a_live_partial_run_is_never_deleted() {
+    fn a_live_partial_run_is_never_deleted() {
         let root = tempfile::tempdir().unwrap();
         let target = root.path().join("run");
         let partial = partial_path(&target);
@@ -389,7 +389,7 @@ mod tests {
 
     /// Issue 20: single output files were replaced without `--force`.
     #[test]
-    fn issue20_an_output_file_is_replaced_only_with_force() {
+    fn an_output_file_is_replaced_only_with_force() {
         let root = tempfile::tempdir().unwrap();
         let p = root.path().join("tap.png");
         write_output_file(&p, b"1", false, "--out").unwrap();

@@ -91,7 +91,7 @@ mod tests {
 
     #[cfg(unix)]
     #[test]
-    fn issue20_a_fifo_or_device_is_refused_without_blocking() {
+    fn a_fifo_or_device_is_refused_without_blocking() {
         let root = tempfile::tempdir().unwrap();
         let fifo = root.path().join("frame_1_0.png");
         let made = std::process::Command::new("mkfifo")
@@ -110,7 +110,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_file_over_its_bound_is_refused_before_reading() {
+    fn a_file_over_its_bound_is_refused_before_reading() {
         let root = tempfile::tempdir().unwrap();
         let p = root.path().join("big.toml");
         fs::write(&p, vec![b'#'; 100]).unwrap();

@@ -200,7 +200,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_held_output_is_refused_naming_the_holder() {
+    fn a_held_output_is_refused_naming_the_holder() {
         let root = tempfile::tempdir().unwrap();
         let target = root.path().join("out");
         let other = foreign_lock(&target, "4242\n");
@@ -224,7 +224,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_one_process_shares_its_lock_and_the_last_handle_removes_it() {
+    fn one_process_shares_its_lock_and_the_last_handle_removes_it() {
         let root = tempfile::tempdir().unwrap();
         let target = root.path().join("sub/out");
         let a = OutputLock::acquire(&target).unwrap();
@@ -245,7 +245,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_stale_unlocked_lock_file_does_not_block() {
+    fn a_stale_unlocked_lock_file_does_not_block() {
         let root = tempfile::tempdir().unwrap();
         let target = root.path().join("out");
         fs::write(root.path().join(".out.lock"), "999999\n").unwrap();

@@ -137,7 +137,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_header_claiming_more_than_the_file_holds_is_refused() {
+    fn a_header_claiming_more_than_the_file_holds_is_refused() {
         let root = tempfile::tempdir().unwrap();
         let p = root.path().join("inputs.npy");
         std::fs::write(&p, npy("(100000000, 254)", &[0u8; 1000])).unwrap();

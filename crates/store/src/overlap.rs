@@ -97,7 +97,7 @@ mod tests {
     use std::fs;
 
     #[test]
-    fn issue20_an_output_in_or_around_an_input_is_refused() {
+    fn an_output_in_or_around_an_input_is_refused() {
         let root = tempfile::tempdir().unwrap();
         let frames = root.path().join("frames");
         fs::create_dir(&frames).unwrap();

@@ -125,7 +125,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_write_failing_mid_row_leaves_only_whole_rows() {
+    fn a_write_failing_mid_row_leaves_only_whole_rows() {
         let disk = FillingDisk {
             data: Vec::new(),
             room: 30,

@@ -118,7 +118,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_a_sensor_file_round_trips_and_refuses_unknown_keys_and_bad_settings() {
+    fn a_sensor_file_round_trips_and_refuses_unknown_keys_and_bad_settings() {
         let f = file();
         let text = f.to_toml();
         let p = Path::new("s.toml");

@@ -228,7 +228,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_hashes_are_of_the_numbers_and_stable() {
+    fn hashes_are_of_the_numbers_and_stable() {
         let d = data(3, "simulated", false);
         // SHA-256 of (3u64, 2u64, the six inputs, the six targets), as
         // Python's hashlib gives it: a change of the hashing is seen.
@@ -247,7 +247,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_rows_seen_counts_training_rows_in_any_copy() {
+    fn rows_seen_counts_training_rows_in_any_copy() {
         let d = data(10, "real", true);
         let rec = TrainingRecord::new(&d, None, vec![0, 2, 4, 6, 8], None);
         rec.check().unwrap();

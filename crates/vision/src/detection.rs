@@ -110,7 +110,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_both_detector_kinds_read_from_toml_and_unknown_keys_are_refused() {
+    fn both_detector_kinds_read_from_toml_and_unknown_keys_are_refused() {
         let spots = "[detect]\nkind = \"spots\"\nlevel = 127\nmin_pixels = 3\n\
                      max_pixels = 11\nmax_cluster_pixels = 40\n";
         let file: File = toml::from_str(spots).expect("spots");

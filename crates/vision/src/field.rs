@@ -489,7 +489,7 @@ pub(crate) mod tests {
     /// jittered grids and on the 331-pin ring layout, with the exact and
     /// the cut kernels; observed pins keep their observation.
     #[test]
-    fn issue21_fill_missing_is_the_field_at_missing_pins_bit_for_bit() {
+    fn fill_missing_is_the_field_at_missing_pins_bit_for_bit() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(331);
         for trial in 0..40 {
@@ -551,7 +551,7 @@ pub(crate) mod tests {
     /// under a sheared, bumped field with a tenth of the pins unmatched; and
     /// the two widest kernels keep under 70 % of the exact kernel's weights.
     #[test]
-    fn issue21_cut_field_is_the_exact_one_within_its_bound_on_331_rings() {
+    fn cut_field_is_the_exact_one_within_its_bound_on_331_rings() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
         let reference = rings();

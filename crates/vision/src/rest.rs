@@ -419,7 +419,7 @@ mod tests {
     /// undeformed (0.14 px when written: the least pushed taps still push
     /// a little).
     #[test]
-    fn issue21_rest_layout_of_exact_points() {
+    fn rest_layout_of_exact_points() {
         let rest = layout();
         let est = estimate_rest(&taps(&rest, 200, None), rest.len(), &RestParams::default())
             .expect("estimate");
@@ -434,7 +434,7 @@ mod tests {
     /// provisional frame holds the speck): the speck is dropped, and the
     /// layout is as good as without it.
     #[test]
-    fn issue21_a_speck_in_the_provisional_frame_is_dropped() {
+    fn a_speck_in_the_provisional_frame_is_dropped() {
         let rest = layout();
         let speck = [rest[30][0] + 3.0, rest[30][1] + 2.0];
         let est = estimate_rest(

@@ -476,7 +476,7 @@ mod tests {
     /// hole borders: the tracer's contours are one a component plus one a
     /// hole.
     #[test]
-    fn issue21_run_walk_equals_the_traced_border() {
+    fn run_walk_equals_the_traced_border() {
         let mut rng = ChaCha8Rng::seed_from_u64(2105);
         let (mut walked, mut with_holes) = (0, 0);
         for case in 0..400 {
@@ -554,7 +554,7 @@ mod tests {
     /// Runs at every level, including -1 (all white) and rows of any
     /// width, are the pixels above the level.
     #[test]
-    fn issue21_runs_cover_exactly_the_pixels_above_the_level() {
+    fn runs_cover_exactly_the_pixels_above_the_level() {
         let mut rng = ChaCha8Rng::seed_from_u64(4);
         let mut runs = Vec::new();
         let mut frame = ContourScanner::new(0, 0);

@@ -244,7 +244,7 @@ mod tests {
     /// blob detector) are pins here, at their pixel centroids; a speck
     /// below `min_pixels` is not.
     #[test]
-    fn issue21_tiny_pins_are_found_at_their_centroids() {
+    fn tiny_pins_are_found_at_their_centroids() {
         let p = SpotParams {
             min_pixels: 1,
             ..params()
@@ -270,7 +270,7 @@ mod tests {
     /// Corner contact joins two pins under 8-connectivity only; an
     /// oversize component is a cluster, not a pin.
     #[test]
-    fn issue21_connectivity_and_clusters() {
+    fn connectivity_and_clusters() {
         let f = frame(&[[2, 2], [3, 2], [4, 3], [5, 3]], 255);
         let eight = params().check().expect("valid").detect(&f);
         assert_eq!((eight.pins.len(), eight.clusters.len()), (1, 1));

@@ -176,7 +176,7 @@ impl PinTracker {
     /// to [`EXACT_TOLERANCE`]; the default below [`CUT_MIN_PINS`] pins) or
     /// the cut one (the wide stages' kernels cut at [`CUT_TOLERANCE`]; the
     /// default from [`CUT_MIN_PINS`] pins). Kept to check that the cut
-    /// changes nothing that matters (`tests/speed3.rs`).
+    /// changes nothing that matters (`tests/cut_field.rs`).
     pub fn with_exact_field(mut self, exact: bool) -> Self {
         self.stages = stages(&self.reference, self.spacing, exact);
         self
@@ -208,7 +208,7 @@ impl PinTracker {
     /// lookups pruned (`tracker/split.rs`); an unsettled nearest-neighbour
     /// start with fewer points than pins dropped right after its first
     /// matching (`PinTracker::coarse_to_fine`). Off, the ordering is computed as before them, to the
-    /// same pins bit for bit; kept to check that (`tests/order331.rs`,
+    /// same pins bit for bit; kept to check that (`tests/speed_cuts.rs`,
     /// `examples/order_timing.rs --plain`).
     pub fn with_speed_cuts(mut self, on: bool) -> Self {
         self.cuts = on;

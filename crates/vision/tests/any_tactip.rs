@@ -179,7 +179,7 @@ fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
 /// pins, measures the spacing, picks the detector for the pin size, and
 /// masks the rim and its specks while keeping every pin.
 #[test]
-fn issue21_inspection_tells_rings_from_a_lattice_and_counts_the_pins() {
+fn inspection_tells_rings_from_a_lattice_and_counts_the_pins() {
     for (s, kind, spacing, small) in [
         (ring_sensor(), LayoutKind::Rings, 4.8, true),
         (hex_sensor(), LayoutKind::Hexagonal, 14.0, false),
@@ -243,7 +243,7 @@ fn issue21_inspection_tells_rings_from_a_lattice_and_counts_the_pins() {
 /// estimated pin that close), its residual is reported, and the taps held
 /// out are all fully tracked with every pin on its own true position.
 #[test]
-fn issue21_rest_layout_from_taps_alone_and_small_pins_fully_tracked() {
+fn rest_layout_from_taps_alone_and_small_pins_fully_tracked() {
     for (s, seed) in [(ring_sensor(), 11), (hex_sensor(), 12)] {
         let found = inspected(&s, seed);
         let frames = detector(&s, &found);
@@ -352,7 +352,7 @@ fn camera_frame(tap: &Tap, rng: &mut ChaCha8Rng) -> image::RgbImage {
 /// lattice; the frames read through that preprocessing (RGB or RGBA alike)
 /// are fully tracked against the rest layout estimated from them.
 #[test]
-fn issue21_raw_colour_frames_inspected_and_read() {
+fn raw_colour_frames_inspected_and_read() {
     let mut rng = ChaCha8Rng::seed_from_u64(21);
     let lattice = Sensor {
         size: 320,

@@ -66,7 +66,7 @@ fn pin_frame(rng: &mut ChaCha8Rng, size: u32) -> Frame {
 /// (white and dark blobs): the run-based path gives the threshold-by-
 /// threshold tracer's keypoints exactly.
 #[test]
-fn issue21_run_detector_equals_the_traced_detector_on_synthetic_frames() {
+fn run_detector_equals_the_traced_detector_on_synthetic_frames() {
     let mut rng = ChaCha8Rng::seed_from_u64(2121);
     let mut found = 0;
     for case in 0..60 {
@@ -90,7 +90,7 @@ fn issue21_run_detector_equals_the_traced_detector_on_synthetic_frames() {
 /// Every frame of the shared 127-pin set (binary 256 x 256, `real256`):
 /// the same keypoints, bit for bit, in the same order.
 #[test]
-fn issue21_run_detector_equals_the_traced_detector_on_every_shared_127_pin_frame() {
+fn run_detector_equals_the_traced_detector_on_every_shared_127_pin_frame() {
     let Some(set) = tactrace_testdata::real_edge_set() else {
         return;
     };

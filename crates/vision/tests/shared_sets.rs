@@ -81,7 +81,7 @@ fn fit_part(frames: Vec<(u32, PathBuf)>) -> Vec<(u32, PathBuf)> {
 /// The 331-pin edge set with shear: 331 pins on rings, every val/ frame
 /// read (300 of them, spread) fully tracked but at most 1 %.
 #[test]
-fn issue21_331_pin_edge_set_tracked_with_nothing_hand_written() {
+fn the_331_pin_edge_set_tracked_with_nothing_hand_written() {
     let Some(dir) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "val/targets.csv")
     else {
         return;
@@ -98,7 +98,7 @@ fn issue21_331_pin_edge_set_tracked_with_nothing_hand_written() {
 /// The 331-pin surface set (every tap pressed in, no undeformed frame):
 /// the held-out part N % 5 == 0 fully tracked but at most 1 %.
 #[test]
-fn issue21_331_pin_surface_set_tracked_with_nothing_hand_written() {
+fn the_331_pin_surface_set_tracked_with_nothing_hand_written() {
     let Some(dir) = tactrace_testdata::shared_set("tactip331-surface3d", "targets.csv") else {
         return;
     };
@@ -116,7 +116,7 @@ fn issue21_331_pin_surface_set_tracked_with_nothing_hand_written() {
 /// edge set's undeformed frame reads fully tracked against the layout
 /// estimated without it.
 #[test]
-fn issue21_127_pin_sets_tracked_from_inspection() {
+fn the_127_pin_sets_tracked_from_inspection() {
     let Some(edge) = tactrace_testdata::real_edge_set() else {
         return;
     };

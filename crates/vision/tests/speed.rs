@@ -13,7 +13,7 @@ use tactrace_vision::{BlobParams, Frame, PinExtractor, PinTracker};
 /// `PinExtractor::extract` does (with the touching-pin split): the same
 /// pins, within 1e-6 px, with the nearest-neighbour start as without.
 #[test]
-fn issue21_nearest_start_orders_every_shared_127_pin_frame_as_before() {
+fn nearest_start_orders_every_shared_127_pin_frame_as_before() {
     let Some(set) = tactrace_testdata::real_edge_set() else {
         return;
     };
@@ -43,7 +43,7 @@ fn issue21_nearest_start_orders_every_shared_127_pin_frame_as_before() {
 /// the train part: the same pins with the nearest-neighbour start as
 /// without.
 #[test]
-fn issue21_nearest_start_orders_331_pin_frames_as_before() {
+fn nearest_start_orders_331_pin_frames_as_before() {
     let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
         return;
     };

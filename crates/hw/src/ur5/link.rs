@@ -318,7 +318,7 @@ mod tests {
     use crate::ur5::rtde::resting_state;
 
     #[test]
-    fn issue20_the_realtime_reader_keeps_at_most_one_packet() {
+    fn the_realtime_reader_keeps_at_most_one_packet() {
         let packet = encode_packet(&resting_state());
         let stream: Vec<u8> = packet
             .iter()

@@ -163,7 +163,7 @@ mod tests {
     use crate::ur5::rtde::resting_state;
 
     #[test]
-    fn issue20_huge_or_non_finite_tool_poses_are_refused_with_the_reason() {
+    fn huge_or_non_finite_tool_poses_are_refused_with_the_reason() {
         let ok = resting_state();
         assert!(ArmState::check(ok).is_ok());
         let cases: [([f64; 6], &str); 4] = [

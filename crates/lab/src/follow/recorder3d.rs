@@ -123,7 +123,7 @@ mod tests {
     /// (fields only when asked); a row that fails is the sink error of
     /// its step and the step is not kept.
     #[test]
-    fn issue21_the_3d_recorder_writes_tells_and_keeps_each_step() {
+    fn the_3d_recorder_writes_tells_and_keeps_each_step() {
         let start = Pose::new(10.0, 20.0, 30.0, 0.0, 0.0, 45.0);
         let (_arm, probe) = SimArm::with_probe(SimArmConfig::default(), start);
         for keep_fields in [false, true] {

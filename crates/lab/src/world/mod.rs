@@ -273,7 +273,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_a_world_is_a_kind_tagged_value_that_round_trips_and_refuses_unknown_keys() {
+    fn a_world_is_a_kind_tagged_value_that_round_trips_and_refuses_unknown_keys() {
         let sim = SimFollowConfig::default();
         let text = round_trip(&sim.world());
         assert!(text.starts_with("kind = \"simulated\""), "{text}");

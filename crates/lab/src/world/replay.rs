@@ -230,7 +230,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue21_a_bank_round_trips_and_is_checked_when_read() {
+    fn a_bank_round_trips_and_is_checked_when_read() {
         let c = LabelledCollection::bristol(Path::new("set"));
         let bank = ReplayBank::new(c.clone(), 0.5).unwrap();
         let text = toml::to_string(&bank).unwrap();
@@ -241,7 +241,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_answers_csv_has_a_header_and_a_whole_line_a_tap() {
+    fn answers_csv_has_a_header_and_a_whole_line_a_tap() {
         let labels = |r: f64, t: f64| EdgeLabels {
             r_mm: r,
             theta_deg: t,

@@ -160,7 +160,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_bank_frames_the_model_trained_on_are_counted_and_said() {
+    fn bank_frames_the_model_trained_on_are_counted_and_said() {
         let names = ["frame_1_0.png", "frame_2_0.png", "frame_3_0.png"];
         let frames = names
             .iter()

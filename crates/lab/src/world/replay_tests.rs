@@ -9,7 +9,7 @@ use tactrace_store::{LabelledCollection, TapFields};
 use tactrace_vision::{inspect, preprocess::grey_of, DetectorParams, SightParams};
 
 #[test]
-fn issue21_the_real_frame_world_reads_a_331_pin_frame_as_import_does() {
+fn the_real_frame_world_reads_a_331_pin_frame_as_import_does() {
     let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "val/targets.csv")
     else {
         return;

@@ -200,7 +200,7 @@ mod tests {
     /// A synthetic bank: each tap is answered by the row of the nearest
     /// scaled labels, and the answer's distance is that scaled distance.
     #[test]
-    fn issue23_surface_bank_answers_with_the_nearest_labelled_row() {
+    fn surface_bank_answers_with_the_nearest_labelled_row() {
         let labels = vec![
             [1.0, 0.0, 0.0],
             [3.0, 0.0, 0.0],

@@ -50,7 +50,7 @@ fn jagged(n: usize) -> Vec<(f64, f64)> {
 }
 
 #[test]
-fn issue20_png_lines_stay_inside_the_plotting_area() {
+fn png_lines_stay_inside_the_plotting_area() {
     let dir = tempfile::tempdir().expect("temp dir");
     for (name, style) in [("line", Style::Line), ("linepoints", Style::LinePoints)] {
         let axes = Axes {
@@ -75,7 +75,7 @@ fn issue20_png_lines_stay_inside_the_plotting_area() {
 /// "contour point" 0-1000; they now run along the contour's arc length in
 /// mm, and their PNG stays inside the plot like any other chart.
 #[test]
-fn issue20_error_curve_runs_along_the_arc_length_in_mm() {
+fn error_curve_runs_along_the_arc_length_in_mm() {
     let circle: Vec<_> = (0..400)
         .map(|k| {
             let t = k as f64 / 400.0 * std::f64::consts::TAU;

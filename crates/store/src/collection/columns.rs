@@ -159,7 +159,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_column_named_twice_is_refused_naming_it() {
+    fn a_column_named_twice_is_refused_naming_it() {
         let h = header(&["image_name", "pose_2", "pose_6", "pose_2"]);
         let err = column_indices(&h, &["image_name", "pose_2", "pose_6"]).unwrap_err();
         assert!(
@@ -174,7 +174,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_missing_column_lists_every_column_and_the_closest() {
+    fn a_missing_column_lists_every_column_and_the_closest() {
         let names: Vec<String> = ["image_name", "data_name", "obj_id", "pose_id"]
             .iter()
             .map(|s| s.to_string())

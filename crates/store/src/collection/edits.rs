@@ -94,7 +94,7 @@ mod tests {
     use std::path::Path;
 
     #[test]
-    fn issue21_edits_as_flags_give_them_make_a_checked_collection() {
+    fn edits_as_flags_give_them_make_a_checked_collection() {
         let base = LabelledCollection::bristol(Path::new("set"));
         let c = base
             .clone()

@@ -398,7 +398,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue21_the_bristol_defaults_are_set_in_one_constructor() {
+    fn the_bristol_defaults_are_set_in_one_constructor() {
         let c = LabelledCollection::bristol(Path::new("set"));
         assert_eq!(c.frames(), Path::new("set/frames"));
         assert_eq!(c.targets(), Path::new("set/targets.csv"));
@@ -421,7 +421,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_a_collection_round_trips_through_its_file_form_and_is_checked() {
+    fn a_collection_round_trips_through_its_file_form_and_is_checked() {
         let mut angle = Target::new("pose_6", Unit::Deg);
         angle.circular = true;
         let spec = TargetSpec::new("image", vec![Target::new("pose_2", Unit::Mm), angle]).unwrap();

@@ -169,7 +169,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_one_reader_takes_targets_tap_columns_and_the_selected_rows() {
+    fn one_reader_takes_targets_tap_columns_and_the_selected_rows() {
         let root = tempfile::tempdir().unwrap();
         let c = collection(root.path(), CSV);
         let rows = c.read_rows(TapFields::ALL).unwrap();
@@ -215,7 +215,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_the_reader_names_a_missing_tap_column_and_a_bad_number() {
+    fn the_reader_names_a_missing_tap_column_and_a_bad_number() {
         let root = tempfile::tempdir().unwrap();
         let c = collection(root.path(), "image_name,pose_2,pose_6\nf_0.png,1,x\n");
         let err = c.read_rows(TapFields::NONE).unwrap_err().to_string();
@@ -232,7 +232,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_a_collection_cut_to_some_images_keeps_their_lines_whole() {
+    fn a_collection_cut_to_some_images_keeps_their_lines_whole() {
         let root = tempfile::tempdir().unwrap();
         let c = collection(root.path(), CSV);
         let out = root.path().join("bank.csv");

@@ -126,7 +126,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_a_keep_rule_read_from_a_file_is_checked() {
+    fn a_keep_rule_read_from_a_file_is_checked() {
         let ok: KeepRule = toml::from_str("modulus = 5\nremainder = 0\n").unwrap();
         assert_eq!(ok.to_string(), "N%5==0");
         // A zero modulus once divided by zero on the first frame.

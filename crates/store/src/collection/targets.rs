@@ -200,7 +200,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn issue21_a_spec_names_a_target_and_every_column_once() {
+    fn a_spec_names_a_target_and_every_column_once() {
         assert!(matches!(
             TargetSpec::new("image_name", vec![]),
             Err(CollectionError::NoTargets)
@@ -215,7 +215,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_targets_parse_as_the_cli_writes_them() {
+    fn targets_parse_as_the_cli_writes_them() {
         let t = Target::parse("pose_6:deg:circular").unwrap();
         assert_eq!(
             (t.column.as_str(), t.unit, t.circular),
@@ -238,7 +238,7 @@ mod tests {
     }
 
     #[test]
-    fn issue21_a_spec_of_n_targets_round_trips_and_only_the_edge_pair_makes_a_dataset() {
+    fn a_spec_of_n_targets_round_trips_and_only_the_edge_pair_makes_a_dataset() {
         let mut angle = Target::new("pose_6", Unit::Deg);
         angle.circular = true;
         let spec = TargetSpec::new(

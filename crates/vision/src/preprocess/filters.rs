@@ -244,7 +244,7 @@ mod tests {
     /// OpenCV rounds half to even (to 0: white, as `v - 0 > -1`); cv2 5.0.0
     /// gives this very frame.
     #[test]
-    fn issue21_adaptive_gaussian_rounds_its_mean_half_to_even_as_opencv() {
+    fn adaptive_gaussian_rounds_its_mean_half_to_even_as_opencv() {
         let mut frame = Frame::new(7, 7);
         frame.put_pixel(3, 3, image::Luma([8]));
         let out = adaptive_threshold(&frame, 3, 1.0, true);

@@ -19,7 +19,7 @@ fn stage(params: PreprocessParams, width: u32, height: u32) -> PreprocessStage {
 /// of its centre, for centres on and off the pixel grid, inside and
 /// partly outside the frame.
 #[test]
-fn issue21_mask_keeps_exactly_the_pixels_within_its_radius() {
+fn mask_keeps_exactly_the_pixels_within_its_radius() {
     for (centre, radius) in [
         ([20.0, 15.0], 7.0),
         ([20.3, 14.6], 7.5),
@@ -45,7 +45,7 @@ fn issue21_mask_keeps_exactly_the_pixels_within_its_radius() {
 /// adaptive threshold `v - mean > -ceil(C)` is all white when C > 0 and
 /// all black when C <= 0, for both weightings and any block.
 #[test]
-fn issue21_adaptive_threshold_of_a_constant_frame() {
+fn adaptive_threshold_of_a_constant_frame() {
     for level in [0u8, 93, 255] {
         let frame = Frame::from_pixel(23, 17, image::Luma([level]));
         for block in [3u32, 5, 7, 11, 61] {
@@ -66,7 +66,7 @@ fn issue21_adaptive_threshold_of_a_constant_frame() {
 /// A bright spot on a dark ground: white with C = -5 where it is more
 /// than 5 levels above its neighbourhood, the ground stays black.
 #[test]
-fn issue21_adaptive_threshold_finds_a_bright_spot() {
+fn adaptive_threshold_finds_a_bright_spot() {
     let mut frame = Frame::from_pixel(40, 40, image::Luma([60]));
     for y in 18..21 {
         for x in 18..21 {
@@ -93,7 +93,7 @@ fn issue21_adaptive_threshold_finds_a_bright_spot() {
 /// A constant frame resizes to the same constant, shrinking or
 /// enlarging, by whole and fractional factors, with either method.
 #[test]
-fn issue21_resize_of_a_constant_frame_is_constant() {
+fn resize_of_a_constant_frame_is_constant() {
     for level in [0u8, 1, 77, 254, 255] {
         let frame = Frame::from_pixel(30, 20, image::Luma([level]));
         for size in [[15, 10], [7, 13], [64, 41], [30, 20], [1, 1], [31, 5]] {
@@ -110,7 +110,7 @@ fn issue21_resize_of_a_constant_frame_is_constant() {
 /// an empty one when the settings are checked, and a frame of another
 /// size when it is applied.
 #[test]
-fn issue21_crop_bounds_and_frame_sizes_are_refused() {
+fn crop_bounds_and_frame_sizes_are_refused() {
     let p = |crop| PreprocessParams {
         crop: Some(crop),
         ..PreprocessParams::default()
@@ -142,7 +142,7 @@ fn issue21_crop_bounds_and_frame_sizes_are_refused() {
 /// holds through a threshold that would whiten flat ground, the resize
 /// comes last.
 #[test]
-fn issue21_steps_run_in_order() {
+fn steps_run_in_order() {
     let p = PreprocessParams {
         crop: Some([4, 2, 24, 22]),
         mask: Some(MaskCircle {
@@ -168,7 +168,7 @@ fn issue21_steps_run_in_order() {
 }
 
 #[test]
-fn issue21_settings_read_from_toml_and_refuse_unknown_keys() {
+fn settings_read_from_toml_and_refuse_unknown_keys() {
     let text = "crop = [190, 132, 446, 388]\nmedian_blur = 5\n\
                 mask = { centre = [128.0, 128.0], radius = 120.0 }\n\
                 threshold = { kind = \"adaptive_gaussian\", block = 61, c = -5.0 }\n\

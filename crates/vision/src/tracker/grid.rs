@@ -261,7 +261,7 @@ mod tests {
 
     /// The grid visits every point within the reach (and each once).
     #[test]
-    fn issue21_grid_visits_every_point_within_reach_once() {
+    fn grid_visits_every_point_within_reach_once() {
         let points: Vec<[f64; 2]> = (0..200)
             .map(|k| {
                 let t = k as f64;
@@ -296,7 +296,7 @@ mod tests {
     /// missing pin is not, the same point well nearer its own pin is, and
     /// without a margin nothing is.
     #[test]
-    fn issue21_settled_rejects_a_point_two_pins_contest() {
+    fn settled_rejects_a_point_two_pins_contest() {
         let reference: Vec<[f64; 2]> = (0..6).map(|k| [5.0 * f64::from(k), 0.0]).collect();
         let tracker = PinTracker::new(reference.clone()).expect("tracker");
         let settled = |tracker: &PinTracker, points: &[[f64; 2]], matches: &[Option<usize>]| {
@@ -371,7 +371,7 @@ mod early_tests {
     /// the order of checks without that cut (the speed cuts off), bit for
     /// bit, and such taps occur (the early branch is taken).
     #[test]
-    fn issue21_unsettled_start_with_fewer_points_falls_back_early_bit_for_bit() {
+    fn unsettled_start_with_fewer_points_falls_back_early_bit_for_bit() {
         let reference = crate::field::tests::rings();
         let fast = PinTracker::new(reference.clone()).expect("tracker");
         let plain = PinTracker::new(reference.clone())

@@ -1,8 +1,8 @@
 //! Set-ups shared by the ordering tests on the shared real sets
-//! (`speed.rs`, `speed3.rs`): frames read from a folder, the largest pin
+//! (`speed.rs`, `cut_field.rs`): frames read from a folder, the largest pin
 //! difference between two orderings, and the 331-pin shear set read as the
 //! inspection proposes; and the 331-pin ring layout of the synthetic
-//! ordering tests (`speed3.rs`, `speed4.rs`, `order331.rs`) and their
+//! ordering tests (`cut_field.rs`, `nn_start.rs`, `speed_cuts.rs`) and their
 //! synthetic taps' merged and missed pins. Not every file that shares
 //! it uses every set-up.
 #![allow(dead_code)]
@@ -81,7 +81,7 @@ pub fn shear_set_331(set: &Path) -> (Vec<(PathBuf, Detection)>, Vec<[f64; 2]>) {
 }
 
 /// The 331-pin ring layout: a centre pin and ten rings of 6k pins, 5 px
-/// apart, centred at (64, 64) (`speed3.rs`, `speed4.rs`).
+/// apart, centred at (64, 64) (`cut_field.rs`, `nn_start.rs`).
 pub fn rings() -> Vec<[f64; 2]> {
     let mut pins = vec![[64.0, 64.0]];
     for k in 1..=10 {

@@ -209,7 +209,7 @@ mod tests {
     }
 
     #[test]
-    fn issue20_a_file_a_folder_or_dev_null_is_not_a_camera() {
+    fn a_file_a_folder_or_dev_null_is_not_a_camera() {
         let dir = std::env::temp_dir();
         let file = dir.join(format!("tactrace-not-a-camera-{}", std::process::id()));
         std::fs::write(&file, b"png").unwrap();

@@ -25,7 +25,7 @@ fn free_edge() -> Se3Config {
 }
 
 #[test]
-fn issue23_move_clip_bounds_a_misread_rotation() {
+fn move_clip_bounds_a_misread_rotation() {
     // A tap read nearly half a turn away: the unbounded law turns by 85 deg.
     let misread = [0.0, 0.0, 3.0, 0.0, 0.0, 170.0];
     let mut free = Se3Controller::try_new(free_edge()).unwrap();
@@ -44,7 +44,7 @@ fn issue23_move_clip_bounds_a_misread_rotation() {
 }
 
 #[test]
-fn issue23_move_clip_leaves_moves_within_it_alone() {
+fn move_clip_leaves_moves_within_it_alone() {
     let predictions = [
         [0.4, 0.0, 2.7, 3.0, -2.0, 6.0],
         [-0.2, 0.0, 3.3, -1.0, 4.0, -9.0],
@@ -58,7 +58,7 @@ fn issue23_move_clip_leaves_moves_within_it_alone() {
 }
 
 #[test]
-fn issue23_move_clip_and_heading_are_checked_and_read_from_toml() {
+fn move_clip_and_heading_are_checked_and_read_from_toml() {
     let text = r#"
 task = "surface_3d"
 reference = [0.0, 1.0, 3.0, 0.0, 0.0, 0.0]
@@ -122,7 +122,7 @@ heading_deg = 30.0
 }
 
 #[test]
-fn issue23_heading_error_is_the_turn_about_the_axis_onto_the_direction() {
+fn heading_error_is_the_turn_about_the_axis_onto_the_direction() {
     // Level, the y axis along +x (rz = -90): heading 0 is held.
     let level = Pose::new(0.0, 0.0, 0.0, 0.0, 0.0, -90.0);
     assert!(heading_error_deg(level, 0.0).abs() < 1e-9);
@@ -189,7 +189,7 @@ fn steer(surface: &dyn Object3d, heading: Option<f64>, steps: usize, n: usize) -
 }
 
 #[test]
-fn issue23_a_held_heading_turns_a_surface_run_onto_its_direction() {
+fn a_held_heading_turns_a_surface_run_onto_its_direction() {
     let saddle = HeightField::saddle(60.0).unwrap();
     let wave = HeightField::wave(4.0, 60.0, 0.0).unwrap();
     for (name, surface) in [("saddle", &saddle as &dyn Object3d), ("wave", &wave)] {

@@ -68,7 +68,7 @@ fn last_steps(dir: &std::path::Path, n: usize, heading: f64) -> (f64, Vec<f64>) 
 }
 
 #[test]
-fn issue23_surface_run_turns_onto_the_held_heading() {
+fn surface_run_turns_onto_the_held_heading() {
     let model = small_model();
     let plane = ObjectConfig::named("plane").unwrap().build().unwrap();
     let root = tempfile::tempdir().unwrap();

@@ -38,7 +38,7 @@ fn tap(reference: &[[f64; 2]], rng: &mut ChaCha8Rng) -> Vec<KeyPoint> {
 /// full path does, bit for bit, and as the tracker that never keeps such
 /// a start.
 #[test]
-fn issue21_settled_nearest_start_orders_synthetic_331_pin_taps_as_the_full_path() {
+fn settled_nearest_start_orders_synthetic_331_pin_taps_as_the_full_path() {
     let reference = rings();
     let fast = PinTracker::new(reference.clone()).expect("tracker");
     let before = PinTracker::new(reference.clone())

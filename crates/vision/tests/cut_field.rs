@@ -16,7 +16,7 @@ use tactrace_vision::{BlobParams, Frame, KeyPoint, PinExtractor, PinTracker};
 /// detected pin as the exact one does (on nearly every trial to its own
 /// reference pin) and fills the dropped ones within a hair of it.
 #[test]
-fn issue21_cut_field_orders_a_sheared_331_pin_ring_as_the_exact_one() {
+fn cut_field_orders_a_sheared_331_pin_ring_as_the_exact_one() {
     let reference = rings();
     let cut = PinTracker::new(reference.clone()).expect("tracker");
     let exact = PinTracker::new(reference.clone())
@@ -66,7 +66,7 @@ fn issue21_cut_field_orders_a_sheared_331_pin_ring_as_the_exact_one() {
 /// does: a 127-pin tracker orders the exact way by default (below
 /// `CUT_MIN_PINS`), so its pins are the exact ordering's, bit for bit.
 #[test]
-fn issue21_127_pin_frames_keep_the_exact_ordering() {
+fn the_127_pin_frames_keep_the_exact_ordering() {
     let Some(set) = tactrace_testdata::real_edge_set() else {
         return;
     };
@@ -96,7 +96,7 @@ fn issue21_127_pin_frames_keep_the_exact_ordering() {
 /// the train part: the cut field gives the same pins as the exact one
 /// (within 1e-6 px), and so as many frames fully tracked.
 #[test]
-fn issue21_cut_field_tracks_331_pin_frames_as_the_exact_one() {
+fn cut_field_tracks_331_pin_frames_as_the_exact_one() {
     let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
         return;
     };

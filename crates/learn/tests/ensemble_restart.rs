@@ -39,7 +39,7 @@ fn solo(cfg: &ModelConfig, m: usize, d: &Dataset) -> Result<PoseModel, LearnErro
 }
 
 #[test]
-fn issue21_a_diverged_member_restarts_alone_and_the_others_are_bit_identical() {
+fn a_diverged_member_restarts_alone_and_the_others_are_bit_identical() {
     let d = data(80, 30, 1);
     // The case: only member 5 diverges at the starting rates.
     let strict = ensemble_of_six(0);
@@ -93,7 +93,7 @@ fn issue21_a_diverged_member_restarts_alone_and_the_others_are_bit_identical() {
 }
 
 #[test]
-fn issue21_a_member_out_of_retries_fails_the_fit() {
+fn a_member_out_of_retries_fails_the_fit() {
     // A rate at which every seed diverges, however often halved twice.
     let d = data(80, 30, 1);
     let mut cfg = ensemble_of_six(2);

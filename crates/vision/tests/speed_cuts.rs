@@ -64,7 +64,7 @@ fn hexagon() -> Vec<[f64; 2]> {
 /// On 80 synthetic taps of each layout (331-pin rings, 127-pin lattice)
 /// with pins missing and merged, the cuts give the same pins bit for bit.
 #[test]
-fn issue21_speed_cuts_order_synthetic_taps_bit_for_bit() {
+fn speed_cuts_order_synthetic_taps_bit_for_bit() {
     for (reference, s, c) in [(rings(), 5.0, 64.0), (hexagon(), 11.0, 100.0)] {
         let fast = PinTracker::new(reference.clone()).expect("tracker");
         let plain = PinTracker::new(reference.clone())
@@ -85,7 +85,7 @@ fn issue21_speed_cuts_order_synthetic_taps_bit_for_bit() {
 /// 600 held-out frames of the 331-pin shear set (val part), as
 /// `tests/speed.rs` reads them: the same pins bit for bit with the cuts.
 #[test]
-fn issue21_speed_cuts_order_331_pin_frames_bit_for_bit() {
+fn speed_cuts_order_331_pin_frames_bit_for_bit() {
     let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
         return;
     };
@@ -106,7 +106,7 @@ fn issue21_speed_cuts_order_331_pin_frames_bit_for_bit() {
 /// Every 5th frame of the shared 127-pin set, as `PinExtractor::extract`
 /// reads it: the same pins bit for bit with the cuts.
 #[test]
-fn issue21_speed_cuts_order_127_pin_frames_bit_for_bit() {
+fn speed_cuts_order_127_pin_frames_bit_for_bit() {
     let Some(set) = tactrace_testdata::real_edge_set() else {
         return;
     };

@@ -44,7 +44,7 @@ fn edge() -> Vec<ModelTarget> {
 }
 
 #[test]
-fn issue21_an_ensemble_of_one_is_the_single_model_bit_for_bit() {
+fn an_ensemble_of_one_is_the_single_model_bit_for_bit() {
     let d = data(80, 30, 1);
     for kind in [ModelKind::PDenNN, ModelKind::PcaDenNN, ModelKind::Mlp] {
         let single = fit(&small(kind, 1), &edge(), &d);
@@ -79,7 +79,7 @@ fn worst(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
 }
 
 #[test]
-fn issue21_an_ensemble_of_three_averages_its_members() {
+fn an_ensemble_of_three_averages_its_members() {
     let d = data(80, 30, 2);
     for kind in [ModelKind::PDenNN, ModelKind::PcaDenNN, ModelKind::DisDenNN] {
         let cfg = small(kind, 3);
@@ -134,7 +134,7 @@ fn issue21_an_ensemble_of_three_averages_its_members() {
 }
 
 #[test]
-fn issue21_an_ensemble_of_a_circular_target_trains_and_loads() {
+fn an_ensemble_of_a_circular_target_trains_and_loads() {
     // A circular angle: the ensemble's encoded columns are averaged
     // before atan2 (checked exactly by the unit test in member.rs); here
     // its predictions stay within the members' spread of each other.
@@ -160,7 +160,7 @@ fn issue21_an_ensemble_of_a_circular_target_trains_and_loads() {
 }
 
 #[test]
-fn issue21_an_ensemble_size_out_of_range_is_refused() {
+fn an_ensemble_size_out_of_range_is_refused() {
     for k in [0, tactrace_learn::MAX_ENSEMBLE + 1] {
         let mut cfg = small(ModelKind::PDenNN, 1);
         cfg.ensemble = k;
@@ -170,7 +170,7 @@ fn issue21_an_ensemble_size_out_of_range_is_refused() {
 }
 
 #[test]
-fn issue21_input_noise_is_seeded_training_only_and_checked() {
+fn input_noise_is_seeded_training_only_and_checked() {
     let d = data(80, 30, 4);
     let clean = fit(&small(ModelKind::PDenNN, 1), &edge(), &d);
     let mut cfg = small(ModelKind::PDenNN, 1);

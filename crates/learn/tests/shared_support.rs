@@ -7,7 +7,7 @@ mod support;
 /// `dim` values and two targets in their ranges, the values a smooth
 /// function of the targets plus at most 0.2 of noise.
 #[test]
-fn issue21_correlated_rows_are_seeded_and_follow_their_targets() {
+fn correlated_rows_are_seeded_and_follow_their_targets() {
     let (x, y) = support::correlated_rows(50, 7, 3);
     assert_eq!((x.len(), y.len()), (350, 100));
     assert_eq!((x.clone(), y.clone()), support::correlated_rows(50, 7, 3));
@@ -39,7 +39,7 @@ fn fixture(name: &str) -> (String, Vec<u8>) {
 /// of two networks with its mean frame) load, and save again to the
 /// same bytes.
 #[test]
-fn issue21_model_files_written_before_load_and_save_to_the_same_bytes() {
+fn model_files_written_before_load_and_save_to_the_same_bytes() {
     let (json, weights) = fixture("pin_model");
     let pin = tactrace_learn::PoseModel::from_bytes(&json, &weights).expect("pin model");
     assert_eq!(pin.to_bytes().expect("save"), (json, weights));
@@ -51,7 +51,7 @@ fn issue21_model_files_written_before_load_and_save_to_the_same_bytes() {
 /// A weights file whose tensor has another shape, or is not safetensors,
 /// is a corrupt model naming the tensor, as before.
 #[test]
-fn issue21_a_tensor_of_another_shape_is_named() {
+fn a_tensor_of_another_shape_is_named() {
     let (json, _) = fixture("pin_model");
     let err = tactrace_learn::PoseModel::from_bytes(&json, b"not safetensors").expect_err("bad");
     assert!(err.to_string().contains("weights: "), "{err}");

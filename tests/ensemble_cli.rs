@@ -22,7 +22,7 @@ fn train(dir: &std::path::Path, out: &str, extra: &[&str]) -> Run {
 }
 
 #[test]
-fn issue21_train_ensemble_saves_a_folder_every_command_loads() {
+fn train_ensemble_saves_a_folder_every_command_loads() {
     let t = TempDir::new("ensemble");
     let dir = &t.0;
     let r = tactrace(

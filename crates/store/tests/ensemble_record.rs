@@ -26,7 +26,7 @@ fn small_ensemble() -> (PoseModel, TrainingHistory) {
 }
 
 #[test]
-fn issue21_training_json_records_each_members_halvings() {
+fn training_json_records_each_members_halvings() {
     let (model, mut history) = small_ensemble();
     assert_eq!(history.member_lr_halvings, vec![0, 0]);
     let record: TrainingRecord = serde_json::from_str(

@@ -43,7 +43,7 @@ fn search() -> DepthSearch {
 }
 
 #[test]
-fn issue21_a_sensor_with_absolute_tap_depths_and_a_weaker_slide_is_recovered() {
+fn a_sensor_with_absolute_tap_depths_and_a_weaker_slide_is_recovered() {
     let own = TacTipConfig::default();
     let mut truth = own.clone();
     truth.calibration.tap_depth_mm = 0.5;
@@ -82,7 +82,7 @@ fn issue21_a_sensor_with_absolute_tap_depths_and_a_weaker_slide_is_recovered() {
 }
 
 #[test]
-fn issue21_a_sensor_the_simulator_already_matches_keeps_its_depth_and_slide() {
+fn a_sensor_the_simulator_already_matches_keeps_its_depth_and_slide() {
     let mut own = TacTipConfig::default();
     // A depth law for dz in [3, 5] that reaches the skin: 3.6-5.6 mm.
     own.calibration.tap_depth_mm = 0.6;

@@ -43,7 +43,7 @@ fn edge_taps(shear: (f64, f64), samples: usize) -> TapData {
 }
 
 #[test]
-fn issue23_shear_keeps_the_labels_moves_the_pins_and_is_recorded() {
+fn shear_keeps_the_labels_moves_the_pins_and_is_recorded() {
     let plain = edge_taps((0.0, 0.0), 24);
     let sheared = edge_taps((5.0, 5.0), 24);
     assert_eq!(
@@ -144,7 +144,7 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
 }
 
 #[test]
-fn issue23_surface_metrics_are_at_the_reached_poses() {
+fn surface_metrics_are_at_the_reached_poses() {
     static MODEL: OnceLock<StoredModel> = OnceLock::new();
     let plane = object("plane");
     let model = MODEL.get_or_init(|| {
@@ -193,7 +193,7 @@ fn issue23_surface_metrics_are_at_the_reached_poses() {
 }
 
 #[test]
-fn issue23_edge_metrics_are_at_the_reached_poses() {
+fn edge_metrics_are_at_the_reached_poses() {
     let disk = object("disk");
     let model = model_of(&edge_taps((0.0, 0.0), 200));
     let cfg = Edge3dConfig {

@@ -58,7 +58,7 @@ fn search() -> DepthSearch {
 }
 
 #[test]
-fn issue21_taps_round_the_circle_give_the_rigs_pivot_back() {
+fn taps_round_the_circle_give_the_rigs_pivot_back() {
     let (own, truth) = own_and_truth();
     assert!(own.calibration.pivot_x_mm.hypot(own.calibration.pivot_y_mm) > 1.0);
     let (rest, samples) = taps(&truth, 360.0);
@@ -79,7 +79,7 @@ fn issue21_taps_round_the_circle_give_the_rigs_pivot_back() {
 }
 
 #[test]
-fn issue21_taps_over_a_narrow_arc_keep_the_sensors_pivot() {
+fn taps_over_a_narrow_arc_keep_the_sensors_pivot() {
     let (own, truth) = own_and_truth();
     let (rest, samples) = taps(&truth, 90.0);
     let fit = fit_depth(&own, &rest, &samples, &search()).unwrap();

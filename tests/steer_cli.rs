@@ -5,7 +5,7 @@ mod util;
 use util::{tactrace, TempDir};
 
 #[test]
-fn issue23_steer_is_checked_and_refused_for_edge_tasks() {
+fn steer_is_checked_and_refused_for_edge_tasks() {
     let t = TempDir::new("steer");
     let edge = tactrace(
         &t.0,

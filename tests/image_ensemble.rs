@@ -25,7 +25,7 @@ fn config(members: usize) -> String {
 }
 
 #[test]
-fn issue22_an_ensemble_trains_validates_and_follows_from_the_cli() {
+fn an_ensemble_trains_validates_and_follows_from_the_cli() {
     let t = TempDir::new("conv4-ensemble");
     let d = t.0.as_path();
     let r = tactrace(

@@ -29,7 +29,7 @@ fn collect(t: &TempDir, out: &str, extra: &[&str]) -> util::Run {
 }
 
 #[test]
-fn issue23_collect_shear_is_recorded_and_leaves_the_labels() {
+fn collect_shear_is_recorded_and_leaves_the_labels() {
     let t = TempDir::new("shear3d");
     let plain = collect(&t, "plain", &[]);
     assert_eq!(plain.code, 0, "{}", plain.stderr);

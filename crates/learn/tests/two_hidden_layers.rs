@@ -54,7 +54,7 @@ fn bp_delta(sizes: &[usize], seed: u64) -> Vec<f64> {
 }
 
 #[test]
-fn issue21_two_hidden_layers_linearised_update_is_the_backprop_gradient() {
+fn two_hidden_layers_linearised_update_is_the_backprop_gradient() {
     // One, two and three outputs (the 331-pin edge's pose net has three:
     // the position and the angle's sine and cosine), and three hidden layers.
     for (sizes, seed) in [
@@ -77,7 +77,7 @@ fn issue21_two_hidden_layers_linearised_update_is_the_backprop_gradient() {
 }
 
 #[test]
-fn issue21_two_hidden_layers_closed_form_is_the_euler_equilibrium() {
+fn two_hidden_layers_closed_form_is_the_euler_equilibrium() {
     // A long, fine Euler relaxation of the clamped phase settles where the
     // closed form says (to first order in beta, so a small beta).
     for (sizes, seed) in [(vec![12, 40, 30, 2], 5), (vec![20, 30, 25, 3], 6)] {
@@ -95,7 +95,7 @@ fn issue21_two_hidden_layers_closed_form_is_the_euler_equilibrium() {
 }
 
 #[test]
-fn issue21_one_hidden_layer_keeps_its_closed_form() {
+fn one_hidden_layer_keeps_its_closed_form() {
     // The general closed form reduces to the one-layer one: a net of one
     // hidden layer and 16 outputs (too many for the fused one-layer step)
     // moves along the same direction as backprop.
@@ -115,7 +115,7 @@ fn data(n: usize, dim: usize, seed: u64) -> Dataset {
 }
 
 #[test]
-fn issue21_pose_models_with_two_hidden_layers_learn() {
+fn pose_models_with_two_hidden_layers_learn() {
     // Every kind with `hidden = [a, b]` trains at the default rates and
     // beats predicting the training mean by far on held-out rows.
     let (train, val) = (data(300, 30, 1), data(100, 30, 2));
@@ -181,7 +181,7 @@ fn target_spreads(model: &PoseModel) -> Vec<f64> {
 }
 
 #[test]
-fn issue21_circular_weight_scales_only_the_sine_and_cosine_and_reads_back() {
+fn circular_weight_scales_only_the_sine_and_cosine_and_reads_back() {
     let (train, val) = (full_circle(300, 1), full_circle(100, 2));
     let mut angle = ModelTarget::new("pose_6", Unit::Deg);
     angle.circular = true;
@@ -227,7 +227,7 @@ fn issue21_circular_weight_scales_only_the_sine_and_cosine_and_reads_back() {
 }
 
 #[test]
-fn issue21_circular_weight_out_of_range_is_refused_by_name() {
+fn circular_weight_out_of_range_is_refused_by_name() {
     for w in [0.0, -1.0, f64::NAN, 1e3] {
         let mut cfg = ModelConfig::preset(ModelKind::PcaDenNN, Preset::Default);
         cfg.circular_weight = w;

@@ -8,8 +8,9 @@
 use crate::config::ConvConfig;
 use crate::data::{Frames, Targets};
 use crate::error::{config_error, ConvError};
+use crate::hybrid;
 use crate::model::ConvModel;
-use crate::train::{train, EpochReport, FitData, TrainingHistory};
+use crate::train::{EpochReport, TrainingHistory};
 
 impl ConvModel {
     /// A copy of this model trained further on `frames` and `targets` by
@@ -32,31 +33,22 @@ impl ConvModel {
         config.validate()?;
         same_networks(&self.config, config)?;
         self.check_data(frames, targets)?;
+        hybrid::check_pins(&self.input, frames)?;
         if let Some((vf, vt)) = &validation {
             self.check_data(vf, vt)?;
+            hybrid::check_pins(&self.input, vf)?;
         }
         if frames.count() == 0 {
             return Err(ConvError::Empty);
         }
-        let mut nets = self.nets.clone();
-        let data: Vec<FitData> = (0..nets.len() as u64)
-            .map(|k| FitData {
-                seed: seed.wrapping_add(k),
-                frames: *frames,
-                targets: *targets,
-                input: self.input.clone(),
-                scaling: self.targets.clone(),
-            })
-            .collect();
-        let history = train(&mut nets, config, &data, validation, on_epoch)?;
-        let model = ConvModel {
+        let start = ConvModel {
             config: config.clone(),
             seed,
-            nets,
+            nets: self.nets.clone(),
             input: self.input.clone(),
             targets: self.targets.clone(),
         };
-        Ok((model, history))
+        start.trained((frames, targets), validation, on_epoch)
     }
 
     /// `frames` of this model's input size and `targets` one row a frame,
@@ -98,6 +90,7 @@ fn same_networks(start: &ConvConfig, new: &ConvConfig) -> Result<(), ConvError> 
         ("activation", start.activation != new.activation),
         ("input_centring", start.input_centring != new.input_centring),
         ("coord_channels", start.coord_channels != new.coord_channels),
+        ("input", start.input != new.input),
         ("members", start.members != new.members),
     ];
     match differs.iter().find(|(_, d)| *d) {

@@ -68,32 +68,40 @@ impl ConvModel {
         }
         let layout = hybrid::layout_for(config, frames.size(), targets.dim(), input.pin_count())?;
         let scaling = TargetScaling::fit(targets);
-        let seeds: Vec<u64> = (0..config.members as u64)
-            .map(|k| seed.wrapping_add(k))
+        let nets: Vec<Network> = (0..config.members as u64)
+            .map(|k| Network::new(layout.clone(), config.activation, seed.wrapping_add(k)))
             .collect();
-        let mut nets: Vec<Network> = seeds
-            .iter()
-            .map(|&s| Network::new(layout.clone(), config.activation, s))
-            .collect();
-        let data: Vec<FitData> = seeds
-            .iter()
-            .map(|&seed| FitData {
-                seed,
-                frames: *frames,
-                targets: *targets,
-                input: input.clone(),
-                scaling: scaling.clone(),
-            })
-            .collect();
-        let history = train(&mut nets, config, &data, validation, on_epoch)?;
-        let model = ConvModel {
+        let start = ConvModel {
             config: config.clone(),
             seed,
             nets,
             input,
             targets: scaling,
         };
-        Ok((model, history))
+        start.trained((frames, targets), validation, on_epoch)
+    }
+
+    /// This model's networks trained by its configuration's rule and
+    /// schedule on `frames` and `targets` (network `k` shuffled from
+    /// `seed + k`), its input and target scalings kept: the one training
+    /// step of [`Self::fit_with`] and [`Self::fine_tune_with`].
+    pub(crate) fn trained(
+        mut self,
+        (frames, targets): (&Frames, &Targets),
+        validation: Option<(Frames, Targets)>,
+        on_epoch: &mut dyn FnMut(&EpochReport),
+    ) -> Result<(ConvModel, TrainingHistory), ConvError> {
+        let data: Vec<FitData> = (0..self.nets.len() as u64)
+            .map(|k| FitData {
+                seed: self.seed.wrapping_add(k),
+                frames: *frames,
+                targets: *targets,
+                input: self.input.clone(),
+                scaling: self.targets.clone(),
+            })
+            .collect();
+        let history = train(&mut self.nets, &self.config, &data, validation, on_epoch)?;
+        Ok((self, history))
     }
 
     /// The N outputs for one frame (`height x width` grey pixels), in the

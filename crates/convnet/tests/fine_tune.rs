@@ -129,3 +129,20 @@ fn fine_tuning_refuses_other_networks_and_other_frames() {
         .unwrap_err();
     assert!(matches!(err, ConvError::Shape { .. }), "{err}");
 }
+
+#[test]
+fn fine_tuning_refuses_another_input_kind() {
+    let start = pretrained(ModelKind::ConvMlp);
+    let (pixels, targets) = data(12);
+    let frames = Frames::new(&pixels, 12, SIDE, SIDE).unwrap();
+    let targets = Targets::new(&targets, 12, 2).unwrap();
+    let mut hybrid = config(ModelKind::ConvMlp);
+    hybrid.input = tactrace_convnet::InputKind::PinsAndPixels;
+    let err = start
+        .fine_tune_with(&frames, &targets, &hybrid, 0, None, &mut |_| ())
+        .unwrap_err();
+    assert!(
+        matches!(err, ConvError::Config { field: "input", .. }),
+        "{err}"
+    );
+}

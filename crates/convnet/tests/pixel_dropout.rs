@@ -9,7 +9,9 @@
 mod common;
 
 use common::{moving_pair_frames, random, tiny_config, SIDE};
-use tactrace_convnet::{ConvConfig, ConvError, ConvModel, Frames, InputKind, ModelKind, Network};
+use tactrace_convnet::{
+    ConvConfig, ConvError, ConvModel, Frames, InputKind, ModelKind, Network, Targets,
+};
 
 /// Pin values a frame.
 const PINS: usize = 4;
@@ -17,15 +19,38 @@ const PINS: usize = 4;
 /// Frames whose bright pair moves with the index, random pins, and two
 /// targets: the first a function of the pins, the second the pair's
 /// column (the pixels').
-fn pins_and_pairs(count: usize) -> (Vec<u8>, Vec<f32>, Vec<f64>) {
-    let (pixels, pair) = moving_pair_frames(count);
-    let pins = random(count * PINS, 41);
-    let targets = pins
-        .chunks_exact(PINS)
-        .zip(pair.chunks_exact(2))
-        .flat_map(|(p, xy)| [2.0 * p[0] as f64 - p[1] as f64, xy[0]])
-        .collect();
-    (pixels, pins, targets)
+struct PinsAndPairs {
+    count: usize,
+    pixels: Vec<u8>,
+    pins: Vec<f32>,
+    targets: Vec<f64>,
+}
+
+impl PinsAndPairs {
+    fn new(count: usize) -> Self {
+        let (pixels, pair) = moving_pair_frames(count);
+        let pins = random(count * PINS, 41);
+        let targets = pins
+            .chunks_exact(PINS)
+            .zip(pair.chunks_exact(2))
+            .flat_map(|(p, xy)| [2.0 * p[0] as f64 - p[1] as f64, xy[0]])
+            .collect();
+        PinsAndPairs {
+            count,
+            pixels,
+            pins,
+            targets,
+        }
+    }
+
+    fn frames(&self) -> Frames<'_> {
+        let frames = Frames::new(&self.pixels, self.count, SIDE, SIDE).unwrap();
+        frames.with_pins(&self.pins, PINS).unwrap()
+    }
+
+    fn targets(&self) -> Targets<'_> {
+        Targets::new(&self.targets, self.count, 2).unwrap()
+    }
 }
 
 fn config(kind: ModelKind, pixel_dropout: f64) -> ConvConfig {
@@ -58,11 +83,9 @@ fn pixel_columns(net: &Network) -> Vec<f32> {
 
 #[test]
 fn masked_pixel_features_train_the_pins_alone() {
-    let count = 96;
-    let (pixels, pins, targets) = pins_and_pairs(count);
-    let frames = Frames::new(&pixels, count, SIDE, SIDE).unwrap();
-    let frames = frames.with_pins(&pins, PINS).unwrap();
-    let t = tactrace_convnet::Targets::new(&targets, count, 2).unwrap();
+    let set = PinsAndPairs::new(96);
+    let (count, pins, targets) = (set.count, &set.pins, &set.targets);
+    let (frames, t) = (set.frames(), set.targets());
     for kind in [ModelKind::ConvMlp, ModelKind::ConvDennn] {
         let (model, _) = ConvModel::fit(&frames, &t, &config(kind, 1.0), 5).unwrap();
         let net = model.network();
@@ -76,7 +99,7 @@ fn masked_pixel_features_train_the_pins_alone() {
         // Other pixels, the same pins: the same prediction.
         let dark = vec![0u8; count * SIDE * SIDE];
         let other = Frames::new(&dark, count, SIDE, SIDE).unwrap();
-        let other = other.with_pins(&pins, PINS).unwrap();
+        let other = other.with_pins(pins, PINS).unwrap();
         assert_eq!(
             model.predict_batch(&frames).unwrap(),
             model.predict_batch(&other).unwrap()
@@ -85,18 +108,16 @@ fn masked_pixel_features_train_the_pins_alone() {
         let first: Vec<f64> = targets.iter().step_by(2).copied().collect();
         let mean = first.iter().sum::<f64>() / count as f64;
         let spread = first.iter().map(|v| (v - mean).abs()).sum::<f64>() / count as f64;
-        let error = mae(&model, &frames, &targets, 0);
+        let error = mae(&model, &frames, targets, 0);
         assert!(error < 0.5 * spread, "{kind:?}: {error} against {spread}");
     }
 }
 
 #[test]
 fn a_fine_tune_with_the_pixels_on_starts_at_the_pin_models_figure() {
-    let count = 48;
-    let (pixels, pins, targets) = pins_and_pairs(count);
-    let frames = Frames::new(&pixels, count, SIDE, SIDE).unwrap();
-    let frames = frames.with_pins(&pins, PINS).unwrap();
-    let t = tactrace_convnet::Targets::new(&targets, count, 2).unwrap();
+    let set = PinsAndPairs::new(48);
+    let targets = &set.targets;
+    let (frames, t) = (set.frames(), set.targets());
     for kind in [ModelKind::ConvMlp, ModelKind::ConvDennn] {
         let (pin_model, _) = ConvModel::fit(&frames, &t, &config(kind, 1.0), 5).unwrap();
         let mut still = config(kind, 0.0);
@@ -118,8 +139,8 @@ fn a_fine_tune_with_the_pixels_on_starts_at_the_pin_models_figure() {
             .unwrap();
         assert!(pixel_columns(tuned.network()).iter().any(|&w| w != 0.0));
         let (before, after) = (
-            mae(&pin_model, &frames, &targets, 1),
-            mae(&tuned, &frames, &targets, 1),
+            mae(&pin_model, &frames, targets, 1),
+            mae(&tuned, &frames, targets, 1),
         );
         assert!(after < 0.6 * before, "{kind:?}: column {before} -> {after}");
     }
@@ -127,11 +148,8 @@ fn a_fine_tune_with_the_pixels_on_starts_at_the_pin_models_figure() {
 
 #[test]
 fn pixel_dropout_is_seeded_recorded_and_checked() {
-    let count = 32;
-    let (pixels, pins, targets) = pins_and_pairs(count);
-    let frames = Frames::new(&pixels, count, SIDE, SIDE).unwrap();
-    let frames = frames.with_pins(&pins, PINS).unwrap();
-    let t = tactrace_convnet::Targets::new(&targets, count, 2).unwrap();
+    let set = PinsAndPairs::new(32);
+    let (frames, t) = (set.frames(), set.targets());
     let fit = |c: &ConvConfig, threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -109,7 +109,7 @@ fn masked_pixel_features_train_the_pins_alone() {
         let mean = first.iter().sum::<f64>() / count as f64;
         let spread = first.iter().map(|v| (v - mean).abs()).sum::<f64>() / count as f64;
         let error = mae(&model, &frames, targets, 0);
-        assert!(error < 0.5 * spread, "{kind:?}: {error} against {spread}");
+        assert!(error < 0.1 * spread, "{kind:?}: {error} against {spread}");
     }
 }
 
@@ -142,7 +142,7 @@ fn a_fine_tune_with_the_pixels_on_starts_at_the_pin_models_figure() {
             mae(&pin_model, &frames, targets, 1),
             mae(&tuned, &frames, targets, 1),
         );
-        assert!(after < 0.6 * before, "{kind:?}: column {before} -> {after}");
+        assert!(after < 0.2 * before, "{kind:?}: column {before} -> {after}");
     }
 }
 

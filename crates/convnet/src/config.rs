@@ -230,6 +230,16 @@ pub struct ConvConfig {
     /// JSON) or `pins_and_pixels`.
     #[serde(default, skip_serializing_if = "InputKind::is_pixels")]
     pub input: InputKind,
+    /// Pins and pixels only: the probability that a training frame's
+    /// pixel features (the last convolution's whole output, as the first
+    /// dense layer reads it) are all set to 0, so that the network must
+    /// also predict from the pins alone (docs/learning.md, "Leaning on
+    /// the pins"); kept features are not rescaled. 1 masks them in every
+    /// frame and starts their weights in the dense layer at zero: a pin
+    /// model, which `train --init` can then fine-tune with the pixels on,
+    /// starting at its figure. 0, the default, is off and left out.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub pixel_dropout: f64,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -291,6 +301,7 @@ impl ConvConfig {
             dense_dropout: 0.0,
             channel_dropout: 0.0,
             input: InputKind::Pixels,
+            pixel_dropout: 0.0,
         }
     }
 
@@ -348,6 +359,7 @@ impl ConvConfig {
                 return Err(config_error(field, format!("{p} is not in [0, 0.95)")));
             }
         }
+        self.check_pixel_dropout()?;
         if !(self.weight_decay >= 0.0 && self.weight_decay.is_finite()) {
             return Err(config_error(
                 "weight_decay",
@@ -355,6 +367,30 @@ impl ConvConfig {
             ));
         }
         self.ep.validate()
+    }
+
+    /// `pixel_dropout` in [0, 1], and above 0 only for a pins-and-pixels
+    /// network with convolutions (whose output is what it drops).
+    fn check_pixel_dropout(&self) -> Result<(), ConvError> {
+        let p = self.pixel_dropout;
+        if !(0.0..=1.0).contains(&p) {
+            return Err(config_error(
+                "pixel_dropout",
+                format!("{p} is not in [0, 1]"),
+            ));
+        }
+        if p > 0.0 && (self.input.is_pixels() || self.conv.is_empty()) {
+            return Err(config_error(
+                "pixel_dropout",
+                "needs input = \"pins_and_pixels\" and at least one convolution",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Whether any training frame draws a dropout mask.
+    pub(crate) fn drops_out(&self) -> bool {
+        self.dense_dropout > 0.0 || self.channel_dropout > 0.0 || self.pixel_dropout > 0.0
     }
 
     /// The step-size factor of epoch `epoch` (0-based): a half cosine from

@@ -84,13 +84,17 @@ impl ConvModel {
     /// This model's networks trained by its configuration's rule and
     /// schedule on `frames` and `targets` (network `k` shuffled from
     /// `seed + k`), its input and target scalings kept: the one training
-    /// step of [`Self::fit_with`] and [`Self::fine_tune_with`].
+    /// step of [`Self::fit_with`] and [`Self::fine_tune_with`]. With
+    /// `pixel_dropout = 1` the pixel features' weights are zeroed first.
     pub(crate) fn trained(
         mut self,
         (frames, targets): (&Frames, &Targets),
         validation: Option<(Frames, Targets)>,
         on_epoch: &mut dyn FnMut(&EpochReport),
     ) -> Result<(ConvModel, TrainingHistory), ConvError> {
+        for net in &mut self.nets {
+            crate::dropout::zero_masked_pixels(&mut net.params, &net.layout, &self.config);
+        }
         let data: Vec<FitData> = (0..self.nets.len() as u64)
             .map(|k| FitData {
                 seed: self.seed.wrapping_add(k),

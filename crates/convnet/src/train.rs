@@ -262,7 +262,7 @@ fn chunk_gradient(
         if config.input_noise > 0.0 {
             add_noise(x, config.input_noise as f32, mix(data.seed, epoch, i));
         }
-        if config.dense_dropout > 0.0 || config.channel_dropout > 0.0 {
+        if config.drops_out() {
             let key = mix(data.seed ^ DROPOUT_STREAM, epoch, i);
             dropout::draw(ws, &net.layout, config, (nb, b), key);
         }

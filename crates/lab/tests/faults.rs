@@ -379,15 +379,15 @@ fn an_arm_timeout_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
     assert!(stopped, "no stopl after the timeout: {lines:#?}");
 }
 
-#[test]
-fn a_protective_stop_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
-    // The move after step K's tap is refused by the controller: step K is
-    // recorded, nothing more is sent.
+/// The move after step K's tap is refused by the controller (its state
+/// read over `state`): step K is recorded, nothing more is sent.
+fn protective_stop_is_safe(state: StateInterface) {
     let normal = 1 + 3 * K + 2;
-    let (summary, run, lines) = hardware_run(
+    let (summary, run, lines) = hardware_run_on(
         FakeBehaviour::ProtectiveStopOnMove,
         normal,
         &fixture().frames,
+        state,
     );
     assert_safe_stop(&summary, &run.out, K + 1, "protective stop");
     assert!(summary.message.contains("the arm failed"), "{summary:?}");
@@ -395,17 +395,13 @@ fn a_protective_stop_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
 }
 
 #[test]
+fn a_protective_stop_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
+    protective_stop_is_safe(StateInterface::Realtime);
+}
+
+#[test]
 fn a_protective_stop_read_over_rtde_stops_safely_and_sends_no_further_move() {
-    let normal = 1 + 3 * K + 2;
-    let (summary, run, lines) = hardware_run_on(
-        FakeBehaviour::ProtectiveStopOnMove,
-        normal,
-        &fixture().frames,
-        StateInterface::Rtde,
-    );
-    assert_safe_stop(&summary, &run.out, K + 1, "protective stop");
-    assert!(summary.message.contains("the arm failed"), "{summary:?}");
-    assert_eq!(moves(&lines).0, normal + 1, "{lines:#?}");
+    protective_stop_is_safe(StateInterface::Rtde);
 }
 
 #[test]

@@ -9,58 +9,8 @@
 mod util;
 use image::{GrayImage, Luma, Rgb, RgbImage};
 use std::path::Path;
+use tactrace_testdata::layouts::{hex_sensor, ring_sensor, SyntheticSensor};
 use util::{tactrace, TempDir};
-
-/// A synthetic sensor: frame size, rest pins, pin radius and rim annulus.
-struct Sensor {
-    size: u32,
-    centre: [f64; 2],
-    rest: Vec<[f64; 2]>,
-    pin_radius: f64,
-    rim: [f64; 2],
-}
-
-/// 331 pins: a centre pin and rings k = 1..=10 of 6k pins, 4.8 px apart.
-fn rings() -> Sensor {
-    let centre = [63.6, 63.3];
-    let mut rest = vec![centre];
-    for k in 1..=10 {
-        for j in 0..6 * k {
-            let t = std::f64::consts::TAU * f64::from(j) / f64::from(6 * k) + 0.05 * f64::from(k);
-            let r = 4.8 * f64::from(k);
-            rest.push([centre[0] + r * t.cos(), centre[1] + r * t.sin()]);
-        }
-    }
-    Sensor {
-        size: 128,
-        centre,
-        rest,
-        pin_radius: 1.45,
-        rim: [55.0, 62.0],
-    }
-}
-
-/// 127 pins on a hexagonal lattice of spacing 14 px.
-fn lattice() -> Sensor {
-    let centre = [128.4, 127.7];
-    let mut rest = Vec::new();
-    for q in -6i32..=6 {
-        for r in -6i32..=6 {
-            if (q + r).abs() <= 6 {
-                let x = centre[0] + 14.0 * (f64::from(q) + 0.5 * f64::from(r));
-                let y = centre[1] + 14.0 * 0.75f64.sqrt() * f64::from(r);
-                rest.push([x, y]);
-            }
-        }
-    }
-    Sensor {
-        size: 256,
-        centre,
-        rest,
-        pin_radius: 3.4,
-        rim: [118.0, 126.0],
-    }
-}
 
 /// A small deterministic generator (no seed file, no dependency).
 struct Lcg(u64);
@@ -80,7 +30,7 @@ impl Lcg {
 
 /// Tap `k`'s pins: a smooth push away from a random contact point (tap 0
 /// and every fourth tap barely touch), and its labels.
-fn tap(s: &Sensor, rng: &mut Lcg, k: usize) -> (Vec<[f64; 2]>, [f64; 2]) {
+fn tap(s: &SyntheticSensor, rng: &mut Lcg, k: usize) -> (Vec<[f64; 2]>, [f64; 2]) {
     let scale = s.rim[0] / 55.0;
     let (r, t) = (rng.range(0.0, 0.5 * s.rim[0]), rng.range(-3.1, 3.1));
     let at = [s.centre[0] + r * t.cos(), s.centre[1] + r * t.sin()];
@@ -99,7 +49,7 @@ fn tap(s: &Sensor, rng: &mut Lcg, k: usize) -> (Vec<[f64; 2]>, [f64; 2]) {
 }
 
 /// The binary frame of `pins` (white pins and rim arcs on black).
-fn render(s: &Sensor, pins: &[[f64; 2]]) -> GrayImage {
+fn render(s: &SyntheticSensor, pins: &[[f64; 2]]) -> GrayImage {
     GrayImage::from_fn(s.size, s.size, |x, y| {
         let (x, y) = (f64::from(x), f64::from(y));
         let on_pin = pins
@@ -113,7 +63,7 @@ fn render(s: &Sensor, pins: &[[f64; 2]]) -> GrayImage {
 }
 
 /// `n` taps of `s` as frames/image_K.png and targets.csv in `dir`.
-fn write_set(s: &Sensor, dir: &Path, n: usize) {
+fn write_set(s: &SyntheticSensor, dir: &Path, n: usize) {
     let frames = dir.join("frames");
     std::fs::create_dir_all(&frames).unwrap();
     let mut csv = String::from("sensor_image,pose_2,pose_6\n");
@@ -203,7 +153,7 @@ fn check_counts(m: &serde_json::Value, n: usize, pins: usize) {
 #[test]
 fn inspect_on_a_ring_sensor_writes_a_sensor_file_import_reads_with_no_reference() {
     let tmp = TempDir::new("rings");
-    let s = rings();
+    let s = ring_sensor();
     write_set(&s, &tmp.join("set"), 40);
     let (text, m) = inspect_and_import(&tmp, 40);
     assert!(text.contains("pins = 331"), "{text}");
@@ -226,7 +176,7 @@ fn inspect_on_a_ring_sensor_writes_a_sensor_file_import_reads_with_no_reference(
 #[test]
 fn inspect_on_a_lattice_sensor_writes_a_sensor_file_import_reads_with_no_reference() {
     let tmp = TempDir::new("lattice");
-    write_set(&lattice(), &tmp.join("set"), 30);
+    write_set(&hex_sensor(), &tmp.join("set"), 30);
     let (text, m) = inspect_and_import(&tmp, 30);
     assert!(text.contains("pins = 127"), "{text}");
     assert!(text.contains("layout = \"hexagonal\""), "{text}");

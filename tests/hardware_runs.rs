@@ -3,20 +3,23 @@
 //! keeps `OUT.partial/trajectory.csv` with whole rows and exits 130 / 143;
 //! a fault on the way to the start exits 1 and a start too far exits 2,
 //! nothing moved; a simulation command keeps the default Ctrl-C.
+#[path = "../crates/lab/tests/common/fake_rig.rs"]
+mod fake_rig;
 mod util;
+
+use fake_rig::{fake_ur5_above, lines_after_hang_up, moves, rig_file};
 
 use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
-use tactrace_arm::Workspace;
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_hw::{
     FakeBehaviour, FakeUrController, FakeUrOptions, PreprocessConfig, StateInterface,
 };
 use tactrace_lab::follow::SimFollowConfig;
-use tactrace_lab::hardware::{FrameSourceConfig, HardwareConfig, HardwareStart};
+use tactrace_lab::hardware::{FrameSourceConfig, HardwareConfig};
 use util::{tactrace, TempDir};
 
 /// A trained model (`m`) and a camera folder (`cam`: the reference, then
@@ -72,22 +75,14 @@ fn fixture() -> &'static Fixture {
 fn fake(speed_mm_s: f64, dx_mm: f64, behaviour: FakeBehaviour) -> FakeUrController {
     let (x, y, angle) = fixture().edge;
     let height = SimFollowConfig::default().rig.tap.height_mm;
-    FakeUrController::start(FakeUrOptions {
-        start: [
-            (x + dx_mm) / 1000.0,
-            y / 1000.0,
-            (height + 5.0) / 1000.0,
-            0.0,
-            0.0,
-            angle.to_radians(),
-        ],
+    let options = FakeUrOptions {
         speed_mm_s,
         behaviour,
         state: StateInterface::Rtde,
         lifetime: Duration::from_secs(40),
         ..FakeUrOptions::default()
-    })
-    .unwrap()
+    };
+    fake_ur5_above([x + dx_mm, y, height], angle, options)
 }
 
 /// `rig.toml` in `dir` for `fake`: the camera looping over the fixture's
@@ -95,33 +90,17 @@ fn fake(speed_mm_s: f64, dx_mm: f64, behaviour: FakeBehaviour) -> FakeUrControll
 /// simulated rig's tap, blob and loop settings, a workspace of +-150 mm
 /// around the start.
 fn write_rig(dir: &Path, fake: &FakeUrController) {
-    let (x, y, angle) = fixture().edge;
-    let sim = SimFollowConfig::default();
+    let cam = fixture().dir.join("cam");
     let mut arm = fake.config();
     arm.timeout_s = 2.0;
     let cfg = HardwareConfig {
-        arm,
         camera: FrameSourceConfig::Folder {
-            path: fixture().dir.join("cam"),
+            path: cam.clone(),
             looping: true,
             preprocessed: true,
         },
-        sensor: None,
         preprocess: PreprocessConfig::default(),
-        workspace: Workspace {
-            min: [x - 150.0, y - 150.0, -15.0],
-            max: [x + 150.0, y + 150.0, 20.0],
-            ..Workspace::default()
-        },
-        start: HardwareStart {
-            x_mm: x,
-            y_mm: y,
-            angle_deg: angle,
-        },
-        tap: sim.rig.tap,
-        blob: sim.rig.blob.clone(),
-        controller: sim.controller.clone(),
-        follow: sim.follow.clone(),
+        ..rig_file(arm, (&cam, true), fixture().edge, 150.0)
     };
     std::fs::write(dir.join("rig.toml"), toml::to_string(&cfg).unwrap()).unwrap();
 }
@@ -171,22 +150,6 @@ fn finish(mut child: Child) -> (std::process::ExitStatus, String) {
         }
         std::thread::sleep(Duration::from_millis(10));
     }
-}
-
-/// The `movel` count, and whether a `stopl` came after the last one.
-fn moves(lines: &[String]) -> (usize, bool) {
-    let count = lines.iter().filter(|l| l.contains("movel(")).count();
-    let last = lines.iter().rposition(|l| l.contains("movel("));
-    let stopped = last.is_some_and(|i| lines[i..].iter().any(|l| l.contains("stopl(")));
-    (count, stopped)
-}
-
-fn lines_after_hang_up(fake: &FakeUrController) -> Vec<String> {
-    let deadline = Instant::now() + Duration::from_secs(3);
-    while !fake.finished() && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    fake.received_lines()
 }
 
 /// Runs `follow --hardware` against a slow fake, sends `signals` once the

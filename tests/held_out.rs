@@ -26,6 +26,13 @@ fn validate(dir: &Path, args: &[&str]) -> Run {
     )
 }
 
+/// `validate` of `m` on `data`, scoring only the rows that
+/// `--val-fraction 0.25 --split-seed SPLIT_SEED` holds out.
+fn validate_held_out(dir: &Path, data: &str, split_seed: &str) -> Run {
+    let split = ["--val-fraction", "0.25", "--split-seed", split_seed];
+    validate(dir, &[&["--data", data], &split[..]].concat())
+}
+
 #[test]
 fn a_model_folder_records_the_rows_it_trained_on() {
     let t = TempDir::new("record");
@@ -93,17 +100,7 @@ fn validate_counts_the_rows_seen_in_training_in_any_copy() {
 fn validate_val_fraction_scores_exactly_the_held_out_rows() {
     let t = TempDir::new("heldout");
     let trained = dataset_and_held_out_model(&t.0);
-    let r = validate(
-        &t.0,
-        &[
-            "--data",
-            "ds",
-            "--val-fraction",
-            "0.25",
-            "--split-seed",
-            "3",
-        ],
-    );
+    let r = validate_held_out(&t.0, "ds", "3");
     ok(&r, "validate held out");
     let v = json(&r.stdout);
     assert_eq!(v["samples"], 15, "{v}");
@@ -119,17 +116,7 @@ fn validate_val_fraction_scores_exactly_the_held_out_rows() {
 
     // Another split, another dataset, a model without a held-out part:
     // refused (exit 2), saying why.
-    let r = validate(
-        &t.0,
-        &[
-            "--data",
-            "ds",
-            "--val-fraction",
-            "0.25",
-            "--split-seed",
-            "4",
-        ],
-    );
+    let r = validate_held_out(&t.0, "ds", "4");
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(
         r.stderr
@@ -138,17 +125,7 @@ fn validate_val_fraction_scores_exactly_the_held_out_rows() {
         r.stderr
     );
     ok(&collect(&t.0, "20", &["--seed", "9"], "other"), "collect");
-    let r = validate(
-        &t.0,
-        &[
-            "--data",
-            "other",
-            "--val-fraction",
-            "0.25",
-            "--split-seed",
-            "3",
-        ],
-    );
+    let r = validate_held_out(&t.0, "other", "3");
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(
         r.stderr
@@ -195,17 +172,7 @@ fn older_model_folders_load_and_say_unknown() {
         r.stderr
     );
     // The split is recomputed: the same 15 rows.
-    let r = validate(
-        &t.0,
-        &[
-            "--data",
-            "ds",
-            "--val-fraction",
-            "0.25",
-            "--split-seed",
-            "3",
-        ],
-    );
+    let r = validate_held_out(&t.0, "ds", "3");
     ok(&r, "validate held out");
     assert_eq!(json(&r.stdout)["samples"], 15);
     // A damaged record is bad input, not ignored.

@@ -4,7 +4,10 @@
 //! binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{collect, expect_code, import_labelled, real_data, real_paths, tactrace, twin, TempDir};
+use util::{
+    collect, expect_code, expect_refusal, import_labelled, real_data, real_paths, tactrace, twin,
+    TempDir,
+};
 
 /// A dataset `ds` of 40 simulated taps and a model `m` trained on it
 /// (2 epochs), in `dir`.
@@ -44,12 +47,11 @@ fn training_refuses_too_few_samples_before_any_work() {
     let r = collect(&t.0, "1", &[], "one");
     expect_code(&r, 0, "collect");
     let r = tactrace(&t.0, &["train", "--train", "one", "--out", "m"]);
-    expect_code(&r, 2, "train on 1 sample");
-    assert!(
-        r.stderr
-            .contains("too few training samples (1): at least 36"),
-        "{}",
-        r.stderr
+    expect_refusal(
+        &r,
+        2,
+        "train on 1 sample",
+        "too few training samples (1): at least 36",
     );
     assert!(r.stderr.contains("n_components = 35"), "{}", r.stderr);
     assert!(!t.join("m").exists());
@@ -190,19 +192,9 @@ fn a_label_column_named_twice_is_refused() {
     bristol_targets(&t.join("targets.csv"), Some("pose_2"), 5);
     std::fs::create_dir_all(t.join("frames")).unwrap();
     let r = import_labelled(&t.0, ["frames", "targets.csv", "ref.png"], &[], "x");
-    expect_code(&r, 2, "import");
-    assert!(
-        r.stderr.contains("`pose_2` appears 2 times"),
-        "{}",
-        r.stderr
-    );
+    expect_refusal(&r, 2, "import", "`pose_2` appears 2 times");
     let r = twin(&t.0, ["targets.csv", "ref.png"], &[], "x");
-    expect_code(&r, 2, "twin");
-    assert!(
-        r.stderr.contains("`pose_2` appears 2 times"),
-        "{}",
-        r.stderr
-    );
+    expect_refusal(&r, 2, "twin", "`pose_2` appears 2 times");
     assert!(!t.join("x").exists());
 }
 
@@ -218,12 +210,7 @@ fn a_wrong_column_lists_every_column_and_the_nearest() {
         &["--r-column", "pose2"],
         "x",
     );
-    expect_code(&r, 2, "wrong column");
-    assert!(
-        r.stderr.contains("(did you mean `pose_2`?)"),
-        "{}",
-        r.stderr
-    );
+    expect_refusal(&r, 2, "wrong column", "(did you mean `pose_2`?)");
     for k in 1..=6 {
         for c in [format!("`pose_{k}`"), format!("`move_{k}`")] {
             assert!(r.stderr.contains(&c), "{c}: {}", r.stderr);
@@ -492,8 +479,7 @@ fn a_failed_follow_run_is_in_out_as_the_docs_say() {
             "run",
         ],
     );
-    expect_code(&r, 1, "lost contact");
-    assert!(r.stderr.contains("(lost contact)"), "{}", r.stderr);
+    expect_refusal(&r, 1, "lost contact", "(lost contact)");
     assert!(t.join("run/metrics.json").is_file() && t.join("run/trajectory.csv").is_file());
     assert!(!t.join("run.partial").exists());
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -6,8 +6,8 @@
 mod util;
 use std::path::Path;
 use util::{
-    collect, expect_code, follow_disk_replay, import_real, json, real_paths, tactrace, train,
-    TempDir,
+    collect, expect_code, expect_refusal, follow_disk_replay, import_real, json, real_paths,
+    tactrace, train, TempDir,
 };
 
 /// Side of the synthetic frames, px.
@@ -273,11 +273,11 @@ fn follow_in_the_real_frame_world_with_an_image_model() {
             "follow", "--model", "syn-m", "--shape", "disk", "--steps", "3", "--out", "sim",
         ],
     );
-    expect_code(&r, 2, "follow with a model of other frames");
-    assert!(
-        r.stderr.contains("trained on frames of 16 x 16 px"),
-        "{}",
-        r.stderr
+    expect_refusal(
+        &r,
+        2,
+        "follow with a model of other frames",
+        "trained on frames of 16 x 16 px",
     );
 }
 
@@ -287,7 +287,11 @@ fn follow_in_the_real_frame_world_with_an_image_model() {
 fn reproduce_image_model_needs_real_frames() {
     let t = TempDir::new("issue22-reproduce");
     let r = tactrace(&t.0, &["reproduce", "--image-model", "--out", "rep"]);
-    expect_code(&r, 2, "reproduce --image-model without --real");
-    assert!(r.stderr.contains("give --real DIR"), "{}", r.stderr);
+    expect_refusal(
+        &r,
+        2,
+        "reproduce --image-model without --real",
+        "give --real DIR",
+    );
     assert!(!t.join("rep").exists());
 }

@@ -2,7 +2,7 @@
 //! bug it pins down. They run the real binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{expect_code, import_labelled, tactrace, tactrace_head, twin, TempDir};
+use util::{expect_code, expect_refusal, import_labelled, tactrace, tactrace_head, twin, TempDir};
 
 /// A small dataset `ds` and a model `m` trained on it, in `dir`.
 fn dataset_and_model(dir: &Path) {
@@ -91,8 +91,7 @@ fn follow_refuses_an_existing_out_without_force() {
     std::fs::write(t.join("run/mine.txt"), "keep me").unwrap();
     let before = std::fs::read(t.join("run/trajectory.csv")).unwrap();
     let r = tactrace(&t.0, &[&follow[..], &["--steps", "5"]].concat());
-    expect_code(&r, 2, "follow into an existing --out");
-    assert!(r.stderr.contains("--force"), "{}", r.stderr);
+    expect_refusal(&r, 2, "follow into an existing --out", "--force");
     assert_eq!(std::fs::read(t.join("run/trajectory.csv")).unwrap(), before);
     assert!(t.join("run/mine.txt").exists());
     assert!(!t.join("run.partial").exists());
@@ -118,8 +117,7 @@ fn reproduce_refuses_an_existing_out_without_force() {
     std::fs::write(t.join("rep/mine.txt"), "keep me").unwrap();
     let args = ["reproduce", "--config", "tiny.toml", "--out", "rep"];
     let r = tactrace(&t.0, &args);
-    expect_code(&r, 2, "reproduce into an existing --out");
-    assert!(r.stderr.contains("--force"), "{}", r.stderr);
+    expect_refusal(&r, 2, "reproduce into an existing --out", "--force");
     assert_eq!(
         std::fs::read_to_string(t.join("rep/mine.txt")).unwrap(),
         "keep me"
@@ -203,8 +201,7 @@ fn a_missing_contour_csv_is_not_an_unknown_shape() {
         r.stderr
     );
     let r = render("hexagon");
-    expect_code(&r, 2, "hexagon");
-    assert!(r.stderr.contains("unknown shape `hexagon`"), "{}", r.stderr);
+    expect_refusal(&r, 2, "hexagon", "unknown shape `hexagon`");
     assert!(!t.join("a.png").exists());
 }
 
@@ -341,11 +338,11 @@ fn import_with_a_bad_reference_fails_fast_naming_it() {
         "good reference",
     );
     let r = import("noise.png", "bad");
-    expect_code(&r, 2, "noise as the reference");
-    assert!(
-        r.stderr.contains("noise.png: not an undeformed frame"),
-        "{}",
-        r.stderr
+    expect_refusal(
+        &r,
+        2,
+        "noise as the reference",
+        "noise.png: not an undeformed frame",
     );
     assert!(r.stderr.contains("--reference"), "{}", r.stderr);
     assert!(!t.join("bad").exists());
@@ -356,11 +353,11 @@ fn import_with_a_bad_reference_fails_fast_naming_it() {
         &["--dz-column", "none", "--shear-columns", "none"],
         "twin",
     );
-    expect_code(&r, 2, "twin with noise as the reference");
-    assert!(
-        r.stderr.contains("noise.png: not an undeformed frame"),
-        "{}",
-        r.stderr
+    expect_refusal(
+        &r,
+        2,
+        "twin with noise as the reference",
+        "noise.png: not an undeformed frame",
     );
     assert!(!t.join("twin").exists());
 }
@@ -380,12 +377,11 @@ fn a_json_targets_file_is_not_dumped_as_columns() {
     .unwrap();
     std::fs::write(t.join("ref.png"), b"unused").unwrap();
     let r = import_labelled(&t.0, ["frames", "targets.json", "ref.png"], &[], "x");
-    expect_code(&r, 2, "JSON targets");
-    assert!(
-        r.stderr
-            .contains("targets.json: not a CSV with the label columns"),
-        "{}",
-        r.stderr
+    expect_refusal(
+        &r,
+        2,
+        "JSON targets",
+        "targets.json: not a CSV with the label columns",
     );
     assert!(
         r.stderr.len() < 600,
@@ -420,8 +416,7 @@ fn an_unreachable_contour_prints_no_debug_struct() {
         &t.0,
         &["follow", "--model", "m", "--shape", "far.csv", "--out", "r"],
     );
-    expect_code(&r, 2, "far.csv");
-    assert!(r.stderr.contains("cannot reach"), "{}", r.stderr);
+    expect_refusal(&r, 2, "far.csv", "cannot reach");
     assert!(
         !r.stderr.contains('{') && !r.stderr.contains("Pose"),
         "{}",
@@ -445,8 +440,12 @@ fn an_output_that_cannot_be_written_exits_1() {
             "validate", "--model", "m", "--data", "ds", "--plots", "plots", "--force",
         ],
     );
-    expect_code(&r, 1, "a figure that cannot be written");
-    assert!(r.stderr.contains("predicted_vs_true.svg"), "{}", r.stderr);
+    expect_refusal(
+        &r,
+        1,
+        "a figure that cannot be written",
+        "predicted_vs_true.svg",
+    );
     // A file where a folder should be.
     std::fs::write(t.join("afile"), "x").unwrap();
     let r = tactrace(
@@ -483,8 +482,7 @@ fn sensor_pins_warns_when_the_count_is_not_the_sensors() {
     expect_code(&r, 0, "render");
     let pins = |args: &[&str]| tactrace(&t.0, &[&["sensor", "pins"], args].concat());
     let r = pins(&["noise.png"]);
-    expect_code(&r, 0, "noise, warned");
-    assert!(r.stderr.contains("warning: noise.png"), "{}", r.stderr);
+    expect_refusal(&r, 0, "noise, warned", "warning: noise.png");
     assert!(r.stderr.contains("127 pins"), "{}", r.stderr);
     assert!(r.stdout.lines().count() > 1, "the blobs are still printed");
     let r = pins(&["noise.png", "--strict"]);
@@ -533,8 +531,7 @@ fn bench_real_frames_without_model_is_bad_input() {
     let t = TempDir::new("benchreal");
     std::fs::create_dir_all(t.join("frames")).unwrap();
     let r = tactrace(&t.0, &["bench", "--taps", "1", "--real-frames", "frames"]);
-    expect_code(&r, 2, "bench --real-frames");
-    assert!(r.stderr.contains("--model"), "{}", r.stderr);
+    expect_refusal(&r, 2, "bench --real-frames", "--model");
     assert!(r.stdout.is_empty(), "{}", r.stdout);
 }
 

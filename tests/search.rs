@@ -5,7 +5,7 @@ mod util;
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use util::{expect_code, tactrace, TempDir};
+use util::{expect_code, expect_refusal, tactrace, TempDir};
 
 /// The shipped PDenNN space, as an absolute path.
 fn space() -> String {
@@ -172,8 +172,7 @@ fn search_killed_and_resumed_gives_the_uninterrupted_trials() {
     assert!((4..16).contains(&kept), "{kept} trials kept");
     // Without --resume (or --force) the stopped search's trials are kept.
     let r = tactrace(&t.0, &args);
-    expect_code(&r, 2, "a fresh start over a stopped search");
-    assert!(r.stderr.contains("--resume"), "{}", r.stderr);
+    expect_refusal(&r, 2, "a fresh start over a stopped search", "--resume");
     // Other settings are refused.
     let mut other = search_args(&space, "k", "16", "80");
     other.extend(["--seed", "9", "--resume"]);
@@ -241,12 +240,11 @@ fn search_on_ray_without_its_interpreter_is_refused() {
     let mut args = search_args(&space, "s", "2", "1");
     args.extend(["--executor", "ray", "--python", "/no/such/python3"]);
     let r = tactrace(&t.0, &args);
-    expect_code(&r, 2, "search --executor ray --python /no/such/python3");
-    assert!(
-        r.stderr
-            .contains("cannot start the Python interpreter /no/such/python3"),
-        "{}",
-        r.stderr
+    expect_refusal(
+        &r,
+        2,
+        "search --executor ray --python /no/such/python3",
+        "cannot start the Python interpreter /no/such/python3",
     );
     assert!(!t.join("s").exists() && !t.join("s.partial").exists());
 }
@@ -268,12 +266,11 @@ fn a_search_whose_every_trial_diverged_fails_without_a_best() {
     dataset(&t.0);
     let space = output_rate_space(&t.0, "low = 1e6\nhigh = 1e8\nlog = true\n");
     let r = tactrace(&t.0, &search_args(&space, "s", "3", "3"));
-    expect_code(&r, 1, "a search whose every trial diverged");
-    assert!(
-        r.stderr
-            .contains("every one of the 3 search trials failed (3 diverged"),
-        "{}",
-        r.stderr
+    expect_refusal(
+        &r,
+        1,
+        "a search whose every trial diverged",
+        "every one of the 3 search trials failed (3 diverged",
     );
     assert!(!r.stdout.contains("best:"), "{}", r.stdout);
     assert!(!t.join("s").exists());
@@ -377,8 +374,7 @@ fn search_of_an_image_model_on_its_frames() {
     let mut args = search_args(&space, "pins", "3", "2");
     args.extend(["--model", "conv-dennn"]);
     let r = tactrace(&t.0, &args);
-    expect_code(&r, 2, "an image search on pins");
-    assert!(r.stderr.contains("pin displacements only"), "{}", r.stderr);
+    expect_refusal(&r, 2, "an image search on pins", "pin displacements only");
     // A field the image model does not have is refused.
     std::fs::write(
         t.join("bad.toml"),
@@ -389,6 +385,10 @@ fn search_of_an_image_model_on_its_frames() {
     args[2] = "frames";
     args.extend(["--model", "conv-dennn"]);
     let r = tactrace(&t.0, &args);
-    expect_code(&r, 2, "an image search of a field it lacks");
-    assert!(r.stderr.contains("no such setting"), "{}", r.stderr);
+    expect_refusal(
+        &r,
+        2,
+        "an image search of a field it lacks",
+        "no such setting",
+    );
 }

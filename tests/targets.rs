@@ -38,7 +38,7 @@ fn three_targets_import_train_validate_and_import_like() {
     part_csv(&data, &t.join("score.csv"), &[0], 30);
     std::fs::write(t.join("small.toml"), SMALL).unwrap();
     let s = |p: &Path| p.display().to_string();
-    let (frames, init) = (s(&data.join("frames")), s(&data.join("frames/init_0.png")));
+    let init = s(&data.join("frames/init_0.png"));
     let r = import_fit(
         &t,
         &data,
@@ -64,20 +64,7 @@ fn three_targets_import_train_validate_and_import_like() {
     assert_eq!(fit.len(), 60);
 
     // Another split with the same reference, detector and targets.
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            &frames,
-            "--targets",
-            "score.csv",
-            "--like",
-            "fit",
-            "--out",
-            "score",
-        ],
-    );
+    let r = import_labels(&t, &data, "score.csv", &["--like", "fit"], "score");
     ok(&r, "import --like");
     let score = tactrace_store::read_dataset(&t.join("score")).unwrap();
     assert_eq!(score.meta.target_columns, fit.meta.target_columns);
@@ -92,21 +79,12 @@ fn three_targets_import_train_validate_and_import_like() {
     );
     assert_eq!(score.len(), 30);
     // --like takes the reference and targets from the dataset: not both.
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            &frames,
-            "--targets",
-            "score.csv",
-            "--like",
-            "fit",
-            "--target",
-            "pose_2:mm",
-            "--out",
-            "x",
-        ],
+    let r = import_labels(
+        &t,
+        &data,
+        "score.csv",
+        &["--like", "fit", "--target", "pose_2:mm"],
+        "x",
     );
     assert_eq!(r.code, 2, "{}", r.stderr);
 
@@ -201,20 +179,7 @@ fn three_targets_import_train_validate_and_import_like() {
     assert!(r.stderr.contains("not an edge pose"), "{}", r.stderr);
     assert!(!t.join("run").exists());
     // A model of other targets is scored on a dataset of the same targets only.
-    let r = tactrace(
-        &t.0,
-        &[
-            "import",
-            "--frames",
-            &frames,
-            "--targets",
-            "score.csv",
-            "--reference",
-            &init,
-            "--out",
-            "edge",
-        ],
-    );
+    let r = import_labels(&t, &data, "score.csv", &["--reference", &init], "edge");
     ok(&r, "import (edge)");
     let r = tactrace(&t.0, &["validate", "--model", "m-pdennn", "--data", "edge"]);
     assert_eq!(r.code, 2, "{}", r.stderr);
@@ -271,12 +236,18 @@ fn an_edge_model_folder_of_format_2_loads_and_scores_the_same() {
 /// `import` of `fit.csv` in `t` (frames and reference frame of the real
 /// set `data`) into `fit`, with `extra` arguments.
 fn import_fit(t: &TempDir, data: &Path, extra: &[&str]) -> Run {
-    let frames = data.join("frames").display().to_string();
     let init = data.join("frames/init_0.png").display().to_string();
-    let mut args = vec!["import", "--frames", &frames, "--targets", "fit.csv"];
-    args.extend(["--reference", &init]);
+    let extra = [&["--reference", &init], extra].concat();
+    import_labels(t, data, "fit.csv", &extra, "fit")
+}
+
+/// `import` of the real set's frames labelled in `labels` (a CSV in `t`)
+/// into `out`, with `extra` arguments (a reference, targets or `--like`).
+fn import_labels(t: &TempDir, data: &Path, labels: &str, extra: &[&str], out: &str) -> Run {
+    let frames = data.join("frames").display().to_string();
+    let mut args = vec!["import", "--frames", &frames, "--targets", labels];
     args.extend(extra);
-    args.extend(["--out", "fit"]);
+    args.extend(["--out", out]);
     tactrace(&t.0, &args)
 }
 

@@ -103,6 +103,17 @@ pub fn expect_code(run: &Run, code: i32, what: &str) {
     );
 }
 
+/// Asserts that `run` ended with exit `code` and that its stderr says
+/// `says` (a refusal that names its reason).
+pub fn expect_refusal(run: &Run, code: i32, what: &str, says: &str) {
+    expect_code(run, code, what);
+    assert!(
+        run.stderr.contains(says),
+        "{what}: stderr does not say {says:?}:\n{}",
+        run.stderr
+    );
+}
+
 /// Asserts that `run` succeeded (exit 0).
 pub fn ok(run: &Run, what: &str) {
     expect_code(run, 0, what);

@@ -8,21 +8,22 @@
 //! `trajectory.csv`, record `succeeded: false` in `metrics.json`, and on
 //! the UR5 send no move after the fault (only the retraction of the tap
 //! after a camera fault, only `stopl` after an arm fault).
+mod common;
+use common::fake_rig::{fake_ur5_above, moves, rig_file, wait_for_hang_up};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::Duration;
-use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, Workspace};
+use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose};
 use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
 use tactrace_hw::camera::v4l2::{CameraFormat, FakeDevice, StreamFormat, V4l2Source};
 use tactrace_hw::{
-    CameraSensor, FakeBehaviour, FakeUrController, FakeUrOptions, PreprocessConfig, StateInterface,
-    Ur5Arm,
+    CameraSensor, FakeBehaviour, FakeUrController, FakeUrOptions, StateInterface, Ur5Arm,
 };
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{
     follow_on_rig, perception_for, write_results, RunFolder, SimFollowConfig,
 };
-use tactrace_lab::hardware::{FrameSourceConfig, HardwareConfig, HardwareStart};
+use tactrace_lab::hardware::HardwareConfig;
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_lab::world::World;
 use tactrace_learn::{ModelKind, Preset};
@@ -308,57 +309,24 @@ fn fake_near(
     normal_moves: usize,
     state: StateInterface,
 ) -> FakeUrController {
-    FakeUrController::start(FakeUrOptions {
-        start: [
-            near.x / 1000.0,
-            near.y / 1000.0,
-            (near.z + 5.0) / 1000.0,
-            0.0,
-            0.0,
-            near.rz.to_radians(),
-        ],
+    let options = FakeUrOptions {
         behaviour,
         normal_moves,
         state,
-        lifetime: Duration::from_secs(20),
         ..FakeUrOptions::default()
-    })
-    .unwrap()
+    };
+    fake_ur5_above([near.x, near.y, near.z], near.rz, options)
 }
 
-/// A rig file for the fake arm and the camera replaying `frames`.
-fn rig_file(fake: &FakeUrController, frames: &Path) -> HardwareConfig {
-    let f = fixture();
-    let sim = SimFollowConfig::default();
-    let (x, y) = (f.start.x, f.start.y);
+/// A rig file for the fake arm and the camera replaying `frames` once,
+/// 8 steps.
+fn rig_at_start(fake: &FakeUrController, frames: &Path) -> HardwareConfig {
+    let start = fixture().start;
     let mut arm = fake.config();
     arm.timeout_s = 1.0;
-    let mut follow = sim.follow.clone();
-    follow.steps = Some(8);
-    HardwareConfig {
-        arm,
-        camera: FrameSourceConfig::Folder {
-            path: frames.to_path_buf(),
-            looping: false,
-            preprocessed: false,
-        },
-        sensor: None,
-        preprocess: PreprocessConfig::grayscale_only(),
-        workspace: Workspace {
-            min: [x - 60.0, y - 60.0, -15.0],
-            max: [x + 60.0, y + 60.0, 20.0],
-            ..Workspace::default()
-        },
-        start: HardwareStart {
-            x_mm: x,
-            y_mm: y,
-            angle_deg: f.start.rz,
-        },
-        tap: sim.rig.tap,
-        blob: sim.rig.blob.clone(),
-        controller: sim.controller.clone(),
-        follow,
-    }
+    let mut cfg = rig_file(arm, (frames, false), (start.x, start.y, start.rz), 60.0);
+    cfg.follow.steps = Some(8);
+    cfg
 }
 
 /// Follow on the fake UR5 (after `normal_moves` moves it behaves as
@@ -383,29 +351,17 @@ fn hardware_run_on(
     let f = fixture();
     let fake = fake_near(f.start, behaviour, normal_moves, state);
     let run = Run::new();
-    let world = World::Hardware(rig_file(&fake, frames)).open().unwrap();
+    let world = World::Hardware(rig_at_start(&fake, frames)).open().unwrap();
     let shape = Some(("disk", &f.disk));
     let hooks = tactrace_lab::follow::RunHooks::default();
     let res = tactrace_lab::follow::run(world, &f.model, shape, (&run.out, false), hooks).unwrap();
     // The driver has hung up: wait (bounded) until the fake has read all.
-    let deadline = std::time::Instant::now() + Duration::from_secs(3);
-    while !fake.finished() && std::time::Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(5));
-    }
     assert!(
-        fake.finished(),
+        wait_for_hang_up(&fake),
         "the fake controller did not see the driver leave"
     );
     let lines = fake.received_lines();
     (res.summary, run, lines)
-}
-
-/// The `movel` lines, and whether a `stopl` came after the last of them.
-fn moves(lines: &[String]) -> (usize, bool) {
-    let last_move = lines.iter().rposition(|l| l.contains("movel("));
-    let count = lines.iter().filter(|l| l.contains("movel(")).count();
-    let stop_after = last_move.is_some_and(|i| lines[i..].iter().any(|l| l.contains("stopl(")));
-    (count, stop_after)
 }
 
 // Moves on the rig: one to the start, then per step the tap down, the tap
@@ -423,15 +379,15 @@ fn an_arm_timeout_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
     assert!(stopped, "no stopl after the timeout: {lines:#?}");
 }
 
-#[test]
-fn a_protective_stop_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
-    // The move after step K's tap is refused by the controller: step K is
-    // recorded, nothing more is sent.
+/// The move after step K's tap is refused by the controller (its state
+/// read over `state`): step K is recorded, nothing more is sent.
+fn protective_stop_is_safe(state: StateInterface) {
     let normal = 1 + 3 * K + 2;
-    let (summary, run, lines) = hardware_run(
+    let (summary, run, lines) = hardware_run_on(
         FakeBehaviour::ProtectiveStopOnMove,
         normal,
         &fixture().frames,
+        state,
     );
     assert_safe_stop(&summary, &run.out, K + 1, "protective stop");
     assert!(summary.message.contains("the arm failed"), "{summary:?}");
@@ -439,17 +395,13 @@ fn a_protective_stop_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
 }
 
 #[test]
+fn a_protective_stop_on_the_fake_ur5_stops_safely_and_sends_no_further_move() {
+    protective_stop_is_safe(StateInterface::Realtime);
+}
+
+#[test]
 fn a_protective_stop_read_over_rtde_stops_safely_and_sends_no_further_move() {
-    let normal = 1 + 3 * K + 2;
-    let (summary, run, lines) = hardware_run_on(
-        FakeBehaviour::ProtectiveStopOnMove,
-        normal,
-        &fixture().frames,
-        StateInterface::Rtde,
-    );
-    assert_safe_stop(&summary, &run.out, K + 1, "protective stop");
-    assert!(summary.message.contains("the arm failed"), "{summary:?}");
-    assert_eq!(moves(&lines).0, normal + 1, "{lines:#?}");
+    protective_stop_is_safe(StateInterface::Rtde);
 }
 
 #[test]
@@ -506,7 +458,7 @@ fn a_v4l2_camera_unplugged_mid_run_stops_safely_and_keeps_the_steps_before() {
     // over RTDE) goes away after the reference and K taps.
     let f = fixture();
     let fake = fake_near(f.start, FakeBehaviour::Follow, 0, StateInterface::Rtde);
-    let cfg = rig_file(&fake, &f.frames);
+    let cfg = rig_at_start(&fake, &f.frames);
     let ur5 = Ur5Arm::connect(cfg.arm.clone()).unwrap();
     let mut arm = LimitedArm::new(ur5, cfg.workspace.clone(), LimitMode::Refuse);
     arm.move_to(cfg.start_pose()).unwrap();

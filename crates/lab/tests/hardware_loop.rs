@@ -3,18 +3,19 @@
 //! simulated run captured. Fed the same frames, the hardware path must
 //! command exactly the trajectory the simulated path commanded: the same
 //! pipeline runs on both rigs.
+mod common;
+use common::fake_rig::{fake_ur5_above, rig_file, write_replay_frames};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use tactrace_arm::{Pose, Workspace};
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_hw::{
-    FakeDashboard, FakeDashboardState, FakeUrController, FakeUrOptions, PreprocessConfig,
-    StateInterface,
+    FakeDashboard, FakeDashboardState, FakeUrController, FakeUrOptions, StateInterface,
 };
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::{follow_on_rig, perception_for, RunHooks, SimFollowConfig};
 use tactrace_lab::hardware::{
-    collect_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart, StopFlag,
+    collect_hardware, rig_check, FrameSourceConfig, HardwareConfig, StopFlag,
 };
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_lab::world::World;
@@ -61,49 +62,11 @@ fn trajectory(dir: &Path) -> String {
 /// The loopback fake controller with the tool 5 mm above `near`, serving
 /// its state on `state`.
 fn fake_near(near: Pose, state: StateInterface) -> FakeUrController {
-    FakeUrController::start(FakeUrOptions {
-        start: [
-            near.x / 1000.0,
-            near.y / 1000.0,
-            (near.z + 5.0) / 1000.0,
-            0.0,
-            0.0,
-            near.rz.to_radians(),
-        ],
+    let options = FakeUrOptions {
         state,
         ..FakeUrOptions::default()
-    })
-    .unwrap()
-}
-
-/// A rig file: the fake arm, the camera replaying `frames`, the simulated
-/// rig's tap and blob settings, a workspace around the start.
-fn rig_file(fake: &FakeUrController, frames: &Path, x: f64, y: f64, angle: f64) -> HardwareConfig {
-    let sim = SimFollowConfig::default();
-    HardwareConfig {
-        arm: fake.config(),
-        camera: FrameSourceConfig::Folder {
-            path: frames.to_path_buf(),
-            looping: false,
-            preprocessed: false,
-        },
-        sensor: None,
-        preprocess: PreprocessConfig::grayscale_only(),
-        workspace: Workspace {
-            min: [x - 60.0, y - 60.0, -15.0],
-            max: [x + 60.0, y + 60.0, 20.0],
-            ..Workspace::default()
-        },
-        start: HardwareStart {
-            x_mm: x,
-            y_mm: y,
-            angle_deg: angle,
-        },
-        tap: sim.rig.tap,
-        blob: sim.rig.blob.clone(),
-        controller: sim.controller.clone(),
-        follow: sim.follow.clone(),
-    }
+    };
+    fake_ur5_above([near.x, near.y, near.z], near.rz, options)
 }
 
 #[test]
@@ -164,7 +127,12 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
         let fake = fake_near(start, state);
         let hw = HardwareConfig {
             follow: follow.clone(),
-            ..rig_file(&fake, &frames, start.x, start.y, start.rz)
+            ..rig_file(
+                fake.config(),
+                (&frames, false),
+                (start.x, start.y, start.rz),
+                60.0,
+            )
         };
         assert_eq!(hw.arm.state, state);
         let hw_out = root.path().join(format!("hw-{state:?}"));
@@ -197,7 +165,12 @@ fn replayed_frames_on_the_fake_ur5_command_the_simulated_trajectory() {
     let fake = fake_near(start, StateInterface::Rtde);
     let dashboard =
         FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();
-    let mut hw = rig_file(&fake, &frames, start.x, start.y, start.rz);
+    let mut hw = rig_file(
+        fake.config(),
+        (&frames, false),
+        (start.x, start.y, start.rz),
+        60.0,
+    );
     hw.arm.dashboard_port = dashboard.port();
     let check = rig_check(&hw, Some(&model), None).unwrap();
     assert!(check.ready(), "{check:#?}");
@@ -241,11 +214,7 @@ fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
     // Replay order: the reference first, then the taps.
     let root = tempfile::tempdir().unwrap();
     let frames = scratch(&root, "collect-frames");
-    let mut files = simulated.frames.clone();
-    files.sort_by_key(|(name, _)| (name != "reference.png", name.clone()));
-    for (k, (_, png)) in files.iter().enumerate() {
-        std::fs::write(frames.join(format!("{k:05}.png")), png).unwrap();
-    }
+    write_replay_frames(&frames, &simulated.frames);
     let (edge, normal) = disk.at_arc_length(cfg.edge_arc_mm);
     let angle = normal.y.atan2(normal.x).to_degrees();
     let first = pose_at_edge(
@@ -256,7 +225,12 @@ fn a_collection_replayed_on_the_fake_ur5_gives_the_simulated_dataset() {
         sim.rig.tap.height_mm,
     );
     let fake = fake_near(first, StateInterface::Rtde);
-    let hw = rig_file(&fake, &frames, edge.x, edge.y, angle);
+    let hw = rig_file(
+        fake.config(),
+        (&frames, false),
+        (edge.x, edge.y, angle),
+        60.0,
+    );
     let real = collect_hardware(&hw, &cfg, "rig", &StopFlag::new(), |_| {}).unwrap();
     assert_eq!(real.data.targets, simulated.data.targets);
     assert_eq!(real.data.inputs, simulated.data.inputs);

@@ -5,22 +5,21 @@
 //! collection. Nothing moves on a bad state; a stop sends `stopl`; a
 //! follow run keeps its steps in `OUT.partial`; each failure has its kind
 //! and exit code.
+mod common;
+use common::fake_rig::{fake_ur5_above, lines_after_hang_up, moves, rig_file, write_replay_frames};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
-use std::time::{Duration, Instant};
-use tactrace_arm::{ArmError, Workspace};
+use std::time::Duration;
+use tactrace_arm::ArmError;
 use tactrace_geometry::{builtin_shape, BuiltinShape};
 use tactrace_hw::{
     FakeBehaviour, FakeDashboard, FakeDashboardState, FakeStateFault, FakeUrController,
-    FakeUrOptions, PreprocessConfig, StateInterface,
+    FakeUrOptions, StateInterface,
 };
 use tactrace_lab::collect::{collect, CollectConfig};
 use tactrace_lab::follow::SimFollowConfig;
 use tactrace_lab::follow::{run, RunHooks};
-use tactrace_lab::hardware::{
-    collect_hardware, rig_check, FrameSourceConfig, HardwareConfig, HardwareStart, StopFlag,
-    StopSignal,
-};
+use tactrace_lab::hardware::{collect_hardware, rig_check, HardwareConfig, StopFlag, StopSignal};
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_lab::world::World;
 use tactrace_lab::LabError;
@@ -56,11 +55,7 @@ fn fixture() -> &'static Fixture {
         let root = tempfile::tempdir().unwrap();
         let frames = root.path().join("frames");
         std::fs::create_dir_all(&frames).unwrap();
-        let mut files = got.frames.clone();
-        files.sort_by_key(|(name, _)| (name != "reference.png", name.clone()));
-        for (k, (_, png)) in files.iter().enumerate() {
-            std::fs::write(frames.join(format!("{k:05}.png")), png).unwrap();
-        }
+        write_replay_frames(&frames, &got.frames);
         let (edge, normal) = disk.at_arc_length(cfg.edge_arc_mm);
         let angle = normal.y.atan2(normal.x).to_degrees();
         Fixture {
@@ -77,77 +72,24 @@ fn fixture() -> &'static Fixture {
 /// tap height, turned by `angle` degrees; `options` for the rest.
 fn fake_at(x: f64, y: f64, angle: f64, options: FakeUrOptions) -> FakeUrController {
     let height = SimFollowConfig::default().rig.tap.height_mm;
-    FakeUrController::start(FakeUrOptions {
-        start: [
-            x / 1000.0,
-            y / 1000.0,
-            (height + 5.0) / 1000.0,
-            0.0,
-            0.0,
-            angle.to_radians(),
-        ],
-        lifetime: Duration::from_secs(20),
-        ..options
-    })
-    .unwrap()
+    fake_ur5_above([x, y, height], angle, options)
 }
 
-/// A rig file for `fake` at the fixture's edge, looping over its frames.
-fn rig_file(fake: &FakeUrController) -> HardwareConfig {
+/// A rig file for `fake` at the fixture's edge, looping over its frames,
+/// 8 steps.
+fn rig_at_edge(fake: &FakeUrController) -> HardwareConfig {
     let f = fixture();
-    let sim = SimFollowConfig::default();
-    let (x, y, angle) = f.edge;
     let mut arm = fake.config();
     arm.timeout_s = 1.0;
-    let mut follow = sim.follow.clone();
-    follow.steps = Some(8);
-    HardwareConfig {
-        arm,
-        camera: FrameSourceConfig::Folder {
-            path: f.frames.clone(),
-            looping: true,
-            preprocessed: false,
-        },
-        sensor: None,
-        preprocess: PreprocessConfig::grayscale_only(),
-        workspace: Workspace {
-            min: [x - 80.0, y - 80.0, -15.0],
-            max: [x + 80.0, y + 80.0, 20.0],
-            ..Workspace::default()
-        },
-        start: HardwareStart {
-            x_mm: x,
-            y_mm: y,
-            angle_deg: angle,
-        },
-        tap: sim.rig.tap,
-        blob: sim.rig.blob.clone(),
-        controller: sim.controller.clone(),
-        follow,
-    }
+    let mut cfg = rig_file(arm, (&f.frames, true), f.edge, 80.0);
+    cfg.follow.steps = Some(8);
+    cfg
 }
 
 /// The fake near the fixture's start.
 fn fake_near_start(options: FakeUrOptions) -> FakeUrController {
     let (x, y, angle) = fixture().edge;
     fake_at(x, y, angle, options)
-}
-
-/// Every URScript line the fake got, once the driver has hung up.
-fn lines_after_hang_up(fake: &FakeUrController) -> Vec<String> {
-    let deadline = Instant::now() + Duration::from_secs(3);
-    while !fake.finished() && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    fake.received_lines()
-}
-
-/// The `movel` count, and whether a `stopl` came after the last one.
-fn moves(lines: &[String]) -> (usize, bool) {
-    let count = lines.iter().filter(|l| l.contains("movel(")).count();
-    let last = lines.iter().rposition(|l| l.contains("movel("));
-    let stopped = last.is_some_and(|i| lines[i..].iter().any(|l| l.contains("stopl(")));
-    (count, stopped)
 }
 
 /// A follow run into a fresh folder: its result, `out`, and the folder.
@@ -200,7 +142,7 @@ fn an_impossible_state_moves_nothing_and_is_a_fault() {
                 state_fault,
                 ..FakeUrOptions::default()
             });
-            let run = follow_on(&rig_file(&fake), &StopFlag::new(), None);
+            let run = follow_on(&rig_at_edge(&fake), &StopFlag::new(), None);
             let err = run.result.unwrap_err();
             assert!(
                 matches!(err, LabError::Hardware(_)) && !err.is_bad_input(),
@@ -230,7 +172,7 @@ fn a_frozen_arm_or_a_protective_stop_on_the_way_to_the_start_is_a_fault() {
             state: StateInterface::Rtde,
             ..FakeUrOptions::default()
         });
-        let run = follow_on(&rig_file(&fake), &StopFlag::new(), None);
+        let run = follow_on(&rig_at_edge(&fake), &StopFlag::new(), None);
         let err = run.result.unwrap_err();
         assert!(
             matches!(
@@ -258,7 +200,7 @@ fn a_frozen_arm_or_a_protective_stop_on_the_way_to_the_start_is_a_fault() {
 fn a_start_beyond_the_step_limit_is_the_set_up_and_moves_nothing() {
     let (x, y, angle) = fixture().edge;
     let fake = fake_at(x + 66.0, y, angle, FakeUrOptions::default());
-    let run = follow_on(&rig_file(&fake), &StopFlag::new(), None);
+    let run = follow_on(&rig_at_edge(&fake), &StopFlag::new(), None);
     let err = run.result.unwrap_err();
     assert!(
         matches!(
@@ -281,7 +223,7 @@ fn a_stop_mid_follow_sends_stopl_and_keeps_the_steps_in_partial() {
         ..FakeUrOptions::default()
     });
     let stop = StopFlag::new();
-    let run = follow_on(&rig_file(&fake), &stop, Some(2));
+    let run = follow_on(&rig_at_edge(&fake), &stop, Some(2));
     let err = run.result.unwrap_err();
     let LabError::Interrupted {
         signal,
@@ -316,7 +258,7 @@ fn a_stop_before_the_arm_is_connected_moves_nothing() {
     let fake = fake_near_start(FakeUrOptions::default());
     let stop = StopFlag::new();
     stop.request(StopSignal::Terminate);
-    let run = follow_on(&rig_file(&fake), &stop, None);
+    let run = follow_on(&rig_at_edge(&fake), &stop, None);
     let err = run.result.unwrap_err();
     assert!(
         matches!(
@@ -353,7 +295,7 @@ fn a_stop_mid_collection_sends_stopl_and_ends_it() {
     };
     let stop = StopFlag::new();
     let asker = stop.clone();
-    let err = collect_hardware(&rig_file(&fake), &f.collect, "rig", &stop, |i| {
+    let err = collect_hardware(&rig_at_edge(&fake), &f.collect, "rig", &stop, |i| {
         if i == 3 {
             asker.request(StopSignal::Terminate);
         }
@@ -383,7 +325,7 @@ fn rig_check_is_not_ready_on_an_impossible_state_or_a_start_too_far() {
     let dashboard =
         FakeDashboard::start(FakeDashboardState::default(), Duration::from_secs(20)).unwrap();
     let check = |fake: &FakeUrController| {
-        let mut cfg = rig_file(fake);
+        let mut cfg = rig_at_edge(fake);
         cfg.arm.dashboard_port = dashboard.port();
         rig_check(&cfg, None, None).unwrap()
     };

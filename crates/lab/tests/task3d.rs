@@ -36,6 +36,20 @@ fn data() -> &'static TapData {
     })
 }
 
+/// A small DisDenNN (one hidden layer of 16, 3 epochs) of [`data`], with
+/// its pins.
+fn small_model() -> StoredModel {
+    let cfg = resolve_config(
+        ModelKind::DisDenNN,
+        Preset::Default,
+        Some("[pose]\nhidden = [16]\n"),
+        Some(3),
+    )
+    .unwrap();
+    let (net, _) = train(&cfg, data(), &mut |_| {}).unwrap();
+    StoredModel::new(net, data().meta.reference_pins.clone())
+}
+
 #[test]
 fn collect_surface_3d_writes_named_targets_in_the_anchors_ranges() {
     let d = data();
@@ -114,15 +128,7 @@ fn collect_edge_5d_on_the_foil_writes_five_targets_rz_circular() {
 
 #[test]
 fn follow_surface_3d_on_a_plane_writes_metrics_and_figures() {
-    let cfg = resolve_config(
-        ModelKind::DisDenNN,
-        Preset::Default,
-        Some("[pose]\nhidden = [16]\n"),
-        Some(3),
-    )
-    .unwrap();
-    let (net, _) = train(&cfg, data(), &mut |_| {}).unwrap();
-    let model = StoredModel::new(net, data().meta.reference_pins.clone());
+    let model = small_model();
     let run_cfg = Surface3dConfig {
         path: PathConfig {
             length_mm: 6.0,
@@ -184,15 +190,7 @@ fn follow_surface_3d_on_a_plane_writes_metrics_and_figures() {
 fn surface_replay_answers_every_tap_from_the_bank() {
     use tactrace_lab::follow::surface_replay::run_surface_replay;
     use tactrace_lab::world::SurfaceBank;
-    let cfg = resolve_config(
-        ModelKind::DisDenNN,
-        Preset::Default,
-        Some("[pose]\nhidden = [16]\n"),
-        Some(3),
-    )
-    .unwrap();
-    let (net, _) = train(&cfg, data(), &mut |_| {}).unwrap();
-    let model = StoredModel::new(net, data().meta.reference_pins.clone());
+    let model = small_model();
     let bank = SurfaceBank::from_dataset(data()).unwrap();
     assert_eq!(bank.len(), 120);
     let run_cfg = Surface3dConfig {

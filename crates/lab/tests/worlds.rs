@@ -4,17 +4,16 @@
 //! TacTip, a (tiny) calibrated sensor, the real-frame world on the shared
 //! set, and the real rig (the fake UR5 on loopback and a folder camera).
 mod common;
+use common::fake_rig::{fake_ur5_above, rig_file, write_replay_frames};
 
 use std::path::Path;
 use std::sync::OnceLock;
-use std::time::Duration;
-use tactrace_arm::Workspace;
 use tactrace_geometry::{builtin_shape, BuiltinShape, Contour};
-use tactrace_hw::{FakeUrController, FakeUrOptions, PreprocessConfig};
+use tactrace_hw::FakeUrOptions;
 use tactrace_lab::calibrate::calibrate_sensor;
 use tactrace_lab::collect::{collect, collect_calibrated, CollectConfig};
 use tactrace_lab::follow::{run, FollowOutcome, RunHooks, SimFollowConfig};
-use tactrace_lab::hardware::{FrameSourceConfig, HardwareConfig, HardwareStart};
+use tactrace_lab::hardware::HardwareConfig;
 use tactrace_lab::import::import;
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_lab::world::{ReplayBank, World};
@@ -185,56 +184,20 @@ fn the_hardware_world_runs_on_the_fake_ur5_and_a_folder_camera() {
     let root = tempfile::tempdir().unwrap();
     let folder = root.path().join("frames");
     std::fs::create_dir_all(&folder).unwrap();
-    let mut files = frames.clone();
-    files.sort_by_key(|(name, _)| (name != "reference.png", name.clone()));
-    for (k, (_, png)) in files.iter().enumerate() {
-        std::fs::write(folder.join(format!("{k:05}.png")), png).unwrap();
-    }
-    assert_eq!(files.len(), data.len() + 1);
+    write_replay_frames(&folder, frames);
+    assert_eq!(frames.len(), data.len() + 1);
     let sim = SimFollowConfig::default();
     let (edge, normal) = builtin_shape(BuiltinShape::Disk).at_arc_length(0.0);
     let angle = normal.y.atan2(normal.x).to_degrees();
     let height = sim.rig.tap.height_mm;
-    let fake = FakeUrController::start(FakeUrOptions {
-        start: [
-            edge.x / 1000.0,
-            edge.y / 1000.0,
-            (height + 5.0) / 1000.0,
-            0.0,
-            0.0,
-            angle.to_radians(),
-        ],
-        lifetime: Duration::from_secs(20),
-        ..FakeUrOptions::default()
-    })
-    .unwrap();
-    let rig = HardwareConfig {
-        arm: fake.config(),
-        camera: FrameSourceConfig::Folder {
-            path: folder,
-            looping: true,
-            preprocessed: false,
-        },
-        sensor: None,
-        preprocess: PreprocessConfig::grayscale_only(),
-        workspace: Workspace {
-            min: [edge.x - 80.0, edge.y - 80.0, -15.0],
-            max: [edge.x + 80.0, edge.y + 80.0, 20.0],
-            ..Workspace::default()
-        },
-        start: HardwareStart {
-            x_mm: edge.x,
-            y_mm: edge.y,
-            angle_deg: angle,
-        },
-        tap: sim.rig.tap,
-        blob: sim.rig.blob.clone(),
-        controller: sim.controller.clone(),
-        follow: tactrace_servo::LoopConfig {
-            steps: Some(STEPS),
-            ..sim.follow.clone()
-        },
-    };
+    let fake = fake_ur5_above([edge.x, edge.y, height], angle, FakeUrOptions::default());
+    let mut rig = rig_file(
+        fake.config(),
+        (&folder, true),
+        (edge.x, edge.y, angle),
+        80.0,
+    );
+    rig.follow.steps = Some(STEPS);
     let world = World::Hardware(rig.clone()).open().unwrap();
     let out = root.path().join("run");
     let res = run(world, model, None, (&out, false), RunHooks::default()).unwrap();

@@ -5,7 +5,12 @@
 //! A missing folder can therefore never make a test pass silently.
 //!
 //! `TACTRACE_REAL_DATA=DIR` points at another copy of `tactip127-edge2d`.
+//!
+//! Also the synthetic sensors whose truth is known ([`layouts`]), shared by
+//! the tests of the vision crate and of the binary.
 use std::path::{Path, PathBuf};
+
+pub mod layouts;
 
 /// The environment variable that lets tests needing absent data skip.
 pub const SKIP_VAR: &str = "TACTRACE_SKIP_REAL_DATA";

@@ -8,72 +8,11 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use tactrace_testdata::layouts::{hex_sensor, ring_sensor, SyntheticSensor};
 use tactrace_vision::{
     draw_inspection, estimate_rest, inspect, Detection, DetectorParams, Frame, FrameDetector,
     Inspection, LayoutKind, PinReader, RestParams, SightParams,
 };
-
-/// A synthetic sensor: rest pins, pin radius, rim and static specks.
-struct Sensor {
-    size: u32,
-    centre: [f64; 2],
-    rest: Vec<[f64; 2]>,
-    pin_radius: f64,
-    /// Rim annulus (inner, outer radius), with a gap so it is arcs.
-    rim: [f64; 2],
-    specks: Vec<[f64; 2]>,
-}
-
-/// 331 pins: a centre pin and rings k = 1..=10 of 6k pins at radius 4.8 k,
-/// each ring turned by a little so no spoke is straight; rim at 55-62 px,
-/// static one-pixel specks between the pins and the rim.
-fn ring_sensor() -> Sensor {
-    let centre = [63.6, 63.3];
-    let mut rest = vec![centre];
-    for k in 1..=10 {
-        for j in 0..6 * k {
-            let t = std::f64::consts::TAU * f64::from(j) / f64::from(6 * k) + 0.05 * f64::from(k);
-            let r = 4.8 * f64::from(k);
-            rest.push([centre[0] + r * t.cos(), centre[1] + r * t.sin()]);
-        }
-    }
-    let specks = [0.4f64, 1.9, 3.3, 4.6]
-        .iter()
-        .map(|t| [centre[0] + 53.0 * t.cos(), centre[1] + 53.0 * t.sin()])
-        .collect();
-    Sensor {
-        size: 128,
-        centre,
-        rest,
-        pin_radius: 1.45,
-        rim: [55.0, 62.0],
-        specks,
-    }
-}
-
-/// 127 pins on a hexagonal lattice of spacing 14 px (six hexagonal shells
-/// around a centre pin), rim at 118-126 px.
-fn hex_sensor() -> Sensor {
-    let centre = [128.4, 127.7];
-    let mut rest = Vec::new();
-    for q in -6i32..=6 {
-        for r in -6i32..=6 {
-            if (q + r).abs() <= 6 {
-                let x = centre[0] + 14.0 * (f64::from(q) + 0.5 * f64::from(r));
-                let y = centre[1] + 14.0 * 0.75f64.sqrt() * f64::from(r);
-                rest.push([x, y]);
-            }
-        }
-    }
-    Sensor {
-        size: 256,
-        centre,
-        rest,
-        pin_radius: 3.4,
-        rim: [118.0, 126.0],
-        specks: vec![[40.0, 40.0], [215.0, 220.0]],
-    }
-}
 
 /// A tap: a smooth push away from a contact point `at` (peak `push`
 /// spacings-ish px at one kernel width), a swirl, and a small shift.
@@ -86,7 +25,7 @@ struct Tap {
 }
 
 impl Tap {
-    fn random(rng: &mut ChaCha8Rng, s: &Sensor, strength: f64) -> Self {
+    fn random(rng: &mut ChaCha8Rng, s: &SyntheticSensor, strength: f64) -> Self {
         let reach = 0.6 * (s.rim[0] - 8.0);
         let (r, t) = (rng.random_range(0.0..reach), rng.random_range(0.0..6.3f64));
         let scale = s.rim[0] / 55.0;
@@ -110,7 +49,7 @@ impl Tap {
 }
 
 /// The frame of `pins` (binary: white pins, rim and specks on black).
-fn render(s: &Sensor, pins: &[[f64; 2]]) -> Frame {
+fn render(s: &SyntheticSensor, pins: &[[f64; 2]]) -> Frame {
     let mut frame = Frame::new(s.size, s.size);
     for p in pins.iter().chain(&s.specks) {
         let r = if s.specks.contains(p) {
@@ -141,7 +80,7 @@ fn render(s: &Sensor, pins: &[[f64; 2]]) -> Frame {
 }
 
 /// `n` taps of the sensor: the frames and the true pin positions.
-fn taps(s: &Sensor, n: usize, seed: u64, strength: f64) -> Vec<(Frame, Vec<[f64; 2]>)> {
+fn taps(s: &SyntheticSensor, n: usize, seed: u64, strength: f64) -> Vec<(Frame, Vec<[f64; 2]>)> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..n)
         .map(|_| {
@@ -152,12 +91,12 @@ fn taps(s: &Sensor, n: usize, seed: u64, strength: f64) -> Vec<(Frame, Vec<[f64;
         .collect()
 }
 
-fn inspected(s: &Sensor, seed: u64) -> Inspection {
+fn inspected(s: &SyntheticSensor, seed: u64) -> Inspection {
     let frames: Vec<Frame> = taps(s, 12, seed, 1.0).into_iter().map(|t| t.0).collect();
     inspect(&frames, None).expect("inspection")
 }
 
-fn detector(s: &Sensor, found: &Inspection) -> FrameDetector {
+fn detector(s: &SyntheticSensor, found: &Inspection) -> FrameDetector {
     SightParams {
         preprocess: found.preprocess.clone(),
         detect: found.detect.clone(),
@@ -354,7 +293,7 @@ fn camera_frame(tap: &Tap, rng: &mut ChaCha8Rng) -> image::RgbImage {
 #[test]
 fn raw_colour_frames_inspected_and_read() {
     let mut rng = ChaCha8Rng::seed_from_u64(21);
-    let lattice = Sensor {
+    let lattice = SyntheticSensor {
         size: 320,
         centre: [170.3, 118.6],
         rest: Vec::new(),

@@ -5,23 +5,14 @@
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use tactrace_testdata::layouts::hex_lattice;
 use tactrace_vision::{BlobParams, Frame, KeyPoint, PinExtractor, PinTracker, VisionError};
 
 const SPACING: f64 = 11.0;
 
 /// The 127 centres of a hexagonal patch of 6 rings, spacing 11 px, centred at (128, 128).
 fn hex_reference() -> Vec<[f64; 2]> {
-    let mut pins = Vec::new();
-    for q in -6i32..=6 {
-        for r in -6i32..=6 {
-            if (q + r).abs() <= 6 {
-                let x = 128.0 + SPACING * (f64::from(q) + 0.5 * f64::from(r));
-                let y = 128.0 + SPACING * 0.75f64.sqrt() * f64::from(r);
-                pins.push([x, y]);
-            }
-        }
-    }
-    pins
+    hex_lattice([128.0, 128.0], SPACING, 6)
 }
 
 /// Translation + radial bump + swirl around an off-centre point: smooth and

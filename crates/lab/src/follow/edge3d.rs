@@ -17,15 +17,16 @@
 //! the pins; the run is scored against the edge afterwards
 //! ([`super::edge3d_results`]).
 use super::edge3d_results::{write_edge_results, Edge3dMetrics, EdgeCsv};
-use super::recorder3d::{Recorded3d, Recorder3d};
+use super::recorder3d::{record_loop_3d, Outcome3d, Recorder3d};
 use super::sim3d::{sim_3d, Sim3d};
 use super::RunFolder;
 use crate::error::{LabError, Result};
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use tactrace_arm::Pose;
-use tactrace_control::{Se3Config, Se3Controller, Task};
-use tactrace_servo::{servo_loop_3d, Loop3dConfig, LoopSummary, RigConfig, Step3d};
+use tactrace_control::{Se3Config, Task};
+use tactrace_sensor::TactileSensor;
+use tactrace_servo::{Loop3dConfig, RigConfig, Step3d};
 use tactrace_shape3d::{pose_of_label, EdgeCurve, EdgeSample, Surface};
 use tactrace_store::StoredModel;
 
@@ -117,14 +118,20 @@ impl Edge3dConfig {
             (1.5 * edge.length() / self.controller.reference[1]).ceil() as usize + 10
         })
     }
+
+    /// The loop's settings round `edge`: the step cap, closing at the start.
+    fn loop_config(&self, edge: &EdgeCurve) -> Loop3dConfig {
+        Loop3dConfig {
+            steps: self.steps(edge),
+            max_no_contact: self.max_no_contact,
+            lift_mm: self.rig.tap.height_mm,
+            closure: Some([self.close_radius_mm, self.min_excursion_mm]),
+        }
+    }
 }
 
 /// A finished edge run.
-pub struct Edge3dOutcome {
-    pub summary: LoopSummary,
-    pub metrics: Edge3dMetrics,
-    pub dir: PathBuf,
-}
+pub type Edge3dOutcome = Outcome3d<Edge3dMetrics>;
 
 /// The object's edge, or bad input naming the object.
 pub fn edge_of(object: &Surface, name: &str) -> Result<EdgeCurve> {
@@ -185,32 +192,17 @@ pub fn run_edge(
         (cfg.controller.task.sensed(), cfg.contact_threshold_px),
     )?;
     let run = RunFolder::start(out, force, cfg)?;
-    let mut controller = Se3Controller::try_new(cfg.controller.clone())?;
-    let loop_cfg = Loop3dConfig {
-        steps: cfg.steps(&edge),
-        max_no_contact: cfg.max_no_contact,
-        lift_mm: cfg.rig.tap.height_mm,
-        closure: Some([cfg.close_radius_mm, cfg.min_excursion_mm]),
-    };
     let csv = EdgeCsv::create(run.path(), &edge, cfg.controller.reference)?;
-    let mut recorder = Recorder3d::new(csv, probe, progress, false);
-    let summary = {
-        let mut sink = |s: &Step3d, field: &[f32]| recorder.record(s, field);
-        servo_loop_3d(
-            &mut arm,
-            &mut sensor,
-            &perception,
-            &mut controller,
-            &loop_cfg,
-            &mut sink,
-        )?
-    };
-    let Recorded3d { steps, reached, .. } = recorder.finish();
+    let recorder = Recorder3d::new(csv, probe, progress, false);
+    let mut tap = || perception.perceive(&sensor.capture()?);
+    let loop_cfg = cfg.loop_config(&edge);
+    let (summary, kept) =
+        record_loop_3d(&mut arm, &mut tap, (&cfg.controller, &loop_cfg), recorder)?;
     let metrics = write_edge_results(
         run.path(),
         (name, object, &edge),
         cfg,
-        (&steps, &reached),
+        (&kept.steps, &kept.reached),
         &summary,
     )?;
     let dir = run.finish()?;

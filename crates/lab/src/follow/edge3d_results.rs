@@ -26,8 +26,9 @@
 //!   true label (rz wrapped to +-180 deg).
 use super::edge3d::Edge3dConfig;
 use super::recorder3d::StepRows;
-use super::task3d_results::{
-    pose_cells, wire_mesh, write_replay_page, POSE_COLUMNS, REACHED_COLUMNS,
+use super::results3d::{
+    mean_abs_errors, pose_cells, wire_mesh, write_chart_3d, write_error_curves, write_metrics,
+    write_replay_page, Scored, POSE_COLUMNS, REACHED_COLUMNS,
 };
 use crate::error::Result;
 use serde::Serialize;
@@ -35,12 +36,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use tactrace_arm::Pose;
 use tactrace_learn::wrap_deg;
-use tactrace_report::plot::{chart, chart_3d, Axes, Chart3d, Series, Style};
-use tactrace_report::ReportError;
 use tactrace_servo::{lifted, Ending, LoopSummary, Step3d};
 use tactrace_shape3d::{EdgeCurve, Surface, Vec3};
 use tactrace_store::row_file::RowFile;
-use tactrace_store::write_atomic;
 
 /// An edge run's scores (see the module header).
 #[derive(Debug, Clone, Serialize)]
@@ -61,15 +59,6 @@ pub struct Edge3dMetrics {
     pub edge_length_mm: f64,
     /// The model's mean absolute error per sensed component (mm, deg).
     pub mean_abs_error: BTreeMap<&'static str, f64>,
-}
-
-#[derive(Serialize)]
-struct MetricsDocument<'a> {
-    #[serde(flatten)]
-    metrics: &'a Edge3dMetrics,
-    ending: Ending,
-    succeeded: bool,
-    message: &'a str,
 }
 
 /// The truth at one (reached) pose.
@@ -184,14 +173,7 @@ pub fn write_edge_results(
         .map(|p| edge_truth(edge, *p, reference))
         .collect();
     let metrics = score(name, cfg, (edge, steps, &truths), summary);
-    let doc = MetricsDocument {
-        metrics: &metrics,
-        ending: summary.ending,
-        succeeded: summary.ending.succeeded(),
-        message: &summary.message,
-    };
-    let json = serde_json::to_string_pretty(&doc).expect("metrics serialise");
-    write_atomic(&dir.join("metrics.json"), json.as_bytes())?;
+    write_metrics(dir, &metrics, summary)?;
     let task = cfg.controller.task;
     let mut wire = wire_mesh(object, steps);
     let mut rim: Vec<[f64; 3]> = edge
@@ -206,16 +188,7 @@ pub fn write_edge_results(
     if !steps.is_empty() {
         let title = format!("{task} round the {name}'s edge");
         let tips: Vec<[f64; 3]> = truths.iter().map(|t| [t.tip.x, t.tip.y, t.tip.z]).collect();
-        let paths = [("sensor tip", tips)];
-        chart_3d(
-            &dir.join("trajectory_3d"),
-            &Chart3d {
-                title: &title,
-                wire: &wire,
-                paths: &paths,
-            },
-        )
-        .map_err(ReportError::from)?;
+        write_chart_3d(dir, &title, &wire, &[("sensor tip", tips)])?;
         error_figure(dir, &title, &truths, reference)?;
     }
     let errors = truths
@@ -234,18 +207,14 @@ fn score(
 ) -> Edge3dMetrics {
     let reference = cfg.controller.reference;
     let settle = cfg.settle_steps.min(truths.len().saturating_sub(1));
-    let scored = &truths[settle.min(truths.len())..];
-    let n = scored.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&EdgeTruth) -> f64| scored.iter().map(f).sum::<f64>() / n;
-    let max = |f: &dyn Fn(&EdgeTruth) -> f64| scored.iter().map(f).fold(0.0, f64::max);
+    let scored = Scored(&truths[settle.min(truths.len())..]);
     let path_length_mm: f64 = truths
         .windows(2)
         .map(|w| (w[1].tip - w[0].tip).norm())
         .sum();
     let task = cfg.controller.task;
-    let sensed = task.sensed();
-    let mut mean_abs_error = BTreeMap::new();
-    for k in (0..6).filter(|k| sensed[*k]) {
+    let steps_scored = &steps[settle.min(steps.len())..];
+    let mean_abs_error = mean_abs_errors(task.sensed(), |k| {
         let err = |s: &Step3d, t: &EdgeTruth| {
             let d = s.label[k] - t.label[k];
             if k == 5 {
@@ -254,25 +223,23 @@ fn score(
                 d.abs()
             }
         };
-        let errs: Vec<f64> = steps[settle.min(steps.len())..]
+        steps_scored
             .iter()
-            .zip(scored)
+            .zip(scored.0)
             .map(|(s, t)| err(s, t))
-            .collect();
-        let m = errs.iter().sum::<f64>() / errs.len().max(1) as f64;
-        mean_abs_error.insert(tactrace_control::COMPONENTS[k], m);
-    }
+            .collect()
+    });
     Edge3dMetrics {
         task: task.name(),
         object: name.to_string(),
         steps: steps.len(),
         settle_steps: settle,
-        mean_distance_mm: mean(&|t| t.distance_mm),
-        max_distance_mm: max(&|t| t.distance_mm),
-        mean_offset_mm: mean(&|t| (t.label[0] - reference[0]).abs()),
-        mean_depth_error_mm: mean(&|t| (t.label[2] - reference[2]).abs()),
-        mean_normal_error_deg: mean(&|t| t.normal_error_deg),
-        max_normal_error_deg: max(&|t| t.normal_error_deg),
+        mean_distance_mm: scored.mean(|t| t.distance_mm),
+        max_distance_mm: scored.max(|t| t.distance_mm),
+        mean_offset_mm: scored.mean(|t| (t.label[0] - reference[0]).abs()),
+        mean_depth_error_mm: scored.mean(|t| (t.label[2] - reference[2]).abs()),
+        mean_normal_error_deg: scored.mean(|t| t.normal_error_deg),
+        max_normal_error_deg: scored.max(|t| t.normal_error_deg),
         coverage: coverage(edge, truths, summary.ending == Ending::Closed),
         closed: summary.ending == Ending::Closed,
         path_length_mm,
@@ -322,26 +289,19 @@ fn coverage(edge: &EdgeCurve, truths: &[EdgeTruth], closed: bool) -> f64 {
 /// The true distance, offset and depth error (mm) and normal error (deg)
 /// at every step.
 fn error_figure(dir: &Path, title: &str, truths: &[EdgeTruth], reference: [f64; 6]) -> Result<()> {
-    let series = |label: &str, f: &dyn Fn(&EdgeTruth) -> f64| Series {
-        name: label.into(),
-        points: truths
-            .iter()
-            .enumerate()
-            .map(|(i, t)| (i as f64, f(t)))
-            .collect(),
-        style: Style::Line,
-    };
-    let axes = Axes::new(&format!("{title}: true errors"), "step", "mm / deg");
-    chart(
-        &dir.join("errors"),
-        &axes,
+    let offset = |t: &EdgeTruth| t.label[0] - reference[0];
+    let depth_error = |t: &EdgeTruth| t.label[2] - reference[2];
+    write_error_curves(
+        dir,
+        &format!("{title}: true errors"),
+        truths,
         &[
-            series("distance from the edge (mm)", &|t| t.distance_mm),
-            series("offset x (mm)", &|t| t.label[0] - reference[0]),
-            series("depth error (mm)", &|t| t.label[2] - reference[2]),
-            series("normal error (deg)", &|t| t.normal_error_deg),
+            ("distance from the edge (mm)", &|t: &EdgeTruth| {
+                t.distance_mm
+            }),
+            ("offset x (mm)", &offset),
+            ("depth error (mm)", &depth_error),
+            ("normal error (deg)", &|t: &EdgeTruth| t.normal_error_deg),
         ],
     )
-    .map_err(ReportError::from)?;
-    Ok(())
 }

@@ -17,12 +17,14 @@ pub mod edge3d;
 pub mod edge3d_results;
 mod recorder3d;
 mod results;
+mod results3d;
 mod sim3d;
 pub mod surface_replay;
 pub mod task3d;
 pub mod task3d_results;
 
 pub use config::{ServoSettings, SimFollowConfig};
+pub use recorder3d::Outcome3d;
 pub use results::{size_warning, tactip_diameter_mm, write_results, write_results_with, RunExtras};
 
 use crate::error::Result;

@@ -1,11 +1,22 @@
-//! The 3D runs' step sink, written once: every step of an edge or surface
-//! run (simulated or in the real-frame world) goes to its `trajectory.csv`
+//! The 3D runs' loop and step sink, written once: every edge or surface
+//! run (simulated or in the real-frame world) runs its SE(3) controller
+//! through [`record_loop_3d`], and every step goes to its `trajectory.csv`
 //! row writer (a [`StepRows`]: the edge's or the surface's truth columns),
 //! then to the caller's progress, and is kept with the pose the arm
 //! physically reached (and, when asked, the pin field) for the metrics and
 //! figures written after the loop.
-use tactrace_arm::{Pose, PoseProbe};
-use tactrace_servo::{ServoError, Step3d};
+use crate::error::Result;
+use std::path::PathBuf;
+use tactrace_arm::{Arm, Pose, PoseProbe};
+use tactrace_control::{Se3Config, Se3Controller};
+use tactrace_servo::{servo_loop_3d_taps, Loop3dConfig, LoopSummary, Sensed, ServoError, Step3d};
+
+/// A finished 3D run: how its loop ended, its scores `M`, its folder.
+pub struct Outcome3d<M> {
+    pub summary: LoopSummary,
+    pub metrics: M,
+    pub dir: PathBuf,
+}
 
 /// A 3D run's `trajectory.csv`: one row per step.
 pub trait StepRows {
@@ -79,6 +90,23 @@ impl<'a, R: StepRows> Recorder3d<'a, R> {
     pub fn finish(self) -> Recorded3d {
         self.kept
     }
+}
+
+/// Run a 3D run's loop (`loop_cfg`) with the SE(3) controller `controller`,
+/// from the arm's pose, each tap's percept from `tap` and each step to
+/// `recorder`: how the loop ended, and the steps it kept.
+pub(super) fn record_loop_3d<R: StepRows>(
+    arm: &mut dyn Arm,
+    tap: &mut dyn FnMut() -> tactrace_servo::Result<Sensed>,
+    (controller, loop_cfg): (&Se3Config, &Loop3dConfig),
+    mut recorder: Recorder3d<'_, R>,
+) -> Result<(LoopSummary, Recorded3d)> {
+    let mut controller = Se3Controller::try_new(controller.clone())?;
+    let summary = {
+        let mut sink = |s: &Step3d, field: &[f32]| recorder.record(s, field);
+        servo_loop_3d_taps(arm, tap, &mut controller, loop_cfg, &mut sink)?
+    };
+    Ok((summary, recorder.finish()))
 }
 
 #[cfg(test)]

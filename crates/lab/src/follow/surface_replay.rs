@@ -11,17 +11,15 @@
 //! real tap); the run folder adds
 //! `answers.csv` (each tap's row, image and label distance) and
 //! `replay.json` (the label distances and the distinct rows).
-use super::recorder3d::{Recorded3d, Recorder3d};
 use super::sim3d::sim_arm_3d;
-use super::task3d::{start_pose, Surface3dConfig, Surface3dOutcome};
-use super::task3d_results::{write_surface_results, TruthCsv};
+use super::task3d::{follow_surface, start_pose, Surface3dConfig, Surface3dOutcome};
 use super::RunFolder;
 use crate::error::{LabError, Result};
 use crate::world::{SurfaceAnswer, SurfaceBank};
 use serde::Serialize;
 use std::path::Path;
-use tactrace_control::{Se3Controller, Task};
-use tactrace_servo::{servo_loop_3d_taps, Loop3dConfig, Perception3d, Step3d};
+use tactrace_control::Task;
+use tactrace_servo::{Perception3d, Step3d};
 use tactrace_shape3d::{true_label, Surface};
 use tactrace_store::row_file::RowFile;
 use tactrace_store::{write_atomic, StoredModel};
@@ -61,14 +59,6 @@ pub fn run_surface_replay(
     let perception =
         Perception3d::of_fields(pins.clone(), net.clone(), Task::Surface3d.sensed(), 0.0)?;
     let run = RunFolder::start(out, force, cfg)?;
-    let mut controller = Se3Controller::try_new(cfg.controller.clone())?;
-    let loop_cfg = Loop3dConfig {
-        steps: cfg.steps(),
-        max_no_contact: cfg.max_no_contact,
-        lift_mm: cfg.rig.tap.height_mm,
-        closure: None,
-    };
-    let csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
     let mut answers: Vec<SurfaceAnswer> = Vec::new();
     let mut tap = || -> tactrace_servo::Result<tactrace_servo::Sensed> {
         let pose = probe.actual();
@@ -80,23 +70,13 @@ pub fn run_surface_replay(
         answers.push(answer);
         perception.perceive_field(field)
     };
-    let mut recorder = Recorder3d::new(csv, probe.clone(), progress, true);
-    let summary = {
-        let mut sink = |s: &Step3d, field: &[f32]| recorder.record(s, field);
-        servo_loop_3d_taps(&mut arm, &mut tap, &mut controller, &loop_cfg, &mut sink)?
-    };
-    let Recorded3d {
-        steps,
-        reached,
-        fields,
-    } = recorder.finish();
-    let metrics = write_surface_results(
-        run.path(),
-        (name, object),
+    let (summary, metrics) = follow_surface(
         cfg,
-        (&steps, &reached),
-        &summary,
-        (&pins, &fields),
+        (object, name),
+        &run,
+        (&mut arm, &mut tap, probe.clone()),
+        &pins,
+        progress,
     )?;
     let stats = write_answers(run.path(), bank, &answers)?;
     let dir = run.finish()?;

@@ -11,16 +11,17 @@
 //! the tilt (`max_tilt_deg`: a larger tilt is refused and ends the run).
 //! The model sees only the pins; the run is scored against the object
 //! afterwards ([`super::task3d_results`]).
-use super::recorder3d::{Recorded3d, Recorder3d};
+use super::recorder3d::{record_loop_3d, Outcome3d, Recorder3d};
 use super::sim3d::{sim_3d, Sim3d};
 use super::task3d_results::{write_surface_results, Surface3dMetrics, TruthCsv};
 use super::RunFolder;
 use crate::error::{LabError, Result};
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
-use tactrace_arm::Pose;
-use tactrace_control::{Se3Config, Se3Controller, Task};
-use tactrace_servo::{servo_loop_3d, Loop3dConfig, LoopSummary, RigConfig, Step3d};
+use std::path::Path;
+use tactrace_arm::{Arm, Pose, PoseProbe};
+use tactrace_control::{Se3Config, Task};
+use tactrace_sensor::TactileSensor;
+use tactrace_servo::{Loop3dConfig, LoopSummary, RigConfig, Sensed, Step3d};
 use tactrace_shape3d::{surface_point, Surface};
 use tactrace_store::StoredModel;
 
@@ -142,14 +143,20 @@ impl Surface3dConfig {
     pub fn steps(&self) -> usize {
         (self.path.length_mm / self.controller.reference[1].abs()).round() as usize + 1
     }
+
+    /// The loop's settings: the path's steps, no closure.
+    fn loop_config(&self) -> Loop3dConfig {
+        Loop3dConfig {
+            steps: self.steps(),
+            max_no_contact: self.max_no_contact,
+            lift_mm: self.rig.tap.height_mm,
+            closure: None,
+        }
+    }
 }
 
 /// A finished surface run.
-pub struct Surface3dOutcome {
-    pub summary: LoopSummary,
-    pub metrics: Surface3dMetrics,
-    pub dir: PathBuf,
-}
+pub type Surface3dOutcome = Outcome3d<Surface3dMetrics>;
 
 /// The start pose: level over the surface point at the path's start,
 /// pressed the reference depth below it, its y axis along the heading.
@@ -198,38 +205,14 @@ pub fn run_surface(
     )?;
     let reference_pins = perception.reference_pins().to_vec();
     let run = RunFolder::start(out, force, cfg)?;
-    let mut controller = Se3Controller::try_new(cfg.controller.clone())?;
-    let loop_cfg = Loop3dConfig {
-        steps: cfg.steps(),
-        max_no_contact: cfg.max_no_contact,
-        lift_mm: cfg.rig.tap.height_mm,
-        closure: None,
-    };
-    let csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
-    let mut recorder = Recorder3d::new(csv, probe, progress, true);
-    let summary = {
-        let mut sink = |s: &Step3d, field: &[f32]| recorder.record(s, field);
-        servo_loop_3d(
-            &mut arm,
-            &mut sensor,
-            &perception,
-            &mut controller,
-            &loop_cfg,
-            &mut sink,
-        )?
-    };
-    let Recorded3d {
-        steps,
-        reached,
-        fields,
-    } = recorder.finish();
-    let metrics = write_surface_results(
-        run.path(),
-        (name, object),
+    let mut tap = || perception.perceive(&sensor.capture()?);
+    let (summary, metrics) = follow_surface(
         cfg,
-        (&steps, &reached),
-        &summary,
-        (&reference_pins, &fields),
+        (object, name),
+        &run,
+        (&mut arm, &mut tap, probe),
+        &reference_pins,
+        progress,
     )?;
     let dir = run.finish()?;
     Ok(Surface3dOutcome {
@@ -237,4 +220,35 @@ pub fn run_surface(
         metrics,
         dir,
     })
+}
+
+/// A surface run in a built world, into `run`: the arm, each tap's
+/// percept (at the arm's pose) and the probe of the pose it reached; its
+/// `trajectory.csv`, then its scores, figures and page (the model's
+/// `reference_pins` kept for them); how the loop ended and the scores.
+pub(super) fn follow_surface(
+    cfg: &Surface3dConfig,
+    (object, name): (&Surface, &str),
+    run: &RunFolder,
+    (arm, tap, probe): (
+        &mut dyn Arm,
+        &mut dyn FnMut() -> tactrace_servo::Result<Sensed>,
+        PoseProbe,
+    ),
+    reference_pins: &[[f64; 2]],
+    progress: &mut dyn FnMut(&Step3d),
+) -> Result<(LoopSummary, Surface3dMetrics)> {
+    let csv = TruthCsv::create(run.path(), object.clone(), cfg.controller.reference[2])?;
+    let recorder = Recorder3d::new(csv, probe, progress, true);
+    let loop_cfg = cfg.loop_config();
+    let (summary, kept) = record_loop_3d(arm, tap, (&cfg.controller, &loop_cfg), recorder)?;
+    let metrics = write_surface_results(
+        run.path(),
+        (name, object),
+        cfg,
+        (&kept.steps, &kept.reached),
+        &summary,
+        (reference_pins, &kept.fields),
+    )?;
+    Ok((summary, metrics))
 }

@@ -23,6 +23,10 @@
 //!   sensor's y axis (its tangential step) to it
 //!   (`tactrace_control::heading_error_deg`).
 use super::recorder3d::StepRows;
+use super::results3d::{
+    mean_abs_errors, pose_cells, wire_mesh, write_chart_3d, write_error_curves, write_metrics,
+    write_replay_page, Scored, POSE_COLUMNS, REACHED_COLUMNS,
+};
 use super::task3d::Surface3dConfig;
 use crate::error::Result;
 use serde::Serialize;
@@ -30,13 +34,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use tactrace_arm::Pose;
 use tactrace_control::Task;
-use tactrace_report::plot::{chart, chart_3d, Axes, Chart3d, Series, Style};
-use tactrace_report::replay_3d::{replay_3d_html, Replay3dPage, Replay3dStep};
-use tactrace_report::ReportError;
-use tactrace_servo::{Ending, LoopSummary, Step3d};
-use tactrace_shape3d::{normal_error_deg, surface_point, true_label, Surface, Vec3};
+use tactrace_servo::{LoopSummary, Step3d};
+use tactrace_shape3d::{normal_error_deg, true_label, Surface, Vec3};
 use tactrace_store::row_file::RowFile;
-use tactrace_store::write_atomic;
 
 /// A surface run's scores (see the module header).
 #[derive(Debug, Clone, Serialize)]
@@ -60,15 +60,6 @@ pub struct Surface3dMetrics {
     /// The heading error's mean and max magnitude, deg.
     pub mean_heading_error_deg: f64,
     pub max_heading_error_deg: f64,
-}
-
-#[derive(Serialize)]
-struct MetricsDocument<'a> {
-    #[serde(flatten)]
-    metrics: &'a Surface3dMetrics,
-    ending: Ending,
-    succeeded: bool,
-    message: &'a str,
 }
 
 /// The truth at one reached pose.
@@ -95,19 +86,6 @@ pub struct TruthCsv {
     object: Surface,
     depth_mm: f64,
 }
-
-/// A trajectory's commanded pose columns (every 3D run's).
-pub(super) const POSE_COLUMNS: [&str; 6] = ["x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"];
-
-/// A trajectory's last columns: the pose the arm reached (every 3D run's).
-pub(super) const REACHED_COLUMNS: [&str; 6] = [
-    "x_reached_mm",
-    "y_reached_mm",
-    "z_reached_mm",
-    "rx_reached_deg",
-    "ry_reached_deg",
-    "rz_reached_deg",
-];
 
 /// A surface trajectory's columns between the pose and the reached pose.
 const SURFACE_COLUMNS: [&str; 7] = [
@@ -158,13 +136,6 @@ impl StepRows for TruthCsv {
     }
 }
 
-/// A pose's six cells (mm, deg) for a trajectory row.
-pub(super) fn pose_cells(p: Pose) -> impl Iterator<Item = String> {
-    [p.x, p.y, p.z, p.rx, p.ry, p.rz]
-        .into_iter()
-        .map(|v| format!("{v:.4}"))
-}
-
 /// Score the run at the poses the arm reached (`reached`, one per step)
 /// and write `metrics.json`, the figures and `replay.html` into `dir`;
 /// the reference pins and each tap's field are kept for later pages
@@ -180,29 +151,21 @@ pub fn write_surface_results(
     let depth = cfg.controller.reference[2];
     let truths: Vec<Truth> = reached.iter().map(|p| truth(object, *p, depth)).collect();
     let metrics = score(name, cfg, steps, (&truths, reached));
-    let doc = MetricsDocument {
-        metrics: &metrics,
-        ending: summary.ending,
-        succeeded: summary.ending.succeeded(),
-        message: &summary.message,
-    };
-    let json = serde_json::to_string_pretty(&doc).expect("metrics serialise");
-    write_atomic(&dir.join("metrics.json"), json.as_bytes())?;
+    write_metrics(dir, &metrics, summary)?;
     let wire = wire_mesh(object, steps);
     let path: Vec<[f64; 3]> = reached.iter().map(|p| [p.x, p.y, p.z]).collect();
     if !steps.is_empty() {
         let title = format!("surface_3d over the {name}");
-        let paths = [("sensor tip (dome pole)", path)];
-        chart_3d(
-            &dir.join("trajectory_3d"),
-            &Chart3d {
-                title: &title,
-                wire: &wire,
-                paths: &paths,
-            },
-        )
-        .map_err(ReportError::from)?;
-        error_figure(dir, name, &truths)?;
+        write_chart_3d(dir, &title, &wire, &[("sensor tip (dome pole)", path)])?;
+        write_error_curves(
+            dir,
+            &format!("surface_3d over the {name}: true errors"),
+            &truths,
+            &[
+                ("depth error (mm)", &|t: &Truth| t.depth_error_mm),
+                ("normal error (deg)", &|t: &Truth| t.normal_error_deg),
+            ],
+        )?;
     }
     let errors = truths
         .iter()
@@ -210,38 +173,6 @@ pub fn write_surface_results(
     let title = format!("surface_3d over the {name}: {}", summary.message);
     write_replay_page(dir, &title, &wire, steps, errors)?;
     Ok(metrics)
-}
-
-/// `replay.html` of a 3D run: every step's pose (position and the sensor's
-/// axis) and label, beside its true depth error (mm) and normal error
-/// (deg) from `errors`, over the object's wire mesh.
-pub(super) fn write_replay_page(
-    dir: &Path,
-    title: &str,
-    wire: &[Vec<[f64; 3]>],
-    steps: &[Step3d],
-    errors: impl Iterator<Item = (f64, f64)>,
-) -> Result<()> {
-    let page_steps: Vec<Replay3dStep> = steps
-        .iter()
-        .zip(errors)
-        .map(|(s, (depth_error_mm, normal_error_deg))| {
-            let axis = s.pose.to_isometry().rotation * Vec3::z();
-            Replay3dStep {
-                pose: [s.pose.x, s.pose.y, s.pose.z, axis.x, axis.y, axis.z],
-                label: s.label,
-                depth_error_mm,
-                normal_error_deg,
-            }
-        })
-        .collect();
-    let html = replay_3d_html(&Replay3dPage {
-        title,
-        wire,
-        steps: &page_steps,
-    });
-    write_atomic(&dir.join("replay.html"), html.as_bytes())?;
-    Ok(())
 }
 
 fn score(
@@ -256,99 +187,37 @@ fn score(
         .iter()
         .map(|p| tactrace_control::heading_error_deg(*p, heading_deg).abs())
         .collect();
-    let nh = headings.len().max(1) as f64;
-    let scored = &truths[settle..];
-    let n = scored.len().max(1) as f64;
-    let mean = |f: &dyn Fn(&Truth) -> f64| scored.iter().map(f).sum::<f64>() / n;
-    let max = |f: &dyn Fn(&Truth) -> f64| scored.iter().map(f).fold(0.0, f64::max);
+    let headings = Scored(&headings);
+    let scored = Scored(&truths[settle..]);
     let path_length_mm: f64 = truths
         .windows(2)
         .map(|w| (w[1].surface - w[0].surface).norm())
         .sum();
     let planned = cfg.path.length_mm;
-    let mut mean_abs_error = BTreeMap::new();
-    let sensed = Task::Surface3d.sensed();
-    for k in (0..6).filter(|k| sensed[*k]) {
-        let errs: Vec<f64> = steps[settle.min(steps.len())..]
+    let steps_scored = &steps[settle.min(steps.len())..];
+    let mean_abs_error = mean_abs_errors(Task::Surface3d.sensed(), |k| {
+        steps_scored
             .iter()
-            .zip(scored)
+            .zip(scored.0)
             .filter_map(|(s, t)| t.label.map(|l| (s.label[k] - l[k]).abs()))
-            .collect();
-        let m = errs.iter().sum::<f64>() / errs.len().max(1) as f64;
-        mean_abs_error.insert(tactrace_control::COMPONENTS[k], m);
-    }
+            .collect()
+    });
     Surface3dMetrics {
         task: "surface_3d",
         object: name.to_string(),
         steps: steps.len(),
         settle_steps: settle,
-        mean_distance_mm: mean(&|t| t.depth_error_mm.abs()),
-        max_distance_mm: max(&|t| t.depth_error_mm.abs()),
-        mean_normal_error_deg: mean(&|t| t.normal_error_deg),
-        max_normal_error_deg: max(&|t| t.normal_error_deg),
+        mean_distance_mm: scored.mean(|t| t.depth_error_mm.abs()),
+        max_distance_mm: scored.max(|t| t.depth_error_mm.abs()),
+        mean_normal_error_deg: scored.mean(|t| t.normal_error_deg),
+        max_normal_error_deg: scored.max(|t| t.normal_error_deg),
         coverage: (path_length_mm / planned).min(1.0),
         closed: false,
         path_length_mm,
         planned_length_mm: planned,
         mean_abs_error,
         heading_deg,
-        mean_heading_error_deg: headings.iter().sum::<f64>() / nh,
-        max_heading_error_deg: headings.iter().copied().fold(0.0, f64::max),
+        mean_heading_error_deg: headings.mean(|h| *h),
+        max_heading_error_deg: headings.max(|h| *h),
     }
-}
-
-/// Lines of the surface every 5 mm over the path's box widened by 20 mm.
-pub(super) fn wire_mesh(object: &Surface, steps: &[Step3d]) -> Vec<Vec<[f64; 3]>> {
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for s in steps {
-        for (k, v) in [s.pose.x, s.pose.y].into_iter().enumerate() {
-            lo[k] = lo[k].min(v - 20.0);
-            hi[k] = hi[k].max(v + 20.0);
-        }
-    }
-    if !(lo[0].is_finite() && hi[0].is_finite()) {
-        return Vec::new();
-    }
-    let ticks = |k: usize| {
-        let n = ((hi[k] - lo[k]) / 5.0).ceil() as usize;
-        (0..=n).map(move |i| lo[k] + i as f64 * 5.0)
-    };
-    let at = |x: f64, y: f64| surface_point(object.as_ref(), x, y).map(|q| [q.x, q.y, q.z]);
-    let mut lines: Vec<Vec<[f64; 3]>> = Vec::new();
-    for x in ticks(0) {
-        lines.push(ticks(1).filter_map(|y| at(x, y)).collect());
-    }
-    for y in ticks(1) {
-        lines.push(ticks(0).filter_map(|x| at(x, y)).collect());
-    }
-    lines.retain(|l| l.len() > 1);
-    lines
-}
-
-/// The true depth error (mm) and normal error (deg) at every step.
-fn error_figure(dir: &Path, name: &str, truths: &[Truth]) -> Result<()> {
-    let series = |label: &str, f: &dyn Fn(&Truth) -> f64| Series {
-        name: label.into(),
-        points: truths
-            .iter()
-            .enumerate()
-            .map(|(i, t)| (i as f64, f(t)))
-            .collect(),
-        style: Style::Line,
-    };
-    let axes = Axes::new(
-        &format!("surface_3d over the {name}: true errors"),
-        "step",
-        "mm / deg",
-    );
-    chart(
-        &dir.join("errors"),
-        &axes,
-        &[
-            series("depth error (mm)", &|t| t.depth_error_mm),
-            series("normal error (deg)", &|t| t.normal_error_deg),
-        ],
-    )
-    .map_err(ReportError::from)?;
-    Ok(())
 }

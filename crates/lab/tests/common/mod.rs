@@ -2,6 +2,8 @@
 //! TacTip (the simulator with a known field distortion) and its labelled
 //! taps on a straight edge, in the Bristol layout.
 #![allow(dead_code)]
+pub mod fake_rig;
+
 use rand::{Rng, SeedableRng};
 use std::path::Path;
 use tactrace_sensor::{EdgeTap, FieldCorrection, TacTipConfig, TacTipModel};

@@ -217,6 +217,7 @@ impl<'a> Shared<'a> {
             nets,
             outputs: self.outputs.to_vec(),
             features: None,
+            views: None,
             predictor: OnceLock::new(),
         })
     }

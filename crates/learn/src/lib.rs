@@ -35,6 +35,7 @@ mod standardise;
 mod target_score;
 mod targets;
 mod trainer;
+mod turned_views;
 
 pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_ENSEMBLE};
 pub use dataset::{mean_absolute_error, Dataset};

@@ -46,6 +46,7 @@ impl PoseModel {
             nets,
             outputs: self.outputs.clone(),
             features: self.features.clone(),
+            views: self.views.clone(),
             predictor: OnceLock::new(),
         })
     }
@@ -117,6 +118,7 @@ mod tests {
             nets,
             outputs: vec![ModelTarget::circular("pose_6")],
             features: None,
+            views: None,
             predictor: Default::default(),
         }
     }

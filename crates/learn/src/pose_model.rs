@@ -17,6 +17,7 @@ use crate::rotations;
 use crate::standardise::Standardiser;
 use crate::targets::{self, ModelTarget, Unit};
 pub use crate::trainer::{EpochReport, NetEpoch, TrainingHistory};
+use crate::turned_views::TurnedViews;
 use crate::Layers;
 use std::sync::OnceLock;
 
@@ -51,6 +52,10 @@ pub struct PoseModel {
     /// The features the nets see, when not the displacements themselves
     /// ([`crate::PinFeatures`]); the standardiser is fitted on them.
     pub(crate) features: Option<FeatureMap>,
+    /// The layout and turns of a model fitted with
+    /// [`ModelConfig::rotations`] (absent without, or in a file written
+    /// before they were recorded): what averaging over turned views needs.
+    pub(crate) views: Option<TurnedViews>,
     /// The fast prediction path of an edge model (`[r mm, theta deg]`,
     /// neither circular), laid out at the first prediction.
     pub(crate) predictor: OnceLock<Predictor>,
@@ -101,7 +106,8 @@ impl PoseModel {
     /// [`ModelConfig::pin_features`] other than the displacements and
     /// [`ModelConfig::rotations`] need (an error without it), recorded in
     /// the model for the features. With `rotations` the model is fitted on
-    /// `train` and its turned copies (`val` as given).
+    /// `train` and its turned copies (`val` as given) and keeps the turns
+    /// for averaging over turned views at prediction.
     pub fn fit_targets_on_pins(
         cfg: &ModelConfig,
         outputs: &[ModelTarget],
@@ -111,9 +117,15 @@ impl PoseModel {
         progress: &mut dyn FnMut(&EpochReport),
     ) -> Result<(PoseModel, TrainingHistory), LearnError> {
         let turned = turned_training_data(cfg, outputs, train, reference_pins)?;
+        let views = match (&cfg.rotations, reference_pins) {
+            (Some(rot), Some(pins)) => Some(TurnedViews::new(rot, pins)?),
+            _ => None,
+        };
         let train = turned.as_ref().unwrap_or(train);
         let Some(map) = feature_map(cfg.pin_features, reference_pins, train.dim_x)? else {
-            return Self::fit_displacements(cfg, outputs, train, val, progress);
+            let (mut model, history) = Self::fit_displacements(cfg, outputs, train, val, progress)?;
+            model.views = views;
+            return Ok((model, history));
         };
         let featured =
             |d: &Dataset| Dataset::new(map.rows(&d.x), d.y.clone(), d.n, map.output_dim(), d.dim_y);
@@ -122,6 +134,7 @@ impl PoseModel {
         let (mut model, history) =
             Self::fit_displacements(cfg, outputs, &train, val.as_ref(), progress)?;
         model.features = Some(map);
+        model.views = views;
         model.predictor = OnceLock::new();
         Ok((model, history))
     }
@@ -180,6 +193,18 @@ impl PoseModel {
         if self.is_plain_edge() {
             return self.predict(displacement).map(|p| p.to_vec());
         }
+        let encoded = match self.averaged_views() {
+            Some(views) => {
+                views.average(&self.outputs, displacement, |d| self.predict_columns(d))?
+            }
+            None => self.predict_columns(displacement)?,
+        };
+        Ok(targets::decode(&self.outputs, &encoded))
+    }
+
+    /// The nets' columns of one displacement vector (members averaged,
+    /// target scaling undone): the encoded targets before decoding.
+    fn predict_columns(&self, displacement: &[f32]) -> Result<Vec<f64>, LearnError> {
         let mut z = vec![0.0f64; self.standardiser.dim()];
         match &self.features {
             Some(map) => {
@@ -205,7 +230,42 @@ impl PoseModel {
         self.average_members(&mut scaled);
         let mut encoded = vec![0.0f64; width];
         self.targets.inverse_into(&scaled, &mut encoded);
-        Ok(targets::decode(&self.outputs, &encoded))
+        Ok(encoded)
+    }
+
+    /// The turned views every prediction averages over: `Some` when the
+    /// configuration's [`crate::Rotations::at_prediction`] is set.
+    fn averaged_views(&self) -> Option<&TurnedViews> {
+        let on = self.config.rotations.is_some_and(|r| r.at_prediction);
+        self.views.as_ref().filter(|_| on)
+    }
+
+    /// Whether every prediction averages the tap's turned views
+    /// ([`crate::Rotations::at_prediction`]).
+    pub fn averages_turned_views(&self) -> bool {
+        self.averaged_views().is_some()
+    }
+
+    /// Switch averaging over turned views at prediction on or off (the
+    /// configuration's [`crate::Rotations::at_prediction`]); refused for a
+    /// model without `rotations` or whose file predates the recorded
+    /// layout.
+    pub fn set_turned_views(&mut self, on: bool) -> Result<(), LearnError> {
+        let refuse = |reason: &str| LearnError::Config {
+            field: "rotations.at_prediction",
+            reason: reason.into(),
+        };
+        let Some(rot) = self.config.rotations.as_mut() else {
+            return Err(refuse("the model was not fitted with rotations"));
+        };
+        if on && self.views.is_none() {
+            return Err(refuse(
+                "the model does not record its layout's turns (fitted before they were kept)",
+            ));
+        }
+        rot.at_prediction = on;
+        self.predictor = OnceLock::new();
+        Ok(())
     }
 
     /// Predict every row of `rows` (row-major, [`Self::input_dim`] values
@@ -249,6 +309,7 @@ impl PoseModel {
             if r.unit == Unit::Mm && t.unit == Unit::Deg && !r.circular && !t.circular)
             && self.targets.dim() == 2
             && self.features.is_none()
+            && self.averaged_views().is_none()
     }
 
     fn check_dim(&self, got: usize) -> Result<(), LearnError> {

@@ -24,8 +24,9 @@ pub const MAX_ORDER: usize = 12;
 pub const MATCH_TOLERANCE: f64 = 0.4;
 
 /// Training on every tap and its copies turned by `k 360/order` deg,
-/// `k = 1..order` ([`crate::ModelConfig::rotations`]); predictions never
-/// see a copy.
+/// `k = 1..order` ([`crate::ModelConfig::rotations`]); predictions see the
+/// tap alone, or with `at_prediction` the mean over the tap and its turned
+/// copies, each prediction turned back (`crate::turned_views`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Rotations {
@@ -35,6 +36,12 @@ pub struct Rotations {
     /// How a circular target moves when the frame turns by `phi` in image
     /// coordinates (x right, y down): by `angle_sign * phi`, +1 or -1.
     pub angle_sign: i8,
+    /// Predict every tap and its copies under the same turns, turn each
+    /// prediction back and average them (the nets' columns, a circular
+    /// target's sine and cosine as a vector): an ensemble of `order`
+    /// views. False (the default, not written): the tap alone.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub at_prediction: bool,
 }
 
 impl Rotations {
@@ -59,7 +66,7 @@ impl Rotations {
 /// One turn of the layout: where each pin lands, the rotation and the
 /// move of every circular target (deg).
 #[derive(Debug, Clone, PartialEq)]
-struct Turn {
+pub(crate) struct Turn {
     /// `lands[i]`: the pin that pin `i` lands on.
     lands: Vec<usize>,
     cos: f64,
@@ -109,7 +116,7 @@ impl Turn {
 
     /// The turned copy of one displacement vector (`P` x values, then `P`
     /// y values) into `out`.
-    fn displacements(&self, d: &[f32], out: &mut [f32]) {
+    pub(crate) fn displacements(&self, d: &[f32], out: &mut [f32]) {
         let n = self.lands.len();
         for (i, &j) in self.lands.iter().enumerate() {
             let (x, y) = (f64::from(d[i]), f64::from(d[n + i]));
@@ -128,11 +135,29 @@ impl Turn {
             });
         }
     }
+
+    /// One prediction of the turned copy, as the nets' unscaled columns
+    /// (`encoded`, targets as `outputs` name them), turned back: a
+    /// circular target's sine and cosine of `theta'` become those of
+    /// `theta' - angle_shift` (a rotation of the pair by `-angle_shift`),
+    /// every other column is kept.
+    pub(crate) fn turn_back(&self, outputs: &[ModelTarget], encoded: &mut [f64]) {
+        let (ss, cs) = self.angle_shift_deg.to_radians().sin_cos();
+        let mut k = 0;
+        for t in outputs {
+            if t.circular {
+                let (s, c) = (encoded[k], encoded[k + 1]);
+                encoded[k] = s * cs - c * ss;
+                encoded[k + 1] = c * cs + s * ss;
+            }
+            k += t.width();
+        }
+    }
 }
 
 /// The turns `rot` adds over the layout `pins` (px, in input order):
 /// `k 360/order` deg for `k = 1..order`.
-fn turns(rot: &Rotations, pins: &[[f64; 2]]) -> Result<Vec<Turn>, LearnError> {
+pub(crate) fn turns(rot: &Rotations, pins: &[[f64; 2]]) -> Result<Vec<Turn>, LearnError> {
     rot.validate()?;
     let tolerance = MATCH_TOLERANCE * median_spacing(pins)?;
     (1..rot.order)

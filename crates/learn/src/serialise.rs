@@ -12,6 +12,7 @@ use crate::pin_features::FeatureMap;
 use crate::pose_model::{FittedNet, PoseModel};
 use crate::standardise::Standardiser;
 use crate::targets::{check_targets as check_outputs, edge_targets, ModelTarget};
+use crate::turned_views::TurnedViews;
 use safetensors::SafeTensors;
 use serde::{Deserialize, Serialize};
 use tactrace_convnet::model_file::{
@@ -45,6 +46,11 @@ struct ModelFile {
     /// kind and the reference pins (absent: the displacements).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     features: Option<FeatureMap>,
+    /// The reference pins (px) a model with `rotations` was fitted over,
+    /// whose turns averaging over turned views takes (absent: no
+    /// rotations, or a file written before they were recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rotation_pins: Option<Vec<[f64; 2]>>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -104,6 +110,7 @@ impl PoseModel {
                 .collect(),
             outputs: Some(self.outputs.clone()),
             features: self.features.clone(),
+            rotation_pins: self.views.as_ref().map(|v| v.pins().to_vec()),
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
         let mut tensors = Vec::new();
@@ -158,6 +165,7 @@ impl PoseModel {
             .map(|(k, n)| load_net(k, n, &tensors, feature_dim))
             .collect::<Result<Vec<_>, _>>()?;
         check_targets(&nets, width, file.config.ensemble)?;
+        let views = load_views(&file.config, file.rotation_pins.as_deref(), file.input_dim)?;
         Ok(PoseModel {
             config: file.config,
             standardiser,
@@ -165,6 +173,7 @@ impl PoseModel {
             nets,
             outputs,
             features: file.features,
+            views,
             predictor: Default::default(),
         })
     }
@@ -188,6 +197,35 @@ fn check_features(file: &ModelFile) -> Result<usize, LearnError> {
         Some(map) => Ok(map.output_dim()),
         None => Ok(file.input_dim),
     }
+}
+
+/// The turned views of a model with `rotations` over its recorded
+/// `pins`; a model that averages them must record pins that match its
+/// input length.
+fn load_views(
+    config: &ModelConfig,
+    pins: Option<&[[f64; 2]]>,
+    input_dim: usize,
+) -> Result<Option<TurnedViews>, LearnError> {
+    let (rot, pins) = match (&config.rotations, pins) {
+        (Some(rot), Some(pins)) => (rot, pins),
+        (Some(rot), None) if rot.at_prediction => {
+            return Err(corrupt(
+                "rotations.at_prediction is set but the model records no rotation_pins",
+            ))
+        }
+        (None, Some(_)) => return Err(corrupt("rotation_pins without rotations")),
+        _ => return Ok(None),
+    };
+    if 2 * pins.len() != input_dim {
+        return Err(corrupt(format!(
+            "{} rotation_pins, but the model takes {input_dim} inputs",
+            pins.len()
+        )));
+    }
+    TurnedViews::new(rot, pins)
+        .map(Some)
+        .map_err(|e| corrupt(format!("rotation_pins: {e}")))
 }
 
 fn load_net(

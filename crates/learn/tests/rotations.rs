@@ -69,6 +69,7 @@ fn circular_edge() -> Vec<ModelTarget> {
 const SIX: Rotations = Rotations {
     order: 6,
     angle_sign: -1,
+    at_prediction: false,
 };
 
 #[test]
@@ -175,6 +176,7 @@ fn bad_settings_are_refused_and_the_default_writes_nothing() {
         cfg.rotations = Some(Rotations {
             order: bad.0,
             angle_sign: bad.1,
+            ..SIX
         });
         let err = cfg.validate().unwrap_err();
         assert!(err.to_string().contains("rotations"), "{bad:?}: {err}");
@@ -185,6 +187,34 @@ fn bad_settings_are_refused_and_the_default_writes_nothing() {
     assert_eq!(back.rotations, Some(SIX));
 }
 
+/// `cfg` fitted on `data`, a circular edge over the layout `pins`.
+fn fit_on_pins(
+    cfg: &ModelConfig,
+    data: &Dataset,
+    pins: &[[f64; 2]],
+) -> Result<PoseModel, LearnError> {
+    PoseModel::fit_targets_on_pins(cfg, &circular_edge(), data, None, Some(pins), &mut |_| {})
+        .map(|(model, _)| model)
+}
+
+/// A PCADenNN of one hidden layer of `hidden` units on `components`
+/// principal components, `epochs` epochs.
+fn small_pcadennn(
+    rotations: Option<Rotations>,
+    epochs: usize,
+    hidden: usize,
+    components: usize,
+) -> ModelConfig {
+    let mut cfg = ModelConfig::preset(ModelKind::PcaDenNN, Preset::Default);
+    cfg.rotations = rotations;
+    cfg.epochs = epochs;
+    if let Some(net) = cfg.pose.as_mut() {
+        net.hidden = vec![hidden];
+        net.n_components = Some(components);
+    }
+    cfg
+}
+
 #[test]
 fn a_fit_with_rotations_needs_the_reference_pins() {
     let pins = hex_layout(2);
@@ -192,22 +222,92 @@ fn a_fit_with_rotations_needs_the_reference_pins() {
         .map(|i| (0.5 * f64::from(i % 3), 30.0 * f64::from(i)))
         .collect();
     let data = edges(&pins, &poses);
-    let mut cfg = ModelConfig::preset(ModelKind::PcaDenNN, Preset::Default);
-    cfg.rotations = Some(SIX);
-    cfg.epochs = 2;
-    if let Some(net) = cfg.pose.as_mut() {
-        net.hidden = vec![8];
-        net.n_components = Some(4);
-    }
+    let cfg = small_pcadennn(Some(SIX), 2, 8, 4);
     let err = PoseModel::fit_targets(&cfg, &circular_edge(), &data, None, &mut |_| {}).unwrap_err();
     assert!(err.to_string().contains("reference pins"), "{err}");
-    let fitted = PoseModel::fit_targets_on_pins(
-        &cfg,
-        &circular_edge(),
-        &data,
-        None,
-        Some(&pins),
-        &mut |_| {},
-    );
+    let fitted = fit_on_pins(&cfg, &data, &pins);
     assert!(fitted.is_ok(), "{:?}", fitted.err().map(|e| e.to_string()));
+}
+
+/// Toy edges at `count` seeded poses (r in [-6, 6] px, theta over the
+/// circle), every displacement with seeded noise of `noise` px (sd).
+fn noisy_edges(pins: &[[f64; 2]], count: usize, noise: f64, seed: u64) -> Dataset {
+    use rand::{Rng, SeedableRng};
+    use rand_distr::{Distribution, Normal};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let poses: Vec<(f64, f64)> = (0..count)
+        .map(|_| (rng.random_range(-6.0..6.0), rng.random_range(-180.0..180.0)))
+        .collect();
+    let mut data = edges(pins, &poses);
+    let normal = Normal::new(0.0, noise).unwrap();
+    for v in &mut data.x {
+        *v += normal.sample(&mut rng) as f32;
+    }
+    data
+}
+
+/// Mean wrapped angle error (deg) of `model` over `data`.
+fn angle_mae(model: &PoseModel, data: &Dataset) -> f64 {
+    let predicted = model.predict_targets_batch(data).unwrap();
+    let sum: f64 = predicted
+        .iter()
+        .enumerate()
+        .map(|(i, p)| tactrace_learn::wrap_deg(p[1] - f64::from(data.y_row(i)[1])).abs())
+        .sum();
+    sum / data.n as f64
+}
+
+#[test]
+fn a_net_fitted_on_turned_copies_gains_from_averaging_its_turned_views() {
+    let pins = hex_layout(3);
+    let train = noisy_edges(&pins, 60, 0.1, 1);
+    let held = noisy_edges(&pins, 200, 0.1, 2);
+    let cfg = small_pcadennn(Some(SIX), 30, 32, 8);
+    let mut model = fit_on_pins(&cfg, &train, &pins).unwrap();
+    assert!(!model.averages_turned_views(), "off unless asked for");
+    let plain = angle_mae(&model, &held);
+    model.set_turned_views(true).unwrap();
+    let averaged = angle_mae(&model, &held);
+    assert!(
+        averaged < 0.9 * plain,
+        "six views {averaged:.3} deg against the tap alone {plain:.3}"
+    );
+    // The switch is kept in the file, with the layout it needs.
+    let (json, weights) = model.to_bytes().unwrap();
+    assert!(json.contains("at_prediction") && json.contains("rotation_pins"));
+    let back = PoseModel::from_bytes(&json, &weights).unwrap();
+    assert!(back.averages_turned_views());
+    assert_eq!(
+        back.predict_targets(held.x_row(3)).unwrap(),
+        model.predict_targets(held.x_row(3)).unwrap()
+    );
+    let off = json.replace("\"at_prediction\": true", "\"at_prediction\": false");
+    let off = PoseModel::from_bytes(&off, &weights).unwrap();
+    assert!((angle_mae(&off, &held) - plain).abs() < 1e-12);
+}
+
+#[test]
+fn averaging_is_refused_without_rotations_or_their_recorded_layout() {
+    let pins = hex_layout(2);
+    let data = noisy_edges(&pins, 12, 0.05, 3);
+    let mut cfg = small_pcadennn(None, 2, 8, 4);
+    let (mut plain, _) =
+        PoseModel::fit_targets(&cfg, &circular_edge(), &data, None, &mut |_| {}).unwrap();
+    let err = plain.set_turned_views(true).unwrap_err();
+    assert!(err.to_string().contains("rotations"), "{err}");
+    cfg.rotations = Some(Rotations {
+        at_prediction: true,
+        ..SIX
+    });
+    let turned = fit_on_pins(&cfg, &data, &pins).unwrap();
+    assert!(
+        turned.averages_turned_views(),
+        "asked for in the configuration"
+    );
+    // A file that sets the switch but lost its layout is refused, by name.
+    let (json, weights) = turned.to_bytes().unwrap();
+    let start = json.find("\"rotation_pins\"").unwrap();
+    let cut = format!("{}}}", json[..start].trim_end().trim_end_matches(','));
+    let err = PoseModel::from_bytes(&cut, &weights).unwrap_err();
+    assert!(err.to_string().contains("rotation_pins"), "{err}");
 }

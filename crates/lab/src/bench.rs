@@ -156,7 +156,7 @@ pub fn thread_cpu_us() -> Option<f64> {
         // SAFETY: clock_gettime writes one timespec into `t`, which lives
         // here for the call.
         let read = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
-        (read == 0).then(|| t.tv_sec as f64 * 1e6 + t.tv_nsec as f64 * 1e-3)
+        (read == 0).then_some(t.tv_sec as f64 * 1e6 + t.tv_nsec as f64 * 1e-3)
     }
     #[cfg(not(unix))]
     {

@@ -438,6 +438,8 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             obj.insert("real_control_latency_p95_us".into(), r.p95_us.into());
             obj.insert("real_detect_median_us".into(), r.detect_median_us.into());
             obj.insert("real_predict_median_us".into(), r.predict_median_us.into());
+            obj.insert("real_cpu_median_us".into(), r.cpu_median_us.into());
+            obj.insert("real_cpu_p95_us".into(), r.cpu_p95_us.into());
         }
         crate::say!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
@@ -473,6 +475,11 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             "control loop on real frames, frame -> command: mean {:.1} us, median {:.1} us, p95 {:.1} us \
              (medians of the parts: detect {:.1} us, predict {:.1} us)",
             r.mean_us, r.median_us, r.p95_us, r.detect_median_us, r.predict_median_us
+        );
+        crate::say!(
+            "the same, thread CPU time a frame: median {:.1} us, p95 {:.1} us",
+            r.cpu_median_us,
+            r.cpu_p95_us
         );
     }
     Ok(())

@@ -66,7 +66,8 @@ fn stages(reference: &[[f64; 2]], spacing: f64, exact: bool) -> Vec<Stage> {
                 reference,
                 sigma * spacing,
                 if exact { EXACT_TOLERANCE } else { cut },
-            ),
+            )
+            .with_prior(PRIOR_WEIGHT),
         })
         .collect()
 }

@@ -10,10 +10,12 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use tactrace_lab::calibrate::{calibrate_sensor, write_calibrated, CalibrateConfig};
 use tactrace_lab::import::Imported;
-use tactrace_lab::twin::{simulate_twin_calibrated, simulate_twin_laid_out};
+use tactrace_lab::twin::{
+    fit_position_map, relabel_positions, simulate_twin_calibrated, simulate_twin_laid_out,
+};
 use tactrace_lab::LabError;
 use tactrace_store::collection::{bristol, CollectionEdits, Reference};
-use tactrace_store::{dataset, fsutil, LabelledCollection, SensorFolder, SightFile};
+use tactrace_store::{dataset, fsutil, LabelledCollection, SensorFolder, SightFile, StoredModel};
 
 /// The columns of a tap's depth and shear (`twin`, `calibrate`, `sim-fit`).
 #[derive(Args)]
@@ -64,6 +66,13 @@ pub struct TwinArgs {
     /// of simulated taps only).
     #[arg(long, requires = "sensor")]
     no_real_taps: bool,
+    /// With --sensor: relabel the simulated taps' edge positions by the
+    /// position map this model (trained on the sensor's twin with
+    /// --no-real-taps) gives the sensor's real calibration taps: the
+    /// quadratic from the position it reads to the labelled one
+    /// (docs/calibration.md, "The position map").
+    #[arg(long, value_name = "MODEL", requires = "sensor")]
+    position_map: Option<PathBuf>,
     /// Rig configuration TOML whose `sensor` table is the simulated TacTip
     /// (default: the model calibrated on the real edge frames).
     #[arg(long)]
@@ -95,6 +104,7 @@ pub fn twin(a: TwinArgs) -> Result<()> {
         .add("--targets", &a.labels.targets)
         .opt("--reference", a.labels.reference.as_deref())
         .opt("--sensor", a.sensor.as_deref())
+        .opt("--position-map", a.position_map.as_deref())
         .opt("--config", a.config.as_deref())
         .opt("--params", a.params.as_deref())
         .check_apart("--out", &a.out)?;
@@ -126,8 +136,18 @@ pub fn twin(a: TwinArgs) -> Result<()> {
     let got = match &a.sensor {
         Some(dir) => {
             let sensor = SensorFolder::read(dir)?;
+            let map = match &a.position_map {
+                Some(m) => Some(fit_position_map(&sensor, &StoredModel::load(m)?)?),
+                None => None,
+            };
             let how = (!a.no_real_taps, frames_size);
-            simulate_twin_calibrated(&collection, &sensor, a.seed, how, &tick)
+            simulate_twin_calibrated(&collection, &sensor, a.seed, how, &tick).map(|mut got| {
+                if let Some(map) = &map {
+                    relabel_positions(&mut got, map);
+                    pb.suspend(|| eprintln!("position map: {}", map.describe()));
+                }
+                got
+            })
         }
         None => {
             let rig = rig_config(a.config.as_deref())?;

@@ -14,12 +14,15 @@
 //! - [`select_taps`] / [`check_span`]: the seeded rule that picks calibration
 //!   taps spanning edge position r and angle theta;
 //! - [`field_stats`]: per-coordinate RMS misfit and cosine of two sets of fields;
+//! - [`PositionMap`]: the quadratic map from the edge position a twin-trained
+//!   model reads off the real calibration taps to their labels;
 //! - [`CalibrationRecord`]: the serialisable description of a sensor file's
 //!   correction, with [`Tensor`] helpers for the store layer;
 //! - [`CalibError`]: every way the input can be wrong.
 pub mod calibrate;
 pub mod error;
 pub mod fields;
+pub mod position_map;
 pub mod record;
 pub mod ridge;
 pub mod select;
@@ -28,6 +31,7 @@ pub mod stats;
 pub use calibrate::{calibrate, real_tap_repeats, Calibration, CalibrationPlan};
 pub use error::{CalibError, Result};
 pub use fields::Fields;
+pub use position_map::PositionMap;
 pub use record::{CalibrationRecord, Selection, Tensor, FORMAT_VERSION};
 pub use ridge::{CorrectionParams, FittedCorrection, LinearCorrection, MIN_TAPS, RECOMMENDED_TAPS};
 pub use select::{check_labels, check_span, select_taps, Label, SpanRule};

@@ -14,14 +14,16 @@ use crate::sim_sight::{lay_out, sensor_sight, sim_sight, LayoutReport, SimSight}
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use std::collections::HashSet;
 use std::path::Path;
-use tactrace_calib::real_tap_repeats;
+use tactrace_calib::{real_tap_repeats, PositionMap};
 use tactrace_sensor::{EdgeTap, Shear, TacTipConfig, TacTipModel};
 use tactrace_servo::ImageInput;
 use tactrace_store::collection::Reference;
+use tactrace_store::training_record::row_hash;
 use tactrace_store::{
     pin_order_mismatch, DatasetMeta, LabelledCollection, LabelledRow, SensorFolder, StoreError,
-    TapData, TapFields, TargetColumns,
+    StoredModel, TapData, TapFields, TargetColumns,
 };
 use tactrace_vision::PinReader;
 
@@ -185,6 +187,65 @@ pub fn simulate_twin_calibrated(
         real_tap_repeats: repeats,
     });
     Ok(out)
+}
+
+/// The position map of `sensor` (calib's [`PositionMap`],
+/// docs/calibration.md "The position map"): the edge positions `model`
+/// reads off the sensor's real calibration taps, fitted to their labels.
+/// `model` must be trained on the sensor's twin without those taps
+/// (`twin --no-real-taps`): one trained on any of them, which reads them
+/// as labelled, is refused.
+pub fn fit_position_map(sensor: &SensorFolder, model: &StoredModel) -> Result<PositionMap> {
+    let net = model.for_pins(&sensor.spec.reference_pins, &sensor.source)?;
+    let d = sensor.spec.reference_pins.len() * 2;
+    if let Some(record) = model.training() {
+        let seen: HashSet<&str> = record.row_hashes.iter().map(String::as_str).collect();
+        let trained_on = sensor
+            .real_fields
+            .chunks(d)
+            .zip(&sensor.real_labels)
+            .filter(|(x, l)| seen.contains(row_hash(x, &l[..]).as_str()))
+            .count();
+        if trained_on > 0 {
+            return Err(LabError::Config(format!(
+                "the model {} was trained on {trained_on} of the sensor's {} real calibration \
+                 taps: the position map needs a model trained on its twin without them \
+                 (twin --no-real-taps)",
+                model.source().display(),
+                sensor.real_labels.len()
+            )));
+        }
+    }
+    let read: Vec<f64> = net
+        .predict_rows(&sensor.real_fields)?
+        .iter()
+        .map(|p| p[0])
+        .collect();
+    let labelled: Vec<f64> = sensor.real_labels.iter().map(|l| f64::from(l[0])).collect();
+    Ok(PositionMap::fit(&read, &labelled)?)
+}
+
+/// Relabel the simulated taps of a calibrated sensor's twin `got`
+/// ([`simulate_twin_calibrated`]): each one's edge position `s` becomes
+/// `map(s)`; the real calibration taps appended after them keep their
+/// labels. The map is recorded in the dataset's settings.
+pub fn relabel_positions(got: &mut Imported, map: &PositionMap) {
+    let data = &mut got.data;
+    let width = data.meta.targets.len().max(1);
+    let real = got
+        .composition
+        .as_ref()
+        .map_or(0, |c| c.real_taps * c.real_tap_repeats);
+    let simulated = (data.targets.len() / width).saturating_sub(real);
+    for row in data.targets.chunks_mut(width).take(simulated) {
+        row[0] = map.apply(f64::from(row[0])) as f32;
+    }
+    if let serde_json::Value::Object(settings) = &mut data.meta.settings {
+        settings.insert(
+            "position_map".into(),
+            serde_json::to_value(map).unwrap_or_default(),
+        );
+    }
 }
 
 /// The reader of a calibrated sensor's simulated taps: its detector, and

@@ -4,6 +4,7 @@
 //! rules (equilibrium propagation, or backprop for the twin) and the
 //! optimiser's schedule.
 use crate::error::{config_error, ConvError};
+use crate::turns::FrameTurns;
 use serde::{Deserialize, Serialize};
 
 /// Largest kernel side, stride, channel count and dense width accepted.
@@ -230,6 +231,11 @@ pub struct ConvConfig {
     /// JSON) or `pins_and_pixels`.
     #[serde(default, skip_serializing_if = "InputKind::is_pixels")]
     pub input: InputKind,
+    /// Training on every frame and its copies turned by the sensor's
+    /// symmetry (docs/learning.md, "Turned frames"); `None`, the default,
+    /// is off and left out of the JSON.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub turns: Option<FrameTurns>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -291,6 +297,7 @@ impl ConvConfig {
             dense_dropout: 0.0,
             channel_dropout: 0.0,
             input: InputKind::Pixels,
+            turns: None,
         }
     }
 
@@ -353,6 +360,15 @@ impl ConvConfig {
                 "weight_decay",
                 format!("{} is not a number >= 0", self.weight_decay),
             ));
+        }
+        if let Some(turns) = &self.turns {
+            turns.validate()?;
+            if !self.input.is_pixels() {
+                return Err(config_error(
+                    "turns",
+                    "turned frames are for a model of pixels only (the pins would have to turn too)",
+                ));
+            }
         }
         self.ep.validate()
     }

@@ -58,6 +58,20 @@ fn width(outputs: &[ModelTarget]) -> usize {
     outputs.iter().map(ModelTarget::width).sum()
 }
 
+/// The encoded columns holding a circular target's sine (its cosine is
+/// the next): what a turned training frame turns.
+fn angle_columns(outputs: &[ModelTarget]) -> Vec<usize> {
+    let mut start = 0;
+    let mut angles = Vec::new();
+    for t in outputs {
+        if t.circular {
+            angles.push(start);
+        }
+        start += t.width();
+    }
+    angles
+}
+
 /// Run `fit` on the encoded targets of the training rows `values` (one a
 /// frame of `frames`) and of the validation frames' rows.
 fn with_encoded(
@@ -72,7 +86,8 @@ fn with_encoded(
 ) -> Result<(ConvModel, TrainingHistory), LearnError> {
     let w = width(outputs);
     let encoded = encode(outputs, values, frames.count())?;
-    let train = Targets::new(&encoded, frames.count(), w)?;
+    let angles = angle_columns(outputs);
+    let train = Targets::new(&encoded, frames.count(), w)?.with_angles(&angles)?;
     let val = match validation {
         Some((vf, vv)) => Some((vf, encode(outputs, vv, vf.count())?)),
         None => None,

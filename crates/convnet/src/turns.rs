@@ -15,6 +15,7 @@
 //! distance from the centre). Predictions never see a copy.
 use crate::data::{Frames, Targets};
 use crate::error::{config_error, ConvError};
+use crate::model::ConvModel;
 use serde::{Deserialize, Serialize};
 
 /// The largest order of symmetry accepted (a turn of 30 deg).
@@ -36,6 +37,16 @@ pub struct FrameTurns {
     /// centre `[(width - 1) / 2, (height - 1) / 2]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub centre: Option<[f64; 2]>,
+    /// Predict with the mean of every turned view of a frame too
+    /// ([`ConvModel::predict_batch_turned`]): each view's encoded angles
+    /// turned back, so an angle is the circular mean of the views'. Off
+    /// (false), the default, is left out of the JSON.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub at_prediction: bool,
+}
+
+fn is_false(v: &bool) -> bool {
+    !*v
 }
 
 impl FrameTurns {
@@ -119,6 +130,41 @@ pub fn turn_angles(row: &mut [f64], angles: &[usize], deg: f64) {
         let (s, c) = (row[j], row[j + 1]);
         row[j] = s * cd + c * sd;
         row[j + 1] = c * cd - s * sd;
+    }
+}
+
+impl ConvModel {
+    /// [`ConvModel::predict_batch`] (`count x N`, encoded and unscaled),
+    /// or, when its `turns` say `at_prediction`, the mean over the frames'
+    /// `order` turned views, each view's angles (the sine columns
+    /// `angles`, cosine next) turned back by `-angle_sign phi_k` first.
+    pub fn predict_batch_turned(
+        &self,
+        frames: &Frames,
+        angles: &[usize],
+    ) -> Result<Vec<f64>, ConvError> {
+        let mut sum = self.predict_batch(frames)?;
+        let Some(turns) = self.config.turns.filter(|t| t.at_prediction) else {
+            return Ok(sum);
+        };
+        let (size, n, dim) = (frames.size(), frames.count(), self.outputs());
+        let hw = size.0 * size.1;
+        let centre = turns.centre_for(size);
+        let mut pixels = vec![0u8; n * hw];
+        for k in 1..turns.order {
+            let deg = turns.turn_deg(k);
+            for (i, out) in pixels.chunks_exact_mut(hw).enumerate() {
+                turn_frame(frames.frame(i), size, centre, deg, out);
+            }
+            let mut view = self.predict_batch(&Frames::new(&pixels, n, size.0, size.1)?)?;
+            for row in view.chunks_exact_mut(dim.max(1)) {
+                turn_angles(row, angles, -f64::from(turns.angle_sign) * deg);
+            }
+            sum.iter_mut().zip(&view).for_each(|(s, v)| *s += v);
+        }
+        let order = turns.order as f64;
+        sum.iter_mut().for_each(|s| *s /= order);
+        Ok(sum)
     }
 }
 
@@ -215,6 +261,7 @@ mod tests {
             order: 6,
             angle_sign: 1,
             centre: Some(centre),
+            at_prediction: false,
         };
         // two frames: a spot at 9 px from the centre, at 20 and 75 deg
         // (image coordinates), each labelled with its angle's sine and
@@ -265,6 +312,7 @@ mod tests {
             order: 6,
             angle_sign: -1,
             centre: None,
+            at_prediction: false,
         };
         let set = TurnedSet::of(&frames, &targets, &turns).unwrap();
         assert_eq!(set.frames().unwrap().pin_dim(), 0);

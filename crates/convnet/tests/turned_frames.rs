@@ -126,6 +126,7 @@ fn turns() -> FrameTurns {
         order: 6,
         angle_sign: -1,
         centre: Some([5.5, 5.5]),
+        at_prediction: false,
     }
 }
 
@@ -136,7 +137,7 @@ fn the_option_is_checked() {
         c.turns = Some(FrameTurns {
             order,
             angle_sign: sign,
-            centre: None,
+            ..turns()
         });
         assert!(matches!(c.validate(), Err(ConvError::Config { .. })));
     }
@@ -200,4 +201,64 @@ fn a_fit_with_turns_keeps_them_and_differs() {
         back.predict(frames.frame(3)).unwrap(),
         m1.predict(frames.frame(3)).unwrap()
     );
+}
+
+#[test]
+fn turned_views_at_prediction_are_the_mean_of_the_views_turned_back() {
+    let (pixels, targets) = moving_pair_frames(24);
+    let frames = Frames::new(&pixels, 24, SIDE, SIDE).unwrap();
+    let values: Vec<f64> = targets
+        .chunks(2)
+        .flat_map(|t| {
+            let a = (t[1] - 5.5).atan2(t[0] - 5.5);
+            [t[0], a.sin(), a.cos()]
+        })
+        .collect();
+    let angles = [1];
+    let t = Targets::new(&values, 24, 3)
+        .unwrap()
+        .with_angles(&angles)
+        .unwrap();
+    let mut config = tiny_config(ModelKind::ConvMlp);
+    config.turns = Some(turns());
+    let (plain, _) = ConvModel::fit(&frames, &t, &config, 2).unwrap();
+    config.turns = Some(FrameTurns {
+        at_prediction: true,
+        ..turns()
+    });
+    let (viewed, _) = ConvModel::fit(&frames, &t, &config, 2).unwrap();
+    // the option changes prediction only
+    assert_eq!(
+        plain.predict_batch(&frames).unwrap(),
+        viewed.predict_batch(&frames).unwrap()
+    );
+    assert_eq!(
+        plain.predict_batch_turned(&frames, &angles).unwrap(),
+        plain.predict_batch(&frames).unwrap()
+    );
+    let mut want = vec![0.0; 24 * 3];
+    let mut turned = vec![0u8; pixels.len()];
+    for k in 0..6 {
+        let deg = 60.0 * k as f64;
+        for i in 0..24 {
+            let hw = SIDE * SIDE;
+            turn_frame(
+                frames.frame(i),
+                (SIDE, SIDE),
+                [5.5, 5.5],
+                deg,
+                &mut turned[i * hw..(i + 1) * hw],
+            );
+        }
+        let view = Frames::new(&turned, 24, SIDE, SIDE).unwrap();
+        let mut out = plain.predict_batch(&view).unwrap();
+        for row in out.chunks_exact_mut(3) {
+            turn_angles(row, &angles, deg); // angle_sign -1: back by +deg
+        }
+        want.iter_mut().zip(&out).for_each(|(w, o)| *w += o / 6.0);
+    }
+    let got = viewed.predict_batch_turned(&frames, &angles).unwrap();
+    for (g, w) in got.iter().zip(&want) {
+        assert!((g - w).abs() < 1e-9, "{g} against {w}");
+    }
 }

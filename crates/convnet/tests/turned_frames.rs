@@ -165,18 +165,24 @@ fn the_frame_centre_is_the_default() {
     assert_eq!(turns().centre_for((64, 48)), [5.5, 5.5]);
 }
 
-#[test]
-fn a_fit_with_turns_keeps_them_and_differs() {
+/// 24 tiny frames of a moving bright pair; targets its column and its
+/// angle about the frame's centre as a sine and a cosine (column 1).
+fn spot_angle_frames() -> (Vec<u8>, Vec<f64>) {
     let (pixels, targets) = moving_pair_frames(24);
-    let frames = Frames::new(&pixels, 24, SIDE, SIDE).unwrap();
-    // the targets as one distance and one angle's sine and cosine
-    let values: Vec<f64> = targets
+    let values = targets
         .chunks(2)
         .flat_map(|t| {
             let a = (t[1] - 5.5).atan2(t[0] - 5.5);
             [t[0], a.sin(), a.cos()]
         })
         .collect();
+    (pixels, values)
+}
+
+#[test]
+fn a_fit_with_turns_keeps_them_and_differs() {
+    let (pixels, values) = spot_angle_frames();
+    let frames = Frames::new(&pixels, 24, SIDE, SIDE).unwrap();
     let angles = [1];
     let t = Targets::new(&values, 24, 3)
         .unwrap()
@@ -205,15 +211,8 @@ fn a_fit_with_turns_keeps_them_and_differs() {
 
 #[test]
 fn turned_views_at_prediction_are_the_mean_of_the_views_turned_back() {
-    let (pixels, targets) = moving_pair_frames(24);
+    let (pixels, values) = spot_angle_frames();
     let frames = Frames::new(&pixels, 24, SIDE, SIDE).unwrap();
-    let values: Vec<f64> = targets
-        .chunks(2)
-        .flat_map(|t| {
-            let a = (t[1] - 5.5).atan2(t[0] - 5.5);
-            [t[0], a.sin(), a.cos()]
-        })
-        .collect();
     let angles = [1];
     let t = Targets::new(&values, 24, 3)
         .unwrap()

@@ -4,6 +4,7 @@
 //! rules (equilibrium propagation, or backprop for the twin) and the
 //! optimiser's schedule.
 use crate::error::{config_error, ConvError};
+use crate::turns::FrameTurns;
 use serde::{Deserialize, Serialize};
 
 /// Largest kernel side, stride, channel count and dense width accepted.
@@ -240,6 +241,11 @@ pub struct ConvConfig {
     /// starting at its figure. 0, the default, is off and left out.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub pixel_dropout: f64,
+    /// Training on every frame and its copies turned by the sensor's
+    /// symmetry (docs/learning.md, "Turned frames"); `None`, the default,
+    /// is off and left out of the JSON.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub turns: Option<FrameTurns>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -302,6 +308,7 @@ impl ConvConfig {
             channel_dropout: 0.0,
             input: InputKind::Pixels,
             pixel_dropout: 0.0,
+            turns: None,
         }
     }
 
@@ -365,6 +372,15 @@ impl ConvConfig {
                 "weight_decay",
                 format!("{} is not a number >= 0", self.weight_decay),
             ));
+        }
+        if let Some(turns) = &self.turns {
+            turns.validate()?;
+            if !self.input.is_pixels() {
+                return Err(config_error(
+                    "turns",
+                    "turned frames are for a model of pixels only (the pins would have to turn too)",
+                ));
+            }
         }
         self.ep.validate()
     }

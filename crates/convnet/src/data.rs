@@ -117,6 +117,9 @@ pub struct Targets<'a> {
     values: &'a [f64],
     count: usize,
     dim: usize,
+    /// The columns holding an angle's sine, its cosine in the next one
+    /// (what a turned frame turns, [`crate::FrameTurns`]); none by default.
+    angles: &'a [usize],
 }
 
 impl<'a> Targets<'a> {
@@ -136,7 +139,34 @@ impl<'a> Targets<'a> {
                 value: values[i],
             });
         }
-        Ok(Targets { values, count, dim })
+        Ok(Targets {
+            values,
+            count,
+            dim,
+            angles: &[],
+        })
+    }
+
+    /// The same rows, columns `j` and `j + 1` of each `j` in `angles`
+    /// an angle's sine and cosine (pairs apart and inside a row).
+    pub fn with_angles(self, angles: &'a [usize]) -> Result<Self, ConvError> {
+        let mut used = vec![false; self.dim];
+        for &j in angles {
+            if j + 1 >= self.dim || used[j] || used[j + 1] {
+                return Err(ConvError::AngleColumns {
+                    column: j,
+                    dim: self.dim,
+                });
+            }
+            used[j] = true;
+            used[j + 1] = true;
+        }
+        Ok(Targets { angles, ..self })
+    }
+
+    /// The columns holding an angle's sine (its cosine next).
+    pub fn angles(&self) -> &'a [usize] {
+        self.angles
     }
 
     /// Number of rows.

@@ -45,6 +45,10 @@ pub enum ConvError {
         got_height: usize,
         got_width: usize,
     },
+    /// An angle's sine column whose cosine column (the next) lies past the
+    /// row's `dim` targets, or that overlaps another angle's pair.
+    #[error("angle column {column} (a sine, its cosine next) does not fit {dim} target columns or overlaps another angle")]
+    AngleColumns { column: usize, dim: usize },
     /// A configuration value is out of range.
     #[error("invalid configuration: {field}: {reason}")]
     Config { field: &'static str, reason: String },

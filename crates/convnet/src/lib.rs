@@ -32,6 +32,7 @@ mod serialise;
 mod settle;
 mod simd;
 mod train;
+mod turns;
 mod workspace;
 
 /// The building blocks of a layer as a matrix product, public for the
@@ -62,3 +63,4 @@ pub use resample::area_resample;
 pub use scaling::{InputScaling, TargetScaling};
 pub use serialise::CONV_FORMAT_VERSION;
 pub use train::{EpochReport, TrainingHistory, Validation, DIVERGENCE_FACTOR};
+pub use turns::{turn_angles, turn_frame, FrameTurns, MAX_TURN_ORDER};

@@ -16,6 +16,7 @@ use crate::network::Network;
 use crate::params::Parameters;
 use crate::predict::{predict_all, prediction_pool};
 use crate::scaling::{InputScaling, TargetScaling};
+use crate::turns::TurnedSet;
 use crate::workspace::Workspace;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -71,6 +72,23 @@ pub(crate) struct FitData<'a> {
     pub targets: Targets<'a>,
     pub input: InputScaling,
     pub scaling: TargetScaling,
+}
+
+impl<'a> FitData<'a> {
+    /// The same network's fit on the frames and targets of `set` (the
+    /// originals and their turned copies).
+    fn on<'b>(&self, set: &'b TurnedSet) -> Result<FitData<'b>, ConvError>
+    where
+        'a: 'b,
+    {
+        Ok(FitData {
+            seed: self.seed,
+            frames: set.frames()?,
+            targets: set.targets(self.targets.angles())?,
+            input: self.input.clone(),
+            scaling: self.scaling.clone(),
+        })
+    }
 }
 
 /// One network's training state: its chunk buffers, optimiser, frame
@@ -151,6 +169,18 @@ pub(crate) fn train(
     validation: Option<(Frames, Targets)>,
     on_epoch: &mut dyn FnMut(&EpochReport),
 ) -> Result<TrainingHistory, ConvError> {
+    let turned = match &config.turns {
+        Some(turns) => Some(TurnedSet::of(&data[0].frames, &data[0].targets, turns)?),
+        None => None,
+    };
+    let with_turns: Vec<FitData>;
+    let data = match &turned {
+        Some(set) => {
+            with_turns = data.iter().map(|d| d.on(set)).collect::<Result<_, _>>()?;
+            &with_turns[..]
+        }
+        None => data,
+    };
     let mut members: Vec<Member> = nets
         .iter()
         .zip(data)

@@ -58,6 +58,20 @@ fn width(outputs: &[ModelTarget]) -> usize {
     outputs.iter().map(ModelTarget::width).sum()
 }
 
+/// The encoded columns holding a circular target's sine (its cosine is
+/// the next): what a turned training frame turns.
+fn angle_columns(outputs: &[ModelTarget]) -> Vec<usize> {
+    let mut start = 0;
+    let mut angles = Vec::new();
+    for t in outputs {
+        if t.circular {
+            angles.push(start);
+        }
+        start += t.width();
+    }
+    angles
+}
+
 /// Run `fit` on the encoded targets of the training rows `values` (one a
 /// frame of `frames`) and of the validation frames' rows.
 fn with_encoded(
@@ -72,7 +86,8 @@ fn with_encoded(
 ) -> Result<(ConvModel, TrainingHistory), LearnError> {
     let w = width(outputs);
     let encoded = encode(outputs, values, frames.count())?;
-    let train = Targets::new(&encoded, frames.count(), w)?;
+    let angles = angle_columns(outputs);
+    let train = Targets::new(&encoded, frames.count(), w)?.with_angles(&angles)?;
     let val = match validation {
         Some((vf, vv)) => Some((vf, encode(outputs, vv, vf.count())?)),
         None => None,
@@ -137,8 +152,21 @@ impl ImageModel {
     /// Every target, in [`Self::outputs`]' order and units (circular
     /// angles within (-180, 180] deg), for one frame of the input size.
     pub fn predict_targets(&self, frame: &[u8]) -> Result<Vec<f64>, LearnError> {
-        let encoded = self.conv.predict(frame)?;
+        let encoded = if self.turned_views() {
+            let (h, w) = self.input_size();
+            let one = Frames::new(frame, 1, h, w)?;
+            self.conv
+                .predict_batch_turned(&one, &angle_columns(&self.outputs))?
+        } else {
+            self.conv.predict(frame)?
+        };
         Ok(targets::decode(&self.outputs, &encoded))
+    }
+
+    /// Whether it predicts with the mean of a frame's turned views
+    /// (`turns.at_prediction` of its configuration; a model of pixels).
+    fn turned_views(&self) -> bool {
+        self.conv.config().turns.is_some_and(|t| t.at_prediction)
     }
 
     /// [`Self::predict_targets`] of one frame and its pin displacement
@@ -150,6 +178,9 @@ impl ImageModel {
         frame: &[u8],
         pins: &[f32],
     ) -> Result<Vec<f64>, LearnError> {
+        if self.turned_views() {
+            return self.predict_targets(frame);
+        }
         let encoded = self.conv.predict_with_pins(frame, pins)?;
         Ok(targets::decode(&self.outputs, &encoded))
     }
@@ -197,7 +228,9 @@ impl ImageModel {
     /// Every frame's targets, one row a frame (frames shared among the
     /// threads of the current rayon pool).
     pub fn predict_batch(&self, frames: &Frames) -> Result<Vec<Vec<f64>>, LearnError> {
-        let encoded = self.conv.predict_batch(frames)?;
+        let encoded = self
+            .conv
+            .predict_batch_turned(frames, &angle_columns(&self.outputs))?;
         let w = width(&self.outputs).max(1);
         Ok(encoded
             .chunks_exact(w)

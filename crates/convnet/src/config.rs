@@ -245,7 +245,7 @@ pub struct ConvConfig {
     /// symmetry (docs/learning.md, "Turned frames"); `None`, the default,
     /// is off and left out of the JSON.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub turns: Option<FrameTurns>,
+    pub rotations: Option<FrameTurns>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -308,7 +308,7 @@ impl ConvConfig {
             channel_dropout: 0.0,
             input: InputKind::Pixels,
             pixel_dropout: 0.0,
-            turns: None,
+            rotations: None,
         }
     }
 
@@ -373,11 +373,11 @@ impl ConvConfig {
                 format!("{} is not a number >= 0", self.weight_decay),
             ));
         }
-        if let Some(turns) = &self.turns {
+        if let Some(turns) = &self.rotations {
             turns.validate()?;
             if !self.input.is_pixels() {
                 return Err(config_error(
-                    "turns",
+                    "rotations",
                     "turned frames are for a model of pixels only (the pins would have to turn too)",
                 ));
             }

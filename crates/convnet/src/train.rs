@@ -169,7 +169,7 @@ pub(crate) fn train(
     validation: Option<(Frames, Targets)>,
     on_epoch: &mut dyn FnMut(&EpochReport),
 ) -> Result<TrainingHistory, ConvError> {
-    let turned = match &config.turns {
+    let turned = match &config.rotations {
         Some(turns) => Some(TurnedSet::of(&data[0].frames, &data[0].targets, turns)?),
         None => None,
     };

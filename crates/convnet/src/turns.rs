@@ -54,20 +54,20 @@ impl FrameTurns {
     pub fn validate(&self) -> Result<(), ConvError> {
         if !(2..=MAX_TURN_ORDER).contains(&self.order) {
             return Err(config_error(
-                "turns.order",
+                "rotations.order",
                 format!("{} is not in 2..={MAX_TURN_ORDER}", self.order),
             ));
         }
         if self.angle_sign.abs() != 1 {
             return Err(config_error(
-                "turns.angle_sign",
+                "rotations.angle_sign",
                 format!("{} is not 1 or -1", self.angle_sign),
             ));
         }
         if let Some(c) = self.centre {
             if !c.iter().all(|v| v.is_finite()) {
                 return Err(config_error(
-                    "turns.centre",
+                    "rotations.centre",
                     format!("[{}, {}] is not two finite numbers", c[0], c[1]),
                 ));
             }
@@ -135,7 +135,7 @@ pub fn turn_angles(row: &mut [f64], angles: &[usize], deg: f64) {
 
 impl ConvModel {
     /// [`ConvModel::predict_batch`] (`count x N`, encoded and unscaled),
-    /// or, when its `turns` say `at_prediction`, the mean over the frames'
+    /// or, when its `rotations` say `at_prediction`, the mean over the frames'
     /// `order` turned views, each view's angles (the sine columns
     /// `angles`, cosine next) turned back by `-angle_sign phi_k` first.
     pub fn predict_batch_turned(
@@ -144,7 +144,7 @@ impl ConvModel {
         angles: &[usize],
     ) -> Result<Vec<f64>, ConvError> {
         let mut sum = self.predict_batch(frames)?;
-        let Some(turns) = self.config.turns.filter(|t| t.at_prediction) else {
+        let Some(turns) = self.config.rotations.filter(|t| t.at_prediction) else {
             return Ok(sum);
         };
         let (size, n, dim) = (frames.size(), frames.count(), self.outputs());

@@ -1,4 +1,4 @@
-//! Turned training frames (`ConvConfig::turns`): a turned frame's spots
+//! Turned training frames (`ConvConfig::rotations`): a turned frame's spots
 //! are the turned spots, an encoded angle turns as a vector, the option
 //! is checked, kept in the model's JSON, and a fit with it trains on the
 //! copies.
@@ -134,24 +134,27 @@ fn turns() -> FrameTurns {
 fn the_option_is_checked() {
     let mut c = ConvConfig::new(ModelKind::ConvMlp);
     for (order, sign) in [(1, 1), (13, 1), (6, 0), (6, 2)] {
-        c.turns = Some(FrameTurns {
+        c.rotations = Some(FrameTurns {
             order,
             angle_sign: sign,
             ..turns()
         });
         assert!(matches!(c.validate(), Err(ConvError::Config { .. })));
     }
-    c.turns = Some(FrameTurns {
+    c.rotations = Some(FrameTurns {
         centre: Some([f64::NAN, 1.0]),
         ..turns()
     });
     assert!(c.validate().is_err());
-    c.turns = Some(turns());
+    c.rotations = Some(turns());
     assert!(c.validate().is_ok());
     c.input = InputKind::PinsAndPixels;
     assert!(matches!(
         c.validate(),
-        Err(ConvError::Config { field: "turns", .. })
+        Err(ConvError::Config {
+            field: "rotations",
+            ..
+        })
     ));
 }
 
@@ -190,7 +193,7 @@ fn a_fit_with_turns_keeps_them_and_differs() {
         .unwrap();
     let plain = tiny_config(ModelKind::ConvMlp);
     let mut turned = plain.clone();
-    turned.turns = Some(turns());
+    turned.rotations = Some(turns());
     let (m0, h0) = ConvModel::fit(&frames, &t, &plain, 1).unwrap();
     let (m1, h1) = ConvModel::fit(&frames, &t, &turned, 1).unwrap();
     assert_ne!(h0.epochs[0].loss, h1.epochs[0].loss);
@@ -199,10 +202,10 @@ fn a_fit_with_turns_keeps_them_and_differs() {
         m1.predict(frames.frame(3)).unwrap()
     );
     let (json, weights) = m1.to_bytes().unwrap();
-    assert!(json.contains("\"turns\""));
-    assert!(!m0.to_bytes().unwrap().0.contains("\"turns\""));
+    assert!(json.contains("\"rotations\""));
+    assert!(!m0.to_bytes().unwrap().0.contains("\"rotations\""));
     let back = ConvModel::from_bytes(&json, &weights).unwrap();
-    assert_eq!(back.config().turns, Some(turns()));
+    assert_eq!(back.config().rotations, Some(turns()));
     assert_eq!(
         back.predict(frames.frame(3)).unwrap(),
         m1.predict(frames.frame(3)).unwrap()
@@ -219,9 +222,9 @@ fn turned_views_at_prediction_are_the_mean_of_the_views_turned_back() {
         .with_angles(&angles)
         .unwrap();
     let mut config = tiny_config(ModelKind::ConvMlp);
-    config.turns = Some(turns());
+    config.rotations = Some(turns());
     let (plain, _) = ConvModel::fit(&frames, &t, &config, 2).unwrap();
-    config.turns = Some(FrameTurns {
+    config.rotations = Some(FrameTurns {
         at_prediction: true,
         ..turns()
     });

@@ -164,9 +164,12 @@ impl ImageModel {
     }
 
     /// Whether it predicts with the mean of a frame's turned views
-    /// (`turns.at_prediction` of its configuration; a model of pixels).
+    /// (`rotations.at_prediction` of its configuration; a model of pixels).
     fn turned_views(&self) -> bool {
-        self.conv.config().turns.is_some_and(|t| t.at_prediction)
+        self.conv
+            .config()
+            .rotations
+            .is_some_and(|t| t.at_prediction)
     }
 
     /// [`Self::predict_targets`] of one frame and its pin displacement

@@ -33,7 +33,7 @@ fn config(at_prediction: bool) -> ConvConfig {
     c.epochs = 2;
     c.batch_size = 12;
     c.chunk_size = 4;
-    c.turns = Some(FrameTurns {
+    c.rotations = Some(FrameTurns {
         order: 6,
         angle_sign: 1,
         centre: Some([5.5, 5.5]),

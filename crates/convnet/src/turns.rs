@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 pub const MAX_TURN_ORDER: usize = 12;
 
 /// Training on every frame and its copies turned by `k 360/order` deg
-/// about `centre`, `k = 1..order` ([`crate::ConvConfig::turns`]).
+/// about `centre`, `k = 1..order` ([`crate::ConvConfig::rotations`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrameTurns {

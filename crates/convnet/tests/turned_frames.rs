@@ -182,15 +182,21 @@ fn spot_angle_frames() -> (Vec<u8>, Vec<f64>) {
     (pixels, values)
 }
 
+/// The spot frames as a training set, the angle's (sin, cos) pair at
+/// column 1.
+fn spot_angle_set<'a>(pixels: &'a [u8], values: &'a [f64]) -> (Frames<'a>, Targets<'a>) {
+    let frames = Frames::new(pixels, 24, SIDE, SIDE).unwrap();
+    let t = Targets::new(values, 24, 3)
+        .unwrap()
+        .with_angles(&[1])
+        .unwrap();
+    (frames, t)
+}
+
 #[test]
 fn a_fit_with_turns_keeps_them_and_differs() {
     let (pixels, values) = spot_angle_frames();
-    let frames = Frames::new(&pixels, 24, SIDE, SIDE).unwrap();
-    let angles = [1];
-    let t = Targets::new(&values, 24, 3)
-        .unwrap()
-        .with_angles(&angles)
-        .unwrap();
+    let (frames, t) = spot_angle_set(&pixels, &values);
     let plain = tiny_config(ModelKind::ConvMlp);
     let mut turned = plain.clone();
     turned.rotations = Some(turns());
@@ -215,12 +221,7 @@ fn a_fit_with_turns_keeps_them_and_differs() {
 #[test]
 fn turned_views_at_prediction_are_the_mean_of_the_views_turned_back() {
     let (pixels, values) = spot_angle_frames();
-    let frames = Frames::new(&pixels, 24, SIDE, SIDE).unwrap();
-    let angles = [1];
-    let t = Targets::new(&values, 24, 3)
-        .unwrap()
-        .with_angles(&angles)
-        .unwrap();
+    let (frames, t) = spot_angle_set(&pixels, &values);
     let mut config = tiny_config(ModelKind::ConvMlp);
     config.rotations = Some(turns());
     let (plain, _) = ConvModel::fit(&frames, &t, &config, 2).unwrap();
@@ -235,7 +236,7 @@ fn turned_views_at_prediction_are_the_mean_of_the_views_turned_back() {
         viewed.predict_batch(&frames).unwrap()
     );
     assert_eq!(
-        plain.predict_batch_turned(&frames, &angles).unwrap(),
+        plain.predict_batch_turned(&frames, &[1]).unwrap(),
         plain.predict_batch(&frames).unwrap()
     );
     let mut want = vec![0.0; 24 * 3];
@@ -255,11 +256,11 @@ fn turned_views_at_prediction_are_the_mean_of_the_views_turned_back() {
         let view = Frames::new(&turned, 24, SIDE, SIDE).unwrap();
         let mut out = plain.predict_batch(&view).unwrap();
         for row in out.chunks_exact_mut(3) {
-            turn_angles(row, &angles, deg); // angle_sign -1: back by +deg
+            turn_angles(row, &[1], deg); // angle_sign -1: back by +deg
         }
         want.iter_mut().zip(&out).for_each(|(w, o)| *w += o / 6.0);
     }
-    let got = viewed.predict_batch_turned(&frames, &angles).unwrap();
+    let got = viewed.predict_batch_turned(&frames, &[1]).unwrap();
     for (g, w) in got.iter().zip(&want) {
         assert!((g - w).abs() < 1e-9, "{g} against {w}");
     }

@@ -6,10 +6,10 @@
 
 mod common;
 
-use common::{difference, load, pngs, rings, shear_set_331};
+use common::{difference, load, real_127_extractors, rings, shear_set_331};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tactrace_vision::{BlobParams, Frame, KeyPoint, PinExtractor, PinTracker};
+use tactrace_vision::{Frame, KeyPoint, PinTracker};
 
 /// A 331-pin ring layout sheared by up to a spacing with a bump, pins
 /// dropped and jittered, keypoints shuffled: the cut field matches every
@@ -67,18 +67,10 @@ fn cut_field_orders_a_sheared_331_pin_ring_as_the_exact_one() {
 /// `CUT_MIN_PINS`), so its pins are the exact ordering's, bit for bit.
 #[test]
 fn the_127_pin_frames_keep_the_exact_ordering() {
-    let Some(set) = tactrace_testdata::real_edge_set() else {
+    let Some((cut, exact, frames)) = real_127_extractors(|t| t.with_exact_field(true)) else {
         return;
     };
-    let dir = set.join("frames");
-    let params = BlobParams::preset("real256").expect("preset");
-    let reference = load(&dir.join("init_0.png")).to_luma8();
-    let cut = PinExtractor::from_reference_frame(&reference, params.clone()).expect("reference");
     assert!(cut.tracker.reference().len() < tactrace_vision::CUT_MIN_PINS);
-    let mut exact = PinExtractor::from_reference_frame(&reference, params).expect("reference");
-    exact.tracker = exact.tracker.with_exact_field(true);
-    let frames = pngs(&dir, "frame_");
-    assert!(frames.len() > 3700, "{} frames", frames.len());
     for path in &frames {
         let frame: Frame = load(path).to_luma8();
         match (cut.extract(&frame), exact.extract(&frame)) {

@@ -6,25 +6,17 @@
 
 mod common;
 
-use common::{difference, load, pngs, shear_set_331};
-use tactrace_vision::{BlobParams, Frame, PinExtractor, PinTracker};
+use common::{difference, load, real_127_extractors, shear_set_331};
+use tactrace_vision::{Frame, PinTracker};
 
 /// Every frame of the shared 127-pin set, detected and ordered as
 /// `PinExtractor::extract` does (with the touching-pin split): the same
 /// pins, within 1e-6 px, with the nearest-neighbour start as without.
 #[test]
 fn nearest_start_orders_every_shared_127_pin_frame_as_before() {
-    let Some(set) = tactrace_testdata::real_edge_set() else {
+    let Some((fast, slow, frames)) = real_127_extractors(|t| t.with_nearest_start(false)) else {
         return;
     };
-    let dir = set.join("frames");
-    let params = BlobParams::preset("real256").expect("preset");
-    let reference = load(&dir.join("init_0.png")).to_luma8();
-    let fast = PinExtractor::from_reference_frame(&reference, params.clone()).expect("reference");
-    let mut slow = PinExtractor::from_reference_frame(&reference, params).expect("reference");
-    slow.tracker = slow.tracker.with_nearest_start(false);
-    let frames = pngs(&dir, "frame_");
-    assert!(frames.len() > 3700, "{} frames", frames.len());
     for path in &frames {
         let frame: Frame = load(path).to_luma8();
         let (a, b) = (fast.extract(&frame), slow.extract(&frame));

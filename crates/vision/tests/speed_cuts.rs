@@ -9,10 +9,10 @@
 
 mod common;
 
-use common::{load, merged_dropped_shuffled, pngs, rings, shear_set_331};
+use common::{load, merged_dropped_shuffled, real_127_extractors, rings, shear_set_331};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tactrace_vision::{BlobParams, Frame, KeyPoint, PinExtractor, PinTracker, Tracked};
+use tactrace_vision::{Frame, KeyPoint, PinTracker, Tracked};
 
 /// `a` and `b` the same, bit for bit (pins, flags and counts).
 fn assert_same(a: &Tracked, b: &Tracked, what: &str) {
@@ -107,17 +107,9 @@ fn speed_cuts_order_331_pin_frames_bit_for_bit() {
 /// reads it: the same pins bit for bit with the cuts.
 #[test]
 fn speed_cuts_order_127_pin_frames_bit_for_bit() {
-    let Some(set) = tactrace_testdata::real_edge_set() else {
+    let Some((fast, plain, frames)) = real_127_extractors(|t| t.with_speed_cuts(false)) else {
         return;
     };
-    let dir = set.join("frames");
-    let params = BlobParams::preset("real256").expect("preset");
-    let reference = load(&dir.join("init_0.png")).to_luma8();
-    let fast = PinExtractor::from_reference_frame(&reference, params.clone()).expect("reference");
-    let mut plain = PinExtractor::from_reference_frame(&reference, params).expect("reference");
-    plain.tracker = plain.tracker.with_speed_cuts(false);
-    let frames = pngs(&dir, "frame_");
-    assert!(frames.len() > 3700, "{} frames", frames.len());
     for path in frames.iter().step_by(5) {
         let frame: Frame = load(path).to_luma8();
         match (fast.extract(&frame), plain.extract(&frame)) {

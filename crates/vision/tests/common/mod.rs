@@ -1,6 +1,7 @@
 //! Set-ups shared by the ordering tests on the shared real sets
 //! (`speed.rs`, `cut_field.rs`): frames read from a folder, the largest pin
-//! difference between two orderings, and the 331-pin shear set read as the
+//! difference between two orderings, the 127-pin edge set's extractor
+//! beside one whose tracker is changed, and the 331-pin shear set read as the
 //! inspection proposes; and the 331-pin ring layout of the synthetic
 //! ordering tests (`cut_field.rs`, `nn_start.rs`, `speed_cuts.rs`) and their
 //! synthetic taps' merged and missed pins. Not every file that shares
@@ -9,7 +10,10 @@
 
 use std::path::{Path, PathBuf};
 
-use tactrace_vision::{estimate_rest, inspect, Detection, Frame, RestParams, SightParams, Tracked};
+use tactrace_vision::{
+    estimate_rest, inspect, BlobParams, Detection, Frame, PinExtractor, PinTracker, RestParams,
+    SightParams, Tracked,
+};
 
 /// The image at `path`, or a panic naming it.
 pub fn load(path: &Path) -> image::DynamicImage {
@@ -121,4 +125,23 @@ pub fn merged_dropped_shuffled(
         .collect();
     keypoints.sort_by_key(|k| (k.x * 7919.0) as i64 % 331);
     keypoints
+}
+
+/// The shared 127-pin edge set read as `PinExtractor::extract` reads it
+/// (the real256 preset over its rest frame `init_0.png`), a second
+/// extractor over the same reference whose tracker `change` makes, and
+/// the set's tap frames (more than 3700); `None` where the set is absent
+/// (said by `tactrace_testdata::real_edge_set`).
+pub fn real_127_extractors(
+    change: impl FnOnce(PinTracker) -> PinTracker,
+) -> Option<(PinExtractor, PinExtractor, Vec<PathBuf>)> {
+    let dir = tactrace_testdata::real_edge_set()?.join("frames");
+    let params = BlobParams::preset("real256").expect("preset");
+    let reference = load(&dir.join("init_0.png")).to_luma8();
+    let usual = PinExtractor::from_reference_frame(&reference, params.clone()).expect("reference");
+    let mut changed = PinExtractor::from_reference_frame(&reference, params).expect("reference");
+    changed.tracker = change(changed.tracker);
+    let frames = pngs(&dir, "frame_");
+    assert!(frames.len() > 3700, "{} frames", frames.len());
+    Some((usual, changed, frames))
 }

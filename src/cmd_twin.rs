@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 use tactrace_lab::calibrate::{calibrate_sensor, write_calibrated, CalibrateConfig};
 use tactrace_lab::import::Imported;
 use tactrace_lab::twin::{
-    fit_position_map, relabel_positions, simulate_twin_calibrated, simulate_twin_laid_out,
+    fit_position_map, relabel_positions, renders_differ, simulate_twin_calibrated,
+    simulate_twin_laid_out, with_pin_jitter,
 };
 use tactrace_lab::LabError;
 use tactrace_store::collection::{bristol, CollectionEdits, Reference};
@@ -73,6 +74,13 @@ pub struct TwinArgs {
     /// (docs/calibration.md, "The position map").
     #[arg(long, value_name = "MODEL", requires = "sensor")]
     position_map: Option<PathBuf>,
+    /// With --sensor: move every rendered pin centre by N(0, PX^2) per
+    /// axis (the sensor's `[sensor.nuisance] pin_jitter_px` for this twin),
+    /// so that its renders differ as real frames of one tap would
+    /// (docs/calibration.md, "Pin jitter in the twin"); default: the
+    /// sensor's own (0 for a sensor `calibrate` writes: identical renders).
+    #[arg(long, value_name = "PX", requires = "sensor")]
+    pin_jitter: Option<f64>,
     /// Rig configuration TOML whose `sensor` table is the simulated TacTip
     /// (default: the model calibrated on the real edge frames).
     #[arg(long)]
@@ -135,7 +143,13 @@ pub fn twin(a: TwinArgs) -> Result<()> {
     let frames_size = a.frames_size.map(usize::from);
     let got = match &a.sensor {
         Some(dir) => {
-            let sensor = SensorFolder::read(dir)?;
+            let mut sensor = SensorFolder::read(dir)?;
+            if let Some(px) = a.pin_jitter {
+                sensor = with_pin_jitter(sensor, px)?;
+            }
+            if !renders_differ(&sensor.spec.sensor) && sensor.spec.training.renders > 1 {
+                pb.suspend(|| eprintln!("{}", identical_renders_note(&sensor)));
+            }
             let map = match &a.position_map {
                 Some(m) => Some(fit_position_map(&sensor, &StoredModel::load(m)?)?),
                 None => None,
@@ -166,6 +180,16 @@ pub fn twin(a: TwinArgs) -> Result<()> {
     let dir = dataset::write_dataset_with(&a.out, &got.data, &[], images, a.force)?;
     summary("simulated", "labelled taps", &got, &dir);
     Ok(())
+}
+
+/// What `twin --sensor` says when the sensor's renders are copies of one
+/// another (no pin jitter, no image noise).
+fn identical_renders_note(sensor: &SensorFolder) -> String {
+    format!(
+        "note: the sensor's pin jitter and image noise are 0, so its {} renders of each \
+         row are identical; --pin-jitter PX makes them differ",
+        sensor.spec.training.renders
+    )
 }
 
 /// The error of a twin given neither a reference nor a calibrated sensor.

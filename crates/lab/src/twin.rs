@@ -160,6 +160,7 @@ pub fn simulate_twin_calibrated(
         "twin": collection, "seed": seed, "sensor": sensor.source, "recipe": spec.training,
         "renders": renders, "real_tap_repeats": repeats,
     });
+    let settings = with_nuisance(settings, &spec.sensor);
     let mut all = Vec::new();
     for r in 0..renders as u64 {
         let how = (seed + r, input.as_ref());
@@ -187,6 +188,29 @@ pub fn simulate_twin_calibrated(
         real_tap_repeats: repeats,
     });
     Ok(out)
+}
+
+/// `sensor` with its renders' pin jitter set to `px` (each rendered pin
+/// centre moved by N(0, px^2) per axis before the frame is drawn and read,
+/// docs/sensor-model.md "Rendering and nuisance", `[sensor.nuisance]
+/// pin_jitter_px`): `twin --pin-jitter`. A sensor whose jitter and image
+/// noise are both 0 renders every labelled row the same at every seed, so
+/// the recipe's renders are copies of one another ([`renders_differ`]);
+/// with a jitter each render is a new draw of the detection noise the
+/// real frames carry (docs/calibration.md, "Pin jitter in the twin").
+/// Refused unless `px` is finite and at least 0.
+pub fn with_pin_jitter(mut sensor: SensorFolder, px: f64) -> Result<SensorFolder> {
+    sensor.spec.sensor.nuisance.pin_jitter_px = px;
+    sensor.spec.sensor.validate()?;
+    Ok(sensor)
+}
+
+/// Whether two renders of one labelled tap by `sensor` can differ: its pin
+/// jitter or image noise is above 0 (they are drawn from the render's
+/// seed; nothing else in a render is random).
+pub fn renders_differ(sensor: &TacTipConfig) -> bool {
+    let n = &sensor.nuisance;
+    n.pin_jitter_px > 0.0 || n.image_noise_std > 0.0
 }
 
 /// The position map of `sensor` (calib's [`PositionMap`],
@@ -246,6 +270,18 @@ pub fn relabel_positions(got: &mut Imported, map: &PositionMap) {
             serde_json::to_value(map).unwrap_or_default(),
         );
     }
+}
+
+/// `settings` with the sensor's pin jitter and image noise when either is
+/// above 0 (a twin's renders then differ: [`renders_differ`]); a sensor
+/// without them records nothing more, as before they were recorded.
+fn with_nuisance(mut settings: serde_json::Value, sensor: &TacTipConfig) -> serde_json::Value {
+    if let (true, serde_json::Value::Object(map)) = (renders_differ(sensor), &mut settings) {
+        let n = &sensor.nuisance;
+        map.insert("pin_jitter_px".into(), n.pin_jitter_px.into());
+        map.insert("image_noise_std".into(), n.image_noise_std.into());
+    }
+    settings
 }
 
 /// The reader of a calibrated sensor's simulated taps: its detector, and

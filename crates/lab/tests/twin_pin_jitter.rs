@@ -5,13 +5,13 @@
 //! before the detector's own quantisation), centred on each other, with
 //! the labels kept and the jitter recorded; a jitter below 0 or not a
 //! number is refused as bad input.
-use tactrace_lab::calibrate::{calibrate_sensor, CalibrateConfig};
+use tactrace_lab::calibrate::calibrate_sensor;
 use tactrace_lab::import::Imported;
 use tactrace_lab::twin::{renders_differ, simulate_twin_calibrated, with_pin_jitter};
 use tactrace_sensor::TacTipConfig;
 
 mod common;
-use common::distorted_sensor_set;
+use common::{calibration, distorted_sensor_set};
 
 /// The inputs and targets of render `k` of a twin of `rows` rows.
 fn render(got: &Imported, rows: usize, k: usize) -> (&[f32], &[f32]) {
@@ -27,16 +27,7 @@ fn render(got: &Imported, rows: usize, k: usize) -> (&[f32], &[f32]) {
 fn renders_are_identical_without_jitter_and_differ_by_it_with() {
     let root = tempfile::tempdir().unwrap();
     let set = distorted_sensor_set(root.path(), 40);
-    let cfg = CalibrateConfig {
-        collection: set.clone(),
-        render_seed: 1,
-        samples: Some(20),
-        seed: 3,
-        allowed_rows: None,
-        score_rows: None,
-        fit_physics: false,
-        labelled_depth: false,
-    };
+    let cfg = calibration(set.clone(), 20);
     let sensor = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {})
         .unwrap()
         .sensor;

@@ -33,7 +33,7 @@ fn renders_are_identical_without_jitter_and_differ_by_it_with() {
         .sensor;
     assert!(!renders_differ(&sensor.spec.sensor));
     let plain = simulate_twin_calibrated(&set, &sensor, 1, (false, None), &|| {}).unwrap();
-    let c = plain.composition.clone().unwrap();
+    let c = plain.composition.unwrap();
     assert_eq!((c.renders, c.real_tap_repeats), (3, 0));
     let rows = c.rows;
     assert_eq!(render(&plain, rows, 0), render(&plain, rows, 2));

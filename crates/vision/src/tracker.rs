@@ -318,7 +318,7 @@ impl PinTracker {
     fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
         let grid = Grid::new(points, grid::CELL * self.spacing);
         if let (true, Some(grid)) = (self.nearest, &grid) {
-            if let Some(found) = self.from_nearest(points, grid) {
+            if let Some(found) = self.order_from_nearest(points, grid) {
                 return found;
             }
         }

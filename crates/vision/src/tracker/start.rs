@@ -32,7 +32,7 @@ impl PinTracker {
     /// start when the first is dropped ([`PinTracker::with_second_start`]);
     /// `None` when neither holds (the caller runs every stage from the
     /// centroid shift).
-    pub(super) fn from_nearest(&self, points: &[[f64; 2]], grid: &Grid) -> Option<Found> {
+    pub(super) fn order_from_nearest(&self, points: &[[f64; 2]], grid: &Grid) -> Option<Found> {
         let start = self.nearest_start(points, grid)?;
         let pins = match self.try_start(start, points, grid, self.second) {
             Ok(found) => return Some(found),
@@ -141,26 +141,16 @@ mod tests {
             .is_some_and(|start| tracker.try_start(start, points, &grid, false).is_ok())
     }
 
-    /// On 120 synthetic taps with a sliding bump (pins moved up to 1.4
-    /// spacings where the centroid shift barely moves), the tracker orders
-    /// every tap as the full coarse-to-fine path and as the tracker without
-    /// the second start, bit for bit; and the second start is what holds
-    /// on some of them.
-    #[test]
-    fn second_start_orders_sheared_127_pin_taps_as_the_full_path() {
-        let spacing = 14.0;
-        let reference = hex_lattice([128.0, 128.0], spacing, 6);
-        let fast = PinTracker::new(reference.clone()).expect("tracker");
-        let once = PinTracker::new(reference.clone())
-            .expect("tracker")
-            .with_second_start(false);
-        let full = PinTracker::new(reference.clone())
-            .expect("tracker")
-            .with_nearest_start(false);
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(127);
+    /// Orders every tap of `taps` on `reference` with the default tracker,
+    /// the one without the second start and the full path (no
+    /// nearest-neighbour start), asserts the three the same bit for bit,
+    /// and returns on how many taps the second start held.
+    fn second_starts(reference: &[[f64; 2]], taps: impl Iterator<Item = Vec<[f64; 2]>>) -> usize {
+        let tracker = || PinTracker::new(reference.to_vec()).expect("tracker");
+        let (fast, once) = (tracker(), tracker().with_second_start(false));
+        let full = tracker().with_nearest_start(false);
         let mut second = 0;
-        for trial in 0..120 {
-            let points = sheared_tap(&reference, spacing, [128.0, 128.0], &mut rng);
+        for (trial, points) in taps.enumerate() {
             second += usize::from(second_holds(&fast, &points));
             let (a, b, c) = (
                 fast.order_points(&points),
@@ -171,6 +161,21 @@ mod tests {
             assert_eq!((&a.0.matched, &a.1), (&c.0.matched, &c.1), "trial {trial}");
             assert_eq!(bits(&b.0), bits(&c.0), "trial {trial}");
         }
+        second
+    }
+
+    /// On 120 synthetic taps with a sliding bump (pins moved up to 1.4
+    /// spacings where the centroid shift barely moves), the tracker orders
+    /// every tap as the full coarse-to-fine path and as the tracker without
+    /// the second start, bit for bit; and the second start is what holds
+    /// on some of them.
+    #[test]
+    fn second_start_orders_sheared_127_pin_taps_as_the_full_path() {
+        let spacing = 14.0;
+        let reference = hex_lattice([128.0, 128.0], spacing, 6);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(127);
+        let taps = (0..120).map(|_| sheared_tap(&reference, spacing, [128.0, 128.0], &mut rng));
+        let second = second_starts(&reference, taps);
         assert!(second >= 8, "the second start held on {second} of 120 taps");
     }
 
@@ -183,30 +188,15 @@ mod tests {
     #[test]
     fn second_start_orders_331_pin_taps_with_pins_missing_as_the_full_path() {
         let reference = crate::field::tests::rings();
-        let fast = PinTracker::new(reference.clone()).expect("tracker");
-        let once = PinTracker::new(reference.clone())
-            .expect("tracker")
-            .with_second_start(false);
-        let full = PinTracker::new(reference.clone())
-            .expect("tracker")
-            .with_nearest_start(false);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3311);
-        let mut second = 0;
-        for trial in 0..100 {
+        let taps = (0..100).map(|trial| {
             let mut points = sheared_tap(&reference, 5.0, [64.0, 64.0], &mut rng);
             for _ in 0..1 + trial % 4 {
                 points.remove(rng.random_range(0..points.len()));
             }
-            second += usize::from(second_holds(&fast, &points));
-            let (a, b, c) = (
-                fast.order_points(&points),
-                once.order_points(&points),
-                full.order_points(&points),
-            );
-            assert_eq!(bits(&a.0), bits(&c.0), "trial {trial}");
-            assert_eq!((&a.0.matched, &a.1), (&c.0.matched, &c.1), "trial {trial}");
-            assert_eq!(bits(&b.0), bits(&c.0), "trial {trial}");
-        }
+            points
+        });
+        let second = second_starts(&reference, taps);
         assert!(second >= 8, "the second start held on {second} of 100 taps");
     }
 }

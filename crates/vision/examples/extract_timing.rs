@@ -2,7 +2,7 @@
 //! from PNG files (no criterion; one thread):
 //!
 //! `cargo run --release -p tactrace-vision --example extract_timing -- \
-//!     <preset|file.toml> <reference.png> [--reps N] [--dump out.txt] <png>...`
+//!     <preset|file.toml> <reference.png> [--reps N] [--dump out.txt] [--once] <png>...`
 //!
 //! Prints mean microseconds per frame (thread CPU time, and wall time) for blob detection, ordering (tracker)
 //! and the whole `PinExtractor::extract` (detect + order + cluster split when
@@ -10,11 +10,15 @@
 //! threshold (`detect_blobs_by_threshold`, the reference); `--only` times
 //! one of them. `--dump` writes every keypoint and ordered pin with
 //! full precision, to check that a change leaves the results bit-identical.
+//! `--once` orders without the second nearest-neighbour start
+//! (`PinTracker::with_second_start(false)`), the ordering before it.
 
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use tactrace_vision::{detect_blobs, detect_blobs_by_threshold, BlobParams, Frame, PinExtractor};
+use tactrace_vision::{
+    detect_blobs, detect_blobs_by_threshold, BlobParams, Frame, PinExtractor, PinTracker,
+};
 
 struct Args {
     params: BlobParams,
@@ -22,12 +26,13 @@ struct Args {
     reps: usize,
     dump: Option<String>,
     only: Option<String>,
+    once: bool,
     frames: Vec<(String, Frame)>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage =
-        "usage: extract_timing <preset|file.toml> <reference.png> [--reps N] [--dump F] [--only detect|threshold|order|extract] <png>...";
+        "usage: extract_timing <preset|file.toml> <reference.png> [--reps N] [--dump F] [--only detect|threshold|order|extract] [--once] <png>...";
     let mut args = std::env::args().skip(1);
     let which = args.next().ok_or(usage)?;
     let params = if which.ends_with(".toml") {
@@ -36,12 +41,13 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         BlobParams::preset(&which)?
     };
     let reference = image::open(args.next().ok_or(usage)?)?.to_luma8();
-    let (mut reps, mut dump, mut only, mut frames) = (3, None, None, Vec::new());
+    let (mut reps, mut dump, mut only, mut once, mut frames) = (3, None, None, false, Vec::new());
     while let Some(a) = args.next() {
         match a.as_str() {
             "--reps" => reps = args.next().ok_or(usage)?.parse()?,
             "--dump" => dump = Some(args.next().ok_or(usage)?),
             "--only" => only = Some(args.next().ok_or(usage)?),
+            "--once" => once = true,
             _ => {
                 let frame = image::open(&a)?.to_luma8();
                 frames.push((a, frame));
@@ -57,6 +63,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         reps: reps.max(1),
         dump,
         only,
+        once,
         frames,
     })
 }
@@ -89,7 +96,11 @@ fn time_per_frame(frames: &[(String, Frame)], reps: usize, mut f: impl FnMut(usi
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a = parse()?;
-    let extractor = PinExtractor::from_reference_frame(&a.reference, a.params.clone())?;
+    let mut extractor = PinExtractor::from_reference_frame(&a.reference, a.params.clone())?;
+    if a.once {
+        let reference = extractor.tracker.reference().to_vec();
+        extractor.tracker = PinTracker::new(reference)?.with_second_start(false);
+    }
     let keypoints: Vec<_> = a
         .frames
         .iter()

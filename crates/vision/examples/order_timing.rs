@@ -13,7 +13,9 @@
 //! tracker's margin for keeping a nearest-neighbour start with pins missing
 //! (`PinTracker::with_nearest_margin`; `none`: never kept). With `--plain`,
 //! the other tracker is the one without the speed cuts that change no pin
-//! (`PinTracker::with_speed_cuts(false)`). With `--dump
+//! (`PinTracker::with_speed_cuts(false)`). With `--once`, the other tracker
+//! is the one without the second nearest-neighbour start
+//! (`PinTracker::with_second_start(false)`). With `--dump
 //! FILE`, every frame's pins from the default tracker are written to FILE
 //! bit for bit (per pin x and y as little-endian f64 bits and the matched
 //! flag; per frame the missing and extra counts), so two versions of the
@@ -24,7 +26,7 @@
 //!
 //! `cargo run --release -p tactrace-vision --example order_timing -- \
 //!     --fit DIR --frames DIR [--rest-frames K] [--limit N] [--reps R] [--compare]
-//!     [--full] [--plain] [--margin M|none] [--dump FILE]`
+//!     [--full] [--plain] [--once] [--margin M|none] [--dump FILE]`
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -42,13 +44,14 @@ struct Args {
     compare: bool,
     full: bool,
     plain: bool,
+    once: bool,
     margin: Option<f64>,
     dump: Option<PathBuf>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage = "usage: order_timing --fit DIR --frames DIR [--rest-frames K] [--limit N] \
-                 [--reps R] [--compare] [--full] [--plain] [--margin M|none] [--dump FILE]";
+                 [--reps R] [--compare] [--full] [--plain] [--once] [--margin M|none] [--dump FILE]";
     let mut args = std::env::args().skip(1);
     let mut a = Args {
         fit: PathBuf::new(),
@@ -59,6 +62,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         compare: false,
         full: false,
         plain: false,
+        once: false,
         margin: Some(0.25),
         dump: None,
     };
@@ -73,6 +77,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--compare" => a.compare = true,
             "--full" => a.full = true,
             "--plain" => a.plain = true,
+            "--once" => a.once = true,
             "--dump" => a.dump = Some(value()?.into()),
             "--margin" => {
                 a.margin = match value()?.as_str() {
@@ -213,6 +218,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )
     } else if a.plain {
         (PinTracker::new(rest.pins)?.with_speed_cuts(false), "plain")
+    } else if a.once {
+        (PinTracker::new(rest.pins)?.with_second_start(false), "once")
     } else {
         (PinTracker::new(rest.pins)?.with_exact_field(true), "exact")
     };
@@ -231,7 +238,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         dump(path, &tracker, &detections)?;
         println!("pins of every frame written to {}", path.display());
     }
-    let timed = match (a.reps, a.compare || a.full || a.plain) {
+    let timed = match (a.reps, a.compare || a.full || a.plain || a.once) {
         (0, _) => 0,
         (_, false) => 1,
         (_, true) => 2,

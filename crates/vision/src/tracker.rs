@@ -19,6 +19,7 @@ use crate::merged::Cluster;
 mod grid;
 mod repair;
 mod split;
+mod start;
 
 use grid::Grid;
 
@@ -88,6 +89,9 @@ pub struct PinTracker {
     /// Whether the speed cuts that change no pin are on
     /// ([`PinTracker::with_speed_cuts`]).
     cuts: bool,
+    /// Whether a dropped nearest-neighbour start is tried once more from
+    /// its own pins ([`PinTracker::with_second_start`]).
+    second: bool,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -170,6 +174,7 @@ impl PinTracker {
             nearest: true,
             nearest_margin: Some(grid::NEAREST_MARGIN),
             cuts: true,
+            second: true,
         })
     }
 
@@ -213,6 +218,16 @@ impl PinTracker {
     /// `examples/order_timing.rs --plain`).
     pub fn with_speed_cuts(mut self, on: bool) -> Self {
         self.cuts = on;
+        self
+    }
+
+    /// This tracker trying a dropped nearest-neighbour start once more,
+    /// from the nearest neighbours of the pins it gave (the default), or
+    /// not (every such frame runs all the stages from the centroid shift,
+    /// as before). The same pins on the shared sets (`tests/speed.rs`);
+    /// kept to check that and to time it (`tracker/start.rs`).
+    pub fn with_second_start(mut self, on: bool) -> Self {
+        self.second = on;
         self
     }
 
@@ -293,38 +308,18 @@ impl PinTracker {
 
     /// The coarse-to-fine stages and the fill of missing pins: from the
     /// nearest-neighbour start where it holds (no pin missing, or its first
-    /// matching settled; see `tracker/grid.rs`), else every stage from the
-    /// centroid shift. With fewer points than pins some pin is missing
-    /// whatever the stages match (the matching is one to one), so the start
-    /// holds only if its first matching is settled: that is checked before
-    /// the later stages run, and an unsettled start goes to the centroid
-    /// shift at once (the same result, without the stages it would drop).
+    /// matching settled; see `tracker/grid.rs`), or from the second start
+    /// taken from a dropped one's pins (`tracker/start.rs`), else every
+    /// stage from the centroid shift. With fewer points than pins some pin
+    /// is missing whatever the stages match (the matching is one to one),
+    /// so a start holds only if its first matching is settled: that is
+    /// checked before the later stages run, and an unsettled start is
+    /// dropped at once (the same result, without the stages it would drop).
     fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
         let grid = Grid::new(points, grid::CELL * self.spacing);
         if let (true, Some(grid)) = (self.nearest, &grid) {
-            if let Some(start) = self.nearest_start(points, grid) {
-                let after = &self.stages[grid::NEAREST_STAGE + 1..];
-                let must_miss = points.len() < self.reference.len();
-                let settled = |first: &[Option<usize>]| {
-                    self.settled(&start, points, first, after[0].gate, grid)
-                };
-                // The first matching, when whether it settles is left until
-                // after the stages (`None`: checked already, and settled).
-                let mut first = None;
-                let early = |matches: &[Option<usize>]| {
-                    if must_miss && self.cuts {
-                        return settled(matches);
-                    }
-                    first = Some(matches.to_vec());
-                    true
-                };
-                let run = self.run_stages(start.clone(), after, points, Some(grid), early);
-                if let Some((tracked, matches)) = run {
-                    let holds = tracked.missing == 0 || first.as_deref().is_none_or(settled);
-                    if !self.folds.any_turned(&tracked.pins) && holds {
-                        return (tracked, matches);
-                    }
-                }
+            if let Some(found) = self.order_from_nearest(points, grid) {
+                return found;
             }
         }
         let start = self.centroid_shift(points);

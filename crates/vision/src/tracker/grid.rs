@@ -18,8 +18,9 @@
 //! settled by [`NEAREST_MARGIN`] ([`PinTracker::settled`]: every later
 //! stage depends on the start only through that matching, so a settled one
 //! is what the full path finds unless its start moves the costs by the
-//! margin); otherwise the tracker runs every stage from the centroid shift,
-//! as it always did.
+//! margin); otherwise it is tried once more from the pins it gave
+//! (`tracker/start.rs`), and when that does not hold either the tracker
+//! runs every stage from the centroid shift, as it always did.
 
 use super::{PinTracker, Stage};
 
@@ -151,10 +152,21 @@ impl Grid {
 }
 
 impl PinTracker {
-    /// Every pin's prediction from the nearest-neighbour pairs (see the
-    /// module docs), or `None` when too few pins pair up.
+    /// Every pin's prediction from the nearest-neighbour pairs of the
+    /// reference shifted by the centroids' difference (see the module
+    /// docs), or `None` when too few pins pair up.
     pub(super) fn nearest_start(&self, points: &[[f64; 2]], grid: &Grid) -> Option<Vec<[f64; 2]>> {
-        let shifted = self.centroid_shift(points);
+        self.nearest_from(&self.centroid_shift(points), points, grid)
+    }
+
+    /// [`PinTracker::nearest_start`] with the pins at `shifted` (px, one
+    /// a reference pin) instead of the centroid shift.
+    pub(super) fn nearest_from(
+        &self,
+        shifted: &[[f64; 2]],
+        points: &[[f64; 2]],
+        grid: &Grid,
+    ) -> Option<Vec<[f64; 2]>> {
         let reach = NEAREST_REACH * self.spacing;
         let reach2 = reach * reach;
         // Per point, its nearest pin; per pin, its nearest point.

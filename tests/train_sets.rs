@@ -35,7 +35,7 @@ fn training(dir: &Path, m: &str) -> serde_json::Value {
 #[test]
 fn two_halves_train_the_pin_model_the_whole_set_trains() {
     let t = TempDir::new("train-sets-pins");
-    ok(&collect(&t.0, "60", &["--seed", "3"], &"whole"), "collect");
+    ok(&collect(&t.0, "60", &["--seed", "3"], "whole"), "collect");
     write_rows(&t.0, "whole", 0..25, "a");
     write_rows(&t.0, "whole", 25..60, "b");
     let common = ["train", "--epochs", "2", "--val-fraction", "0.2"];
@@ -119,7 +119,7 @@ fn two_halves_train_the_image_model_the_whole_set_trains() {
 #[test]
 fn datasets_that_differ_are_refused_by_name_before_training() {
     let t = TempDir::new("train-sets-refused");
-    ok(&collect(&t.0, "20", &["--seed", "3"], &"a"), "collect");
+    ok(&collect(&t.0, "20", &["--seed", "3"], "a"), "collect");
     let data = read_dataset(&t.join("a")).unwrap();
     let write = |name: &str, edit: &dyn Fn(&mut tactrace_store::TapData)| {
         let mut d = data.clone();

@@ -3,7 +3,8 @@
 //! of one sensor, a simulator's taps beside real ones), read and joined
 //! row for row in the order given, after every one is checked against
 //! the first ([`tactrace_store::dataset_join`]). The model folder's
-//! `training.json` records each of them ([`TrainingRecord::with_datasets`]).
+//! `training.json` records each of them
+//! ([`tactrace_store::TrainingRecord::with_datasets`]).
 use crate::error::{LabError, Result};
 use crate::train::{training_split, TrainingSplit};
 use std::path::{Path, PathBuf};

@@ -43,13 +43,26 @@ pub enum DatasetMismatch {
     Frames { first: String, other: String },
 }
 
-/// The refusal of `other` beside `first` for `why`.
-fn refuse(first: &Path, other: &Path, why: DatasetMismatch) -> StoreError {
-    StoreError::Mismatch {
-        first: first.to_path_buf(),
-        other: other.to_path_buf(),
-        mismatch: why,
+/// Error unless there is a part and every part is `alike` the first;
+/// the refusal names the first's folder and the other's.
+fn check_each<T>(
+    parts: &[(&Path, &T)],
+    alike: impl Fn(&T, &T) -> Result<(), DatasetMismatch>,
+) -> Result<()> {
+    let Some(&(first_path, first)) = parts.first() else {
+        return Err(StoreError::Config {
+            what: "the training sets".into(),
+            reason: "no dataset given".into(),
+        });
+    };
+    for &(path, other) in &parts[1..] {
+        alike(first, other).map_err(|why| StoreError::Mismatch {
+            first: first_path.to_path_buf(),
+            other: path.to_path_buf(),
+            mismatch: why,
+        })?;
     }
+    Ok(())
 }
 
 /// The datasets `parts` (each with the folder it was read from) as one,
@@ -58,15 +71,7 @@ fn refuse(first: &Path, other: &Path, why: DatasetMismatch) -> StoreError {
 /// targets. The joined `meta.json` keeps the first's pins and targets and
 /// sums the counts ([`joined_meta`]).
 pub fn join_datasets(parts: &[(&Path, &TapData)]) -> Result<TapData> {
-    let Some(&(first_path, first)) = parts.first() else {
-        return Err(StoreError::Config {
-            what: "the training sets".into(),
-            reason: "no dataset given".into(),
-        });
-    };
-    for &(path, data) in &parts[1..] {
-        check_alike(first, data).map_err(|why| refuse(first_path, path, why))?;
-    }
+    check_each(parts, check_alike)?;
     let mut inputs = Vec::new();
     let mut targets = Vec::new();
     for (_, data) in parts {
@@ -175,16 +180,8 @@ fn summed_tracking(parts: impl Iterator<Item = TrackTotals>) -> TrackTotals {
 /// ([`join_datasets`]), refused unless every part's frames have the
 /// first's size and preprocessing; the first's description is kept.
 pub fn join_frames(parts: &[(&Path, &ImageFrames)]) -> Result<ImageFrames> {
-    let Some(&(first_path, first)) = parts.first() else {
-        return Err(StoreError::Config {
-            what: "the training sets' frames".into(),
-            reason: "no dataset given".into(),
-        });
-    };
-    for &(path, frames) in &parts[1..] {
-        check_frames_alike(&first.info, &frames.info)
-            .map_err(|why| refuse(first_path, path, why))?;
-    }
+    check_each(parts, |a, b| check_frames_alike(&a.info, &b.info))?;
+    let first = parts[0].1;
     let pixels = parts
         .iter()
         .flat_map(|(_, f)| f.pixels.iter().copied())

@@ -27,6 +27,22 @@ fn same_model(dir: &Path, a: &str, b: &str) {
     }
 }
 
+/// `train` with `common` arguments on the dataset `whole` into `m-whole`
+/// and on `a` then `b` into `m-halves`, in `dir`: both succeed and say
+/// the same validation.
+fn whole_and_halves(dir: &Path, common: &[&str]) {
+    let whole = [common, &["--train", "whole", "--out", "m-whole"]].concat();
+    let halves = [
+        common,
+        &["--train", "a", "--train", "b", "--out", "m-halves"],
+    ]
+    .concat();
+    let (w, h) = (tactrace(dir, &whole), tactrace(dir, &halves));
+    ok(&w, "train on the whole");
+    ok(&h, "train on the halves");
+    assert_eq!(w.stdout, h.stdout, "the same validation");
+}
+
 /// `training.json` of the model folder `m` in `dir`.
 fn training(dir: &Path, m: &str) -> serde_json::Value {
     json(&std::fs::read_to_string(dir.join(m).join("training.json")).unwrap())
@@ -39,16 +55,7 @@ fn two_halves_train_the_pin_model_the_whole_set_trains() {
     write_rows(&t.0, "whole", 0..25, "a");
     write_rows(&t.0, "whole", 25..60, "b");
     let common = ["train", "--epochs", "2", "--val-fraction", "0.2"];
-    let whole = [&common[..], &["--train", "whole", "--out", "m-whole"]].concat();
-    let halves = [
-        &common[..],
-        &["--train", "a", "--train", "b", "--out", "m-halves"],
-    ]
-    .concat();
-    let (w, h) = (tactrace(&t.0, &whole), tactrace(&t.0, &halves));
-    ok(&w, "train on the whole");
-    ok(&h, "train on the halves");
-    assert_eq!(w.stdout, h.stdout, "the same validation");
+    whole_and_halves(&t.0, &common);
     same_model(&t.0, "m-whole", "m-halves");
     let (rw, rh) = (training(&t.0, "m-whole"), training(&t.0, "m-halves"));
     assert_eq!(rh["dataset"]["sha256"], rw["dataset"]["sha256"]);
@@ -98,16 +105,7 @@ fn two_halves_train_the_image_model_the_whole_set_trains() {
         "--val-fraction",
         "0.25",
     ];
-    let whole = [&common[..], &["--train", "whole", "--out", "m-whole"]].concat();
-    let halves = [
-        &common[..],
-        &["--train", "a", "--train", "b", "--out", "m-halves"],
-    ]
-    .concat();
-    let (w, h) = (tactrace(&t.0, &whole), tactrace(&t.0, &halves));
-    ok(&w, "train on the whole");
-    ok(&h, "train on the halves");
-    assert_eq!(w.stdout, h.stdout, "the same validation");
+    whole_and_halves(&t.0, &common);
     for file in ["weights.safetensors", "history.csv"] {
         let read = |m: &str| std::fs::read(t.join(m).join(file)).unwrap();
         assert!(read("m-whole") == read("m-halves"), "{file} differs");

@@ -8,7 +8,8 @@ use crate::progress::bar;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
 use tactrace_convnet::ModelKind;
-use tactrace_lab::{import_reader, train as tr, train_image as ti, LabError};
+use tactrace_lab::train_sets::TrainingSets;
+use tactrace_lab::{import_reader, train_image as ti, LabError};
 use tactrace_servo::ImageInput;
 use tactrace_store::{
     check_output_dir, fsutil, read_dataset, FramesInfo, ImageFrames, LoadedModel, SightFile,
@@ -45,27 +46,22 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         return Ok(());
     }
     Inputs::new()
-        .add("--train", &a.train)
-        .opt("--val", a.val.as_deref())
+        .all("--train", &a.train)
+        .all("--val", &a.val)
         .opt("--config", a.config.as_deref())
         .opt("--init", a.init.as_deref())
         .check_apart("--out", &a.out)?;
     let start = a.init.as_deref().map(start_model).transpose()?;
     let _out = check_output_dir(&a.out, a.force)?;
-    let all = read_dataset(&a.train)?;
-    let all_frames = ti::data_frames(&all, &a.train)?;
-    let split = tr::training_split(
-        &all,
-        Some(&a.train),
-        a.val_fraction.map(|f| (f, a.split_seed)),
-    )?;
+    let sets = TrainingSets::read(&a.train)?;
+    let all_frames = sets.frames()?;
+    let split = sets.split(a.val_fraction.map(|f| (f, a.split_seed)))?;
     let train_frames = all_frames.subset(&split.record.train_rows);
-    let (val, val_frames): (Option<TapData>, Option<ImageFrames>) = match a.val.as_deref() {
-        Some(dir) => {
-            let v = read_dataset(dir)?;
-            let f = ti::data_frames(&v, dir)?;
-            (Some(v), Some(f))
-        }
+    let val_sets = (!a.val.is_empty())
+        .then(|| TrainingSets::read(&a.val))
+        .transpose()?;
+    let (val, val_frames): (Option<TapData>, Option<ImageFrames>) = match &val_sets {
+        Some(v) => (Some(v.data.clone()), Some(v.frames()?)),
         None => {
             let rows = split
                 .record
@@ -132,7 +128,7 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         dir.display()
     );
     if let (Some(v), Some(f)) = (&val, &val_frames) {
-        let what = a.val.as_deref().unwrap_or(&a.train);
+        let what = val_sets.as_ref().unwrap_or(&sets).first_dir();
         let score = ti::validate_image(&stored, v, f, what)?;
         crate::say!(
             "validation: {} over {} samples",

@@ -4,6 +4,7 @@ use crate::progress::bar;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
+use tactrace_lab::train_sets::{check_val_pins, TrainingSets};
 use tactrace_lab::{import_reader, train as tr, LabError};
 use tactrace_learn::{ModelKind, Preset, SearchSpace};
 use tactrace_report::figures::{self, Predicted};
@@ -88,14 +89,19 @@ pub struct TrainArgs {
     /// from `import --frames-size`).
     #[arg(long, value_enum, default_value = "pdennn")]
     pub(crate) model: TrainModelArg,
-    /// Training dataset directory.
-    #[arg(long)]
-    pub(crate) train: PathBuf,
-    /// Validation dataset directory (scored after training).
-    #[arg(long, conflicts_with = "val_fraction")]
-    pub(crate) val: Option<PathBuf>,
-    /// Hold out this fraction of --train (seeded shuffle) as the validation
-    /// set instead of a separate --val directory; the model never sees it.
+    /// Training dataset directory; repeat it to train on several datasets
+    /// as one (their rows joined in the order given; each must have the
+    /// first's pins and reference order, targets and, for an image model,
+    /// frame size and preprocessing).
+    #[arg(long, required = true, value_name = "DIR")]
+    pub(crate) train: Vec<PathBuf>,
+    /// Validation dataset directory (scored after training); repeat it to
+    /// score several datasets as one.
+    #[arg(long, conflicts_with = "val_fraction", value_name = "DIR")]
+    pub(crate) val: Vec<PathBuf>,
+    /// Hold out this fraction of --train (seeded shuffle; of the rows of
+    /// every --train joined) as the validation set instead of a separate
+    /// --val directory; the model never sees it.
     #[arg(long)]
     pub(crate) val_fraction: Option<f64>,
     /// Seed of the --val-fraction shuffle.
@@ -197,29 +203,21 @@ pub fn train(a: TrainArgs) -> Result<()> {
         return Ok(());
     }
     Inputs::new()
-        .add("--train", &a.train)
-        .opt("--val", a.val.as_deref())
+        .all("--train", &a.train)
+        .all("--val", &a.val)
         .opt("--config", a.config.as_deref())
         .opt("--search-space", a.search_space.as_deref())
         .check_apart("--out", &a.out)?;
     let _out = check_output_dir(&a.out, a.force)?;
-    let all = read_dataset(&a.train)?;
-    let split = tr::training_split(
-        &all,
-        Some(&a.train),
-        a.val_fraction.map(|f| (f, a.split_seed)),
-    )?;
-    let (data, val, record) = match a.val.as_deref() {
-        Some(dir) => {
-            let val = read_dataset(dir)?;
-            tactrace_store::pin_order_mismatch(&all.meta.reference_pins, &val.meta.reference_pins)
-                .map_or(Ok(()), |source| {
-                    Err(tactrace_store::StoreError::PinOrder {
-                        path: dir.to_path_buf(),
-                        source,
-                    })
-                })?;
-            (split.train, Some(val), split.record)
+    let sets = TrainingSets::read(&a.train)?;
+    let split = sets.split(a.val_fraction.map(|f| (f, a.split_seed)))?;
+    let val_sets = (!a.val.is_empty())
+        .then(|| TrainingSets::read(&a.val))
+        .transpose()?;
+    let (data, val, record) = match &val_sets {
+        Some(v) => {
+            check_val_pins(&sets, v)?;
+            (split.train, Some(v.data.clone()), split.record)
         }
         None => {
             if let (Some(f), Some(va)) = (a.val_fraction, &split.val) {
@@ -233,7 +231,7 @@ pub fn train(a: TrainArgs) -> Result<()> {
             (split.train, split.val, split.record)
         }
     };
-    let held_out = if a.val.is_none() {
+    let held_out = if a.val.is_empty() {
         val.as_ref().map_or(0, |v| v.len())
     } else {
         0
@@ -305,7 +303,8 @@ pub fn train(a: TrainArgs) -> Result<()> {
         );
     }
     if let Some(val) = val {
-        let v = tr::validate(&model, &val, a.val.as_deref().unwrap_or(&a.train))?;
+        let what = val_sets.as_ref().unwrap_or(&sets).first_dir();
+        let v = tr::validate(&model, &val, what)?;
         if v.predictions.is_empty() {
             crate::say!(
                 "validation: {} over {} samples",

@@ -29,6 +29,11 @@ impl<'a> Inputs<'a> {
         }
     }
 
+    /// Every input of a repeatable `flag` (`--train A --train B`).
+    pub fn all(self, flag: &'static str, paths: &'a [std::path::PathBuf]) -> Self {
+        paths.iter().fold(self, |inputs, p| inputs.add(flag, p))
+    }
+
     /// A `--shape`-like value: an input when it names a file (a contour
     /// CSV), nothing when it is a built-in or parametric shape.
     pub fn file_arg(self, flag: &'static str, value: &'a str) -> Self {

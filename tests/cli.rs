@@ -1,6 +1,6 @@
 //! End-to-end tests of the `tactrace` binary.
 mod util;
-use util::{real_data, real_paths, tactrace, TempDir};
+use util::{expect_refusal, real_data, real_paths, tactrace, TempDir};
 
 #[test]
 fn collect_writes_a_python_readable_dataset() {
@@ -124,8 +124,7 @@ fn open_contour_csv_is_rejected_with_the_file_name() {
         &t.0,
         &["sensor", "render", "--shape", "open.csv", "--out", "a.png"],
     );
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("open.csv"), "{}", r.stderr);
+    expect_refusal(&r, 2, "open.csv", "open.csv");
 }
 
 #[test]
@@ -133,8 +132,7 @@ fn corrupt_image_is_a_clear_error() {
     let t = TempDir::new("corrupt");
     std::fs::write(t.join("bad.png"), b"not a png").unwrap();
     let r = tactrace(&t.0, &["sensor", "pins", "bad.png"]);
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("bad.png"), "{}", r.stderr);
+    expect_refusal(&r, 2, "bad.png", "bad.png");
 }
 
 #[test]
@@ -197,8 +195,7 @@ fn twin_of_real_frames_writes_a_dataset_and_refuses_bad_input() {
     ]
     .concat();
     let r = tactrace(&t.0, &bad);
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("three columns"), "{}", r.stderr);
+    expect_refusal(&r, 2, "three columns", "three columns");
 }
 
 #[test]
@@ -236,8 +233,7 @@ fn follow_rejects_unknown_config_keys_and_unreachable_contours() {
             "follow", "--model", "m", "--shape", "far.csv", "--out", "r2",
         ],
     );
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("cannot reach"), "{}", r.stderr);
+    expect_refusal(&r, 2, "cannot reach", "cannot reach");
     // A real-rig file whose start lies outside its workspace is refused
     // before any connection is attempted (the host does not exist).
     std::fs::write(
@@ -259,8 +255,7 @@ fn follow_rejects_unknown_config_keys_and_unreachable_contours() {
             "r3",
         ],
     );
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("outside the workspace"), "{}", r.stderr);
+    expect_refusal(&r, 2, "outside the workspace", "outside the workspace");
 }
 
 #[test]
@@ -346,8 +341,7 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
     assert_eq!(tactrace(&t.0, &cal).code, 2);
     let few = [&cal[..7], &["--samples", "5", "--out", "s2"]].concat();
     let r = tactrace(&t.0, &few);
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("10"), "{}", r.stderr);
+    expect_refusal(&r, 2, "10", "10");
     // Taps that do not span theta are refused, the message printed once.
     let narrow = [&cal[..7], &["--limit", "600", "--out", "s3"]].concat();
     let r = tactrace(&t.0, &narrow);
@@ -431,8 +425,7 @@ fn calibrate_then_render_and_twin_with_the_sensor() {
     assert!(config.contains("calibrated_sensor"), "{config}");
     // The default world lists its pins otherwise: refused before moving.
     let r = follow(&[], "run2");
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("order"), "{}", r.stderr);
+    expect_refusal(&r, 2, "order", "order");
     assert_eq!(follow(&["--sensor", "no-such-sensor"], "run3").code, 2);
     // The real-frame world reads the sensor's label convention too; its
     // taps are real frames, so the model is the one trained on the twin

@@ -1,7 +1,7 @@
 //! `tactrace sim-fit`: the transfer fit of the simulator's physics, end to
 //! end on a few real frames (needs ../shared, see tactrace_testdata).
 mod util;
-use util::{real_data, real_paths, tactrace, TempDir};
+use util::{expect_refusal, real_data, real_paths, tactrace, TempDir};
 
 #[test]
 fn sim_fit_writes_a_usable_rig_file_reproducibly_and_refuses_bad_input() {
@@ -81,8 +81,7 @@ fn sim_fit_writes_a_usable_rig_file_reproducibly_and_refuses_bad_input() {
     let mut none = args("none");
     none[10] = "0";
     let r = tactrace(&t.0, &none);
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("--generations"), "{}", r.stderr);
+    expect_refusal(&r, 2, "--generations", "--generations");
     assert!(!t.join("none").exists());
 }
 
@@ -116,7 +115,6 @@ fn sim_fit_refuses_a_pressed_reference() {
             "fit",
         ],
     );
-    assert_eq!(r.code, 2, "{}", r.stderr);
-    assert!(r.stderr.contains("not an undeformed frame"), "{}", r.stderr);
+    expect_refusal(&r, 2, "not an undeformed frame", "not an undeformed frame");
     assert!(!t.join("fit").exists());
 }

@@ -6,7 +6,8 @@
 //! [`import`] turns a labelled collection of real frames
 //! (`tactrace_store::LabelledCollection`) into the same dataset format,
 //! [`twin`] replays a real set's labels on the simulator, [`train`] fits
-//! and validates pose models ([`train_image`] the image models), [`follow`] runs the servo loop round an
+//! and validates pose models ([`train_image`] the image models, on the
+//! datasets of [`train_sets`]: one, or several joined), [`follow`] runs the servo loop round an
 //! object into a run folder in any [`world`] (the simulated TacTip, a
 //! calibrated sensor, the real-frame world, the real rig of [`hardware`]),
 //! [`reproduce`] regenerates the report, [`mod@bench`] times it, [`render`]
@@ -41,6 +42,7 @@ pub mod sim_sight;
 mod tap_images;
 pub mod train;
 pub mod train_image;
+pub mod train_sets;
 pub mod trajectory_csv;
 pub mod transfer_fit;
 pub mod tune;

@@ -407,6 +407,14 @@ fn check_held_out(
         })
     };
     let hash = tactrace_store::training_record::dataset_hash(data);
+    if hash != trained.sha256 && !record.datasets.is_empty() {
+        return refuse(format!(
+            "the model was trained on {} datasets together, and --val-fraction held out rows \
+             of all of them joined: its held-out rows cannot be scored on one dataset \
+             (validate on a dataset it never saw)",
+            record.datasets.len()
+        ));
+    }
     if hash != trained.sha256 {
         let short = |h: &str| format!("{}...", &h[..h.len().min(23)]);
         return refuse(format!(

@@ -32,13 +32,19 @@ pub fn resolve_image_config(
 /// The frames of the dataset `data` read from `dir`, refused (bad input)
 /// when it has none: a dataset of pin vectors only.
 pub fn data_frames(data: &TapData, dir: &Path) -> Result<ImageFrames> {
-    tactrace_store::read_dataset_frames(dir, data)?.ok_or_else(|| LabError::Format {
+    tactrace_store::read_dataset_frames(dir, data)?.ok_or_else(|| no_frames(dir))
+}
+
+/// The refusal of the dataset folder `dir` for an image model: it holds
+/// no frames as images.
+pub(crate) fn no_frames(dir: &Path) -> LabError {
+    LabError::Format {
         path: dir.to_path_buf(),
         reason: "the dataset holds pin displacements only, no frames as images \
                  (frames.npy): an image model trains on frames; import the collection \
                  again with --frames-size PX (e.g. 64)"
             .into(),
-    })
+    }
 }
 
 /// A view of `frames` for the network, each frame with its row's pin

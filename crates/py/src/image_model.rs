@@ -11,6 +11,7 @@ use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
 use tactrace_convnet::TrainingHistory;
 use tactrace_lab::train_image as ti;
+use tactrace_lab::train_sets::TrainingSets;
 use tactrace_store::{LoadedModel, StoredImageModel};
 
 /// A trained image model: grey frames (uint8) in, its N targets out.
@@ -167,21 +168,20 @@ pub(crate) fn load(py: Python<'_>, dir: &Path) -> PyResult<ImageModel> {
     Ok(ImageModel::new(stored))
 }
 
-/// `train` of an image model `kind` on the dataset folder `dir` (with
-/// frames.npy), as `tactrace train --model conv-dennn|conv-mlp` does.
+/// `train` of an image model `kind` on the dataset folders `dirs` (with
+/// frames.npy; several joined in order), as `tactrace train --model
+/// conv-dennn|conv-mlp` does.
 pub(crate) fn train(
     py: Python<'_>,
     kind: tactrace_convnet::ModelKind,
-    dir: &Path,
+    dirs: &[PathBuf],
     (config, epochs, seed): (Option<&str>, Option<usize>, Option<u64>),
     held_out: Option<(f64, u64)>,
 ) -> PyResult<ImageModel> {
     let cfg = ti::resolve_image_config(kind, config, epochs).map_err(lab)?;
-    let all = py
-        .detach(|| tactrace_store::read_dataset(dir))
-        .map_err(store)?;
-    let frames = py.detach(|| ti::data_frames(&all, dir)).map_err(lab)?;
-    let split = tactrace_lab::train::training_split(&all, Some(dir), held_out).map_err(lab)?;
+    let sets = py.detach(|| TrainingSets::read(dirs)).map_err(lab)?;
+    let frames = py.detach(|| sets.frames()).map_err(lab)?;
+    let split = sets.split(held_out).map_err(lab)?;
     let train_frames = frames.subset(&split.record.train_rows);
     let val_frames = split.record.split.as_ref().map(|s| frames.subset(&s.rows));
     let val = split.val.as_ref().zip(val_frames.as_ref());

@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use tactrace_lab::train::Validation;
+use tactrace_lab::train_sets::TrainingSets;
 use tactrace_learn::{ModelKind, PoseModel, Preset, TrainingHistory};
 use tactrace_store::StoredModel;
 
@@ -396,10 +397,13 @@ pub fn load_model(py: Python<'_>, dir: PathBuf) -> PyResult<Py<PyAny>> {
 ///
 /// ``kind`` is one of "pdennn", "pcadennn", "disdennn", "mlp" (``train
 /// --model``), or an image model's, "conv-dennn" or "conv-mlp": then
-/// ``data`` is a dataset folder with frames (``import --frames-size``),
+/// ``data`` is a dataset folder with frames (``import --frames-size``)
+/// or a list of them,
 /// ``config`` overrides the network's settings, ``seed`` seeds it (0 by
-/// default), and an ``ImageModel`` is returned. ``data`` is a dataset folder, the ``(inputs, targets,
-/// meta)`` tuple ``load_dataset`` returns, or an N x 2P array of inputs
+/// default), and an ``ImageModel`` is returned. ``data`` is a dataset folder,
+/// a list of dataset folders (trained on as one, rows joined in order, as
+/// ``train --train A --train B``: each must have the first's pins, targets
+/// and frames), the ``(inputs, targets, meta)`` tuple ``load_dataset`` returns, or an N x 2P array of inputs
 /// with ``targets`` (N x 2: r mm, theta deg) and ``reference_pins`` (P x 2
 /// px, the pins the inputs are ordered by); any dtype (used as float32).
 /// ``epochs`` overrides the preset's; ``seed`` the model seed (None: the
@@ -429,9 +433,9 @@ pub fn train(
 ) -> PyResult<Py<PyAny>> {
     let text = config_text(config)?;
     if let Some(image) = image_kind(kind) {
-        let dir: PathBuf = data.extract().map_err(|_| {
+        let dirs = dataset_folders(data).ok_or_else(|| {
             input(format!(
-                "{kind} trains on a dataset folder with frames (frames.npy)"
+                "{kind} trains on a dataset folder with frames (frames.npy), or a list of them"
             ))
         })?;
         if preset != "default" || targets.is_some() || reference_pins.is_some() {
@@ -441,7 +445,7 @@ pub fn train(
         }
         let settings = (text.as_deref(), epochs, seed);
         let held_out = val_fraction.map(|f| (f, split_seed));
-        let m = crate::image_model::train(py, image, &dir, settings, held_out)?;
+        let m = crate::image_model::train(py, image, &dirs, settings, held_out)?;
         return Ok(Py::new(py, m)?.into_any());
     }
     let mut cfg = tactrace_lab::train::resolve_config(
@@ -454,11 +458,28 @@ pub fn train(
     if let Some(s) = seed {
         cfg.seed = s;
     }
-    let samples = Samples::read(data, targets, reference_pins, true)?;
-    let all = samples.to_tap_data()?;
     let held_out = val_fraction.map(|f| (f, split_seed));
-    let split = tactrace_lab::train::training_split(&all, samples.folder.as_deref(), held_out)
-        .map_err(lab)?;
+    let list = data.is_instance_of::<pyo3::types::PyList>();
+    let (samples, split) = match dataset_folders(data).filter(|_| list) {
+        Some(dirs) => {
+            if targets.is_some() || reference_pins.is_some() {
+                return Err(input(
+                    "targets and reference_pins are given with arrays only: a dataset carries \
+                     its own",
+                ));
+            }
+            let sets = py.detach(|| TrainingSets::read(&dirs)).map_err(lab)?;
+            let split = sets.split(held_out).map_err(lab)?;
+            (Samples::from_tap_data(sets.data, None), split)
+        }
+        None => {
+            let samples = Samples::read(data, targets, reference_pins, true)?;
+            let all = samples.to_tap_data()?;
+            let folder = samples.folder.as_deref();
+            let split = tactrace_lab::train::training_split(&all, folder, held_out).map_err(lab)?;
+            (samples, split)
+        }
+    };
     let (data, val) = (&split.train, split.val.as_ref());
     let fitted = run_detached(py, || {
         tactrace_lab::train::train_with_validation(&cfg, data, val, &mut |_| checkpoint())
@@ -471,6 +492,19 @@ pub fn train(
         m.validation = Some(m.validation_of(py, &samples)?);
     }
     Ok(Py::new(py, m)?.into_any())
+}
+
+/// The dataset folders `data` names: one folder, or a list of them
+/// (trained on as one, `train --train A --train B`); `None` for anything
+/// else (arrays, `load_dataset`'s tuple).
+fn dataset_folders(data: &Bound<'_, PyAny>) -> Option<Vec<PathBuf>> {
+    if data.is_instance_of::<pyo3::types::PyList>() {
+        return data
+            .extract::<Vec<PathBuf>>()
+            .ok()
+            .filter(|d| !d.is_empty());
+    }
+    data.extract::<PathBuf>().ok().map(|d| vec![d])
 }
 
 /// The image model of `kind`, if it names one.

@@ -153,3 +153,21 @@ def test_follow_in_the_real_frame_world_as_the_cli(real_model, real_set, work,
         tactrace.follow(real_model, "disk", replay={"dir": data, "kep": "N%5==0"})
     with pytest.raises(tactrace.InputError, match="not a labelled collection"):
         tactrace.follow(real_model, "disk", replay=tmp_path)
+
+
+def test_a_list_of_datasets_trains_as_their_rows_joined(sim_set, tmp_path):
+    inputs, targets, meta = tactrace.load_dataset(sim_set)
+    halves = [tactrace.save_dataset(tmp_path / name, inputs[rows], targets[rows], meta)
+              for name, rows in [("a", slice(0, 30)), ("b", slice(30, None))]]
+    whole = tactrace.train("pdennn", sim_set, epochs=2, val_fraction=0.2)
+    joined = tactrace.train("pdennn", [str(h) for h in halves], epochs=2, val_fraction=0.2)
+    assert joined.validation == whole.validation
+    assert np.array_equal(joined.predict(sim_set), whole.predict(sim_set))
+    record = joined.training
+    assert record["dataset"]["sha256"] == whole.training["dataset"]["sha256"]
+    assert [d["rows"] for d in record["datasets"]] == [30, len(inputs) - 30]
+    swapped = dict(meta, reference_pins=np.array(meta["reference_pins"])[
+        [1, 0] + list(range(2, 127))].tolist())
+    other = tactrace.save_dataset(tmp_path / "swapped", inputs, targets, swapped)
+    with pytest.raises(tactrace.InputError, match="their reference pins differ"):
+        tactrace.train("pdennn", [halves[0], other], epochs=1)

@@ -68,6 +68,15 @@ pub enum StoreError {
     /// A labelled collection's description that cannot be used.
     #[error(transparent)]
     Collection(#[from] crate::collection::CollectionError),
+    /// Two datasets given to be trained on together that differ in what a
+    /// model needs alike (`train --train A --train B`).
+    #[error("{first} and {other} cannot be trained on together")]
+    Mismatch {
+        first: PathBuf,
+        other: PathBuf,
+        #[source]
+        mismatch: crate::dataset_join::DatasetMismatch,
+    },
     /// Data whose pins are ordered against other reference pins than the
     /// model's training data.
     #[error("{path}: not ordered like the model's training data")]

@@ -4,6 +4,7 @@
 //!   detector, reference, target spec) and the one reader of its labels;
 //! - [`dataset`]: `inputs.npy` / `targets.npy` / `meta.json` folders;
 //!   [`image_frames`]: their optional `frames.npy` (the rows as images);
+//!   [`dataset_join`]: several datasets as one training set, checked alike;
 //! - [`model_dir`]: a trained model with the reference pins of its training
 //!   data, loaded as one [`StoredModel`] so the pin-order check
 //!   ([`pin_order`]) runs whenever a model meets data or a rig;
@@ -32,6 +33,7 @@ pub mod collection;
 pub mod config_file;
 pub mod csv_text;
 pub mod dataset;
+pub mod dataset_join;
 pub mod error;
 pub mod folder_kind;
 pub mod frame_file;
@@ -58,6 +60,7 @@ pub use dataset::{
     read_dataset, read_dataset_frames, write_dataset, write_dataset_with, DatasetMeta, TapData,
     TargetColumns, TrackTotals,
 };
+pub use dataset_join::{join_datasets, join_frames, DatasetMismatch};
 pub use error::{read_err, write_err, Result, StoreError};
 pub use fsutil::{
     check_output_dir, check_output_file, read_text, write_atomic, write_output_file, StagedDir,
@@ -72,4 +75,4 @@ pub use pin_order::{pin_order_mismatch, PinOrderError};
 pub use sensor_file::SensorFolder;
 pub use shape_file::load_shape;
 pub use sight_file::{SensorSummary, SightFile};
-pub use training_record::{HeldOut, TrainingRecord};
+pub use training_record::{DatasetId, HeldOut, TrainingRecord};

@@ -19,6 +19,11 @@
 //! targets (f32), the first 8 bytes in 16 hex digits. A dataset written
 //! again (by Python, say) hashes alike.
 //!
+//! A model trained on several datasets at once (`train --train A --train
+//! B`) records their rows joined in order as `dataset` (no path) and each
+//! dataset apart, in that order, in `datasets`; the row indices are of the
+//! joined rows. A model of one dataset writes no `datasets`.
+//!
 //! Model folders written before tactrace kept this file load as before;
 //! what they were trained on is then unknown.
 use crate::dataset::TapData;
@@ -37,8 +42,13 @@ pub const TRAINING_FORMAT: u32 = 1;
 pub struct TrainingRecord {
     /// [`TRAINING_FORMAT`] when written.
     pub format: u32,
-    /// The dataset the row indices are of.
+    /// The dataset the row indices are of (several datasets' rows joined,
+    /// when `datasets` lists them).
     pub dataset: DatasetId,
+    /// The datasets joined into `dataset`, in the order of their rows,
+    /// when the model was trained on more than one; empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub datasets: Vec<DatasetId>,
     /// The part of the dataset held out, when one was (`--val-fraction`).
     pub split: Option<HeldOut>,
     /// Indices of the rows the model was fitted on.
@@ -68,6 +78,18 @@ pub struct DatasetId {
     pub rows: usize,
     /// The dataset's `source` (meta.json): "simulated", "real", ...
     pub source: String,
+}
+
+impl DatasetId {
+    /// The identity of `data`, read from `path`.
+    pub fn of(data: &TapData, path: Option<&std::path::Path>) -> Self {
+        Self {
+            path: path.map(|p| p.display().to_string()),
+            sha256: dataset_hash(data),
+            rows: data.len(),
+            source: data.meta.source.clone(),
+        }
+    }
 }
 
 /// A held-out part: the fraction and seed it was drawn with and its rows.
@@ -106,12 +128,8 @@ impl TrainingRecord {
         };
         Self {
             format: TRAINING_FORMAT,
-            dataset: DatasetId {
-                path: path.map(|p| p.display().to_string()),
-                sha256: dataset_hash(data),
-                rows: data.len(),
-                source: data.meta.source.clone(),
-            },
+            dataset: DatasetId::of(data, path),
+            datasets: Vec::new(),
             split,
             train_rows,
             row_hashes,
@@ -123,6 +141,17 @@ impl TrainingRecord {
     /// The record of a model fitted on every row of `data`.
     pub fn all_rows(data: &TapData, path: Option<&std::path::Path>) -> Self {
         Self::new(data, path, (0..data.len()).collect(), None)
+    }
+
+    /// The record of a model trained on the datasets `parts` joined in
+    /// order (the record's own dataset, without a path): `datasets` lists
+    /// them. One part leaves the record as it is.
+    pub fn with_datasets(mut self, parts: Vec<DatasetId>) -> Self {
+        if parts.len() > 1 {
+            self.dataset.path = None;
+            self.datasets = parts;
+        }
+        self
     }
 
     /// How many rows of `data` are rows the model was fitted on (equal
@@ -161,6 +190,12 @@ impl TrainingRecord {
                 "{} row hashes for {} training rows",
                 self.row_hashes.len(),
                 self.train_rows.len()
+            ));
+        }
+        let parts: usize = self.datasets.iter().map(|d| d.rows).sum();
+        if !self.datasets.is_empty() && parts != n {
+            return Err(format!(
+                "the datasets listed hold {parts} rows, their joined rows {n}"
             ));
         }
         if !self.images.is_empty() && self.images.len() != self.train_rows.len() {

@@ -116,7 +116,7 @@ class ImageModel:
 def load_model(dir: StrPath) -> Union[Model, ImageModel]: ...
 def train(
     kind: str,
-    data: Samples,
+    data: Union[Samples, List[StrPath]],
     targets: Optional[ArrayLike] = None,
     reference_pins: Optional[ArrayLike] = None,
     *,

@@ -1,6 +1,7 @@
 //! Model configurations: which of the report's three networks (Table 4.1)
 //! or the backprop baseline, with every hyper-parameter explicit, checked
 //! before any training starts.
+use crate::band_weight::BandWeight;
 use crate::dennn::{ClampedPhase, FreePhase, LrScaling};
 use crate::error::LearnError;
 use crate::pca::PcScaling;
@@ -154,6 +155,11 @@ pub struct ModelConfig {
     /// the taps as read.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rotations: Option<Rotations>,
+    /// Rows whose target lies in a band count more in the training loss
+    /// ([`BandWeight`]: visited `weight` times an epoch); none (the
+    /// default, not written): every row once.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band_weight: Option<BandWeight>,
     /// The single net of DisDenNN / PcaDenNN (outputs r and theta).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<NetConfig>,
@@ -317,6 +323,9 @@ impl ModelConfig {
         }
         if let Some(r) = &self.rotations {
             r.validate()?;
+        }
+        if let Some(b) = &self.band_weight {
+            b.validate()?;
         }
         if self.divergence_retries > MAX_RETRIES {
             let n = self.divergence_retries;
@@ -546,6 +555,7 @@ fn report(kind: ModelKind) -> ModelConfig {
         circular_weight: 1.0,
         pin_features: PinFeatures::Displacements,
         rotations: None,
+        band_weight: None,
         pose: None,
         position: None,
         angle: None,

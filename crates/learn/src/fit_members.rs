@@ -5,6 +5,7 @@
 //! rates halved, while the other members keep what they learnt. Each
 //! member is therefore the model its seed gives alone (at the rates it
 //! finally trained with), whether or not another member diverged.
+use crate::band_weight::epoch_rows;
 use crate::config::ModelConfig;
 use crate::dataset::Dataset;
 use crate::error::LearnError;
@@ -29,6 +30,8 @@ struct Shared<'a> {
     z_val: Option<Vec<f64>>,
     /// Per net of a member: its encoded target columns and PCA.
     plans: Vec<(Vec<usize>, Option<Pca>)>,
+    /// The rows an epoch visits ([`crate::band_weight::epoch_rows`]).
+    rows: Vec<usize>,
 }
 
 /// Fit `cfg`'s members on the encoded targets `train` (and report on
@@ -91,6 +94,7 @@ impl<'a> Shared<'a> {
         standardiser: &Standardiser,
     ) -> Result<Self, LearnError> {
         let encoded = targets::encoded_columns(outputs);
+        let rows = epoch_rows(cfg.band_weight.as_ref(), outputs, train)?;
         let targets = fit_target_scaling(cfg, train)?;
         let targets = weight_circular(targets, cfg.circular_weight, outputs, &encoded)?;
         let z = standardiser.transform(&train.x);
@@ -119,6 +123,7 @@ impl<'a> Shared<'a> {
             z,
             z_val,
             plans,
+            rows,
         })
     }
 
@@ -151,7 +156,8 @@ impl<'a> Shared<'a> {
                 self.train,
                 cols,
                 &self.targets,
-            )?;
+            )?
+            .with_rows(self.rows.clone());
             let val_data = match (self.val, &self.z_val) {
                 (Some(v), Some(zv)) => Some(NetData::new(
                     net_inputs(pca.as_ref(), zv),

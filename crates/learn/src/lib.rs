@@ -10,6 +10,7 @@
 //!
 //! Everything here is pure: no files, no printing. Models serialise to a JSON
 //! string plus safetensors bytes; the lab crate writes them.
+mod band_weight;
 mod closed_form;
 mod config;
 mod dataset;
@@ -37,6 +38,7 @@ mod targets;
 mod trainer;
 mod turned_views;
 
+pub use band_weight::{BandWeight, MAX_BAND_WEIGHT};
 pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_ENSEMBLE};
 pub use dataset::{mean_absolute_error, Dataset};
 pub use dennn::{ClampedPhase, DenNN, EpConfig, FreePhase, LrScaling, SampleStats};

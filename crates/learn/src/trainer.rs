@@ -53,9 +53,11 @@ pub struct TrainingHistory {
     pub member_lr_halvings: Vec<usize>,
 }
 
-/// One net's training inputs and scaled targets.
+/// One net's training inputs and scaled targets, and the rows one epoch
+/// visits (each once, or some more often: [`crate::BandWeight`]).
 pub(crate) struct NetData {
     pub set: Dataset,
+    pub rows: Vec<usize>,
 }
 
 impl NetData {
@@ -79,7 +81,14 @@ impl NetData {
         }
         Ok(NetData {
             set: Dataset::new(x, y, src.n, dim, cols.len())?,
+            rows: (0..src.n).collect(),
         })
+    }
+
+    /// The same data, an epoch visiting `rows` (indices into it, in any
+    /// order and with repeats; shuffled every epoch).
+    pub fn with_rows(self, rows: Vec<usize>) -> Self {
+        Self { rows, ..self }
     }
 }
 
@@ -169,7 +178,7 @@ impl Trainer {
         };
         let rng =
             ChaCha8Rng::seed_from_u64(cfg.seed ^ (0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k + 1)));
-        let order = (0..data.set.n).collect();
+        let order = data.rows.clone();
         let limit = divergence_limit(&data.set.y, data.set.n, data.set.dim_y);
         Trainer {
             name: name.to_string(),

@@ -330,16 +330,22 @@ mod tests {
         [sx / m, sy / m]
     }
 
+    /// Six turns about the spot frames' centre `[16, 16]`, angles and
+    /// `vectors` turning by `+phi`.
+    fn six_turns(vectors: Vec<TurnedVector>) -> FrameTurns {
+        FrameTurns {
+            order: 6,
+            angle_sign: 1,
+            centre: Some([16.0, 16.0]),
+            at_prediction: false,
+            vectors,
+        }
+    }
+
     #[test]
     fn each_copy_holds_the_turned_frame_and_its_turned_angle() {
         let centre = [16.0, 16.0];
-        let turns = FrameTurns {
-            order: 6,
-            angle_sign: 1,
-            centre: Some(centre),
-            at_prediction: false,
-            vectors: Vec::new(),
-        };
+        let turns = six_turns(Vec::new());
         // two frames: a spot at 9 px from the centre, at 20 and 75 deg
         // (image coordinates), each labelled with its angle's sine and
         // cosine after an unturned target 3.5 (as an edge's distance)
@@ -358,11 +364,7 @@ mod tests {
         let set = TurnedSet::of(&frames, &targets, &turns).unwrap();
         let (tf, tt) = (
             set.frames().unwrap(),
-            set.targets(TurnedColumns {
-                angles: &angles,
-                vectors: &[],
-            })
-            .unwrap(),
+            set.targets(targets.columns()).unwrap(),
         );
         assert_eq!(tf.count(), 12);
         for row in 0..12 {
@@ -385,16 +387,10 @@ mod tests {
     #[test]
     fn a_vector_turns_with_the_frame_and_depth_stays() {
         let centre = [16.0, 16.0];
-        let turns = FrameTurns {
-            order: 6,
-            angle_sign: 1,
-            centre: Some(centre),
-            at_prediction: false,
-            vectors: vec![TurnedVector {
-                targets: ["dx".into(), "dy".into()],
-                sign: 1,
-            }],
-        };
+        let turns = six_turns(vec![TurnedVector {
+            targets: ["dx".into(), "dy".into()],
+            sign: 1,
+        }]);
         // a spot at offset (dx, dy) from the centre, labelled with a depth
         // and the offset as a vector (columns 1 and 2): in image
         // coordinates the spot turns by +phi, so the vector's sign is +1

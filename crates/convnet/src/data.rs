@@ -5,6 +5,7 @@
 //! displacement vector beside them (f32, `count x dim`, px), which a
 //! pins-and-pixels model reads too.
 use crate::error::ConvError;
+use crate::turns::{TurnedColumns, VectorColumns};
 
 /// `count` grey frames of `height x width` px, row-major, frame after frame.
 #[derive(Debug, Clone, Copy)]
@@ -120,6 +121,8 @@ pub struct Targets<'a> {
     /// The columns holding an angle's sine, its cosine in the next one
     /// (what a turned frame turns, [`crate::FrameTurns`]); none by default.
     angles: &'a [usize],
+    /// Pairs of columns that turn as a vector with the frame; none by default.
+    vectors: &'a [VectorColumns],
 }
 
 impl<'a> Targets<'a> {
@@ -144,6 +147,7 @@ impl<'a> Targets<'a> {
             count,
             dim,
             angles: &[],
+            vectors: &[],
         })
     }
 
@@ -164,9 +168,40 @@ impl<'a> Targets<'a> {
         Ok(Targets { angles, ..self })
     }
 
+    /// The same rows, the columns of each of `vectors` a vector that
+    /// turns with the frame (inside a row, apart from each other and from
+    /// the angles' columns).
+    pub fn with_vectors(self, vectors: &'a [VectorColumns]) -> Result<Self, ConvError> {
+        let mut used = vec![false; self.dim];
+        for &j in self.angles {
+            used[j] = true;
+            used[j + 1] = true;
+        }
+        for v in vectors {
+            for j in v.columns {
+                if j >= self.dim || used[j] {
+                    return Err(ConvError::VectorColumns {
+                        column: j,
+                        dim: self.dim,
+                    });
+                }
+                used[j] = true;
+            }
+        }
+        Ok(Targets { vectors, ..self })
+    }
+
     /// The columns holding an angle's sine (its cosine next).
     pub fn angles(&self) -> &'a [usize] {
         self.angles
+    }
+
+    /// The columns a turn of the frame moves: angles and vectors.
+    pub fn columns(&self) -> TurnedColumns<'a> {
+        TurnedColumns {
+            angles: self.angles,
+            vectors: self.vectors,
+        }
     }
 
     /// Number of rows.

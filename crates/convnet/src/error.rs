@@ -49,6 +49,10 @@ pub enum ConvError {
     /// row's `dim` targets, or that overlaps another angle's pair.
     #[error("angle column {column} (a sine, its cosine next) does not fit {dim} target columns or overlaps another angle")]
     AngleColumns { column: usize, dim: usize },
+    /// A turned vector's column that lies past the row's `dim` targets or
+    /// is already an angle's or another vector's.
+    #[error("vector column {column} does not fit {dim} target columns or is taken by an angle or another vector")]
+    VectorColumns { column: usize, dim: usize },
     /// A configuration value is out of range.
     #[error("invalid configuration: {field}: {reason}")]
     Config { field: &'static str, reason: String },

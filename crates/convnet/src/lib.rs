@@ -63,4 +63,7 @@ pub use resample::area_resample;
 pub use scaling::{InputScaling, TargetScaling};
 pub use serialise::CONV_FORMAT_VERSION;
 pub use train::{EpochReport, TrainingHistory, Validation, DIVERGENCE_FACTOR};
-pub use turns::{turn_angles, turn_frame, FrameTurns, MAX_TURN_ORDER};
+pub use turns::{
+    turn_angles, turn_frame, turn_vector, FrameTurns, TurnedColumns, TurnedVector, VectorColumns,
+    MAX_TURN_ORDER,
+};

@@ -84,7 +84,7 @@ impl<'a> FitData<'a> {
         Ok(FitData {
             seed: self.seed,
             frames: set.frames()?,
-            targets: set.targets(self.targets.angles())?,
+            targets: set.targets(self.targets.columns())?,
             input: self.input.clone(),
             scaling: self.scaling.clone(),
         })

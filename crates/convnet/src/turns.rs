@@ -10,9 +10,13 @@
 //! `tactrace_learn`'s `rotations` turn them. A circular target's angle
 //! moves by `angle_sign phi_k`: its encoded sine and cosine turn as a
 //! vector, `(sin(a + d), cos(a + d)) = (sin a cos d + cos a sin d, cos a
-//! cos d - sin a sin d)`; every other target is left as it is (the caller
-//! keeps to targets a turn leaves alone, such as the edge's signed
-//! distance from the centre). Predictions never see a copy.
+//! cos d - sin a sin d)`. Two targets named a vector ([`TurnedVector`],
+//! a surface's two tilts) turn as one: `v' = R(vector_sign phi_k) v`
+//! (a small-angle reading of the tilts: a turn about the dome's axis
+//! turns the surface's normal, whose sideways part the two tilts are to
+//! first order). Every other target is left as it is (the caller keeps to
+//! targets a turn leaves alone, such as the edge's signed distance from
+//! the centre or a surface's depth). Predictions never see a copy.
 use crate::data::{Frames, Targets};
 use crate::error::{config_error, ConvError};
 use crate::model::ConvModel;
@@ -23,7 +27,7 @@ pub const MAX_TURN_ORDER: usize = 12;
 
 /// Training on every frame and its copies turned by `k 360/order` deg
 /// about `centre`, `k = 1..order` ([`crate::ConvConfig::rotations`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrameTurns {
     /// The pattern's order of symmetry n: each frame gains n - 1 turned
@@ -43,6 +47,43 @@ pub struct FrameTurns {
     /// (false), the default, is left out of the JSON.
     #[serde(default, skip_serializing_if = "is_false")]
     pub at_prediction: bool,
+    /// Pairs of targets that turn as a vector with the frame (none, the
+    /// default, is left out of the JSON).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub vectors: Vec<TurnedVector>,
+}
+
+/// Two targets, by name, that turn as a vector `(a, b)` when the frame
+/// turns: by `sign * phi` for a turn of the frame by `phi` in image
+/// coordinates, `(a, b) -> (a cos - b sin, a sin + b cos)`. The 331-pin
+/// surface's tilts: `targets = ["pose_4", "pose_5"]`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TurnedVector {
+    /// The names of the two components, `[a, b]`.
+    pub targets: [String; 2],
+    /// +1 or -1: how the vector turns with the frame.
+    pub sign: i8,
+}
+
+/// Two encoded target columns `[a, b]` of a [`TurnedVector`] and its
+/// sign, as the caller resolved its names ([`crate::Targets::with_vectors`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VectorColumns {
+    /// The columns of `a` and `b`.
+    pub columns: [usize; 2],
+    /// +1 or -1, the [`TurnedVector`]'s.
+    pub sign: i8,
+}
+
+/// The encoded columns a turn moves: the circular targets' sine columns
+/// (cosine next) and the vectors' pairs.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TurnedColumns<'a> {
+    /// Each circular target's sine column.
+    pub angles: &'a [usize],
+    /// Each vector's two columns and sign.
+    pub vectors: &'a [VectorColumns],
 }
 
 fn is_false(v: &bool) -> bool {
@@ -63,6 +104,20 @@ impl FrameTurns {
                 "rotations.angle_sign",
                 format!("{} is not 1 or -1", self.angle_sign),
             ));
+        }
+        for v in &self.vectors {
+            if v.sign.abs() != 1 {
+                return Err(config_error(
+                    "rotations.vectors.sign",
+                    format!("{} is not 1 or -1", v.sign),
+                ));
+            }
+            if v.targets[0] == v.targets[1] {
+                return Err(config_error(
+                    "rotations.vectors.targets",
+                    format!("a vector of {} and itself", v.targets[0]),
+                ));
+            }
         }
         if let Some(c) = self.centre {
             if !c.iter().all(|v| v.is_finite()) {
@@ -133,18 +188,37 @@ pub fn turn_angles(row: &mut [f64], angles: &[usize], deg: f64) {
     }
 }
 
+/// One target row's vector `(row[a], row[b])` turned by `deg`:
+/// `(a cos - b sin, a sin + b cos)`.
+pub fn turn_vector(row: &mut [f64], [a, b]: [usize; 2], deg: f64) {
+    let (sd, cd) = deg.to_radians().sin_cos();
+    let (x, y) = (row[a], row[b]);
+    row[a] = x * cd - y * sd;
+    row[b] = x * sd + y * cd;
+}
+
+/// One target row as a turn of the frame by `phi` deg moves it: the
+/// angles by `angle_sign phi`, each vector by its `sign phi`.
+fn turn_row(row: &mut [f64], columns: TurnedColumns, angle_sign: i8, phi: f64) {
+    turn_angles(row, columns.angles, f64::from(angle_sign) * phi);
+    for v in columns.vectors {
+        turn_vector(row, v.columns, f64::from(v.sign) * phi);
+    }
+}
+
 impl ConvModel {
     /// [`ConvModel::predict_batch`] (`count x N`, encoded and unscaled),
     /// or, when its `rotations` say `at_prediction`, the mean over the frames'
     /// `order` turned views, each view's angles (the sine columns
-    /// `angles`, cosine next) turned back by `-angle_sign phi_k` first.
+    /// `columns.angles`, cosine next) turned back by `-angle_sign phi_k`
+    /// and its vectors by `-sign phi_k` first.
     pub fn predict_batch_turned(
         &self,
         frames: &Frames,
-        angles: &[usize],
+        columns: TurnedColumns,
     ) -> Result<Vec<f64>, ConvError> {
         let mut sum = self.predict_batch(frames)?;
-        let Some(turns) = self.config.rotations.filter(|t| t.at_prediction) else {
+        let Some(turns) = self.config.rotations.as_ref().filter(|t| t.at_prediction) else {
             return Ok(sum);
         };
         let (size, n, dim) = (frames.size(), frames.count(), self.outputs());
@@ -158,7 +232,7 @@ impl ConvModel {
             }
             let mut view = self.predict_batch(&Frames::new(&pixels, n, size.0, size.1)?)?;
             for row in view.chunks_exact_mut(dim.max(1)) {
-                turn_angles(row, angles, -f64::from(turns.angle_sign) * deg);
+                turn_row(row, columns, turns.angle_sign, -deg);
             }
             sum.iter_mut().zip(&view).for_each(|(s, v)| *s += v);
         }
@@ -192,7 +266,7 @@ impl TurnedSet {
         let mut values = Vec::with_capacity(turns.order * n * dim);
         for k in 0..turns.order {
             let deg = turns.turn_deg(k);
-            let shift = f64::from(turns.angle_sign) * deg;
+            let columns = targets.columns();
             let block = &mut pixels[k * n * hw..(k + 1) * n * hw];
             for (i, out) in block.chunks_exact_mut(hw).enumerate() {
                 if k == 0 {
@@ -202,7 +276,7 @@ impl TurnedSet {
                 }
                 let start = values.len();
                 values.extend_from_slice(targets.row(i));
-                turn_angles(&mut values[start..], targets.angles(), shift);
+                turn_row(&mut values[start..], columns, turns.angle_sign, deg);
             }
         }
         Ok(Self {
@@ -219,9 +293,11 @@ impl TurnedSet {
         Frames::new(&self.pixels, self.count, self.size.0, self.size.1)
     }
 
-    /// Their targets, with `angles` the encoded angles' sine columns.
-    pub fn targets<'a>(&'a self, angles: &'a [usize]) -> Result<Targets<'a>, ConvError> {
-        Targets::new(&self.values, self.count, self.dim)?.with_angles(angles)
+    /// Their targets, with the columns a turn moves.
+    pub fn targets<'a>(&'a self, columns: TurnedColumns<'a>) -> Result<Targets<'a>, ConvError> {
+        Targets::new(&self.values, self.count, self.dim)?
+            .with_angles(columns.angles)?
+            .with_vectors(columns.vectors)
     }
 }
 
@@ -254,15 +330,22 @@ mod tests {
         [sx / m, sy / m]
     }
 
+    /// Six turns about the spot frames' centre `[16, 16]`, angles and
+    /// `vectors` turning by `+phi`.
+    fn six_turns(vectors: Vec<TurnedVector>) -> FrameTurns {
+        FrameTurns {
+            order: 6,
+            angle_sign: 1,
+            centre: Some([16.0, 16.0]),
+            at_prediction: false,
+            vectors,
+        }
+    }
+
     #[test]
     fn each_copy_holds_the_turned_frame_and_its_turned_angle() {
         let centre = [16.0, 16.0];
-        let turns = FrameTurns {
-            order: 6,
-            angle_sign: 1,
-            centre: Some(centre),
-            at_prediction: false,
-        };
+        let turns = six_turns(Vec::new());
         // two frames: a spot at 9 px from the centre, at 20 and 75 deg
         // (image coordinates), each labelled with its angle's sine and
         // cosine after an unturned target 3.5 (as an edge's distance)
@@ -279,7 +362,10 @@ mod tests {
             .with_angles(&angles)
             .unwrap();
         let set = TurnedSet::of(&frames, &targets, &turns).unwrap();
-        let (tf, tt) = (set.frames().unwrap(), set.targets(&angles).unwrap());
+        let (tf, tt) = (
+            set.frames().unwrap(),
+            set.targets(targets.columns()).unwrap(),
+        );
         assert_eq!(tf.count(), 12);
         for row in 0..12 {
             let c = centroid(tf.frame(row));
@@ -299,6 +385,65 @@ mod tests {
     }
 
     #[test]
+    fn a_vector_turns_with_the_frame_and_depth_stays() {
+        let centre = [16.0, 16.0];
+        let turns = six_turns(vec![TurnedVector {
+            targets: ["dx".into(), "dy".into()],
+            sign: 1,
+        }]);
+        // a spot at offset (dx, dy) from the centre, labelled with a depth
+        // and the offset as a vector (columns 1 and 2): in image
+        // coordinates the spot turns by +phi, so the vector's sign is +1
+        let (dx, dy) = (7.0, -4.0);
+        let pixels = spot_frame([centre[0] + dx, centre[1] + dy]);
+        let frames = Frames::new(&pixels, 1, SIDE, SIDE).unwrap();
+        let values = [2.5, dx, dy];
+        let vectors = [VectorColumns {
+            columns: [1, 2],
+            sign: 1,
+        }];
+        let targets = Targets::new(&values, 1, 3)
+            .unwrap()
+            .with_vectors(&vectors)
+            .unwrap();
+        let set = TurnedSet::of(&frames, &targets, &turns).unwrap();
+        let (tf, tt) = (
+            set.frames().unwrap(),
+            set.targets(targets.columns()).unwrap(),
+        );
+        for row in 0..6 {
+            let c = centroid(tf.frame(row));
+            let t = tt.row(row);
+            assert_eq!(t[0], 2.5, "copy {row}: the depth stays");
+            assert!(
+                (c[0] - centre[0] - t[1]).abs() < 0.1 && (c[1] - centre[1] - t[2]).abs() < 0.1,
+                "copy {row}: spot at {c:?}, vector label ({}, {})",
+                t[1],
+                t[2]
+            );
+        }
+    }
+
+    #[test]
+    fn a_vector_and_its_turn_back_cancel() {
+        let mut row = [1.0, 0.3, -0.8, 0.6, 0.8];
+        let columns = TurnedColumns {
+            angles: &[3],
+            vectors: &[VectorColumns {
+                columns: [2, 1],
+                sign: -1,
+            }],
+        };
+        let before = row;
+        turn_row(&mut row, columns, 1, 60.0);
+        assert!((row[1] - before[1]).abs() > 0.1 && (row[3] - before[3]).abs() > 0.1);
+        turn_row(&mut row, columns, 1, -60.0);
+        for (a, b) in row.iter().zip(&before) {
+            assert!((a - b).abs() < 1e-12);
+        }
+    }
+
+    #[test]
     fn the_copies_carry_no_pins() {
         let pixels = vec![0u8; SIDE * SIDE];
         let pins = [0.5f32, -0.5];
@@ -313,6 +458,7 @@ mod tests {
             angle_sign: -1,
             centre: None,
             at_prediction: false,
+            vectors: Vec::new(),
         };
         let set = TurnedSet::of(&frames, &targets, &turns).unwrap();
         assert_eq!(set.frames().unwrap().pin_dim(), 0);

@@ -7,7 +7,7 @@ mod common;
 use common::{moving_pair_frames, tiny_config, SIDE};
 use tactrace_convnet::{
     turn_angles, turn_frame, ConvConfig, ConvError, ConvModel, FrameTurns, Frames, InputKind,
-    ModelKind, Targets,
+    ModelKind, Targets, TurnedColumns, TurnedVector, VectorColumns,
 };
 
 /// A ring of six pins (3 x 3 px each, 8 px from the centre of a 41 px
@@ -121,12 +121,21 @@ fn angle_columns_must_fit_the_row() {
     }
 }
 
+/// The columns a turn moves in the spot sets below: the angle at column 1.
+fn angle_one() -> TurnedColumns<'static> {
+    TurnedColumns {
+        angles: &[1],
+        vectors: &[],
+    }
+}
+
 fn turns() -> FrameTurns {
     FrameTurns {
         order: 6,
         angle_sign: -1,
         centre: Some([5.5, 5.5]),
         at_prediction: false,
+        vectors: Vec::new(),
     }
 }
 
@@ -156,6 +165,61 @@ fn the_option_is_checked() {
             ..
         })
     ));
+}
+
+#[test]
+fn a_vector_is_checked_and_its_columns_kept_apart() {
+    let mut c = ConvConfig::new(ModelKind::ConvMlp);
+    let vector = |a: &str, b: &str, sign| TurnedVector {
+        targets: [a.into(), b.into()],
+        sign,
+    };
+    for v in [
+        vector("a", "b", 0),
+        vector("a", "b", 2),
+        vector("a", "a", 1),
+    ] {
+        c.rotations = Some(FrameTurns {
+            vectors: vec![v],
+            ..turns()
+        });
+        assert!(matches!(c.validate(), Err(ConvError::Config { .. })));
+    }
+    c.rotations = Some(FrameTurns {
+        vectors: vec![vector("a", "b", -1)],
+        ..turns()
+    });
+    assert!(c.validate().is_ok());
+    let values = [0.0; 5];
+    let t = Targets::new(&values, 1, 5)
+        .unwrap()
+        .with_angles(&[0])
+        .unwrap();
+    let at = |columns, sign| [VectorColumns { columns, sign }];
+    assert!(t.with_vectors(&at([2, 3], 1)).is_ok());
+    for bad in [[1, 2], [2, 5], [3, 3]] {
+        assert!(
+            matches!(
+                t.with_vectors(&at(bad, 1)),
+                Err(ConvError::VectorColumns { .. })
+            ),
+            "{bad:?}"
+        );
+    }
+}
+
+#[test]
+fn the_vectors_are_kept_in_the_model_json() {
+    let text = r#"{"order": 6, "angle_sign": -1, "vectors": [{"targets": ["pose_4", "pose_5"], "sign": 1}]}"#;
+    let t: FrameTurns = serde_json::from_str(text).unwrap();
+    assert_eq!(
+        t.vectors[0].targets,
+        ["pose_4".to_string(), "pose_5".into()]
+    );
+    let back: FrameTurns = serde_json::from_str(&serde_json::to_string(&t).unwrap()).unwrap();
+    assert_eq!(back, t);
+    let none = serde_json::to_string(&turns()).unwrap();
+    assert!(!none.contains("vectors"), "no vectors, no key: {none}");
 }
 
 #[test]
@@ -236,7 +300,7 @@ fn turned_views_at_prediction_are_the_mean_of_the_views_turned_back() {
         viewed.predict_batch(&frames).unwrap()
     );
     assert_eq!(
-        plain.predict_batch_turned(&frames, &[1]).unwrap(),
+        plain.predict_batch_turned(&frames, angle_one()).unwrap(),
         plain.predict_batch(&frames).unwrap()
     );
     let mut want = vec![0.0; 24 * 3];
@@ -260,7 +324,7 @@ fn turned_views_at_prediction_are_the_mean_of_the_views_turned_back() {
         }
         want.iter_mut().zip(&out).for_each(|(w, o)| *w += o / 6.0);
     }
-    let got = viewed.predict_batch_turned(&frames, &[1]).unwrap();
+    let got = viewed.predict_batch_turned(&frames, angle_one()).unwrap();
     for (g, w) in got.iter().zip(&want) {
         assert!((g - w).abs() < 1e-9, "{g} against {w}");
     }

@@ -10,7 +10,10 @@
 use crate::error::LearnError;
 use crate::targets::{self, ModelTarget};
 use serde::{Deserialize, Serialize};
-use tactrace_convnet::{ConvConfig, ConvModel, EpochReport, Frames, Targets, TrainingHistory};
+use tactrace_convnet::{
+    ConvConfig, ConvModel, EpochReport, Frames, Targets, TrainingHistory, TurnedColumns,
+    VectorColumns,
+};
 
 /// Identifies an image model's `model.json`.
 pub const IMAGE_FORMAT: &str = "tactrace-image-model";
@@ -72,6 +75,48 @@ fn angle_columns(outputs: &[ModelTarget]) -> Vec<usize> {
     angles
 }
 
+/// The encoded columns of the vectors `config`'s turned frames name
+/// ([`tactrace_convnet::TurnedVector`]): each name one of `outputs`, not
+/// circular, the two of one unit.
+fn vector_columns(
+    outputs: &[ModelTarget],
+    config: &ConvConfig,
+) -> Result<Vec<VectorColumns>, LearnError> {
+    let Some(turns) = &config.rotations else {
+        return Ok(Vec::new());
+    };
+    let column = |name: &str| -> Result<(usize, &ModelTarget), LearnError> {
+        let mut start = 0;
+        for t in outputs {
+            if t.name == name && !t.circular {
+                return Ok((start, t));
+            }
+            start += t.width();
+        }
+        Err(LearnError::Config {
+            field: "rotations.vectors",
+            reason: format!("{name} is not one of the model's targets that is not circular"),
+        })
+    };
+    turns
+        .vectors
+        .iter()
+        .map(|v| {
+            let ((a, ta), (b, tb)) = (column(&v.targets[0])?, column(&v.targets[1])?);
+            if ta.unit != tb.unit {
+                return Err(LearnError::Config {
+                    field: "rotations.vectors",
+                    reason: format!("{} and {} are not in one unit", ta.name, tb.name),
+                });
+            }
+            Ok(VectorColumns {
+                columns: [a, b],
+                sign: v.sign,
+            })
+        })
+        .collect()
+}
+
 /// Run `fit` on the encoded targets of the training rows `values` (one a
 /// frame of `frames`) and of the validation frames' rows.
 fn with_encoded(
@@ -79,6 +124,7 @@ fn with_encoded(
     frames: &Frames,
     values: &[f32],
     validation: Option<(Frames, &[f32])>,
+    vectors: &[VectorColumns],
     fit: impl FnOnce(
         &Targets,
         Option<(Frames, Targets)>,
@@ -87,7 +133,9 @@ fn with_encoded(
     let w = width(outputs);
     let encoded = encode(outputs, values, frames.count())?;
     let angles = angle_columns(outputs);
-    let train = Targets::new(&encoded, frames.count(), w)?.with_angles(&angles)?;
+    let train = Targets::new(&encoded, frames.count(), w)?
+        .with_angles(&angles)?
+        .with_vectors(vectors)?;
     let val = match validation {
         Some((vf, vv)) => Some((vf, encode(outputs, vv, vf.count())?)),
         None => None,
@@ -114,9 +162,11 @@ impl ImageModel {
         on_epoch: &mut dyn FnMut(&EpochReport),
     ) -> Result<(Self, TrainingHistory), LearnError> {
         targets::check_targets(outputs)?;
-        let (conv, history) = with_encoded(outputs, frames, values, validation, |t, v| {
-            ConvModel::fit_with(frames, t, config, seed, v, on_epoch)
-        })?;
+        let vectors = vector_columns(outputs, config)?;
+        let (conv, history) =
+            with_encoded(outputs, frames, values, validation, &vectors, |t, v| {
+                ConvModel::fit_with(frames, t, config, seed, v, on_epoch)
+            })?;
         Ok((
             Self {
                 conv,
@@ -141,10 +191,12 @@ impl ImageModel {
         on_epoch: &mut dyn FnMut(&EpochReport),
     ) -> Result<(Self, TrainingHistory), LearnError> {
         let outputs = &self.outputs;
-        let (conv, history) = with_encoded(outputs, frames, values, validation, |t, v| {
-            self.conv
-                .fine_tune_with(frames, t, config, seed, v, on_epoch)
-        })?;
+        let vectors = vector_columns(outputs, config)?;
+        let (conv, history) =
+            with_encoded(outputs, frames, values, validation, &vectors, |t, v| {
+                self.conv
+                    .fine_tune_with(frames, t, config, seed, v, on_epoch)
+            })?;
         let outputs = outputs.clone();
         Ok((Self { conv, outputs }, history))
     }
@@ -155,12 +207,23 @@ impl ImageModel {
         let encoded = if self.turned_views() {
             let (h, w) = self.input_size();
             let one = Frames::new(frame, 1, h, w)?;
-            self.conv
-                .predict_batch_turned(&one, &angle_columns(&self.outputs))?
+            self.predict_encoded_turned(&one)?
         } else {
             self.conv.predict(frame)?
         };
         Ok(targets::decode(&self.outputs, &encoded))
+    }
+
+    /// The encoded prediction of `frames` ([`ConvModel::predict_batch_turned`]:
+    /// with its configuration's turned views, if any).
+    fn predict_encoded_turned(&self, frames: &Frames) -> Result<Vec<f64>, LearnError> {
+        let angles = angle_columns(&self.outputs);
+        let vectors = vector_columns(&self.outputs, self.conv.config())?;
+        let columns = TurnedColumns {
+            angles: &angles,
+            vectors: &vectors,
+        };
+        Ok(self.conv.predict_batch_turned(frames, columns)?)
     }
 
     /// Whether it predicts with the mean of a frame's turned views
@@ -169,6 +232,7 @@ impl ImageModel {
         self.conv
             .config()
             .rotations
+            .as_ref()
             .is_some_and(|t| t.at_prediction)
     }
 
@@ -231,9 +295,7 @@ impl ImageModel {
     /// Every frame's targets, one row a frame (frames shared among the
     /// threads of the current rayon pool).
     pub fn predict_batch(&self, frames: &Frames) -> Result<Vec<Vec<f64>>, LearnError> {
-        let encoded = self
-            .conv
-            .predict_batch_turned(frames, &angle_columns(&self.outputs))?;
+        let encoded = self.predict_encoded_turned(frames)?;
         let w = width(&self.outputs).max(1);
         Ok(encoded
             .chunks_exact(w)
@@ -299,6 +361,7 @@ impl ImageModel {
             serde_json::from_value(value).map_err(|e| corrupt(format!("model json: {e}")))?;
         targets::check_targets(&file.targets)?;
         let conv = ConvModel::from_bytes(&file.network.to_string(), weights)?;
+        vector_columns(&file.targets, conv.config())?;
         if conv.outputs() != width(&file.targets) {
             return Err(corrupt(format!(
                 "{} network outputs for targets that take {}",

@@ -1,9 +1,10 @@
 //! An image model with turned frames (`turns` of its configuration):
 //! trained with its circular target's sine and cosine turned, and, with
 //! `at_prediction`, predicting one frame as it predicts a batch, the
-//! angle the circular mean of the turned views.
-use tactrace_convnet::{ConvConfig, ConvSpec, FrameTurns, Frames, ModelKind};
-use tactrace_learn::{ImageModel, ModelTarget, Unit};
+//! angle the circular mean of the turned views; two targets named a
+//! vector turn as one, checked against the model's targets.
+use tactrace_convnet::{ConvConfig, ConvSpec, FrameTurns, Frames, ModelKind, TurnedVector};
+use tactrace_learn::{ImageModel, LearnError, ModelTarget, Unit};
 
 const SIDE: usize = 12;
 
@@ -38,6 +39,7 @@ fn config(at_prediction: bool) -> ConvConfig {
         angle_sign: 1,
         centre: Some([5.5, 5.5]),
         at_prediction,
+        vectors: Vec::new(),
     });
     c
 }
@@ -77,4 +79,70 @@ fn turned_views_change_only_the_prediction_and_one_frame_is_a_batch_row() {
             );
         }
     }
+}
+
+/// The spot frames' targets as a depth (mm) and the spot's offset from
+/// the centre as two "tilts" (deg) that turn as a vector.
+fn vector_targets(values: &[f32]) -> Vec<f32> {
+    values
+        .chunks(2)
+        .flat_map(|t| {
+            let a = t[1].to_radians();
+            [1.5, t[0] * a.cos(), t[0] * a.sin()]
+        })
+        .collect()
+}
+
+fn vector_config(a: &str, b: &str) -> ConvConfig {
+    let mut c = config(true);
+    if let Some(t) = c.rotations.as_mut() {
+        t.vectors = vec![TurnedVector {
+            targets: [a.into(), b.into()],
+            sign: 1,
+        }];
+    }
+    c
+}
+
+#[test]
+fn turned_vectors_name_two_targets_of_one_unit_and_survive_the_file() {
+    let (pixels, values) = spot_frames(24);
+    let frames = Frames::new(&pixels, 24, SIDE, SIDE).unwrap();
+    let values = vector_targets(&values);
+    let outputs = [
+        ModelTarget::new("depth", Unit::Mm),
+        ModelTarget::new("tilt_x", Unit::Deg),
+        ModelTarget::new("tilt_y", Unit::Deg),
+    ];
+    let fit = |c: &ConvConfig| ImageModel::fit(&frames, &values, &outputs, c, 3, None, &mut |_| ());
+    for (a, b) in [("tilt_x", "nope"), ("depth", "tilt_y")] {
+        assert!(
+            matches!(
+                fit(&vector_config(a, b)),
+                Err(LearnError::Config {
+                    field: "rotations.vectors",
+                    ..
+                })
+            ),
+            "{a}, {b}"
+        );
+    }
+    let model = fit(&vector_config("tilt_x", "tilt_y")).unwrap().0;
+    let (json, weights) = model.to_bytes().unwrap();
+    assert!(json.contains("tilt_x"));
+    let back = ImageModel::from_bytes(&json, &weights).unwrap();
+    let (p, q) = (
+        model.predict_batch(&frames).unwrap(),
+        back.predict_batch(&frames).unwrap(),
+    );
+    assert_eq!(p, q);
+    // the views' mean of a vector that turns: not the plain prediction
+    let plain = fit(&config(true)).unwrap().0;
+    let swapped = fit(&vector_config("tilt_y", "tilt_x")).unwrap().0;
+    assert_ne!(
+        plain.predict_batch(&frames).unwrap(),
+        p,
+        "the vector's copies change the fit"
+    );
+    assert_ne!(swapped.predict_batch(&frames).unwrap(), p);
 }

@@ -26,6 +26,19 @@ fn base_of(targets: &[f64]) -> Vec<f32> {
         .collect()
 }
 
+/// `count` moving-pair frames, their targets and their base.
+fn residual_set(count: usize) -> (Vec<u8>, Vec<f64>, Vec<f32>) {
+    let (pixels, targets) = moving_pair_frames(count);
+    let base = base_of(&targets);
+    (pixels, targets, base)
+}
+
+/// The frames of `pixels`, each with its two values of `base`.
+fn with_base<'a>(pixels: &'a [u8], base: &'a [f32]) -> Frames<'a> {
+    let frames = Frames::new(pixels, base.len() / 2, SIDE, SIDE).unwrap();
+    frames.with_pins(base, 2).unwrap()
+}
+
 fn residual_config(kind: ModelKind) -> ConvConfig {
     let mut c = tiny_config(kind);
     c.input = InputKind::PinModelAndPixels;
@@ -72,12 +85,8 @@ fn ep_update_from_the_zeroed_output_points_along_the_backprop_gradient() {
 #[test]
 fn a_fresh_residual_model_predicts_its_base() {
     let count = 48;
-    let (pixels, targets) = moving_pair_frames(count);
-    let base = base_of(&targets);
-    let frames = Frames::new(&pixels, count, SIDE, SIDE)
-        .unwrap()
-        .with_pins(&base, 2)
-        .unwrap();
+    let (pixels, targets, base) = residual_set(count);
+    let frames = with_base(&pixels, &base);
     let t = Targets::new(&targets, count, 2).unwrap();
     for kind in [ModelKind::ConvMlp, ModelKind::ConvDennn] {
         let mut c = residual_config(kind);
@@ -107,12 +116,8 @@ fn a_fresh_residual_model_predicts_its_base() {
 #[test]
 fn a_residual_model_learns_what_the_base_lacks_by_either_rule() {
     let count = 96;
-    let (pixels, targets) = moving_pair_frames(count);
-    let base = base_of(&targets);
-    let frames = Frames::new(&pixels, count, SIDE, SIDE)
-        .unwrap()
-        .with_pins(&base, 2)
-        .unwrap();
+    let (pixels, targets, base) = residual_set(count);
+    let frames = with_base(&pixels, &base);
     let t = Targets::new(&targets, count, 2).unwrap();
     let base_mae = mae(
         &base.iter().map(|&b| b as f64).collect::<Vec<_>>(),

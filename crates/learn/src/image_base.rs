@@ -177,9 +177,9 @@ impl ImageModel {
         let model = Self {
             conv,
             outputs: outputs.to_vec(),
-            base: Some(base.model.clone()),
+            base: Some(Box::new(base.model.clone())),
         };
-        check_base(&model.conv, outputs, model.base.as_ref())?;
+        check_base(&model.conv, outputs, model.base())?;
         Ok((model, history))
     }
 }

@@ -25,7 +25,7 @@ pub const IMAGE_FORMAT_VERSION: u32 = 1;
 pub struct ImageModel {
     pub(crate) conv: ConvModel,
     pub(crate) outputs: Vec<ModelTarget>,
-    pub(crate) base: Option<PoseModel>,
+    pub(crate) base: Option<Box<PoseModel>>,
 }
 
 impl PartialEq for ImageModel {
@@ -251,7 +251,7 @@ impl ImageModel {
     /// The pin model whose prediction it corrects (`input =
     /// "pin_model_and_pixels"`), `None` for any other model.
     pub fn base(&self) -> Option<&PoseModel> {
-        self.base.as_ref()
+        self.base.as_deref()
     }
 
     /// The edge pose `[r mm, theta deg]` of one frame, refused
@@ -383,7 +383,7 @@ impl ImageModel {
         Ok(Self {
             conv,
             outputs: file.targets,
-            base,
+            base: base.map(Box::new),
         })
     }
 }

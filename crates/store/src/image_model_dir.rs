@@ -32,7 +32,7 @@ pub struct StoredImageModel {
     frames: FramesInfo,
     training: Option<TrainingRecord>,
     /// A residual model's pin model with its reference pins.
-    base: Option<StoredModel>,
+    base: Option<Box<StoredModel>>,
     source: PathBuf,
 }
 
@@ -57,17 +57,17 @@ impl StoredImageModel {
     ) -> Self {
         self.base = self.model.base().map(|b| {
             let stored = StoredModel::new(b.clone(), reference_pins);
-            match training {
+            Box::new(match training {
                 Some(t) => stored.with_training(t),
                 None => stored,
-            }
+            })
         });
         self
     }
 
     /// A residual model's pin model as stored (`base/`), `None` otherwise.
     pub fn base(&self) -> Option<&StoredModel> {
-        self.base.as_ref()
+        self.base.as_deref()
     }
 
     /// Refuse data or a rig whose reference pins (`pins`, named `what`)
@@ -91,7 +91,7 @@ impl StoredImageModel {
         let (json, weights) = read_network(dir)?;
         let base_dir = dir.join(BASE_DIR);
         let base = match base_dir.join(MODEL_JSON).is_file() {
-            true => Some(StoredModel::load(&base_dir)?),
+            true => Some(Box::new(StoredModel::load(&base_dir)?)),
             false => None,
         };
         let pose = base.as_ref().map(|b| b.model_unchecked().clone());

@@ -7,7 +7,8 @@ use crate::inputs::Inputs;
 use crate::progress::bar;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
-use tactrace_convnet::ModelKind;
+use tactrace_convnet::{ConvConfig, ModelKind};
+use tactrace_lab::image_base::BaseSettings;
 use tactrace_lab::train_sets::TrainingSets;
 use tactrace_lab::{import_reader, train_image as ti, LabError};
 use tactrace_servo::ImageInput;
@@ -27,7 +28,8 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         .into());
     }
     let text = a.config.as_deref().map(fsutil::read_text).transpose()?;
-    let mut cfg = ti::resolve_image_config(kind, text.as_deref(), a.epochs).with_context(|| {
+    let settings = ti::resolve_image_settings(kind, text.as_deref(), a.epochs);
+    let (mut cfg, base) = settings.with_context(|| {
         a.config
             .as_ref()
             .map(|p| p.display().to_string())
@@ -42,7 +44,7 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
     }
     let seed = a.seed.unwrap_or(0);
     if a.print_config {
-        crate::say!("{}", toml::to_string(&cfg)?.trim_end());
+        crate::say!("{}", resolved_toml(&cfg, base.as_ref())?.trim_end());
         return Ok(());
     }
     Inputs::new()
@@ -100,21 +102,37 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         });
     };
     let data = (&split.train, &train_frames);
-    let (model, history) = match &start {
-        Some((_, s)) => {
+    let (model, history, folds) = match (&start, &base) {
+        (Some((_, s)), _) => {
             same_frames(s, &all_frames.info)?;
-            ti::fine_tune_image(s.model(), &cfg, seed, data, pair, &mut on_epoch)?
+            let (m, h) = ti::fine_tune_image(s.model(), &cfg, seed, data, pair, &mut on_epoch)?;
+            (m, h, None)
         }
-        None => ti::train_image(&cfg, seed, data, pair, &mut on_epoch)?,
+        (None, Some(b)) => {
+            let (m, h, f) = ti::train_image_on_base(&cfg, b, seed, data, pair, &mut on_epoch)?;
+            (m, h, Some(f))
+        }
+        (None, None) => {
+            let (m, h) = ti::train_image(&cfg, seed, data, pair, &mut on_epoch)?;
+            (m, h, None)
+        }
     };
     pb.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
-    let stored = StoredImageModel::new(model, all_frames.info.clone()).with_training(split.record);
+    let pins = sets.data.meta.reference_pins.clone();
+    let base_record = Some(split.record.clone());
+    let record = tactrace_store::TrainingRecord {
+        base: folds,
+        ..split.record
+    };
+    let stored = StoredImageModel::new(model, all_frames.info.clone())
+        .with_training(record)
+        .with_base_pins(pins, base_record);
     let resolved = format!(
         "# {} {} (seed {seed})\n{}",
         kind.name(),
         env!("CARGO_PKG_VERSION"),
-        toml::to_string(&cfg)?
+        resolved_toml(&cfg, base.as_ref())?
     );
     let mut extra = vec![("config.toml", resolved)];
     if let Some((path, s)) = &start {
@@ -140,6 +158,17 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The resolved configuration as TOML, a residual model's `[base]` table
+/// last.
+fn resolved_toml(cfg: &ConvConfig, base: Option<&BaseSettings>) -> Result<String> {
+    let mut text = toml::to_string(cfg)?;
+    if let Some(b) = base {
+        let table = toml::Table::from_iter([("base".to_string(), toml::Value::try_from(b)?)]);
+        text.push_str(&toml::to_string(&table)?);
+    }
+    Ok(text)
 }
 
 /// The image model `train --init` starts from, with its folder.

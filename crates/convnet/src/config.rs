@@ -63,11 +63,24 @@ pub enum InputKind {
     /// the last convolution, as the first dense layer's input
     /// (docs/learning.md, "Pins and pixels").
     PinsAndPixels,
+    /// The frame, and a pin model's prediction of the targets (the base,
+    /// computed by the caller from the tap's pins and given as the frame's
+    /// side values, one an encoded target), standardised as the targets
+    /// are and read beside the pixels as the pins are; the network learns
+    /// the correction `t - base` in standardised units, its output layer
+    /// starting at zero, so that a fresh model predicts the base
+    /// (docs/learning.md, "The residual on a pin model").
+    PinModelAndPixels,
 }
 
 impl InputKind {
     fn is_pixels(&self) -> bool {
         *self == InputKind::Pixels
+    }
+
+    /// Whether the side values are a base prediction the network corrects.
+    pub fn reads_base(&self) -> bool {
+        *self == InputKind::PinModelAndPixels
     }
 }
 
@@ -228,7 +241,7 @@ pub struct ConvConfig {
     #[serde(default, skip_serializing_if = "is_zero")]
     pub channel_dropout: f64,
     /// What the network reads: `pixels` (the default, left out of the
-    /// JSON) or `pins_and_pixels`.
+    /// JSON), `pins_and_pixels` or `pin_model_and_pixels`.
     #[serde(default, skip_serializing_if = "InputKind::is_pixels")]
     pub input: InputKind,
     /// Pins and pixels only: the probability that a training frame's
@@ -241,6 +254,12 @@ pub struct ConvConfig {
     /// starting at its figure. 0, the default, is off and left out.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub pixel_dropout: f64,
+    /// The convolutions' step size (the pixel path, below the dense
+    /// layers) as a fraction of `learning_rate`, e.g. 0.1 for a residual
+    /// model whose head learns faster than its pixel features; 1, the
+    /// default, is one step size for all and left out of the JSON.
+    #[serde(default = "one_f64", skip_serializing_if = "is_one_f64")]
+    pub pixel_rate: f64,
     /// Training on every frame and its copies turned by the sensor's
     /// symmetry (docs/learning.md, "Turned frames"); `None`, the default,
     /// is off and left out of the JSON.
@@ -258,6 +277,14 @@ fn is_false(v: &bool) -> bool {
 
 fn one() -> usize {
     1
+}
+
+fn one_f64() -> f64 {
+    1.0
+}
+
+fn is_one_f64(v: &f64) -> bool {
+    *v == 1.0
 }
 
 fn is_one(v: &usize) -> bool {
@@ -308,6 +335,7 @@ impl ConvConfig {
             channel_dropout: 0.0,
             input: InputKind::Pixels,
             pixel_dropout: 0.0,
+            pixel_rate: 1.0,
             rotations: None,
         }
     }
@@ -367,6 +395,12 @@ impl ConvConfig {
             }
         }
         self.check_pixel_dropout()?;
+        if !(self.pixel_rate > 0.0 && self.pixel_rate <= 1.0) {
+            return Err(config_error(
+                "pixel_rate",
+                format!("{} is not in (0, 1]", self.pixel_rate),
+            ));
+        }
         if !(self.weight_decay >= 0.0 && self.weight_decay.is_finite()) {
             return Err(config_error(
                 "weight_decay",

@@ -8,28 +8,52 @@
 //! `-e z^T` of their weights' gradient and backprop's are those of any
 //! other input column (the im2col matrix simply has `P` more rows), and
 //! no error is sent down to them.
+//!
+//! The residual on a pin model (`input = "pin_model_and_pixels"`,
+//! docs/learning.md): the side values are a base prediction `b` of the
+//! targets, standardised as the targets are (`z = (b - mean) / std`), and
+//! the model's output is `y = z + s(L)`. Training fits `s(L)` to the
+//! correction `t - z`: with the linear output layer and the cost
+//! `C = 1/2 ||s(L) - (t - z)||^2 = 1/2 ||y - t||^2`, the energy, its
+//! equilibria and both learning rules are those of the plain network on
+//! shifted targets, so the EP estimate still approaches the gradient of
+//! the model's loss. The output layer starts at zero, so a fresh model
+//! predicts `b` exactly.
 use crate::config::{ConvConfig, InputKind};
 use crate::data::Frames;
 use crate::error::ConvError;
 use crate::layout::{LayerShape, Layout};
+use crate::network::Network;
 use crate::scaling::{InputScaling, TargetScaling};
+use crate::workspace::Workspace;
 
-/// The pins' per-column standardisation from the training frames' pins,
-/// `None` for a pixels-only configuration; a pins-and-pixels one refuses
-/// frames that carry no pins.
+/// The side values' standardisation: `None` for a pixels-only
+/// configuration; per column from the training frames' pins for a
+/// pins-and-pixels one; `targets`' own for a base prediction (one value
+/// an encoded target). Frames that carry no side values, or a base of
+/// another width, are refused.
 pub(crate) fn fit_pins(
     frames: &Frames,
     config: &ConvConfig,
+    targets: &TargetScaling,
 ) -> Result<Option<TargetScaling>, ConvError> {
-    if config.input == InputKind::Pixels {
-        return Ok(None);
-    }
     let dim = frames.pin_dim();
-    if dim == 0 {
-        return Err(ConvError::PinCount {
-            expected: 1,
-            got: 0,
-        });
+    match config.input {
+        InputKind::Pixels => return Ok(None),
+        InputKind::PinModelAndPixels if dim == targets.dim() => return Ok(Some(targets.clone())),
+        InputKind::PinModelAndPixels => {
+            return Err(ConvError::PinCount {
+                expected: targets.dim(),
+                got: dim,
+            })
+        }
+        InputKind::PinsAndPixels if dim == 0 => {
+            return Err(ConvError::PinCount {
+                expected: 1,
+                got: 0,
+            })
+        }
+        InputKind::PinsAndPixels => {}
     }
     let n = frames.count().max(1) as f64;
     let (mut mean, mut var) = (vec![0.0f64; dim], vec![0.0f64; dim]);
@@ -110,9 +134,55 @@ pub(crate) fn layout_for(
     match (config.input, pins) {
         (InputKind::Pixels, 0) => Ok(layout),
         (InputKind::PinsAndPixels, p) if p > 0 => layout.with_side_inputs(config.conv.len(), p),
-        (_, got) => Err(ConvError::PinCount {
-            expected: usize::from(config.input == InputKind::PinsAndPixels),
+        (InputKind::PinModelAndPixels, p) if p == outputs => {
+            layout.with_side_inputs(config.conv.len(), p)
+        }
+        (kind, got) => Err(ConvError::PinCount {
+            expected: match kind {
+                InputKind::Pixels => 0,
+                InputKind::PinsAndPixels => 1,
+                InputKind::PinModelAndPixels => outputs,
+            },
             got,
         }),
     }
+}
+
+/// A base model's side scaling must be its target scaling (what the skip
+/// adds is in standardised target units); refused otherwise.
+pub(crate) fn check_base(input: &InputScaling, targets: &TargetScaling) -> Result<(), ConvError> {
+    if input.base_skip && input.pins.as_ref() != Some(targets) {
+        return Err(ConvError::Corrupt {
+            reason: "a pin model's prediction is read in other units than the targets".into(),
+        });
+    }
+    Ok(())
+}
+
+/// The training targets of a base model's chunk made corrections: `t -=
+/// z`, both `outputs x nb` in standardised units (`pins` holds `z`).
+pub(crate) fn subtract_base(input: &InputScaling, nb: usize, pins: &[f32], t: &mut [f32]) {
+    if input.base_skip {
+        let n = input.pin_count() * nb;
+        t[..n].iter_mut().zip(&pins[..n]).for_each(|(t, z)| *t -= z);
+    }
+}
+
+/// The skip of a base model after its feed-forward pass: the output
+/// `s(L) += z`, so `s(L)` holds the model's prediction `y` (scaled).
+pub(crate) fn add_base(net: &Network, input: &InputScaling, ws: &mut Workspace, nb: usize) {
+    if input.base_skip {
+        let n = input.pin_count() * nb;
+        let last = net.layout.depth() - 1;
+        let (s, z) = (&mut ws.s[last], &ws.pins);
+        s[..n].iter_mut().zip(&z[..n]).for_each(|(s, z)| *s += z);
+    }
+}
+
+/// The output layer's weights and bias set to zero: a fresh base model's
+/// correction path, so that it predicts the base until it learns.
+pub(crate) fn zero_output(net: &mut Network) {
+    let last = net.layout.depth() - 1;
+    net.params.weights[last].fill(0.0);
+    net.params.biases[last].fill(0.0);
 }

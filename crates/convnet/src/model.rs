@@ -61,16 +61,20 @@ impl ConvModel {
                 });
             }
         }
+        let scaling = TargetScaling::fit(targets);
         let mut input = InputScaling::fit(frames, config.input_centring);
-        input.pins = hybrid::fit_pins(frames, config)?;
+        input.pins = hybrid::fit_pins(frames, config, &scaling)?;
+        input.base_skip = config.input.reads_base();
         if let Some((vf, _)) = &validation {
             hybrid::check_pins(&input, vf)?;
         }
         let layout = hybrid::layout_for(config, frames.size(), targets.dim(), input.pin_count())?;
-        let scaling = TargetScaling::fit(targets);
-        let nets: Vec<Network> = (0..config.members as u64)
+        let mut nets: Vec<Network> = (0..config.members as u64)
             .map(|k| Network::new(layout.clone(), config.activation, seed.wrapping_add(k)))
             .collect();
+        if input.base_skip {
+            nets.iter_mut().for_each(hybrid::zero_output);
+        }
         let start = ConvModel {
             config: config.clone(),
             seed,

@@ -23,7 +23,7 @@ pub struct Predictor {
 /// Standardise frames `first..first + nb` of `frames` into `ws.x` (and
 /// their pins into `ws.pins`, for a pins-and-pixels model) and run
 /// the feed-forward pass; the outputs are left in the last layer's `s`
-/// (`outputs x nb`, scaled units).
+/// (`outputs x nb`, scaled units; a base model's base added).
 pub(crate) fn forward_frames(
     net: &Network,
     input: &InputScaling,
@@ -39,6 +39,7 @@ pub(crate) fn forward_frames(
     }
     crate::hybrid::load_pins(input, frames, first..first + nb, nb, &mut ws.pins);
     feed_forward(net, ws, nb);
+    crate::hybrid::add_base(net, input, ws, nb);
 }
 
 /// The last layer's output of frame `b` of an `nb`-frame chunk, unscaled.

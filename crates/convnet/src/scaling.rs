@@ -24,6 +24,11 @@ pub struct InputScaling {
     /// pins-and-pixels model), `None` for a model of pixels only.
     #[serde(default)]
     pub pins: Option<TargetScaling>,
+    /// The side values are a base prediction of the targets (`pins` is
+    /// then the target scaling), added to the network's output in
+    /// standardised units (`input = "pin_model_and_pixels"`).
+    #[serde(default)]
+    pub base_skip: bool,
 }
 
 impl InputScaling {
@@ -61,6 +66,7 @@ impl InputScaling {
                 InputCentring::MeanFrame => centre.iter().map(|&c| c as f32).collect(),
             },
             pins: None,
+            base_skip: false,
         }
     }
 

@@ -125,6 +125,7 @@ impl ConvModel {
         let layout = crate::hybrid::layout_for(c, size, file.outputs, file.pins)?;
         let tensors = read_tensors(safetensors)?;
         let (input, targets) = read_scalings(&tensors, &file)?;
+        crate::hybrid::check_base(&input, &targets)?;
         let nets = (0..c.members)
             .map(|k| read_network(&tensors, &layout, c, k))
             .collect::<Result<Vec<_>, _>>()?;
@@ -193,6 +194,7 @@ fn read_scalings(
                 std: read_f64(tensors, "input.pins.std", &[p])?,
             }),
         },
+        base_skip: file.config.input.reads_base(),
     };
     let targets = TargetScaling {
         mean: read_f64(tensors, "target.mean", &[k])?,

@@ -265,7 +265,9 @@ fn batch_step(
         }
     }
     grad.scale(1.0 / batch.len() as f32);
-    adam.step(&mut net.params, grad, lr, config.weight_decay);
+    let convs = config.conv.len();
+    let factor = |l: usize| if l < convs { config.pixel_rate } else { 1.0 };
+    adam.step_layers(&mut net.params, grad, (lr, config.weight_decay), factor);
     losses[..used].iter().sum()
 }
 
@@ -307,6 +309,7 @@ fn chunk_gradient(
         nb,
         &mut ws.pins,
     );
+    crate::hybrid::subtract_base(&data.input, nb, &ws.pins, &mut ws.t);
     if let Some(g) = ws.grad.as_mut() {
         g.clear();
     }

@@ -25,6 +25,7 @@ pub mod error;
 pub mod follow;
 #[cfg(feature = "hardware")]
 pub mod hardware;
+pub mod image_base;
 pub mod import;
 pub mod import_checks;
 pub mod import_like;

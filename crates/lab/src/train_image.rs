@@ -3,30 +3,48 @@
 //! same targets, validation figures and model folders as the pin models
 //! (`crate::train`). docs/learning.md, "Images in".
 use crate::error::{LabError, Result};
+use crate::image_base::{base_settings, fit_base, split_base_table, BaseSettings};
 use crate::train::{data_targets, held_out_rows, named_targets, score_predictions, Validation};
 use std::path::{Path, PathBuf};
 use tactrace_convnet::{ConvConfig, EpochReport, Frames, ModelKind, TrainingHistory};
-use tactrace_learn::{ImageModel, ModelTarget};
-use tactrace_store::{stage_image_model, ImageFrames, LoadedModel, StoredImageModel, TapData};
+use tactrace_learn::{BaseFit, ImageModel, ModelTarget};
+use tactrace_store::{
+    stage_image_model, BaseFolds, ImageFrames, LoadedModel, StoredImageModel, TapData,
+};
 
 /// The configuration of an image model of `kind`: its defaults, then the
 /// keys of an optional TOML override (unknown keys are errors), then
-/// `epochs`; validated here, before any work.
+/// `epochs`; validated here, before any work. A `[base]` table is checked
+/// and left out ([`resolve_image_settings`] keeps it).
 pub fn resolve_image_config(
     kind: ModelKind,
     toml_text: Option<&str>,
     epochs: Option<usize>,
 ) -> Result<ConvConfig> {
+    Ok(resolve_image_settings(kind, toml_text, epochs)?.0)
+}
+
+/// [`resolve_image_config`] and a residual model's base settings (its
+/// `[base]` table, or the defaults; `None` for any other model).
+pub fn resolve_image_settings(
+    kind: ModelKind,
+    toml_text: Option<&str>,
+    epochs: Option<usize>,
+) -> Result<(ConvConfig, Option<BaseSettings>)> {
     let mut cfg = ConvConfig::new(kind);
+    let mut given = None;
     if let Some(text) = toml_text {
-        cfg = tactrace_store::overlay(&cfg, text, "model config")?;
+        let (rest, base) = split_base_table(text)?;
+        cfg = tactrace_store::overlay(&cfg, &rest, "model config")?;
         cfg.kind = kind;
+        given = base;
     }
     if let Some(e) = epochs {
         cfg.epochs = e;
     }
     cfg.validate().map_err(tactrace_learn::LearnError::from)?;
-    Ok(cfg)
+    let base = base_settings(&cfg, given)?;
+    Ok((cfg, base))
 }
 
 /// The frames of the dataset `data` read from `dir`, refused (bad input)
@@ -81,6 +99,39 @@ pub fn train_image(
         val,
         on_epoch,
     )?)
+}
+
+/// A residual model (`input = "pin_model_and_pixels"`) of `cfg` fitted
+/// from `seed` on `data`'s targets and `frames` ([`train_image`]'s
+/// arguments): its pin model of `base` fitted on every row of `data`, the
+/// rows' base predictions out of fold (crate::image_base); with the
+/// record of the folds for `training.json`.
+pub fn train_image_on_base(
+    cfg: &ConvConfig,
+    base: &BaseSettings,
+    seed: u64,
+    (data, frames): (&TapData, &ImageFrames),
+    val: Option<(&TapData, &ImageFrames)>,
+    on_epoch: &mut dyn FnMut(&EpochReport),
+) -> Result<(ImageModel, TrainingHistory, BaseFolds)> {
+    let outputs = data_targets(data)?;
+    let (train, val) = views(&outputs, (data, frames), val)?;
+    let (pin_model, rows, folds) = fit_base(base, data, seed)?;
+    let fit = BaseFit {
+        model: &pin_model,
+        rows: &rows,
+    };
+    let (model, history) = ImageModel::fit_on_base(
+        &train,
+        &data.targets,
+        &outputs,
+        fit,
+        cfg,
+        seed,
+        val,
+        on_epoch,
+    )?;
+    Ok((model, history, folds))
 }
 
 /// [`train_image`] from the fitted model `start` instead of fresh
@@ -153,6 +204,7 @@ pub fn validate_image(
             ),
         });
     }
+    model.check_pins(&data.meta.reference_pins, what)?;
     let targets = named_targets(net.outputs(), data)?;
     let predicted = net.predict_batch(&view(frames, data)?)?;
     let mut v = score_predictions(targets, data, predicted, net.edge_roles().ok())?;

@@ -8,6 +8,7 @@
 //! Serialised as a JSON string (format, version, targets, the network's
 //! own JSON) plus the network's safetensors bytes; the caller writes them.
 use crate::error::LearnError;
+use crate::pose_model::PoseModel;
 use crate::targets::{self, ModelTarget};
 use serde::{Deserialize, Serialize};
 use tactrace_convnet::{
@@ -20,11 +21,22 @@ pub const IMAGE_FORMAT: &str = "tactrace-image-model";
 /// Bumped on any incompatible change.
 pub const IMAGE_FORMAT_VERSION: u32 = 1;
 
-/// A fitted image model: the network and the targets it predicts.
-#[derive(Debug, Clone, PartialEq)]
+/// A fitted image model: the network and the targets it predicts, and
+/// for a residual model (`input = "pin_model_and_pixels"`) the pin model
+/// whose prediction it corrects (`crate::image_base`).
+#[derive(Debug, Clone)]
 pub struct ImageModel {
-    conv: ConvModel,
-    outputs: Vec<ModelTarget>,
+    pub(crate) conv: ConvModel,
+    pub(crate) outputs: Vec<ModelTarget>,
+    pub(crate) base: Option<Box<PoseModel>>,
+}
+
+impl PartialEq for ImageModel {
+    /// The same network and targets, and bases that serialise alike.
+    fn eq(&self, other: &Self) -> bool {
+        let base = |m: &Self| m.base.as_ref().map(|b| b.to_bytes().ok());
+        self.conv == other.conv && self.outputs == other.outputs && base(self) == base(other)
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -38,7 +50,11 @@ struct ImageFile {
 
 /// The encoded columns (circular targets as sine and cosine) of the
 /// `count x T` target rows `values`.
-fn encode(outputs: &[ModelTarget], values: &[f32], count: usize) -> Result<Vec<f64>, LearnError> {
+pub(crate) fn encode(
+    outputs: &[ModelTarget],
+    values: &[f32],
+    count: usize,
+) -> Result<Vec<f64>, LearnError> {
     let t = outputs.len();
     if values.len() != count * t {
         return Err(LearnError::Shape {
@@ -57,13 +73,13 @@ fn encode(outputs: &[ModelTarget], values: &[f32], count: usize) -> Result<Vec<f
     Ok(out)
 }
 
-fn width(outputs: &[ModelTarget]) -> usize {
+pub(crate) fn width(outputs: &[ModelTarget]) -> usize {
     outputs.iter().map(ModelTarget::width).sum()
 }
 
 /// The encoded columns holding a circular target's sine (its cosine is
 /// the next): what a turned training frame turns.
-fn angle_columns(outputs: &[ModelTarget]) -> Vec<usize> {
+pub(crate) fn angle_columns(outputs: &[ModelTarget]) -> Vec<usize> {
     let mut start = 0;
     let mut angles = Vec::new();
     for t in outputs {
@@ -78,7 +94,7 @@ fn angle_columns(outputs: &[ModelTarget]) -> Vec<usize> {
 /// The encoded columns of the vectors `config`'s turned frames name
 /// ([`tactrace_convnet::TurnedVector`]): each name one of `outputs`, not
 /// circular, the two of one unit.
-fn vector_columns(
+pub(crate) fn vector_columns(
     outputs: &[ModelTarget],
     config: &ConvConfig,
 ) -> Result<Vec<VectorColumns>, LearnError> {
@@ -119,7 +135,7 @@ fn vector_columns(
 
 /// Run `fit` on the encoded targets of the training rows `values` (one a
 /// frame of `frames`) and of the validation frames' rows.
-fn with_encoded(
+pub(crate) fn with_encoded(
     outputs: &[ModelTarget],
     frames: &Frames,
     values: &[f32],
@@ -162,6 +178,9 @@ impl ImageModel {
         on_epoch: &mut dyn FnMut(&EpochReport),
     ) -> Result<(Self, TrainingHistory), LearnError> {
         targets::check_targets(outputs)?;
+        if config.input.reads_base() {
+            return Err(crate::image_base::needs_base());
+        }
         let vectors = vector_columns(outputs, config)?;
         let (conv, history) =
             with_encoded(outputs, frames, values, validation, &vectors, |t, v| {
@@ -171,6 +190,7 @@ impl ImageModel {
             Self {
                 conv,
                 outputs: outputs.to_vec(),
+                base: None,
             },
             history,
         ))
@@ -190,6 +210,14 @@ impl ImageModel {
         validation: Option<(Frames, &[f32])>,
         on_epoch: &mut dyn FnMut(&EpochReport),
     ) -> Result<(Self, TrainingHistory), LearnError> {
+        if self.base.is_some() {
+            return Err(LearnError::Config {
+                field: "input",
+                reason: "a model that corrects a pin model is trained whole (its training rows \
+                         need out-of-fold predictions of the pin model); --init takes another"
+                    .into(),
+            });
+        }
         let outputs = &self.outputs;
         let vectors = vector_columns(outputs, config)?;
         let (conv, history) =
@@ -198,7 +226,15 @@ impl ImageModel {
                     .fine_tune_with(frames, t, config, seed, v, on_epoch)
             })?;
         let outputs = outputs.clone();
-        Ok((Self { conv, outputs }, history))
+        let base = None;
+        Ok((
+            Self {
+                conv,
+                outputs,
+                base,
+            },
+            history,
+        ))
     }
 
     /// Every target, in [`Self::outputs`]' order and units (circular
@@ -248,7 +284,13 @@ impl ImageModel {
         if self.turned_views() {
             return self.predict_targets(frame);
         }
-        let encoded = self.conv.predict_with_pins(frame, pins)?;
+        let encoded = match &self.base {
+            Some(base) => {
+                let side = crate::image_base::base_side(base, &self.outputs, pins, 1)?;
+                self.conv.predict_with_pins(frame, &side)?
+            }
+            None => self.conv.predict_with_pins(frame, pins)?,
+        };
         Ok(targets::decode(&self.outputs, &encoded))
     }
 
@@ -261,9 +303,19 @@ impl ImageModel {
         Ok([values[r], values[theta]])
     }
 
-    /// Pin values a frame it reads beside the pixels (0: pixels only).
+    /// Pin values a frame it reads beside the pixels (0: pixels only; a
+    /// residual model's, those its pin model reads).
     pub fn pin_inputs(&self) -> usize {
-        self.conv.pin_inputs()
+        match &self.base {
+            Some(base) => base.input_dim(),
+            None => self.conv.pin_inputs(),
+        }
+    }
+
+    /// The pin model whose prediction it corrects (`input =
+    /// "pin_model_and_pixels"`), `None` for any other model.
+    pub fn base(&self) -> Option<&PoseModel> {
+        self.base.as_deref()
     }
 
     /// The edge pose `[r mm, theta deg]` of one frame, refused
@@ -295,7 +347,15 @@ impl ImageModel {
     /// Every frame's targets, one row a frame (frames shared among the
     /// threads of the current rayon pool).
     pub fn predict_batch(&self, frames: &Frames) -> Result<Vec<Vec<f64>>, LearnError> {
-        let encoded = self.predict_encoded_turned(frames)?;
+        let side;
+        let frames = match &self.base {
+            Some(base) => {
+                side = crate::image_base::frames_side(base, &self.outputs, frames)?;
+                frames.with_pins(&side, width(&self.outputs))?
+            }
+            None => *frames,
+        };
+        let encoded = self.predict_encoded_turned(&frames)?;
         let w = width(&self.outputs).max(1);
         Ok(encoded
             .chunks_exact(w)
@@ -343,8 +403,21 @@ impl ImageModel {
     }
 
     /// Rebuild a model from [`Self::to_bytes`] output; another format
-    /// version, or targets that do not match the network, are errors.
+    /// version, or targets that do not match the network, are errors, and
+    /// so is a residual model (its pin model is stored beside it:
+    /// [`Self::from_bytes_with_base`]).
     pub fn from_bytes(json: &str, weights: &[u8]) -> Result<Self, LearnError> {
+        Self::from_bytes_with_base(json, weights, None)
+    }
+
+    /// [`Self::from_bytes`] with the pin model `base` a residual model
+    /// corrects (required by one, refused by any other model; it must
+    /// predict the same targets).
+    pub fn from_bytes_with_base(
+        json: &str,
+        weights: &[u8],
+        base: Option<PoseModel>,
+    ) -> Result<Self, LearnError> {
         let value: serde_json::Value =
             serde_json::from_str(json).map_err(|e| corrupt(format!("model json: {e}")))?;
         if !is_image_model_json(&value) {
@@ -369,9 +442,11 @@ impl ImageModel {
                 width(&file.targets)
             )));
         }
+        crate::image_base::check_base(&conv, &file.targets, base.as_ref())?;
         Ok(Self {
             conv,
             outputs: file.targets,
+            base: base.map(Box::new),
         })
     }
 }

@@ -19,6 +19,7 @@ mod dennn;
 mod ep;
 mod error;
 mod fit_members;
+mod image_base;
 mod image_model;
 mod kernels;
 mod member;
@@ -43,6 +44,7 @@ pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_E
 pub use dataset::{mean_absolute_error, Dataset};
 pub use dennn::{ClampedPhase, DenNN, EpConfig, FreePhase, LrScaling, SampleStats};
 pub use error::LearnError;
+pub use image_base::BaseFit;
 pub use image_model::{is_image_model_json, ImageModel, IMAGE_FORMAT, IMAGE_FORMAT_VERSION};
 pub use mlp::Mlp;
 pub use net::Layers;

@@ -3,13 +3,17 @@
 //! `frames.json` (the training frames' [`FramesInfo`]: the input size and
 //! what it was averaged from), `training.json` and `history.csv`. No
 //! `pins.json`: an image model reads pixels, whatever the pin order.
+//! A residual model (`input = "pin_model_and_pixels"`) holds the pin model
+//! it corrects in `base/`, a pin model folder of its own (with its
+//! `pins.json`), so the folder moves whole; its pins are checked against
+//! the data's or the rig's ([`StoredImageModel::check_pins`]).
 //!
 //! [`LoadedModel`] is the one entry that loads any model folder, pin or
 //! image model, for the commands that take either.
 use crate::error::{Result, StoreError};
 use crate::fsutil::{read_text, StagedDir};
 use crate::image_frames::FramesInfo;
-use crate::model_dir::StoredModel;
+use crate::model_dir::{write_model_into, StoredModel};
 use crate::model_files::{
     network_error, read_network, read_training, write_common, write_file, CommonParts, MODEL_JSON,
 };
@@ -18,6 +22,8 @@ use std::path::{Path, PathBuf};
 use tactrace_learn::ImageModel;
 
 const FRAMES_JSON: &str = "frames.json";
+/// The sub-folder holding a residual model's pin model.
+pub const BASE_DIR: &str = "base";
 
 /// An image model with what its training frames were.
 #[derive(Debug, Clone)]
@@ -25,6 +31,8 @@ pub struct StoredImageModel {
     model: ImageModel,
     frames: FramesInfo,
     training: Option<TrainingRecord>,
+    /// A residual model's pin model with its reference pins.
+    base: Option<Box<StoredModel>>,
     source: PathBuf,
 }
 
@@ -35,7 +43,40 @@ impl StoredImageModel {
             model,
             frames,
             training: None,
+            base: None,
             source: PathBuf::new(),
+        }
+    }
+
+    /// A residual model's pin model given its training data's reference
+    /// pins and, when known, what it was trained on (written to `base/`).
+    pub fn with_base_pins(
+        mut self,
+        reference_pins: Vec<[f64; 2]>,
+        training: Option<TrainingRecord>,
+    ) -> Self {
+        self.base = self.model.base().map(|b| {
+            let stored = StoredModel::new(b.clone(), reference_pins);
+            Box::new(match training {
+                Some(t) => stored.with_training(t),
+                None => stored,
+            })
+        });
+        self
+    }
+
+    /// A residual model's pin model as stored (`base/`), `None` otherwise.
+    pub fn base(&self) -> Option<&StoredModel> {
+        self.base.as_deref()
+    }
+
+    /// Refuse data or a rig whose reference pins (`pins`, named `what`)
+    /// are ordered otherwise than a residual model's pin model reads
+    /// them; any other image model takes any order.
+    pub fn check_pins(&self, pins: &[[f64; 2]], what: &Path) -> Result<()> {
+        match &self.base {
+            Some(b) => b.for_pins(pins, what).map(|_| ()),
+            None => Ok(()),
         }
     }
 
@@ -48,7 +89,14 @@ impl StoredImageModel {
     /// Load an image model folder, with errors naming the file.
     pub fn load(dir: &Path) -> Result<Self> {
         let (json, weights) = read_network(dir)?;
-        let model = ImageModel::from_bytes(&json, &weights).map_err(|e| network_error(dir, e))?;
+        let base_dir = dir.join(BASE_DIR);
+        let base = match base_dir.join(MODEL_JSON).is_file() {
+            true => Some(Box::new(StoredModel::load(&base_dir)?)),
+            false => None,
+        };
+        let pose = base.as_ref().map(|b| b.model_unchecked().clone());
+        let model = ImageModel::from_bytes_with_base(&json, &weights, pose)
+            .map_err(|e| network_error(dir, e))?;
         let frames_path = dir.join(FRAMES_JSON);
         let frames: FramesInfo =
             serde_json::from_str(&read_text(&frames_path)?).map_err(|e| StoreError::Format {
@@ -71,6 +119,7 @@ impl StoredImageModel {
             model,
             frames,
             training: read_training(dir)?,
+            base,
             source: dir.to_path_buf(),
         })
     }
@@ -107,6 +156,21 @@ pub fn stage_image_model(
     extra: &[(&str, String)],
 ) -> Result<StagedDir> {
     let stage = StagedDir::new(dir, force)?;
+    match (&model.base, model.model.base()) {
+        (Some(base), Some(_)) => {
+            let base_dir = stage.path().join(BASE_DIR);
+            std::fs::create_dir(&base_dir).map_err(crate::error::write_err(&base_dir))?;
+            let history = tactrace_learn::TrainingHistory::default();
+            write_model_into(&base_dir, base, &history, &[])?;
+        }
+        (None, None) => {}
+        _ => {
+            return Err(network_error(
+                dir,
+                "a model that corrects a pin model is saved with that model's reference pins",
+            ))
+        }
+    }
     let network = model.model.to_bytes().map_err(|e| network_error(dir, e))?;
     let frames = serde_json::to_string_pretty(&model.frames).expect("info serialises");
     write_file(&stage.path().join(FRAMES_JSON), frames.as_bytes())?;
@@ -116,7 +180,7 @@ pub fn stage_image_model(
         history_csv,
         extra,
     };
-    write_common(&stage, parts)?;
+    write_common(stage.path(), parts)?;
     Ok(stage)
 }
 

@@ -75,4 +75,4 @@ pub use pin_order::{pin_order_mismatch, PinOrderError};
 pub use sensor_file::SensorFolder;
 pub use shape_file::load_shape;
 pub use sight_file::{SensorSummary, SightFile};
-pub use training_record::{DatasetId, HeldOut, TrainingRecord};
+pub use training_record::{BaseFolds, DatasetId, HeldOut, TrainingRecord};

@@ -131,6 +131,13 @@ impl StoredModel {
         self.for_pins(&data.meta.reference_pins, what)
     }
 
+    /// The pose model whatever the pin order, for a holder that checks
+    /// the order itself (an image model's base:
+    /// [`crate::StoredImageModel::check_pins`]).
+    pub(crate) fn model_unchecked(&self) -> &PoseModel {
+        &self.model
+    }
+
     /// As [`Self::for_pins`], giving up the stored model.
     pub fn into_model_for(self, pins: &[[f64; 2]], what: &Path) -> Result<PoseModel> {
         self.for_pins(pins, what)?;
@@ -170,11 +177,23 @@ pub fn stage_model(
     extra: &[(&str, String)],
 ) -> Result<StagedDir> {
     let stage = StagedDir::new(dir, force)?;
+    write_model_into(stage.path(), model, history, extra)?;
+    Ok(stage)
+}
+
+/// The files of [`stage_model`] written into the folder `dir` (a staging
+/// folder, or a folder inside one: an image model's base).
+pub(crate) fn write_model_into(
+    dir: &Path,
+    model: &StoredModel,
+    history: &TrainingHistory,
+    extra: &[(&str, String)],
+) -> Result<()> {
     let pins = PinsFile {
         reference_pins: model.reference_pins.clone(),
     };
     let pins = serde_json::to_string(&pins).expect("pins serialise");
-    write_file(&stage.path().join(PINS), pins.as_bytes())?;
+    write_file(&dir.join(PINS), pins.as_bytes())?;
     let network = model.model.to_bytes().map_err(|e| network_error(dir, e))?;
     let training = model.training.clone().map(|t| TrainingRecord {
         member_lr_halvings: history.member_lr_halvings.clone(),
@@ -186,8 +205,7 @@ pub fn stage_model(
         history_csv: &history_csv(history),
         extra,
     };
-    write_common(&stage, parts)?;
-    Ok(stage)
+    write_common(dir, parts)
 }
 
 /// The per-epoch history as CSV: one row per epoch and network.

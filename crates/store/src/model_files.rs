@@ -4,9 +4,9 @@
 //! folders), `history.csv` and the caller's text files (`config.toml`,
 //! ...). [`crate::model_dir`] and [`crate::image_model_dir`] read and
 //! write these parts here, one way, beside their own files, in a staging
-//! folder that appears whole or not at all ([`StagedDir`]).
+//! folder that appears whole or not at all ([`crate::fsutil::StagedDir`]).
 use crate::error::{write_err, Result, StoreError};
-use crate::fsutil::{read_text, StagedDir};
+use crate::fsutil::read_text;
 use crate::input_file::{read_bounded, MAX_BINARY_BYTES};
 use crate::training_record::{TrainingRecord, TRAINING_FILE};
 use std::path::Path;
@@ -62,9 +62,9 @@ pub(crate) struct CommonParts<'a> {
     pub extra: &'a [(&'a str, String)],
 }
 
-/// Write `parts` into the staging folder `stage`.
-pub(crate) fn write_common(stage: &StagedDir, parts: CommonParts) -> Result<()> {
-    let dir = stage.path();
+/// Write `parts` into the folder `dir` (a staging folder, or a folder
+/// inside one).
+pub(crate) fn write_common(dir: &Path, parts: CommonParts) -> Result<()> {
     if let Some(training) = parts.training {
         let text = serde_json::to_string(training).expect("record serialises");
         write_file(&dir.join(TRAINING_FILE), text.as_bytes())?;

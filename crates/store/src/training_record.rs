@@ -64,6 +64,28 @@ pub struct TrainingRecord {
     /// their results); empty for a single model and in older folders.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub member_lr_halvings: Vec<usize>,
+    /// A residual image model's base (`input = "pin_model_and_pixels"`):
+    /// how its training rows' base predictions were made; absent for any
+    /// other model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<BaseFolds>,
+}
+
+/// The out-of-fold base predictions of a residual image model's training
+/// rows: the rows dealt into `folds` folds from `seed`, each fold's
+/// predictions from a pin model fitted on the other folds; the stored pin
+/// model (`base/`) fitted on every training row.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BaseFolds {
+    /// The pin model's kind ("pdennn", ...).
+    pub model: String,
+    /// Number of folds.
+    pub folds: usize,
+    /// The seed of the deal.
+    pub seed: u64,
+    /// Each training row's fold, in the order of `train_rows`.
+    pub fold_of_row: Vec<usize>,
 }
 
 /// Which dataset: its content hash, size and where it was read from.
@@ -135,6 +157,7 @@ impl TrainingRecord {
             row_hashes,
             images,
             member_lr_halvings: Vec::new(),
+            base: None,
         }
     }
 
@@ -197,6 +220,17 @@ impl TrainingRecord {
             return Err(format!(
                 "the datasets listed hold {parts} rows, their joined rows {n}"
             ));
+        }
+        if let Some(b) = &self.base {
+            let bad = b.fold_of_row.iter().any(|&f| f >= b.folds);
+            if b.fold_of_row.len() != self.train_rows.len() || bad {
+                return Err(format!(
+                    "the base's folds: {} rows dealt into {} folds for {} training rows",
+                    b.fold_of_row.len(),
+                    b.folds,
+                    self.train_rows.len()
+                ));
+            }
         }
         if !self.images.is_empty() && self.images.len() != self.train_rows.len() {
             return Err(format!(

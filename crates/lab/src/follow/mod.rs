@@ -222,6 +222,10 @@ pub fn image_perception(
     settings: &ServoSettings,
 ) -> Result<Perception> {
     image.model().edge_roles()?;
+    image.check_pins(
+        reader.tracker().reference(),
+        Path::new("the rig's reference frame"),
+    )?;
     let input = image_input_for(image)?;
     let rig = input.preprocessed_size(reference.width(), reference.height());
     let trained = image.frames().source_size;

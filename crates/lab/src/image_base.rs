@@ -1,0 +1,281 @@
+//! `train` of a residual image model (`input = "pin_model_and_pixels"`,
+//! docs/learning.md, "The residual on a pin model"): the `[base]` table of
+//! its configuration, the pin model fitted on every training row (stored
+//! in the model's `base/`), and the training rows' base predictions made
+//! out of fold: the rows dealt into `folds` folds by a seeded shuffle, each
+//! fold's predictions from a pin model fitted on the other folds, so the
+//! network learns its corrections against a base as good as it is on taps
+//! it has not seen.
+use crate::error::{LabError, Result};
+use crate::train::{check_trainable, data_targets, resolve_config, train};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use tactrace_convnet::ConvConfig;
+use tactrace_learn::{ModelConfig, ModelKind, PoseModel, Preset};
+use tactrace_store::{BaseFolds, TapData};
+
+/// Most folds.
+const MAX_FOLDS: usize = 50;
+
+/// Added to the training seed for the deal of the rows into folds.
+const FOLD_STREAM: u64 = 0x6a09_e667_f3bc_c909;
+
+/// The `[base]` table of a residual model's configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BaseSettings {
+    /// The pin model: "pdennn" (default), "pcadennn", "disdennn" or
+    /// "mlp", with its default settings.
+    #[serde(default = "pdennn")]
+    pub model: String,
+    /// Folds of the training rows for their out-of-fold base predictions
+    /// (2 ..= 50; default 5).
+    #[serde(default = "five")]
+    pub folds: usize,
+    /// Keys of the pin model's configuration over its kind's defaults, as
+    /// `train --config` takes them (`[base.settings]`; none by default).
+    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
+    pub settings: toml::Table,
+}
+
+fn pdennn() -> String {
+    "pdennn".into()
+}
+
+fn five() -> usize {
+    5
+}
+
+impl Default for BaseSettings {
+    fn default() -> Self {
+        BaseSettings {
+            model: pdennn(),
+            folds: five(),
+            settings: toml::Table::new(),
+        }
+    }
+}
+
+impl BaseSettings {
+    /// The pin model's kind, refused when unknown.
+    pub fn kind(&self) -> Result<ModelKind> {
+        Ok(match self.model.as_str() {
+            "pdennn" => ModelKind::PDenNN,
+            "pcadennn" => ModelKind::PcaDenNN,
+            "disdennn" => ModelKind::DisDenNN,
+            "mlp" => ModelKind::Mlp,
+            other => {
+                return Err(LabError::Config(format!(
+                    "[base] model = \"{other}\": a pin model (pdennn, pcadennn, disdennn, mlp)"
+                )))
+            }
+        })
+    }
+
+    /// The pin model's configuration (its kind's defaults, then
+    /// `settings`), checked with the folds.
+    pub fn config(&self) -> Result<ModelConfig> {
+        if !(2..=MAX_FOLDS).contains(&self.folds) {
+            return Err(LabError::Config(format!(
+                "[base] folds = {}: not in 2..={MAX_FOLDS}",
+                self.folds
+            )));
+        }
+        let text = toml::to_string(&self.settings).expect("a table serialises");
+        resolve_config(self.kind()?, Preset::Default, Some(&text), None)
+    }
+}
+
+/// The `[base]` table of the configuration text `text`, split from the
+/// rest (returned as text for the image model's own keys): the base
+/// settings of a residual model (`cfg_reads_base`; the defaults when the
+/// table is absent), refused for any other model.
+pub fn split_base_table(text: &str) -> Result<(String, Option<BaseSettings>)> {
+    let mut table: toml::Table = toml::from_str(text)
+        .map_err(|e| LabError::Config(format!("model config: {}", e.to_string().trim_end())))?;
+    let base = match table.remove("base") {
+        Some(v) => Some(
+            v.try_into::<BaseSettings>()
+                .map_err(|e| LabError::Config(format!("[base]: {}", e.to_string().trim_end())))?,
+        ),
+        None => None,
+    };
+    let rest = toml::to_string(&table).expect("a table serialises");
+    Ok((rest, base))
+}
+
+/// The base settings of `cfg` given its file's `[base]` table `given`:
+/// the table (or its defaults) for a residual model, `None` for another
+/// model, which refuses a `[base]` table.
+pub fn base_settings(
+    cfg: &ConvConfig,
+    given: Option<BaseSettings>,
+) -> Result<Option<BaseSettings>> {
+    match (cfg.input.reads_base(), given) {
+        (true, given) => {
+            let settings = given.unwrap_or_default();
+            settings.config()?;
+            Ok(Some(settings))
+        }
+        (false, None) => Ok(None),
+        (false, Some(_)) => Err(LabError::Config(
+            "[base] is read by input = \"pin_model_and_pixels\" only".into(),
+        )),
+    }
+}
+
+/// Each of `n` rows' fold, `0..folds`: a shuffle of the rows from `seed`
+/// dealt round-robin, so the folds differ in size by one at most.
+pub fn deal_folds(n: usize, folds: usize, seed: u64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    order.shuffle(&mut ChaCha8Rng::seed_from_u64(
+        seed.wrapping_add(FOLD_STREAM),
+    ));
+    let mut fold = vec![0; n];
+    for (p, &r) in order.iter().enumerate() {
+        fold[r] = p % folds.max(1);
+    }
+    fold
+}
+
+/// The rows of `fold_of_row` outside fold `f`: what its pin model fits.
+pub fn rows_outside(fold_of_row: &[usize], f: usize) -> Vec<usize> {
+    (0..fold_of_row.len())
+        .filter(|&r| fold_of_row[r] != f)
+        .collect()
+}
+
+/// The pin model of `cfg` fitted on every row of `data`, and each row's
+/// out-of-fold prediction (`rows x T`, targets' order and units) with
+/// the record of the deal (`settings`, `seed`).
+pub fn fit_base(
+    settings: &BaseSettings,
+    data: &TapData,
+    seed: u64,
+) -> Result<(PoseModel, Vec<f64>, BaseFolds)> {
+    let cfg = settings.config()?;
+    check_trainable(&cfg, data, 0)?;
+    let t = data_targets(data)?.len();
+    let fold_of_row = deal_folds(data.len(), settings.folds, seed);
+    let mut predictions = vec![0.0; data.len() * t];
+    for f in 0..settings.folds {
+        let fit_rows = rows_outside(&fold_of_row, f);
+        let part = data.subset(&fit_rows);
+        check_trainable(&cfg, &part, data.len() - fit_rows.len())?;
+        let (model, _) = train(&cfg, &part, &mut |_| ())?;
+        let d = data.dim();
+        for r in (0..data.len()).filter(|&r| fold_of_row[r] == f) {
+            let values = model.predict_targets(&data.inputs[r * d..(r + 1) * d])?;
+            predictions[r * t..(r + 1) * t].copy_from_slice(&values);
+        }
+    }
+    let (model, _) = train(&cfg, data, &mut |_| ())?;
+    let record = BaseFolds {
+        model: settings.model.clone(),
+        folds: settings.folds,
+        seed,
+        fold_of_row,
+    };
+    Ok((model, predictions, record))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tactrace_store::DatasetMeta;
+
+    /// `n` rows of 4 pin values (two pins) whose targets are linear in
+    /// them, with a little seeded scatter.
+    fn data(n: usize) -> TapData {
+        let meta: DatasetMeta = serde_json::from_value(serde_json::json!({
+            "source": "test", "origin": "", "seed": null, "samples": n, "pins": 2,
+            "targets": ["r", "theta"], "frames_with_missing_pins": 0,
+            "reference_pins": [[0.0, 0.0], [5.0, 0.0]], "settings": null, "tactrace_version": ""
+        }))
+        .expect("meta");
+        let inputs: Vec<f32> = (0..4 * n)
+            .map(|i| ((i * 7919) % 101) as f32 / 50.0 - 1.0)
+            .collect();
+        let targets = inputs
+            .chunks_exact(4)
+            .flat_map(|p| [p[0] - 0.5 * p[1], 10.0 * p[2] + 3.0 * p[3]])
+            .collect();
+        TapData {
+            inputs,
+            targets,
+            meta,
+        }
+    }
+
+    fn quick() -> BaseSettings {
+        let settings: toml::Table = toml::from_str("epochs = 15").unwrap();
+        BaseSettings {
+            model: "disdennn".into(),
+            folds: 3,
+            settings,
+        }
+    }
+
+    #[test]
+    fn the_folds_are_seeded_and_even() {
+        let a = deal_folds(23, 5, 7);
+        assert_eq!(a, deal_folds(23, 5, 7));
+        assert_ne!(a, deal_folds(23, 5, 8));
+        let sizes: Vec<usize> = (0..5)
+            .map(|f| a.iter().filter(|&&k| k == f).count())
+            .collect();
+        assert!(sizes.iter().all(|&s| s == 4 || s == 5), "{sizes:?}");
+        for (f, size) in sizes.iter().enumerate() {
+            assert!(rows_outside(&a, f).iter().all(|&r| a[r] != f));
+            assert_eq!(rows_outside(&a, f).len(), 23 - size);
+        }
+    }
+
+    /// A row's out-of-fold prediction does not move when that row's own
+    /// target is spoilt (no pin model that predicts it saw it), while the
+    /// rows of the other folds, whose pin models did see it, move.
+    #[test]
+    fn out_of_fold_predictions_never_see_their_own_rows() {
+        let clean = data(45);
+        let (_, before, folds) = fit_base(&quick(), &clean, 3).unwrap();
+        assert_eq!(folds.fold_of_row.len(), 45);
+        assert_eq!((folds.folds, folds.seed), (3, 3));
+        let spoilt_row = 10;
+        let mut spoilt = clean.clone();
+        spoilt.targets[2 * spoilt_row] += 50.0;
+        let (_, after, _) = fit_base(&quick(), &spoilt, 3).unwrap();
+        let own = folds.fold_of_row[spoilt_row];
+        for r in 0..45 {
+            let moved = (before[2 * r] - after[2 * r]).abs();
+            if folds.fold_of_row[r] == own {
+                assert_eq!(moved, 0.0, "row {r}, in the spoilt row's fold, moved");
+            } else {
+                assert!(moved > 1e-4, "row {r} of another fold did not move");
+            }
+        }
+    }
+
+    #[test]
+    fn the_base_table_is_read_checked_and_only_for_a_residual_model() {
+        let (rest, base) = split_base_table("epochs = 3\n[base]\nfolds = 4\n").unwrap();
+        assert_eq!(rest.trim(), "epochs = 3");
+        assert_eq!(base.as_ref().map(|b| b.folds), Some(4));
+        let mut cfg = ConvConfig::new(tactrace_convnet::ModelKind::ConvMlp);
+        assert!(base_settings(&cfg, base.clone()).is_err());
+        cfg.input = tactrace_convnet::InputKind::PinModelAndPixels;
+        assert_eq!(
+            base_settings(&cfg, None).unwrap(),
+            Some(BaseSettings::default())
+        );
+        for bad in [
+            "[base]\nfolds = 1",
+            "[base]\nmodel = \"conv-mlp\"",
+            "[base]\nfold = 3",
+        ] {
+            let given = split_base_table(bad).and_then(|(_, b)| base_settings(&cfg, b));
+            assert!(given.is_err(), "{bad}");
+        }
+    }
+}

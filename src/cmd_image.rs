@@ -120,7 +120,7 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
     pb.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     let pins = sets.data.meta.reference_pins.clone();
-    let base_record = Some(split.record.clone());
+    let base_record = split.record.clone();
     let record = tactrace_store::TrainingRecord {
         base: folds,
         ..split.record

@@ -49,19 +49,17 @@ impl StoredImageModel {
     }
 
     /// A residual model's pin model given its training data's reference
-    /// pins and, when known, what it was trained on (written to `base/`).
+    /// pins and what it was trained on (written to `base/`); nothing for
+    /// any other image model.
     pub fn with_base_pins(
         mut self,
         reference_pins: Vec<[f64; 2]>,
-        training: Option<TrainingRecord>,
+        training: TrainingRecord,
     ) -> Self {
-        self.base = self.model.base().map(|b| {
-            let stored = StoredModel::new(b.clone(), reference_pins);
-            Box::new(match training {
-                Some(t) => stored.with_training(t),
-                None => stored,
-            })
-        });
+        self.base = self
+            .model
+            .base()
+            .map(|b| Box::new(StoredModel::new(b.clone(), reference_pins).with_training(training)));
         self
     }
 

@@ -30,3 +30,44 @@ fn the_shipped_report_config_restores_the_reports_controller() {
         toml::to_string(&rest).unwrap()
     );
 }
+
+/// The shipped configuration of the file `name` in configs/.
+fn shipped(name: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../configs")
+        .join(name);
+    std::fs::read_to_string(path).unwrap()
+}
+
+/// The 127-pin edge's pin model (configs/pdennn-edge127.toml) is the
+/// search's best trial as an ensemble of five, and the shipped residual
+/// image model (configs/residual-edge127.toml) carries exactly that pin
+/// model as its base: the two files cannot drift apart.
+#[test]
+fn the_shipped_edge_residual_carries_the_shipped_pin_model() {
+    use tactrace_learn::{ModelKind, Preset};
+    let pins = tactrace_lab::train::resolve_config(
+        ModelKind::PDenNN,
+        Preset::Default,
+        Some(&shipped("pdennn-edge127.toml")),
+        None,
+    )
+    .unwrap();
+    assert_eq!(pins.ensemble, 5);
+    let (position, angle) = (pins.position.as_ref(), pins.angle.as_ref());
+    assert_eq!(position.and_then(|n| n.n_components), Some(27));
+    assert_eq!(angle.and_then(|n| n.n_components), Some(39));
+    assert_eq!(position.map(|n| n.hidden.clone()), Some(vec![385]));
+    for kind in [
+        tactrace_convnet::ModelKind::ConvMlp,
+        tactrace_convnet::ModelKind::ConvDennn,
+    ] {
+        let text = shipped("residual-edge127.toml");
+        let (image, base) =
+            tactrace_lab::train_image::resolve_image_settings(kind, Some(&text), None).unwrap();
+        assert!(image.input.reads_base(), "{}", kind.name());
+        let base = base.expect("a residual model has a base");
+        assert_eq!(base.kind().unwrap(), ModelKind::PDenNN);
+        assert_eq!(base.config().unwrap(), pins);
+    }
+}

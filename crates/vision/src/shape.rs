@@ -76,7 +76,8 @@ pub fn perimeter(points: &[[i32; 2]]) -> f64 {
     let Some(&last) = points.last() else {
         return 0.0;
     };
-    let steps = [0.0, 1.0, 1.0f64.hypot(1.0)];
+    // SQRT_2 is what `1.0f64.hypot(1.0)` gives (a test checks it).
+    let steps = [0.0, 1.0, std::f64::consts::SQRT_2];
     let mut prev = last;
     let mut total = 0.0;
     for &p in points {
@@ -89,6 +90,21 @@ pub fn perimeter(points: &[[i32; 2]]) -> f64 {
         prev = p;
     }
     total
+}
+
+/// The length of a closed border of `points` points whose steps (from
+/// each point to the next, and from the last to the first) are all one
+/// pixel along an axis or diagonal, `diagonal` of them diagonal: the exact
+/// sum `(points - diagonal) + diagonal sqrt 2` rounded twice, where
+/// [`perimeter`] rounds once a step. The two differ by at most
+/// `(points + 2) u` relatively (u = 2^-53, the error bound of a sum of
+/// positive terms), so they can decide a filter only where its value lies
+/// outside that margin of the bound (`blob.rs`). A lone pixel has length 0.
+pub fn perimeter_of_steps(points: usize, diagonal: usize) -> f64 {
+    if points < 2 {
+        return 0.0;
+    }
+    (points - diagonal) as f64 + diagonal as f64 * std::f64::consts::SQRT_2
 }
 
 /// Circularity 4 pi A / P^2 (1 for a disc).
@@ -482,6 +498,59 @@ mod tests {
                 exact_median(&pts, c, &mut b)
             );
         }
+    }
+
+    #[test]
+    fn sqrt_2_is_the_hypot_of_a_diagonal_step() {
+        assert_eq!(1.0f64.hypot(1.0), std::f64::consts::SQRT_2);
+    }
+
+    /// The length from the step counts is within the bound of the sum
+    /// point by point, on random 8-connected closed walks.
+    #[test]
+    fn perimeter_of_steps_is_within_its_bound_of_the_sum() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let moves = [
+            [1, 0],
+            [1, 1],
+            [0, 1],
+            [-1, 1],
+            [-1, 0],
+            [-1, -1],
+            [0, -1],
+            [1, -1],
+        ];
+        for _ in 0..2000 {
+            let n = rng.random_range(2..400);
+            let mut points = vec![[0, 0]];
+            for _ in 1..n {
+                let [x, y] = points[points.len() - 1];
+                let [dx, dy] = moves[rng.random_range(0..8)];
+                points.push([x + dx, y + dy]);
+            }
+            // Close it: the last step back to the first point must be one
+            // pixel too, so retrace the walk backwards.
+            let back: Vec<[i32; 2]> = points[1..points.len() - 1].iter().rev().copied().collect();
+            points.extend(back);
+            let diagonal = (0..points.len())
+                .filter(|&i| {
+                    let (p, q) = (points[i], points[(i + 1) % points.len()]);
+                    p[0] != q[0] && p[1] != q[1]
+                })
+                .count();
+            let (sum, steps) = (
+                perimeter(&points),
+                perimeter_of_steps(points.len(), diagonal),
+            );
+            let bound = (points.len() + 2) as f64 * f64::EPSILON / 2.0 * sum;
+            assert!((sum - steps).abs() <= bound, "{sum} {steps} {bound}");
+        }
+        assert_eq!(perimeter_of_steps(1, 0), perimeter(&[[3, 4]]));
+        assert_eq!(
+            perimeter_of_steps(4, 0),
+            perimeter(&[[0, 0], [1, 0], [1, 1], [0, 1]])
+        );
     }
 
     #[test]

@@ -12,8 +12,8 @@ use crate::contour::ContourScanner;
 use crate::grouping::{Centre, Grouper};
 use crate::params::BlobParams;
 use crate::shape::{
-    circularity, hull_area_upper_bound, hull_area_with, median_radius, perimeter, HullScratch,
-    MedianScratch, Moments, Octagon,
+    circularity, hull_area_upper_bound, hull_area_with, median_radius, perimeter,
+    perimeter_of_steps, HullScratch, MedianScratch, Moments, Octagon,
 };
 
 /// An 8-bit grey camera frame.
@@ -200,14 +200,23 @@ pub(crate) fn measure_shape(
     p: &BlobParams,
     scratch: &mut Scratch,
 ) -> Option<Centre> {
-    measure_shape_in(contour, None, p, scratch)
+    measure_shape_in(contour, Known::default(), p, scratch)
 }
 
-/// [`measure_shape`] with the contour's octagon (the extremes of x, y,
-/// x + y and x - y over its points) when it is known already.
+/// What is known of a contour before it is measured, from the runs and
+/// the walk that found it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Known<'a> {
+    /// The extremes of x, y, x + y and x - y over its points.
+    pub octagon: Option<&'a Octagon>,
+    /// How many of its steps are diagonal (every step one pixel).
+    pub diagonal_steps: Option<usize>,
+}
+
+/// [`measure_shape`] with what is `known` of the contour already.
 pub(crate) fn measure_shape_in(
     contour: &[[i32; 2]],
-    octagon: Option<&Octagon>,
+    known: Known,
     p: &BlobParams,
     scratch: &mut Scratch,
 ) -> Option<Centre> {
@@ -216,13 +225,7 @@ pub(crate) fn measure_shape_in(
     if p.filter_by_area && !within(area, p.min_area, p.max_area) {
         return None;
     }
-    if p.filter_by_circularity
-        && !within(
-            circularity(area, perimeter(contour)),
-            p.min_circularity,
-            p.max_circularity,
-        )
-    {
+    if p.filter_by_circularity && !circularity_passes(contour, known.diagonal_steps, area, p) {
         return None;
     }
     let mut confidence = 1.0;
@@ -233,7 +236,7 @@ pub(crate) fn measure_shape_in(
         }
         confidence = ratio * ratio;
     }
-    if p.filter_by_convexity && !surely_convex_enough(contour, octagon, area, p) {
+    if p.filter_by_convexity && !surely_convex_enough(contour, known.octagon, area, p) {
         let hull = hull_area_with(contour, &mut scratch.hull);
         if hull.abs() < f64::EPSILON || !within(area / hull, p.min_convexity, p.max_convexity) {
             return None;
@@ -250,6 +253,31 @@ pub(crate) fn measure_shape_in(
         radius,
         confidence,
     })
+}
+
+/// The circularity filter, `4 pi A / P^2` (report ch. 4.1) in `[min,
+/// max)`. With the border's `diagonal_steps` known, decided from the
+/// perimeter of the step counts ([`perimeter_of_steps`]) wherever that
+/// circularity lies farther than 1e-9 (relative) from both bounds: the
+/// two perimeters differ by at most `(n + 2) u` relatively (n points, u =
+/// 2^-53), so the two circularities by at most `2 (n + 4) u`, under 1e-9
+/// / 4 for n < 2^20, and both fall on the same side of each bound. Else,
+/// or near a bound, from the sum step by step ([`perimeter`]), as OpenCV.
+fn circularity_passes(
+    contour: &[[i32; 2]],
+    diagonal_steps: Option<usize>,
+    area: f64,
+    p: &BlobParams,
+) -> bool {
+    let (min, max) = (p.min_circularity, p.max_circularity);
+    if let Some(diagonal) = diagonal_steps.filter(|_| contour.len() < 1 << 20) {
+        let c = circularity(area, perimeter_of_steps(contour.len(), diagonal));
+        let clear = |bound: f32| (c - f64::from(bound)).abs() > 1e-9 * c.abs();
+        if c.is_finite() && clear(min) && clear(max) {
+            return within(c, min, max);
+        }
+    }
+    within(circularity(area, perimeter(contour)), min, max)
 }
 
 /// True when the convexity test `area / hull` in `[min, max)` passes
@@ -349,6 +377,55 @@ mod tests {
     fn blank_and_empty_frames_give_no_blobs() {
         assert!(detect_blobs(&Frame::new(32, 32), &white_blobs()).is_empty());
         assert!(detect_blobs(&Frame::new(0, 0), &white_blobs()).is_empty());
+    }
+
+    /// The circularity filter decided from the walk's step counts is the
+    /// one decided from the sum step by step ([`perimeter`]), on the
+    /// borders of random discs and ellipses with bounds at the f32 values
+    /// on either side of each border's own circularity, at 0 and at
+    /// f32::MAX.
+    #[test]
+    fn circularity_from_step_counts_decides_as_the_sum() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(41);
+        let mut checked = 0;
+        for _ in 0..400 {
+            let (cx, cy) = (rng.random_range(10.0..22.0), rng.random_range(10.0..22.0));
+            let (r, sx) = (rng.random_range(0.3..8.0), rng.random_range(0.4..1.6));
+            let frame = Frame::from_fn(32, 32, |x, y| {
+                let d = ((f64::from(x) - cx) * sx).hypot(f64::from(y) - cy);
+                image::Luma([if d <= r { 255 } else { 0 }])
+            });
+            let Some(first) = frame.as_raw().iter().position(|&v| v > 127) else {
+                continue;
+            };
+            let mut scanner = ContourScanner::new(32, 32);
+            scanner.binarise_above(frame.as_raw(), 127);
+            let (contour, diagonal) = scanner.outer_border_at(first % 32, first / 32);
+            let area = Moments::of_polygon(contour).m00;
+            let exact = circularity(area, perimeter(contour)) as f32;
+            let around = [
+                0.0,
+                exact,
+                f32::from_bits(exact.to_bits().saturating_sub(1)),
+                f32::from_bits(exact.to_bits() + 1),
+                f32::MAX,
+            ];
+            for &min in &around {
+                for &max in &around {
+                    let p = BlobParams {
+                        min_circularity: min,
+                        max_circularity: max,
+                        ..white_blobs()
+                    };
+                    let want = within(circularity(area, perimeter(contour)), min, max);
+                    let got = circularity_passes(contour, Some(diagonal), area, &p);
+                    assert_eq!(got, want, "{contour:?} [{min}, {max})");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 5000, "{checked} decisions");
     }
 
     #[test]

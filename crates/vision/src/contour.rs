@@ -50,6 +50,17 @@ pub struct ContourScanner {
     offsets: [isize; 8],
     points: Vec<[i32; 2]>,
     spans: Vec<Span>,
+    /// The diagonal steps of the last [`ContourScanner::outer_border_at`]
+    /// walk (odd chain codes), the closing step included.
+    diagonal_steps: usize,
+}
+
+impl Default for ContourScanner {
+    /// A scanner for an empty image, to be sized by
+    /// [`ContourScanner::clear`] or [`ContourScanner::reset_window`].
+    fn default() -> Self {
+        Self::new(0, 0)
+    }
 }
 
 impl ContourScanner {
@@ -66,6 +77,7 @@ impl ContourScanner {
             offsets,
             points: Vec::new(),
             spans: Vec::new(),
+            diagonal_steps: 0,
         }
     }
 
@@ -112,13 +124,18 @@ impl ContourScanner {
     /// that component (its only one when it has no hole), found without
     /// the scan. Other contours traced before are forgotten. The walk
     /// writes no marks into the labels (only the raster scan reads them;
-    /// every walk reads a label only as zero or not).
-    pub fn outer_border_at(&mut self, x: usize, y: usize) -> &[[i32; 2]] {
+    /// every walk reads a label only as zero or not). Also returns how many
+    /// of the border's steps, from each point to the next and from the last
+    /// back to the first, are diagonal (the others are one pixel along an
+    /// axis; a lone pixel has no step): its perimeter without a sum over
+    /// the points (`shape::perimeter_of_steps`).
+    pub fn outer_border_at(&mut self, x: usize, y: usize) -> (&[[i32; 2]], usize) {
         self.points.clear();
         self.spans.clear();
+        self.diagonal_steps = 0;
         let at = (y + 1) * self.stride + x + 1;
         self.follow_border::<false>(at, WEST, at);
-        &self.points
+        (&self.points, self.diagonal_steps)
     }
 
     /// Binarises a window of grey levels (row-major, `width * height`,
@@ -344,6 +361,7 @@ impl ContourScanner {
     /// repeat its first move. With `MARK`, marks pixels whose east side was
     /// seen empty (and the others visited).
     fn walk<const MARK: bool>(&mut self, start: usize, last: usize, first_direction: usize) {
+        let mut diagonal_steps = 0;
         let mut current = start;
         // Full-image coordinates of `current`, moved along with it.
         let mut xy = self.full_xy(start);
@@ -367,10 +385,13 @@ impl ContourScanner {
             }
             self.points.push(xy);
             if next == start && current == last {
+                // Odd chain codes are the diagonal moves.
+                self.diagonal_steps = diagonal_steps + (direction & 1);
                 return;
             }
             current = next;
             let (dx, dy) = DIRECTIONS[direction];
+            diagonal_steps += usize::from(dx != 0 && dy != 0);
             xy = [xy[0] + dx as i32, xy[1] + dy as i32];
             back = (direction + 4) & 7;
         }

@@ -14,7 +14,7 @@
 //! by the same functions, so the blobs are the full-frame tracer's, bit
 //! for bit (the tests here, in `binary.rs` and `tests/runs.rs`).
 
-use crate::blob::{colour_passes, measure_shape, measure_shape_in, Scratch};
+use crate::blob::{colour_passes, measure_shape, measure_shape_in, Known, Scratch};
 use crate::contour::ContourScanner;
 use crate::grouping::Centre;
 use crate::params::BlobParams;
@@ -78,12 +78,16 @@ impl Sums {
 }
 
 /// Reusable buffers of [`RunDetector::centres`].
+#[derive(Default)]
 pub(crate) struct RunDetector {
     runs: Vec<Run>,
     parent: Vec<u32>,
     /// Per root (a component's first run): the component's sums (stale
     /// at other runs).
     sums: Vec<Sums>,
+    /// The runs that began a component, in raster order (after a merge,
+    /// only the earlier of two is still a root).
+    firsts: Vec<u32>,
     grouped: Vec<Run>,
     found: Vec<(usize, Centre)>,
     /// The whole binary frame (its outer borders are walked on it).
@@ -91,21 +95,6 @@ pub(crate) struct RunDetector {
     /// A component with holes, traced in a window of its own.
     scanner: Option<ContourScanner>,
     shape: Scratch,
-}
-
-impl Default for RunDetector {
-    fn default() -> Self {
-        Self {
-            runs: Vec::new(),
-            parent: Vec::new(),
-            sums: Vec::new(),
-            grouped: Vec::new(),
-            found: Vec::new(),
-            frame: ContourScanner::new(0, 0),
-            scanner: None,
-            shape: Scratch::default(),
-        }
-    }
 }
 
 impl RunDetector {
@@ -136,7 +125,8 @@ impl RunDetector {
         );
         self.join();
         self.found.clear();
-        for i in 0..self.runs.len() {
+        for f in 0..self.firsts.len() {
+            let i = self.firsts[f] as usize;
             if self.parent[i] as usize != i {
                 continue;
             }
@@ -149,9 +139,12 @@ impl RunDetector {
                     continue;
                 }
                 let (x, y) = (self.runs[i].x0 as usize, self.runs[i].y as usize);
-                let points = self.frame.outer_border_at(x, y);
-                let octagon = Some(&self.sums[i].octagon);
-                if let Some(c) = measure_shape_in(points, octagon, p, &mut self.shape) {
+                let (points, diagonal) = self.frame.outer_border_at(x, y);
+                let known = Known {
+                    octagon: Some(&self.sums[i].octagon),
+                    diagonal_steps: Some(diagonal),
+                };
+                if let Some(c) = measure_shape_in(points, known, p, &mut self.shape) {
                     if colour_passes(&c, pixels, width, height, level, p) {
                         self.found.push((y * width + x, c));
                     }
@@ -192,15 +185,23 @@ impl RunDetector {
     /// (its root) is the only run that is its own `parent`, and the root's
     /// `sums` are the component's. Each run is added to its root's sums as
     /// it is joined, and when two components meet the later root's sums
-    /// are added to the earlier one's.
+    /// are added to the earlier one's; `firsts` lists the runs that began
+    /// a component (the roots among them are the components').
     fn join(&mut self) {
         let Self {
-            runs, parent, sums, ..
+            runs,
+            parent,
+            sums,
+            firsts,
+            ..
         } = self;
+        firsts.clear();
+        // Each run's parent and root's sums are written before being read.
         let n = runs.len();
-        parent.clear();
-        parent.resize(n, 0);
-        sums.resize(n, Sums::default());
+        if parent.len() < n {
+            parent.resize(n, 0);
+            sums.resize(n, Sums::default());
+        }
         let (mut above, mut row_start, mut row_y) = (0, 0, u32::MAX);
         for (i, &r) in runs.iter().enumerate() {
             if r.y != row_y {
@@ -235,6 +236,7 @@ impl RunDetector {
             parent[i] = root as u32;
             if root == i {
                 sums[i] = Sums::of_run(r);
+                firsts.push(i as u32);
             } else {
                 sums[root].add_run(r, touching, blocks);
             }
@@ -498,11 +500,15 @@ mod tests {
                     .iter()
                     .find(|(t, _)| *t == start)
                     .expect("a contour starts at the component's first pixel");
-                let got = d
-                    .frame
-                    .outer_border_at(first.x0 as usize, first.y as usize)
-                    .to_vec();
+                let (got, diagonal) = d.frame.outer_border_at(first.x0 as usize, first.y as usize);
+                let got = got.to_vec();
                 assert_eq!(got, want.1, "case {case} component at {start:?}");
+                let next = got.iter().cycle().skip(1);
+                let diagonals = got
+                    .iter()
+                    .zip(next)
+                    .filter(|(a, b)| a[0] != b[0] && a[1] != b[1]);
+                assert_eq!(diagonal, diagonals.count(), "case {case}: diagonal steps");
                 // Holes: as many as the Euler number says.
                 let holes = (d.sums[i].touching + 1 - d.sums[i].count) as usize;
                 if holes == 0 {

@@ -76,7 +76,8 @@ pub fn perimeter(points: &[[i32; 2]]) -> f64 {
     let Some(&last) = points.last() else {
         return 0.0;
     };
-    let steps = [0.0, 1.0, 1.0f64.hypot(1.0)];
+    // SQRT_2 is what `1.0f64.hypot(1.0)` gives (a test checks it).
+    let steps = [0.0, 1.0, std::f64::consts::SQRT_2];
     let mut prev = last;
     let mut total = 0.0;
     for &p in points {
@@ -89,6 +90,21 @@ pub fn perimeter(points: &[[i32; 2]]) -> f64 {
         prev = p;
     }
     total
+}
+
+/// The length of a closed border of `points` points whose steps (from
+/// each point to the next, and from the last to the first) are all one
+/// pixel along an axis or diagonal, `diagonal` of them diagonal: the exact
+/// sum `(points - diagonal) + diagonal sqrt 2` rounded twice, where
+/// [`perimeter`] rounds once a step. The two differ by at most
+/// `(points + 2) u` relatively (u = 2^-53, the error bound of a sum of
+/// positive terms), so they can decide a filter only where its value lies
+/// outside that margin of the bound (`blob.rs`). A lone pixel has length 0.
+pub fn perimeter_of_steps(points: usize, diagonal: usize) -> f64 {
+    if points < 2 {
+        return 0.0;
+    }
+    (points - diagonal) as f64 + diagonal as f64 * std::f64::consts::SQRT_2
 }
 
 /// Circularity 4 pi A / P^2 (1 for a disc).
@@ -254,6 +270,7 @@ fn turn(a: [i64; 2], b: [i64; 2], c: [i64; 2]) -> i64 {
 #[derive(Default)]
 pub struct MedianScratch {
     keys: Vec<u64>,
+    window: Vec<u64>,
     band: Vec<f64>,
 }
 
@@ -261,7 +278,8 @@ pub struct MedianScratch {
 /// middle values for an even count): OpenCV's blob radius, as the values
 /// `hypot` gives. The middle ranks are selected on squared distances (by
 /// their bit patterns, which order finite non-negative floats as their
-/// values); only the points whose squared distance is within a relative
+/// values; first within a window about their mean, `middle_keys`);
+/// only the points whose squared distance is within a relative
 /// 1e-9 of the middle ones (far above rounding error, so every other point
 /// is surely nearer or farther) get `hypot`, and the exact middle values
 /// are picked among those.
@@ -275,19 +293,15 @@ pub fn median_radius(points: &[[i32; 2]], centre: [f64; 2], s: &mut MedianScratc
     }
     let offsets = |&[x, y]: &[i32; 2]| (f64::from(x) - centre[0], f64::from(y) - centre[1]);
     s.keys.clear();
-    s.keys.extend(
-        points
-            .iter()
-            .map(offsets)
-            .map(|(dx, dy)| (dx * dx + dy * dy).to_bits()),
-    );
+    let mut sum = 0.0;
+    s.keys.extend(points.iter().map(offsets).map(|(dx, dy)| {
+        let d2 = dx * dx + dy * dy;
+        sum += d2;
+        d2.to_bits()
+    }));
     let (lower_rank, upper_rank) = ((n - 1) / 2, n / 2);
-    let (below, &mut upper_bits, _) = s.keys.select_nth_unstable(upper_rank);
-    let lower_bits = if lower_rank == upper_rank {
-        upper_bits
-    } else {
-        below.iter().copied().max().unwrap_or(upper_bits)
-    };
+    let ranks = [lower_rank, upper_rank];
+    let (lower_bits, upper_bits) = middle_keys(&mut s.keys, sum / n as f64, ranks, &mut s.window);
     let (lower_d2, upper_d2) = (f64::from_bits(lower_bits), f64::from_bits(upper_bits));
     if !(lower_d2.is_finite() && upper_d2.is_finite()) {
         return exact_median(points, centre, &mut s.band);
@@ -309,6 +323,43 @@ pub fn median_radius(points: &[[i32; 2]], centre: [f64; 2], s: &mut MedianScratc
     (scratch[lower_rank - nearer] + scratch[upper_rank - nearer]) / 2.0
 }
 
+/// The keys (bit patterns of finite non-negative squared distances) of
+/// ranks `lower` and `upper` among `keys`, whose values' mean is `mean`.
+/// First from a window of +-10 % about the mean, which on a blob's
+/// border (every point near one radius) holds both middle ranks and few
+/// other keys: the keys below it counted, those in it sorted. Else (the
+/// window misses a rank) by a selection over all keys. The same keys
+/// either way (`median_radius_matches_sorting` and the random sets'
+/// test reach both).
+fn middle_keys(
+    keys: &mut [u64],
+    mean: f64,
+    [lower, upper]: [usize; 2],
+    window: &mut Vec<u64>,
+) -> (u64, u64) {
+    let (lo, hi) = ((mean * 0.9).to_bits(), (mean * 1.1).to_bits());
+    let mut under = 0;
+    window.clear();
+    for &key in keys.iter() {
+        if key < lo {
+            under += 1;
+        } else if key <= hi {
+            window.push(key);
+        }
+    }
+    if mean.is_finite() && under <= lower && under + window.len() > upper {
+        window.sort_unstable();
+        return (window[lower - under], window[upper - under]);
+    }
+    let (below, &mut upper_key, _) = keys.select_nth_unstable(upper);
+    let lower_key = if lower == upper {
+        upper_key
+    } else {
+        below.iter().copied().max().unwrap_or(upper_key)
+    };
+    (lower_key, upper_key)
+}
+
 /// The median of all `hypot` distances by sorting (reference definition).
 fn exact_median(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f64>) -> f64 {
     scratch.clear();
@@ -323,176 +374,4 @@ fn exact_median(points: &[[i32; 2]], centre: [f64; 2], scratch: &mut Vec<f64>) -
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const SQUARE: [[i32; 2]; 4] = [[0, 0], [0, 4], [4, 4], [4, 0]];
-
-    #[test]
-    fn square_moments_match_closed_form() {
-        let m = Moments::of_polygon(&SQUARE);
-        assert!((m.m00 - 16.0).abs() < 1e-12);
-        assert!((m.m10 / m.m00 - 2.0).abs() < 1e-12);
-        assert!((m.m01 / m.m00 - 2.0).abs() < 1e-12);
-        // mu20 of a side-a square is a^4 / 12.
-        assert!((m.mu20 - 256.0 / 12.0).abs() < 1e-9);
-        assert!(m.mu11.abs() < 1e-9);
-        assert!((m.inertia_ratio() - 1.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn orientation_does_not_change_moments() {
-        let mut reversed = SQUARE;
-        reversed.reverse();
-        assert_eq!(Moments::of_polygon(&SQUARE), Moments::of_polygon(&reversed));
-    }
-
-    #[test]
-    fn rectangle_inertia_ratio_is_squared_aspect() {
-        // Second moments of a w x h rectangle scale as w^2 and h^2.
-        let rect = [[0, 0], [0, 2], [6, 2], [6, 0]];
-        let ratio = Moments::of_polygon(&rect).inertia_ratio();
-        assert!((ratio - 1.0 / 9.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn hull_of_an_l_shape_fills_the_notch() {
-        let l_shape = [[0, 0], [0, 4], [4, 4], [4, 2], [2, 2], [2, 0]];
-        assert!((hull_area(&l_shape) - 14.0).abs() < 1e-12);
-        assert!((Moments::of_polygon(&l_shape).m00 - 12.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn perimeter_and_circularity_of_a_square() {
-        assert!((perimeter(&SQUARE) - 16.0).abs() < 1e-12);
-        let c = circularity(16.0, 16.0);
-        assert!((c - std::f64::consts::PI / 4.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn degenerate_polygons_have_zero_moments() {
-        assert_eq!(Moments::of_polygon(&[[3, 3]]), Moments::default());
-        assert_eq!(Moments::of_polygon(&[]), Moments::default());
-        assert_eq!(hull_area(&[[0, 0], [1, 1], [2, 2]]), 0.0);
-    }
-
-    /// Hull area by sorting every point (the textbook monotone chain).
-    fn hull_area_sorted(points: &[[i32; 2]]) -> f64 {
-        let mut pts: Vec<[i64; 2]> = points
-            .iter()
-            .map(|p| [i64::from(p[0]), i64::from(p[1])])
-            .collect();
-        pts.sort_unstable();
-        pts.dedup();
-        if pts.len() < 3 {
-            return 0.0;
-        }
-        let chain = |it: &mut dyn Iterator<Item = [i64; 2]>| {
-            let mut c: Vec<[i64; 2]> = Vec::new();
-            for p in it {
-                while c.len() >= 2 && turn(c[c.len() - 2], c[c.len() - 1], p) <= 0 {
-                    c.pop();
-                }
-                c.push(p);
-            }
-            c
-        };
-        let lower = chain(&mut pts.iter().copied());
-        let upper = chain(&mut pts.iter().rev().copied());
-        let ring: Vec<[i64; 2]> = lower[..lower.len() - 1]
-            .iter()
-            .chain(&upper[..upper.len() - 1])
-            .copied()
-            .collect();
-        let twice: i64 = (0..ring.len())
-            .map(|i| {
-                let (p, q) = (ring[i], ring[(i + 1) % ring.len()]);
-                p[0] * q[1] - q[0] * p[1]
-            })
-            .sum();
-        twice.abs() as f64 / 2.0
-    }
-
-    #[test]
-    fn row_extreme_hull_equals_full_sort_hull() {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        for _ in 0..500 {
-            let n = rng.random_range(0..30);
-            let span = rng.random_range(1..12);
-            let pts: Vec<[i32; 2]> = (0..n)
-                .map(|_| [rng.random_range(-span..span), rng.random_range(-span..span)])
-                .collect();
-            assert_eq!(hull_area(&pts), hull_area_sorted(&pts), "{pts:?}");
-        }
-    }
-
-    #[test]
-    fn octagon_bounds_the_hull_and_is_tight_for_a_square() {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
-        for _ in 0..2000 {
-            let n = rng.random_range(1..30);
-            let pts: Vec<[i32; 2]> = (0..n)
-                .map(|_| [rng.random_range(-6..6), rng.random_range(-6..6)])
-                .collect();
-            assert!(hull_area_upper_bound(&pts) >= hull_area(&pts), "{pts:?}");
-        }
-        assert_eq!(hull_area_upper_bound(&SQUARE), 16.0);
-    }
-
-    #[test]
-    fn median_radius_matches_sorting() {
-        let pts = [[0, 0], [3, 0], [0, 4], [5, 5], [1, 1], [2, 7]];
-        let mut scratch = MedianScratch::default();
-        for n in 1..=pts.len() {
-            let c = [0.7, 1.3];
-            let mut d: Vec<f64> = pts[..n]
-                .iter()
-                .map(|p| (f64::from(p[0]) - c[0]).hypot(f64::from(p[1]) - c[1]))
-                .collect();
-            d.sort_by(f64::total_cmp);
-            let want = (d[(n - 1) / 2] + d[n / 2]) / 2.0;
-            assert_eq!(median_radius(&pts[..n], c, &mut scratch), want);
-        }
-    }
-
-    #[test]
-    fn banded_median_radius_equals_full_sort_on_random_sets() {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let mut a = MedianScratch::default();
-        let mut b = Vec::new();
-        for _ in 0..2000 {
-            let n = rng.random_range(1..40);
-            let pts: Vec<[i32; 2]> = (0..n)
-                .map(|_| [rng.random_range(0..12), rng.random_range(0..12)])
-                .collect();
-            // Half the centres on the half-pixel grid: many exact ties.
-            let c = if rng.random_bool(0.5) {
-                [
-                    f64::from(rng.random_range(0..24)) / 2.0,
-                    f64::from(rng.random_range(0..24)) / 2.0,
-                ]
-            } else {
-                [rng.random_range(0.0..12.0), rng.random_range(0.0..12.0)]
-            };
-            assert_eq!(
-                median_radius(&pts, c, &mut a),
-                exact_median(&pts, c, &mut b)
-            );
-        }
-    }
-
-    #[test]
-    fn perimeter_table_matches_hypot() {
-        let ring = [[0, 0], [1, 1], [2, 1], [2, 2], [5, 2], [4, 1]];
-        let mut want = 0.0;
-        let mut prev = ring[ring.len() - 1];
-        for p in ring {
-            want += f64::from(p[0] - prev[0]).hypot(f64::from(p[1] - prev[1]));
-            prev = p;
-        }
-        assert_eq!(perimeter(&ring), want);
-    }
-}
+mod tests;

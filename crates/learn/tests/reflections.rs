@@ -16,18 +16,7 @@ const CENTRE: [f64; 2] = [128.0, 127.0];
 /// A hexagonal lattice of `rings` rings about `CENTRE`, rows along the
 /// image's x axis (127 pins for 6, as the 127-pin TacTip).
 fn hex_layout(rings: i32) -> Vec<[f64; 2]> {
-    let mut pins = Vec::new();
-    for a in -rings..=rings {
-        for b in -rings..=rings {
-            if (a + b).abs() <= rings {
-                let (a, b) = (f64::from(a), f64::from(b));
-                let x = CENTRE[0] + SPACING * (a + 0.5 * b);
-                let y = CENTRE[1] + SPACING * (0.75f64.sqrt() * b);
-                pins.push([x, y]);
-            }
-        }
-    }
-    pins
+    tactrace_testdata::layouts::hex_lattice(CENTRE, SPACING, rings)
 }
 
 /// The point `p` mirrored across the line at `axis_deg` through `CENTRE`.
@@ -211,24 +200,15 @@ fn a_model_fitted_without_copies_tells_the_sign_of_a_mirror() {
     let pins = hex_layout(6);
     let model = fit_on_pins(&small_mlp(None, 40), &random_surfaces(&pins, 200, 1), &pins);
     let held = random_surfaces(&pins, 100, 2);
-    let across = mirrored_inputs(&held, &pins, 90.0).unwrap();
-    let (minus, plus) = (
-        angle_mae(&model, &across, -1.0),
-        angle_mae(&model, &across, 1.0),
-    );
-    assert!(
-        minus < 2.0 && plus > 5.0 * minus,
-        "across: -a {minus:.2}, +a {plus:.2} deg"
-    );
-    let along = mirrored_inputs(&held, &pins, 0.0).unwrap();
-    let (minus, plus) = (
-        angle_mae(&model, &along, -1.0),
-        angle_mae(&model, &along, 1.0),
-    );
-    assert!(
-        plus < 2.0 && minus > 5.0 * plus,
-        "along: -a {minus:.2}, +a {plus:.2} deg"
-    );
+    for (axis, sign) in [(90.0, -1.0), (0.0, 1.0)] {
+        let flipped = mirrored_inputs(&held, &pins, axis).unwrap();
+        let right = angle_mae(&model, &flipped, sign);
+        let wrong = angle_mae(&model, &flipped, -sign);
+        assert!(
+            right < 2.0 && wrong > 5.0 * right,
+            "mirror at {axis} deg: sign {sign} {right:.2} deg, the other {wrong:.2}"
+        );
+    }
 }
 
 #[test]

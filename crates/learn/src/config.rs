@@ -6,6 +6,7 @@ use crate::dennn::{ClampedPhase, FreePhase, LrScaling};
 use crate::error::LearnError;
 use crate::pca::PcScaling;
 use crate::pin_features::PinFeatures;
+use crate::reflections::Reflections;
 use crate::rotations::Rotations;
 use crate::targets::{ModelTarget, Unit};
 use serde::{Deserialize, Serialize};
@@ -155,6 +156,11 @@ pub struct ModelConfig {
     /// the taps as read.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rotations: Option<Rotations>,
+    /// Train on every tap and its mirror copy across a lattice axis of
+    /// the pin layout ([`Reflections`]); none (the default, not written)
+    /// trains on the taps as read. Not with `rotations`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflections: Option<Reflections>,
     /// Rows whose target lies in a band count more in the training loss
     /// ([`BandWeight`]: visited `weight` times an epoch); none (the
     /// default, not written): every row once.
@@ -323,6 +329,15 @@ impl ModelConfig {
         }
         if let Some(r) = &self.rotations {
             r.validate()?;
+        }
+        if let Some(r) = &self.reflections {
+            r.validate()?;
+            if self.rotations.is_some() {
+                return Err(config_err(
+                    "reflections",
+                    "mirror copies with turned copies (rotations) are not supported".into(),
+                ));
+            }
         }
         if let Some(b) = &self.band_weight {
             b.validate()?;
@@ -555,6 +570,7 @@ fn report(kind: ModelKind) -> ModelConfig {
         circular_weight: 1.0,
         pin_features: PinFeatures::Displacements,
         rotations: None,
+        reflections: None,
         band_weight: None,
         pose: None,
         position: None,

@@ -224,6 +224,7 @@ impl<'a> Shared<'a> {
             outputs: self.outputs.to_vec(),
             features: None,
             views: None,
+            mirror: None,
             predictor: OnceLock::new(),
         })
     }

@@ -47,6 +47,7 @@ impl PoseModel {
             outputs: self.outputs.clone(),
             features: self.features.clone(),
             views: self.views.clone(),
+            mirror: self.mirror.clone(),
             predictor: OnceLock::new(),
         })
     }
@@ -119,6 +120,7 @@ mod tests {
             outputs: vec![ModelTarget::circular("pose_6")],
             features: None,
             views: None,
+            mirror: None,
             predictor: Default::default(),
         }
     }

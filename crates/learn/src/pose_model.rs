@@ -13,6 +13,7 @@ use crate::fit_members::{fit_members, net_inputs};
 use crate::pca::Pca;
 use crate::pin_features::{FeatureMap, PinFeatures};
 use crate::predict::Predictor;
+use crate::reflections::{self, MirrorViews};
 use crate::rotations;
 use crate::standardise::Standardiser;
 use crate::targets::{self, ModelTarget, Unit};
@@ -56,6 +57,10 @@ pub struct PoseModel {
     /// [`ModelConfig::rotations`] (absent without, or in a file written
     /// before they were recorded): what averaging over turned views needs.
     pub(crate) views: Option<TurnedViews>,
+    /// The layout and mirror of a model fitted with
+    /// [`ModelConfig::reflections`]: what averaging a tap with its mirror
+    /// copy needs.
+    pub(crate) mirror: Option<MirrorViews>,
     /// The fast prediction path of an edge model (`[r mm, theta deg]`,
     /// neither circular), laid out at the first prediction.
     pub(crate) predictor: OnceLock<Predictor>,
@@ -121,10 +126,13 @@ impl PoseModel {
             (Some(rot), Some(pins)) => Some(TurnedViews::new(rot, pins)?),
             _ => None,
         };
-        let train = turned.as_ref().unwrap_or(train);
+        let mirrored = reflections::mirrored_training_data(cfg, outputs, train, reference_pins)?;
+        let mirror = reflections::mirror_views(cfg, outputs, reference_pins)?;
+        let train = turned.as_ref().or(mirrored.as_ref()).unwrap_or(train);
         let Some(map) = feature_map(cfg.pin_features, reference_pins, train.dim_x)? else {
             let (mut model, history) = Self::fit_displacements(cfg, outputs, train, val, progress)?;
             model.views = views;
+            model.mirror = mirror;
             return Ok((model, history));
         };
         let featured =
@@ -135,6 +143,7 @@ impl PoseModel {
             Self::fit_displacements(cfg, outputs, &train, val.as_ref(), progress)?;
         model.features = Some(map);
         model.views = views;
+        model.mirror = mirror;
         model.predictor = OnceLock::new();
         Ok((model, history))
     }
@@ -193,11 +202,12 @@ impl PoseModel {
         if self.is_plain_edge() {
             return self.predict(displacement).map(|p| p.to_vec());
         }
-        let encoded = match self.averaged_views() {
-            Some(views) => {
+        let encoded = match (self.averaged_views(), self.averaged_mirror()) {
+            (Some(views), _) => {
                 views.average(&self.outputs, displacement, |d| self.predict_columns(d))?
             }
-            None => self.predict_columns(displacement)?,
+            (None, Some(mirror)) => mirror.average(displacement, |d| self.predict_columns(d))?,
+            (None, None) => self.predict_columns(displacement)?,
         };
         Ok(targets::decode(&self.outputs, &encoded))
     }
@@ -238,6 +248,17 @@ impl PoseModel {
     fn averaged_views(&self) -> Option<&TurnedViews> {
         let on = self.config.rotations.is_some_and(|r| r.at_prediction);
         self.views.as_ref().filter(|_| on)
+    }
+
+    /// The mirror every prediction averages over: `Some` when the
+    /// configuration's [`crate::Reflections::at_prediction`] is set.
+    fn averaged_mirror(&self) -> Option<&MirrorViews> {
+        let on = self
+            .config
+            .reflections
+            .as_ref()
+            .is_some_and(|r| r.at_prediction);
+        self.mirror.as_ref().filter(|_| on)
     }
 
     /// Whether every prediction averages the tap's turned views
@@ -310,6 +331,7 @@ impl PoseModel {
             && self.targets.dim() == 2
             && self.features.is_none()
             && self.averaged_views().is_none()
+            && self.averaged_mirror().is_none()
     }
 
     fn check_dim(&self, got: usize) -> Result<(), LearnError> {

@@ -222,7 +222,7 @@ fn with_turned_copies(
 }
 
 /// The mean of the pins (the centre of a layout symmetric about it).
-fn centre(pins: &[[f64; 2]]) -> [f64; 2] {
+pub(crate) fn centre(pins: &[[f64; 2]]) -> [f64; 2] {
     let n = pins.len().max(1) as f64;
     let (sx, sy) = pins
         .iter()
@@ -231,7 +231,7 @@ fn centre(pins: &[[f64; 2]]) -> [f64; 2] {
 }
 
 /// The pin nearest `at` and its distance.
-fn nearest(pins: &[[f64; 2]], at: [f64; 2]) -> (usize, f64) {
+pub(crate) fn nearest(pins: &[[f64; 2]], at: [f64; 2]) -> (usize, f64) {
     pins.iter()
         .map(|p| (p[0] - at[0]).hypot(p[1] - at[1]))
         .enumerate()
@@ -242,7 +242,7 @@ fn nearest(pins: &[[f64; 2]], at: [f64; 2]) -> (usize, f64) {
 }
 
 /// The median over the pins of the distance to their nearest neighbour.
-fn median_spacing(pins: &[[f64; 2]]) -> Result<f64, LearnError> {
+pub(crate) fn median_spacing(pins: &[[f64; 2]]) -> Result<f64, LearnError> {
     if pins.len() < 2 {
         return Err(rotations_err(
             "a layout of fewer than two pins has no spacing".into(),

@@ -51,6 +51,10 @@ struct ModelFile {
     /// rotations, or a file written before they were recorded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     rotation_pins: Option<Vec<[f64; 2]>>,
+    /// The reference pins (px) a model with `reflections` was fitted
+    /// over, whose mirror averaging with the mirror copy takes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    reflection_pins: Option<Vec<[f64; 2]>>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -111,6 +115,7 @@ impl PoseModel {
             outputs: Some(self.outputs.clone()),
             features: self.features.clone(),
             rotation_pins: self.views.as_ref().map(|v| v.pins().to_vec()),
+            reflection_pins: self.mirror.as_ref().map(|v| v.pins().to_vec()),
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
         let mut tensors = Vec::new();
@@ -166,6 +171,13 @@ impl PoseModel {
             .collect::<Result<Vec<_>, _>>()?;
         check_targets(&nets, width, file.config.ensemble)?;
         let views = load_views(&file.config, file.rotation_pins.as_deref(), file.input_dim)?;
+        let mirror = crate::reflections::load_mirror(
+            &file.config,
+            &outputs,
+            file.reflection_pins.as_deref(),
+            file.input_dim,
+        )
+        .map_err(corrupt)?;
         Ok(PoseModel {
             config: file.config,
             standardiser,
@@ -174,6 +186,7 @@ impl PoseModel {
             outputs,
             features: file.features,
             views,
+            mirror,
             predictor: Default::default(),
         })
     }

@@ -257,6 +257,28 @@ mod tests {
         }
     }
 
+    /// An ensemble base (the 331 surface's recipe) keeps its members,
+    /// and its out-of-fold predictions still never see their own rows.
+    #[test]
+    fn an_ensemble_base_keeps_its_members_and_its_folds_apart() {
+        let mut settings = quick();
+        settings
+            .settings
+            .insert("ensemble".into(), toml::Value::Integer(2));
+        let clean = data(36);
+        let (model, before, folds) = fit_base(&settings, &clean, 5).unwrap();
+        assert_eq!(model.ensemble(), 2);
+        let mut spoilt = clean.clone();
+        spoilt.targets[2 * 7] += 50.0;
+        let (_, after, _) = fit_base(&settings, &spoilt, 5).unwrap();
+        let own = folds.fold_of_row[7];
+        for r in 0..36 {
+            let moved = (before[2 * r] - after[2 * r]).abs();
+            let same_fold = folds.fold_of_row[r] == own;
+            assert!(same_fold == (moved == 0.0), "row {r}: moved {moved}");
+        }
+    }
+
     #[test]
     fn the_base_table_is_read_checked_and_only_for_a_residual_model() {
         let (rest, base) = split_base_table("epochs = 3\n[base]\nfolds = 4\n").unwrap();

@@ -138,10 +138,7 @@ impl StoredImageModel {
     pub fn set_turned_views(&mut self, on: bool) -> Result<()> {
         self.model
             .set_turned_views(on)
-            .map_err(|source| StoreError::ModelSetting {
-                path: crate::model_dir::model_name(&self.source),
-                source,
-            })
+            .map_err(crate::model_dir::setting_refused(&self.source))
     }
 
     /// What its training frames were (size, source size).

@@ -125,10 +125,7 @@ impl StoredModel {
     pub fn set_turned_views(&mut self, on: bool) -> Result<()> {
         self.model
             .set_turned_views(on)
-            .map_err(|source| StoreError::ModelSetting {
-                path: model_name(&self.source),
-                source,
-            })
+            .map_err(setting_refused(&self.source))
     }
 
     /// The network, for data or a rig whose reference pins are `pins`
@@ -162,8 +159,19 @@ impl StoredModel {
     }
 }
 
+/// The refusal of a setting by the model loaded from `source`, naming
+/// its folder ([`StoreError::ModelSetting`]).
+pub(crate) fn setting_refused(
+    source: &Path,
+) -> impl FnOnce(tactrace_learn::LearnError) -> StoreError + '_ {
+    move |e| StoreError::ModelSetting {
+        path: model_name(source),
+        source: e,
+    }
+}
+
 /// A model's folder for messages, or "the model" for one made in memory.
-pub(crate) fn model_name(source: &Path) -> PathBuf {
+fn model_name(source: &Path) -> PathBuf {
     match source.as_os_str().is_empty() {
         true => PathBuf::from("the model"),
         false => source.to_path_buf(),

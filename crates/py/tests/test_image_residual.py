@@ -100,3 +100,12 @@ def test_views_switch_a_turned_copies_model_and_refuse_one_without(frames_set):
     with pytest.raises(tactrace.InputError, match="not fitted with rotations"):
         plain.predict(frames, views=True)
     assert "turned_views" not in scored_on_training_rows(plain, frames_set)
+
+
+def test_a_pin_model_without_rotations_refuses_views(sim_set, sim_model):
+    model = tactrace.load_model(sim_model)
+    with pytest.raises(tactrace.InputError, match="not fitted with rotations"):
+        model.predict(str(sim_set), views=False)
+    with pytest.raises(tactrace.InputError, match="not fitted with rotations"):
+        model.validate(str(sim_set), views=True)
+    assert "turned_views" not in scored_on_training_rows(model, sim_set)

@@ -54,6 +54,8 @@ pub struct FollowArgs {
     #[arg(long)]
     force: bool,
     #[command(flatten)]
+    views: crate::views::ViewsFlag,
+    #[command(flatten)]
     replay: ReplayArgs,
     #[command(flatten)]
     task3d: crate::cmd_task3d::FollowTaskArgs,
@@ -126,6 +128,14 @@ pub fn follow(a: FollowArgs) -> Result<()> {
         return follow_hardware(a, &hw);
     }
     if a.task3d.is_3d() {
+        if a.views.given() {
+            return Err(LabError::Config(
+                "--views is the edge follow's (and validate's, predict's): the 3D tasks \
+                 take a model's turned views as its file says"
+                    .into(),
+            )
+            .into());
+        }
         let out = (a.out.as_path(), a.force);
         return crate::cmd_task3d::follow(&a.task3d, &a.model, a.config.as_deref(), a.seed, out);
     }
@@ -154,7 +164,8 @@ pub fn follow(a: FollowArgs) -> Result<()> {
     let spec =
         ShapeSpec::parse_checked(a.shape.as_deref().unwrap_or_default()).map_err(LabError::from)?;
     let shape = (spec.name(), load_shape(&spec)?);
-    let model = LoadedModel::load(&a.model)?;
+    let mut model = LoadedModel::load(&a.model)?;
+    a.views.apply(&mut model)?;
     follow_in(world, &model, Some(&shape), (&a.out, a.force), None)
 }
 
@@ -512,7 +523,8 @@ fn follow_hardware(a: FollowArgs, path: &std::path::Path) -> Result<()> {
         }
         None => None,
     };
-    let model = LoadedModel::load(&a.model)?;
+    let mut model = LoadedModel::load(&a.model)?;
+    a.views.apply(&mut model)?;
     // From here on SIGINT / SIGTERM stop the arm (stopl) instead of the
     // process; the run keeps its steps and exits 130 / 143.
     let stop = StopFlag::on_signals().map_err(LabError::from)?;

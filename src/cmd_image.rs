@@ -9,6 +9,7 @@ use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
 use tactrace_convnet::{ConvConfig, ModelKind};
 use tactrace_lab::image_base::BaseSettings;
+use tactrace_lab::image_fit::{fit_fresh_image, store_fitted_image, FreshImage};
 use tactrace_lab::train_sets::TrainingSets;
 use tactrace_lab::{import_reader, train_image as ti, LabError};
 use tactrace_servo::ImageInput;
@@ -102,32 +103,26 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         });
     };
     let data = (&split.train, &train_frames);
-    let (model, history, folds) = match (&start, &base) {
-        (Some((_, s)), _) => {
+    let (model, history, folds) = match &start {
+        Some((_, s)) => {
             same_frames(s, &all_frames.info)?;
             let (m, h) = ti::fine_tune_image(s.model(), &cfg, seed, data, pair, &mut on_epoch)?;
             (m, h, None)
         }
-        (None, Some(b)) => {
-            let (m, h, f) = ti::train_image_on_base(&cfg, b, seed, data, pair, &mut on_epoch)?;
-            (m, h, Some(f))
-        }
-        (None, None) => {
-            let (m, h) = ti::train_image(&cfg, seed, data, pair, &mut on_epoch)?;
-            (m, h, None)
+        None => {
+            let fresh = FreshImage {
+                cfg: &cfg,
+                base: base.as_ref(),
+                seed,
+            };
+            fit_fresh_image(fresh, data, pair, &mut on_epoch)?
         }
     };
     pb.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     let pins = sets.data.meta.reference_pins.clone();
-    let base_record = split.record.clone();
-    let record = tactrace_store::TrainingRecord {
-        base: folds,
-        ..split.record
-    };
-    let stored = StoredImageModel::new(model, all_frames.info.clone())
-        .with_training(record)
-        .with_base_pins(pins, base_record);
+    let info = all_frames.info.clone();
+    let stored = store_fitted_image(model, folds, info, split.record, pins);
     let resolved = format!(
         "# {} {} (seed {seed})\n{}",
         kind.name(),

@@ -367,6 +367,8 @@ pub struct ValidateArgs {
     /// Replace existing plots in --plots.
     #[arg(long, requires = "plots")]
     force: bool,
+    #[command(flatten)]
+    pub(crate) views: crate::views::ViewsFlag,
 }
 
 /// The stem of the plots `validate --plots` writes (`.png`, `.svg`).
@@ -401,7 +403,8 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
         }
         None => None,
     };
-    let model = LoadedModel::load(&a.model)?;
+    let mut model = LoadedModel::load(&a.model)?;
+    a.views.apply(&mut model)?;
     let data = read_dataset(&a.data)?;
     let held_out = a.val_fraction.map(|f| (f, a.split_seed));
     let v = tactrace_lab::train_image::validate_loaded(&model, &data, &a.data, held_out)?;
@@ -527,10 +530,14 @@ pub struct PredictArgs {
     /// Blob parameters TOML; default: the real256 preset.
     #[arg(long)]
     pub(crate) params: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) views: crate::views::ViewsFlag,
 }
 
 pub fn predict(a: PredictArgs) -> Result<()> {
-    let model = match LoadedModel::load(&a.model)? {
+    let mut loaded = LoadedModel::load(&a.model)?;
+    a.views.apply(&mut loaded)?;
+    let model = match loaded {
         LoadedModel::Pins(m) => m,
         LoadedModel::Image(m) => return crate::cmd_image::predict(&m, a),
     };

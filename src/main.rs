@@ -21,6 +21,7 @@ mod cmd_twin;
 mod doc_commands;
 mod inputs;
 mod progress;
+mod views;
 
 /// Print a line on standard output; a closed pipe becomes an error that
 /// `main` turns into a quiet exit, never a panic.

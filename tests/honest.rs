@@ -5,14 +5,16 @@
 mod util;
 use std::path::Path;
 use util::{
-    collect, expect_code, expect_refusal, import_labelled, real_data, real_paths, tactrace, twin,
-    TempDir,
+    collect, expect_code, expect_refusal, expect_refusal_saying, import_labelled, real_data,
+    real_paths, stderr_says, tactrace, twin, TempDir,
 };
 
-/// A dataset `ds` of 40 simulated taps and a model `m` trained on it
-/// (2 epochs), in `dir`.
-fn dataset_and_model(dir: &Path) {
-    util::dataset_and_model(dir, "40", &[], &[]);
+/// A temporary folder `name` holding a dataset `ds` of 40 simulated taps
+/// and a model `m` trained on it (2 epochs).
+fn with_model(name: &str) -> TempDir {
+    let t = TempDir::new(name);
+    util::dataset_and_model(&t.0, "40", &[], &[]);
+    t
 }
 
 /// The Bristol labels header (16 columns) and `rows` rows of labels.
@@ -53,7 +55,7 @@ fn training_refuses_too_few_samples_before_any_work() {
         "train on 1 sample",
         "too few training samples (1): at least 36",
     );
-    assert!(r.stderr.contains("n_components = 35"), "{}", r.stderr);
+    stderr_says(&r, &["n_components = 35"]);
     assert!(!t.join("m").exists());
     // 40 taps are enough, but not once a fifth is held out.
     let r = collect(&t.0, "40", &[], "ds");
@@ -72,12 +74,8 @@ fn training_refuses_too_few_samples_before_any_work() {
             "m",
         ],
     );
-    expect_code(&r, 2, "train on 32 of 40");
-    assert!(
-        r.stderr.contains("(32)") && r.stderr.contains("8 more were held out"),
-        "{}",
-        r.stderr
-    );
+    let says = ["(32)", "8 more were held out"];
+    expect_refusal_saying(&r, 2, "train on 32 of 40", &says);
     assert!(!t.join("m").exists());
 }
 
@@ -103,8 +101,7 @@ fn a_setting_out_of_range_is_refused_naming_its_key() {
             args.extend(extra);
             args.extend(["--out", "m"]);
             let r = tactrace(&t.0, &args);
-            expect_code(&r, 2, text);
-            assert!(r.stderr.contains(key), "{text}: {}", r.stderr);
+            expect_refusal(&r, 2, text, key);
             assert!(!r.stderr.contains("missing"), "{text}: {}", r.stderr);
         }
     }
@@ -132,11 +129,7 @@ fn a_loss_growing_far_beyond_the_means_is_a_divergence() {
         ],
     );
     expect_code(&r, 1, "diverged");
-    assert!(
-        r.stderr.contains("training diverged") && r.stderr.contains("exceeds"),
-        "{}",
-        r.stderr
-    );
+    stderr_says(&r, &["training diverged", "exceeds"]);
     assert!(!r.stderr.contains("NaN"), "a finite loss: {}", r.stderr);
     assert!(!t.join("m").exists());
 }
@@ -144,8 +137,7 @@ fn a_loss_growing_far_beyond_the_means_is_a_divergence() {
 /// `validate` printed NaN MAEs with exit 0 on a degenerate model/dataset.
 #[test]
 fn validate_never_reports_a_nan_error_as_success() {
-    let t = TempDir::new("nanmae");
-    dataset_and_model(&t.0);
+    let t = with_model("nanmae");
     // A dataset whose first row is finite but far beyond any float the
     // network can carry: its prediction is not a number.
     let bad = t.join("bad");
@@ -169,11 +161,7 @@ fn validate_never_reports_a_nan_error_as_success() {
         }
         let r = tactrace(&t.0, &args);
         expect_code(&r, 1, "NaN prediction");
-        assert!(
-            r.stderr.contains("row 0") && r.stderr.contains("not a number"),
-            "{}",
-            r.stderr
-        );
+        stderr_says(&r, &["row 0", "not a number"]);
         assert!(
             !r.stdout.contains("NaN") && !r.stdout.contains("null"),
             "{}",
@@ -231,13 +219,8 @@ fn frames_one_level_too_high_names_the_subfolder() {
         &[],
         "x",
     );
-    expect_code(&r, 2, "frames one level up");
-    assert!(
-        r.stderr.contains("subfolder set/frames holds it")
-            && r.stderr.contains("--frames set/frames"),
-        "{}",
-        r.stderr
-    );
+    let says = ["subfolder set/frames holds it", "--frames set/frames"];
+    expect_refusal_saying(&r, 2, "frames one level up", &says);
 }
 
 /// A deformed frame given as `--reference` was accepted silently.
@@ -296,12 +279,12 @@ fn twin_with_a_sensor_says_where_its_taps_come_from() {
         "twin",
     );
     expect_code(&r, 0, "twin --sensor");
-    assert!(
-        r.stderr
-            .contains("from 30 labelled rows: 3 render(s) of each (90 taps")
-            && r.stderr.contains("its 40 real calibration taps"),
-        "{}",
-        r.stderr
+    stderr_says(
+        &r,
+        &[
+            "from 30 labelled rows: 3 render(s) of each (90 taps",
+            "its 40 real calibration taps",
+        ],
     );
 }
 
@@ -309,8 +292,7 @@ fn twin_with_a_sensor_says_where_its_taps_come_from() {
 /// sensor render; a NaN tap depth stopped a follow run as a fault (1).
 #[test]
 fn an_invalid_configuration_exits_2_from_every_command() {
-    let t = TempDir::new("configcodes");
-    dataset_and_model(&t.0);
+    let t = with_model("configcodes");
     let tables = [
         ("[sensor.camera]\nwidth = 0\n", "camera.width"),
         ("[tap]\ndepth_mm = nan\n", "depth_mm"),
@@ -362,8 +344,7 @@ fn an_invalid_configuration_exits_2_from_every_command() {
         ];
         for args in runs {
             let r = tactrace(&t.0, args);
-            expect_code(&r, 2, &format!("{table} {}", args[0]));
-            assert!(r.stderr.contains(key), "{table} {args:?}: {}", r.stderr);
+            expect_refusal(&r, 2, &format!("{table} {args:?}"), key);
         }
     }
     for out in ["c", "r.png", "f", "f.partial"] {
@@ -440,8 +421,7 @@ fn no_debug_formatting_in_messages() {
     }
     assert!(found.is_empty(), "debug formatting:\n{}", found.join("\n"));
     // And what a follow run prints: its ending in words.
-    let t = TempDir::new("ending");
-    dataset_and_model(&t.0);
+    let t = with_model("ending");
     let r = tactrace(
         &t.0,
         &[
@@ -457,8 +437,7 @@ fn no_debug_formatting_in_messages() {
 /// `OUT`, and the README and ARCHITECTURE say so.
 #[test]
 fn a_failed_follow_run_is_in_out_as_the_docs_say() {
-    let t = TempDir::new("failedrunout");
-    dataset_and_model(&t.0);
+    let t = with_model("failedrunout");
     // A contour in metres: the sensor loses contact at once.
     let circle: String = (0..100)
         .map(|k| {

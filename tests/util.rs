@@ -114,6 +114,24 @@ pub fn expect_refusal(run: &Run, code: i32, what: &str, says: &str) {
     );
 }
 
+/// Asserts that `run` ended with exit `code` and that its stderr says
+/// every one of `says` (a refusal whose message names several things).
+pub fn expect_refusal_saying(run: &Run, code: i32, what: &str, says: &[&str]) {
+    expect_code(run, code, what);
+    stderr_says(run, says);
+}
+
+/// Asserts that `run`'s stderr says every one of `says`.
+pub fn stderr_says(run: &Run, says: &[&str]) {
+    for s in says {
+        assert!(
+            run.stderr.contains(s),
+            "stderr does not say {s:?}:\n{}",
+            run.stderr
+        );
+    }
+}
+
 /// Asserts that `run` succeeded (exit 0).
 pub fn ok(run: &Run, what: &str) {
     expect_code(run, 0, what);

@@ -207,6 +207,29 @@ fn turn_row(row: &mut [f64], columns: TurnedColumns, angle_sign: i8, phi: f64) {
 }
 
 impl ConvModel {
+    /// Whether it predicts with the mean of a frame's turned views
+    /// ([`FrameTurns::at_prediction`]); `None` for a model fitted without
+    /// `rotations`, which has no views to average.
+    pub fn turned_views(&self) -> Option<bool> {
+        self.config.rotations.as_ref().map(|t| t.at_prediction)
+    }
+
+    /// Switch the mean over turned views at prediction on or off
+    /// ([`FrameTurns::at_prediction`]; training is not affected); refused
+    /// for a model fitted without `rotations`.
+    pub fn set_turned_views(&mut self, on: bool) -> Result<(), ConvError> {
+        match self.config.rotations.as_mut() {
+            Some(t) => {
+                t.at_prediction = on;
+                Ok(())
+            }
+            None => Err(config_error(
+                "rotations.at_prediction",
+                "the model was not fitted with rotations: it has no turned views",
+            )),
+        }
+    }
+
     /// [`ConvModel::predict_batch`] (`count x N`, encoded and unscaled),
     /// or, when its `rotations` say `at_prediction`, the mean over the frames'
     /// `order` turned views, each view's angles (the sine columns

@@ -287,6 +287,11 @@ pub struct Validation {
     /// How many of the samples the model was trained on (by row hash);
     /// `None` (null) when the model folder does not record it.
     pub rows_seen_in_training: Option<usize>,
+    /// Whether each prediction was the mean over the tap's turned views
+    /// (`--views`, else what the model's file says); absent for a model
+    /// fitted without rotations.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub turned_views: Option<bool>,
     /// The edge pose predicted for each sample (empty unless the model is
     /// an edge model).
     #[serde(skip)]
@@ -512,7 +517,9 @@ pub fn validate_net(model: &PoseModel, data: &TapData) -> Result<Validation> {
     check_dim(model.input_dim(), data.dim())?;
     let targets = named_targets(model.outputs(), data)?;
     let predicted = model.predict_targets_batch(&ds)?;
-    score_predictions(targets, data, predicted, model.edge_roles().ok())
+    let mut v = score_predictions(targets, data, predicted, model.edge_roles().ok())?;
+    v.turned_views = model.views_at_prediction();
+    Ok(v)
 }
 
 /// The validation of `predicted` (one row of every target a sample of
@@ -574,6 +581,7 @@ pub(crate) fn score_predictions(
         per_target,
         samples: data.len(),
         rows_seen_in_training: None,
+        turned_views: None,
         predictions,
         truth: edge_truth,
         targets,

@@ -209,6 +209,7 @@ pub fn validate_image(
     let predicted = net.predict_batch(&view(frames, data)?)?;
     let mut v = score_predictions(targets, data, predicted, net.edge_roles().ok())?;
     v.rows_seen_in_training = model.training().map(|t| t.rows_seen(data));
+    v.turned_views = net.views_at_prediction();
     Ok(v)
 }
 

@@ -265,11 +265,22 @@ impl ImageModel {
     /// Whether it predicts with the mean of a frame's turned views
     /// (`rotations.at_prediction` of its configuration; a model of pixels).
     fn turned_views(&self) -> bool {
-        self.conv
-            .config()
-            .rotations
-            .as_ref()
-            .is_some_and(|t| t.at_prediction)
+        self.conv.turned_views() == Some(true)
+    }
+
+    /// Whether every prediction is the mean over the frame's turned views
+    /// (`rotations.at_prediction`); `None` for a model fitted without
+    /// `rotations`.
+    pub fn views_at_prediction(&self) -> Option<bool> {
+        self.conv.turned_views()
+    }
+
+    /// Switch the mean over turned views at prediction on or off (the
+    /// configuration's `rotations.at_prediction`, as
+    /// [`PoseModel::set_turned_views`] for a pin model); refused for a
+    /// model fitted without `rotations`.
+    pub fn set_turned_views(&mut self, on: bool) -> Result<(), LearnError> {
+        Ok(self.conv.set_turned_views(on)?)
     }
 
     /// [`Self::predict_targets`] of one frame and its pin displacement

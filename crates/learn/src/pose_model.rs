@@ -267,6 +267,12 @@ impl PoseModel {
         self.averaged_views().is_some()
     }
 
+    /// Whether every prediction averages the tap's turned views; `None`
+    /// for a model fitted without `rotations`, which has none to average.
+    pub fn views_at_prediction(&self) -> Option<bool> {
+        self.config.rotations.map(|_| self.averages_turned_views())
+    }
+
     /// Switch averaging over turned views at prediction on or off (the
     /// configuration's [`crate::Rotations::at_prediction`]); refused for a
     /// model without `rotations` or whose file predates the recorded

@@ -8,8 +8,10 @@ use crate::errors::{input, lab, store};
 use crate::interrupt::{checkpoint, run_detached};
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use tactrace_convnet::TrainingHistory;
+use tactrace_lab::image_fit::{fit_fresh_image, store_fitted_image, FreshImage};
 use tactrace_lab::train_image as ti;
 use tactrace_lab::train_sets::TrainingSets;
 use tactrace_store::{LoadedModel, StoredImageModel};
@@ -33,6 +35,18 @@ impl ImageModel {
     pub(crate) fn stored(&self) -> &StoredImageModel {
         &self.stored
     }
+
+    /// The model with its turned views at prediction switched as `views`
+    /// says (as it is when `None`); refused, naming the model, for one
+    /// fitted without rotations.
+    fn with_views(&self, views: Option<bool>) -> PyResult<Cow<'_, StoredImageModel>> {
+        let Some(on) = views else {
+            return Ok(Cow::Borrowed(&self.stored));
+        };
+        let mut stored = self.stored.clone();
+        stored.set_turned_views(on).map_err(store)?;
+        Ok(Cow::Owned(stored))
+    }
 }
 
 #[pymethods]
@@ -41,11 +55,15 @@ impl ImageModel {
     /// an N x H x W stack (any dtype, used as uint8), of any size: each is
     /// area-averaged to the model's input (as ``frames.npy`` was made from
     /// the frames the pin detector sees). Returns N x T float64 (one row
-    /// for one frame), in ``targets``' order and units.
+    /// for one frame), in ``targets``' order and units. ``views`` as
+    /// ``Model.predict``'s: with / without the mean over each frame's turned
+    /// views (None: as the model's file says).
+    #[pyo3(signature = (frames, *, views = None))]
     fn predict<'py>(
         &self,
         py: Python<'py>,
         frames: &Bound<'py, PyAny>,
+        views: Option<bool>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let a = contiguous::<u8>(frames, "uint8", "frames")?;
         let shape = a.shape().to_vec();
@@ -63,7 +81,8 @@ impl ImageModel {
             return Err(input("frames: empty frames"));
         }
         let pixels = a.to_vec().map_err(|e| input(format!("frames: {e}")))?;
-        let net = self.stored.model();
+        let stored = self.with_views(views)?;
+        let net = stored.model();
         let (ih, iw) = net.input_size();
         let t = net.outputs().len();
         let out = run_detached(py, || -> Result<Vec<f64>, tactrace_learn::LearnError> {
@@ -82,9 +101,16 @@ impl ImageModel {
     /// ``frames.npy``, from ``import --frames-size``) as ``tactrace
     /// validate --json`` gives them: ``position_mae_mm``,
     /// ``angle_mae_deg``, ``per_target``, ``samples``,
-    /// ``rows_seen_in_training``.
-    fn validate<'py>(&self, py: Python<'py>, data: PathBuf) -> PyResult<Bound<'py, PyAny>> {
-        let loaded = LoadedModel::Image(self.stored.clone());
+    /// ``rows_seen_in_training`` and, for a model fitted with rotations,
+    /// ``turned_views``. ``views`` as ``predict``'s.
+    #[pyo3(signature = (data, *, views = None))]
+    fn validate<'py>(
+        &self,
+        py: Python<'py>,
+        data: PathBuf,
+        views: Option<bool>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let loaded = LoadedModel::Image(self.with_views(views)?.into_owned());
         let v = py
             .detach(|| {
                 let d = tactrace_store::read_dataset(&data)?;
@@ -178,24 +204,24 @@ pub(crate) fn train(
     (config, epochs, seed): (Option<&str>, Option<usize>, Option<u64>),
     held_out: Option<(f64, u64)>,
 ) -> PyResult<ImageModel> {
-    let cfg = ti::resolve_image_config(kind, config, epochs).map_err(lab)?;
+    let (cfg, base) = ti::resolve_image_settings(kind, config, epochs).map_err(lab)?;
     let sets = py.detach(|| TrainingSets::read(dirs)).map_err(lab)?;
     let frames = py.detach(|| sets.frames()).map_err(lab)?;
     let split = sets.split(held_out).map_err(lab)?;
     let train_frames = frames.subset(&split.record.train_rows);
     let val_frames = split.record.split.as_ref().map(|s| frames.subset(&s.rows));
     let val = split.val.as_ref().zip(val_frames.as_ref());
+    let fresh = FreshImage {
+        cfg: &cfg,
+        base: base.as_ref(),
+        seed: seed.unwrap_or(0),
+    };
+    let data = (&split.train, &train_frames);
     let fitted = run_detached(py, || {
-        ti::train_image(
-            &cfg,
-            seed.unwrap_or(0),
-            (&split.train, &train_frames),
-            val,
-            &mut |_| checkpoint(),
-        )
+        fit_fresh_image(fresh, data, val, &mut |_| checkpoint())
     })?;
-    let (model, history) = fitted.map_err(lab)?;
-    let stored =
-        StoredImageModel::new(model, frames.info.clone()).with_training(split.record.clone());
+    let (model, history, folds) = fitted.map_err(lab)?;
+    let pins = sets.data.meta.reference_pins.clone();
+    let stored = store_fitted_image(model, folds, frames.info.clone(), split.record, pins);
     Ok(ImageModel { stored, history })
 }

@@ -7,6 +7,7 @@ use crate::interrupt::{checkpoint, run_detached};
 use crate::samples::Samples;
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use tactrace_lab::train::Validation;
@@ -116,13 +117,36 @@ impl Model {
         &self.net
     }
 
+    /// `net` with its turned views at prediction switched as `views` says
+    /// (as it is when `None`); refused, naming the model, for a model
+    /// fitted without rotations (the CLI's `--views`).
+    fn with_views<'a>(
+        &self,
+        net: &'a PoseModel,
+        views: Option<bool>,
+    ) -> PyResult<Cow<'a, PoseModel>> {
+        let Some(on) = views else {
+            return Ok(Cow::Borrowed(net));
+        };
+        let mut switched = self.stored.clone();
+        switched.set_turned_views(on).map_err(store)?;
+        let own = self.stored.reference_pins();
+        let net = switched.into_model_for(own, Path::new("the model"));
+        Ok(Cow::Owned(net.map_err(store)?))
+    }
+
     /// A validation of `samples`, with the training rows among them
     /// counted when the model knows what it was trained on.
-    fn validation_of(&self, py: Python<'_>, samples: &Samples) -> PyResult<Validation> {
-        let net = self.net_for(samples)?;
+    fn validation_of(
+        &self,
+        py: Python<'_>,
+        samples: &Samples,
+        views: Option<bool>,
+    ) -> PyResult<Validation> {
+        let net = self.with_views(self.net_for(samples)?, views)?;
         let data = samples.to_tap_data()?;
         let mut v =
-            run_detached(py, || tactrace_lab::train::validate_net(net, &data))?.map_err(lab)?;
+            run_detached(py, || tactrace_lab::train::validate_net(&net, &data))?.map_err(lab)?;
         v.rows_seen_in_training = self.stored.training().map(|t| t.rows_seen(&data));
         Ok(v)
     }
@@ -138,18 +162,23 @@ impl Model {
     /// ``PinExtractor.reference_pins``). Data ordered otherwise than the
     /// model's training data is refused, and so are arrays without
     /// ``reference_pins``. A single row (2P,) gives a (2,) array, else an N
-    /// x 2 float64 array.
-    #[pyo3(signature = (data, *, reference_pins = None))]
+    /// x 2 float64 array. ``views=True`` / ``False`` predicts with / without
+    /// the mean over each sample's turned views (a model fitted on turned
+    /// copies; the CLI's ``--views on|off``); None, the default, as the
+    /// model's file says. Refused for a model fitted without rotations.
+    #[pyo3(signature = (data, *, reference_pins = None, views = None))]
     fn predict<'py>(
         &self,
         py: Python<'py>,
         data: &Bound<'py, PyAny>,
         reference_pins: Option<&Bound<'py, PyAny>>,
+        views: Option<bool>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let samples = Samples::read(data, None, reference_pins, false)?;
         let (net, cols) = self.net_taking(&samples)?;
+        let net = self.with_views(net, views)?;
         let flat = &samples.inputs;
-        let out = run_detached(py, || predict_rows(net, flat, cols))?.map_err(core)?;
+        let out = run_detached(py, || predict_rows(&net, flat, cols))?.map_err(core)?;
         let arr = to_matrix(py, out, samples.rows, 2)?;
         if samples.one_row {
             return arr.reshape(vec![2]);
@@ -204,17 +233,19 @@ impl Model {
     /// is a dataset folder, ``load_dataset``'s tuple, or an N x 2P array
     /// with ``targets`` (N x 2: r mm, theta deg) and ``reference_pins``
     /// (as ``predict``). Warns (``UserWarning``) when some samples were
-    /// training rows.
-    #[pyo3(signature = (data, targets = None, *, reference_pins = None))]
+    /// training rows. ``views`` as ``predict``'s; the result says which
+    /// (``turned_views``, for a model fitted with rotations).
+    #[pyo3(signature = (data, targets = None, *, reference_pins = None, views = None))]
     fn validate<'py>(
         &self,
         py: Python<'py>,
         data: &Bound<'py, PyAny>,
         targets: Option<&Bound<'py, PyAny>>,
         reference_pins: Option<&Bound<'py, PyAny>>,
+        views: Option<bool>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let samples = Samples::read(data, targets, reference_pins, true)?;
-        let v = self.validation_of(py, &samples)?;
+        let v = self.validation_of(py, &samples, views)?;
         if let Some(w) = v.seen_warning() {
             crate::follow::warn(py, &w)?;
         }
@@ -489,7 +520,7 @@ pub fn train(
     let mut m = Model::new(stored, history, None)?;
     if let Some(v) = val {
         let samples = Samples::from_tap_data(v.clone(), None);
-        m.validation = Some(m.validation_of(py, &samples)?);
+        m.validation = Some(m.validation_of(py, &samples, None)?);
     }
     Ok(Py::new(py, m)?.into_any())
 }

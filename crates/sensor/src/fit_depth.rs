@@ -242,43 +242,146 @@ pub fn fit_depth(
     search: &DepthSearch,
 ) -> Result<DepthFit, SensorError> {
     TacTipModel::with_rest_pins(cfg.clone(), rest_px.to_vec())?;
+    let problem = DepthProblem::new(cfg, rest_px, samples, search);
+    let own = problem.own_score()?;
+    let fit = |kept_own: bool, chosen: DepthScore| DepthFit {
+        kept_own,
+        own,
+        chosen,
+        dz_range: [problem.lo, problem.hi],
+        taps: samples.len(),
+    };
+    if !problem.varies() {
+        // No depth column (or one depth for every tap): the fit is not
+        // run, the sensor's own kept (a lone depth trades against the
+        // field correction, which a synthetic sensor showed).
+        return Ok(fit(true, own));
+    }
+    let best = problem.coarse_best(own);
+    let refined = problem.refine(best.0);
+    let chosen = if refined.rms_px < best.1.rms_px {
+        refined
+    } else {
+        best.1
+    };
+    let kept_own = chosen.rms_px >= own.rms_px * (1.0 - search.min_gain);
+    Ok(fit(kept_own, if kept_own { own } else { chosen }))
+}
+
+/// The taps' smallest and largest labelled `dz` (both 0 without taps).
+fn dz_range(samples: &[FitSample]) -> (f64, f64) {
     let (lo, hi) = samples
         .iter()
         .map(|s| s.tap.dz_mm)
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
             (a.min(v), b.max(v))
         });
-    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.0) };
-    let varies = hi - lo > 1e-6;
-    let k = &cfg.calibration;
-    let deepest = cfg.mechanics.max_depth_mm;
-    let own_pivot = [k.pivot_x_mm, k.pivot_y_mm];
-    let fit_pivot = angle_resultant(samples) < PIVOT_MAX_RESULTANT;
-    let labelled = search.labelled_depth;
-    // x = [ln slide scale, ln rim scale, edge offset, pivot x, pivot y,
-    // ln field gain (read only with the labelled depth)].
-    let score = |depth_lo: f64, depth_hi: f64, x: [f64; 6]| -> DepthScore {
+    if lo.is_finite() {
+        (lo, hi)
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// One fit's fixed parts: the sensor, its rest pins, the taps and their
+/// `dz` range, the search, and whether the pivot is fitted.
+struct DepthProblem<'a> {
+    cfg: &'a TacTipConfig,
+    rest_px: &'a [[f64; 2]],
+    samples: &'a [FitSample],
+    search: &'a DepthSearch,
+    lo: f64,
+    hi: f64,
+    /// The sensor's own pivot offset, mm.
+    own_pivot: [f64; 2],
+    /// Whether the taps' angles go round enough of the circle to fit the
+    /// pivot ([`PIVOT_MAX_RESULTANT`]).
+    fit_pivot: bool,
+}
+
+impl<'a> DepthProblem<'a> {
+    fn new(
+        cfg: &'a TacTipConfig,
+        rest_px: &'a [[f64; 2]],
+        samples: &'a [FitSample],
+        search: &'a DepthSearch,
+    ) -> Self {
+        let (lo, hi) = dz_range(samples);
+        let k = &cfg.calibration;
+        Self {
+            cfg,
+            rest_px,
+            samples,
+            search,
+            lo,
+            hi,
+            own_pivot: [k.pivot_x_mm, k.pivot_y_mm],
+            fit_pivot: angle_resultant(samples) < PIVOT_MAX_RESULTANT,
+        }
+    }
+
+    /// Whether the taps' labelled `dz` varies (else the fit is not run).
+    fn varies(&self) -> bool {
+        self.hi - self.lo > 1e-6
+    }
+
+    /// Parameters in the simplex before the three of the slide, rim and
+    /// edge: the two depths, or the log field gain with the labelled depth.
+    fn head(&self) -> usize {
+        if self.search.labelled_depth {
+            1
+        } else {
+            2
+        }
+    }
+
+    /// The sensor's own depth law and slide response, scored on the taps.
+    fn own_score(&self) -> Result<DepthScore, SensorError> {
+        let k = &self.cfg.calibration;
+        let model = TacTipModel::with_rest_pins(self.cfg.clone(), self.rest_px.to_vec())?;
+        let [rms_px, cosine] = scores(&model, self.samples, self.search.threads);
+        Ok(DepthScore {
+            tap_depth_mm: k.tap_depth_mm,
+            depth_per_offset: k.depth_per_offset,
+            slide_scale: 1.0,
+            rim_scale: 1.0,
+            edge_offset_mm: k.edge_offset_mm,
+            pivot_mm: self.fit_pivot.then_some(self.own_pivot),
+            field_gain: None,
+            rms_px,
+            cosine,
+        })
+    }
+
+    /// The candidate pressing `depth_lo` at the smallest `dz` and
+    /// `depth_hi` at the largest, with `x = [ln slide scale, ln rim scale,
+    /// edge offset, pivot x, pivot y, ln field gain]` (the gain read only
+    /// with the labelled depth), scored on the taps; unscored (RMS
+    /// infinite) outside the search's bounds.
+    fn score(&self, depth_lo: f64, depth_hi: f64, x: [f64; 6]) -> DepthScore {
         let [ln_slide, ln_rim, edge, px, py, ln_gain] = x;
-        let per = if varies {
-            (depth_hi - depth_lo) / (hi - lo)
+        let k = &self.cfg.calibration;
+        let per = if self.varies() {
+            (depth_hi - depth_lo) / (self.hi - self.lo)
         } else {
             k.depth_per_offset
         };
         let mut d = DepthScore {
-            tap_depth_mm: depth_lo - per * lo,
+            tap_depth_mm: depth_lo - per * self.lo,
             depth_per_offset: per,
             slide_scale: ln_slide.exp(),
             rim_scale: ln_rim.exp(),
             edge_offset_mm: edge,
-            pivot_mm: fit_pivot.then_some([px, py]),
-            field_gain: labelled.then_some(ln_gain.exp()),
+            pivot_mm: self.fit_pivot.then_some([px, py]),
+            field_gain: self.search.labelled_depth.then_some(ln_gain.exp()),
             rms_px: f64::INFINITY,
             cosine: -1.0,
         };
+        let deepest = self.cfg.mechanics.max_depth_mm;
         let inside = |v: f64| v > 0.0 && v <= deepest;
         let near = (edge - k.edge_offset_mm).abs() <= EDGE_REACH_MM
-            && (px - own_pivot[0]).abs() <= PIVOT_REACH_MM
-            && (py - own_pivot[1]).abs() <= PIVOT_REACH_MM;
+            && (px - self.own_pivot[0]).abs() <= PIVOT_REACH_MM
+            && (py - self.own_pivot[1]).abs() <= PIVOT_REACH_MM;
         if !inside(depth_lo)
             || !inside(depth_hi)
             || ln_slide.abs() > 3.0
@@ -288,44 +391,42 @@ pub fn fit_depth(
         {
             return d;
         }
-        if let Ok(m) = TacTipModel::with_rest_pins(with_depth(cfg, &d), rest_px.to_vec()) {
-            [d.rms_px, d.cosine] = scores(&m, samples, search.threads);
+        let cfg = with_depth(self.cfg, &d);
+        if let Ok(m) = TacTipModel::with_rest_pins(cfg, self.rest_px.to_vec()) {
+            [d.rms_px, d.cosine] = scores(&m, self.samples, self.search.threads);
         }
         d
-    };
-    let own_lo = k.tap_depth_mm + k.depth_per_offset * lo;
-    let own_hi = k.tap_depth_mm + k.depth_per_offset * hi;
-    let model = TacTipModel::with_rest_pins(cfg.clone(), rest_px.to_vec())?;
-    let [rms_px, cosine] = scores(&model, samples, search.threads);
-    let own = DepthScore {
-        tap_depth_mm: k.tap_depth_mm,
-        depth_per_offset: k.depth_per_offset,
-        slide_scale: 1.0,
-        rim_scale: 1.0,
-        edge_offset_mm: k.edge_offset_mm,
-        pivot_mm: fit_pivot.then_some(own_pivot),
-        field_gain: None,
-        rms_px,
-        cosine,
-    };
-    if !varies {
-        // No depth column (or one depth for every tap): the fit is not
-        // run, the sensor's own kept (a lone depth trades against the
-        // field correction, which a synthetic sensor showed).
-        return Ok(DepthFit {
-            kept_own: true,
-            own,
-            chosen: own,
-            dz_range: [lo, hi],
-            taps: samples.len(),
-        });
     }
-    let step = search.grid_step_mm.max(0.1);
-    // The coarse start: a grid of the two depths, or with the labelled
-    // depth of the field's gain; `head` is its length in the simplex.
-    let starts: Vec<[f64; 2]> = if labelled {
-        GAIN_GRID.iter().map(|g| [g.ln(), 0.0]).collect()
-    } else {
+
+    /// The candidate at the simplex point `x`: its [`Self::head`] first,
+    /// then the slide, rim and edge, then the pivot when it is fitted.
+    fn at(&self, x: &[f64]) -> DepthScore {
+        let rest = &x[self.head()..];
+        let pivot = if self.fit_pivot {
+            [rest[3], rest[4]]
+        } else {
+            self.own_pivot
+        };
+        let (a, b, ln_gain) = if self.search.labelled_depth {
+            (self.lo, self.hi, x[0])
+        } else {
+            (x[0], x[1], 0.0)
+        };
+        self.score(
+            a,
+            b,
+            [rest[0], rest[1], rest[2], pivot[0], pivot[1], ln_gain],
+        )
+    }
+
+    /// The coarse starts: a grid of the two depths, or with the labelled
+    /// depth of the field's gain (its first [`Self::head`] values count).
+    fn starts(&self) -> Vec<[f64; 2]> {
+        if self.search.labelled_depth {
+            return GAIN_GRID.iter().map(|g| [g.ln(), 0.0]).collect();
+        }
+        let step = self.grid_step();
+        let deepest = self.cfg.mechanics.max_depth_mm;
         let grid: Vec<f64> = (1..)
             .map(|i| step * f64::from(i))
             .take_while(|&v| v <= deepest)
@@ -333,64 +434,67 @@ pub fn fit_depth(
         grid.iter()
             .flat_map(|&a| grid.iter().map(move |&b| [a, b]))
             .collect()
-    };
-    let head = if labelled { 1 } else { 2 };
-    // The simplex moves the pivot only when it is fitted.
-    let at = |x: &[f64]| {
-        let rest = &x[head..];
-        let pivot = if fit_pivot {
-            [rest[3], rest[4]]
+    }
+
+    fn grid_step(&self) -> f64 {
+        self.search.grid_step_mm.max(0.1)
+    }
+
+    /// The slide, rim and edge of the sensor's own, as the simplex holds them.
+    fn own_tail(&self) -> [f64; 3] {
+        [0.0, 0.0, self.cfg.calibration.edge_offset_mm]
+    }
+
+    /// The best coarse start and its score: the sensor's own law (the
+    /// gain 1 with the labelled depth) unless a start beats it.
+    fn coarse_best(&self, own: DepthScore) -> ([f64; 2], DepthScore) {
+        let k = &self.cfg.calibration;
+        let own_start = if self.search.labelled_depth {
+            [0.0; 2]
         } else {
-            own_pivot
+            [
+                k.tap_depth_mm + k.depth_per_offset * self.lo,
+                k.tap_depth_mm + k.depth_per_offset * self.hi,
+            ]
         };
-        let (a, b, ln_gain) = if labelled {
-            (lo, hi, x[0])
-        } else {
-            (x[0], x[1], 0.0)
-        };
-        score(
-            a,
-            b,
-            [rest[0], rest[1], rest[2], pivot[0], pivot[1], ln_gain],
-        )
-    };
-    let tail = [0.0, 0.0, k.edge_offset_mm];
-    // The sensor's own law (the gain 1 with the labelled depth) unless a
-    // start beats it.
-    let mut best = (if labelled { [0.0; 2] } else { [own_lo, own_hi] }, own);
-    for start in &starts {
-        let x: Vec<f64> = start[..head]
+        let mut best = (own_start, own);
+        for start in &self.starts() {
+            let x: Vec<f64> = start[..self.head()]
+                .iter()
+                .chain(&self.own_tail())
+                .chain(&self.own_pivot)
+                .copied()
+                .collect();
+            let d = self.at(&x);
+            if d.rms_px < best.1.rms_px {
+                best = (*start, d);
+            }
+        }
+        best
+    }
+
+    /// Nelder-Mead from the coarse start `start` (the pivot moved only
+    /// when it is fitted): the candidate it ends at.
+    fn refine(&self, start: [f64; 2]) -> DepthScore {
+        let head = self.head();
+        let objective = |x: &[f64]| self.at(x).rms_px;
+        let mut x0: Vec<f64> = start[..head]
             .iter()
-            .chain(&tail)
-            .chain(&own_pivot)
+            .chain(&self.own_tail())
             .copied()
             .collect();
-        let d = at(&x);
-        if d.rms_px < best.1.rms_px {
-            best = (*start, d);
+        let first_step = if self.search.labelled_depth {
+            0.2
+        } else {
+            self.grid_step() / 2.0
+        };
+        let mut first = vec![first_step; head];
+        first.extend([0.3, 0.3, 0.5]);
+        if self.fit_pivot {
+            x0.extend(self.own_pivot);
+            first.extend([0.5, 0.5]);
         }
+        let (x, _) = minimise(&objective, &x0, &first, self.search.iterations);
+        self.at(&x)
     }
-    let objective = |x: &[f64]| at(x).rms_px;
-    let mut x0: Vec<f64> = best.0[..head].iter().chain(&tail).copied().collect();
-    let mut first = vec![if labelled { 0.2 } else { step / 2.0 }; head];
-    first.extend([0.3, 0.3, 0.5]);
-    if fit_pivot {
-        x0.extend(own_pivot);
-        first.extend([0.5, 0.5]);
-    }
-    let (x, _) = minimise(&objective, &x0, &first, search.iterations);
-    let refined = at(&x);
-    let chosen = if refined.rms_px < best.1.rms_px {
-        refined
-    } else {
-        best.1
-    };
-    let kept_own = chosen.rms_px >= own.rms_px * (1.0 - search.min_gain);
-    Ok(DepthFit {
-        kept_own,
-        own,
-        chosen: if kept_own { own } else { chosen },
-        dz_range: [lo, hi],
-        taps: samples.len(),
-    })
 }

@@ -77,6 +77,14 @@ pub enum StoreError {
         #[source]
         mismatch: crate::dataset_join::DatasetMismatch,
     },
+    /// A setting of a loaded model that it cannot take (turned views at
+    /// prediction for a model fitted without rotations: `--views`).
+    #[error("{path}: {source}")]
+    ModelSetting {
+        path: PathBuf,
+        #[source]
+        source: tactrace_learn::LearnError,
+    },
     /// Data whose pins are ordered against other reference pins than the
     /// model's training data.
     #[error("{path}: not ordered like the model's training data")]

@@ -127,6 +127,20 @@ impl StoredImageModel {
         &self.model
     }
 
+    /// Whether its predictions average turned views (`None`: fitted
+    /// without rotations), as [`ImageModel::views_at_prediction`].
+    pub fn views_at_prediction(&self) -> Option<bool> {
+        self.model.views_at_prediction()
+    }
+
+    /// Switch the mean over turned views at prediction on or off
+    /// ([`ImageModel::set_turned_views`]), refused naming the model folder.
+    pub fn set_turned_views(&mut self, on: bool) -> Result<()> {
+        self.model
+            .set_turned_views(on)
+            .map_err(crate::model_dir::setting_refused(&self.source))
+    }
+
     /// What its training frames were (size, source size).
     pub fn frames(&self) -> &FramesInfo {
         &self.frames
@@ -197,6 +211,25 @@ impl LoadedModel {
             StoredImageModel::load(dir).map(LoadedModel::Image)
         } else {
             StoredModel::load(dir).map(LoadedModel::Pins)
+        }
+    }
+
+    /// Whether its predictions average turned views (`None`: fitted
+    /// without rotations).
+    pub fn views_at_prediction(&self) -> Option<bool> {
+        match self {
+            LoadedModel::Pins(m) => m.views_at_prediction(),
+            LoadedModel::Image(m) => m.views_at_prediction(),
+        }
+    }
+
+    /// Switch the mean over turned views at prediction on or off, pin or
+    /// image model; refused (bad input, naming the folder) for a model
+    /// fitted without rotations.
+    pub fn set_turned_views(&mut self, on: bool) -> Result<()> {
+        match self {
+            LoadedModel::Pins(m) => m.set_turned_views(on),
+            LoadedModel::Image(m) => m.set_turned_views(on),
         }
     }
 

@@ -114,6 +114,20 @@ impl StoredModel {
         &self.source
     }
 
+    /// Whether its predictions average turned views (`None`: fitted
+    /// without rotations), as [`PoseModel::views_at_prediction`].
+    pub fn views_at_prediction(&self) -> Option<bool> {
+        self.model.views_at_prediction()
+    }
+
+    /// Switch the mean over turned views at prediction on or off
+    /// ([`PoseModel::set_turned_views`]), refused naming the model folder.
+    pub fn set_turned_views(&mut self, on: bool) -> Result<()> {
+        self.model
+            .set_turned_views(on)
+            .map_err(setting_refused(&self.source))
+    }
+
     /// The network, for data or a rig whose reference pins are `pins`
     /// (named `what` in the error): refused when they are ordered otherwise.
     pub fn for_pins(&self, pins: &[[f64; 2]], what: &Path) -> Result<&PoseModel> {
@@ -142,6 +156,25 @@ impl StoredModel {
     pub fn into_model_for(self, pins: &[[f64; 2]], what: &Path) -> Result<PoseModel> {
         self.for_pins(pins, what)?;
         Ok(self.model)
+    }
+}
+
+/// The refusal of a setting by the model loaded from `source`, naming
+/// its folder ([`StoreError::ModelSetting`]).
+pub(crate) fn setting_refused(
+    source: &Path,
+) -> impl FnOnce(tactrace_learn::LearnError) -> StoreError + '_ {
+    move |e| StoreError::ModelSetting {
+        path: model_name(source),
+        source: e,
+    }
+}
+
+/// A model's folder for messages, or "the model" for one made in memory.
+fn model_name(source: &Path) -> PathBuf {
+    match source.as_os_str().is_empty() {
+        true => PathBuf::from("the model"),
+        false => source.to_path_buf(),
     }
 }
 

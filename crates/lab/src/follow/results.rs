@@ -33,6 +33,11 @@ struct MetricsDocument<'a> {
     /// The real-frame world: how near the answered frames' labels were.
     #[serde(skip_serializing_if = "Option::is_none")]
     replay: Option<&'a ReplayStats>,
+    /// Whether the model predicted with the mean of each tap's turned
+    /// views (`follow --views`, else its file's setting); absent for a
+    /// model fitted without rotations.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    turned_views: Option<bool>,
 }
 
 /// What a run knows besides its trajectory: the real-frame world's label
@@ -44,6 +49,9 @@ pub struct RunExtras<'a> {
     pub fields: Option<PinFields<'a>>,
     /// The frames the taps saw (the real-frame world's answers).
     pub frames: Option<StepFrames<'a>>,
+    /// The model's turned views at prediction, on or off (`None`: a model
+    /// fitted without rotations).
+    pub turned_views: Option<bool>,
 }
 
 /// The diameter of the real TacTip's dome, mm (the simulated one's is in
@@ -125,6 +133,7 @@ pub fn write_results_with(
             extras.replay.and_then(ReplayStats::warning),
         ]),
         replay: extras.replay,
+        turned_views: extras.turned_views,
     };
     let json = serde_json::to_string_pretty(&document).expect("metrics serialise");
     write_atomic(&dir.join("metrics.json"), json.as_bytes())?;

@@ -281,6 +281,7 @@ impl Rig {
         (model, settings): (&LoadedModel, &ServoSettings),
         (dir, sensor_diameter_mm): (&Path, f64),
     ) -> Result<(Option<FollowMetrics>, Vec<f64>, Option<ReplayStats>)> {
+        let turned_views = model.views_at_prediction();
         let fields = Some(PinFields {
             reference_pins: self.perception.reference_pins(),
             fields: &recorded.fields,
@@ -299,6 +300,7 @@ impl Rig {
         let Kind::Replay { rig, far_distance } = &self.kind else {
             let (metrics, curve) = written(&RunExtras {
                 fields,
+                turned_views,
                 ..RunExtras::default()
             })?;
             return Ok((metrics, curve, None));
@@ -320,6 +322,7 @@ impl Rig {
                 per_step: &answered.per_step,
                 distances: &answered.distances,
             }),
+            turned_views,
         })?;
         Ok((metrics, curve, Some(stats)))
     }

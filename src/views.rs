@@ -1,8 +1,10 @@
 //! `--views on|off` of `validate`, `predict` and `follow`: a model fitted
 //! on turned copies (`rotations`) predicts with or without the mean over
-//! each tap's turned views, whatever its file says, so the two can be
-//! compared without editing the model folder. Refused (exit 2, naming the
-//! folder) for a model fitted without rotations.
+//! each tap's turned views, and a pin model fitted on mirror copies
+//! (`reflections`) with or without the mean of the tap and its mirror
+//! copy, whatever its file says, so the two can be compared without
+//! editing the model folder. Refused (exit 2, naming the folder) for a
+//! model fitted with neither.
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 use tactrace_lab::LabError;
@@ -20,10 +22,11 @@ pub enum ViewsArg {
 /// The `--views` flag.
 #[derive(Args, Clone, Copy, Debug, Default)]
 pub struct ViewsFlag {
-    /// Turned views at prediction of a model fitted on turned copies
-    /// (`rotations`): on, the mean over each tap's turned views; off, the
+    /// Views at prediction of a model fitted on turned copies
+    /// (`rotations`) or mirror copies (`reflections`): on, the mean over
+    /// each tap's turned views (or the tap and its mirror copy); off, the
     /// tap alone. Default: what the model's file says. Refused for a model
-    /// fitted without rotations.
+    /// fitted with neither.
     #[arg(long, value_enum, value_name = "on|off")]
     pub views: Option<ViewsArg>,
 }

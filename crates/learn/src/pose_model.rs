@@ -267,23 +267,34 @@ impl PoseModel {
         self.averaged_views().is_some()
     }
 
-    /// Whether every prediction averages the tap's turned views; `None`
-    /// for a model fitted without `rotations`, which has none to average.
+    /// Whether every prediction averages the tap's turned views (or, for
+    /// a model fitted with `reflections`, the tap and its mirror copy);
+    /// `None` for a model fitted with neither, which has no views to
+    /// average.
     pub fn views_at_prediction(&self) -> Option<bool> {
+        if let Some(refl) = &self.config.reflections {
+            return Some(refl.at_prediction && self.mirror.is_some());
+        }
         self.config.rotations.map(|_| self.averages_turned_views())
     }
 
     /// Switch averaging over turned views at prediction on or off (the
-    /// configuration's [`crate::Rotations::at_prediction`]); refused for a
-    /// model without `rotations` or whose file predates the recorded
-    /// layout.
+    /// configuration's [`crate::Rotations::at_prediction`], or for a model
+    /// fitted with mirror copies [`crate::Reflections::at_prediction`]);
+    /// refused for a model with neither or whose file predates the
+    /// recorded layout.
     pub fn set_turned_views(&mut self, on: bool) -> Result<(), LearnError> {
+        if self.config.reflections.is_some() {
+            return self.set_mirror_view(on);
+        }
         let refuse = |reason: &str| LearnError::Config {
             field: "rotations.at_prediction",
             reason: reason.into(),
         };
         let Some(rot) = self.config.rotations.as_mut() else {
-            return Err(refuse("the model was not fitted with rotations"));
+            return Err(refuse(
+                "the model was not fitted with rotations (nor with reflections)",
+            ));
         };
         if on && self.views.is_none() {
             return Err(refuse(
@@ -291,6 +302,23 @@ impl PoseModel {
             ));
         }
         rot.at_prediction = on;
+        self.predictor = OnceLock::new();
+        Ok(())
+    }
+
+    /// [`Self::set_turned_views`] of a model fitted with mirror copies.
+    fn set_mirror_view(&mut self, on: bool) -> Result<(), LearnError> {
+        let has_mirror = self.mirror.is_some();
+        let Some(refl) = self.config.reflections.as_mut() else {
+            return Ok(());
+        };
+        if on && !has_mirror {
+            return Err(LearnError::Config {
+                field: "reflections.at_prediction",
+                reason: "the model does not record its layout's mirror".into(),
+            });
+        }
+        refl.at_prediction = on;
         self.predictor = OnceLock::new();
         Ok(())
     }

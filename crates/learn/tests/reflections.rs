@@ -291,3 +291,43 @@ fn bad_settings_are_refused_and_the_default_writes_nothing() {
         assert!(err.to_string().contains("reflections"), "{err}");
     }
 }
+
+#[test]
+fn the_mirror_view_is_switched_as_turned_views_are() {
+    // `--views on|off` reaches a mirror-copies model: off predicts the tap
+    // alone (no longer mirror-symmetric), on the mean with its copy.
+    let pins = hex_layout(4);
+    let refl = Reflections {
+        at_prediction: true,
+        ..mirror(90.0, &["angle"])
+    };
+    let mut model = fit_on_pins(
+        &small_mlp(Some(refl), 5),
+        &random_surfaces(&pins, 40, 3),
+        &pins,
+    );
+    let held = random_surfaces(&pins, 5, 4);
+    let flipped = mirrored_inputs(&held, &pins, 90.0).unwrap();
+    let asymmetry = |m: &PoseModel| -> f64 {
+        (0..held.n)
+            .map(|i| {
+                let a = m.predict_targets(held.x_row(i)).unwrap();
+                let b = m.predict_targets(flipped.x_row(i)).unwrap();
+                (a[1] + b[1]).abs()
+            })
+            .fold(0.0, f64::max)
+    };
+    let on = model.predict_targets(held.x_row(0)).unwrap();
+    assert_eq!(model.views_at_prediction(), Some(true));
+    model.set_turned_views(false).unwrap();
+    assert_eq!(model.views_at_prediction(), Some(false));
+    assert!(asymmetry(&model) > 1e-6, "the tap alone is not symmetric");
+    assert_ne!(model.predict_targets(held.x_row(0)).unwrap(), on);
+    model.set_turned_views(true).unwrap();
+    assert!(asymmetry(&model) < 1e-9);
+    assert_eq!(model.predict_targets(held.x_row(0)).unwrap(), on);
+    let plain = fit_on_pins(&small_mlp(None, 2), &random_surfaces(&pins, 20, 5), &pins);
+    assert_eq!(plain.views_at_prediction(), None);
+    let err = plain.clone().set_turned_views(true).unwrap_err();
+    assert!(err.to_string().contains("rotations"), "{err}");
+}

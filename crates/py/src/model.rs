@@ -119,7 +119,7 @@ impl Model {
 
     /// `net` with its turned views at prediction switched as `views` says
     /// (as it is when `None`); refused, naming the model, for a model
-    /// fitted without rotations (the CLI's `--views`).
+    /// fitted without rotations or reflections (the CLI's `--views`).
     fn with_views<'a>(
         &self,
         net: &'a PoseModel,
@@ -164,8 +164,9 @@ impl Model {
     /// ``reference_pins``. A single row (2P,) gives a (2,) array, else an N
     /// x 2 float64 array. ``views=True`` / ``False`` predicts with / without
     /// the mean over each sample's turned views (a model fitted on turned
-    /// copies; the CLI's ``--views on|off``); None, the default, as the
-    /// model's file says. Refused for a model fitted without rotations.
+    /// copies; or the sample and its mirror copy, for a model fitted on
+    /// mirror copies; the CLI's ``--views on|off``); None, the default, as
+    /// the model's file says. Refused for a model fitted with neither.
     #[pyo3(signature = (data, *, reference_pins = None, views = None))]
     fn predict<'py>(
         &self,

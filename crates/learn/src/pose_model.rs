@@ -272,8 +272,8 @@ impl PoseModel {
     /// `None` for a model fitted with neither, which has no views to
     /// average.
     pub fn views_at_prediction(&self) -> Option<bool> {
-        if let Some(refl) = &self.config.reflections {
-            return Some(refl.at_prediction && self.mirror.is_some());
+        if self.config.reflections.is_some() {
+            return Some(self.averaged_mirror().is_some());
         }
         self.config.rotations.map(|_| self.averages_turned_views())
     }
@@ -284,8 +284,17 @@ impl PoseModel {
     /// refused for a model with neither or whose file predates the
     /// recorded layout.
     pub fn set_turned_views(&mut self, on: bool) -> Result<(), LearnError> {
-        if self.config.reflections.is_some() {
-            return self.set_mirror_view(on);
+        let has_mirror = self.mirror.is_some();
+        if let Some(refl) = self.config.reflections.as_mut() {
+            if on && !has_mirror {
+                return Err(LearnError::Config {
+                    field: "reflections.at_prediction",
+                    reason: "the model does not record its layout's mirror".into(),
+                });
+            }
+            refl.at_prediction = on;
+            self.predictor = OnceLock::new();
+            return Ok(());
         }
         let refuse = |reason: &str| LearnError::Config {
             field: "rotations.at_prediction",
@@ -302,23 +311,6 @@ impl PoseModel {
             ));
         }
         rot.at_prediction = on;
-        self.predictor = OnceLock::new();
-        Ok(())
-    }
-
-    /// [`Self::set_turned_views`] of a model fitted with mirror copies.
-    fn set_mirror_view(&mut self, on: bool) -> Result<(), LearnError> {
-        let has_mirror = self.mirror.is_some();
-        let Some(refl) = self.config.reflections.as_mut() else {
-            return Ok(());
-        };
-        if on && !has_mirror {
-            return Err(LearnError::Config {
-                field: "reflections.at_prediction",
-                reason: "the model does not record its layout's mirror".into(),
-            });
-        }
-        refl.at_prediction = on;
         self.predictor = OnceLock::new();
         Ok(())
     }

@@ -109,7 +109,7 @@ fn plain_taps_import_train_validate_and_predict_by_name() {
     let r = tactrace(
         &t.0,
         &[
-            "predict", "--model", "md", "--image", frame, &sensor[0], &sensor[1],
+            "predict", "--model", "md", "--image", frame, sensor[0], sensor[1],
         ],
     );
     ok(&r, "predict --image");

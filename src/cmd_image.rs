@@ -232,21 +232,7 @@ pub fn predict(model: &StoredImageModel, a: PredictArgs) -> Result<()> {
             let input = predict_input(model, a.sensor.as_deref())?;
             let pixels = import_reader::image_input(&input, &image)?;
             let values = net.predict_targets(&pixels).map_err(LabError::from)?;
-            let names: Vec<(String, f64)> = net
-                .outputs()
-                .iter()
-                .zip(&values)
-                .map(|(t, &v)| (format!("{}_{}", t.name, t.unit.as_str()), v))
-                .collect();
-            let refs: Vec<(&str, f64)> = names.iter().map(|(n, v)| (n.as_str(), *v)).collect();
-            tactrace_lab::numbers::require_finite(
-                &format!("the model's prediction for {}", image.display()),
-                &refs,
-                "the model is degenerate, or the frame far from its training data",
-            )?;
-            let header: Vec<&str> = refs.iter().map(|(n, _)| *n).collect();
-            let cells: Vec<String> = values.iter().map(|v| format!("{v:.4}")).collect();
-            crate::say!("{}\n{}", header.join(","), cells.join(","));
+            crate::cmd_learn::say_prediction(&image, net.outputs(), &values)?;
         }
         (None, Some(dir)) => {
             let data = read_dataset(&dir)?;

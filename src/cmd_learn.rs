@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use tactrace_lab::train_sets::{check_val_pins, TrainingSets};
 use tactrace_lab::{import_reader, train as tr, LabError};
-use tactrace_learn::{ModelKind, Preset, SearchSpace};
+use tactrace_learn::{ModelKind, ModelTarget, Preset, SearchSpace};
 use tactrace_report::figures::{self, Predicted};
 use tactrace_store::{check_output_dir, fsutil, read_dataset, LoadedModel, SightFile, StoredModel};
 
@@ -506,6 +506,29 @@ pub(crate) fn say_target_rows(v: &tr::Validation) -> Result<()> {
     Ok(())
 }
 
+/// One frame's prediction of every target of a model (`outputs`, in its
+/// order), as a CSV header (`NAME_UNIT`) and row; refused when a value
+/// is not a number.
+pub(crate) fn say_prediction(image: &Path, outputs: &[ModelTarget], values: &[f64]) -> Result<()> {
+    let names: Vec<String> = outputs
+        .iter()
+        .map(|t| format!("{}_{}", t.name, t.unit.as_str()))
+        .collect();
+    let named: Vec<(&str, f64)> = names
+        .iter()
+        .map(String::as_str)
+        .zip(values.iter().copied())
+        .collect();
+    tactrace_lab::numbers::require_finite(
+        &format!("the model's prediction for {}", image.display()),
+        &named,
+        "the model is degenerate, or the frame far from its training data",
+    )?;
+    let cells: Vec<String> = values.iter().map(|v| format!("{v:.4}")).collect();
+    crate::say!("{}\n{}", names.join(","), cells.join(","));
+    Ok(())
+}
+
 #[derive(Args)]
 pub struct PredictArgs {
     /// Model directory (from `tactrace train`).
@@ -566,6 +589,10 @@ pub fn predict(a: PredictArgs) -> Result<()> {
                     what.display()
                 )
             })?;
+            if net.edge_roles().is_err() {
+                let values = net.predict_targets(&disp).map_err(LabError::from)?;
+                return say_prediction(&image, net.outputs(), &values);
+            }
             let [r, t] = net.predict(&disp).map_err(LabError::from)?;
             tactrace_lab::numbers::require_finite(
                 &format!("the model's prediction for {}", image.display()),

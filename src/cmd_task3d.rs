@@ -256,7 +256,7 @@ pub fn follow(
     if a.steer.is_some() {
         cfg.controller.heading_deg = a.steer;
     }
-    cfg.seed = seed.unwrap_or(cfg.seed);
+    cfg.run.seed = seed.unwrap_or(cfg.run.seed);
     cfg.validate()?;
     let surface = object(name)?;
     let (_out, model) = claim_and_load(model, (out, force))?;
@@ -362,7 +362,7 @@ fn follow_edge(
     if let Some(s) = &a.start {
         cfg.start_mm = Some(xy(s, "--start")?);
     }
-    cfg.seed = seed.unwrap_or(cfg.seed);
+    cfg.run.seed = seed.unwrap_or(cfg.run.seed);
     cfg.validate()?;
     let surface = object(name)?;
     let edge = edge_of(&surface, name)?;

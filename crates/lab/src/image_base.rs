@@ -184,17 +184,11 @@ pub fn fit_base(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tactrace_store::DatasetMeta;
+    use crate::test_data::edge_data;
 
     /// `n` rows of 4 pin values (two pins) whose targets are linear in
     /// them, with a little seeded scatter.
     fn data(n: usize) -> TapData {
-        let meta: DatasetMeta = serde_json::from_value(serde_json::json!({
-            "source": "test", "origin": "", "seed": null, "samples": n, "pins": 2,
-            "targets": ["r", "theta"], "frames_with_missing_pins": 0,
-            "reference_pins": [[0.0, 0.0], [5.0, 0.0]], "settings": null, "tactrace_version": ""
-        }))
-        .expect("meta");
         let inputs: Vec<f32> = (0..4 * n)
             .map(|i| ((i * 7919) % 101) as f32 / 50.0 - 1.0)
             .collect();
@@ -202,11 +196,7 @@ mod tests {
             .chunks_exact(4)
             .flat_map(|p| [p[0] - 0.5 * p[1], 10.0 * p[2] + 3.0 * p[3]])
             .collect();
-        TapData {
-            inputs,
-            targets,
-            meta,
-        }
+        edge_data(inputs, targets, &[[0.0, 0.0], [5.0, 0.0]])
     }
 
     fn quick() -> BaseSettings {

@@ -198,6 +198,8 @@ fn import_rows_with(
     got.estimated_rest = opened.estimated;
     got.images = input.and_then(|i| images_of(&i, small));
     let d = &got.data;
+    got.warnings
+        .extend(crate::import_checks::constant_targets(d));
     if let Some(reference) = opened.reference.frame() {
         got.warnings.extend(crate::import_checks::pressed_reference(
             reference,

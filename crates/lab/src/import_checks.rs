@@ -1,7 +1,7 @@
 //! What real frames and their reference are checked for before and after
 //! an import (`import`, `calibrate`, `sim-fit`, `reproduce --real`): a
-//! `--frames` folder one level above the frames, and a `--reference`
-//! frame that is itself pressed.
+//! `--frames` folder one level above the frames, a `--reference` frame
+//! that is itself pressed, and a target of one value in every row.
 //!
 //! **A pressed reference.** Pressing the dome spreads its pins apart in
 //! the image: against the undeformed frame every tap of the shared real
@@ -17,6 +17,7 @@
 //! taps, whose fields are then off by little.
 use crate::error::LabError;
 use std::path::Path;
+use tactrace_store::TapData;
 
 /// Fraction of frames that may be less spread than the reference before
 /// it is called pressed (noise on a truly undeformed reference leaves none
@@ -118,9 +119,52 @@ pub fn pressed_reference(
     })
 }
 
+/// A warning for each target that has one value in every row of `data`
+/// (of two rows or more): a label column that is not the one meant (the
+/// edge task's `pose_2` and `pose_6`, read by default, are zero in a
+/// collection of surface taps), which no model can learn anything from.
+pub fn constant_targets(data: &TapData) -> Vec<String> {
+    let (n, k) = (data.len(), data.n_targets());
+    let names: Vec<String> = match data.meta.model_targets() {
+        Ok(t) => t.into_iter().map(|t| t.name).collect(),
+        Err(_) => data.meta.targets.clone(),
+    };
+    if n < 2 || names.len() != k {
+        return Vec::new();
+    }
+    let column = |j: usize| data.targets.iter().skip(j).step_by(k);
+    (0..k)
+        .filter(|&j| column(j).all(|v| *v == data.targets[j]))
+        .map(|j| {
+            format!(
+                "the target {} is {} in every one of the {n} rows: is it the label column \
+                 meant? Name the label columns with --target COLUMN:UNIT",
+                names[j], data.targets[j]
+            )
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_target_of_one_value_is_named() {
+        let mut data = crate::test_data::edge_data(
+            vec![0.0; 6],
+            vec![1.0, 0.0, 2.0, 0.0, 3.0, 0.0],
+            &[[0.0, 0.0]],
+        );
+        let w = constant_targets(&data);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("theta is 0 in every one of the 3 rows"),
+            "{w:?}"
+        );
+        data.targets[5] = 0.5;
+        assert!(constant_targets(&data).is_empty());
+    }
 
     /// A hexagon of pins about (10, 20) and rows scaled by `scales`.
     fn rows(scales: &[f64]) -> (Vec<[f64; 2]>, Vec<f32>) {

@@ -42,6 +42,8 @@ pub mod search;
 pub mod sensor_inspect;
 pub mod sim_sight;
 mod tap_images;
+#[cfg(test)]
+mod test_data;
 pub mod train;
 pub mod train_image;
 pub mod train_sets;

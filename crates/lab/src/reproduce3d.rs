@@ -5,6 +5,7 @@
 use crate::collect3d::{collect_3d, Collect3dConfig};
 use crate::error::Result;
 use crate::follow::task3d::{run_surface, PathConfig, Surface3dConfig};
+use crate::follow::Run3dSettings;
 use crate::reproduce::ReproduceConfig;
 use crate::train::{resolve_config, save_model, train, validate_net};
 use std::path::Path;
@@ -68,9 +69,12 @@ pub fn surface_section(
     for name in SURFACES {
         let object = ObjectConfig::named(name).expect("built in").build()?;
         let run_cfg = Surface3dConfig {
-            rig: rig.clone(),
+            run: Run3dSettings {
+                rig: rig.clone(),
+                seed: cfg.seed,
+                ..Run3dSettings::default()
+            },
             path: PathConfig::for_object(name),
-            seed: cfg.seed,
             ..Surface3dConfig::default()
         };
         let dir = out.join("follow-3d").join(name);

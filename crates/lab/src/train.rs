@@ -593,20 +593,11 @@ pub(crate) fn score_predictions(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tactrace_store::DatasetMeta;
+    use crate::test_data::edge_data;
 
     fn data(n: usize) -> TapData {
-        let meta: DatasetMeta = serde_json::from_value(serde_json::json!({
-            "source": "test", "origin": "", "seed": null, "samples": n, "pins": 1,
-            "targets": ["r", "theta"], "frames_with_missing_pins": 0,
-            "reference_pins": [[0.0, 0.0]], "settings": null, "tactrace_version": ""
-        }))
-        .expect("meta");
-        TapData {
-            inputs: (0..2 * n).map(|v| v as f32).collect(),
-            targets: (0..2 * n).map(|v| v as f32).collect(),
-            meta,
-        }
+        let rows = (0..2 * n).map(|v| v as f32);
+        edge_data(rows.clone().collect(), rows.collect(), &[[0.0, 0.0]])
     }
 
     #[test]

@@ -15,6 +15,7 @@ use tactrace_lab::collect3d::{collect_3d, tap_shear, Collect3dConfig};
 use tactrace_lab::follow::edge3d::{edge_of, run_edge, Edge3dConfig};
 use tactrace_lab::follow::edge3d_results::edge_truth;
 use tactrace_lab::follow::task3d::{run_surface, PathConfig, Surface3dConfig};
+use tactrace_lab::follow::Run3dSettings;
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_servo::RigConfig;
@@ -94,12 +95,16 @@ fn shear_keeps_the_labels_moves_the_pins_and_is_recorded() {
     }
 }
 
-/// A rig whose arm misses its poses by about 0.4 mm and 2 deg.
-fn noisy_rig() -> RigConfig {
-    let mut rig = RigConfig::default();
-    rig.arm.repeatability_mm = 0.4;
-    rig.arm.repeatability_deg = 2.0;
-    rig
+/// A 3D run, seed 3, on a rig whose arm misses its poses by about
+/// 0.4 mm and 2 deg.
+fn noisy_run() -> Run3dSettings {
+    let mut run = Run3dSettings {
+        seed: 3,
+        ..Run3dSettings::default()
+    };
+    run.rig.arm.repeatability_mm = 0.4;
+    run.rig.arm.repeatability_deg = 2.0;
+    run
 }
 
 /// A quickly trained model of `data`.
@@ -160,12 +165,11 @@ fn surface_metrics_are_at_the_reached_poses() {
         )
     });
     let cfg = Surface3dConfig {
-        rig: noisy_rig(),
+        run: noisy_run(),
         path: PathConfig {
             length_mm: 14.0,
             ..PathConfig::for_object("plane")
         },
-        seed: 3,
         ..Surface3dConfig::default()
     };
     let root = tempfile::tempdir().unwrap();
@@ -174,7 +178,11 @@ fn surface_metrics_are_at_the_reached_poses() {
     let (header, rows) = trajectory(&out);
     assert_eq!(header.len(), 20);
     let both = poses(&header, &rows);
-    assert!(both.len() > cfg.settle_steps + 3, "{}", res.summary.message);
+    assert!(
+        both.len() > cfg.run.settle_steps + 3,
+        "{}",
+        res.summary.message
+    );
     let off = mean(
         both.iter()
             .map(|(c, r)| (c.z - r.z).abs() + (c.x - r.x).abs()),
@@ -197,9 +205,8 @@ fn edge_metrics_are_at_the_reached_poses() {
     let disk = object("disk");
     let model = model_of(&edge_taps((0.0, 0.0), 200));
     let cfg = Edge3dConfig {
-        rig: noisy_rig(),
+        run: noisy_run(),
         max_steps: Some(16),
-        seed: 3,
         ..Edge3dConfig::default()
     };
     let root = tempfile::tempdir().unwrap();
@@ -207,7 +214,11 @@ fn edge_metrics_are_at_the_reached_poses() {
     let res = run_edge(&cfg, &disk, "disk", &model, (&out, false), &mut |_| {}).unwrap();
     let (header, rows) = trajectory(&out);
     let both = poses(&header, &rows);
-    assert!(both.len() > cfg.settle_steps + 3, "{}", res.summary.message);
+    assert!(
+        both.len() > cfg.run.settle_steps + 3,
+        "{}",
+        res.summary.message
+    );
     let edge = edge_of(&disk, "disk").unwrap();
     let reference = cfg.controller.reference;
     let scored = &both[res.metrics.settle_steps..];

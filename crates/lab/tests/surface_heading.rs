@@ -4,6 +4,7 @@
 use tactrace_control::heading_error_deg;
 use tactrace_lab::collect3d::{collect_3d, Collect3dConfig};
 use tactrace_lab::follow::task3d::{run_surface, PathConfig, Surface3dConfig};
+use tactrace_lab::follow::Run3dSettings;
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset};
 use tactrace_servo::{Ending, RigConfig};
@@ -78,7 +79,10 @@ fn surface_run_turns_onto_the_held_heading() {
                 length_mm: 14.0,
                 ..PathConfig::for_object("plane")
             },
-            settle_steps: 3,
+            run: Run3dSettings {
+                settle_steps: 3,
+                ..Run3dSettings::default()
+            },
             ..Surface3dConfig::default()
         };
         cfg.controller.heading_deg = heading;

@@ -5,6 +5,7 @@ use std::sync::OnceLock;
 use tactrace_control::Task;
 use tactrace_lab::collect3d::{collect_3d, Collect3dConfig};
 use tactrace_lab::follow::task3d::{run_surface, PathConfig, Surface3dConfig};
+use tactrace_lab::follow::Run3dSettings;
 use tactrace_lab::train::{resolve_config, train};
 use tactrace_learn::{ModelKind, Preset, Unit};
 use tactrace_servo::{Ending, RigConfig};
@@ -134,7 +135,10 @@ fn follow_surface_3d_on_a_plane_writes_metrics_and_figures() {
             length_mm: 6.0,
             ..PathConfig::for_object("plane")
         },
-        settle_steps: 2,
+        run: Run3dSettings {
+            settle_steps: 2,
+            ..Run3dSettings::default()
+        },
         ..Surface3dConfig::default()
     };
     let root = tempfile::tempdir().unwrap();
@@ -198,7 +202,10 @@ fn surface_replay_answers_every_tap_from_the_bank() {
             length_mm: 5.0,
             ..PathConfig::for_object("plane")
         },
-        settle_steps: 1,
+        run: Run3dSettings {
+            settle_steps: 1,
+            ..Run3dSettings::default()
+        },
         ..Surface3dConfig::default()
     };
     let root = tempfile::tempdir().unwrap();

@@ -17,7 +17,8 @@
 //! - [`sensor_file`]: calibrated sensor folders (`tactrace calibrate`);
 //! - [`sight_file`]: sensor settings files (`tactrace sensor inspect`):
 //!   how to read a TacTip's frames;
-//! - [`config_file`]: defaults, then the file, unknown keys rejected;
+//! - [`config_file`]: defaults, then the file, unknown keys rejected
+//!   ([`other_keys`]: also by a configuration made of flattened parts);
 //! - [`fsutil`]: outputs that appear only when complete; [`lock`]: one
 //!   writer per output;
 //! - [`input_file`], [`npy_file`]: inputs read within bounds (regular files
@@ -45,6 +46,7 @@ pub mod lock;
 pub mod model_dir;
 mod model_files;
 pub mod npy_file;
+pub mod other_keys;
 pub mod overlap;
 pub mod pin_order;
 pub mod row_file;
@@ -70,6 +72,7 @@ pub use image_model_dir::{stage_image_model, LoadedModel, StoredImageModel};
 pub use input_file::{open_regular, read_bounded};
 pub use lock::OutputLock;
 pub use model_dir::{stage_model, StoredModel};
+pub use other_keys::NoOtherKeys;
 pub use overlap::{check_output_apart, check_output_outside};
 pub use pin_order::{pin_order_mismatch, PinOrderError};
 pub use sensor_file::SensorFolder;

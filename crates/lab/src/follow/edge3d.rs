@@ -19,24 +19,27 @@
 use super::edge3d_results::{write_edge_results, Edge3dMetrics, EdgeCsv};
 use super::recorder3d::{record_loop_3d, Outcome3d, Recorder3d};
 use super::sim3d::{sim_3d, Sim3d};
-use super::RunFolder;
+use super::{Run3dSettings, RunFolder};
 use crate::error::{LabError, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use tactrace_arm::Pose;
 use tactrace_control::{Se3Config, Task};
 use tactrace_sensor::TactileSensor;
-use tactrace_servo::{Loop3dConfig, RigConfig, Step3d};
+use tactrace_servo::{Loop3dConfig, Step3d};
 use tactrace_shape3d::{pose_of_label, EdgeCurve, EdgeSample, Surface};
-use tactrace_store::StoredModel;
+use tactrace_store::{NoOtherKeys, StoredModel};
 
-/// An edge run in simulation (the run folder's `config.toml`).
+/// An edge run in simulation (the run folder's `config.toml`): the
+/// settings every 3D run shares at the top level, the controller and the
+/// edge's start, step cap and closure; any other key is refused by name.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Edge3dConfig {
-    /// The simulated sensor, arm noise, workspace, tap (its `height_mm`
-    /// is the lift between taps, along the sensor's axis) and detector.
-    pub rig: RigConfig,
+    /// The rig, tilt bound, contact, settling steps (left out of the
+    /// distance and normal metrics) and seed.
+    #[serde(flatten)]
+    pub run: Run3dSettings,
     /// The SE(3) controller of an edge task (edge_5d's preset by default).
     pub controller: Se3Config,
     /// The start: the edge sample nearest this (x, y), mm; the edge's
@@ -44,36 +47,25 @@ pub struct Edge3dConfig {
     pub start_mm: Option<[f64; 2]>,
     /// Step cap; absent: 1.5 times the edge's length in steps, plus 10.
     pub max_steps: Option<usize>,
-    /// The arm refuses a tilt of the tool beyond this, deg.
-    pub max_tilt_deg: f64,
-    /// Below this mean pin displacement (px) a tap counts as no contact.
-    pub contact_threshold_px: f64,
-    /// Taps in a row without contact before the run stops.
-    pub max_no_contact: usize,
-    /// Steps left out of the distance and normal metrics (the approach).
-    pub settle_steps: usize,
     /// The path closes when it comes within this of its start, mm...
     pub close_radius_mm: f64,
     /// ...after getting at least this far from it, mm.
     pub min_excursion_mm: f64,
-    /// Seed of the arm's and the camera's noise.
-    pub seed: u64,
+    /// Refuses the keys no field above took.
+    #[serde(flatten)]
+    pub other_keys: NoOtherKeys,
 }
 
 impl Default for Edge3dConfig {
     fn default() -> Self {
         Self {
-            rig: RigConfig::default(),
+            run: Run3dSettings::default(),
             controller: Se3Config::edge_5d(),
             start_mm: None,
             max_steps: None,
-            max_tilt_deg: 45.0,
-            contact_threshold_px: 0.5,
-            max_no_contact: 3,
-            settle_steps: 5,
             close_radius_mm: 3.0,
             min_excursion_mm: 20.0,
-            seed: 1,
+            other_keys: NoOtherKeys,
         }
     }
 }
@@ -81,7 +73,7 @@ impl Default for Edge3dConfig {
 impl Edge3dConfig {
     /// Check the settings before anything runs.
     pub fn validate(&self) -> Result<()> {
-        self.rig.validate()?;
+        self.run.validate()?;
         self.controller.validate()?;
         if !matches!(self.controller.task, Task::Edge5d | Task::Edge3d) {
             return Err(LabError::Config(format!(
@@ -95,17 +87,13 @@ impl Edge3dConfig {
         let ok = start_ok
             && self.controller.reference[1] > 0.0
             && self.max_steps != Some(0)
-            && (0.0..=90.0).contains(&self.max_tilt_deg)
-            && self.contact_threshold_px.is_finite()
-            && self.max_no_contact > 0
             && self.close_radius_mm > 0.0
             && self.min_excursion_mm > self.close_radius_mm
             && self.min_excursion_mm.is_finite();
         if !ok {
             return Err(LabError::Config(
                 "edge run: finite start_mm, the reference's y step > 0, max_steps >= 1, \
-                 max_tilt_deg in [0, 90], max_no_contact >= 1, 0 < close_radius_mm < \
-                 min_excursion_mm"
+                 0 < close_radius_mm < min_excursion_mm"
                     .into(),
             ));
         }
@@ -123,8 +111,8 @@ impl Edge3dConfig {
     fn loop_config(&self, edge: &EdgeCurve) -> Loop3dConfig {
         Loop3dConfig {
             steps: self.steps(edge),
-            max_no_contact: self.max_no_contact,
-            lift_mm: self.rig.tap.height_mm,
+            max_no_contact: self.run.max_no_contact,
+            lift_mm: self.run.rig.tap.height_mm,
             closure: Some([self.close_radius_mm, self.min_excursion_mm]),
         }
     }
@@ -183,14 +171,7 @@ pub fn run_edge(
         mut sensor,
         perception,
         probe,
-    } = sim_3d(
-        &cfg.rig,
-        (cfg.seed, cfg.max_tilt_deg),
-        object,
-        start,
-        model,
-        (cfg.controller.task.sensed(), cfg.contact_threshold_px),
-    )?;
+    } = sim_3d(&cfg.run, object, start, model, cfg.controller.task.sensed())?;
     let run = RunFolder::start(out, force, cfg)?;
     let csv = EdgeCsv::create(run.path(), &edge, cfg.controller.reference)?;
     let recorder = Recorder3d::new(csv, probe, progress, false);

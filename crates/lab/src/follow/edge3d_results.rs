@@ -206,7 +206,7 @@ fn score(
     summary: &LoopSummary,
 ) -> Edge3dMetrics {
     let reference = cfg.controller.reference;
-    let settle = cfg.settle_steps.min(truths.len().saturating_sub(1));
+    let settle = cfg.run.settle_steps.min(truths.len().saturating_sub(1));
     let scored = Scored(&truths[settle.min(truths.len())..]);
     let path_length_mm: f64 = truths
         .windows(2)

@@ -18,6 +18,7 @@ pub mod edge3d_results;
 mod recorder3d;
 mod results;
 mod results3d;
+mod settings3d;
 mod sim3d;
 pub mod surface_replay;
 pub mod task3d;
@@ -26,6 +27,7 @@ pub mod task3d_results;
 pub use config::{ServoSettings, SimFollowConfig};
 pub use recorder3d::Outcome3d;
 pub use results::{size_warning, tactip_diameter_mm, write_results, write_results_with, RunExtras};
+pub use settings3d::Run3dSettings;
 
 use crate::error::Result;
 use crate::trajectory_csv::TrajectoryCsv;

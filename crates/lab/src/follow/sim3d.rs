@@ -1,11 +1,12 @@
 //! The simulated world of a 3D run (surface or edge): the arm started at
 //! its first pose, the TacTip pressed into the object, and the pin
 //! perception of the model, built one way for `task3d` and `edge3d`.
+use super::Run3dSettings;
 use crate::error::Result;
 use std::path::Path;
 use tactrace_arm::{Arm, LimitMode, LimitedArm, Pose, PoseProbe, SimArm, SimArmConfig};
 use tactrace_sensor::{SimTacTip, TacTipModel};
-use tactrace_servo::{Perception3d, RigConfig};
+use tactrace_servo::Perception3d;
 use tactrace_shape3d::Surface;
 use tactrace_store::StoredModel;
 use tactrace_vision::PinExtractor;
@@ -24,19 +25,19 @@ pub(crate) struct Sim3d {
     pub probe: PoseProbe,
 }
 
-/// The simulated 3D world: `rig` (sensor, arm noise, workspace, detector)
-/// seeded by `seed` (the sensor by `seed + 1`), the arm moved to `start`,
-/// the model's pose components `sensed`, contact when a pin moves
-/// `contact_threshold_px` or more.
+/// The simulated 3D world of `run`: its rig (sensor, arm noise,
+/// workspace, detector) seeded by its seed (the sensor by seed + 1), the
+/// arm moved to `start`, the model's pose components `sensed`, contact
+/// when a pin moves the run's `contact_threshold_px` or more.
 pub(crate) fn sim_3d(
-    rig: &RigConfig,
-    (seed, max_tilt_deg): (u64, f64),
+    run: &Run3dSettings,
     object: &Surface,
     start: Pose,
     model: &StoredModel,
-    (sensed, contact_threshold_px): ([bool; 6], f64),
+    sensed: [bool; 6],
 ) -> Result<Sim3d> {
-    let (arm, probe) = sim_arm_3d(rig, (seed, max_tilt_deg), start)?;
+    let (rig, seed) = (&run.rig, run.seed);
+    let (arm, probe) = sim_arm_3d(run, start)?;
     let sensor_model = TacTipModel::new(rig.sensor.clone())?;
     let seen = probe.clone();
     let pose_source = Box::new(move || seen.actual());
@@ -52,7 +53,7 @@ pub(crate) fn sim_3d(
         extractor.tracker.reference(),
         Path::new("the simulated sensor's reference frame"),
     )?;
-    let perception = Perception3d::new(extractor, net.clone(), sensed, contact_threshold_px)?;
+    let perception = Perception3d::new(extractor, net.clone(), sensed, run.contact_threshold_px)?;
     Ok(Sim3d {
         arm,
         sensor,
@@ -61,21 +62,21 @@ pub(crate) fn sim_3d(
     })
 }
 
-/// The simulated arm of a 3D run (`rig`'s noise seeded by `seed`, its
-/// workspace, tilts past `max_tilt_deg` refused), moved to `start`, and
-/// the probe that reads its actual pose (for the world, never the loop).
+/// The simulated arm of a 3D run (its rig's noise seeded by its seed, its
+/// workspace, tilts past its `max_tilt_deg` refused), moved to `start`,
+/// and the probe that reads its actual pose (for the world, never the
+/// loop).
 pub(crate) fn sim_arm_3d(
-    rig: &RigConfig,
-    (seed, max_tilt_deg): (u64, f64),
+    run: &Run3dSettings,
     start: Pose,
 ) -> Result<(LimitedArm<SimArm>, PoseProbe)> {
     let arm_cfg = SimArmConfig {
-        seed,
-        ..rig.arm.clone()
+        seed: run.seed,
+        ..run.rig.arm.clone()
     };
     let (sim_arm, probe) = SimArm::with_probe(arm_cfg, start);
-    let mut arm = LimitedArm::new(sim_arm, rig.workspace.clone(), LimitMode::Refuse)
-        .with_max_tilt_deg(max_tilt_deg);
+    let mut arm = LimitedArm::new(sim_arm, run.rig.workspace.clone(), LimitMode::Refuse)
+        .with_max_tilt_deg(run.max_tilt_deg);
     arm.move_to(start)?;
     Ok((arm, probe))
 }

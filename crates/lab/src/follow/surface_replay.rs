@@ -50,7 +50,7 @@ pub fn run_surface_replay(
     cfg.validate()?;
     let _claim = tactrace_store::check_output_dir(out, force)?;
     let start = start_pose(object, cfg)?;
-    let (mut arm, probe) = sim_arm_3d(&cfg.rig, (cfg.seed, cfg.max_tilt_deg), start)?;
+    let (mut arm, probe) = sim_arm_3d(&cfg.run, start)?;
     let pins = bank.reference_pins().to_vec();
     let net = model.for_pins(&pins, Path::new("the bank's dataset"))?;
     // Every row of the bank is a tap in contact (a real frame's pins move

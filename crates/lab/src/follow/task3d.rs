@@ -14,16 +14,16 @@
 use super::recorder3d::{record_loop_3d, Outcome3d, Recorder3d};
 use super::sim3d::{sim_3d, Sim3d};
 use super::task3d_results::{write_surface_results, Surface3dMetrics, TruthCsv};
-use super::RunFolder;
+use super::{Run3dSettings, RunFolder};
 use crate::error::{LabError, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use tactrace_arm::{Arm, Pose, PoseProbe};
 use tactrace_control::{Se3Config, Task};
 use tactrace_sensor::TactileSensor;
-use tactrace_servo::{Loop3dConfig, LoopSummary, RigConfig, Sensed, Step3d};
+use tactrace_servo::{Loop3dConfig, LoopSummary, Sensed, Step3d};
 use tactrace_shape3d::{surface_point, Surface};
-use tactrace_store::StoredModel;
+use tactrace_store::{NoOtherKeys, StoredModel};
 
 /// The path across the surface.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -67,39 +67,30 @@ impl PathConfig {
     }
 }
 
-/// A surface_3d run in simulation (the run folder's `config.toml`).
+/// A surface_3d run in simulation (the run folder's `config.toml`): the
+/// settings every 3D run shares at the top level, the controller and the
+/// path; any other key is refused by name.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Surface3dConfig {
-    /// The simulated sensor, arm noise, workspace, tap (its `height_mm`
-    /// is the lift between taps, along the sensor's axis) and detector.
-    pub rig: RigConfig,
+    /// The rig, tilt bound, contact, settling steps and seed.
+    #[serde(flatten)]
+    pub run: Run3dSettings,
     /// The SE(3) controller (the anchors' surface_3d preset).
     pub controller: Se3Config,
     pub path: PathConfig,
-    /// The arm refuses a tilt of the tool beyond this, deg.
-    pub max_tilt_deg: f64,
-    /// Below this mean pin displacement (px) a tap counts as no contact.
-    pub contact_threshold_px: f64,
-    /// Taps in a row without contact before the run stops.
-    pub max_no_contact: usize,
-    /// Steps left out of the metrics at the start (the approach).
-    pub settle_steps: usize,
-    /// Seed of the arm's and the camera's noise.
-    pub seed: u64,
+    /// Refuses the keys no field above took.
+    #[serde(flatten)]
+    pub other_keys: NoOtherKeys,
 }
 
 impl Default for Surface3dConfig {
     fn default() -> Self {
         Self {
-            rig: RigConfig::default(),
+            run: Run3dSettings::default(),
             controller: Se3Config::surface_3d(),
             path: PathConfig::default(),
-            max_tilt_deg: 45.0,
-            contact_threshold_px: 0.5,
-            max_no_contact: 3,
-            settle_steps: 5,
-            seed: 1,
+            other_keys: NoOtherKeys,
         }
     }
 }
@@ -107,7 +98,7 @@ impl Default for Surface3dConfig {
 impl Surface3dConfig {
     /// Check the settings before anything runs.
     pub fn validate(&self) -> Result<()> {
-        self.rig.validate()?;
+        self.run.validate()?;
         self.controller.validate()?;
         if self.controller.task != Task::Surface3d {
             return Err(LabError::Config(format!(
@@ -122,17 +113,11 @@ impl Surface3dConfig {
             .chain([&p.heading_deg])
             .all(|v| v.is_finite());
         let step = self.controller.reference[1].abs();
-        let ok = finite
-            && p.length_mm.is_finite()
-            && p.length_mm >= step
-            && step > 0.0
-            && (0.0..=90.0).contains(&self.max_tilt_deg)
-            && self.contact_threshold_px.is_finite()
-            && self.max_no_contact > 0;
+        let ok = finite && p.length_mm.is_finite() && p.length_mm >= step && step > 0.0;
         if !ok {
             return Err(LabError::Config(
                 "path: finite start and heading, length_mm at least one step (the reference's y, \
-                 not 0); max_tilt_deg in [0, 90]; max_no_contact >= 1"
+                 not 0)"
                     .into(),
             ));
         }
@@ -148,8 +133,8 @@ impl Surface3dConfig {
     fn loop_config(&self) -> Loop3dConfig {
         Loop3dConfig {
             steps: self.steps(),
-            max_no_contact: self.max_no_contact,
-            lift_mm: self.rig.tap.height_mm,
+            max_no_contact: self.run.max_no_contact,
+            lift_mm: self.run.rig.tap.height_mm,
             closure: None,
         }
     }
@@ -195,14 +180,7 @@ pub fn run_surface(
         mut sensor,
         perception,
         probe,
-    } = sim_3d(
-        &cfg.rig,
-        (cfg.seed, cfg.max_tilt_deg),
-        object,
-        start,
-        model,
-        (Task::Surface3d.sensed(), cfg.contact_threshold_px),
-    )?;
+    } = sim_3d(&cfg.run, object, start, model, Task::Surface3d.sensed())?;
     let reference_pins = perception.reference_pins().to_vec();
     let run = RunFolder::start(out, force, cfg)?;
     let mut tap = || perception.perceive(&sensor.capture()?);

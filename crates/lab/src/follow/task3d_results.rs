@@ -181,7 +181,7 @@ fn score(
     steps: &[Step3d],
     (truths, reached): (&[Truth], &[Pose]),
 ) -> Surface3dMetrics {
-    let settle = cfg.settle_steps.min(truths.len().saturating_sub(1));
+    let settle = cfg.run.settle_steps.min(truths.len().saturating_sub(1));
     let heading_deg = cfg.controller.heading_deg.unwrap_or(cfg.path.heading_deg);
     let headings: Vec<f64> = reached[settle.min(reached.len())..]
         .iter()

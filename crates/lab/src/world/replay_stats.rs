@@ -177,17 +177,9 @@ mod tests {
             distance: 0.1,
         };
         let answers = [answer(0), answer(1), answer(1), answer(2)];
-        let data: tactrace_store::TapData = tactrace_store::TapData {
-            inputs: vec![0.0; 4],
-            targets: vec![0.0; 4],
-            meta: serde_json::from_value(serde_json::json!({
-                "source": "real", "origin": "", "seed": null, "samples": 2, "pins": 1,
-                "targets": ["r", "theta"], "frames_with_missing_pins": 0,
-                "reference_pins": [[0.0, 0.0]], "settings": null, "tactrace_version": "",
-                "images": ["frame_2_0.png", "frame_9_0.png"]
-            }))
-            .unwrap(),
-        };
+        let mut data = crate::test_data::edge_data(vec![0.0; 4], vec![0.0; 4], &[[0.0, 0.0]]);
+        data.meta.source = "real".into();
+        data.meta.images = vec!["frame_2_0.png".into(), "frame_9_0.png".into()];
         let record = TrainingRecord::all_rows(&data, None);
         let s = ReplayStats::of(&answers, &bank, 0.5);
         assert_eq!(s.bank_frames_seen_in_training, None, "unknown");

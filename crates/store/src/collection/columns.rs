@@ -66,7 +66,8 @@ fn missing(headers: &csv::StringRecord, name: &str, needed: &str) -> String {
     };
     format!(
         "not a CSV with the label columns {needed}: no column `{name}`{hint}\n\
-         its {} columns:\n{}\nname the columns with --image-column, --r-column, --theta-column",
+         its {} columns:\n{}\nname the columns with --image-column and, for an edge, --r-column and --theta-column, \
+         or for any labels --target COLUMN:UNIT, once a label",
         headers.len(),
         listing(headers)
     )

@@ -92,6 +92,9 @@ pub struct PinTracker {
     /// Whether a dropped nearest-neighbour start is tried once more from
     /// its own pins ([`PinTracker::with_second_start`]).
     second: bool,
+    /// Whether the nearest-neighbour pairs grow from the field fitted to
+    /// them before the start ([`PinTracker::with_grown_pairs`]).
+    grow: bool,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -175,6 +178,7 @@ impl PinTracker {
             nearest_margin: Some(grid::NEAREST_MARGIN),
             cuts: true,
             second: true,
+            grow: true,
         })
     }
 
@@ -228,6 +232,17 @@ impl PinTracker {
     /// kept to check that and to time it (`tracker/start.rs`).
     pub fn with_second_start(mut self, on: bool) -> Self {
         self.second = on;
+        self
+    }
+
+    /// This tracker growing the nearest-neighbour pairs before a start
+    /// (the default: unpaired pins, put where the field fitted to the
+    /// pairs puts them, pair with free points by the same rule, a few
+    /// rounds; see `tracker/grid.rs`) or not (the start from the first
+    /// pairs alone, as before). The same pins on the shared sets
+    /// (`tests/speed.rs`); kept to check that and to time it.
+    pub fn with_grown_pairs(mut self, on: bool) -> Self {
+        self.grow = on;
         self
     }
 

@@ -11,8 +11,13 @@
 //! and 1.5 spacings, about 30 candidates a pin) where the tap moves the
 //! pins little: each pin shifted by the centroids' difference takes its
 //! nearest point within [`NEAREST_REACH`] when that point's nearest pin is
-//! it too; the field fitted to those pairs predicts every pin, and the
-//! narrow stages run from there. It is used only when at least
+//! it too; when fewer than [`GROW_BELOW`] of the pins pair so, the pairs
+//! grow for up to [`GROW_ROUNDS`] rounds (each unpaired pin, where the field
+//! of 3 spacings fitted to the pairs puts it, pairs with a free point by
+//! the same rule: under a large shear the pairs thin out where the pins
+//! moved most, and grow back in from its edge); the field fitted to the
+//! pairs (kernel of 2 spacings) predicts every pin, and the narrow stages
+//! run from there. It is used only when at least
 //! [`NEAREST_MIN_SHARE`] of the pins pair up, the result turns no triangle
 //! over, and either no pin is missing or the first narrow matching is
 //! settled by [`NEAREST_MARGIN`] ([`PinTracker::settled`]: every later
@@ -37,6 +42,18 @@ pub(super) const GRID_GATE: f64 = 3.0;
 const PLAIN_GRID_GATE: f64 = 1.5;
 /// Radius (spacings) within which a pin and a point are nearest neighbours.
 const NEAREST_REACH: f64 = 0.5;
+/// Rounds at most in which the nearest-neighbour pairs grow from the
+/// field fitted to them ([`PinTracker::with_grown_pairs`]); chosen with
+/// [`GROW_BELOW`] by instruction counts on every 20th 127-pin frame (1
+/// round: no lower p95; 4: more instructions for the same).
+const GROW_ROUNDS: usize = 2;
+/// Share of pins below which the first pairs grow (fewer pins pairing
+/// up: the pins moved far from the centroid shift somewhere); 0.8 left
+/// more frames to the second start, 0.9 grew the median frame's cost.
+const GROW_BELOW: f64 = 0.85;
+/// Stage whose kernel (3 spacings) puts the unpaired pins where the pairs
+/// grow from.
+const GROW_STAGE: usize = 0;
 /// Share of pins that must pair up for the nearest-neighbour start.
 const NEAREST_MIN_SHARE: f64 = 0.5;
 /// Stage whose kernel (2 spacings) fits the field to the
@@ -160,23 +177,62 @@ impl PinTracker {
     }
 
     /// [`PinTracker::nearest_start`] with the pins at `shifted` (px, one
-    /// a reference pin) instead of the centroid shift.
+    /// a reference pin) instead of the centroid shift. The pairs are grown
+    /// first ([`PinTracker::with_grown_pairs`]): up to [`GROW_ROUNDS`]
+    /// times, each unpaired pin where the field fitted to the pairs (kernel
+    /// of [`GROW_STAGE`]) puts it pairs with a free point in the same way.
     pub(super) fn nearest_from(
         &self,
         shifted: &[[f64; 2]],
         points: &[[f64; 2]],
         grid: &Grid,
     ) -> Option<Vec<[f64; 2]>> {
+        let mut pairs = vec![None; shifted.len()];
+        let mut paired = self.pair_nearest(|i| Some(shifted[i]), points, grid, &mut pairs);
+        let kernel = &self.stages[GROW_STAGE].kernel;
+        let grows = self.grow && (paired as f64) < GROW_BELOW * pairs.len() as f64;
+        for _ in 0..if grows { GROW_ROUNDS } else { 0 } {
+            let at = self.fill(&self.displacements(&pairs, points), kernel);
+            match self.pair_nearest(|i| Some(at[i]), points, grid, &mut pairs) {
+                0 => break,
+                grew => paired += grew,
+            }
+        }
+        if (paired as f64) < NEAREST_MIN_SHARE * self.reference.len() as f64 {
+            return None;
+        }
+        let observed = self.displacements(&pairs, points);
+        Some(self.predict(&observed, &self.stages[NEAREST_STAGE].kernel))
+    }
+
+    /// Pairs each pin `i` with no pair yet (`pairs[i]` is `None`) and a
+    /// position `at(i)` with the nearest point within [`NEAREST_REACH`]
+    /// that no pin holds, when that point's nearest such pin is it too;
+    /// returns how many pairs it added.
+    fn pair_nearest(
+        &self,
+        at: impl Fn(usize) -> Option<[f64; 2]>,
+        points: &[[f64; 2]],
+        grid: &Grid,
+        pairs: &mut [Option<usize>],
+    ) -> usize {
         let reach = NEAREST_REACH * self.spacing;
         let reach2 = reach * reach;
-        // Per point, its nearest pin; per pin, its nearest point.
+        // Per point, its nearest pin (a held point: -inf, never taken);
+        // per pin, its nearest point.
         let mut pin_of = vec![(f64::INFINITY, usize::MAX); points.len()];
-        let mut point_of = vec![(f64::INFINITY, usize::MAX); shifted.len()];
-        for (i, p) in shifted.iter().enumerate() {
-            grid.around(p, reach, |k| {
+        for &k in pairs.iter().flatten() {
+            pin_of[k].0 = f64::NEG_INFINITY;
+        }
+        let mut point_of = vec![(f64::INFINITY, usize::MAX); pairs.len()];
+        for i in 0..pairs.len() {
+            let Some(p) = at(i).filter(|_| pairs[i].is_none()) else {
+                continue;
+            };
+            grid.around(&p, reach, |k| {
                 let d2 = (p[0] - points[k][0]).powi(2) + (p[1] - points[k][1]).powi(2);
                 if d2 < reach2 {
-                    if d2 < point_of[i].0 {
+                    if d2 < point_of[i].0 && pin_of[k].0 > f64::NEG_INFINITY {
                         point_of[i] = (d2, k);
                     }
                     if d2 < pin_of[k].0 {
@@ -185,22 +241,14 @@ impl PinTracker {
                 }
             });
         }
-        let mut paired = 0;
-        let observed: Vec<Option<[f64; 2]>> = point_of
-            .iter()
-            .zip(&self.reference)
-            .enumerate()
-            .map(|(i, (&(_, k), r))| {
-                (k != usize::MAX && pin_of[k].1 == i).then(|| {
-                    paired += 1;
-                    [points[k][0] - r[0], points[k][1] - r[1]]
-                })
-            })
-            .collect();
-        if (paired as f64) < NEAREST_MIN_SHARE * self.reference.len() as f64 {
-            return None;
+        let mut added = 0;
+        for (i, &(_, k)) in point_of.iter().enumerate() {
+            if k != usize::MAX && pin_of[k].1 == i {
+                pairs[i] = Some(k);
+                added += 1;
+            }
         }
-        Some(self.predict(&observed, &self.stages[NEAREST_STAGE].kernel))
+        added
     }
 
     /// Whether the matching `matches` of the pins predicted at `predicted`

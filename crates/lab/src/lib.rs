@@ -43,6 +43,7 @@ pub mod sensor_inspect;
 pub mod sim_sight;
 mod tap_images;
 pub mod train;
+pub mod train_continue;
 pub mod train_image;
 pub mod train_sets;
 pub mod trajectory_csv;

@@ -9,14 +9,11 @@ use tactrace_store::{LoadedModel, StoredModel, TrainingRecord};
 
 /// The pin model `train --init` continues, with its folder.
 pub(crate) fn start_model(dir: &Path) -> Result<(PathBuf, StoredModel)> {
-    match LoadedModel::load(dir)? {
-        LoadedModel::Pins(m) => Ok((dir.to_path_buf(), m)),
-        LoadedModel::Image(_) => Err(LabError::Config(format!(
-            "--init {}: an image model; a pin model continues only from a pin model",
-            dir.display()
-        ))
-        .into()),
+    if let LoadedModel::Pins(m) = LoadedModel::load(dir)? {
+        return Ok((dir.to_path_buf(), m));
     }
+    let why = "an image model; a pin model continues only from a pin model";
+    Err(LabError::Config(format!("--init {}: {why}", dir.display())).into())
 }
 
 /// Error unless `cfg` describes `start`'s nets, `record` gives the rows it

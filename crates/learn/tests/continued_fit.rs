@@ -9,31 +9,22 @@ use tactrace_learn::{
 };
 
 mod support;
-use support::{edge_field, hex_layout};
+use support::hex_layout;
 
-/// Edges over `pins` at a few distances (px) and angles all round.
+/// Edges over `pins` at a few distances (px) and angles all round, the
+/// angle a circular target.
 fn edges(pins: &[[f64; 2]]) -> Dataset {
     let poses: Vec<(f64, f64)> = (0..30)
         .map(|i| (f64::from(i % 5) - 2.0, 12.0 * f64::from(i) - 170.0))
         .collect();
-    let x = poses
-        .iter()
-        .flat_map(|&(r, t)| edge_field(pins, r, t))
-        .collect();
-    let y = poses
-        .iter()
-        .flat_map(|&(r, t)| [r as f32, t as f32])
-        .collect();
+    let (x, y) = support::edge_rows(pins, &poses);
     Dataset::new(x, y, poses.len(), 2 * pins.len(), 2).unwrap()
 }
 
 fn circular_edge() -> Vec<ModelTarget> {
     vec![
         ModelTarget::new("pose_2", Unit::Mm),
-        ModelTarget {
-            circular: true,
-            ..ModelTarget::new("pose_6", Unit::Deg)
-        },
+        ModelTarget::circular("pose_6"),
     ]
 }
 

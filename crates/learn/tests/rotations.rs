@@ -11,14 +11,7 @@ mod support;
 use support::{edge_field, hex_layout, SPACING};
 
 fn edges(pins: &[[f64; 2]], poses: &[(f64, f64)]) -> Dataset {
-    let x: Vec<f32> = poses
-        .iter()
-        .flat_map(|&(r, t)| edge_field(pins, r, t))
-        .collect();
-    let y: Vec<f32> = poses
-        .iter()
-        .flat_map(|&(r, t)| [r as f32, t as f32])
-        .collect();
+    let (x, y) = support::edge_rows(pins, poses);
     Dataset::new(x, y, poses.len(), 2 * pins.len(), 2).unwrap()
 }
 

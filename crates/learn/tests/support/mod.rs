@@ -82,3 +82,18 @@ pub fn edge_field(pins: &[[f64; 2]], r: f64, theta: f64) -> Vec<f32> {
     }
     d
 }
+
+/// The rows of toy edges over `pins` at `poses` (`(r, theta)`, px and
+/// deg): [`edge_field`]'s displacements and the poses as targets,
+/// row-major, for `Dataset::new(x, y, poses.len(), 2 * pins.len(), 2)`.
+pub fn edge_rows(pins: &[[f64; 2]], poses: &[(f64, f64)]) -> (Vec<f32>, Vec<f32>) {
+    let x = poses
+        .iter()
+        .flat_map(|&(r, t)| edge_field(pins, r, t))
+        .collect();
+    let y = poses
+        .iter()
+        .flat_map(|&(r, t)| [r as f32, t as f32])
+        .collect();
+    (x, y)
+}

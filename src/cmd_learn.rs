@@ -5,7 +5,7 @@ use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use tactrace_lab::train_sets::{check_val_pins, TrainingSets};
-use tactrace_lab::{import_reader, train as tr, LabError};
+use tactrace_lab::{import_reader, train as tr, train_continue as tc, LabError};
 use tactrace_learn::{ModelKind, ModelTarget, Preset, SearchSpace};
 use tactrace_report::figures::{self, Predicted};
 use tactrace_store::{check_output_dir, fsutil, read_dataset, LoadedModel, SightFile, StoredModel};
@@ -125,11 +125,13 @@ pub struct TrainArgs {
     /// (pin models take theirs from --config).
     #[arg(long)]
     pub(crate) seed: Option<u64>,
-    /// Start an image model from the trained image model in this folder
-    /// instead of fresh weights, and fine-tune it on --train (its networks,
-    /// pixel and target scalings kept; --config / --epochs give the new
-    /// schedule, and must describe the same networks). Recorded in the new
-    /// model folder's init.toml. Default: fresh weights.
+    /// Start from the trained model in this folder instead of fresh
+    /// weights: an image model fine-tuned on --train (its networks, pixel
+    /// and target scalings kept), or a pin model trained further on the
+    /// rows it was trained on (its nets, standardiser, PCA and target
+    /// scaling kept, its shuffles continued). --config / --epochs give the
+    /// new schedule and must describe the same networks. Recorded in the
+    /// new model folder's init.toml. Default: fresh weights.
     #[arg(long, value_name = "MODEL")]
     pub(crate) init: Option<PathBuf>,
     /// Hyper-parameter preset the --config file is laid over (pin models).
@@ -185,14 +187,11 @@ pub fn train(a: TrainArgs) -> Result<()> {
         )
         .into());
     }
-    if a.init.is_some() {
-        return Err(LabError::Config(
-            "--init starts an image model (conv-dennn, conv-mlp) from another; a pin model \
-             always trains from fresh weights"
-                .into(),
-        )
-        .into());
-    }
+    let start = a
+        .init
+        .as_deref()
+        .map(crate::cmd_pin_init::start_model)
+        .transpose()?;
     let mut cfg = model_config(model, a.preset, a.config.as_deref(), a.epochs)?;
     if let Some(k) = a.ensemble {
         cfg.ensemble = k;
@@ -207,6 +206,7 @@ pub fn train(a: TrainArgs) -> Result<()> {
         .all("--val", &a.val)
         .opt("--config", a.config.as_deref())
         .opt("--search-space", a.search_space.as_deref())
+        .opt("--init", a.init.as_deref())
         .check_apart("--out", &a.out)?;
     let _out = check_output_dir(&a.out, a.force)?;
     let sets = TrainingSets::read(&a.train)?;
@@ -237,7 +237,10 @@ pub fn train(a: TrainArgs) -> Result<()> {
         0
     };
     tr::check_trainable(&cfg, &data, held_out)?;
-    let (cfg, extra) = if a.search {
+    if let Some((_, start)) = &start {
+        crate::cmd_pin_init::check_start(start, &cfg, &record, a.search)?;
+    }
+    let (cfg, mut extra) = if a.search {
         let space = search_space(a.search_space.as_deref(), a.trials)?;
         let t0 = std::time::Instant::now();
         let mut k = 0;
@@ -274,12 +277,17 @@ pub fn train(a: TrainArgs) -> Result<()> {
     };
     let pb = bar(cfg.epochs as u64, "train");
     let t0 = std::time::Instant::now();
-    let (model, history) = tr::train_with_validation(&cfg, &data, val.as_ref(), &mut |e| {
-        pb.set_position(e as u64)
-    })?;
+    let mut tick = |e: usize| pb.set_position(e as u64);
+    let (model, history) = match &start {
+        None => tr::train_with_validation(&cfg, &data, val.as_ref(), &mut tick)?,
+        Some((dir, start)) => {
+            extra.push(("init.toml", tc::init_record(dir, start)?));
+            let what = sets.first_dir();
+            tc::continue_training(start, what, &cfg, &data, val.as_ref(), &mut tick)?
+        }
+    };
     pb.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
-    let extra: Vec<(&str, String)> = extra;
     let model = StoredModel::new(model, data.meta.reference_pins.clone()).with_training(record);
     let dir = tr::save_model(&a.out, &model, &history, a.force, &extra)?;
     eprintln!("trained in {secs:.1} s; saved model to {}", dir.display());

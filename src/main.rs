@@ -12,6 +12,7 @@ mod cmd_follow;
 mod cmd_image;
 mod cmd_inspect;
 mod cmd_learn;
+mod cmd_pin_init;
 mod cmd_rig;
 mod cmd_search;
 mod cmd_task3d;

@@ -45,6 +45,7 @@ mod tap_images;
 #[cfg(test)]
 mod test_data;
 pub mod train;
+pub mod train_continue;
 pub mod train_image;
 pub mod train_sets;
 pub mod trajectory_csv;

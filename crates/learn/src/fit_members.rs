@@ -32,6 +32,9 @@ struct Shared<'a> {
     plans: Vec<(Vec<usize>, Option<Pca>)>,
     /// The rows an epoch visits ([`crate::band_weight::epoch_rows`]).
     rows: Vec<usize>,
+    /// The model a continued fit starts from: its nets in model order
+    /// and the epochs they trained (`None`: fresh weights).
+    start: Option<(&'a [FittedNet], usize)>,
 }
 
 /// Fit `cfg`'s members on the encoded targets `train` (and report on
@@ -49,6 +52,38 @@ pub(crate) fn fit_members(
     cfg.check_samples(train.n, train.dim_x)?;
     let standardiser = Standardiser::fit(&train.x, train.n, train.dim_x)?;
     let shared = Shared::new(cfg, outputs, train, val, &standardiser)?;
+    train_members(shared, standardiser, progress)
+}
+
+/// Train `start`'s members further on the encoded targets `train` by
+/// `cfg` (already checked to describe `start`'s nets): `start`'s
+/// standardiser, target scaling and PCA kept, every net starting from its
+/// weights, its shuffles continuing from the epochs `start` trained
+/// ([`Trainer::skip_epochs`]); a diverged member restarts alone from
+/// `start`'s weights with its rates halved, as in [`fit_members`].
+pub(crate) fn continue_members(
+    start: &PoseModel,
+    cfg: &ModelConfig,
+    train: &Dataset,
+    val: Option<&Dataset>,
+    progress: &mut dyn FnMut(&EpochReport),
+) -> Result<(PoseModel, TrainingHistory), LearnError> {
+    cfg.check_samples(train.n, train.dim_x)?;
+    let shared = Shared::continuing(start, cfg, train, val)?;
+    let (mut model, history) = train_members(shared, start.standardiser.clone(), progress)?;
+    model.epochs_before = start.epochs_before + start.config.epochs;
+    Ok((model, history))
+}
+
+/// Train every member of `shared`, restarting a diverged member alone with
+/// halved rates up to `divergence_retries` times; the first member out of
+/// retries ends the fit with its divergence.
+fn train_members(
+    shared: Shared,
+    standardiser: Standardiser,
+    progress: &mut dyn FnMut(&EpochReport),
+) -> Result<(PoseModel, TrainingHistory), LearnError> {
+    let cfg = shared.cfg;
     let (k, per) = (cfg.ensemble, shared.plans.len());
     let mut halvings = vec![0usize; k];
     let mut layers: Vec<Option<Layers>> = vec![None; k * per];
@@ -124,6 +159,33 @@ impl<'a> Shared<'a> {
             z_val,
             plans,
             rows,
+            start: None,
+        })
+    }
+
+    /// What a fit continuing `start` shares: `start`'s standardiser,
+    /// target scaling and each net's target columns and PCA.
+    fn continuing(
+        start: &'a PoseModel,
+        cfg: &'a ModelConfig,
+        train: &'a Dataset,
+        val: Option<&'a Dataset>,
+    ) -> Result<Self, LearnError> {
+        let per = start.nets.len() / start.config.ensemble.max(1);
+        let plans = (start.nets.iter().take(per))
+            .map(|n| (n.targets.clone(), n.pca.clone()))
+            .collect();
+        Ok(Self {
+            cfg,
+            outputs: &start.outputs,
+            train,
+            val,
+            targets: start.targets.clone(),
+            z: start.standardiser.transform(&train.x),
+            z_val: val.map(|v| start.standardiser.transform(&v.x)),
+            plans,
+            rows: epoch_rows(cfg.band_weight.as_ref(), &start.outputs, train)?,
+            start: Some((&start.nets, start.epochs_before + start.config.epochs)),
         })
     }
 
@@ -167,14 +229,20 @@ impl<'a> Shared<'a> {
                 )?),
                 _ => None,
             };
-            let layers = Layers::new(
-                &self.sizes(j, data.set.dim_x),
-                member.seed.wrapping_add(j as u64),
-            )?;
+            let layers = match self.start {
+                Some((nets, _)) => nets[m * self.plans.len() + j].layers.clone(),
+                None => Layers::new(
+                    &self.sizes(j, data.set.dim_x),
+                    member.seed.wrapping_add(j as u64),
+                )?,
+            };
             let name = member_name(&name, m, k);
-            out.push(Trainer::new(
-                &name, layers, &member, net_cfg, data, val_data, j as u64,
-            ));
+            let mut trainer =
+                Trainer::new(&name, layers, &member, net_cfg, data, val_data, j as u64);
+            if let Some((_, done)) = self.start {
+                trainer.skip_epochs(done);
+            }
+            out.push(trainer);
         }
         Ok(out)
     }
@@ -225,6 +293,7 @@ impl<'a> Shared<'a> {
             features: None,
             views: None,
             mirror: None,
+            epochs_before: 0,
             predictor: OnceLock::new(),
         })
     }

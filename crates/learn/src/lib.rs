@@ -13,6 +13,7 @@
 mod band_weight;
 mod closed_form;
 mod config;
+mod continued;
 mod dataset;
 mod deep_clamp;
 mod dennn;
@@ -42,6 +43,7 @@ mod turned_views;
 
 pub use band_weight::{BandWeight, MAX_BAND_WEIGHT};
 pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_ENSEMBLE};
+pub use continued::check_continuable;
 pub use dataset::{mean_absolute_error, Dataset};
 pub use dennn::{ClampedPhase, DenNN, EpConfig, FreePhase, LrScaling, SampleStats};
 pub use error::LearnError;

@@ -48,6 +48,7 @@ impl PoseModel {
             features: self.features.clone(),
             views: self.views.clone(),
             mirror: self.mirror.clone(),
+            epochs_before: self.epochs_before,
             predictor: OnceLock::new(),
         })
     }
@@ -121,6 +122,7 @@ mod tests {
             features: None,
             views: None,
             mirror: None,
+            epochs_before: 0,
             predictor: Default::default(),
         }
     }

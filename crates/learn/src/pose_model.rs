@@ -61,6 +61,10 @@ pub struct PoseModel {
     /// [`ModelConfig::reflections`]: what averaging a tap with its mirror
     /// copy needs.
     pub(crate) mirror: Option<MirrorViews>,
+    /// Epochs its nets trained before this fit's `config.epochs`: 0 for a
+    /// model fitted from fresh weights, the starting model's total for one
+    /// continued from it ([`PoseModel::continue_on_pins`]).
+    pub(crate) epochs_before: usize,
     /// The fast prediction path of an edge model (`[r mm, theta deg]`,
     /// neither circular), laid out at the first prediction.
     pub(crate) predictor: OnceLock<Predictor>,
@@ -121,62 +125,12 @@ impl PoseModel {
         reference_pins: Option<&[[f64; 2]]>,
         progress: &mut dyn FnMut(&EpochReport),
     ) -> Result<(PoseModel, TrainingHistory), LearnError> {
-        let turned = turned_training_data(cfg, outputs, train, reference_pins)?;
-        let views = match (&cfg.rotations, reference_pins) {
-            (Some(rot), Some(pins)) => Some(TurnedViews::new(rot, pins)?),
-            _ => None,
-        };
-        let mirrored = reflections::mirrored_training_data(cfg, outputs, train, reference_pins)?;
-        let mirror = reflections::mirror_views(cfg, outputs, reference_pins)?;
-        let train = turned.as_ref().or(mirrored.as_ref()).unwrap_or(train);
-        let Some(map) = feature_map(cfg.pin_features, reference_pins, train.dim_x)? else {
-            let (mut model, history) = Self::fit_displacements(cfg, outputs, train, val, progress)?;
-            model.views = views;
-            model.mirror = mirror;
-            return Ok((model, history));
-        };
-        let featured =
-            |d: &Dataset| Dataset::new(map.rows(&d.x), d.y.clone(), d.n, map.output_dim(), d.dim_y);
-        let train = featured(train)?;
-        let val = val.map(featured).transpose()?;
-        let (mut model, history) =
-            Self::fit_displacements(cfg, outputs, &train, val.as_ref(), progress)?;
-        model.features = Some(map);
-        model.views = views;
-        model.mirror = mirror;
-        model.predictor = OnceLock::new();
+        let data = PinData::prepare(cfg, outputs, train, val, reference_pins)?;
+        let (train, val) = data.sets(train, val);
+        let (train, val) = checked_encoded(outputs, train, val)?;
+        let (mut model, history) = fit_members(cfg, outputs, &train, val.as_ref(), progress)?;
+        data.attach(&mut model);
         Ok((model, history))
-    }
-
-    /// Fit on the rows of `train` as the nets' inputs (before standardising).
-    fn fit_displacements(
-        cfg: &ModelConfig,
-        outputs: &[ModelTarget],
-        train: &Dataset,
-        val: Option<&Dataset>,
-        progress: &mut dyn FnMut(&EpochReport),
-    ) -> Result<(PoseModel, TrainingHistory), LearnError> {
-        targets::check_targets(outputs)?;
-        for d in std::iter::once(train).chain(val) {
-            if d.dim_y != outputs.len() {
-                return Err(LearnError::Shape {
-                    what: "targets per sample",
-                    expected: outputs.len(),
-                    got: d.dim_y,
-                });
-            }
-        }
-        if let Some(v) = val {
-            if v.dim_x != train.dim_x {
-                return Err(LearnError::DimensionMismatch {
-                    expected: train.dim_x,
-                    got: v.dim_x,
-                });
-            }
-        }
-        let train = encode(outputs, train)?;
-        let val = val.map(|v| encode(outputs, v)).transpose()?;
-        fit_members(cfg, outputs, &train, val.as_ref(), progress)
     }
 
     /// Predict the edge pose `[r mm, theta deg]` from one displacement
@@ -498,6 +452,116 @@ pub(crate) fn edge_roles_of(outputs: &[ModelTarget]) -> Result<[usize; 2], Learn
                 .join(", "),
         }),
     }
+}
+
+/// The training rows the nets see, and what the model keeps of how they
+/// were made: the turned or mirrored copies, the feature map, the views.
+pub(crate) struct PinData {
+    /// The training rows with their copies, as features when `features`.
+    train: Option<Dataset>,
+    /// The validation rows as features (`None`: as given).
+    val: Option<Dataset>,
+    features: Option<FeatureMap>,
+    views: Option<TurnedViews>,
+    mirror: Option<MirrorViews>,
+}
+
+impl PinData {
+    /// `train` with the copies of `cfg.rotations` or `cfg.reflections`
+    /// over `reference_pins`, and both sets as `cfg.pin_features`.
+    pub(crate) fn prepare(
+        cfg: &ModelConfig,
+        outputs: &[ModelTarget],
+        train: &Dataset,
+        val: Option<&Dataset>,
+        reference_pins: Option<&[[f64; 2]]>,
+    ) -> Result<Self, LearnError> {
+        let turned = turned_training_data(cfg, outputs, train, reference_pins)?;
+        let views = match (&cfg.rotations, reference_pins) {
+            (Some(rot), Some(pins)) => Some(TurnedViews::new(rot, pins)?),
+            _ => None,
+        };
+        let mirrored = reflections::mirrored_training_data(cfg, outputs, train, reference_pins)?;
+        let mirror = reflections::mirror_views(cfg, outputs, reference_pins)?;
+        let copied = turned.or(mirrored);
+        let mut data = PinData {
+            train: None,
+            val: None,
+            features: None,
+            views,
+            mirror,
+        };
+        let rows = copied.as_ref().unwrap_or(train);
+        let Some(map) = feature_map(cfg.pin_features, reference_pins, rows.dim_x)? else {
+            data.train = copied;
+            return Ok(data);
+        };
+        let featured =
+            |d: &Dataset| Dataset::new(map.rows(&d.x), d.y.clone(), d.n, map.output_dim(), d.dim_y);
+        data.train = Some(featured(rows)?);
+        data.val = val.map(featured).transpose()?;
+        data.features = Some(map);
+        Ok(data)
+    }
+
+    /// The training and validation rows the nets see (`train` and `val`
+    /// themselves when nothing was made of them).
+    pub(crate) fn sets<'a>(
+        &'a self,
+        train: &'a Dataset,
+        val: Option<&'a Dataset>,
+    ) -> (&'a Dataset, Option<&'a Dataset>) {
+        let val = if self.features.is_some() {
+            self.val.as_ref()
+        } else {
+            val
+        };
+        (self.train.as_ref().unwrap_or(train), val)
+    }
+
+    /// Whether `model` was fitted on rows made this way (the same feature
+    /// map, turned views and mirror, over the same pins).
+    pub(crate) fn made_as(&self, model: &PoseModel) -> bool {
+        self.features == model.features && self.views == model.views && self.mirror == model.mirror
+    }
+
+    /// Give `model` the feature map and views these rows were made with.
+    pub(crate) fn attach(self, model: &mut PoseModel) {
+        model.features = self.features;
+        model.views = self.views;
+        model.mirror = self.mirror;
+        model.predictor = OnceLock::new();
+    }
+}
+
+/// `train` and `val` checked against `outputs` and encoded (a circular
+/// target as its sine and cosine).
+pub(crate) fn checked_encoded(
+    outputs: &[ModelTarget],
+    train: &Dataset,
+    val: Option<&Dataset>,
+) -> Result<(Dataset, Option<Dataset>), LearnError> {
+    targets::check_targets(outputs)?;
+    for d in std::iter::once(train).chain(val) {
+        if d.dim_y != outputs.len() {
+            return Err(LearnError::Shape {
+                what: "targets per sample",
+                expected: outputs.len(),
+                got: d.dim_y,
+            });
+        }
+    }
+    if let Some(v) = val {
+        if v.dim_x != train.dim_x {
+            return Err(LearnError::DimensionMismatch {
+                expected: train.dim_x,
+                got: v.dim_x,
+            });
+        }
+    }
+    let train = encode(outputs, train)?;
+    let val = val.map(|v| encode(outputs, v)).transpose()?;
+    Ok((train, val))
 }
 
 /// `train` with its copies turned by `cfg.rotations` over `reference_pins`;

@@ -55,6 +55,10 @@ struct ModelFile {
     /// over, whose mirror averaging with the mirror copy takes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     reflection_pins: Option<Vec<[f64; 2]>>,
+    /// Epochs the nets trained before this fit's `config.epochs` (a model
+    /// continued from another, `train --init`; absent: none).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    epochs_before: usize,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -116,6 +120,7 @@ impl PoseModel {
             features: self.features.clone(),
             rotation_pins: self.views.as_ref().map(|v| v.pins().to_vec()),
             reflection_pins: self.mirror.as_ref().map(|v| v.pins().to_vec()),
+            epochs_before: self.epochs_before,
         };
         let json = serde_json::to_string_pretty(&file).map_err(corrupt)?;
         let mut tensors = Vec::new();
@@ -187,6 +192,7 @@ impl PoseModel {
             features: file.features,
             views,
             mirror,
+            epochs_before: file.epochs_before,
             predictor: Default::default(),
         })
     }

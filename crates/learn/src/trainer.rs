@@ -193,6 +193,18 @@ impl Trainer {
         }
     }
 
+    /// Draw the shuffles (and input noise) of `epochs` epochs without
+    /// training, so that a fit continued from a model of `epochs` epochs
+    /// visits the rows as a fit of more epochs from the same seed would.
+    pub fn skip_epochs(&mut self, epochs: usize) {
+        for _ in 0..epochs {
+            self.order.shuffle(&mut self.rng);
+            if let Some(noise) = self.noise.as_mut() {
+                noise.apply(&self.data.set);
+            }
+        }
+    }
+
     /// One shuffled pass over the training data.
     pub fn epoch(&mut self, epoch: usize) -> Result<NetEpoch, LearnError> {
         self.order.shuffle(&mut self.rng);

@@ -42,3 +42,58 @@ pub fn cosine(a: &[f64], b: &[f64]) -> f64 {
     let nb: f64 = b.iter().map(|x| x * x).sum::<f64>().sqrt();
     dot / (na * nb)
 }
+
+/// The pin spacing (px) of [`hex_layout`].
+pub const SPACING: f64 = 4.5;
+/// The centre (px) of [`hex_layout`] and of [`edge_field`]'s edges.
+pub const CENTRE: [f64; 2] = [63.0, 64.0];
+
+/// A hexagonal layout of `rings` rings about `CENTRE`, its pins `SPACING`
+/// px apart (331 pins for 10).
+pub fn hex_layout(rings: i32) -> Vec<[f64; 2]> {
+    let mut pins = Vec::new();
+    for a in -rings..=rings {
+        for b in -rings..=rings {
+            if (a + b).abs() <= rings {
+                let (a, b) = (f64::from(a), f64::from(b));
+                let x = CENTRE[0] + SPACING * (a + 0.5 * b);
+                let y = CENTRE[1] + SPACING * (0.75f64.sqrt() * b);
+                pins.push([x, y]);
+            }
+        }
+    }
+    pins
+}
+
+/// The displacements of a toy edge: its labelled angle `theta` (deg) is
+/// the image angle of its normal negated (the image's y axis points
+/// down), its signed distance `r` (px here) from the centre; every pin on
+/// the far side moves along the normal by its depth past the edge.
+pub fn edge_field(pins: &[[f64; 2]], r: f64, theta: f64) -> Vec<f32> {
+    let (s, c) = (-theta).to_radians().sin_cos();
+    let n = pins.len();
+    let mut d = vec![0.0f32; 2 * n];
+    for (i, p) in pins.iter().enumerate() {
+        let depth = (p[0] - CENTRE[0]) * c + (p[1] - CENTRE[1]) * s - r;
+        if depth > 0.0 {
+            d[i] = (0.1 * depth * c) as f32;
+            d[n + i] = (0.1 * depth * s) as f32;
+        }
+    }
+    d
+}
+
+/// The rows of toy edges over `pins` at `poses` (`(r, theta)`, px and
+/// deg): [`edge_field`]'s displacements and the poses as targets,
+/// row-major, for `Dataset::new(x, y, poses.len(), 2 * pins.len(), 2)`.
+pub fn edge_rows(pins: &[[f64; 2]], poses: &[(f64, f64)]) -> (Vec<f32>, Vec<f32>) {
+    let x = poses
+        .iter()
+        .flat_map(|&(r, t)| edge_field(pins, r, t))
+        .collect();
+    let y = poses
+        .iter()
+        .flat_map(|&(r, t)| [r as f32, t as f32])
+        .collect();
+    (x, y)
+}

@@ -10,6 +10,7 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use tactrace_lab::calibrate::{calibrate_sensor, write_calibrated, CalibrateConfig};
 use tactrace_lab::import::Imported;
+use tactrace_lab::pin_jitter::PinJitter;
 use tactrace_lab::twin::{
     fit_position_map, relabel_positions, renders_differ, simulate_twin_calibrated,
     simulate_twin_laid_out, with_pin_jitter,
@@ -362,6 +363,14 @@ pub struct CalibrateArgs {
     /// of the depth law (docs/calibration.md, "The labelled depth").
     #[arg(long)]
     labelled_depth: bool,
+    /// The sensor's render pin jitter, px per axis (`[sensor.nuisance]
+    /// pin_jitter_px`; each render of `twin --sensor` then draws it):
+    /// `fit` estimates it from the calibration taps' scatter about a
+    /// smooth field against the simulator's at a grid of jitters and
+    /// records the evidence (docs/calibration.md, "Pin jitter fitted from
+    /// the taps"); a number sets it. Default: the simulator's own (0).
+    #[arg(long, value_name = "fit|PX")]
+    pin_jitter: Option<PinJitter>,
     /// The sensor folder to write.
     #[arg(long)]
     out: PathBuf,
@@ -382,6 +391,7 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
         score_rows: None,
         fit_physics: a.fit_physics,
         labelled_depth: a.labelled_depth,
+        pin_jitter: a.pin_jitter.unwrap_or_default(),
     };
     let _out = fsutil::check_output_dir(&a.out, a.force)?;
     let t0 = std::time::Instant::now();
@@ -402,6 +412,9 @@ pub fn calibrate(a: CalibrateArgs) -> Result<()> {
     eprintln!("{}", got.layout.describe());
     eprintln!("{}", got.convention.describe());
     eprintln!("{}", got.depth.describe());
+    if let Some(j) = &got.sensor.spec.calibration.pin_jitter {
+        eprintln!("{}", j.describe());
+    }
     let c = &got.sensor.spec.calibration;
     eprintln!(
         "calibrated on {} of {} labelled taps ({} frames rejected) in {:.1} s into {}",

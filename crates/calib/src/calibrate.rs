@@ -88,6 +88,7 @@ pub fn calibrate(
         },
         held_out_before: before,
         held_out_after: after,
+        pin_jitter: None,
     };
     Ok(Calibration {
         correction: fit.correction.clone(),

@@ -16,12 +16,15 @@
 //! - [`field_stats`]: per-coordinate RMS misfit and cosine of two sets of fields;
 //! - [`PositionMap`]: the quadratic map from the edge position a twin-trained
 //!   model reads off the real calibration taps to their labels;
+//! - [`roughness`] / [`fit_jitter`]: the pins' detection noise estimated from
+//!   the taps' scatter about a smooth field, and the render jitter that matches it;
 //! - [`CalibrationRecord`]: the serialisable description of a sensor file's
 //!   correction, with [`Tensor`] helpers for the store layer;
 //! - [`CalibError`]: every way the input can be wrong.
 pub mod calibrate;
 pub mod error;
 pub mod fields;
+pub mod jitter;
 pub mod position_map;
 pub mod record;
 pub mod ridge;
@@ -31,6 +34,7 @@ pub mod stats;
 pub use calibrate::{calibrate, real_tap_repeats, Calibration, CalibrationPlan};
 pub use error::{CalibError, Result};
 pub use fields::Fields;
+pub use jitter::{fit_jitter, roughness, JitterFit, JitterPoint, Stencil, JITTER_GRID};
 pub use position_map::PositionMap;
 pub use record::{CalibrationRecord, Selection, Tensor, FORMAT_VERSION};
 pub use ridge::{CorrectionParams, FittedCorrection, LinearCorrection, MIN_TAPS, RECOMMENDED_TAPS};

@@ -3,6 +3,7 @@
 //! TOML part, and W and b as named f32 tensors for the safetensors part.
 //! No file is touched here: the store layer writes and reads both.
 use crate::error::{CalibError, Result};
+use crate::jitter::JitterFit;
 use crate::ridge::{CorrectionParams, LinearCorrection};
 use crate::stats::FieldStats;
 use nalgebra::{DMatrix, DVector};
@@ -49,6 +50,11 @@ pub struct CalibrationRecord {
     pub held_out_before: Option<FieldStats>,
     /// Corrected twin vs real on the held-out taps.
     pub held_out_after: Option<FieldStats>,
+    /// The render pin jitter fitted to the calibration taps and its
+    /// evidence (`calibrate --pin-jitter fit`; absent otherwise, so files
+    /// written before read the same).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pin_jitter: Option<JitterFit>,
 }
 
 impl CalibrationRecord {

@@ -25,6 +25,7 @@ fn fitted() -> (LinearCorrection, CalibrationRecord, tactrace_calib::Fields) {
         },
         held_out_before: Some(field_stats(&sim, &real).unwrap()),
         held_out_after: Some(after),
+        pin_jitter: None,
     };
     (fit.correction, record, sim)
 }

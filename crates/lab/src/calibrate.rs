@@ -13,7 +13,8 @@
 //! command that simulates taps.
 use crate::error::{LabError, Result};
 use crate::import::{import_rows, Imported};
-use crate::sim_sight::{lay_out, resolve_reference, sim_sight, LayoutReport};
+use crate::pin_jitter::{fit_pin_jitter, PinJitter};
+use crate::sim_sight::{lay_out, resolve_reference, sim_sight, LayoutReport, SimSight};
 use crate::twin::{simulate_twin_rows, twin_rows};
 use std::collections::HashSet;
 use std::path::PathBuf;
@@ -59,6 +60,9 @@ pub struct CalibrateConfig {
     /// the field's gain instead of the depth law
     /// (`tactrace_sensor::DepthSearch::labelled_depth`, `--labelled-depth`).
     pub labelled_depth: bool,
+    /// The sensor's render pin jitter: its own, given, or fitted to the
+    /// calibration taps (`--pin-jitter`, [`PinJitter`]).
+    pub pin_jitter: PinJitter,
 }
 
 /// A fitted sensor and what the calibration saw.
@@ -201,6 +205,9 @@ pub fn calibrate_sensor(
             corrected: corrected.row(k),
         });
     }
+    let (sensor, jitter) = with_jitter(cfg, (c, &sight, sensor), (&chosen, &real))?;
+    record.pin_jitter = jitter;
+    let sensor = &sensor;
     let reference = match c.reference() {
         Reference::Frame(path) => tactrace_sensor::read_frame(path)?,
         // No undeformed frame: the calibrated simulator's own rest frame.
@@ -253,6 +260,32 @@ pub fn calibrate_sensor(
         convention,
         depth,
     })
+}
+
+/// `sensor` with the render pin jitter `cfg` asks for, and the fit's
+/// evidence when it was fitted to the `chosen` rows' real taps `real`
+/// (after the field correction, which is fitted to noiseless renders as
+/// before).
+fn with_jitter(
+    cfg: &CalibrateConfig,
+    (c, sight, sensor): (&LabelledCollection, &SimSight, &TacTipConfig),
+    (chosen, real): (&[usize], &Imported),
+) -> Result<(TacTipConfig, Option<tactrace_calib::JitterFit>)> {
+    let mut out = sensor.clone();
+    let fit = match cfg.pin_jitter {
+        PinJitter::Own => None,
+        PinJitter::Given(px) => {
+            out.nuisance.pin_jitter_px = px;
+            None
+        }
+        PinJitter::Fit => {
+            let fit = fit_pin_jitter(c, sight, sensor, (chosen, real), cfg.render_seed)?;
+            out.nuisance.pin_jitter_px = fit.pin_jitter_px;
+            Some(fit)
+        }
+    };
+    out.validate()?;
+    Ok((out, fit))
 }
 
 /// Nelder-Mead rounds and steps of the physics fit (`--fit-physics`).
@@ -485,7 +518,7 @@ fn held_out_rows(pool: &[usize], chosen: &[usize], seed: u64) -> Vec<usize> {
 }
 
 /// Twin and real fields of the same frames, joined on the image name.
-struct Pairs {
+pub(crate) struct Pairs {
     dim: usize,
     names: Vec<String>,
     sim: Vec<f32>,
@@ -515,7 +548,7 @@ impl Pairs {
         (a, b)
     }
 
-    fn fields(&self) -> Result<(Fields, Fields, Vec<Label>)> {
+    pub(crate) fn fields(&self) -> Result<(Fields, Fields, Vec<Label>)> {
         Ok((
             Fields::from_flat(&self.sim, self.dim, "simulated taps")?,
             Fields::from_flat(&self.real, self.dim, "real taps")?,
@@ -526,7 +559,7 @@ impl Pairs {
 
 /// The twin's and the real fields of the same frames (joined on the image
 /// name), with their labels.
-fn paired(real: &Imported, twin: &Imported) -> Result<Pairs> {
+pub(crate) fn paired(real: &Imported, twin: &Imported) -> Result<Pairs> {
     let (r, s) = (&real.data, &twin.data);
     let row_of = s.image_rows();
     let d = r.dim();

@@ -140,6 +140,7 @@ fn run_case(
         score_rows: Some(rows_in(split, split.validation, case.scored.1)?),
         fit_physics: false,
         labelled_depth: false,
+        pin_jitter: Default::default(),
     };
     let got = calibrate_sensor(&ccfg, &cfg.follow.rig.sensor, &|| {})?;
     let dir = out.join("calibration").join(case.folder);

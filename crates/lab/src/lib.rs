@@ -33,6 +33,7 @@ pub mod import_like;
 pub mod import_reader;
 pub mod import_request;
 pub mod numbers;
+pub mod pin_jitter;
 pub mod remote;
 pub mod render;
 pub mod reproduce;

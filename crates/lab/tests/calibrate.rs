@@ -25,6 +25,7 @@ fn calibration_finds_a_known_distortion_and_the_sensor_round_trips() {
         score_rows: None,
         fit_physics: false,
         labelled_depth: false,
+        pin_jitter: Default::default(),
     };
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     let record = &got.sensor.spec.calibration;
@@ -112,6 +113,7 @@ fn too_few_or_one_sided_taps_are_refused_with_how_many_are_needed() {
         score_rows: None,
         fit_physics: false,
         labelled_depth: false,
+        pin_jitter: Default::default(),
     };
     let err = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {})
         .err()

@@ -30,6 +30,7 @@ fn calibrated_sensor(dir: &std::path::Path) -> SensorFolder {
         score_rows: None,
         fit_physics: false,
         labelled_depth: false,
+        pin_jitter: Default::default(),
     };
     let got = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {}).unwrap();
     got.sensor.write(&dir.join("sensor"), false).unwrap();
@@ -104,6 +105,7 @@ fn calibrate_80(twin: LabelledCollection, fit_physics: bool) -> CalibrateConfig 
         score_rows: None,
         fit_physics,
         labelled_depth: false,
+        pin_jitter: Default::default(),
     }
 }
 

@@ -26,6 +26,7 @@ fn the_map_needs_a_model_without_the_real_taps_and_moves_only_simulated_taps() {
         score_rows: None,
         fit_physics: false,
         labelled_depth: false,
+        pin_jitter: Default::default(),
     };
     let sensor = calibrate_sensor(&cfg, &TacTipConfig::default(), &|| {})
         .unwrap()

@@ -98,5 +98,6 @@ pub fn calibration(
         score_rows: None,
         fit_physics: false,
         labelled_depth: false,
+        pin_jitter: Default::default(),
     }
 }

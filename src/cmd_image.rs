@@ -103,6 +103,7 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
         });
     };
     let data = (&split.train, &train_frames);
+    let in_first = split.record.in_first_dataset();
     let (model, history, folds) = match &start {
         Some((_, s)) => {
             same_frames(s, &all_frames.info)?;
@@ -114,6 +115,7 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
                 cfg: &cfg,
                 base: base.as_ref(),
                 seed,
+                in_first: &in_first,
             };
             fit_fresh_image(fresh, data, pair, &mut on_epoch)?
         }

@@ -112,3 +112,35 @@ fn base_settings_and_init_are_refused_where_they_do_not_apply() {
     let r = train(&t.0, "conv-mlp", "ds", "1", "again", &init);
     expect_refusal(&r, 2, "--init from a residual model", "out-of-fold");
 }
+
+/// `[base] fit_on = "first_dataset"` with `--train ds --train more`: the
+/// first dataset's rows alone are dealt into the folds, the second's
+/// marked past them (predicted by the whole base), and the record and
+/// the resolved configuration say so; with one dataset it is refused.
+#[test]
+fn a_base_of_the_first_dataset_is_recorded_and_needs_two_datasets() {
+    let t = TempDir::new("image-residual-first");
+    set_up(&t.0, "0.003");
+    util::spot_frames_dataset(&t.join("more"), "tests/image_residual.rs", 30);
+    let first = RESIDUAL.replace("folds = 3\n", "folds = 3\nfit_on = \"first_dataset\"\n");
+    std::fs::write(t.join("first.toml"), first).unwrap();
+    let cfg = ["--train", "more", "--config", "first.toml"];
+    expect_code(&train(&t.0, "conv-mlp", "ds", "1", "res", &cfg), 0, "train");
+    let record = std::fs::read_to_string(t.join("res").join("training.json")).unwrap();
+    let base = &json(&record)["base"];
+    assert_eq!(base["first_dataset_only"], true);
+    let folds: Vec<u64> = (base["fold_of_row"].as_array().unwrap().iter())
+        .map(|f| f.as_u64().unwrap())
+        .collect();
+    assert_eq!(folds.len(), 120);
+    assert!(folds[..90].iter().all(|&f| f < 3), "{folds:?}");
+    assert!(folds[90..].iter().all(|&f| f == 3), "{folds:?}");
+    let resolved = std::fs::read_to_string(t.join("res").join("config.toml")).unwrap();
+    assert!(
+        resolved.contains("fit_on = \"first_dataset\""),
+        "{resolved}"
+    );
+    let one = ["--config", "first.toml"];
+    let r = train(&t.0, "conv-mlp", "ds", "1", "alone", &one);
+    expect_refusal(&r, 2, "fit_on with one dataset", "two datasets");
+}

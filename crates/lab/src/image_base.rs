@@ -5,7 +5,10 @@
 //! out of fold: the rows dealt into `folds` folds by a seeded shuffle, each
 //! fold's predictions from a pin model fitted on the other folds, so the
 //! network learns its corrections against a base as good as it is on taps
-//! it has not seen.
+//! it has not seen. With `fit_on = "first_dataset"` (`train --train real
+//! --train sim`) only the first dataset's rows fit the pin models and are
+//! dealt into the folds; every other row's base prediction comes from the
+//! pin model fitted on all of those rows, which never saw it.
 use crate::error::{LabError, Result};
 use crate::train::{check_trainable, data_targets, resolve_config, train};
 use rand::seq::SliceRandom;
@@ -38,6 +41,50 @@ pub struct BaseSettings {
     /// `train --config` takes them (`[base.settings]`; none by default).
     #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
     pub settings: toml::Table,
+    /// The training rows the pin models are fitted on (`fit_on`; every
+    /// row by default, and then left out).
+    #[serde(default, skip_serializing_if = "BaseRows::is_all")]
+    pub fit_on: BaseRows,
+}
+
+/// Which training rows fit a residual model's pin models (`[base]
+/// fit_on`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BaseRows {
+    /// Every training row, of every dataset given (the default).
+    #[default]
+    All,
+    /// The rows of the first dataset given (`train --train real --train
+    /// sim`: the real taps); the other rows' base predictions from the
+    /// pin model fitted on those rows.
+    FirstDataset,
+}
+
+impl BaseRows {
+    fn is_all(&self) -> bool {
+        *self == BaseRows::All
+    }
+
+    /// The rows that fit the pin models, given whether each row is of the
+    /// first dataset (`in_first`); refused when that leaves no row, or no
+    /// other row for `FirstDataset` to predict.
+    pub fn rows(self, in_first: &[bool]) -> Result<Vec<usize>> {
+        let n = in_first.len();
+        let rows: Vec<usize> = match self {
+            BaseRows::All => (0..n).collect(),
+            BaseRows::FirstDataset => (0..n).filter(|&r| in_first[r]).collect(),
+        };
+        if self == BaseRows::FirstDataset && (rows.is_empty() || rows.len() == n) {
+            return Err(LabError::Config(format!(
+                "[base] fit_on = \"first_dataset\": {} of the {n} training rows are of the \
+                 first dataset; it takes two datasets (train --train A --train B), both with \
+                 training rows",
+                rows.len()
+            )));
+        }
+        Ok(rows)
+    }
 }
 
 fn pdennn() -> String {
@@ -54,6 +101,7 @@ impl Default for BaseSettings {
             model: pdennn(),
             folds: five(),
             settings: toml::Table::new(),
+            fit_on: BaseRows::All,
         }
     }
 }
@@ -140,43 +188,62 @@ pub fn deal_folds(n: usize, folds: usize, seed: u64) -> Vec<usize> {
     fold
 }
 
-/// The rows of `fold_of_row` outside fold `f`: what its pin model fits.
-pub fn rows_outside(fold_of_row: &[usize], f: usize) -> Vec<usize> {
+/// The rows that fit the pin model of fold `f`: those dealt into another
+/// of the `folds` folds (a row marked `folds`, fitting no pin model, is
+/// never one).
+pub fn rows_outside(fold_of_row: &[usize], folds: usize, f: usize) -> Vec<usize> {
     (0..fold_of_row.len())
-        .filter(|&r| fold_of_row[r] != f)
+        .filter(|&r| fold_of_row[r] != f && fold_of_row[r] < folds)
         .collect()
 }
 
-/// The pin model of `cfg` fitted on every row of `data`, and each row's
-/// out-of-fold prediction (`rows x T`, targets' order and units) with
-/// the record of the deal (`settings`, `seed`).
+/// The pin model of `settings` fitted on the rows of `data` that
+/// `settings.fit_on` names (all of them, or those with `in_first[r]`),
+/// and each row's out-of-fold prediction (`rows x T`, targets' order and
+/// units): a fitting row's from the pin model of the other folds, any
+/// other row's from the whole pin model; with the record of the deal
+/// (`settings`, `seed`; the other rows' fold is `folds`).
 pub fn fit_base(
     settings: &BaseSettings,
     data: &TapData,
     seed: u64,
+    in_first: &[bool],
 ) -> Result<(PoseModel, Vec<f64>, BaseFolds)> {
+    assert_eq!(in_first.len(), data.len(), "one flag a row");
     let cfg = settings.config()?;
-    check_trainable(&cfg, data, 0)?;
+    let fitting = settings.fit_on.rows(in_first)?;
+    let whole = data.subset(&fitting);
+    check_trainable(&cfg, &whole, 0)?;
     let t = data_targets(data)?.len();
-    let fold_of_row = deal_folds(data.len(), settings.folds, seed);
+    let mut fold_of_row = vec![settings.folds; data.len()];
+    let deal = deal_folds(fitting.len(), settings.folds, seed);
+    for (&r, &f) in fitting.iter().zip(&deal) {
+        fold_of_row[r] = f;
+    }
     let mut predictions = vec![0.0; data.len() * t];
-    for f in 0..settings.folds {
-        let fit_rows = rows_outside(&fold_of_row, f);
-        let part = data.subset(&fit_rows);
-        check_trainable(&cfg, &part, data.len() - fit_rows.len())?;
-        let (model, _) = train(&cfg, &part, &mut |_| ())?;
+    let mut predict = |model: &PoseModel, fold: usize| -> Result<()> {
         let d = data.dim();
-        for r in (0..data.len()).filter(|&r| fold_of_row[r] == f) {
+        for r in (0..data.len()).filter(|&r| fold_of_row[r] == fold) {
             let values = model.predict_targets(&data.inputs[r * d..(r + 1) * d])?;
             predictions[r * t..(r + 1) * t].copy_from_slice(&values);
         }
+        Ok(())
+    };
+    for f in 0..settings.folds {
+        let fit_rows = rows_outside(&fold_of_row, settings.folds, f);
+        let part = data.subset(&fit_rows);
+        check_trainable(&cfg, &part, fitting.len() - fit_rows.len())?;
+        let (model, _) = train(&cfg, &part, &mut |_| ())?;
+        predict(&model, f)?;
     }
-    let (model, _) = train(&cfg, data, &mut |_| ())?;
+    let (model, _) = train(&cfg, &whole, &mut |_| ())?;
+    predict(&model, settings.folds)?;
     let record = BaseFolds {
         model: settings.model.clone(),
         folds: settings.folds,
         seed,
         fold_of_row,
+        first_dataset_only: settings.fit_on == BaseRows::FirstDataset,
     };
     Ok((model, predictions, record))
 }
@@ -205,6 +272,7 @@ mod tests {
             model: "disdennn".into(),
             folds: 3,
             settings,
+            fit_on: BaseRows::All,
         }
     }
 
@@ -218,8 +286,8 @@ mod tests {
             .collect();
         assert!(sizes.iter().all(|&s| s == 4 || s == 5), "{sizes:?}");
         for (f, size) in sizes.iter().enumerate() {
-            assert!(rows_outside(&a, f).iter().all(|&r| a[r] != f));
-            assert_eq!(rows_outside(&a, f).len(), 23 - size);
+            assert!(rows_outside(&a, 5, f).iter().all(|&r| a[r] != f));
+            assert_eq!(rows_outside(&a, 5, f).len(), 23 - size);
         }
     }
 
@@ -229,13 +297,13 @@ mod tests {
     #[test]
     fn out_of_fold_predictions_never_see_their_own_rows() {
         let clean = data(45);
-        let (_, before, folds) = fit_base(&quick(), &clean, 3).unwrap();
+        let (_, before, folds) = fit_base(&quick(), &clean, 3, &[true; 45]).unwrap();
         assert_eq!(folds.fold_of_row.len(), 45);
         assert_eq!((folds.folds, folds.seed), (3, 3));
         let spoilt_row = 10;
         let mut spoilt = clean.clone();
         spoilt.targets[2 * spoilt_row] += 50.0;
-        let (_, after, _) = fit_base(&quick(), &spoilt, 3).unwrap();
+        let (_, after, _) = fit_base(&quick(), &spoilt, 3, &[true; 45]).unwrap();
         let own = folds.fold_of_row[spoilt_row];
         for r in 0..45 {
             let moved = (before[2 * r] - after[2 * r]).abs();
@@ -256,16 +324,64 @@ mod tests {
             .settings
             .insert("ensemble".into(), toml::Value::Integer(2));
         let clean = data(36);
-        let (model, before, folds) = fit_base(&settings, &clean, 5).unwrap();
+        let (model, before, folds) = fit_base(&settings, &clean, 5, &[true; 36]).unwrap();
         assert_eq!(model.ensemble(), 2);
         let mut spoilt = clean.clone();
         spoilt.targets[2 * 7] += 50.0;
-        let (_, after, _) = fit_base(&settings, &spoilt, 5).unwrap();
+        let (_, after, _) = fit_base(&settings, &spoilt, 5, &[true; 36]).unwrap();
         let own = folds.fold_of_row[7];
         for r in 0..36 {
             let moved = (before[2 * r] - after[2 * r]).abs();
             let same_fold = folds.fold_of_row[r] == own;
             assert!(same_fold == (moved == 0.0), "row {r}: moved {moved}");
+        }
+    }
+
+    /// With `fit_on = "first_dataset"` the later rows fit nothing: a
+    /// spoilt target of one of them moves no prediction at all, while a
+    /// spoilt first-dataset row moves the other folds and the later rows
+    /// (predicted by the whole pin model), never its own fold.
+    #[test]
+    fn a_base_of_the_first_dataset_never_sees_the_later_rows() {
+        let mut settings = quick();
+        settings.fit_on = BaseRows::FirstDataset;
+        let in_first: Vec<bool> = (0..45).map(|r| r % 3 != 2).collect();
+        let clean = data(45);
+        let (_, before, folds) = fit_base(&settings, &clean, 3, &in_first).unwrap();
+        assert!(folds.first_dataset_only);
+        for r in 0..45 {
+            assert_eq!(folds.fold_of_row[r] == 3, !in_first[r], "row {r}");
+        }
+        let mut later = clean.clone();
+        later.targets[2 * 5] += 50.0;
+        let (_, after, _) = fit_base(&settings, &later, 3, &in_first).unwrap();
+        assert_eq!(before, after, "a later row's target moved a prediction");
+        let mut first = clean.clone();
+        first.targets[2 * 4] += 50.0;
+        let (_, after, _) = fit_base(&settings, &first, 3, &in_first).unwrap();
+        let own = folds.fold_of_row[4];
+        for r in 0..45 {
+            let moved = (before[2 * r] - after[2 * r]).abs();
+            let same_fold = folds.fold_of_row[r] == own;
+            assert!(same_fold == (moved == 0.0), "row {r}: moved {moved}");
+        }
+    }
+
+    /// Every row by default, whatever dataset it is of: the first-dataset
+    /// flags change nothing; `first_dataset` needs rows of both kinds.
+    #[test]
+    fn every_row_fits_the_base_by_default() {
+        let clean = data(30);
+        let mixed: Vec<bool> = (0..30).map(|r| r < 20).collect();
+        let (_, all, folds) = fit_base(&quick(), &clean, 2, &[true; 30]).unwrap();
+        let (_, flagged, _) = fit_base(&quick(), &clean, 2, &mixed).unwrap();
+        assert_eq!(all, flagged);
+        assert!(!folds.first_dataset_only && folds.fold_of_row.iter().all(|&f| f < 3));
+        let mut first = quick();
+        first.fit_on = BaseRows::FirstDataset;
+        for flags in [[true; 30], [false; 30]] {
+            let refused = fit_base(&first, &clean, 2, &flags).unwrap_err();
+            assert!(refused.to_string().contains("two datasets"), "{refused}");
         }
     }
 
@@ -281,7 +397,12 @@ mod tests {
             base_settings(&cfg, None).unwrap(),
             Some(BaseSettings::default())
         );
+        let (_, first) = split_base_table("[base]\nfit_on = \"first_dataset\"\n").unwrap();
+        assert_eq!(first.map(|b| b.fit_on), Some(BaseRows::FirstDataset));
+        let default = toml::to_string(&BaseSettings::default()).unwrap();
+        assert!(!default.contains("fit_on"), "{default}");
         for bad in [
+            "[base]\nfit_on = \"real\"",
             "[base]\nfolds = 1",
             "[base]\nmodel = \"conv-mlp\"",
             "[base]\nfold = 3",

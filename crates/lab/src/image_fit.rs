@@ -17,12 +17,15 @@ use tactrace_store::{
 };
 
 /// What a fresh image model is: its configuration, a residual model's
-/// base settings (`None` for any other), and its seed.
+/// base settings (`None` for any other), its seed, and whether each
+/// training row is of the first dataset given
+/// ([`TrainingRecord::in_first_dataset`], read by `[base] fit_on`).
 #[derive(Debug, Clone, Copy)]
 pub struct FreshImage<'a> {
     pub cfg: &'a ConvConfig,
     pub base: Option<&'a BaseSettings>,
     pub seed: u64,
+    pub in_first: &'a [bool],
 }
 
 /// A fitted image model, its history, and a residual model's folds.
@@ -38,6 +41,7 @@ pub fn fit_fresh_image(
 ) -> Result<FittedImage> {
     match fresh.base {
         Some(base) => {
+            let data = (data.0, data.1, fresh.in_first);
             let (m, h, folds) =
                 train_image_on_base(fresh.cfg, base, fresh.seed, data, val, on_epoch)?;
             Ok((m, h, Some(folds)))

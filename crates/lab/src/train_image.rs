@@ -103,20 +103,21 @@ pub fn train_image(
 
 /// A residual model (`input = "pin_model_and_pixels"`) of `cfg` fitted
 /// from `seed` on `data`'s targets and `frames` ([`train_image`]'s
-/// arguments): its pin model of `base` fitted on every row of `data`, the
-/// rows' base predictions out of fold (crate::image_base); with the
+/// arguments): its pin model of `base` fitted on every row of `data` (or,
+/// with `fit_on = "first_dataset"`, on the rows flagged in `in_first`),
+/// the rows' base predictions out of fold (crate::image_base); with the
 /// record of the folds for `training.json`.
 pub fn train_image_on_base(
     cfg: &ConvConfig,
     base: &BaseSettings,
     seed: u64,
-    (data, frames): (&TapData, &ImageFrames),
+    (data, frames, in_first): (&TapData, &ImageFrames, &[bool]),
     val: Option<(&TapData, &ImageFrames)>,
     on_epoch: &mut dyn FnMut(&EpochReport),
 ) -> Result<(ImageModel, TrainingHistory, BaseFolds)> {
     let outputs = data_targets(data)?;
     let (train, val) = views(&outputs, (data, frames), val)?;
-    let (pin_model, rows, folds) = fit_base(base, data, seed)?;
+    let (pin_model, rows, folds) = fit_base(base, data, seed, in_first)?;
     let fit = BaseFit {
         model: &pin_model,
         rows: &rows,

@@ -211,10 +211,12 @@ pub(crate) fn train(
     let train_frames = frames.subset(&split.record.train_rows);
     let val_frames = split.record.split.as_ref().map(|s| frames.subset(&s.rows));
     let val = split.val.as_ref().zip(val_frames.as_ref());
+    let in_first = split.record.in_first_dataset();
     let fresh = FreshImage {
         cfg: &cfg,
         base: base.as_ref(),
         seed: seed.unwrap_or(0),
+        in_first: &in_first,
     };
     let data = (&split.train, &train_frames);
     let fitted = run_detached(py, || {

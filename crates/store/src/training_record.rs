@@ -74,7 +74,8 @@ pub struct TrainingRecord {
 /// The out-of-fold base predictions of a residual image model's training
 /// rows: the rows dealt into `folds` folds from `seed`, each fold's
 /// predictions from a pin model fitted on the other folds; the stored pin
-/// model (`base/`) fitted on every training row.
+/// model (`base/`) fitted on every training row, or with
+/// `first_dataset_only` on the first dataset's rows only.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BaseFolds {
@@ -84,8 +85,15 @@ pub struct BaseFolds {
     pub folds: usize,
     /// The seed of the deal.
     pub seed: u64,
-    /// Each training row's fold, in the order of `train_rows`.
+    /// Each training row's fold, in the order of `train_rows`; `folds`
+    /// for a row the pin models were not fitted on (`first_dataset_only`),
+    /// predicted by the stored pin model.
     pub fold_of_row: Vec<usize>,
+    /// The pin model was fitted on the rows of the first dataset only
+    /// (`[base] fit_on = "first_dataset"`): only they were dealt into the
+    /// folds. False (and left out) otherwise.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub first_dataset_only: bool,
 }
 
 /// Which dataset: its content hash, size and where it was read from.
@@ -161,6 +169,13 @@ impl TrainingRecord {
         }
     }
 
+    /// Whether each training row (in the order of `train_rows`) is a row
+    /// of the first dataset given: every one for a model of one dataset.
+    pub fn in_first_dataset(&self) -> Vec<bool> {
+        let first = self.datasets.first().unwrap_or(&self.dataset).rows;
+        self.train_rows.iter().map(|&r| r < first).collect()
+    }
+
     /// The record of a model fitted on every row of `data`.
     pub fn all_rows(data: &TapData, path: Option<&std::path::Path>) -> Self {
         Self::new(data, path, (0..data.len()).collect(), None)
@@ -222,7 +237,8 @@ impl TrainingRecord {
             ));
         }
         if let Some(b) = &self.base {
-            let bad = b.fold_of_row.iter().any(|&f| f >= b.folds);
+            let past = b.folds + usize::from(b.first_dataset_only);
+            let bad = b.fold_of_row.iter().any(|&f| f >= past);
             if b.fold_of_row.len() != self.train_rows.len() || bad {
                 return Err(format!(
                     "the base's folds: {} rows dealt into {} folds for {} training rows",
@@ -340,5 +356,41 @@ mod tests {
             .check()
             .unwrap_err()
             .contains("past the dataset's 10 rows"));
+    }
+
+    /// The rows of the first of two joined datasets are told apart in
+    /// training order, and a base fitted on them alone may mark the
+    /// other rows with the fold past the last (only then).
+    #[test]
+    fn a_base_of_the_first_dataset_marks_the_other_rows_past_its_folds() {
+        let (a, b) = (data(4, "real", false), data(3, "simulated", false));
+        let joined = crate::join_datasets(&[
+            (std::path::Path::new("a"), &a),
+            (std::path::Path::new("b"), &b),
+        ])
+        .unwrap();
+        let ids = vec![DatasetId::of(&a, None), DatasetId::of(&b, None)];
+        let rec = TrainingRecord::new(&joined, None, vec![6, 0, 3, 4], None).with_datasets(ids);
+        assert_eq!(rec.in_first_dataset(), [false, true, true, false]);
+        let one = TrainingRecord::all_rows(&a, None);
+        assert!(one.in_first_dataset().iter().all(|&f| f));
+        let mut with_base = rec.clone();
+        with_base.base = Some(BaseFolds {
+            model: "pdennn".into(),
+            folds: 2,
+            seed: 0,
+            fold_of_row: vec![2, 0, 1, 2],
+            first_dataset_only: true,
+        });
+        with_base.check().unwrap();
+        let text = serde_json::to_string(&with_base).unwrap();
+        assert!(text.contains("\"first_dataset_only\":true"));
+        let mut every_row = with_base.clone();
+        every_row.base.as_mut().unwrap().first_dataset_only = false;
+        assert!(every_row.check().unwrap_err().contains("the base's folds"));
+        every_row.base.as_mut().unwrap().fold_of_row = vec![1, 0, 1, 0];
+        every_row.check().unwrap();
+        let text = serde_json::to_string(&every_row).unwrap();
+        assert!(!text.contains("first_dataset_only"), "left out when false");
     }
 }

@@ -349,8 +349,8 @@ mod tests {
         let clean = data(45);
         let (_, before, folds) = fit_base(&settings, &clean, 3, &in_first).unwrap();
         assert!(folds.first_dataset_only);
-        for r in 0..45 {
-            assert_eq!(folds.fold_of_row[r] == 3, !in_first[r], "row {r}");
+        for (r, (&fold, &first)) in folds.fold_of_row.iter().zip(&in_first).enumerate() {
+            assert_eq!(fold == 3, !first, "row {r}");
         }
         let mut later = clean.clone();
         later.targets[2 * 5] += 50.0;

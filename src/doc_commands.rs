@@ -1,4 +1,4 @@
-//! Tests only: every `tactrace ...` command line in README.md and docs/*.md
+//! Tests only: every `tactrace ...` command line in README.md and docs/ (docs/results/ too)
 //! parses with the CLI's own clap definition, so the docs cannot name an
 //! option, a value or a subcommand that does not exist.
 //!
@@ -30,12 +30,13 @@ struct Found {
     block: bool,
 }
 
-/// The user documents: README.md and docs/*.md.
+/// The user documents: README.md, docs/*.md and docs/results/*.md.
 fn documents() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = vec![root.join("README.md")];
-    let mut docs: Vec<PathBuf> = std::fs::read_dir(root.join("docs"))
-        .expect("docs/ is readable")
+    let mut docs: Vec<PathBuf> = ["docs", "docs/results"]
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(root.join(dir)).expect("docs/ is readable"))
         .map(|e| e.expect("a docs entry").path())
         .filter(|p| p.extension().is_some_and(|e| e == "md"))
         .collect();
@@ -433,7 +434,7 @@ fn problem(found: &Found) -> Option<String> {
 }
 
 /// Issue 20: the docs are checked against the code. Every `tactrace`
-/// command line of README.md and docs/*.md names existing subcommands and
+/// command line of README.md and docs/ (docs/results/ too) names existing subcommands and
 /// options, and the shell lines parse.
 #[test]
 fn every_documented_command_parses() {

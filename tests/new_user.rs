@@ -12,7 +12,8 @@ fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// README.md, ARCHITECTURE.md, CHANGELOG.md, fuzz/README.md and docs/*.md.
+/// README.md, ARCHITECTURE.md, CHANGELOG.md, fuzz/README.md, docs/*.md and
+/// docs/results/*.md.
 fn markdown_files() -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = [
         "README.md",
@@ -23,8 +24,9 @@ fn markdown_files() -> Vec<PathBuf> {
     .iter()
     .map(|f| repo().join(f))
     .collect();
-    let mut docs: Vec<PathBuf> = std::fs::read_dir(repo().join("docs"))
-        .unwrap()
+    let mut docs: Vec<PathBuf> = ["docs", "docs/results"]
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(repo().join(dir)).unwrap())
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "md"))
         .collect();
@@ -33,13 +35,13 @@ fn markdown_files() -> Vec<PathBuf> {
     files
 }
 
-/// The user docs: README.md and docs/*.md.
+/// The user docs: README.md and every page under docs/.
 fn user_docs() -> Vec<PathBuf> {
     markdown_files()
         .into_iter()
         .filter(|p| {
             let docs = repo().join("docs");
-            *p == repo().join("README.md") || p.parent() == Some(docs.as_path())
+            *p == repo().join("README.md") || p.starts_with(&docs)
         })
         .collect()
 }

@@ -329,12 +329,7 @@ mod tests {
         let mut spoilt = clean.clone();
         spoilt.targets[2 * 7] += 50.0;
         let (_, after, _) = fit_base(&settings, &spoilt, 5, &[true; 36]).unwrap();
-        let own = folds.fold_of_row[7];
-        for r in 0..36 {
-            let moved = (before[2 * r] - after[2 * r]).abs();
-            let same_fold = folds.fold_of_row[r] == own;
-            assert!(same_fold == (moved == 0.0), "row {r}: moved {moved}");
-        }
+        moved_outside_its_fold_only(&before, &after, &folds.fold_of_row, 7);
     }
 
     /// With `fit_on = "first_dataset"` the later rows fit nothing: a
@@ -359,11 +354,21 @@ mod tests {
         let mut first = clean.clone();
         first.targets[2 * 4] += 50.0;
         let (_, after, _) = fit_base(&settings, &first, 3, &in_first).unwrap();
-        let own = folds.fold_of_row[4];
-        for r in 0..45 {
+        moved_outside_its_fold_only(&before, &after, &folds.fold_of_row, 4);
+    }
+
+    /// Panics unless, with row `spoilt`'s target spoilt, exactly the rows
+    /// outside its fold moved their first predicted target (two a row).
+    fn moved_outside_its_fold_only(
+        before: &[f64],
+        after: &[f64],
+        fold_of_row: &[usize],
+        spoilt: usize,
+    ) {
+        let own = fold_of_row[spoilt];
+        for (r, &fold) in fold_of_row.iter().enumerate() {
             let moved = (before[2 * r] - after[2 * r]).abs();
-            let same_fold = folds.fold_of_row[r] == own;
-            assert!(same_fold == (moved == 0.0), "row {r}: moved {moved}");
+            assert!((fold == own) == (moved == 0.0), "row {r}: moved {moved}");
         }
     }
 

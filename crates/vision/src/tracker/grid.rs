@@ -188,12 +188,12 @@ impl PinTracker {
         grid: &Grid,
     ) -> Option<Vec<[f64; 2]>> {
         let mut pairs = vec![None; shifted.len()];
-        let mut paired = self.pair_nearest(|i| Some(shifted[i]), points, grid, &mut pairs);
+        let mut paired = self.pair_nearest(shifted, points, grid, &mut pairs);
         let kernel = &self.stages[GROW_STAGE].kernel;
         let grows = self.grow && (paired as f64) < GROW_BELOW * pairs.len() as f64;
         for _ in 0..if grows { GROW_ROUNDS } else { 0 } {
             let at = self.fill(&self.displacements(&pairs, points), kernel);
-            match self.pair_nearest(|i| Some(at[i]), points, grid, &mut pairs) {
+            match self.pair_nearest(&at, points, grid, &mut pairs) {
                 0 => break,
                 grew => paired += grew,
             }
@@ -206,12 +206,12 @@ impl PinTracker {
     }
 
     /// Pairs each pin `i` with no pair yet (`pairs[i]` is `None`) and a
-    /// position `at(i)` with the nearest point within [`NEAREST_REACH`]
+    /// position `at[i]` with the nearest point within [`NEAREST_REACH`]
     /// that no pin holds, when that point's nearest such pin is it too;
     /// returns how many pairs it added.
     fn pair_nearest(
         &self,
-        at: impl Fn(usize) -> Option<[f64; 2]>,
+        at: &[[f64; 2]],
         points: &[[f64; 2]],
         grid: &Grid,
         pairs: &mut [Option<usize>],
@@ -225,10 +225,10 @@ impl PinTracker {
             pin_of[k].0 = f64::NEG_INFINITY;
         }
         let mut point_of = vec![(f64::INFINITY, usize::MAX); pairs.len()];
-        for i in 0..pairs.len() {
-            let Some(p) = at(i).filter(|_| pairs[i].is_none()) else {
+        for (i, &p) in at.iter().enumerate() {
+            if pairs[i].is_some() {
                 continue;
-            };
+            }
             grid.around(&p, reach, |k| {
                 let d2 = (p[0] - points[k][0]).powi(2) + (p[1] - points[k][1]).powi(2);
                 if d2 < reach2 {

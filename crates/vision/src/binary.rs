@@ -13,6 +13,7 @@
 use crate::blob::KeyPoint;
 use crate::grouping::{joins, keypoint_of, Centre, Grouper};
 use crate::params::BlobParams;
+use crate::row_bits::any_in_span;
 use crate::runs::RunDetector;
 
 /// Whether every level in `lo..=hi` binarises `pixels` (white above the
@@ -26,40 +27,7 @@ pub(crate) fn same_at_levels(pixels: &[u8], lo: i16, hi: i16) -> bool {
     }
     // v in (lo, hi] <=> v - (lo + 1) < hi - lo, wrapping in u8 (lo >= -1).
     let (base, span) = ((lo + 1) as u8, (hi - lo) as u8);
-    let blocks = pixels.chunks_exact(64);
-    let tail = blocks.remainder();
-    blocks.clone().all(|block| !any_in_span(block, base, span))
-        && tail.iter().all(|&v| v.wrapping_sub(base) >= span)
-}
-
-/// Whether any of the 64 values of `block` has `v - base < span` (wrapping
-/// in u8; `span` >= 1): sixteen values a vector compare on x86_64 (SSE2,
-/// part of its baseline), `v - base <= span - 1` where the saturating
-/// `(v - base) - (span - 1)` is zero.
-fn any_in_span(block: &[u8], base: u8, span: u8) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if let Ok(block) = <&[u8; 64]>::try_from(block) {
-        use std::arch::x86_64::{
-            _mm_cmpeq_epi8, _mm_loadu_si128, _mm_movemask_epi8, _mm_or_si128, _mm_set1_epi8,
-            _mm_setzero_si128, _mm_sub_epi8, _mm_subs_epu8,
-        };
-        // SAFETY: SSE2 is in the x86_64 baseline, so these intrinsics exist
-        // on every x86_64 CPU; `block` holds 64 bytes, so the four 16-byte
-        // loads at 0, 16, 32 and 48 are in bounds (no alignment needed).
-        return unsafe {
-            let (b, top) = (_mm_set1_epi8(base as i8), _mm_set1_epi8((span - 1) as i8));
-            let inside = |at: usize| {
-                let d = _mm_sub_epi8(_mm_loadu_si128(block.as_ptr().add(at).cast()), b);
-                _mm_cmpeq_epi8(_mm_subs_epu8(d, top), _mm_setzero_si128())
-            };
-            let any = _mm_or_si128(
-                _mm_or_si128(inside(0), inside(16)),
-                _mm_or_si128(inside(32), inside(48)),
-            );
-            _mm_movemask_epi8(any) != 0
-        };
-    }
-    block.iter().any(|&v| v.wrapping_sub(base) < span)
+    !any_in_span(pixels, base, span)
 }
 
 /// [`crate::detect_blobs`] for a `width` x `height` frame that binarises the

@@ -27,6 +27,7 @@ mod params;
 pub mod preprocess;
 mod reader;
 mod rest;
+mod row_bits;
 mod runs;
 mod shape;
 mod spots;

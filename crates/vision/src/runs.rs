@@ -1,11 +1,11 @@
 //! The blob detector's contours of a binary frame (report ch. 4.1) found
 //! without the raster scan of border following. The white pixels are read
-//! as horizontal runs (16 pixels a compare, the binary frame written on the
-//! way) and joined into 8-connected components by union-find. A component
-//! whose Euler number (its runs minus its pairs of touching runs in
-//! adjacent rows) is 1 has no hole, so OpenCV's `findContours` gives it
-//! exactly one contour, its outer border, started at its first pixel in
-//! raster order. When the area filter surely rejects that border, known
+//! as horizontal runs (32 or 16 pixels a compare, `row_bits.rs`; the
+//! binary frame written on the way) and joined into 8-connected components
+//! by union-find. A component whose Euler number (its runs minus its pairs
+//! of touching runs in adjacent rows) is 1 has no hole, so OpenCV's
+//! `findContours` gives it exactly one contour, its outer border, started
+//! at its first pixel in raster order. When the area filter surely rejects that border, known
 //! from the runs alone (its area is at least the number of squares of four
 //! white pixels and at most its box's: the rim's long arcs, the specks),
 //! it is never walked; otherwise it is walked directly from there
@@ -18,6 +18,7 @@ use crate::blob::{colour_passes, measure_shape, measure_shape_in, Known, Scratch
 use crate::contour::ContourScanner;
 use crate::grouping::Centre;
 use crate::params::BlobParams;
+use crate::row_bits::row_mask;
 use crate::shape::Octagon;
 
 /// A horizontal run of white pixels `x0..=x1` in row `y`.
@@ -330,51 +331,6 @@ fn white_runs(
             row_mask(row, level as u8, labels, &mut masks);
         }
         row_runs(&masks, y as u32, width as u32, runs);
-    }
-}
-
-/// Bit `x % 64` of `masks[x / 64]` set, and `labels[x]` 1 (else 0), where
-/// `row[x] > lvl` (`lvl` < 255; `row` and `labels` of the same length, at
-/// most 64 bits a mask; the bits past the row cleared): 64 pixels a step in
-/// four 16-pixel vector compares on x86_64 (SSE2, part of its baseline),
-/// one at a time elsewhere and for the tail.
-fn row_mask(row: &[u8], lvl: u8, labels: &mut [i8], masks: &mut [u64]) {
-    let n = row.len().min(labels.len()).min(64 * masks.len());
-    masks.fill(0);
-    #[cfg(target_arch = "x86_64")]
-    let done = {
-        use std::arch::x86_64::{
-            _mm_and_si128, _mm_cmpeq_epi8, _mm_loadu_si128, _mm_max_epu8, _mm_movemask_epi8,
-            _mm_set1_epi8, _mm_storeu_si128,
-        };
-        let (src, dst) = (row.as_ptr(), labels.as_mut_ptr());
-        for (w, mask) in masks.iter_mut().enumerate().take(n / 64) {
-            let mut bits = 0u64;
-            for q in 0..4 {
-                let at = 64 * w + 16 * q;
-                // SAFETY: SSE2 is in the x86_64 baseline, so these
-                // intrinsics exist on every x86_64 CPU; at + 16 <= 64 (w + 1)
-                // <= n, within `row` and `labels`, so the 16 bytes loaded
-                // and stored are in bounds (no alignment needed).
-                // v > lvl <=> max(v, lvl + 1) == v (lvl < 255).
-                let hits = unsafe {
-                    let v = _mm_loadu_si128(src.add(at).cast());
-                    let hit = _mm_cmpeq_epi8(_mm_max_epu8(v, _mm_set1_epi8((lvl + 1) as i8)), v);
-                    _mm_storeu_si128(dst.add(at).cast(), _mm_and_si128(hit, _mm_set1_epi8(1)));
-                    _mm_movemask_epi8(hit)
-                };
-                bits |= u64::from(hits as u16) << (16 * q);
-            }
-            *mask = bits;
-        }
-        n / 64 * 64
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let done = 0;
-    for x in done..n {
-        let white = row[x] > lvl;
-        labels[x] = i8::from(white);
-        masks[x / 64] |= u64::from(white) << (x % 64);
     }
 }
 

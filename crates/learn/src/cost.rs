@@ -22,7 +22,7 @@
 //! Both tend to the squared cost as `a` grows (the slope exactly, not
 //! scaled), so a large scale is today's training.
 use crate::error::LearnError;
-use crate::targets::{encoded_columns, ModelTarget};
+use crate::targets::{linear_column, ModelTarget};
 use serde::{Deserialize, Serialize};
 
 /// Which cost ([`Cost::kind`]).
@@ -93,21 +93,8 @@ impl Cost {
 
     /// The encoded column of the cost's target.
     fn column(&self, outputs: &[ModelTarget]) -> Result<usize, LearnError> {
-        let Some(t) = outputs.iter().position(|o| o.name == self.target) else {
-            let names: Vec<&str> = outputs.iter().map(|o| o.name.as_str()).collect();
-            return Err(cost_err(format!(
-                "target `{}` is not one of the model's ({})",
-                self.target,
-                names.join(", ")
-            )));
-        };
-        if outputs[t].circular {
-            return Err(cost_err(format!(
-                "target `{}` is circular: its sine and cosine keep the squared cost",
-                self.target
-            )));
-        }
-        Ok(encoded_columns(outputs)[t][0])
+        let why = "its sine and cosine keep the squared cost";
+        linear_column(outputs, &self.target, why).map_err(cost_err)
     }
 }
 

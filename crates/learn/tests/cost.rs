@@ -14,19 +14,21 @@ use tactrace_learn::{
     ModelKind, ModelTarget, NetCost, PoseModel, Preset, Unit,
 };
 
-/// All parameters, canonical orientation, flattened.
-fn flat(layers: &Layers) -> Vec<f64> {
-    let mut out = Vec::new();
-    for l in 1..layers.sizes().len() {
-        out.extend(layers.weight(l).iter().map(|&v| v as f64));
-        out.extend(layers.bias(l).iter().map(|&v| v as f64));
-    }
-    out
-}
-
+/// Every parameter's change from `before` to `after`, layer by layer
+/// (weights in canonical orientation, then biases).
 fn change(before: &Layers, after: &Layers) -> Vec<f64> {
-    let b = flat(before);
-    flat(after).iter().zip(&b).map(|(a, b)| a - b).collect()
+    let diff = |a: &[f32], b: &[f32]| -> Vec<f64> {
+        a.iter()
+            .zip(b)
+            .map(|(&a, &b)| f64::from(a) - f64::from(b))
+            .collect()
+    };
+    (1..before.sizes().len())
+        .flat_map(|l| {
+            let w = diff(&after.weight(l), &before.weight(l));
+            w.into_iter().chain(diff(after.bias(l), before.bias(l)))
+        })
+        .collect()
 }
 
 fn net_cost(kind: CostKind, output: usize, scale: f32) -> NetCost {

@@ -12,7 +12,7 @@
 //! prediction.
 use crate::dataset::Dataset;
 use crate::error::LearnError;
-use crate::targets::{encoded_columns, ModelTarget};
+use crate::targets::{linear_column, ModelTarget};
 use serde::{Deserialize, Serialize};
 
 /// The largest weight accepted: each epoch grows by `weight - 1` times
@@ -88,21 +88,8 @@ impl BandWeight {
 
     /// The encoded column of the band's target.
     fn column(&self, outputs: &[ModelTarget]) -> Result<usize, LearnError> {
-        let Some(t) = outputs.iter().position(|o| o.name == self.target) else {
-            let names: Vec<&str> = outputs.iter().map(|o| o.name.as_str()).collect();
-            return Err(band_err(format!(
-                "target `{}` is not one of the model's ({})",
-                self.target,
-                names.join(", ")
-            )));
-        };
-        if outputs[t].circular {
-            return Err(band_err(format!(
-                "target `{}` is circular: a band of an angle that wraps is not supported",
-                self.target
-            )));
-        }
-        Ok(encoded_columns(outputs)[t][0])
+        let why = "a band of an angle that wraps is not supported";
+        linear_column(outputs, &self.target, why).map_err(band_err)
     }
 }
 

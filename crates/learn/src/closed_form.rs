@@ -5,9 +5,12 @@
 //! dozen: the exact free phase (`phi = sigmoid(drive)`, `y = W2^T phi + b2`),
 //! the nudge, the linearised clamped phase (`A = W2^T D^2 W2` with
 //! `D = diag(phi')`, `(I + A) e2 = beta (t - y)`, `e1 = D W2 e2`), the energy
-//! (eq. 3.17) and the update (eqs. 3.21-3.22). Every pass stores as little
+//! (eq. 3.17) and the update (eqs. 3.21-3.22); a cost other than the
+//! squared one moves the target the output is nudged toward
+//! ([`crate::NetCost`]). Every pass stores as little
 //! as it can (stores, not arithmetic, bound them on the machine measured,
 //! docs/learning.md "Speed"). Tested against the general step.
+use crate::cost::nudge_target;
 use crate::dennn::{ClampedPhase, EpConfig, FreePhase, SampleStats};
 use crate::ep::LayerRates;
 use crate::kernels::{madd, reduce, sigmoid, LANES};
@@ -102,9 +105,10 @@ pub(crate) fn step_two_outputs<const F: bool>(
     for p in 0..2 {
         let y = wphi[p] + b2[p];
         loss += 0.5 * ((y - t[p]) as f64).powi(2);
-        y_nudged[p] = y + beta * (t[p] - y);
-        nudge_sq += ((y_nudged[p] - t[p]) as f64).powi(2);
-        rhs[p] = (beta * (t[p] - y)) as f64;
+        let t = nudge_target(cfg.cost.as_ref(), p, y, t[p]);
+        y_nudged[p] = y + beta * (t - y);
+        nudge_sq += ((y_nudged[p] - t) as f64).powi(2);
+        rhs[p] = (beta * (t - y)) as f64;
     }
     // (I + A) e2 = rhs, A symmetric positive semi-definite: Cramer's rule.
     let (m00, m01, m11) = (1.0 + a00 as f64, a01 as f64, 1.0 + a11 as f64);

@@ -2,6 +2,7 @@
 //! or the backprop baseline, with every hyper-parameter explicit, checked
 //! before any training starts.
 use crate::band_weight::BandWeight;
+use crate::cost::Cost;
 use crate::dennn::{ClampedPhase, FreePhase, LrScaling};
 use crate::error::LearnError;
 use crate::pca::PcScaling;
@@ -166,6 +167,11 @@ pub struct ModelConfig {
     /// default, not written): every row once.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub band_weight: Option<BandWeight>,
+    /// The training cost of one target ([`Cost`]: log-cosh or Huber in
+    /// place of the squared cost); none (the default, not written): every
+    /// target's squared cost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cost: Option<Cost>,
     /// The single net of DisDenNN / PcaDenNN (outputs r and theta).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pose: Option<NetConfig>,
@@ -341,6 +347,9 @@ impl ModelConfig {
         }
         if let Some(b) = &self.band_weight {
             b.validate()?;
+        }
+        if let Some(c) = &self.cost {
+            c.validate()?;
         }
         if self.divergence_retries > MAX_RETRIES {
             let n = self.divergence_retries;
@@ -572,6 +581,7 @@ fn report(kind: ModelKind) -> ModelConfig {
         rotations: None,
         reflections: None,
         band_weight: None,
+        cost: None,
         pose: None,
         position: None,
         angle: None,

@@ -98,6 +98,7 @@ fn nets_of(cfg: &ModelConfig) -> Result<Value, LearnError> {
     c.anneal_fraction = 0.0;
     c.input_noise = 0.0;
     c.band_weight = None;
+    c.cost = None;
     if let Some(r) = c.rotations.as_mut() {
         r.at_prediction = false;
     }

@@ -8,6 +8,7 @@
 //!   relax to equilibrium (closed form for one hidden layer, or Euler);
 //! - local update `W(l) += eta phi(s(l-1)) e(l)^T`, `b(l) += eta e(l)`
 //!   (eqs. 3.21-3.22 with the sign fixed together with the nudge).
+use crate::cost::NetCost;
 use crate::dataset::Dataset;
 use crate::ep::step;
 use crate::error::LearnError;
@@ -95,6 +96,11 @@ pub struct EpConfig {
     pub clamped_phase: ClampedPhase,
     pub epochs: usize,
     pub seed: u64,
+    /// A cost other than the squared one on an output ([`NetCost`]),
+    /// entering through the nudge; none (the default, not written): eq.
+    /// 3.16's squared cost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cost: Option<NetCost>,
 }
 
 impl Default for EpConfig {
@@ -108,6 +114,7 @@ impl Default for EpConfig {
             clamped_phase: ClampedPhase::Linearised,
             epochs: 200,
             seed: 0,
+            cost: None,
         }
     }
 }

@@ -3,6 +3,7 @@
 //! local weight update. Kept apart from the [`crate::DenNN`] type so the hot
 //! loop reads top to bottom.
 use crate::closed_form::{closed_form_outputs, step_one_output, step_two_outputs};
+use crate::cost::nudge_targets;
 use crate::deep_clamp::{clamp_linearised_deep, solve_in_place};
 use crate::dennn::{ClampedPhase, EpConfig, FreePhase, LrScaling, SampleStats};
 use crate::kernels::{dot, dot3, sigmoid, sum_squares_f64};
@@ -49,8 +50,13 @@ pub(crate) fn step_general<const F: bool>(
         FreePhase::Euler { n_i, dt } => free_euler::<F>(layers, st, x, n_i, dt as f32),
     }
     let mut loss = 0.0f64;
-    for ((yn, &y), &t) in st.nudged.iter_mut().zip(&st.s[n]).zip(t) {
+    for (&y, &t) in st.s[n].iter().zip(t) {
         loss += 0.5 * ((y - t) as f64).powi(2);
+    }
+    // The cost enters through the nudge alone: `t` in the squared cost's.
+    let nudge_to = nudge_targets(cfg.cost.as_ref(), &st.s[n], t);
+    let t = &*nudge_to;
+    for ((yn, &y), &t) in st.nudged.iter_mut().zip(&st.s[n]).zip(t) {
         *yn = y + beta * (t - y);
     }
     match cfg.clamped_phase {

@@ -237,8 +237,13 @@ impl<'a> Shared<'a> {
                 )?,
             };
             let name = member_name(&name, m, k);
+            let cost = (member.cost.as_ref())
+                .map(|c| c.for_net(self.outputs, cols, self.targets.std()))
+                .transpose()?
+                .flatten();
             let mut trainer =
-                Trainer::new(&name, layers, &member, net_cfg, data, val_data, j as u64);
+                Trainer::new(&name, layers, &member, net_cfg, data, val_data, j as u64)
+                    .with_cost(cost);
             if let Some((_, done)) = self.start {
                 trainer.skip_epochs(done);
             }

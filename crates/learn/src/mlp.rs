@@ -1,6 +1,8 @@
 //! The backprop twin of the dendritic network: same layers, same
-//! initialisation, plain per-sample SGD on `0.5 ||y - t||^2`. It is the
+//! initialisation, plain per-sample SGD on `0.5 ||y - t||^2` (or another
+//! cost on an output, [`crate::NetCost`]). It is the
 //! baseline the DenNN must match (report ch. 3.2).
+use crate::cost::{nudge_target, NetCost};
 use crate::dennn::{check_dims, LrScaling};
 use crate::ep::{update, LayerRates};
 use crate::error::LearnError;
@@ -13,6 +15,7 @@ pub struct Mlp {
     st: States,
     lr_scaling: LrScaling,
     output_lr: Option<f64>,
+    cost: Option<NetCost>,
 }
 
 impl Mlp {
@@ -29,6 +32,7 @@ impl Mlp {
             st,
             lr_scaling: LrScaling::None,
             output_lr: None,
+            cost: None,
         }
     }
 
@@ -49,6 +53,13 @@ impl Mlp {
     /// As [`Mlp::with_output_learning_rate`], in place (an annealed rate).
     pub(crate) fn set_output_learning_rate(&mut self, lr: Option<f64>) {
         self.output_lr = lr;
+    }
+
+    /// Train on `cost` in place of the squared cost on its output (as
+    /// [`crate::EpConfig::cost`]): the output error is `-C'(y - t)`.
+    pub fn with_cost(mut self, cost: Option<NetCost>) -> Self {
+        self.cost = cost;
+        self
     }
 
     /// The parameters.
@@ -80,7 +91,8 @@ fn train_fma(net: &mut Mlp, x: &[f32], t: &[f32], lr: f64) -> f64 {
     train_impl::<true>(net, x, t, lr)
 }
 
-/// Forward pass, output error `t - y` (the negative loss gradient), deltas
+/// Forward pass, output error `t - y` (the negative loss gradient; `-C'(y -
+/// t)` under another cost), deltas
 /// `e(l) = phi'(s(l)) . W(l+1) e(l+1)`, then the same rank-one update as EP.
 #[inline(always)]
 fn train_impl<const F: bool>(net: &mut Mlp, x: &[f32], t: &[f32], lr: f64) -> f64 {
@@ -89,13 +101,14 @@ fn train_impl<const F: bool>(net: &mut Mlp, x: &[f32], t: &[f32], lr: f64) -> f6
         st,
         lr_scaling,
         output_lr,
+        cost,
     } = net;
     let n = layers.depth();
     layers.forward::<F>(x, st);
     let mut loss = 0.0f64;
-    for ((e, &y), &t) in st.e[n].iter_mut().zip(&st.s[n]).zip(t) {
+    for (p, ((e, &y), &t)) in st.e[n].iter_mut().zip(&st.s[n]).zip(t).enumerate() {
         loss += 0.5 * ((y - t) as f64).powi(2);
-        *e = t - y;
+        *e = nudge_target(cost.as_ref(), p, y, t) - y;
     }
     for l in (1..n).rev() {
         let (lower, upper) = st.e.split_at_mut(l + 1);

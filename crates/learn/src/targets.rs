@@ -124,6 +124,28 @@ pub fn check_targets(targets: &[ModelTarget]) -> Result<(), LearnError> {
     Ok(())
 }
 
+/// The encoded column of the plain (not circular) target `name` of
+/// `outputs`, for a setting that picks one (`band_weight`, `cost`); the
+/// reason when it is not one of them, or is circular (`why_not_circular`
+/// says why that will not do).
+pub(crate) fn linear_column(
+    outputs: &[ModelTarget],
+    name: &str,
+    why_not_circular: &str,
+) -> Result<usize, String> {
+    let Some(t) = outputs.iter().position(|o| o.name == name) else {
+        let names: Vec<&str> = outputs.iter().map(|o| o.name.as_str()).collect();
+        return Err(format!(
+            "target `{name}` is not one of the model's ({})",
+            names.join(", ")
+        ));
+    };
+    if outputs[t].circular {
+        return Err(format!("target `{name}` is circular: {why_not_circular}"));
+    }
+    Ok(encoded_columns(outputs)[t][0])
+}
+
 /// The encoded columns of each target, in order (`[k]` for a plain target,
 /// `[k, k + 1]` for a circular one's sine and cosine).
 pub fn encoded_columns(targets: &[ModelTarget]) -> Vec<Vec<usize>> {

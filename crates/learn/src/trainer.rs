@@ -2,6 +2,7 @@
 //! one EP (or backprop) pass per net, the nets (the PDenNN's two, an
 //! ensemble's members) in parallel with rayon, and the per-epoch history of report Fig. 4.5.
 use crate::config::{anneal_factor, ModelConfig, ModelKind, NetConfig};
+use crate::cost::NetCost;
 use crate::dataset::Dataset;
 use crate::dennn::{DenNN, EpConfig};
 use crate::error::LearnError;
@@ -173,6 +174,7 @@ impl Trainer {
                 clamped_phase: cfg.clamped_phase,
                 epochs: cfg.epochs,
                 seed: cfg.seed,
+                cost: None,
             };
             Engine::Ep(DenNN::from_layers(layers), ep)
         };
@@ -191,6 +193,15 @@ impl Trainer {
             limit,
             noise: (cfg.input_noise > 0.0).then(|| InputNoise::new(cfg.input_noise, cfg.seed, k)),
         }
+    }
+
+    /// Train on `cost` in place of the squared cost ([`crate::Cost`]).
+    pub fn with_cost(mut self, cost: Option<NetCost>) -> Self {
+        self.engine = match self.engine {
+            Engine::Ep(net, cfg) => Engine::Ep(net, EpConfig { cost, ..cfg }),
+            Engine::Backprop(net, lr, out) => Engine::Backprop(net.with_cost(cost), lr, out),
+        };
+        self
     }
 
     /// Draw the shuffles (and input noise) of `epochs` epochs without

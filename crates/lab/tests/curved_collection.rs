@@ -8,6 +8,7 @@
 //! - Along the edge (edge tasks): the same labels, taps spread over the
 //!   edge (their poses' edge points far apart), refused for surface_3d.
 use tactrace_control::Task;
+use tactrace_lab::collect::Collected;
 use tactrace_lab::collect3d::{collect_3d, tap_edge_frame, tap_patch, Collect3dConfig};
 use tactrace_servo::RigConfig;
 use tactrace_shape3d::{pose_of_label, true_label, HeightField, ObjectConfig, Surface};
@@ -17,6 +18,12 @@ fn object(name: &str) -> Surface {
     ObjectConfig::named(name).unwrap().build().unwrap()
 }
 
+/// `cfg`'s taps on the built-in object `name`.
+fn collect(cfg: &Collect3dConfig, name: &str) -> Collected {
+    let rig = RigConfig::default();
+    collect_3d(&rig, &object(name), cfg, name, |_| {}).unwrap()
+}
+
 fn surface_taps(curvature_per_mm: f64) -> TapData {
     let cfg = Collect3dConfig {
         samples: 24,
@@ -24,15 +31,7 @@ fn surface_taps(curvature_per_mm: f64) -> TapData {
         curvature_per_mm,
         ..Collect3dConfig::default()
     };
-    collect_3d(
-        &RigConfig::default(),
-        &object("plane"),
-        &cfg,
-        "plane",
-        |_| {},
-    )
-    .unwrap()
-    .data
+    collect(&cfg, "plane").data
 }
 
 /// Mean pin displacement of tap `i`, px.
@@ -147,7 +146,7 @@ fn taps_along_the_edge_keep_the_labels_and_spread_over_it() {
     assert!(diff > 0.05, "mean field difference {diff} px");
     assert_eq!(along.data.meta.settings["collect_3d"]["along_edge"], true);
     // The taps' edge points spread round the edge (radius 40 mm).
-    let edge = foil.edge().unwrap();
+    let edge = object("foil").edge().unwrap();
     let points: Vec<_> = (0..16)
         .map(|i| tap_edge_frame(&cfg(true), &edge, i).translation.vector)
         .collect();

@@ -153,55 +153,55 @@ impl ObjectConfig {
     pub fn named(name: &str) -> Option<Self> {
         let name = name.trim().to_ascii_lowercase();
         Some(match name.as_str() {
-            "plane" => Self::Ramp {
-                height_mm: 0.0,
-                slope_deg: 0.0,
-                azimuth_deg: 0.0,
-            },
-            "ramp" => Self::Ramp {
-                height_mm: 0.0,
-                slope_deg: 20.0,
-                azimuth_deg: 0.0,
-            },
+            "plane" => Self::ramp(0.0, 0.0),
+            "ramp" => Self::ramp(20.0, 0.0),
             "saddle" => Self::Saddle { radius_mm: 60.0 },
-            "bowl" => Self::Bowl {
-                sphere_radius_mm: 80.0,
-                rim_radius_mm: 60.0,
-            },
+            "bowl" => Self::bowl(80.0, 60.0),
             "wave" => Self::Wave {
                 amplitude_mm: 4.0,
                 wavelength_mm: 60.0,
                 azimuth_deg: 0.0,
             },
-            "foil" => Self::Foil {
-                outline_radius_mm: 40.0,
-                bend_radius_mm: 80.0,
-                thickness_mm: 3.0,
-            },
+            "foil" => Self::foil(80.0),
             "dome" => Self::Dome { radius_mm: 60.0 },
             "cylinder" => Self::Cylinder {
                 radius_mm: 40.0,
                 azimuth_deg: 90.0,
             },
-            "bowl-50" => Self::Bowl {
-                sphere_radius_mm: 50.0,
-                rim_radius_mm: 40.0,
-            },
-            "ramp-32" => Self::Ramp {
-                height_mm: 0.0,
-                slope_deg: 32.0,
-                azimuth_deg: 135.0,
-            },
-            "foil-65" => Self::Foil {
-                outline_radius_mm: 40.0,
-                bend_radius_mm: 65.0,
-                thickness_mm: 3.0,
-            },
+            "bowl-50" => Self::bowl(50.0, 40.0),
+            "ramp-32" => Self::ramp(32.0, 135.0),
+            "foil-65" => Self::foil(65.0),
             other => Self::Extruded {
                 shape: BuiltinShape::from_name(other)?,
                 height_mm: EXTRUDED_HEIGHT_MM,
             },
         })
+    }
+
+    /// A ramp through the origin.
+    fn ramp(slope_deg: f64, azimuth_deg: f64) -> Self {
+        Self::Ramp {
+            height_mm: 0.0,
+            slope_deg,
+            azimuth_deg,
+        }
+    }
+
+    /// A bowl of sphere and rim radii, mm.
+    fn bowl(sphere_radius_mm: f64, rim_radius_mm: f64) -> Self {
+        Self::Bowl {
+            sphere_radius_mm,
+            rim_radius_mm,
+        }
+    }
+
+    /// The 40 mm, 3 mm thick foil bent to `bend_radius_mm`.
+    fn foil(bend_radius_mm: f64) -> Self {
+        Self::Foil {
+            outline_radius_mm: 40.0,
+            bend_radius_mm,
+            thickness_mm: 3.0,
+        }
     }
 
     /// A command line's object: a built-in name ([`ObjectConfig::named`]),

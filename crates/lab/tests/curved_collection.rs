@@ -133,8 +133,9 @@ fn taps_along_the_edge_keep_the_labels_and_spread_over_it() {
         |along| collect_3d(&RigConfig::default(), &foil, &cfg(along), "foil", |_| {}).unwrap();
     let (one, along) = (taps(false), taps(true));
     assert_eq!(one.data.targets, along.data.targets);
-    // The foil's face tilts 0-29 deg along its edge: the same labels
-    // elsewhere on it give other pin fields.
+    // The foil's face tilts 0-29 deg along its edge and the angle to its
+    // outline wall changes: the same labels and noise elsewhere on it
+    // give other pin fields (at one point the set repeats bit for bit).
     let diff: f32 = one
         .data
         .inputs
@@ -143,7 +144,8 @@ fn taps_along_the_edge_keep_the_labels_and_spread_over_it() {
         .map(|(a, b)| (a - b).abs())
         .sum::<f32>()
         / one.data.inputs.len() as f32;
-    assert!(diff > 0.05, "mean field difference {diff} px");
+    assert!(diff > 0.01, "mean field difference {diff} px");
+    assert_eq!(one.data.inputs, taps(false).data.inputs);
     assert_eq!(along.data.meta.settings["collect_3d"]["along_edge"], true);
     // The taps' edge points spread round the edge (radius 40 mm).
     let edge = object("foil").edge().unwrap();

@@ -52,7 +52,9 @@ pub struct CollectTaskArgs {
     #[arg(long, value_enum, default_value = "edge_2d", conflicts_with_all = ["hardware", "sensor"])]
     task: TaskArg,
     /// The 3D object of a 3D task: plane, ramp, saddle, bowl, wave, foil,
-    /// an extruded report shape (disk, ...), or an .stl / .obj mesh (mm).
+    /// an extruded report shape (disk, ...), the held-out dome, cylinder,
+    /// bowl-50, ramp-32, foil-65, an extruded square:S or star:R,A,K, or
+    /// an .stl / .obj mesh (mm).
     #[arg(long, default_value = "plane")]
     object: String,
     /// The point tapped: the object's top over this X,Y (mm); edge_5d:
@@ -82,6 +84,16 @@ pub struct CollectTaskArgs {
     /// in +-DEG (default 0; the anchors': 5).
     #[arg(long, value_name = "DEG")]
     shear_deg: Option<f64>,
+    /// surface_3d: each tap on a curved patch of its own (a quadric level
+    /// under the origin, principal curvatures uniform in +-K per mm, at
+    /// most 0.05: convex, concave, saddle-shaped) instead of --object,
+    /// which must be left the plane (default 0: the object).
+    #[arg(long, value_name = "K")]
+    patch_curvature: Option<f64>,
+    /// Edge tasks: each tap at an edge point drawn uniformly along the
+    /// whole edge (seeded) instead of the one nearest --at.
+    #[arg(long)]
+    along_edge: bool,
 }
 
 impl CollectTaskArgs {
@@ -99,7 +111,14 @@ impl CollectTaskArgs {
             ("--rz-range", self.rz_range),
             ("--shear-mm", self.shear_mm),
             ("--shear-deg", self.shear_deg),
+            ("--patch-curvature", self.patch_curvature),
         ];
+        if self.along_edge && !self.is_3d() {
+            return Err(LabError::Config(
+                "--along-edge is for a 3D edge collection (--task edge_3d or edge_5d)".into(),
+            )
+            .into());
+        }
         match given.iter().find(|(_, v)| v.is_some()) {
             Some((flag, _)) if !self.is_3d() => Err(LabError::Config(format!(
                 "{flag} is for a 3D collection (--task surface_3d, edge_3d or edge_5d)"
@@ -153,9 +172,19 @@ pub fn collect(
         rz_range_deg: a.rz_range.unwrap_or(base.rz_range_deg),
         shear_mm: a.shear_mm.unwrap_or(base.shear_mm),
         shear_deg: a.shear_deg.unwrap_or(base.shear_deg),
+        curvature_per_mm: a.patch_curvature.unwrap_or(base.curvature_per_mm),
+        along_edge: a.along_edge,
         ..base
     };
     cfg.validate()?;
+    let on_plane = a.object.trim().eq_ignore_ascii_case("plane") && cfg.at_mm == [0.0, 0.0];
+    if cfg.curvature_per_mm > 0.0 && !on_plane {
+        return Err(LabError::Config(
+            "--patch-curvature taps patches under the origin: leave --object plane and --at 0,0"
+                .into(),
+        )
+        .into());
+    }
     let surface = object(&a.object)?;
     let _out = fsutil::check_output_dir(out, force)?;
     let pb = bar(samples as u64, "collect");
@@ -186,11 +215,14 @@ pub struct FollowTaskArgs {
     #[arg(long, value_enum, conflicts_with_all = ["hardware", "sensor", "replay"])]
     task: Option<TaskArg>,
     /// The 3D object of a 3D task: plane, ramp, saddle, bowl, wave, foil,
-    /// an extruded report shape, or an .stl / .obj mesh (mm).
+    /// an extruded report shape, the held-out dome, cylinder, bowl-50,
+    /// ramp-32, foil-65, an extruded square:S or star:R,A,K, or an .stl /
+    /// .obj mesh (mm).
     #[arg(long, requires = "task")]
     object: Option<String>,
     /// The path's start: the surface point over X,Y (mm); default: the
-    /// object's (-40,0; the saddle -40,10; plane and ramp -20,0). Edge
+    /// object's (-40,0; the saddle -40,10; plane and ramps -20,0; the
+    /// held-out dome, cylinder and bowl-50 their own, docs/3d.md). Edge
     /// tasks: the edge point nearest X,Y (default the edge's first).
     #[arg(
         long,

@@ -23,6 +23,19 @@
 //!    pose in contact: the skin lags (S7, or B1-B3), the label is the pose
 //!    alone. The shear has a generator of its own, so a sheared set has
 //!    the unsheared set's labels and noise at the same seed.
+//!    With curved patches ([`Collect3dConfig::curvature_per_mm`] K > 0;
+//!    surface_3d only) tap i is on a surface of its own instead of the
+//!    object: the quadric patch z = -(k1 u^2 + k2 v^2) / 2 level at the
+//!    origin, k1 and k2 uniform in +-K (convex, concave, saddle-shaped or
+//!    nearly flat), u along an azimuth uniform in [0, 180) deg, drawn
+//!    from a generator of its own, so the labels and noise are the flat
+//!    set's at the same seed. The label is the pose in the patch's
+//!    feature frame at the origin: with x = y = 0 the pole lies on the
+//!    normal there, which is the nearest surface point (the true label a
+//!    run is scored by, `tactrace_shape3d::true_label`).
+//!    Along the edge ([`Collect3dConfig::along_edge`]; edge tasks only)
+//!    tap i is placed in the edge frame of an edge sample drawn uniformly
+//!    (a generator of its own) instead of the one nearest `at_mm`.
 //! 4. The pins' displacements are the inputs, s's sensed components the
 //!    named targets (surface_3d `z` mm, `rx`, `ry` deg; edge_5d `x`, `z`
 //!    mm, `rx`, `ry` deg, `rz` deg circular; edge_3d `x`, `z`, `rz`).
@@ -41,7 +54,9 @@ use tactrace_control::Task;
 use tactrace_learn::{ModelTarget, Unit};
 use tactrace_sensor::{Frame, Shear, TacTipModel};
 use tactrace_servo::{lifted, RigConfig};
-use tactrace_shape3d::{feature_frame, pose_of_label, surface_point, Surface};
+use tactrace_shape3d::{
+    feature_frame, pose_of_label, surface_point, HeightField, Surface, MAX_QUADRIC_CURVATURE,
+};
 use tactrace_store::dataset::TargetColumns;
 use tactrace_store::frame_file::png_bytes;
 use tactrace_store::{DatasetMeta, TapData};
@@ -71,6 +86,13 @@ pub struct Collect3dConfig {
     /// Unlabelled shear: the twist ending at each tap's pose is uniform
     /// in +-this, deg; 0 for none.
     pub shear_deg: f64,
+    /// surface_3d: each tap on a quadric patch of its own whose principal
+    /// curvatures are uniform in +-this, 1/mm (at most 1/20); 0 (the
+    /// default) taps the object.
+    pub curvature_per_mm: f64,
+    /// Edge tasks: each tap at an edge sample drawn uniformly along the
+    /// edge instead of the one nearest `at_mm`.
+    pub along_edge: bool,
     /// Keep the PNG of every tap.
     pub save_frames: bool,
 }
@@ -88,6 +110,8 @@ impl Default for Collect3dConfig {
             rz_range_deg: 180.0,
             shear_mm: 0.0,
             shear_deg: 0.0,
+            curvature_per_mm: 0.0,
+            along_edge: false,
             save_frames: false,
         }
     }
@@ -122,6 +146,24 @@ impl Collect3dConfig {
                     .into(),
             ));
         }
+        let k = self.curvature_per_mm;
+        if !(0.0..=MAX_QUADRIC_CURVATURE).contains(&k) {
+            return Err(LabError::Config(format!(
+                "curvature_per_mm = {k}: must be in [0, {MAX_QUADRIC_CURVATURE}] (a radius of 20 mm \
+                 or more)"
+            )));
+        }
+        if k > 0.0 && self.task != Task::Surface3d {
+            return Err(LabError::Config(format!(
+                "curved patches are surface_3d's: {} taps an object's edge",
+                self.task
+            )));
+        }
+        if self.along_edge && self.task == Task::Surface3d {
+            return Err(LabError::Config(
+                "taps along the edge are the edge tasks': surface_3d has no edge".into(),
+            ));
+        }
         check_samples(&CollectConfig {
             samples: self.samples,
             ..CollectConfig::default()
@@ -152,6 +194,40 @@ pub fn tap_shear(cfg: &Collect3dConfig, i: usize) -> Option<Shear> {
         dy_mm: rng.random_range(-m..=m),
         drz_deg: rng.random_range(-a..=a),
     })
+}
+
+/// Mixed into the seed of the curved patches' own generators.
+const PATCH_STREAM_SALT: u64 = 0x5041_5443_4833_4400;
+
+/// The curved patch tap `i` presses (its own generator, stream `i` of the
+/// salted seed): principal curvatures uniform in +-`curvature_per_mm`
+/// along an azimuth uniform in [0, 180) deg; `None` without patches.
+pub fn tap_patch(cfg: &Collect3dConfig, i: usize) -> Result<Option<Surface>> {
+    let k = cfg.curvature_per_mm;
+    if k == 0.0 {
+        return Ok(None);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed ^ PATCH_STREAM_SALT);
+    rng.set_stream(i as u64);
+    let curvatures = [rng.random_range(-k..=k), rng.random_range(-k..=k)];
+    let azimuth = rng.random_range(0.0..180.0);
+    let patch = HeightField::quadric(curvatures, azimuth)?;
+    Ok(Some(std::sync::Arc::new(patch)))
+}
+
+/// Mixed into the seed of the edge samples' own generators.
+const EDGE_STREAM_SALT: u64 = 0x4544_4745_3344_4400;
+
+/// The edge frame tap `i` is placed in along `edge` (its own generator,
+/// stream `i` of the salted seed: a sample drawn uniformly).
+pub fn tap_edge_frame(
+    cfg: &Collect3dConfig,
+    edge: &tactrace_shape3d::EdgeCurve,
+    i: usize,
+) -> nalgebra::Isometry3<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed ^ EDGE_STREAM_SALT);
+    rng.set_stream(i as u64);
+    edge.samples[rng.random_range(0..edge.samples.len())].frame()
 }
 
 /// Where a tap whose `pose` ends a `shear` starts its slide: the pose
@@ -203,6 +279,7 @@ pub fn collect_3d(
         model: &model,
         object,
         frame,
+        edge: cfg.along_edge.then(|| object.edge()).flatten(),
         extractor: &extractor,
     };
     let targets = task_targets(cfg.task);
@@ -309,6 +386,8 @@ struct World<'a> {
     object: &'a Surface,
     /// The feature frame of the tapped surface point (object frame).
     frame: nalgebra::Isometry3<f64>,
+    /// The edge its taps are spread along (`along_edge`), else `None`.
+    edge: Option<tactrace_shape3d::EdgeCurve>,
     extractor: &'a PinExtractor,
 }
 
@@ -335,7 +414,16 @@ impl World<'_> {
         } else {
             [0.0, 0.0, z, rx, ry, 0.0]
         };
-        let pose = pose_of_label(&self.frame, label);
+        let patch = tap_patch(cfg, i)?;
+        // A patch is level at the origin: its feature frame is the identity.
+        let (object, frame) = match &patch {
+            Some(p) => (p, nalgebra::Isometry3::identity()),
+            None => match &self.edge {
+                Some(edge) => (self.object, tap_edge_frame(cfg, edge, i)),
+                None => (self.object, self.frame),
+            },
+        };
+        let pose = pose_of_label(&frame, label);
         let shear = tap_shear(cfg, i);
         let pressed = shear.map_or(pose, |s| slide_start(pose, s));
         let approach = lifted(pressed, self.rig.tap.height_mm);
@@ -351,9 +439,7 @@ impl World<'_> {
         }
         arm.move_to(pose)?;
         let mut nuisance = ChaCha8Rng::seed_from_u64(rng.next_u64());
-        let pins = self
-            .model
-            .pins_3d(self.object.as_ref(), probe.actual(), shear);
+        let pins = self.model.pins_3d(object.as_ref(), probe.actual(), shear);
         let frame = self
             .model
             .render(&self.model.seen_pins(pins), Some(&mut nuisance));

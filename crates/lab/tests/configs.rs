@@ -71,3 +71,17 @@ fn the_shipped_edge_residual_carries_the_shipped_pin_model() {
         assert_eq!(base.config().unwrap(), pins);
     }
 }
+
+/// configs/edge5d-no-tilt-integral.toml is edge_5d's preset with the
+/// tilts' integral gains at zero, and nothing else changed.
+#[test]
+fn the_shipped_edge_config_is_the_preset_without_the_tilt_integral() {
+    use tactrace_control::Se3Config;
+    use tactrace_lab::follow::edge3d::Edge3dConfig;
+    let cfg: Edge3dConfig = toml::from_str(&shipped("edge5d-no-tilt-integral.toml")).unwrap();
+    let mut want = Se3Config::edge_5d();
+    want.ki[3] = 0.0;
+    want.ki[4] = 0.0;
+    assert_eq!(cfg.controller, want);
+    assert_ne!(Se3Config::edge_5d().ki[3], 0.0);
+}

@@ -13,6 +13,13 @@ pub enum Shape3dError {
         value: f64,
         reason: &'static str,
     },
+    /// A parametric outline that gives no contour.
+    #[error("the outline {outline} gives no contour")]
+    Outline {
+        outline: String,
+        #[source]
+        source: tactrace_geometry::GeometryError,
+    },
     /// A mesh file could not be opened.
     #[error("cannot read the mesh {path}")]
     Read {

@@ -1,10 +1,12 @@
 //! Smooth surfaces z = f(x, y) with the solid below them: the tilted ramp,
-//! the saddle and the wave. The closest point is found by Newton's method
+//! the saddle, the wave and the quadric patch (any two principal
+//! curvatures at the origin). The closest point is found by Newton's method
 //! on the squared distance to the graph, so the signed distance is exact.
 use crate::{Object3d, Shape3dError, Vec3};
 
 /// A height-field surface z = f(x, y) (mm), solid below: built by
-/// [`HeightField::ramp`], [`HeightField::saddle`] or [`HeightField::wave`].
+/// [`HeightField::ramp`], [`HeightField::saddle`], [`HeightField::wave`]
+/// or [`HeightField::quadric`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct HeightField {
     kind: Kind,
@@ -29,7 +31,15 @@ enum Kind {
         wavenumber: f64,
         dir: [f64; 2],
     },
+    /// The quadric z = (k1 u^2 + k2 v^2) / 2 with u = x cos(a) + y sin(a),
+    /// v = -x sin(a) + y cos(a): level at the origin, `k` its second
+    /// derivatives there along `dir` = (cos a, sin a) and across
+    /// (negative where the patch is convex).
+    Quadric { k: [f64; 2], dir: [f64; 2] },
 }
+
+/// The largest |curvature| of a quadric patch, 1/mm (a 20 mm radius).
+pub const MAX_QUADRIC_CURVATURE: f64 = 1.0 / 20.0;
 
 fn unit(azimuth_deg: f64) -> [f64; 2] {
     let (s, c) = azimuth_deg.to_radians().sin_cos();
@@ -123,13 +133,40 @@ impl HeightField {
         })
     }
 
+    /// The quadric patch z = (k1 u^2 + k2 v^2) / 2, u along `azimuth_deg`
+    /// and v across it: level at the origin with the principal curvatures
+    /// `curvatures_per_mm` = [k1, k2] there (1/mm; positive: convex, the
+    /// surface falling away from its tangent plane like a dome's; each
+    /// |k| at most 1/20 mm, the saddle's bound). A sphere's or a
+    /// cylinder's top to second order, a saddle for k1 = -k2.
+    pub fn quadric(curvatures_per_mm: [f64; 2], azimuth_deg: f64) -> Result<Self, Shape3dError> {
+        for k in curvatures_per_mm {
+            check(
+                "curvatures_per_mm",
+                k,
+                k.abs() <= MAX_QUADRIC_CURVATURE,
+                "a quadric's curvatures must be within +-1/20 per mm",
+            )?;
+        }
+        check("azimuth_deg", azimuth_deg, true, "must be finite")?;
+        let [k1, k2] = curvatures_per_mm;
+        Ok(Self {
+            // z = -(k u^2) / 2 falls away for a convex k > 0.
+            kind: Kind::Quadric {
+                k: [-k1, -k2],
+                dir: unit(azimuth_deg),
+            },
+        })
+    }
+
     /// f(x, y), mm.
     pub fn height(&self, x: f64, y: f64) -> f64 {
         self.derivatives(x, y).0
     }
 
     /// The largest curvature of the surface, 1/mm (0 for the ramp, 1/R
-    /// for the saddle, A (2 pi / L)^2 for the wave).
+    /// for the saddle, A (2 pi / L)^2 for the wave, the larger |k| of a
+    /// quadric).
     pub fn max_curvature(&self) -> f64 {
         match self.kind {
             Kind::Ramp { .. } => 0.0,
@@ -139,6 +176,7 @@ impl HeightField {
                 wavenumber,
                 ..
             } => amplitude * wavenumber * wavenumber,
+            Kind::Quadric { k, .. } => k[0].abs().max(k[1].abs()),
         }
     }
 
@@ -171,6 +209,19 @@ impl HeightField {
                         h * dir[0] * dir[0],
                         h * dir[0] * dir[1],
                         h * dir[1] * dir[1],
+                    ],
+                )
+            }
+            Kind::Quadric { k, dir: [c, s] } => {
+                let u = x * c + y * s;
+                let v = -x * s + y * c;
+                (
+                    0.5 * (k[0] * u * u + k[1] * v * v),
+                    [k[0] * u * c - k[1] * v * s, k[0] * u * s + k[1] * v * c],
+                    [
+                        k[0] * c * c + k[1] * s * s,
+                        (k[0] - k[1]) * c * s,
+                        k[0] * s * s + k[1] * c * c,
                     ],
                 )
             }

@@ -7,7 +7,8 @@
 //! height along the sensor's axis, and the footprint of an edged top face).
 //! The objects:
 //! - analytic ([`Extruded`], [`HeightField`]: a tilted ramp, a saddle, a
-//!   wave; [`Bowl`], [`Foil`]), chosen by a serde configuration
+//!   wave, a quadric patch; [`Bowl`], [`Foil`], [`Dome`], [`Cylinder`]; a
+//!   parametric outline extruded), chosen by a serde configuration
 //!   ([`ObjectConfig`], millimetres and degrees);
 //! - triangle meshes ([`TriangleMesh`]) read from STL or OBJ bytes (the
 //!   crate's only I/O is [`TriangleMesh::read`], which reads one file).
@@ -26,9 +27,10 @@ mod height_field;
 mod mesh;
 mod mesh_io;
 mod object;
+mod round;
 
 pub use bowl::Bowl;
-pub use config::{ObjectConfig, Surface, OBJECT_NAMES};
+pub use config::{ObjectConfig, Surface, HELD_OUT_EDGES, HELD_OUT_SURFACES, OBJECT_NAMES};
 pub use edge::{EdgeCurve, EdgeSample};
 pub use error::Shape3dError;
 pub use extruded::Extruded;
@@ -36,10 +38,11 @@ pub use feature_frame::{
     feature_frame, normal_error_deg, pose_of_label, surface_point, true_label,
 };
 pub use foil::Foil;
-pub use height_field::HeightField;
+pub use height_field::{HeightField, MAX_QUADRIC_CURVATURE};
 pub use mesh::TriangleMesh;
 pub use mesh_io::MeshFormat;
 pub use object::{numeric_gradient, Object3d};
+pub use round::{Cylinder, Dome};
 
 /// A point or vector in space, millimetres.
 pub type Vec3 = nalgebra::Vector3<f64>;

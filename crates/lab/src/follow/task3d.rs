@@ -50,18 +50,22 @@ impl Default for PathConfig {
 impl PathConfig {
     /// The path the built-in objects are followed along: 80 mm across the
     /// middle (the saddle's off its flat diagonal, at y = 10 mm), 40 mm
-    /// over the plane and the ramp.
+    /// over the plane and the ramps; the held-out round objects' paths
+    /// start where their surface slopes 30-32 deg (the dome 60 mm from
+    /// (-30, 10), the cylinder 40 mm from (-20, -10) at 20 deg to its
+    /// cross-section, the small bowl 50 mm from (-25, 5)).
     pub fn for_object(name: &str) -> Self {
+        let path = |start_mm, heading_deg, length_mm| Self {
+            start_mm,
+            heading_deg,
+            length_mm,
+        };
         match name {
-            "saddle" => Self {
-                start_mm: [-40.0, 10.0],
-                ..Self::default()
-            },
-            "plane" | "ramp" => Self {
-                start_mm: [-20.0, 0.0],
-                length_mm: 40.0,
-                ..Self::default()
-            },
+            "saddle" => path([-40.0, 10.0], 0.0, 80.0),
+            "plane" | "ramp" | "ramp-32" => path([-20.0, 0.0], 0.0, 40.0),
+            "dome" => path([-30.0, 10.0], 0.0, 60.0),
+            "cylinder" => path([-20.0, -10.0], 20.0, 40.0),
+            "bowl-50" => path([-25.0, 5.0], 0.0, 50.0),
             _ => Self::default(),
         }
     }

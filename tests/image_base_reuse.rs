@@ -6,7 +6,7 @@
 //! refused with what differs. The real binary through `tests/util.rs`.
 mod util;
 use std::path::Path;
-use util::{expect_code, expect_refusal, json, tactrace, train, TempDir};
+use util::{expect_code, expect_refusal, json, per_target, train, TempDir};
 
 const RESIDUAL: &str = "input = \"pin_model_and_pixels\"\ndense = [16]\n\
                         learning_rate = 0.003\nbatch_size = 8\n\
@@ -25,16 +25,6 @@ fn reusing(dir: &Path, name: &str, change: (&str, &str)) {
 
 fn read(dir: &Path, file: &str) -> Vec<u8> {
     std::fs::read(dir.join(file)).unwrap()
-}
-
-/// `validate --json` of `model` on ds.
-fn figures(dir: &Path, model: &str) -> serde_json::Value {
-    let r = tactrace(
-        dir,
-        &["validate", "--model", model, "--data", "ds", "--json"],
-    );
-    expect_code(&r, 0, "validate");
-    json(&r.stdout)["per_target"].clone()
 }
 
 #[test]
@@ -70,7 +60,10 @@ fn a_reused_base_gives_the_refitted_models_figures_digit_for_digit() {
         let (a, b) = (read(&t.join("res"), file), read(&t.join("again"), file));
         assert!(a == b, "{file} differs");
     }
-    assert_eq!(figures(&t.0, "again"), figures(&t.0, "res"));
+    assert_eq!(
+        per_target(&t.0, "again", "ds"),
+        per_target(&t.0, "res", "ds")
+    );
     let record = |m: &str| json(&String::from_utf8(read(&t.join(m), "training.json")).unwrap());
     let (first, second) = (
         record("res")["base"].clone(),

@@ -25,12 +25,7 @@ fn set_up(dir: &Path, learning_rate: &str) {
 
 /// `validate --json` of `model` on ds: the per-target figures.
 fn per_target(dir: &Path, model: &str) -> serde_json::Value {
-    let r = tactrace(
-        dir,
-        &["validate", "--model", model, "--data", "ds", "--json"],
-    );
-    expect_code(&r, 0, "validate");
-    json(&r.stdout)["per_target"].clone()
+    util::per_target(dir, model, "ds")
 }
 
 #[test]

@@ -142,6 +142,17 @@ pub fn json(text: &str) -> serde_json::Value {
     serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("{e}: {text}"))
 }
 
+/// `validate --json` of `model` on the dataset `data` (run in `dir`):
+/// the per-target figures.
+pub fn per_target(dir: &Path, model: &str, data: &str) -> serde_json::Value {
+    let r = tactrace(
+        dir,
+        &["validate", "--model", model, "--data", data, "--json"],
+    );
+    expect_code(&r, 0, "validate");
+    json(&r.stdout)["per_target"].clone()
+}
+
 /// The reference pins a dataset's `meta.json` records.
 pub fn reference_pins(dataset: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dataset.join("meta.json")).unwrap();

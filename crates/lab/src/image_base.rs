@@ -45,6 +45,12 @@ pub struct BaseSettings {
     /// row by default, and then left out).
     #[serde(default, skip_serializing_if = "BaseRows::is_all")]
     pub fit_on: BaseRows,
+    /// The folder of a residual model whose base (pin model, folds and
+    /// out-of-fold predictions) is taken instead of fitted again, when
+    /// it is this table's base on the same training rows
+    /// (crate::image_base_reuse); none by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from: Option<String>,
 }
 
 /// Which training rows fit a residual model's pin models (`[base]
@@ -102,6 +108,7 @@ impl Default for BaseSettings {
             folds: five(),
             settings: toml::Table::new(),
             fit_on: BaseRows::All,
+            from: None,
         }
     }
 }
@@ -244,6 +251,8 @@ pub fn fit_base(
         seed,
         fold_of_row,
         first_dataset_only: settings.fit_on == BaseRows::FirstDataset,
+        predictions: predictions.clone(),
+        reused_from: None,
     };
     Ok((model, predictions, record))
 }
@@ -273,6 +282,7 @@ mod tests {
             folds: 3,
             settings,
             fit_on: BaseRows::All,
+            from: None,
         }
     }
 

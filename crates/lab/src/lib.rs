@@ -26,6 +26,7 @@ pub mod follow;
 #[cfg(feature = "hardware")]
 pub mod hardware;
 pub mod image_base;
+pub mod image_base_reuse;
 pub mod image_fit;
 pub mod import;
 pub mod import_checks;

@@ -4,6 +4,7 @@
 //! (`crate::train`). docs/learning.md, "Images in".
 use crate::error::{LabError, Result};
 use crate::image_base::{base_settings, fit_base, split_base_table, BaseSettings};
+use crate::image_base_reuse::reuse_base;
 use crate::train::{data_targets, held_out_rows, named_targets, score_predictions, Validation};
 use std::path::{Path, PathBuf};
 use tactrace_convnet::{ConvConfig, EpochReport, Frames, ModelKind, TrainingHistory};
@@ -105,8 +106,10 @@ pub fn train_image(
 /// from `seed` on `data`'s targets and `frames` ([`train_image`]'s
 /// arguments): its pin model of `base` fitted on every row of `data` (or,
 /// with `fit_on = "first_dataset"`, on the rows flagged in `in_first`),
-/// the rows' base predictions out of fold (crate::image_base); with the
-/// record of the folds for `training.json`.
+/// the rows' base predictions out of fold (crate::image_base), or, with
+/// `[base] from`, the pin model and predictions of that folder's base
+/// (crate::image_base_reuse); with the record of the folds for
+/// `training.json`.
 pub fn train_image_on_base(
     cfg: &ConvConfig,
     base: &BaseSettings,
@@ -117,7 +120,10 @@ pub fn train_image_on_base(
 ) -> Result<(ImageModel, TrainingHistory, BaseFolds)> {
     let outputs = data_targets(data)?;
     let (train, val) = views(&outputs, (data, frames), val)?;
-    let (pin_model, rows, folds) = fit_base(base, data, seed, in_first)?;
+    let (pin_model, rows, folds) = match base.from {
+        Some(_) => reuse_base(base, data, in_first)?,
+        None => fit_base(base, data, seed, in_first)?,
+    };
     let fit = BaseFit {
         model: &pin_model,
         rows: &rows,

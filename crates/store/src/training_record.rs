@@ -94,6 +94,17 @@ pub struct BaseFolds {
     /// folds. False (and left out) otherwise.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub first_dataset_only: bool,
+    /// Each training row's base prediction, the network's side input
+    /// (rows in the order of `train_rows`, each the targets in their
+    /// order and units): kept so that `[base] from` can reuse the base.
+    /// Empty in folders written before it was kept.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub predictions: Vec<f64>,
+    /// The model folder whose base (pin model, folds and predictions)
+    /// was reused (`[base] from`), as given; absent for a base fitted
+    /// by this training.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reused_from: Option<String>,
 }
 
 /// Which dataset: its content hash, size and where it was read from.
@@ -247,6 +258,14 @@ impl TrainingRecord {
                     self.train_rows.len()
                 ));
             }
+            let width = b.predictions.len() / self.train_rows.len().max(1);
+            if width * self.train_rows.len() != b.predictions.len() {
+                return Err(format!(
+                    "the base's predictions: {} values for {} training rows",
+                    b.predictions.len(),
+                    self.train_rows.len()
+                ));
+            }
         }
         if !self.images.is_empty() && self.images.len() != self.train_rows.len() {
             return Err(format!(
@@ -381,6 +400,8 @@ mod tests {
             seed: 0,
             fold_of_row: vec![2, 0, 1, 2],
             first_dataset_only: true,
+            predictions: vec![0.5; 8],
+            reused_from: None,
         });
         with_base.check().unwrap();
         let text = serde_json::to_string(&with_base).unwrap();
@@ -389,6 +410,10 @@ mod tests {
         every_row.base.as_mut().unwrap().first_dataset_only = false;
         assert!(every_row.check().unwrap_err().contains("the base's folds"));
         every_row.base.as_mut().unwrap().fold_of_row = vec![1, 0, 1, 0];
+        every_row.check().unwrap();
+        every_row.base.as_mut().unwrap().predictions.pop();
+        assert!(every_row.check().unwrap_err().contains("predictions"));
+        every_row.base.as_mut().unwrap().predictions.clear();
         every_row.check().unwrap();
         let text = serde_json::to_string(&every_row).unwrap();
         assert!(!text.contains("first_dataset_only"), "left out when false");

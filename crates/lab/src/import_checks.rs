@@ -180,7 +180,7 @@ impl StillPins {
 /// all zero or all the same; `None` when they vary, or for fewer than
 /// two rows.
 pub fn still_pins(inputs: &[f32], n: usize) -> Option<StillPins> {
-    if n < 2 || inputs.is_empty() || inputs.len() % n != 0 {
+    if n < 2 || inputs.is_empty() || !inputs.len().is_multiple_of(n) {
         return None;
     }
     let width = inputs.len() / n;

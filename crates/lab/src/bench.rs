@@ -117,7 +117,7 @@ pub struct Latency {
 impl Latency {
     /// Statistics of the per-frame times `samples` (any order), with the
     /// loop's mean given; all zero without samples. The parts' medians are
-    /// zero (see [`median`]).
+    /// zero (see [`tactrace_calib::median`]).
     pub fn from_samples(mean_us: f64, samples: Vec<f64>) -> Self {
         Self {
             mean_us,

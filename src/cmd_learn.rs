@@ -313,7 +313,7 @@ pub fn train(a: TrainArgs) -> Result<()> {
     if let Some(val) = val {
         let what = val_sets.as_ref().unwrap_or(&sets).first_dir();
         let v = tr::validate(&model, &val, what)?;
-        if v.predictions.is_empty() {
+        if !v.shows_edge_pose() {
             crate::say!(
                 "validation: {} over {} samples",
                 v.per_target_line(),
@@ -442,7 +442,7 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
             ),
         };
         let stem = dir.join(PLOTS_STEM);
-        if v.predictions.is_empty() || v.targets.iter().any(|t| t.circular) {
+        if !v.shows_edge_pose() {
             figures::predicted_vs_true_targets(&stem, &title, &target_panels(&v))
                 .map_err(LabError::from)?;
         } else {
@@ -456,7 +456,7 @@ pub fn validate(a: ValidateArgs) -> Result<()> {
     }
     if a.json {
         crate::say!("{}", serde_json::to_string(&v)?);
-    } else if !v.predictions.is_empty() && v.targets.iter().all(|t| !t.circular) {
+    } else if v.shows_edge_pose() {
         crate::say!(
             "position MAE {:.3} mm, angle MAE {:.3} deg, {} samples",
             v.position_mae_mm,
@@ -597,7 +597,7 @@ pub fn predict(a: PredictArgs) -> Result<()> {
                     what.display()
                 )
             })?;
-            if net.edge_roles().is_err() {
+            if !tactrace_learn::names_the_edge(net.outputs()) {
                 let values = net.predict_targets(&disp).map_err(LabError::from)?;
                 return say_prediction(&image, net.outputs(), &values);
             }
@@ -612,8 +612,9 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         (None, None, Some(dir)) => {
             let data = read_dataset(&dir)?;
             let v = tr::validate(&model, &data, &dir)?;
-            if v.predictions.is_empty() {
-                // Not an edge model: every target, by its column and unit.
+            if !v.shows_edge_pose() {
+                // Not the edge task's r and theta: every target, by its
+                // column and unit.
                 say_target_rows(&v)?;
             } else {
                 crate::say!("r_mm,theta_deg,true_r_mm,true_theta_deg");

@@ -10,10 +10,10 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use tactrace_lab::calibrate::{calibrate_sensor, write_calibrated, CalibrateConfig};
 use tactrace_lab::import::Imported;
-use tactrace_lab::pin_jitter::PinJitter;
+use tactrace_lab::pin_jitter::{with_pin_jitter, PinJitter};
 use tactrace_lab::twin::{
     fit_position_map, relabel_positions, renders_differ, simulate_twin_calibrated,
-    simulate_twin_laid_out, with_pin_jitter,
+    simulate_twin_laid_out,
 };
 use tactrace_lab::LabError;
 use tactrace_store::collection::{bristol, CollectionEdits, Reference};
@@ -146,7 +146,7 @@ pub fn twin(a: TwinArgs) -> Result<()> {
         Some(dir) => {
             let mut sensor = SensorFolder::read(dir)?;
             if let Some(px) = a.pin_jitter {
-                sensor = with_pin_jitter(sensor, px)?;
+                sensor.spec.sensor = with_pin_jitter(&sensor.spec.sensor, px)?;
             }
             if !renders_differ(&sensor.spec.sensor) && sensor.spec.training.renders > 1 {
                 pb.suspend(|| eprintln!("{}", identical_renders_note(&sensor)));

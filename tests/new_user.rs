@@ -262,11 +262,13 @@ fn the_getting_started_guide_runs_as_written() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stdout}\n{stderr}");
-    assert!(stdout.contains("position MAE"), "{stdout}");
+    // The targets by their columns' names, not "position" and "angle".
+    assert!(stdout.contains("  pose_2: "), "{stdout}");
+    assert!(stdout.contains("  pose_6: "), "{stdout}");
     let plot =
         std::fs::read_to_string(t.join("runs/mine-validation/predicted_vs_true.svg")).unwrap();
     assert!(
-        plot.contains("PDenNN mine on mine-test: position r, MAE"),
+        plot.contains("PDenNN mine on mine-test: pose_2, MAE"),
         "validation plot title"
     );
     let run = t.join("runs/mine-disk");

@@ -21,6 +21,7 @@
 //! ([`fit_jitter`], interpolated in variance: `q(s)^2 ~ q(0)^2 + c s^2`).
 use crate::error::{CalibError, Result};
 use crate::fields::Fields;
+use crate::stats::median;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
@@ -157,7 +158,8 @@ pub fn roughness(fields: &Fields, stencil: &Stencil) -> Result<f64> {
             variances.push(centred_variance(&residual) / s.gain);
         }
     }
-    Ok(median(&mut variances).sqrt())
+    // A stencil has pins (`Stencil::new`), so there are variances.
+    Ok(median(&variances).map_or(f64::NAN, f64::sqrt))
 }
 
 /// The variance of `x` about its own mean (divided by n - 1).
@@ -165,16 +167,6 @@ fn centred_variance(x: &[f64]) -> f64 {
     let n = x.len() as f64;
     let mean = x.iter().sum::<f64>() / n;
     x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 /// The simulator's roughness at one render jitter.

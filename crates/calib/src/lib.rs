@@ -39,4 +39,4 @@ pub use position_map::PositionMap;
 pub use record::{CalibrationRecord, Selection, Tensor, FORMAT_VERSION};
 pub use ridge::{CorrectionParams, FittedCorrection, LinearCorrection, MIN_TAPS, RECOMMENDED_TAPS};
 pub use select::{check_labels, check_span, select_taps, Label, SpanRule};
-pub use stats::{field_stats, FieldStats};
+pub use stats::{field_stats, median, FieldStats};

@@ -117,7 +117,7 @@ pub struct Latency {
 impl Latency {
     /// Statistics of the per-frame times `samples` (any order), with the
     /// loop's mean given; all zero without samples. The parts' medians are
-    /// zero (see [`median`]).
+    /// zero (see [`tactrace_calib::median`]).
     pub fn from_samples(mean_us: f64, samples: Vec<f64>) -> Self {
         Self {
             mean_us,
@@ -165,15 +165,9 @@ pub fn thread_cpu_us() -> Option<f64> {
 }
 
 /// Median of `samples` (any order; mean of the two middle ones for an even
-/// count), 0 without samples.
-pub fn median(samples: &[f64]) -> f64 {
-    let mut s = samples.to_vec();
-    s.sort_unstable_by(f64::total_cmp);
-    let n = s.len();
-    if n == 0 {
-        return 0.0;
-    }
-    (s[(n - 1) / 2] + s[n / 2]) / 2.0
+/// count, [`tactrace_calib::median`]), 0 without samples.
+fn median(samples: &[f64]) -> f64 {
+    tactrace_calib::median(samples).unwrap_or(0.0)
 }
 
 /// Time `taps` simulated taps on the disk edge, and the control loop when a

@@ -13,7 +13,7 @@
 //! command that simulates taps.
 use crate::error::{LabError, Result};
 use crate::import::{import_rows, Imported};
-use crate::pin_jitter::{fit_pin_jitter, PinJitter};
+use crate::pin_jitter::{fit_pin_jitter, with_pin_jitter, PinJitter};
 use crate::sim_sight::{lay_out, resolve_reference, sim_sight, LayoutReport, SimSight};
 use crate::twin::{simulate_twin_rows, twin_rows};
 use std::collections::HashSet;
@@ -271,21 +271,15 @@ fn with_jitter(
     (c, sight, sensor): (&LabelledCollection, &SimSight, &TacTipConfig),
     (chosen, real): (&[usize], &Imported),
 ) -> Result<(TacTipConfig, Option<tactrace_calib::JitterFit>)> {
-    let mut out = sensor.clone();
-    let fit = match cfg.pin_jitter {
-        PinJitter::Own => None,
-        PinJitter::Given(px) => {
-            out.nuisance.pin_jitter_px = px;
-            None
-        }
+    let (px, fit) = match cfg.pin_jitter {
+        PinJitter::Own => (sensor.nuisance.pin_jitter_px, None),
+        PinJitter::Given(px) => (px, None),
         PinJitter::Fit => {
             let fit = fit_pin_jitter(c, sight, sensor, (chosen, real), cfg.render_seed)?;
-            out.nuisance.pin_jitter_px = fit.pin_jitter_px;
-            Some(fit)
+            (fit.pin_jitter_px, Some(fit))
         }
     };
-    out.validate()?;
-    Ok((out, fit))
+    Ok((with_pin_jitter(sensor, px)?, fit))
 }
 
 /// Nelder-Mead rounds and steps of the physics fit (`--fit-physics`).

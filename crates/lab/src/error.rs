@@ -62,6 +62,10 @@ pub enum LabError {
         reason: String,
         held_out: usize,
     },
+    /// Training data whose pins never move: every displacement 0, or every
+    /// row the same ([`crate::import_checks::still_pins`]).
+    #[error("{what}: {reason}")]
+    StillPins { what: String, reason: String },
     /// A controller setting that cannot work.
     #[error(transparent)]
     Control(#[from] tactrace_control::ControlError),
@@ -167,6 +171,7 @@ impl LabError {
             | LabError::Geometry(_)
             | LabError::Shape3d(_)
             | LabError::TooFewSamples { .. }
+            | LabError::StillPins { .. }
             | LabError::Calib(_) => true,
             LabError::Control(e) => {
                 !matches!(e, tactrace_control::ControlError::NonFiniteInput { .. })

@@ -200,6 +200,8 @@ fn import_rows_with(
     let d = &got.data;
     got.warnings
         .extend(crate::import_checks::constant_targets(d));
+    got.warnings
+        .extend(crate::import_checks::still_pins_warning(d));
     if let Some(reference) = opened.reference.frame() {
         got.warnings.extend(crate::import_checks::pressed_reference(
             reference,

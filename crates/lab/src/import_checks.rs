@@ -1,7 +1,9 @@
 //! What real frames and their reference are checked for before and after
 //! an import (`import`, `calibrate`, `sim-fit`, `reproduce --real`): a
 //! `--frames` folder one level above the frames, a `--reference` frame
-//! that is itself pressed, and a target of one value in every row.
+//! that is itself pressed, a target of one value in every row, and pins
+//! that do not move at all (every frame the same, or the reference one
+//! of them: [`still_pins`], a warning here and a refusal in `train`).
 //!
 //! **A pressed reference.** Pressing the dome spreads its pins apart in
 //! the image: against the undeformed frame every tap of the shared real
@@ -145,9 +147,75 @@ pub fn constant_targets(data: &TapData) -> Vec<String> {
         .collect()
 }
 
+/// How the pin displacements of a dataset fail to vary, when they do.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StillPins {
+    /// Every displacement of every row is 0: each frame shows its pins
+    /// where the reference has them (the reference is every frame).
+    AllZero,
+    /// Every row is the same, not all zero: the frames are all alike.
+    AllSame,
+}
+
+impl StillPins {
+    /// What it means for the user, for a dataset of `rows` rows.
+    pub fn says(self, rows: usize) -> String {
+        let what = match self {
+            StillPins::AllZero => {
+                "every pin displacement is 0: each frame shows its pins where the reference \
+                 has them (is the reference one of the frames, or are the frames all the same?)"
+            }
+            StillPins::AllSame => {
+                "every row has the same pin displacements: the frames are all alike"
+            }
+        };
+        format!(
+            "{what}, in all {rows} rows; no model can learn a pose from them (give the \
+             sensor's frame taken without contact as the reference, and frames of taps)"
+        )
+    }
+}
+
+/// Whether the `n` rows of `inputs` (each `inputs.len() / n` values) are
+/// all zero or all the same; `None` when they vary, or for fewer than
+/// two rows.
+pub fn still_pins(inputs: &[f32], n: usize) -> Option<StillPins> {
+    if n < 2 || inputs.is_empty() || !inputs.len().is_multiple_of(n) {
+        return None;
+    }
+    let width = inputs.len() / n;
+    let first = &inputs[..width];
+    if inputs.chunks_exact(width).any(|row| row != first) {
+        return None;
+    }
+    Some(if first.iter().all(|v| *v == 0.0) {
+        StillPins::AllZero
+    } else {
+        StillPins::AllSame
+    })
+}
+
+/// The warning of an import whose pins do not move ([`still_pins`]).
+pub fn still_pins_warning(data: &TapData) -> Option<String> {
+    still_pins(&data.inputs, data.len()).map(|still| still.says(data.len()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pins_that_never_move_are_told_apart_from_pins_that_do() {
+        let zero = vec![0.0f32; 3 * 4];
+        assert_eq!(still_pins(&zero, 3), Some(StillPins::AllZero));
+        let same: Vec<f32> = [0.5f32, -1.0, 0.0, 2.0].repeat(3);
+        assert_eq!(still_pins(&same, 3), Some(StillPins::AllSame));
+        let mut moving = same.clone();
+        moving[11] = 2.5;
+        assert_eq!(still_pins(&moving, 3), None);
+        assert_eq!(still_pins(&zero[..4], 1), None, "one row says nothing");
+        assert!(StillPins::AllZero.says(3).contains("all 3 rows"));
+    }
 
     #[test]
     fn a_target_of_one_value_is_named() {

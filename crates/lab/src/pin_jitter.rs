@@ -16,6 +16,22 @@ use tactrace_calib::{fit_jitter, roughness, JitterFit, JitterPoint, Stencil, JIT
 use tactrace_sensor::TacTipConfig;
 use tactrace_store::LabelledCollection;
 
+/// `sensor` with its renders' pin jitter set to `px` (each rendered pin
+/// centre moved by N(0, px^2) per axis before the frame is drawn and read,
+/// docs/sensor-model.md "Rendering and nuisance", `[sensor.nuisance]
+/// pin_jitter_px`): what `twin --pin-jitter` and `calibrate --pin-jitter`
+/// set. A sensor whose jitter and image noise are both 0 renders every
+/// labelled row the same at every seed (`twin::renders_differ`); with a
+/// jitter each render is a new draw of the detection noise the real
+/// frames carry (docs/calibration.md, "Pin jitter in the twin").
+/// Refused unless `px` is finite and at least 0.
+pub fn with_pin_jitter(sensor: &TacTipConfig, px: f64) -> Result<TacTipConfig> {
+    let mut out = sensor.clone();
+    out.nuisance.pin_jitter_px = px;
+    out.validate()?;
+    Ok(out)
+}
+
 /// What a calibration does with the sensor's render pin jitter
 /// (`[sensor.nuisance] pin_jitter_px`).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -64,8 +80,7 @@ pub(crate) fn fit_pin_jitter(
     let mut curve = Vec::with_capacity(JITTER_GRID.len());
     let mut measured = None;
     for &px in &JITTER_GRID {
-        let mut at = sensor.clone();
-        at.nuisance.pin_jitter_px = px;
+        let at = with_pin_jitter(sensor, px)?;
         let twin = simulate_twin_rows(collection, sight, &at, seed, (Some(chosen), &|| {}))?;
         let (sim, real_fields, _) = paired(real, &twin)?.fields()?;
         if measured.is_none() {

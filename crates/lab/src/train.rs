@@ -130,12 +130,19 @@ pub struct TrainingSplit {
 
 /// Fit on every row of `data` (read from `path`), or with `held_out =
 /// Some((fraction, seed))` on the rows [`holdout`] keeps, holding out the
-/// rest.
+/// rest. Refused when no pin moves in any row
+/// ([`crate::import_checks::still_pins`]): no model learns from that.
 pub fn training_split(
     data: &TapData,
     path: Option<&Path>,
     held_out: Option<(f64, u64)>,
 ) -> Result<TrainingSplit> {
+    if let Some(still) = crate::import_checks::still_pins(&data.inputs, data.len()) {
+        return Err(LabError::StillPins {
+            what: path.map_or("the training rows".into(), |p| p.display().to_string()),
+            reason: still.says(data.len()),
+        });
+    }
     let Some((val_fraction, split_seed)) = held_out else {
         return Ok(TrainingSplit {
             train: data.clone(),
@@ -311,6 +318,15 @@ pub struct Validation {
 }
 
 impl Validation {
+    /// Whether its outputs may call the targets "position" and "angle":
+    /// an edge model whose targets are the edge task's own `r` and
+    /// `theta` ([`tactrace_learn::names_the_edge`]). Any other model, a
+    /// surface's depth (mm) and angle (deg) included, is shown by its
+    /// targets' names.
+    pub fn shows_edge_pose(&self) -> bool {
+        !self.predictions.is_empty() && tactrace_learn::names_the_edge(&self.targets)
+    }
+
     /// Every target's MAE with its unit, in the model's order: "r 0.120
     /// mm, theta 1.010 deg".
     pub fn per_target_line(&self) -> String {

@@ -190,21 +190,6 @@ pub fn simulate_twin_calibrated(
     Ok(out)
 }
 
-/// `sensor` with its renders' pin jitter set to `px` (each rendered pin
-/// centre moved by N(0, px^2) per axis before the frame is drawn and read,
-/// docs/sensor-model.md "Rendering and nuisance", `[sensor.nuisance]
-/// pin_jitter_px`): `twin --pin-jitter`. A sensor whose jitter and image
-/// noise are both 0 renders every labelled row the same at every seed, so
-/// the recipe's renders are copies of one another ([`renders_differ`]);
-/// with a jitter each render is a new draw of the detection noise the
-/// real frames carry (docs/calibration.md, "Pin jitter in the twin").
-/// Refused unless `px` is finite and at least 0.
-pub fn with_pin_jitter(mut sensor: SensorFolder, px: f64) -> Result<SensorFolder> {
-    sensor.spec.sensor.nuisance.pin_jitter_px = px;
-    sensor.spec.sensor.validate()?;
-    Ok(sensor)
-}
-
 /// Whether two renders of one labelled tap by `sensor` can differ: its pin
 /// jitter or image noise is above 0 (they are drawn from the render's
 /// seed; nothing else in a render is random).

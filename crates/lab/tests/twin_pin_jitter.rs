@@ -7,7 +7,8 @@
 //! number is refused as bad input.
 use tactrace_lab::calibrate::calibrate_sensor;
 use tactrace_lab::import::Imported;
-use tactrace_lab::twin::{renders_differ, simulate_twin_calibrated, with_pin_jitter};
+use tactrace_lab::pin_jitter::with_pin_jitter;
+use tactrace_lab::twin::{renders_differ, simulate_twin_calibrated};
 use tactrace_sensor::TacTipConfig;
 
 mod common;
@@ -40,7 +41,8 @@ fn renders_are_identical_without_jitter_and_differ_by_it_with() {
     assert!(plain.data.meta.settings.get("pin_jitter_px").is_none());
 
     let px = 0.3;
-    let jittered = with_pin_jitter(sensor.clone(), px).unwrap();
+    let mut jittered = sensor.clone();
+    jittered.spec.sensor = with_pin_jitter(&sensor.spec.sensor, px).unwrap();
     assert!(renders_differ(&jittered.spec.sensor));
     let got = simulate_twin_calibrated(&set, &jittered, 1, (false, None), &|| {}).unwrap();
     let ((a, la), (b, lb)) = (render(&got, rows, 0), render(&got, rows, 1));
@@ -62,7 +64,7 @@ fn renders_are_identical_without_jitter_and_differ_by_it_with() {
     assert_eq!(recorded.as_f64(), Some(px), "{recorded}");
 
     for bad in [-0.1, f64::NAN] {
-        let err = with_pin_jitter(sensor.clone(), bad).unwrap_err();
+        let err = with_pin_jitter(&sensor.spec.sensor, bad).unwrap_err();
         assert!(err.is_bad_input(), "{err}");
         assert!(err.to_string().contains("pin_jitter_px"), "{err}");
     }

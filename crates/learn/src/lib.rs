@@ -64,6 +64,6 @@ pub use serialise::FORMAT_VERSION;
 pub use standardise::Standardiser;
 pub use target_score::{target_spread, TargetScale};
 pub use targets::{
-    check_targets, decode, edge_targets, encode_into, encoded_columns, target_mae, wrap_deg,
-    ModelTarget, Unit,
+    check_targets, decode, edge_targets, encode_into, encoded_columns, names_the_edge, target_mae,
+    wrap_deg, ModelTarget, Unit,
 };

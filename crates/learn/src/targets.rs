@@ -101,6 +101,23 @@ pub fn edge_targets() -> Vec<ModelTarget> {
     ]
 }
 
+/// Whether `targets` are the edge task's own: `r` (mm) and `theta` (deg)
+/// as [`edge_targets`] names them, or `r_mm` and `theta_deg` as
+/// `collect`'s datasets (and arrays given without names) do. Only then do
+/// outputs call them "position" and "angle"; any other model, a
+/// surface's depth (mm) and angle (deg) included, is labelled by its
+/// targets' names.
+pub fn names_the_edge(targets: &[ModelTarget]) -> bool {
+    let edge = |r: &str, theta: &str| {
+        targets
+            == [
+                ModelTarget::new(r, Unit::Mm),
+                ModelTarget::new(theta, Unit::Deg),
+            ]
+    };
+    edge("r", "theta") || edge("r_mm", "theta_deg")
+}
+
 /// Error unless `targets` names at least one target, each name once, and
 /// only angles are circular.
 pub fn check_targets(targets: &[ModelTarget]) -> Result<(), LearnError> {
@@ -209,6 +226,30 @@ pub fn target_mae(targets: &[ModelTarget], pred: &[Vec<f64>], truth: &[Vec<f64>]
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn only_the_edge_tasks_own_names_are_an_edge() {
+        assert!(names_the_edge(&edge_targets()));
+        let named = |a: &str, b: &str| {
+            [
+                ModelTarget::new(a, Unit::Mm),
+                ModelTarget::new(b, Unit::Deg),
+            ]
+        };
+        assert!(names_the_edge(&named("r_mm", "theta_deg")));
+        // A surface's depth and angle: one mm and one deg, not an edge.
+        assert!(!names_the_edge(&named("pose_2", "pose_6")));
+        let swapped = [
+            ModelTarget::new("theta", Unit::Deg),
+            ModelTarget::new("r", Unit::Mm),
+        ];
+        assert!(!names_the_edge(&swapped));
+        let circular = [
+            ModelTarget::new("r", Unit::Mm),
+            ModelTarget::circular("theta"),
+        ];
+        assert!(!names_the_edge(&circular));
+    }
 
     #[test]
     fn a_circular_target_round_trips_through_sin_and_cos() {

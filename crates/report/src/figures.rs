@@ -64,10 +64,15 @@ pub fn training_curves(stem: &Path, history: &TrainingHistory) -> Result<Vec<Pat
             })
             .collect()
     };
-    let mut loss = axes("Loss per epoch", "epoch", "loss");
-    loss.log_y = true;
-    let mut energy = axes("Total energy per epoch", "epoch", "energy");
-    energy.log_y = true;
+    let per_epoch = |title: &str, y: &str| Axes {
+        log_y: true,
+        whole_x: true,
+        ..axes(title, "epoch", y)
+    };
+    let (loss, energy) = (
+        per_epoch("Loss per epoch", "loss"),
+        per_epoch("Total energy per epoch", "energy"),
+    );
     let panels = vec![
         (loss, series_of(&|n| n.loss)),
         (energy, series_of(&|n| n.energy)),

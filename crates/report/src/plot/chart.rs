@@ -8,7 +8,7 @@
 
 use super::font::{AXIS_SIZE, FAMILY, LABEL_SIZE, TITLE_SIZE};
 use super::legend::legend_corner;
-use super::range::{bounds, equal_aspect, padded, padded_log, tick_label, Span};
+use super::range::{bounds, equal_aspect, padded, padded_log, tick_label, whole_tick_count, Span};
 use super::raster::Raster;
 use super::render::{draw_err, write_both, Figure};
 use super::series::draw_series;
@@ -211,18 +211,22 @@ where
     Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
 {
     let (x_width, y_width) = (panel.x.width(), panel.y.width());
-    chart
-        .configure_mesh()
-        .x_label_formatter(&|v| tick_label(*v, x_width))
-        .y_label_formatter(&|v| tick_label(*v, y_width))
-        .x_desc(panel.axes.x_label.as_str())
-        .y_desc(panel.axes.y_label.as_str())
-        .label_style((FAMILY, LABEL_SIZE))
-        .axis_desc_style((FAMILY, AXIS_SIZE))
-        .bold_line_style(RGBColor(215, 215, 215))
-        .light_line_style(RGBColor(240, 240, 240))
-        .draw()
-        .map_err(draw_err)?;
+    {
+        let mut mesh = chart.configure_mesh();
+        if let Some(count) = whole_tick_count(panel.x).filter(|_| panel.axes.whole_x) {
+            mesh.x_labels(count);
+        }
+        mesh.x_label_formatter(&|v| tick_label(*v, x_width))
+            .y_label_formatter(&|v| tick_label(*v, y_width))
+            .x_desc(panel.axes.x_label.as_str())
+            .y_desc(panel.axes.y_label.as_str())
+            .label_style((FAMILY, LABEL_SIZE))
+            .axis_desc_style((FAMILY, AXIS_SIZE))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .light_line_style(RGBColor(240, 240, 240))
+            .draw()
+            .map_err(draw_err)?;
+    }
     for cleaned in &panel.series {
         draw_series(&mut chart, cleaned, raster)?;
     }

@@ -75,6 +75,9 @@ pub struct Axes {
     /// A linear y axis over non-negative data starts at 0 (errors,
     /// distances) instead of padding below it.
     pub y_from_zero: bool,
+    /// The x axis counts whole things (epochs): ticks only at whole
+    /// numbers, never at 1.5 on a short run.
+    pub whole_x: bool,
     /// Figure size in pixels for [`chart`]; ignored by [`grid`] panels.
     pub size: (u32, u32),
 }
@@ -89,6 +92,7 @@ impl Axes {
             log_y: false,
             equal_aspect: false,
             y_from_zero: false,
+            whole_x: false,
             size: (640, 480),
         }
     }

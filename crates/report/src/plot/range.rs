@@ -91,6 +91,18 @@ pub(crate) fn equal_aspect(x: Span, y: Span, pixels: (u32, u32)) -> (Span, Span)
     (x.with_width(per_pixel * w), y.with_width(per_pixel * h))
 }
 
+/// How many x labels to ask plotters for so that every tick of `span`
+/// falls on a whole number: at most 10, and never more than the whole
+/// numbers inside it (plotters picks the finest step of 10^k times 1, 2
+/// or 5 that gives no more labels than asked; a step under 1 gives more
+/// ticks than there are whole numbers once two are inside, and with one
+/// inside its only tick is that number). `None` when no whole number
+/// lies inside `span`.
+pub(crate) fn whole_tick_count(span: Span) -> Option<usize> {
+    let inside = span.hi.floor() - span.lo.ceil() + 1.0;
+    (inside >= 1.0).then(|| (inside as usize).min(10))
+}
+
 /// A tick label without float noise or needless zeros: "5" rather than
 /// "5.0", "0.25", "0.001"; scientific notation outside 1e-3..1e5.
 /// Values smaller than a billionth of the axis `width` print as "0".
@@ -143,6 +155,16 @@ mod tests {
             "same units per pixel"
         );
         assert!((x.width() - 10.0).abs() < 1e-12 && (y.lo + y.hi - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn whole_ticks_never_ask_for_more_labels_than_whole_numbers() {
+        let span = |lo, hi| Span { lo, hi };
+        assert_eq!(whole_tick_count(span(0.8, 5.2)), Some(5));
+        assert_eq!(whole_tick_count(span(0.95, 1.05)), Some(1));
+        assert_eq!(whole_tick_count(span(1.0, 2.0)), Some(2));
+        assert_eq!(whole_tick_count(span(-4.0, 300.0)), Some(10));
+        assert_eq!(whole_tick_count(span(1.1, 1.9)), None);
     }
 
     #[test]

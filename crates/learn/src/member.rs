@@ -66,7 +66,7 @@ impl PoseModel {
 }
 
 /// A member's net name without its `#m` (the name trained alone).
-fn single_name(name: &str, k: usize) -> &str {
+pub(crate) fn single_name(name: &str, k: usize) -> &str {
     match name.rsplit_once('#') {
         Some((base, _)) if k > 1 => base,
         _ => name,
@@ -74,7 +74,7 @@ fn single_name(name: &str, k: usize) -> &str {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use crate::config::{ModelConfig, ModelKind, Preset};
     use crate::net::Layers;
     use crate::pose_model::{FittedNet, PoseModel};
@@ -83,7 +83,7 @@ mod tests {
 
     /// A net of `dim` inputs whose output is `out` whatever the input
     /// (zero weights, the output layer's biases `out`).
-    fn constant_net(name: &str, dim: usize, out: [f32; 2]) -> FittedNet {
+    pub(crate) fn constant_net(name: &str, dim: usize, out: [f32; 2]) -> FittedNet {
         let sizes = vec![dim, 1, 2];
         let w = vec![vec![0.0; dim], vec![0.0; 2]];
         let b = vec![vec![0.0], out.to_vec()];

@@ -108,8 +108,8 @@ pub(crate) fn check_joinable(first: &PoseModel, other: &PoseModel) -> Result<(),
     match first_difference(&a, &b, "") {
         None => Ok(()),
         Some((key, was, now)) => Err(format!(
-            "`{key}` is {was} in member 1 and {now} in this one: members differ in their \
-             seed and epochs only"
+            "`{key}` is {was} in member 1 and {now} in this one: members may differ only in their \
+             seed and epochs"
         )),
     }
 }
@@ -136,9 +136,8 @@ fn refused(reason: String) -> LearnError {
 #[cfg(test)]
 mod tests {
     use crate::config::{ModelConfig, ModelKind, Preset};
-    use crate::member::tests::constant_net;
+    use crate::member::tests::{angle_model, constant_net};
     use crate::pose_model::PoseModel;
-    use crate::standardise::Standardiser;
     use crate::targets::{wrap_deg, ModelTarget};
 
     /// A single DisDenNN of one circular angle whose net predicts `angle`
@@ -147,21 +146,9 @@ mod tests {
         let mut config = ModelConfig::preset(ModelKind::DisDenNN, Preset::Default);
         config.pose.as_mut().expect("pose").hidden = vec![1];
         config.validate().expect("config");
-        let dim = 4;
         let r = angle.to_radians();
         let out = [r.sin() as f32, r.cos() as f32];
-        PoseModel {
-            config,
-            standardiser: Standardiser::from_parts(vec![mean; dim], vec![1.0; dim]).expect("std"),
-            targets: Standardiser::from_parts(vec![0.0; 2], vec![1.0; 2]).expect("targets"),
-            nets: vec![constant_net("pose", dim, out)],
-            outputs: vec![ModelTarget::circular("pose_6")],
-            features: None,
-            views: None,
-            mirror: None,
-            epochs_before: 0,
-            predictor: Default::default(),
-        }
+        angle_model(config, vec![constant_net("pose", 4, out)], mean)
     }
 
     fn angle_of(model: &PoseModel) -> f64 {

@@ -113,9 +113,16 @@ pub(crate) mod tests {
                 constant_net(&format!("pose#{}", m + 1), dim, out)
             })
             .collect();
+        angle_model(config, nets, 0.0)
+    }
+
+    /// A model of one circular angle (`pose_6`, targets unscaled) of
+    /// `nets` on 4 inputs standardised by `mean` (spread 1).
+    pub(crate) fn angle_model(config: ModelConfig, nets: Vec<FittedNet>, mean: f64) -> PoseModel {
+        let dim = 4;
         PoseModel {
             config,
-            standardiser: Standardiser::from_parts(vec![0.0; dim], vec![1.0; dim]).expect("std"),
+            standardiser: Standardiser::from_parts(vec![mean; dim], vec![1.0; dim]).expect("std"),
             targets: Standardiser::from_parts(vec![0.0; 2], vec![1.0; 2]).expect("targets"),
             nets,
             outputs: vec![ModelTarget::circular("pose_6")],

@@ -8,6 +8,7 @@
 
 mod cmd_completions;
 mod cmd_data;
+mod cmd_ensemble;
 mod cmd_follow;
 mod cmd_image;
 mod cmd_inspect;
@@ -62,6 +63,8 @@ enum Command {
     Train(cmd_learn::TrainArgs),
     /// Bayesian search (TPE) of a pose model's settings on an inner validation part of the training data.
     Search(cmd_search::SearchArgs),
+    /// Join pin models trained apart on the same rows into one ensemble, their predictions averaged.
+    Ensemble(cmd_ensemble::EnsembleArgs),
     /// Mean absolute errors of a model on a dataset (report ch. 4.3).
     Validate(cmd_learn::ValidateArgs),
     /// Predict a model's targets (the edge pose by default) for one frame or a dataset.
@@ -99,6 +102,7 @@ fn main() -> ExitCode {
         Command::SimFit(a) => cmd_twin::sim_fit(a),
         Command::Train(a) => cmd_learn::train(a),
         Command::Search(a) => cmd_search::search(a),
+        Command::Ensemble(a) => cmd_ensemble::ensemble(a),
         Command::Validate(a) => cmd_learn::validate(a),
         Command::Predict(a) => cmd_learn::predict(a),
         Command::Follow(a) => cmd_follow::follow(a),

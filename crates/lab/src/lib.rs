@@ -33,6 +33,7 @@ pub mod import_checks;
 pub mod import_like;
 pub mod import_reader;
 pub mod import_request;
+pub mod join_models;
 pub mod numbers;
 pub mod pin_jitter;
 pub mod remote;

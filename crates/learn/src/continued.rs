@@ -118,7 +118,7 @@ fn nets_of(cfg: &ModelConfig) -> Result<Value, LearnError> {
 
 /// The first key (dotted path under `at`) whose values differ in `a` and
 /// `b`, with both values as JSON text ("absent" for a missing key).
-fn first_difference(a: &Value, b: &Value, at: &str) -> Option<(String, String, String)> {
+pub(crate) fn first_difference(a: &Value, b: &Value, at: &str) -> Option<(String, String, String)> {
     let (Value::Object(x), Value::Object(y)) = (a, b) else {
         return (a != b).then(|| (at.to_string(), a.to_string(), b.to_string()));
     };

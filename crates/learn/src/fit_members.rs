@@ -330,7 +330,7 @@ fn history_of(epochs: Vec<Vec<NetEpoch>>, count: usize, halvings: &[usize]) -> T
 
 /// A net's name in member `m` of an ensemble of `k`: the single model's
 /// name for `k = 1`, else `name#m` counting members from 1.
-fn member_name(name: &str, m: usize, k: usize) -> String {
+pub(crate) fn member_name(name: &str, m: usize, k: usize) -> String {
     if k == 1 {
         name.to_string()
     } else {

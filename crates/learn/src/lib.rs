@@ -23,6 +23,7 @@ mod error;
 mod fit_members;
 mod image_base;
 mod image_model;
+mod joined;
 mod kernels;
 mod member;
 mod mlp;

@@ -66,7 +66,7 @@ impl PoseModel {
 }
 
 /// A member's net name without its `#m` (the name trained alone).
-fn single_name(name: &str, k: usize) -> &str {
+pub(crate) fn single_name(name: &str, k: usize) -> &str {
     match name.rsplit_once('#') {
         Some((base, _)) if k > 1 => base,
         _ => name,
@@ -74,7 +74,7 @@ fn single_name(name: &str, k: usize) -> &str {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use crate::config::{ModelConfig, ModelKind, Preset};
     use crate::net::Layers;
     use crate::pose_model::{FittedNet, PoseModel};
@@ -83,7 +83,7 @@ mod tests {
 
     /// A net of `dim` inputs whose output is `out` whatever the input
     /// (zero weights, the output layer's biases `out`).
-    fn constant_net(name: &str, dim: usize, out: [f32; 2]) -> FittedNet {
+    pub(crate) fn constant_net(name: &str, dim: usize, out: [f32; 2]) -> FittedNet {
         let sizes = vec![dim, 1, 2];
         let w = vec![vec![0.0; dim], vec![0.0; 2]];
         let b = vec![vec![0.0], out.to_vec()];
@@ -113,9 +113,16 @@ mod tests {
                 constant_net(&format!("pose#{}", m + 1), dim, out)
             })
             .collect();
+        angle_model(config, nets, 0.0)
+    }
+
+    /// A model of one circular angle (`pose_6`, targets unscaled) of
+    /// `nets` on 4 inputs standardised by `mean` (spread 1).
+    pub(crate) fn angle_model(config: ModelConfig, nets: Vec<FittedNet>, mean: f64) -> PoseModel {
+        let dim = 4;
         PoseModel {
             config,
-            standardiser: Standardiser::from_parts(vec![0.0; dim], vec![1.0; dim]).expect("std"),
+            standardiser: Standardiser::from_parts(vec![mean; dim], vec![1.0; dim]).expect("std"),
             targets: Standardiser::from_parts(vec![0.0; 2], vec![1.0; 2]).expect("targets"),
             nets,
             outputs: vec![ModelTarget::circular("pose_6")],

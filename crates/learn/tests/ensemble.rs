@@ -194,3 +194,39 @@ fn input_noise_is_seeded_training_only_and_checked() {
         assert!(err.contains("input_noise"), "{err}");
     }
 }
+
+#[test]
+fn models_trained_apart_join_into_the_ensemble_of_them() {
+    // `PoseModel::join`: one model joined alone is that model, and an
+    // ensemble's members, each trained alone, joined are the ensemble,
+    // bit for bit; a model of other rows is refused.
+    let d = data(80, 30, 5);
+    let kind = ModelKind::PcaDenNN;
+    let one = fit(&small(kind, 1), &edge(), &d);
+    let alone = PoseModel::join(std::slice::from_ref(&one)).expect("join");
+    assert_eq!(
+        alone.to_bytes().expect("save"),
+        one.to_bytes().expect("save")
+    );
+    let cfg = small(kind, 2);
+    let two = fit(&cfg, &edge(), &d);
+    let members: Vec<PoseModel> = (0..2)
+        .map(|m| {
+            let mut single = small(kind, 1);
+            single.seed = cfg.member_seed(m);
+            fit(&single, &edge(), &d)
+        })
+        .collect();
+    let joined = PoseModel::join(&members).expect("join");
+    assert_eq!(
+        joined.to_bytes().expect("save"),
+        two.to_bytes().expect("save")
+    );
+    assert_eq!(
+        joined.predict_targets_batch(&d).expect("joined"),
+        two.predict_targets_batch(&d).expect("two")
+    );
+    let elsewhere = fit(&small(kind, 1), &edge(), &data(80, 30, 6));
+    let err = PoseModel::join(&[one, elsewhere]).expect_err("refused");
+    assert!(err.to_string().contains("standardised"), "{err}");
+}

@@ -198,6 +198,9 @@ pub fn stage_image_model(
 
 /// Any model folder: a pin model (displacement vectors in) or an image
 /// model (frames in), as its `model.json` says.
+// One is loaded per command, and both variants are about a kilobyte of
+// settings beside their boxed weights: boxing one would only add a hop.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub enum LoadedModel {
     Pins(StoredModel),

@@ -32,7 +32,7 @@ pub fn join_models(dirs: &[PathBuf]) -> Result<(StoredModel, String)> {
         models.push(model.into_model_for(&pins, dir)?);
     }
     let joined = PoseModel::join(&models)?;
-    let record = members_record(&models, dirs);
+    let record = members_record(&models, dirs)?;
     let mut out = StoredModel::new(joined, pins);
     if let Some(t) = training {
         out = out.with_training(t);
@@ -83,28 +83,35 @@ fn same_training(stored: &[StoredModel], dirs: &[PathBuf]) -> Result<Option<Trai
 
 /// [`MEMBERS_FILE`]: every member's folder (as given), seed, epochs its
 /// nets trained (with those of any model it continued) and members.
-fn members_record(models: &[PoseModel], dirs: &[PathBuf]) -> String {
-    let mut text = String::from(
+fn members_record(models: &[PoseModel], dirs: &[PathBuf]) -> Result<String> {
+    let member = models
+        .iter()
+        .zip(dirs)
+        .map(|(model, dir)| MemberRecord {
+            model: dir.display().to_string(),
+            seed: model.config().seed,
+            epochs: model.epochs_before() + model.config().epochs,
+            ensemble: model.config().ensemble,
+        })
+        .collect();
+    let body = toml::to_string(&MembersRecord { member })
+        .map_err(|e| LabError::Config(format!("ensemble: {MEMBERS_FILE} not written: {e}")))?;
+    Ok(format!(
         "# the models joined into this ensemble (tactrace ensemble), in order: their \
-         folders, seeds, epochs and members\n",
-    );
-    for (model, dir) in models.iter().zip(dirs) {
-        let cfg = model.config();
-        let folder = toml::Value::String(dir.display().to_string());
-        text.push_str(&format!(
-            "\n[[member]]\nmodel = {folder}\nseed = {}\nepochs = {}\nensemble = {}\n",
-            seed_text(cfg.seed),
-            model.epochs_before() + cfg.epochs,
-            cfg.ensemble
-        ));
-    }
-    text
+         folders, seeds, epochs and members\n\n{body}"
+    ))
 }
 
-/// A seed as TOML: an integer when TOML can hold it, else a string.
-fn seed_text(seed: u64) -> String {
-    match i64::try_from(seed) {
-        Ok(s) => s.to_string(),
-        Err(_) => format!("\"{seed}\""),
-    }
+/// The [`MEMBERS_FILE`] record, one `[[member]]` table a member.
+#[derive(serde::Serialize)]
+struct MembersRecord {
+    member: Vec<MemberRecord>,
+}
+
+#[derive(serde::Serialize)]
+struct MemberRecord {
+    model: String,
+    seed: u64,
+    epochs: usize,
+    ensemble: usize,
 }

@@ -12,6 +12,14 @@
 //! full precision, to check that a change leaves the results bit-identical.
 //! `--once` orders without the second nearest-neighbour start
 //! (`PinTracker::with_second_start(false)`), the ordering before it.
+//! `--windows R` sets the matchings' window radius (spacings), `--windows
+//! none` turns the windows off (`PinTracker::with_windows`). `--per-frame F` writes, per frame, the thread CPU time of each rep's
+//! `extract` (`CLOCK_THREAD_CPUTIME_ID`, microseconds), after its keypoint
+//! count and the pins its first pass leaves missing, with `--only detect|order` the time of
+//! that stage instead; `--cold MB` writes a buffer of MB megabytes before
+//! each frame, so that it starts with cold caches: the reps of a frame
+//! tell its own cost (their least) from what the machine added to it, and
+//! each time is followed by `/` and the thread's context switches during it.
 
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -27,12 +35,15 @@ struct Args {
     dump: Option<String>,
     only: Option<String>,
     once: bool,
+    per_frame: Option<String>,
+    windows: Option<Option<f64>>,
+    cold_mb: usize,
     frames: Vec<(String, Frame)>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage =
-        "usage: extract_timing <preset|file.toml> <reference.png> [--reps N] [--dump F] [--only detect|threshold|order|extract] [--once] <png>...";
+        "usage: extract_timing <preset|file.toml> <reference.png> [--reps N] [--dump F] [--only detect|threshold|order|extract] [--once] [--per-frame F] [--windows R|none] [--cold MB] <png>...";
     let mut args = std::env::args().skip(1);
     let which = args.next().ok_or(usage)?;
     let params = if which.ends_with(".toml") {
@@ -42,12 +53,19 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     };
     let reference = image::open(args.next().ok_or(usage)?)?.to_luma8();
     let (mut reps, mut dump, mut only, mut once, mut frames) = (3, None, None, false, Vec::new());
+    let (mut per_frame, mut windows, mut cold_mb) = (None, None, 0);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--reps" => reps = args.next().ok_or(usage)?.parse()?,
             "--dump" => dump = Some(args.next().ok_or(usage)?),
             "--only" => only = Some(args.next().ok_or(usage)?),
             "--once" => once = true,
+            "--per-frame" => per_frame = Some(args.next().ok_or(usage)?),
+            "--cold" => cold_mb = args.next().ok_or(usage)?.parse()?,
+            "--windows" => {
+                let reach = args.next().ok_or(usage)?;
+                windows = Some((reach != "none").then(|| reach.parse()).transpose()?);
+            }
             _ => {
                 let frame = image::open(&a)?.to_luma8();
                 frames.push((a, frame));
@@ -64,6 +82,9 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         dump,
         only,
         once,
+        per_frame,
+        windows,
+        cold_mb,
         frames,
     })
 }
@@ -94,12 +115,89 @@ fn time_per_frame(frames: &[(String, Frame)], reps: usize, mut f: impl FnMut(usi
     (cpu * 1e6 / n, wall * 1e6 / n)
 }
 
+/// This thread's CPU time, microseconds (`CLOCK_THREAD_CPUTIME_ID`).
+fn thread_cpu_us() -> f64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes one timespec into `t`, which lives here
+    // for the call.
+    let read = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    if read == 0 {
+        t.tv_sec as f64 * 1e6 + t.tv_nsec as f64 * 1e-3
+    } else {
+        f64::NAN
+    }
+}
+
+/// Context switches of this thread so far, voluntary plus involuntary
+/// (`getrusage(RUSAGE_THREAD)`).
+fn switches() -> i64 {
+    // SAFETY: an all-zero rusage is a valid value, which getrusage
+    // overwrites.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: getrusage writes one rusage into `u`, which lives here for
+    // the call.
+    let read = unsafe { libc::getrusage(libc::RUSAGE_THREAD, &mut u) };
+    if read == 0 {
+        u.ru_nvcsw + u.ru_nivcsw
+    } else {
+        -1
+    }
+}
+
+/// Per frame, its name and the thread CPU time of `extract` in each of
+/// `reps` passes over all the frames (frames in order within a pass, as
+/// `bench` runs them) with the context switches during it, one line a
+/// frame.
+fn per_frame_cpu(a: &Args, extractor: &PinExtractor) -> String {
+    let mut times = vec![Vec::with_capacity(a.reps); a.frames.len()];
+    let mut flush = vec![0u8; a.cold_mb << 20];
+    let keypoints: Vec<_> = a
+        .frames
+        .iter()
+        .map(|(_, f)| detect_blobs(f, &a.params))
+        .collect();
+    for rep in 0..a.reps {
+        for (i, (_, frame)) in a.frames.iter().enumerate() {
+            // Every cache line of the buffer written: the caches then hold
+            // none of the frame's data, as after another process ran.
+            for line in flush.chunks_mut(64) {
+                line[0] = line[0].wrapping_add(rep as u8 | 1);
+            }
+            std::hint::black_box(&mut flush);
+            let (s, c) = (switches(), thread_cpu_us());
+            match a.only.as_deref() {
+                Some("detect") => drop(std::hint::black_box(detect_blobs(frame, &a.params))),
+                Some("order") => drop(std::hint::black_box(extractor.tracker.order(&keypoints[i]))),
+                _ => drop(std::hint::black_box(extractor.extract(frame).ok())),
+            }
+            let cpu = thread_cpu_us() - c;
+            times[i].push((cpu, switches() - s));
+        }
+    }
+    let mut out = String::new();
+    for ((name, frame), t) in a.frames.iter().zip(&times) {
+        let keypoints = detect_blobs(frame, &a.params);
+        let first = extractor.tracker.first_pass(&keypoints);
+        let cells: Vec<String> = t.iter().map(|(v, s)| format!("{v:.2}/{s}")).collect();
+        let (n, missing) = (keypoints.len(), first.tracked().missing);
+        let _ = writeln!(out, "{name} {n} {missing} {}", cells.join(" "));
+    }
+    out
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a = parse()?;
     let mut extractor = PinExtractor::from_reference_frame(&a.reference, a.params.clone())?;
     if a.once {
         let reference = extractor.tracker.reference().to_vec();
         extractor.tracker = PinTracker::new(reference)?.with_second_start(false);
+    }
+    if let Some(reach) = a.windows {
+        let reference = extractor.tracker.reference().to_vec();
+        extractor.tracker = PinTracker::new(reference)?.with_windows(reach);
     }
     let keypoints: Vec<_> = a
         .frames
@@ -140,6 +238,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         extract_us.1,
         failed / a.reps.max(1)
     );
+    if let Some(path) = &a.per_frame {
+        std::fs::write(path, per_frame_cpu(&a, &extractor))?;
+    }
     if let Some(path) = a.dump {
         let mut out = String::new();
         for ((name, frame), kps) in a.frames.iter().zip(&keypoints) {

@@ -20,6 +20,7 @@ mod grid;
 mod repair;
 mod split;
 mod start;
+mod window;
 
 use grid::Grid;
 
@@ -95,6 +96,9 @@ pub struct PinTracker {
     /// Whether the nearest-neighbour pairs grow from the field fitted to
     /// them before the start ([`PinTracker::with_grown_pairs`]).
     grow: bool,
+    /// Radius (spacings) of the pins' windows of the fast path, `None`
+    /// for none ([`PinTracker::with_windows`]).
+    windows: Option<f64>,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -179,6 +183,7 @@ impl PinTracker {
             cuts: true,
             second: true,
             grow: true,
+            windows: Some(window::WINDOW_REACH),
         })
     }
 
@@ -243,6 +248,19 @@ impl PinTracker {
     /// (`tests/speed.rs`); kept to check that and to time it.
     pub fn with_grown_pairs(mut self, on: bool) -> Self {
         self.grow = on;
+        self
+    }
+
+    /// This tracker with the windowed fast path of its matchings (the
+    /// default: each pin looked for in a window of `reach` spacings around
+    /// its prediction, every pin taking the only point of its window when
+    /// no window is ambiguous; see `tracker/window.rs`) or without it
+    /// (`None`: every stage lists its candidates and solves the
+    /// assignment, as before). The same matchings by construction, for any
+    /// reach whose window and band fit in the stage's gate (wider ones
+    /// are not used); kept to check that (`tests/speed.rs`) and to time it.
+    pub fn with_windows(mut self, reach: Option<f64>) -> Self {
+        self.windows = reach;
         self
     }
 
@@ -390,7 +408,9 @@ impl PinTracker {
     }
 
     /// Optimal one-to-one matching of predicted pins to points, squared
-    /// distance cost, pairs farther than `gate` not allowed. Candidates come
+    /// distance cost, pairs farther than `gate` not allowed: from the
+    /// pins' windows where none is ambiguous (`tracker/window.rs`, the
+    /// same matching), else in full. Candidates come
     /// from the x-window of each prediction (through the grid's cells or
     /// the x-sorted points: the same edges) and are listed by point index
     /// (as a scan over all points would list them), through a bit set.
@@ -401,6 +421,11 @@ impl PinTracker {
         source: Candidates,
         gate: f64,
     ) -> Vec<Option<usize>> {
+        if let Candidates::Grid(grid) = source {
+            if let Some(matches) = self.window_matches(predicted, points, grid, gate) {
+                return matches;
+            }
+        }
         let gate2 = gate * gate;
         // The cost of leaving a pin unassigned (as `assign_rows` takes it).
         let unassigned = if gate2.is_finite() {

@@ -37,6 +37,7 @@ mod reflections;
 mod rotations;
 mod search;
 mod serialise;
+mod setting_difference;
 mod standardise;
 mod target_score;
 mod targets;
@@ -62,6 +63,7 @@ pub use reflections::{mirror_pins, mirrored_copies, mirrored_inputs, Reflections
 pub use rotations::{turned_copies, Rotations, MATCH_TOLERANCE, MAX_ORDER};
 pub use search::{hyperparameter_search, SearchSpace, Trial, MAX_GRID_POINTS};
 pub use serialise::FORMAT_VERSION;
+pub use setting_difference::{first_difference, first_setting_difference, SettingDifference};
 pub use standardise::Standardiser;
 pub use target_score::{target_spread, TargetScale};
 pub use targets::{

@@ -45,7 +45,9 @@ mod trainer;
 mod turned_views;
 
 pub use band_weight::{BandWeight, MAX_BAND_WEIGHT};
-pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_ENSEMBLE};
+pub use config::{
+    ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_ENSEMBLE, MAX_SEED,
+};
 pub use continued::check_continuable;
 pub use cost::{Cost, CostKind, NetCost};
 pub use dataset::{mean_absolute_error, Dataset};

@@ -45,6 +45,7 @@ pub mod input_file;
 pub mod lock;
 pub mod model_dir;
 mod model_files;
+mod toml_integers;
 pub mod npy_file;
 pub mod other_keys;
 pub mod overlap;
@@ -56,7 +57,7 @@ pub mod sight_file;
 pub mod training_record;
 
 pub use collection::{LabelledCollection, LabelledRow, TapFields, TargetSpec};
-pub use config_file::{load_config, overlay, resolved_config_toml};
+pub use config_file::{load_config, overlay, parse_toml, resolved_config_toml};
 pub use csv_text::CsvText;
 pub use dataset::{
     read_dataset, read_dataset_frames, write_dataset, write_dataset_with, DatasetMeta, TapData,

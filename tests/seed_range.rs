@@ -12,12 +12,12 @@ fn a_config_integer_past_i64_is_refused_naming_the_key() {
     let r = train(&t.0, "pdennn", "ds", "1", "m", &["--config", "big.toml"]);
     expect_refusal_saying(&r, 2, "a seed past i64", &["`seed`", "line 2", "big.toml"]);
     assert!(!t.join("m").exists(), "nothing written");
-    // The largest seed a TOML file holds trains, and is written back.
+    // The largest seed a TOML file holds trains, and the model records it.
     std::fs::write(t.join("max.toml"), "seed = 9223372036854775807\n").unwrap();
     let r = train(&t.0, "pdennn", "ds", "1", "m", &["--config", "max.toml"]);
     expect_code(&r, 0, "the largest seed");
-    let config = std::fs::read_to_string(t.join("m").join("config.toml")).unwrap();
-    assert!(config.contains("seed = 9223372036854775807"), "{config}");
+    let model = std::fs::read_to_string(t.join("m").join("model.json")).unwrap();
+    assert!(model.contains("\"seed\": 9223372036854775807"), "the seed recorded");
 }
 
 #[test]

@@ -322,13 +322,21 @@ fn the_guide_without_an_undeformed_frame_runs_as_written() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("guide-no-rest");
     my_data(&data, &t.0, 10);
-    let script =
-        guide_blocks(|section| section.starts_with("## 2.") || section == NO_REST_SECTION);
-    assert!(script.contains("sensor inspect") && script.contains("--like"), "{script}");
+    let script = guide_blocks(|section| section.starts_with("## 2.") || section == NO_REST_SECTION);
+    assert!(
+        script.contains("sensor inspect") && script.contains("--like"),
+        "{script}"
+    );
     let (stdout, stderr) = run_script(&t.0, &script);
-    assert!(stderr.contains("no --reference: estimated the rest layout (127 pins)"), "{stderr}");
+    assert!(
+        stderr.contains("no --reference: estimated the rest layout (127 pins)"),
+        "{stderr}"
+    );
     assert!(t.join("sensor.toml").is_file() && t.join("found.png").is_file());
     let pins = |split: &str| util::reference_pins(&t.join("data").join(split));
     assert_eq!(pins("norest-train"), pins("norest-test"));
-    assert!(stdout.contains("  pose_2: ") && stdout.contains("  pose_6: "), "{stdout}");
+    assert!(
+        stdout.contains("  pose_2: ") && stdout.contains("  pose_6: "),
+        "{stdout}"
+    );
 }

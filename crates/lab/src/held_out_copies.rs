@@ -63,7 +63,12 @@ mod tests {
     #[test]
     fn renders_and_rounds_of_one_tap_are_copies() {
         let train = named(&["a.png", "b.png", "calibration-tap-3#0"]);
-        let val = named(&["a.png", "c.png", "calibration-tap-3#1", "calibration-tap-4#1"]);
+        let val = named(&[
+            "a.png",
+            "c.png",
+            "calibration-tap-3#1",
+            "calibration-tap-4#1",
+        ]);
         assert_eq!(held_out_copies(&train, &val), 2);
         let w = held_out_copies_warning(&train, &val).unwrap();
         assert!(w.contains("2 of the 4 held-out rows"), "{w}");

@@ -165,7 +165,12 @@ pub fn wrapping_angles(data: &TapData) -> Vec<String> {
         return Vec::new();
     }
     let span = |j: usize| {
-        let column = data.targets.iter().skip(j).step_by(k).map(|v| f64::from(*v));
+        let column = data
+            .targets
+            .iter()
+            .skip(j)
+            .step_by(k)
+            .map(|v| f64::from(*v));
         let (lo, hi) = column.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(v), hi.max(v))
         });

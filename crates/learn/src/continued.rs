@@ -17,8 +17,8 @@ use crate::dataset::Dataset;
 use crate::error::LearnError;
 use crate::fit_members::continue_members;
 use crate::pose_model::{checked_encoded, PinData, PoseModel};
-use crate::trainer::{EpochReport, TrainingHistory};
 use crate::setting_difference::{first_difference, SettingDifference};
+use crate::trainer::{EpochReport, TrainingHistory};
 use serde_json::Value;
 
 impl PoseModel {

@@ -45,7 +45,6 @@ pub mod input_file;
 pub mod lock;
 pub mod model_dir;
 mod model_files;
-mod toml_integers;
 pub mod npy_file;
 pub mod other_keys;
 pub mod overlap;
@@ -54,6 +53,7 @@ pub mod row_file;
 pub mod sensor_file;
 pub mod shape_file;
 pub mod sight_file;
+mod toml_integers;
 pub mod training_record;
 
 pub use collection::{LabelledCollection, LabelledRow, TapFields, TargetSpec};

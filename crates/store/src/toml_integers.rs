@@ -12,7 +12,10 @@ pub(crate) fn oversized_integer(text: &str) -> Option<(String, usize, String)> {
         let line = without_strings(line);
         let line = line.split('#').next().unwrap_or_default().trim();
         if line.starts_with('[') && !line.contains('=') {
-            table = line.trim_matches(|c| c == '[' || c == ']').trim().to_string();
+            table = line
+                .trim_matches(|c| c == '[' || c == ']')
+                .trim()
+                .to_string();
             continue;
         }
         let Some((key, value)) = line.split_once('=') else {

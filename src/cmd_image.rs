@@ -78,6 +78,10 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
                     va.len(),
                     a.split_seed
                 );
+                let copies = tactrace_lab::held_out_copies::held_out_copies_warning;
+                if let Some(w) = copies(&split.train, va) {
+                    eprintln!("{w}");
+                }
             }
             (split.val.clone(), rows)
         }

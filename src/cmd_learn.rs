@@ -122,8 +122,9 @@ pub struct TrainArgs {
     #[arg(long, value_name = "K")]
     pub(crate) ensemble: Option<usize>,
     /// Seed of an image model's initialisation, shuffling and shifts
-    /// (pin models take theirs from --config).
-    #[arg(long)]
+    /// (pin models take theirs from --config); at most 2^63 - 1, the
+    /// largest a TOML record of the run holds.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(..=tactrace_learn::MAX_SEED))]
     pub(crate) seed: Option<u64>,
     /// Start from the trained model in this folder instead of fresh
     /// weights: an image model fine-tuned on --train (its networks, pixel
@@ -227,6 +228,10 @@ pub fn train(a: TrainArgs) -> Result<()> {
                     va.len(),
                     a.split_seed
                 );
+                let copies = tactrace_lab::held_out_copies::held_out_copies_warning;
+                if let Some(w) = copies(&split.train, va) {
+                    eprintln!("{w}");
+                }
             }
             (split.train, split.val, split.record)
         }

@@ -116,3 +116,30 @@ fn members_of_other_rows_or_nets_and_out_a_member_are_refused() {
     }
     predicted(&t.0, "m5");
 }
+
+/// A joined model follows as any model: two PDenNNs of other seeds on
+/// 400 simulated taps, joined, close the disk in the simulated world (the
+/// controller sees the joined model's predictions, never the true pose).
+#[test]
+fn follow_with_a_joined_model_closes_the_disk() {
+    let t = TempDir::new("ensemble-follow");
+    expect_code(
+        &util::collect(&t.0, "400", &["--seed", "11"], "ds"),
+        0,
+        "ds",
+    );
+    for seed in [1, 2] {
+        let (config, out) = (format!("s{seed}.toml"), format!("p{seed}"));
+        std::fs::write(t.join(&config), format!("seed = {seed}\n")).unwrap();
+        let r = train(&t.0, "pdennn", "ds", "60", &out, &["--config", &config]);
+        expect_code(&r, 0, &out);
+    }
+    let args = ["ensemble", "--member", "p1", "--member", "p2", "--out", "e"];
+    expect_code(&tactrace(&t.0, &args), 0, "ensemble");
+    let args = ["follow", "--model", "e", "--shape", "disk", "--out", "run"];
+    let r = tactrace(&t.0, &args);
+    expect_code(&r, 0, "follow with the joined model");
+    assert!(r.stdout.contains("closed"), "{}", r.stdout);
+    let metrics = std::fs::read_to_string(t.join("run").join("metrics.json")).unwrap();
+    assert!(metrics.contains("\"closed\": true"), "{metrics}");
+}

@@ -201,22 +201,58 @@ fn completions_print_a_script_bash_accepts() {
     assert_eq!(r.code, 2, "{}", r.stderr);
 }
 
-/// The shell blocks of docs/getting-started.md, in order.
-fn guide_script() -> String {
+/// The guide's section on frames without an undeformed one (run by its
+/// own test, not as part of the main path).
+const NO_REST_SECTION: &str = "## No undeformed frame, or another TacTip";
+
+/// The shell blocks of docs/getting-started.md, in order, of the sections
+/// (`## ` headings) for which `keep` holds.
+fn guide_blocks(keep: impl Fn(&str) -> bool) -> String {
     let text = std::fs::read_to_string(repo().join("docs/getting-started.md")).unwrap();
     let mut script = String::from("set -eu\n");
-    let mut in_sh = false;
+    let (mut in_sh, mut section) = (false, "");
     for line in text.lines() {
+        if line.starts_with("## ") {
+            section = line;
+        }
         if let Some(lang) = line.trim_start().strip_prefix("```") {
             in_sh = !in_sh && lang.trim() == "sh";
             continue;
         }
-        if in_sh {
+        if in_sh && keep(section) {
             script.push_str(line);
             script.push('\n');
         }
     }
     script
+}
+
+/// The guide's main path: every shell block but those of
+/// [`NO_REST_SECTION`].
+fn guide_script() -> String {
+    guide_blocks(|section| section != NO_REST_SECTION)
+}
+
+/// `bash -c script` in `dir` with the binary on the `PATH`: its stdout
+/// and stderr, after asserting that it succeeded.
+fn run_script(dir: &Path, script: &str) -> (String, String) {
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_tactrace"));
+    let path = format!(
+        "{}:{}",
+        bin.parent().unwrap().display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let out = Command::new("bash")
+        .arg("-c")
+        .arg(script)
+        .current_dir(dir)
+        .env("PATH", path)
+        .output()
+        .expect("bash runs");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{script}\n{stdout}\n{stderr}");
+    (stdout, stderr)
 }
 
 /// `mydata/` for the guide: every `stride`-th labelled tap of the real
@@ -244,24 +280,10 @@ fn the_getting_started_guide_runs_as_written() {
     let Some(data) = real_data() else { return };
     let t = TempDir::new("guide");
     my_data(&data, &t.0, 2);
-    let bin = PathBuf::from(env!("CARGO_BIN_EXE_tactrace"));
-    let path = format!(
-        "{}:{}",
-        bin.parent().unwrap().display(),
-        std::env::var("PATH").unwrap_or_default()
-    );
     let script = guide_script();
     assert!(script.matches("tactrace ").count() >= 7, "{script}");
-    let out = Command::new("bash")
-        .arg("-c")
-        .arg(&script)
-        .current_dir(&t.0)
-        .env("PATH", path)
-        .output()
-        .expect("bash runs");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stdout}\n{stderr}");
+    assert!(!script.contains("sensor inspect"), "{script}");
+    let (stdout, _) = run_script(&t.0, &script);
     // The targets by their columns' names, not "position" and "angle".
     assert!(stdout.contains("  pose_2: "), "{stdout}");
     assert!(stdout.contains("  pose_6: "), "{stdout}");
@@ -287,4 +309,34 @@ fn the_getting_started_guide_runs_as_written() {
     );
     let l2 = std::fs::read_to_string(run.join("l2_error.svg")).unwrap();
     assert!(l2.contains("arc length along the contour (mm)"));
+}
+
+/// The guide's "No undeformed frame, or another TacTip" run as written
+/// (after its step 2, which splits the rows) on every tenth row of the
+/// public edge set: `sensor inspect` proposes the settings and draws its
+/// picture, `import` estimates the rest layout and says so, `--like`
+/// reads the held-out rows against the same rest pins, and a model
+/// trained on one split is scored on the other by the columns' names.
+#[test]
+fn the_guide_without_an_undeformed_frame_runs_as_written() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("guide-no-rest");
+    my_data(&data, &t.0, 10);
+    let script = guide_blocks(|section| section.starts_with("## 2.") || section == NO_REST_SECTION);
+    assert!(
+        script.contains("sensor inspect") && script.contains("--like"),
+        "{script}"
+    );
+    let (stdout, stderr) = run_script(&t.0, &script);
+    assert!(
+        stderr.contains("no --reference: estimated the rest layout (127 pins)"),
+        "{stderr}"
+    );
+    assert!(t.join("sensor.toml").is_file() && t.join("found.png").is_file());
+    let pins = |split: &str| util::reference_pins(&t.join("data").join(split));
+    assert_eq!(pins("norest-train"), pins("norest-test"));
+    assert!(
+        stdout.contains("  pose_2: ") && stdout.contains("  pose_6: "),
+        "{stdout}"
+    );
 }

@@ -148,8 +148,7 @@ impl BaseSettings {
 /// settings of a residual model (`cfg_reads_base`; the defaults when the
 /// table is absent), refused for any other model.
 pub fn split_base_table(text: &str) -> Result<(String, Option<BaseSettings>)> {
-    let mut table: toml::Table = toml::from_str(text)
-        .map_err(|e| LabError::Config(format!("model config: {}", e.to_string().trim_end())))?;
+    let mut table = tactrace_store::parse_toml(text, "model config")?;
     let base = match table.remove("base") {
         Some(v) => Some(
             v.try_into::<BaseSettings>()

@@ -16,9 +16,8 @@
 use crate::error::{LabError, Result};
 use crate::image_base::{split_base_table, BaseSettings};
 use crate::train::data_targets;
-use std::collections::BTreeSet;
 use std::path::Path;
-use tactrace_learn::PoseModel;
+use tactrace_learn::{first_setting_difference, PoseModel};
 use tactrace_store::training_record::row_hashes;
 use tactrace_store::{BaseFolds, LoadedModel, StoredImageModel, TapData};
 
@@ -82,12 +81,19 @@ pub fn differing_setting(given: &BaseSettings, source: &BaseSettings) -> Option<
     if given.fit_on != source.fit_on {
         return Some("fit_on".into());
     }
-    let (a, b) = (&given.settings, &source.settings);
-    let keys: BTreeSet<&String> = a.keys().chain(b.keys()).collect();
-    let key = keys.into_iter().find(|k| a.get(*k) != b.get(*k))?;
-    match (given.config(), source.config()) {
-        (Ok(x), Ok(y)) if x == y => None,
-        _ => Some(format!("[base.settings] {key}")),
+    if given.settings == source.settings {
+        return None;
+    }
+    // Named by the resolved configurations where both resolve (so a key
+    // spelt out at its default is no difference), else by the tables.
+    let named = match (given.config(), source.config()) {
+        (Ok(x), Ok(y)) => first_setting_difference(&x, &y),
+        _ => first_setting_difference(&given.settings, &source.settings),
+    };
+    match named {
+        Ok(None) => None,
+        Ok(Some(d)) => Some(format!("[base.settings] {}", d.key)),
+        Err(_) => Some("[base.settings]".into()),
     }
 }
 
@@ -182,5 +188,15 @@ mod tests {
         assert_eq!(named.as_deref(), Some("[base.settings] epochs"));
         let folds = base("[base]\nmodel = \"disdennn\"\nfolds = 4\n[base.settings]\nepochs = 30\n");
         assert_eq!(differing_setting(&folds, &source).as_deref(), Some("folds"));
+        // The key named is the one that resolves otherwise, not merely the
+        // first written otherwise (`divergence_retries`, at its default).
+        let retries = source.config().unwrap().divergence_retries;
+        let both = base(&format!(
+            "[base]\nmodel = \"disdennn\"\n[base.settings]\nepochs = 30\n\
+             divergence_retries = {retries}\nseed = {}\n",
+            default + 1
+        ));
+        let named = differing_setting(&both, &source);
+        assert_eq!(named.as_deref(), Some("[base.settings] seed"));
     }
 }

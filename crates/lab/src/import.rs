@@ -201,6 +201,8 @@ fn import_rows_with(
     got.warnings
         .extend(crate::import_checks::constant_targets(d));
     got.warnings
+        .extend(crate::import_checks::wrapping_angles(d));
+    got.warnings
         .extend(crate::import_checks::still_pins_warning(d));
     if let Some(reference) = opened.reference.frame() {
         got.warnings.extend(crate::import_checks::pressed_reference(

@@ -19,6 +19,7 @@
 //! taps, whose fields are then off by little.
 use crate::error::LabError;
 use std::path::Path;
+use tactrace_learn::Unit;
 use tactrace_store::TapData;
 
 /// Fraction of frames that may be less spread than the reference before
@@ -147,6 +148,51 @@ pub fn constant_targets(data: &TapData) -> Vec<String> {
         .collect()
 }
 
+/// Span (deg) from which an angle not marked circular is warned about.
+pub const WRAP_SPAN_DEG: f64 = 300.0;
+
+/// A warning for each target in degrees, not marked circular, whose
+/// values span [`WRAP_SPAN_DEG`] or more: likely an angle over the full
+/// circle (a heading, say), whose -179 and 179 deg the model would learn
+/// as 358 deg apart. Marked `--target COLUMN:deg:circular`, it is learnt
+/// as its sine and cosine and its errors are wrapped.
+pub fn wrapping_angles(data: &TapData) -> Vec<String> {
+    let (n, k) = (data.len(), data.n_targets());
+    let Ok(targets) = data.meta.model_targets() else {
+        return Vec::new();
+    };
+    if n < 2 || targets.len() != k {
+        return Vec::new();
+    }
+    let span = |j: usize| {
+        let column = data
+            .targets
+            .iter()
+            .skip(j)
+            .step_by(k)
+            .map(|v| f64::from(*v));
+        let (lo, hi) = column.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+        hi - lo
+    };
+    targets
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.unit == Unit::Deg && !t.circular)
+        .filter_map(|(j, t)| {
+            let s = span(j);
+            (s >= WRAP_SPAN_DEG).then(|| {
+                format!(
+                    "the target {} spans {s:.0} deg and is not marked circular: if it is an \
+                     angle that wraps (-180 and 180 the same), import it as --target {}:deg:circular",
+                    t.name, t.name
+                )
+            })
+        })
+        .collect()
+}
+
 /// How the pin displacements of a dataset fail to vary, when they do.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StillPins {
@@ -232,6 +278,23 @@ mod tests {
         );
         data.targets[5] = 0.5;
         assert!(constant_targets(&data).is_empty());
+    }
+
+    /// An angle spanning 300 deg or more is warned about unless it is
+    /// circular; a narrower one, and a position, are not.
+    #[test]
+    fn a_wide_angle_not_marked_circular_is_warned_about() {
+        let mut data = crate::test_data::edge_data(
+            vec![0.0; 6],
+            vec![1.0, -170.0, 2.0, 0.0, 400.0, 129.0],
+            &[[0.0, 0.0]],
+        );
+        assert!(wrapping_angles(&data).is_empty(), "299 deg, and r in mm");
+        data.targets[5] = 130.0;
+        let w = wrapping_angles(&data);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains("theta spans 300 deg"), "{w:?}");
+        assert!(w[0].contains("--target theta:deg:circular"), "{w:?}");
     }
 
     /// A hexagon of pins about (10, 20) and rows scaled by `scales`.

@@ -25,6 +25,7 @@ pub mod error;
 pub mod follow;
 #[cfg(feature = "hardware")]
 pub mod hardware;
+pub mod held_out_copies;
 pub mod image_base;
 pub mod image_base_reuse;
 pub mod image_fit;

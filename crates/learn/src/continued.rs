@@ -17,6 +17,7 @@ use crate::dataset::Dataset;
 use crate::error::LearnError;
 use crate::fit_members::continue_members;
 use crate::pose_model::{checked_encoded, PinData, PoseModel};
+use crate::setting_difference::{first_difference, SettingDifference};
 use crate::trainer::{EpochReport, TrainingHistory};
 use serde_json::Value;
 
@@ -80,9 +81,9 @@ impl PoseModel {
 /// noise, band weight, and whether turned views average at prediction.
 pub fn check_continuable(start: &ModelConfig, next: &ModelConfig) -> Result<(), LearnError> {
     let (a, b) = (nets_of(start)?, nets_of(next)?);
-    match first_difference(&a, &b, "") {
+    match first_difference(&a, &b) {
         None => Ok(()),
-        Some((key, was, now)) => Err(refused(format!(
+        Some(SettingDifference { key, was, now }) => Err(refused(format!(
             "`{key}` is {was} in the model and {now} in the configuration: a continued fit \
              trains the same nets"
         ))),
@@ -114,31 +115,6 @@ fn nets_of(cfg: &ModelConfig) -> Result<Value, LearnError> {
         net.beta = 1.0;
     }
     serde_json::to_value(&c).map_err(|e| refused(e.to_string()))
-}
-
-/// The first key (dotted path under `at`) whose values differ in `a` and
-/// `b`, with both values as JSON text ("absent" for a missing key).
-pub(crate) fn first_difference(a: &Value, b: &Value, at: &str) -> Option<(String, String, String)> {
-    let (Value::Object(x), Value::Object(y)) = (a, b) else {
-        return (a != b).then(|| (at.to_string(), a.to_string(), b.to_string()));
-    };
-    let text = |v: Option<&Value>| v.map_or("absent".to_string(), Value::to_string);
-    for key in x.keys().chain(y.keys().filter(|k| !x.contains_key(*k))) {
-        let path = if at.is_empty() {
-            key.clone()
-        } else {
-            format!("{at}.{key}")
-        };
-        match (x.get(key), y.get(key)) {
-            (Some(p), Some(q)) => {
-                if let Some(d) = first_difference(p, q, &path) {
-                    return Some(d);
-                }
-            }
-            (p, q) => return Some((path, text(p), text(q))),
-        }
-    }
-    None
 }
 
 fn refused(reason: String) -> LearnError {

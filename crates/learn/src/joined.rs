@@ -11,11 +11,11 @@
 //! seeds on the same rows join; models fitted on other rows (another
 //! standardiser) or of other nets or rates do not.
 use crate::config::ModelConfig;
-use crate::continued::first_difference;
 use crate::error::LearnError;
 use crate::fit_members::member_name;
 use crate::member::single_name;
 use crate::pose_model::{FittedNet, PoseModel};
+use crate::setting_difference::{first_difference, SettingDifference};
 use std::sync::OnceLock;
 
 impl PoseModel {
@@ -105,9 +105,9 @@ pub(crate) fn check_joinable(first: &PoseModel, other: &PoseModel) -> Result<(),
         nets_and_rates(&first.config)?,
         nets_and_rates(&other.config)?,
     );
-    match first_difference(&a, &b, "") {
+    match first_difference(&a, &b) {
         None => Ok(()),
-        Some((key, was, now)) => Err(format!(
+        Some(SettingDifference { key, was, now }) => Err(format!(
             "`{key}` is {was} in member 1 and {now} in this one: members may differ only in their \
              seed and epochs"
         )),

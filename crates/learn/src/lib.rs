@@ -37,6 +37,7 @@ mod reflections;
 mod rotations;
 mod search;
 mod serialise;
+mod setting_difference;
 mod standardise;
 mod target_score;
 mod targets;
@@ -44,7 +45,9 @@ mod trainer;
 mod turned_views;
 
 pub use band_weight::{BandWeight, MAX_BAND_WEIGHT};
-pub use config::{ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_ENSEMBLE};
+pub use config::{
+    ModelConfig, ModelKind, NetConfig, Preset, TargetScaling, MAX_ENSEMBLE, MAX_SEED,
+};
 pub use continued::check_continuable;
 pub use cost::{Cost, CostKind, NetCost};
 pub use dataset::{mean_absolute_error, Dataset};
@@ -62,6 +65,7 @@ pub use reflections::{mirror_pins, mirrored_copies, mirrored_inputs, Reflections
 pub use rotations::{turned_copies, Rotations, MATCH_TOLERANCE, MAX_ORDER};
 pub use search::{hyperparameter_search, SearchSpace, Trial, MAX_GRID_POINTS};
 pub use serialise::FORMAT_VERSION;
+pub use setting_difference::{first_difference, first_setting_difference, SettingDifference};
 pub use standardise::Standardiser;
 pub use target_score::{target_spread, TargetScale};
 pub use targets::{

@@ -169,6 +169,18 @@ fn an_ensemble_size_out_of_range_is_refused() {
     }
 }
 
+/// A seed past TOML's signed integers could not be written back into the
+/// run's `config.toml`: refused, naming the key; the largest is taken.
+#[test]
+fn a_seed_past_max_seed_is_refused() {
+    let mut cfg = small(ModelKind::PDenNN, 1);
+    cfg.seed = tactrace_learn::MAX_SEED;
+    cfg.validate().expect("the largest seed");
+    cfg.seed = tactrace_learn::MAX_SEED + 1;
+    let err = cfg.validate().expect_err("refused").to_string();
+    assert!(err.contains("seed"), "{err}");
+}
+
 #[test]
 fn input_noise_is_seeded_training_only_and_checked() {
     let d = data(80, 30, 4);

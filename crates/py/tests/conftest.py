@@ -9,6 +9,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[3]
 SKIP_VAR = "TACTRACE_SKIP_REAL_DATA"
+SHARED_VAR = "TACTRACE_SHARED_DATA"
 
 
 def cli_path() -> Path:
@@ -51,19 +52,28 @@ def sim_model(work, sim_set) -> Path:
     return out
 
 
+def shared_data_dir() -> Path:
+    """The folder of the shared sets: TACTRACE_SHARED_DATA when set, else
+    ../shared/data beside the repository (as the Rust tests find it)."""
+    given = os.environ.get(SHARED_VAR)
+    return Path(given) if given else ROOT.parent / "shared" / "data"
+
+
 def real_edge_set() -> Path:
-    """The real TacTip edge set, as the Rust tests find it: a missing set
-    fails the test unless TACTRACE_SKIP_REAL_DATA=1 (then it is skipped,
-    saying why)."""
-    default = ROOT.parent / "shared" / "data" / "tactip127-edge2d"
-    path = Path(os.environ.get("TACTRACE_REAL_DATA", default))
+    """The real TacTip edge set, as the Rust tests find it
+    (TACTRACE_REAL_DATA, else tactip127-edge2d in the shared folder): a
+    missing set fails the test unless TACTRACE_SKIP_REAL_DATA=1 (then it
+    is skipped, saying why)."""
+    given = os.environ.get("TACTRACE_REAL_DATA")
+    path = Path(given) if given else shared_data_dir() / "tactip127-edge2d"
     if (path / "targets.csv").is_file() and (path / "frames" / "init_0.png").is_file():
         return path
     if os.environ.get(SKIP_VAR) == "1":
         pytest.skip(f"SKIPPED ({SKIP_VAR}=1): real TacTip data not found at {path}")
     pytest.fail(f"real TacTip data not found at {path}: this test needs it (the README says "
-                f"where ../shared comes from). Set TACTRACE_REAL_DATA=DIR to point at it, or "
-                f"{SKIP_VAR}=1 to skip the tests that need it.")
+                f"where ../shared comes from). Set {SHARED_VAR}=DIR to point at the folder of "
+                f"the sets (TACTRACE_REAL_DATA=DIR for the edge set alone), or {SKIP_VAR}=1 "
+                f"to skip the tests that need it.")
 
 
 @pytest.fixture(scope="session")

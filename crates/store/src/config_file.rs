@@ -4,6 +4,7 @@
 //! them), then the command's flags (set by the caller on the result). The
 //! resolved configuration is written into every run's output.
 use crate::error::{Result, StoreError};
+use crate::toml_integers::oversized_integer;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::path::Path;
@@ -50,10 +51,28 @@ pub fn overlay_value<T: DeserializeOwned>(
     text: &str,
     what: &str,
 ) -> Result<T> {
-    let over: toml::Value = toml::from_str(text).map_err(|e| config_err(what, e))?;
-    merge_into(&mut base, over);
+    let over = parse_toml(text, what)?;
+    merge_into(&mut base, toml::Value::Table(over));
     base.try_into()
         .map_err(|e: toml::de::Error| config_err(what, e))
+}
+
+/// The TOML `text` parsed; refused naming the key and line of an integer
+/// larger than TOML's signed 64-bit integers hold (say a seed of
+/// 2^64 - 1), where the parser's own message may not name it.
+pub fn parse_toml(text: &str, what: &str) -> Result<toml::Table> {
+    toml::from_str(text).map_err(|e| match oversized_integer(text) {
+        Some((key, line, literal)) => config_err(
+            what,
+            format!(
+                "`{key}` = {literal} (line {line}) is out of range: a TOML integer lies in \
+                 [{}, {}]",
+                i64::MIN,
+                i64::MAX
+            ),
+        ),
+        None => config_err(what, e),
+    })
 }
 
 fn config_err(what: &str, e: impl std::fmt::Display) -> StoreError {
@@ -119,5 +138,16 @@ mod tests {
         assert!(err.to_string().contains('c'), "{err}");
         assert!(overlay(&base(), "n = \"three\"", "test").is_err());
         assert!(overlay(&base(), "[inner", "test").is_err());
+    }
+
+    /// An integer past i64 is refused naming its key and line, whatever
+    /// the parser itself says; one in range still reaches the type.
+    #[test]
+    fn an_integer_past_i64_is_refused_naming_the_key() {
+        let text = "n = 3\n[inner]\na = 18446744073709551615\n";
+        let err = overlay(&base(), text, "test").unwrap_err().to_string();
+        assert!(err.contains("`inner.a`") && err.contains("line 3"), "{err}");
+        let got: Outer = overlay(&base(), "n = 9223372036854775807\n", "test").unwrap();
+        assert_eq!(got.n as u64, i64::MAX as u64);
     }
 }

@@ -53,10 +53,11 @@ pub mod row_file;
 pub mod sensor_file;
 pub mod shape_file;
 pub mod sight_file;
+mod toml_integers;
 pub mod training_record;
 
 pub use collection::{LabelledCollection, LabelledRow, TapFields, TargetSpec};
-pub use config_file::{load_config, overlay, resolved_config_toml};
+pub use config_file::{load_config, overlay, parse_toml, resolved_config_toml};
 pub use csv_text::CsvText;
 pub use dataset::{
     read_dataset, read_dataset_frames, write_dataset, write_dataset_with, DatasetMeta, TapData,

@@ -85,3 +85,20 @@ fn the_shipped_edge_config_is_the_preset_without_the_tilt_integral() {
     assert_eq!(cfg.controller, want);
     assert_ne!(Se3Config::edge_5d().ki[3], 0.0);
 }
+
+/// configs/edge5d-no-surface-integral.toml is edge_5d's preset with the
+/// depth's and the tilts' integral gains at zero (the policy off), and
+/// nothing else changed.
+#[test]
+fn the_shipped_corner_config_is_the_preset_without_the_surface_integral() {
+    use tactrace_control::Se3Config;
+    use tactrace_lab::follow::edge3d::Edge3dConfig;
+    let cfg: Edge3dConfig = toml::from_str(&shipped("edge5d-no-surface-integral.toml")).unwrap();
+    let mut want = Se3Config::edge_5d();
+    want.ki[2] = 0.0;
+    want.ki[3] = 0.0;
+    want.ki[4] = 0.0;
+    assert_eq!(cfg.controller, want);
+    assert!(cfg.controller.policy.is_off());
+    assert_ne!(Se3Config::edge_5d().ki[2], 0.0);
+}

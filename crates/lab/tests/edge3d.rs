@@ -40,7 +40,10 @@ fn the_step_cap_doubles_with_the_curvature_policy_on() {
     let mut cfg = Edge3dConfig::default();
     // The rim, about 377 mm, at 1 mm a step: 1.5 times that, plus 10.
     let length = edge.length();
-    assert!((length - 120.0 * std::f64::consts::PI).abs() < 1.0, "{length}");
+    assert!(
+        (length - 120.0 * std::f64::consts::PI).abs() < 1.0,
+        "{length}"
+    );
     assert_eq!(cfg.steps(&edge), (1.5 * length).ceil() as usize + 10);
     cfg.controller.policy.step_curvature_mm = 5.0;
     assert_eq!(cfg.steps(&edge), (3.0 * length).ceil() as usize + 10);

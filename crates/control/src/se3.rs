@@ -41,7 +41,18 @@
 //! to the line of the sensor's plane that runs over that direction seen
 //! from above, read from the commanded pose ([`heading_error_deg`]), with
 //! the rz gains.
+//!
+//! # The curvature policy in the edge's plane
+//! `policy` (the `[controller.policy]` table, off by default) is the 2D
+//! controller's ([`crate::policy`]) acting on the edge tasks' plane: the
+//! predicted rz stands for the report's theta (eq. 5.3) and the move's x,
+//! y and rz for the planar move, so the curvature estimate, the x
+//! reference shift c kappa and the shortened tangential step are the 2D
+//! ones. The step's contact term takes the tap's mean pin displacement
+//! ([`Se3Controller::observe_contact`]). Off, every move is bit for bit
+//! the controller's without it.
 use crate::pbts::PbtsConfig;
+use crate::policy::{ContactTypicality, CurvatureEstimate, PolicyConfig};
 use crate::task::{Task, COMPONENTS};
 use crate::ControlError;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -82,6 +93,9 @@ pub struct Se3Config {
     /// (only for a task that does not sense rz); `None`: the heading is
     /// never turned.
     pub heading_deg: Option<f64>,
+    /// The 2D curvature policy in the edge's plane (edge tasks only; off
+    /// by default): see the module header.
+    pub policy: PolicyConfig,
 }
 
 /// The serialised form, checked on the way in.
@@ -99,6 +113,8 @@ struct RawSe3Config {
     move_clip: Option<[f64; 6]>,
     #[serde(default)]
     heading_deg: Option<f64>,
+    #[serde(default)]
+    policy: PolicyConfig,
 }
 
 impl TryFrom<RawSe3Config> for Se3Config {
@@ -114,6 +130,7 @@ impl TryFrom<RawSe3Config> for Se3Config {
             integral_clip: r.integral_clip,
             move_clip: r.move_clip,
             heading_deg: r.heading_deg,
+            policy: r.policy,
         };
         config.validate()?;
         Ok(config)
@@ -138,6 +155,7 @@ impl Se3Config {
             integral_clip,
             move_clip: None,
             heading_deg: None,
+            policy: PolicyConfig::default(),
         };
         config.validate()?;
         Ok(config)
@@ -209,6 +227,7 @@ impl Se3Config {
             integral_clip: CLIP,
             move_clip: None,
             heading_deg: None,
+            policy: PolicyConfig::default(),
         }
     }
 
@@ -231,6 +250,7 @@ impl Se3Config {
             integral_clip: pbts.integral_clip,
             move_clip: None,
             heading_deg: None,
+            policy: PolicyConfig::default(),
         })
     }
 
@@ -268,6 +288,17 @@ impl Se3Config {
                     value,
                 });
             }
+        }
+        if let Some(reason) = self.policy.problem() {
+            return Err(ControlError::Policy { reason });
+        }
+        if !self.policy.is_off() && !self.task.sensed()[5] {
+            return Err(ControlError::Policy {
+                reason: format!(
+                    "the curvature policy needs a task that senses rz; {} does not",
+                    self.task
+                ),
+            });
         }
         if self.heading_deg.is_some() && self.task.sensed()[5] {
             return Err(ControlError::Policy {
@@ -350,6 +381,10 @@ pub struct Se3Controller {
     config: Se3Config,
     integral: [f64; 6],
     previous_error: Option<[f64; 6]>,
+    curvature: CurvatureEstimate,
+    contact: ContactTypicality,
+    /// Novelty of the latest contact ([`Se3Controller::observe_contact`]).
+    contact_novelty: f64,
 }
 
 impl Se3Controller {
@@ -360,6 +395,9 @@ impl Se3Controller {
             config,
             integral: [0.0; 6],
             previous_error: None,
+            curvature: CurvatureEstimate::default(),
+            contact: ContactTypicality::default(),
+            contact_novelty: 0.0,
         })
     }
 
@@ -373,10 +411,27 @@ impl Se3Controller {
         self.integral
     }
 
-    /// Forget the integral and the previous error.
+    /// The smoothed edge curvature estimated from the moves and
+    /// predictions so far, 1/mm (0 while the policy is off).
+    pub fn curvature_per_mm(&self) -> f64 {
+        self.curvature.kappa_per_mm
+    }
+
+    /// Forget the integral, the previous error, the curvature estimate
+    /// and the contacts seen.
     pub fn reset(&mut self) {
         self.integral = [0.0; 6];
         self.previous_error = None;
+        self.curvature = CurvatureEstimate::default();
+        self.contact = ContactTypicality::default();
+        self.contact_novelty = 0.0;
+    }
+
+    /// Take the mean pin displacement (px) of the tap the next step
+    /// answers, for the policy's contact term (`policy.step_contact`);
+    /// without it the novelty is 0.
+    pub fn observe_contact(&mut self, mean_displacement_px: f64) {
+        self.contact_novelty = self.contact.novelty(mean_displacement_px);
     }
 
     /// The error of a prediction (see the module header): the SE(3) error
@@ -399,7 +454,7 @@ impl Se3Controller {
     pub fn step(&mut self, prediction: [f64; 6]) -> Result<[f64; 6], ControlError> {
         self.check(prediction)?;
         let error = self.error(prediction);
-        Ok(self.law(error))
+        Ok(self.law_with_policy(prediction, error))
     }
 
     /// [`Se3Controller::step`] at the commanded pose `current` (work
@@ -415,7 +470,7 @@ impl Se3Controller {
         if let Some(heading) = self.config.heading_deg {
             error[5] = heading_error_deg(current, heading);
         }
-        Ok(self.law(error))
+        Ok(self.law_with_policy(prediction, error))
     }
 
     fn check(&self, prediction: [f64; 6]) -> Result<(), ControlError> {
@@ -427,6 +482,25 @@ impl Se3Controller {
             }),
             None => Ok(()),
         }
+    }
+
+    /// The law with the curvature policy in the edge's plane (module
+    /// header): the predicted rz as theta, the x error shifted by the
+    /// reference c kappa and the y step scaled, as the 2D controller's
+    /// (`PbtsController::try_step`); the move then feeds the estimate.
+    fn law_with_policy(&mut self, prediction: [f64; 6], mut error: [f64; 6]) -> [f64; 6] {
+        let policy = &self.config.policy;
+        if policy.is_off() {
+            return self.law(error);
+        }
+        let theta = prediction[5];
+        self.curvature.observe(theta, policy.curvature_smoothing);
+        let kappa = self.curvature.kappa_per_mm;
+        error[0] += policy.r_reference_mm(kappa);
+        error[1] *= policy.step_fraction(kappa, theta, self.contact_novelty);
+        let u = self.law(error);
+        self.curvature.moved(u[0], u[1], u[5]);
+        u
     }
 
     /// The PI(D) law on `error`, the move clipped.

@@ -72,16 +72,31 @@ fn the_shipped_edge_residual_carries_the_shipped_pin_model() {
     }
 }
 
-/// configs/edge5d-no-tilt-integral.toml is edge_5d's preset with the
-/// tilts' integral gains at zero, and nothing else changed.
-#[test]
-fn the_shipped_edge_config_is_the_preset_without_the_tilt_integral() {
+/// The shipped edge_5d config `name` is edge_5d's preset with the
+/// integral gains of the components `zeroed` at 0 (each nonzero in the
+/// preset), the policy off, and nothing else changed.
+fn assert_preset_without_integral(name: &str, zeroed: &[usize]) {
     use tactrace_control::Se3Config;
     use tactrace_lab::follow::edge3d::Edge3dConfig;
-    let cfg: Edge3dConfig = toml::from_str(&shipped("edge5d-no-tilt-integral.toml")).unwrap();
+    let cfg: Edge3dConfig = toml::from_str(&shipped(name)).unwrap();
     let mut want = Se3Config::edge_5d();
-    want.ki[3] = 0.0;
-    want.ki[4] = 0.0;
-    assert_eq!(cfg.controller, want);
-    assert_ne!(Se3Config::edge_5d().ki[3], 0.0);
+    for &k in zeroed {
+        assert_ne!(want.ki[k], 0.0, "{name}: ki[{k}] is 0 in the preset");
+        want.ki[k] = 0.0;
+    }
+    assert_eq!(cfg.controller, want, "{name}");
+    assert!(cfg.controller.policy.is_off(), "{name}");
+}
+
+/// configs/edge5d-no-tilt-integral.toml: without the tilts' integral terms.
+#[test]
+fn the_shipped_edge_config_is_the_preset_without_the_tilt_integral() {
+    assert_preset_without_integral("edge5d-no-tilt-integral.toml", &[3, 4]);
+}
+
+/// configs/edge5d-no-surface-integral.toml (the corners' preset): without
+/// the depth's and the tilts' integral terms.
+#[test]
+fn the_shipped_corner_config_is_the_preset_without_the_surface_integral() {
+    assert_preset_without_integral("edge5d-no-surface-integral.toml", &[2, 3, 4]);
 }

@@ -34,6 +34,24 @@ fn edge_truth_of_the_start_is_the_reference() {
 }
 
 #[test]
+fn the_step_cap_doubles_with_the_curvature_policy_on() {
+    let bowl = object("bowl");
+    let edge = edge_of(&bowl, "bowl").unwrap();
+    let mut cfg = Edge3dConfig::default();
+    // The rim, about 377 mm, at 1 mm a step: 1.5 times that, plus 10.
+    let length = edge.length();
+    assert!(
+        (length - 120.0 * std::f64::consts::PI).abs() < 1.0,
+        "{length}"
+    );
+    assert_eq!(cfg.steps(&edge), (1.5 * length).ceil() as usize + 10);
+    cfg.controller.policy.step_curvature_mm = 5.0;
+    assert_eq!(cfg.steps(&edge), (3.0 * length).ceil() as usize + 10);
+    cfg.max_steps = Some(100);
+    assert_eq!(cfg.steps(&edge), 100);
+}
+
+#[test]
 fn edge_5d_follows_a_curved_rim_and_writes_metrics() {
     let disk = object("disk");
     // Taps near the poses a run meets (x +-3 mm, tilts +-8, rz +-30 deg).

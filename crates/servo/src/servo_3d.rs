@@ -277,6 +277,7 @@ pub fn servo_loop_3d_taps(
         };
         no_contact = if sensed.contact { 0 } else { no_contact + 1 };
         let u = if sensed.contact {
+            controller.observe_contact(sensed.mean_displacement_px);
             match controller.step_at(pose, sensed.label) {
                 Ok(u) => u,
                 Err(e) => return stop(step, Ending::Fault, format!("stopped at step {step}: {e}")),

@@ -100,10 +100,16 @@ impl Edge3dConfig {
         Ok(())
     }
 
-    /// The step cap round `edge`.
+    /// The step cap round `edge`: 1.5 times its length in steps, plus 10;
+    /// doubled with the curvature policy on, whose steps may be shorter.
     pub fn steps(&self, edge: &EdgeCurve) -> usize {
         self.max_steps.unwrap_or_else(|| {
-            (1.5 * edge.length() / self.controller.reference[1]).ceil() as usize + 10
+            let policy = if self.controller.policy.is_off() {
+                1.0
+            } else {
+                2.0
+            };
+            (policy * 1.5 * edge.length() / self.controller.reference[1]).ceil() as usize + 10
         })
     }
 

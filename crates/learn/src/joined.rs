@@ -6,10 +6,12 @@
 //! 180). Joined only when every member's nets see the same inputs and
 //! answer in the same units: the same standardiser, target scaling,
 //! targets, features, turned and mirrored views, and configurations that
-//! differ in the schedule's length and seed only. So the snapshots of one
-//! run (a model and its continuations, `train --init`) and runs of other
-//! seeds on the same rows join; models fitted on other rows (another
-//! standardiser) or of other nets or rates do not.
+//! differ in the schedule's length, seed and band weight only (the band
+//! weight orders the training rows and changes nothing at prediction). So
+//! the snapshots of one run (a model and its continuations, `train
+//! --init`) and runs of other seeds or band weights on the same rows
+//! join; models fitted on other rows (another standardiser) or of other
+//! nets or rates do not.
 use crate::config::ModelConfig;
 use crate::error::LearnError;
 use crate::fit_members::member_name;
@@ -21,9 +23,10 @@ use std::sync::OnceLock;
 impl PoseModel {
     /// One ensemble of `members` (each a single model or an ensemble,
     /// whose members it keeps): their nets in order. Its configuration,
-    /// seed and epochs are the first member's, with `ensemble` the count
-    /// of members joined (so [`PoseModel::member`] gives each member's
-    /// nets, but the seed and epochs it records are the first's); the
+    /// seed, epochs and band weight are the first member's, with
+    /// `ensemble` the count of members joined (so [`PoseModel::member`]
+    /// gives each member's nets, but the seed, epochs and band weight it
+    /// records are the first's); the
     /// caller keeps a record of every member. Error when there is no
     /// member, when any member differs from the first in what its nets
     /// see or answer (the module's documentation says what), or when the
@@ -79,8 +82,8 @@ fn joined_nets(members: &[PoseModel], k: usize) -> Vec<FittedNet> {
 /// Why `other` cannot join `first` in one ensemble, as a message: they
 /// differ in the targets, the standardiser of the inputs, the target
 /// scaling, the features, the turned or mirrored views, or their
-/// configurations in more than the epochs, seed, members and divergence
-/// retries (the first differing key named).
+/// configurations in more than the epochs, seed, members, divergence
+/// retries and band weight (the first differing key named).
 pub(crate) fn check_joinable(first: &PoseModel, other: &PoseModel) -> Result<(), String> {
     if first.outputs != other.outputs {
         return Err("they predict other targets".into());
@@ -109,7 +112,7 @@ pub(crate) fn check_joinable(first: &PoseModel, other: &PoseModel) -> Result<(),
         None => Ok(()),
         Some(SettingDifference { key, was, now }) => Err(format!(
             "`{key}` is {was} in member 1 and {now} in this one: members may differ only in their \
-             seed and epochs"
+             seed, epochs and band weight"
         )),
     }
 }
@@ -121,6 +124,7 @@ fn nets_and_rates(cfg: &ModelConfig) -> Result<serde_json::Value, String> {
         seed: 0,
         ensemble: 1,
         divergence_retries: 0,
+        band_weight: None,
         ..cfg.clone()
     };
     serde_json::to_value(&c).map_err(|e| e.to_string())
@@ -197,10 +201,17 @@ mod tests {
         other.outputs = vec![ModelTarget::circular("pose_5")];
         assert!(refusal(other).contains("other targets"));
         assert!(PoseModel::join(&[]).is_err());
-        // What members may differ in: the seed and the epochs.
+        // What members may differ in: the seed, the epochs and the band
+        // weight (the rows' order in training; nothing at prediction).
         let mut later = one.clone();
         later.config.seed = 9;
         later.config.epochs += 30;
+        later.config.band_weight = Some(crate::BandWeight {
+            target: "pose_2".into(),
+            min: Some(5.0),
+            max: None,
+            weight: 2,
+        });
         assert_eq!(
             PoseModel::join(&[one, later])
                 .expect("join")

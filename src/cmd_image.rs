@@ -78,9 +78,11 @@ pub fn train(kind: ModelKind, a: TrainArgs) -> Result<()> {
                     va.len(),
                     a.split_seed
                 );
-                let copies = tactrace_lab::held_out_copies::held_out_copies_warning;
-                if let Some(w) = copies(&split.train, va) {
-                    eprintln!("{w}");
+                if let Some(held) = &split.record.split {
+                    let says = tactrace_lab::held_out_copies::held_out_lines;
+                    for line in says(&sets.data, held, &split.train, va) {
+                        eprintln!("{line}");
+                    }
                 }
             }
             (split.val.clone(), rows)

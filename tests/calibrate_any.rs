@@ -79,6 +79,40 @@ fn calibrate_without_an_undeformed_frame_then_twin_in_its_pin_order() {
     ok(&twin_taps(&t.0, &["--sensor", "s"]), "twin --sensor");
     ok(&import_taps(&t.0, &[], "ds"), "import");
     assert_eq!(reference_pins(&t.join("tw")), reference_pins(&t.join("ds")));
+    a_twin_holds_out_whole_taps(&t.0);
+}
+
+/// `train --val-fraction` on the twin `tw` (80 label rows rendered three
+/// times each, and the 40 calibration taps) holds out every copy of its
+/// taps, says so, and warns of
+/// no copies; `validate --val-fraction` scores those rows, none of them
+/// seen in training.
+fn a_twin_holds_out_whole_taps(dir: &std::path::Path) {
+    let split = ["--val-fraction", "0.25", "--split-seed", "2"];
+    let run = train(dir, "pdennn", "tw", "2", "m-tw", &split);
+    ok(&run, "train --val-fraction on a twin");
+    assert!(
+        run.stderr.contains("every copy of 30 of the 120 taps"),
+        "{}",
+        run.stderr
+    );
+    assert!(
+        !run.stderr.contains("show a tap that training"),
+        "{}",
+        run.stderr
+    );
+    let rec = util::json(&std::fs::read_to_string(dir.join("m-tw/training.json")).unwrap());
+    assert_eq!(rec["split"]["unit"], "tap", "{rec}");
+    assert_eq!(rec["split"]["rows"].as_array().unwrap().len(), 70);
+    let args = [
+        &["validate", "--model", "m-tw", "--data", "tw", "--json"],
+        &split[..],
+    ];
+    let run = tactrace(dir, &args.concat());
+    ok(&run, "validate --val-fraction on a twin");
+    let v = util::json(&run.stdout);
+    assert_eq!(v["rows_seen_in_training"], 0, "{}", run.stdout);
+    assert_eq!(v["samples"], 70, "{}", run.stdout);
 }
 
 /// The field RMS before and after on the held-out taps, from calibrate's

@@ -1,21 +1,15 @@
 //! Held-out rows that are copies of training rows. A twin (`tactrace
 //! twin`) renders every label row `renders` times under that row's image
 //! name, and repeats the sensor's real calibration taps
-//! (`calibration-tap-I#K`, round K); `train --val-fraction` draws rows,
-//! not taps, so most held-out rows of a twin have a copy of their tap in
-//! training, and their validation score says how well the model recalls
-//! rows it has seen. Counted here so that `train` can say so.
+//! (`calibration-tap-I#K`, round K). `train --val-fraction` deals whole
+//! taps on such a dataset (`tactrace_store::tap_split`), but a held-out
+//! part given by hand (`--val`) or a row split of an older model can
+//! still hold copies of training taps, and their validation score then
+//! says how well the model recalls rows it has seen. Counted here so that
+//! `train` can say so.
 use std::collections::HashSet;
+use tactrace_store::tap_split::tap_of;
 use tactrace_store::TapData;
-
-/// The tap a row's image name stands for: the name without a trailing
-/// `#K` (the round of a repeated calibration tap).
-fn tap_of(name: &str) -> &str {
-    match name.rsplit_once('#') {
-        Some((tap, k)) if !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()) => tap,
-        _ => name,
-    }
-}
 
 /// How many rows of `val` show a tap that a row of `train` shows too (by
 /// image name; 0 when either part names no image for every row, as a
@@ -46,6 +40,21 @@ pub fn held_out_copies_warning(train: &TapData, val: &TapData) -> Option<String>
     })
 }
 
+/// What `train` says of the part `--val-fraction` held out of `data`
+/// (`split`, giving `train` and `val`): how it was dealt when by tap, and
+/// the warning of [`held_out_copies_warning`] when copies remain.
+pub fn held_out_lines(
+    data: &TapData,
+    split: &tactrace_store::HeldOut,
+    train: &TapData,
+    val: &TapData,
+) -> Vec<String> {
+    let taps = crate::train::held_out_taps_line(data, split);
+    taps.into_iter()
+        .chain(held_out_copies_warning(train, val))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -74,6 +83,52 @@ mod tests {
         assert!(w.contains("2 of the 4 held-out rows"), "{w}");
         let apart = named(&["c.png", "d#x.png"]);
         assert_eq!(held_out_copies_warning(&train, &apart), None);
+    }
+
+    /// 40 rows: 10 taps rendered 4 times, the rows told apart by their
+    /// inputs (so the record's row hashes differ).
+    fn twin_like() -> TapData {
+        let names: Vec<String> = (0..40).map(|i| format!("t{}.png", i % 10)).collect();
+        let mut d = named(&names.iter().map(String::as_str).collect::<Vec<_>>());
+        d.inputs = (0..d.inputs.len()).map(|v| v as f32).collect();
+        d
+    }
+
+    #[test]
+    fn a_twins_held_out_part_has_no_copies_and_says_so() {
+        let d = twin_like();
+        let split = crate::train::training_split(&d, None, Some((0.3, 5))).unwrap();
+        let held = split.record.split.as_ref().unwrap();
+        assert_eq!(held.unit, tactrace_store::tap_split::SplitUnit::Tap);
+        assert_eq!(held.rows.len(), 12);
+        let val = split.val.as_ref().unwrap();
+        assert_eq!(held_out_copies(&split.train, val), 0);
+        let lines = held_out_lines(&d, held, &split.train, val);
+        assert_eq!(lines.len(), 1, "{lines:?}");
+        assert!(lines[0].contains("every copy of 3 of the 10 taps"), "{}", lines[0]);
+    }
+
+    #[test]
+    fn an_older_record_split_by_row_is_drawn_again_by_row() {
+        let d = twin_like();
+        let (tr, va) = d.split_rows(0.7, 5);
+        let held = tactrace_store::HeldOut {
+            val_fraction: 0.3,
+            split_seed: 5,
+            rows: va.clone(),
+            unit: Default::default(),
+        };
+        let record = tactrace_store::TrainingRecord::new(&d, None, tr, Some(held));
+        // Written before the unit was kept: the field is absent.
+        let text = serde_json::to_string(&record).unwrap();
+        assert!(!text.contains("\"unit\""), "{text}");
+        let read: tactrace_store::TrainingRecord = serde_json::from_str(&text).unwrap();
+        let path = std::path::Path::new("twin");
+        let rows = crate::train::held_out_rows(Some(&read), &d, path, (0.3, 5)).unwrap();
+        assert_eq!(rows, va);
+        // With no record the split is by tap: other rows.
+        let now = crate::train::held_out_rows(None, &d, path, (0.3, 5)).unwrap();
+        assert_ne!(now, va);
     }
 
     #[test]

@@ -208,7 +208,10 @@ pub fn rows_outside(fold_of_row: &[usize], folds: usize, f: usize) -> Vec<usize>
 /// and each row's out-of-fold prediction (`rows x T`, targets' order and
 /// units): a fitting row's from the pin model of the other folds, any
 /// other row's from the whole pin model; with the record of the deal
-/// (`settings`, `seed`; the other rows' fold is `folds`).
+/// (`settings`, `seed`; the other rows' fold is `folds`). Every copy of a
+/// tap (a twin's renders) is dealt into one fold, so no fold's prediction
+/// comes from a pin model that saw its tap; with no repeated tap the deal
+/// is of rows.
 pub fn fit_base(
     settings: &BaseSettings,
     data: &TapData,
@@ -222,7 +225,8 @@ pub fn fit_base(
     check_trainable(&cfg, &whole, 0)?;
     let t = data_targets(data)?.len();
     let mut fold_of_row = vec![settings.folds; data.len()];
-    let deal = deal_folds(fitting.len(), settings.folds, seed);
+    let by_tap = tactrace_store::tap_split::fold_by_tap;
+    let (deal, _) = by_tap(data, &fitting, |n| deal_folds(n, settings.folds, seed));
     for (&r, &f) in fitting.iter().zip(&deal) {
         fold_of_row[r] = f;
     }

@@ -7,6 +7,7 @@ use tactrace_learn::{
     hyperparameter_search, target_mae, ModelConfig, ModelKind, ModelTarget, PoseModel, Preset,
     SearchSpace, TrainingHistory, Trial, Unit,
 };
+use tactrace_store::tap_split::SplitUnit;
 use tactrace_store::{stage_model, HeldOut, StoredModel, TapData, TrainingRecord};
 
 /// Resolve a model configuration: the preset for `kind`, then the keys of an
@@ -94,7 +95,8 @@ pub fn train_with_validation(
 }
 
 /// Split `data` into a training part and a held-out part of `fraction`
-/// of the samples (seeded shuffle); both parts must be non-empty.
+/// of the samples (seeded shuffle, whole taps where a tap repeats: see
+/// [`holdout_split`]); both parts must be non-empty.
 pub fn holdout(data: &TapData, fraction: f64, seed: u64) -> Result<(TapData, TapData)> {
     let (tr, va) = holdout_rows(data, fraction, seed)?;
     Ok((data.subset(&tr), data.subset(&va)))
@@ -102,19 +104,58 @@ pub fn holdout(data: &TapData, fraction: f64, seed: u64) -> Result<(TapData, Tap
 
 /// The row indices of [`holdout`]'s two parts (training, held out).
 pub fn holdout_rows(data: &TapData, fraction: f64, seed: u64) -> Result<(Vec<usize>, Vec<usize>)> {
+    let (tr, va, _) = holdout_split(data, fraction, seed, None)?;
+    Ok((tr, va))
+}
+
+/// The rows of the two parts (training, held out) and how they were
+/// dealt. `unit`: `None` deals whole taps where the dataset repeats one
+/// (a twin's renders, repeated calibration taps; see
+/// [`tactrace_store::tap_split`]) and rows otherwise; `Some(Row)` deals
+/// rows always (the split of a model folder written before taps were kept
+/// together).
+pub fn holdout_split(
+    data: &TapData,
+    fraction: f64,
+    seed: u64,
+    unit: Option<SplitUnit>,
+) -> Result<(Vec<usize>, Vec<usize>, SplitUnit)> {
     if !(fraction > 0.0 && fraction < 1.0) {
         return Err(LabError::Config(format!(
             "validation fraction {fraction} must be strictly between 0 and 1"
         )));
     }
-    let (tr, va) = data.split_rows(1.0 - fraction, seed);
+    let (tr, va, unit) = match unit {
+        Some(SplitUnit::Row) => {
+            let (tr, va) = data.split_rows(1.0 - fraction, seed);
+            (tr, va, SplitUnit::Row)
+        }
+        _ => tactrace_store::tap_split::split_taps(data, 1.0 - fraction, seed),
+    };
     if tr.is_empty() || va.is_empty() {
         return Err(LabError::Config(format!(
             "{} samples are too few to hold out a fraction {fraction}",
             data.len()
         )));
     }
-    Ok((tr, va))
+    Ok((tr, va, unit))
+}
+
+/// What `train` says of a held-out part dealt by tap: how many rows, and
+/// that they are every copy of so many taps; `None` for a split by row.
+pub fn held_out_taps_line(data: &TapData, split: &HeldOut) -> Option<String> {
+    if split.unit != SplitUnit::Tap {
+        return None;
+    }
+    let groups = tactrace_store::tap_split::tap_groups(data)?;
+    let held: std::collections::HashSet<usize> = split.rows.iter().copied().collect();
+    let taps = groups.iter().filter(|g| held.contains(&g[0])).count();
+    Some(format!(
+        "held out {} rows: every copy of {taps} of the {} taps (the dataset shows some taps \
+         more than once, as a twin's renders: no held-out tap is seen in training)",
+        split.rows.len(),
+        groups.len()
+    ))
 }
 
 /// The data a model is fitted on, the part held out, and the record of
@@ -150,12 +191,13 @@ pub fn training_split(
             record: TrainingRecord::all_rows(data, path),
         });
     };
-    let (tr, va) = holdout_rows(data, val_fraction, split_seed)?;
+    let (tr, va, unit) = holdout_split(data, val_fraction, split_seed, None)?;
     let (train, val) = (data.subset(&tr), data.subset(&va));
     let split = HeldOut {
         val_fraction,
         split_seed,
         rows: va,
+        unit,
     };
     Ok(TrainingSplit {
         train,
@@ -405,7 +447,8 @@ pub(crate) fn held_out_rows(
     what: &Path,
     (fraction, seed): (f64, u64),
 ) -> Result<Vec<usize>> {
-    let (_, rows) = holdout_rows(data, fraction, seed)?;
+    let unit = record.and_then(|r| r.split.as_ref()).map(|s| s.unit);
+    let (_, rows, _) = holdout_split(data, fraction, seed, unit)?;
     if let Some(record) = record {
         check_held_out(record, data, what, (fraction, seed), &rows)?;
     }

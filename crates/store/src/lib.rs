@@ -53,6 +53,7 @@ pub mod row_file;
 pub mod sensor_file;
 pub mod shape_file;
 pub mod sight_file;
+pub mod tap_split;
 mod toml_integers;
 pub mod training_record;
 

@@ -27,6 +27,7 @@
 //! Model folders written before tactrace kept this file load as before;
 //! what they were trained on is then unknown.
 use crate::dataset::TapData;
+pub use crate::tap_split::SplitUnit;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::collections::HashSet;
@@ -142,6 +143,11 @@ pub struct HeldOut {
     pub split_seed: u64,
     /// Indices of the held-out rows.
     pub rows: Vec<usize>,
+    /// Whether rows or whole taps were dealt (`"tap"` when the dataset
+    /// repeats a tap, as a twin's renders; absent: by row, as every
+    /// dataset where no tap repeats and every folder written before).
+    #[serde(default, skip_serializing_if = "SplitUnit::is_row")]
+    pub unit: SplitUnit,
 }
 
 impl TrainingRecord {

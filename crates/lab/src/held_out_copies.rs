@@ -105,7 +105,11 @@ mod tests {
         assert_eq!(held_out_copies(&split.train, val), 0);
         let lines = held_out_lines(&d, held, &split.train, val);
         assert_eq!(lines.len(), 1, "{lines:?}");
-        assert!(lines[0].contains("every copy of 3 of the 10 taps"), "{}", lines[0]);
+        assert!(
+            lines[0].contains("every copy of 3 of the 10 taps"),
+            "{}",
+            lines[0]
+        );
     }
 
     #[test]

@@ -177,6 +177,7 @@ pub(crate) fn white_components(
     let raw = frame.as_raw();
     let mut seen = vec![false; w * h];
     let mut stack = Vec::new();
+    let mut pixels: Vec<[i32; 2]> = Vec::new();
     let mut out = Vec::new();
     let offsets: &[(i32, i32)] = match connectivity {
         Connectivity::Four => &[(1, 0), (-1, 0), (0, 1), (0, -1)],
@@ -197,7 +198,10 @@ pub(crate) fn white_components(
         }
         seen[start] = true;
         stack.push(start);
-        let mut pixels = Vec::new();
+        // The component's pixels gather in one buffer kept across
+        // components and are copied out at their final size: one
+        // allocation a component, not one each time its list doubles.
+        pixels.clear();
         while let Some(i) = stack.pop() {
             let (x, y) = ((i % w) as i32, (i / w) as i32);
             pixels.push([x, y]);
@@ -213,7 +217,7 @@ pub(crate) fn white_components(
                 }
             }
         }
-        out.push(pixels);
+        out.push(pixels.to_vec());
     }
     out
 }
@@ -287,6 +291,27 @@ mod tests {
         assert!(spots.pins.is_empty());
         assert_eq!(spots.clusters.len(), 1);
         assert!(!spots.clusters[0].passed);
+    }
+
+    /// The buffer the flood fill keeps across components hands each
+    /// component exactly its own pixels: a large one (grown past any first
+    /// capacity) between two small ones, in raster order of their first
+    /// pixels, every pixel once.
+    #[test]
+    fn each_component_gets_only_its_own_pixels() {
+        let bar: Vec<[u32; 2]> = (0..20).map(|x| [x, 5]).collect();
+        let white: Vec<[u32; 2]> = [[1, 1]]
+            .into_iter()
+            .chain(bar.iter().copied())
+            .chain([[3, 9], [4, 9], [3, 10]])
+            .collect();
+        let components = white_components(&frame(&white, 200), 127, Connectivity::Eight);
+        let sizes: Vec<usize> = components.iter().map(Vec::len).collect();
+        assert_eq!(sizes, [1, 20, 3]);
+        let mut all: Vec<[i32; 2]> = components.into_iter().flatten().collect();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), white.len(), "every white pixel exactly once");
     }
 
     #[test]

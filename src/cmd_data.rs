@@ -221,10 +221,14 @@ pub struct LabelArgs {
     /// for --target COLUMN:deg second) [default: pose_6].
     #[arg(long)]
     pub theta_column: Option<String>,
-    /// A target column as COLUMN:UNIT or COLUMN:UNIT:circular, unit mm or
-    /// deg (repeatable, in order; e.g. --target pose_2:mm --target
-    /// pose_6:deg:circular); replaces --r-column/--theta-column.
-    #[arg(long = "target", value_name = "COLUMN:UNIT[:circular]",
+    /// A target column as COLUMN:UNIT[:circular][:ROLE], unit mm or deg,
+    /// role position or angle (repeatable, in order; e.g. --target
+    /// pose_2:mm --target pose_6:deg:circular); replaces
+    /// --r-column/--theta-column. The roles say which targets the servo
+    /// loop reads as the edge pose when there are other targets beside
+    /// them (--target pose_2:mm:position --target pose_3:mm --target
+    /// pose_6:deg:circular:angle).
+    #[arg(long = "target", value_name = "COLUMN:UNIT[:circular][:ROLE]",
           conflicts_with_all = ["r_column", "theta_column"])]
     pub target_list: Vec<String>,
 }

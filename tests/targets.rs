@@ -59,6 +59,8 @@ fn three_targets_import_train_validate_and_import_like() {
     );
     assert_eq!(meta["target_units"], json(r#"["mm", "deg", "mm"]"#));
     assert_eq!(meta["target_circular"], json("[false, true, false]"));
+    // No role marked: no roles written.
+    assert!(meta.get("target_roles").is_none(), "{meta}");
     let fit = tactrace_store::read_dataset(&t.join("fit")).unwrap();
     assert_eq!(fit.n_targets(), 3);
     assert_eq!(fit.len(), 60);
@@ -184,6 +186,74 @@ fn three_targets_import_train_validate_and_import_like() {
     let r = tactrace(&t.0, &["validate", "--model", "m-pdennn", "--data", "edge"]);
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(r.stderr.contains("pose_3 (mm)"), "{}", r.stderr);
+}
+
+/// Roles marked at import (`:position`, `:angle`) let a model that also
+/// learns the tap's depth serve the servo loop, which reads the edge pose
+/// from the marked targets; a role on a target of the wrong unit is
+/// refused at import.
+#[test]
+fn marked_roles_let_a_model_of_three_targets_follow() {
+    let Some(data) = real_data() else { return };
+    let t = TempDir::new("roles3");
+    part_csv(&data, &t.join("fit.csv"), &[2, 3, 4], 60);
+    std::fs::write(t.join("small.toml"), SMALL).unwrap();
+    let r = import_fit(&t, &data, &["--target", "pose_3:deg:position"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("position but is in deg"), "{}", r.stderr);
+    assert!(!t.join("fit").exists());
+    let targets = [
+        "--target",
+        "pose_2:mm:position",
+        "--target",
+        "pose_3:mm",
+        "--target",
+        "pose_6:deg:circular:angle",
+    ];
+    ok(
+        &import_fit(&t, &data, &targets),
+        "import --target with roles",
+    );
+    let meta = json(&std::fs::read_to_string(t.join("fit/meta.json")).unwrap());
+    assert_eq!(meta["target_roles"], json(r#"["position", null, "angle"]"#));
+    let r = tactrace(
+        &t.0,
+        &[
+            "train",
+            "--train",
+            "fit",
+            "--model",
+            "pdennn",
+            "--config",
+            "small.toml",
+            "--epochs",
+            "3",
+            "--out",
+            "m",
+        ],
+    );
+    ok(&r, "train");
+    let model = json(&std::fs::read_to_string(t.join("m/model.json")).unwrap());
+    let roles: Vec<_> = model["outputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["role"].clone())
+        .collect();
+    assert_eq!(
+        roles,
+        [json(r#""position""#), json("null"), json(r#""angle""#)]
+    );
+    let replay = data.display().to_string();
+    let r = tactrace(
+        &t.0,
+        &[
+            "follow", "--model", "m", "--shape", "disk", "--replay", &replay, "--steps", "3",
+            "--out", "run",
+        ],
+    );
+    ok(&r, "follow with a model of three targets, two marked");
+    assert!(t.join("run").is_dir());
 }
 
 #[test]

@@ -59,10 +59,11 @@ pub enum LearnError {
     #[error("targets: {reason}")]
     Targets { reason: String },
     /// A model asked for the edge pose `[r, theta]` whose targets are not
-    /// one position (mm) and one angle (deg).
+    /// one position (mm) and one angle (deg), nor mark one of each.
     #[error(
-        "the model predicts {targets}, not an edge pose (one position in mm and one angle \
-         in deg)"
+        "the model predicts {targets}, not an edge pose: one position in mm and one angle \
+         in deg, or, beside other targets, one of each marked at import (`--target \
+         COLUMN:mm:position`, `--target COLUMN:deg[:circular]:angle`)"
     )]
     NotAnEdgeModel { targets: String },
     /// The image model's network (bad frames, configuration, file; or

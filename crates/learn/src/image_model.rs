@@ -377,7 +377,7 @@ impl ImageModel {
     /// The indices of the position (mm) and angle (deg) targets of an edge
     /// model: exactly one of each.
     pub fn edge_roles(&self) -> Result<[usize; 2], LearnError> {
-        crate::pose_model::edge_roles_of(&self.outputs)
+        crate::targets::edge_roles(&self.outputs)
     }
 
     /// What the model predicts, in order.

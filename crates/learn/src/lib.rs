@@ -69,6 +69,6 @@ pub use setting_difference::{first_difference, first_setting_difference, Setting
 pub use standardise::Standardiser;
 pub use target_score::{target_spread, TargetScale};
 pub use targets::{
-    check_targets, decode, edge_targets, encode_into, encoded_columns, names_the_edge, target_mae,
-    wrap_deg, ModelTarget, Unit,
+    check_targets, decode, edge_roles, edge_targets, encode_into, encoded_columns, names_the_edge,
+    target_mae, wrap_deg, ModelTarget, Role, Unit,
 };

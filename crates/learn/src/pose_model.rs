@@ -380,9 +380,9 @@ impl PoseModel {
     }
 
     /// The indices of the position (mm) and angle (deg) targets of an edge
-    /// model: exactly one of each.
+    /// model ([`crate::edge_roles`]).
     pub fn edge_roles(&self) -> Result<[usize; 2], LearnError> {
-        edge_roles_of(&self.outputs)
+        crate::targets::edge_roles(&self.outputs)
     }
 
     /// Displacement-vector length the model expects.
@@ -430,28 +430,6 @@ fn encode(outputs: &[ModelTarget], data: &Dataset) -> Result<Dataset, LearnError
         targets::encode_into(outputs, data.y_row(i), &mut y);
     }
     Dataset::new(data.x.clone(), y, data.n, data.dim_x, width)
-}
-
-/// The indices of the position (mm) and angle (deg) targets among
-/// `outputs`: exactly two targets, one of each.
-pub(crate) fn edge_roles_of(outputs: &[ModelTarget]) -> Result<[usize; 2], LearnError> {
-    let find = |u: Unit| {
-        let mut it = outputs.iter().enumerate().filter(|(_, t)| t.unit == u);
-        match (it.next(), it.next()) {
-            (Some((k, _)), None) => Some(k),
-            _ => None,
-        }
-    };
-    match (outputs.len(), find(Unit::Mm), find(Unit::Deg)) {
-        (2, Some(r), Some(theta)) => Ok([r, theta]),
-        _ => Err(LearnError::NotAnEdgeModel {
-            targets: outputs
-                .iter()
-                .map(|t| format!("{} ({})", t.name, t.unit.as_str()))
-                .collect::<Vec<_>>()
-                .join(", "),
-        }),
-    }
 }
 
 /// The training rows the nets see, and what the model keeps of how they

@@ -28,8 +28,49 @@ impl Unit {
     }
 }
 
-/// One target a model predicts: its name (the labels column), unit and
-/// whether it is circular.
+/// What a target is to the servo loop of an edge task: the edge's
+/// position (the controller's r, mm) or its angle (theta, deg). A model
+/// whose targets are one position and one angle needs no role; one that
+/// also predicts, say, the tap's depth (a second target in mm) marks which
+/// target is which, so the loop reads the edge pose from it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Role {
+    /// The edge's position, r (mm).
+    Position,
+    /// The edge's angle, theta (deg).
+    Angle,
+}
+
+impl Role {
+    /// Its name as written in files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Role::Position => "position",
+            Role::Angle => "angle",
+        }
+    }
+
+    /// The role named `text` (`position`, `angle`), if it is one.
+    pub fn parse(text: &str) -> Option<Self> {
+        match text {
+            "position" => Some(Role::Position),
+            "angle" => Some(Role::Angle),
+            _ => None,
+        }
+    }
+
+    /// The unit a target in this role is in.
+    pub fn unit(self) -> Unit {
+        match self {
+            Role::Position => Unit::Mm,
+            Role::Angle => Unit::Deg,
+        }
+    }
+}
+
+/// One target a model predicts: its name (the labels column), unit,
+/// whether it is circular, and its role in an edge task, if marked.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelTarget {
@@ -40,6 +81,9 @@ pub struct ModelTarget {
     /// An angle over the full circle: learnt as (sin, cos), errors wrapped.
     #[serde(default)]
     pub circular: bool,
+    /// The edge pose's position or angle, when marked ([`Role`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub role: Option<Role>,
 }
 
 impl ModelTarget {
@@ -49,6 +93,7 @@ impl ModelTarget {
             name: name.into(),
             unit,
             circular: false,
+            role: None,
         }
     }
 
@@ -58,6 +103,15 @@ impl ModelTarget {
             name: name.into(),
             unit: Unit::Deg,
             circular: true,
+            role: None,
+        }
+    }
+
+    /// The same target marked as the edge pose's `role`.
+    pub fn with_role(self, role: Role) -> Self {
+        Self {
+            role: Some(role),
+            ..self
         }
     }
 
@@ -118,8 +172,9 @@ pub fn names_the_edge(targets: &[ModelTarget]) -> bool {
     edge("r", "theta") || edge("r_mm", "theta_deg")
 }
 
-/// Error unless `targets` names at least one target, each name once, and
-/// only angles are circular.
+/// Error unless `targets` names at least one target, each name once, only
+/// angles are circular, and each role is marked at most once, on a target
+/// in its unit.
 pub fn check_targets(targets: &[ModelTarget]) -> Result<(), LearnError> {
     if targets.is_empty() {
         return Err(LearnError::Targets {
@@ -137,8 +192,80 @@ pub fn check_targets(targets: &[ModelTarget]) -> Result<(), LearnError> {
                 reason: format!("the target `{}` is circular but not in degrees", t.name),
             });
         }
+        check_role(targets, k)?;
     }
     Ok(())
+}
+
+/// Error unless the role of `targets[k]`, if any, matches its unit and
+/// is not marked on an earlier target.
+fn check_role(targets: &[ModelTarget], k: usize) -> Result<(), LearnError> {
+    let t = &targets[k];
+    let Some(role) = t.role else {
+        return Ok(());
+    };
+    let reason = if t.unit != role.unit() {
+        format!(
+            "the target `{}` is marked as the edge's {} but is in {}, not {}",
+            t.name,
+            role.as_str(),
+            t.unit.as_str(),
+            role.unit().as_str()
+        )
+    } else if let Some(o) = targets[..k].iter().find(|o| o.role == Some(role)) {
+        format!(
+            "`{}` and `{}` are both marked {}",
+            o.name,
+            t.name,
+            role.as_str()
+        )
+    } else {
+        return Ok(());
+    };
+    Err(LearnError::Targets { reason })
+}
+
+/// The indices of the edge pose's position (mm) and angle (deg) among
+/// `outputs`, as the servo loop reads them: the targets marked
+/// [`Role::Position`] and [`Role::Angle`] when any is marked, else the two
+/// targets of a model of exactly one position and one angle.
+pub fn edge_roles(outputs: &[ModelTarget]) -> Result<[usize; 2], LearnError> {
+    let marked = outputs.iter().any(|t| t.role.is_some());
+    let find = |pick: &dyn Fn(&ModelTarget) -> bool| {
+        let mut it = outputs.iter().enumerate().filter(|(_, t)| pick(t));
+        match (it.next(), it.next()) {
+            (Some((k, _)), None) => Some(k),
+            _ => None,
+        }
+    };
+    let found = if marked {
+        (
+            find(&|t| t.role == Some(Role::Position)),
+            find(&|t| t.role == Some(Role::Angle)),
+        )
+    } else if outputs.len() == 2 {
+        (
+            find(&|t| t.unit == Unit::Mm),
+            find(&|t| t.unit == Unit::Deg),
+        )
+    } else {
+        (None, None)
+    };
+    match found {
+        (Some(r), Some(theta)) => Ok([r, theta]),
+        _ => Err(LearnError::NotAnEdgeModel {
+            targets: outputs
+                .iter()
+                .map(|t| {
+                    let role = t
+                        .role
+                        .map_or(String::new(), |r| format!(", {}", r.as_str()));
+                    format!("{} ({}{role})", t.name, t.unit.as_str())
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
+        }),
+    }
 }
 
 /// The encoded column of the plain (not circular) target `name` of
@@ -301,5 +428,53 @@ mod tests {
         mm.circular = true;
         assert!(check_targets(&[mm]).is_err());
         assert!(check_targets(&edge_targets()).is_ok());
+    }
+
+    #[test]
+    fn the_edge_pose_is_read_from_marked_roles_beside_other_targets() {
+        let (r, depth) = (
+            ModelTarget::new("r", Unit::Mm),
+            ModelTarget::new("d", Unit::Mm),
+        );
+        let theta = ModelTarget::circular("theta");
+        // One position and one angle: no role needed, in either order.
+        assert_eq!(edge_roles(&[r.clone(), theta.clone()]).unwrap(), [0, 1]);
+        assert_eq!(edge_roles(&[theta.clone(), r.clone()]).unwrap(), [1, 0]);
+        // A depth beside them: which mm target is the position is unknown.
+        let three = [depth.clone(), theta.clone(), r.clone()];
+        let err = edge_roles(&three).unwrap_err().to_string();
+        assert!(err.contains(":position"), "{err}");
+        // Marked, the roles decide, wherever the targets stand.
+        let marked = [
+            depth.clone(),
+            theta.clone().with_role(Role::Angle),
+            r.clone().with_role(Role::Position),
+        ];
+        assert!(check_targets(&marked).is_ok());
+        assert_eq!(edge_roles(&marked).unwrap(), [2, 1]);
+        // A role alone is not an edge pose.
+        assert!(edge_roles(&[depth.clone(), r.clone().with_role(Role::Position)]).is_err());
+    }
+
+    #[test]
+    fn roles_are_checked_and_older_files_read_without_them() {
+        let wrong_unit = [ModelTarget::new("d", Unit::Deg).with_role(Role::Position)];
+        let err = check_targets(&wrong_unit).unwrap_err().to_string();
+        assert!(err.contains("in deg, not mm"), "{err}");
+        let twice = [
+            ModelTarget::new("a", Unit::Mm).with_role(Role::Position),
+            ModelTarget::new("b", Unit::Mm).with_role(Role::Position),
+        ];
+        let err = check_targets(&twice).unwrap_err().to_string();
+        assert!(err.contains("`a` and `b`"), "{err}");
+        let old: ModelTarget =
+            serde_json::from_str(r#"{"name": "r", "unit": "mm", "circular": false}"#).unwrap();
+        assert_eq!(old.role, None);
+        let marked = ModelTarget::circular("t").with_role(Role::Angle);
+        let text = serde_json::to_string(&marked).unwrap();
+        assert!(text.contains(r#""role":"angle""#), "{text}");
+        assert_eq!(serde_json::from_str::<ModelTarget>(&text).unwrap(), marked);
+        let plain = serde_json::to_string(&ModelTarget::new("r", Unit::Mm)).unwrap();
+        assert!(!plain.contains("role"), "{plain}");
     }
 }

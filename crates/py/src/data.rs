@@ -139,8 +139,8 @@ fn dataset_meta(meta: &Bound<'_, PyDict>, n: usize, d: usize) -> PyResult<Datase
 /// ``frames`` is the frames folder, ``labels`` the labels CSV (one row a
 /// frame), ``out`` the dataset folder to write (appears only when
 /// complete; an existing one is refused unless ``force=True``).
-/// ``target`` lists the targets as ``"COLUMN:UNIT"`` or
-/// ``"COLUMN:UNIT:circular"`` (unit ``mm`` or ``deg``; ``--target``), in
+/// ``target`` lists the targets as ``"COLUMN:UNIT[:circular][:ROLE]"``
+/// (unit ``mm`` or ``deg``, role ``position`` or ``angle``; ``--target``), in
 /// order; or ``r_column`` / ``theta_column`` name the edge task's two
 /// (default ``pose_2``, ``pose_6``). ``image_column`` names the frame file
 /// column. ``sensor`` is a sensor file (``inspect_sensor(out=...)``);

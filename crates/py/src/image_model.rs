@@ -123,8 +123,8 @@ impl ImageModel {
         serde_to_py(py, &v)
     }
 
-    /// What the model predicts, in order: dicts with ``name``, ``unit``
-    /// and ``circular``.
+    /// What the model predicts, in order: dicts with ``name``, ``unit``,
+    /// ``circular`` and ``role`` when marked.
     #[getter]
     fn targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         serde_to_py(py, self.stored.model().outputs())

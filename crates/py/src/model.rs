@@ -220,7 +220,8 @@ impl Model {
     /// What the model predicts, in order: a list of dicts with ``name``
     /// (the label column), ``unit`` (``"mm"`` or ``"deg"``) and
     /// ``circular`` (an angle over the full circle, learnt as sine and
-    /// cosine, its errors wrapped).
+    /// cosine, its errors wrapped), and ``role`` (``"position"`` or
+    /// ``"angle"``) when the import marked it.
     #[getter]
     fn targets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         serde_to_py(py, self.own_net().outputs())

@@ -200,3 +200,20 @@ def test_n_output_predictions_are_named_as_the_cli_prints_them(ring_set, sensor_
     assert lines[0].startswith("depth_mm,rx_deg,ry_deg,")
     cli = np.array([[float(v) for v in line.split(",")[:3]] for line in lines[1:]])
     assert np.allclose(cli, table, atol=5e-5, rtol=0)
+
+
+def test_marked_roles_reach_the_dataset_and_the_model(ring_set, sensor_file):
+    data = ring_set / "roles-data"
+    marked = ["depth:mm:position", "rx:deg:angle", "ry:deg"]
+    tactrace.import_dataset(ring_set / "frames", ring_set / "labels.csv", data,
+                            target=marked, image_column="image", sensor=sensor_file)
+    _, _, meta = tactrace.load_dataset(data)
+    assert meta["target_roles"] == ["position", "angle", None]
+    model = tactrace.train("mlp", data, epochs=2, seed=3)
+    assert [t.get("role") for t in model.targets] == ["position", "angle", None]
+    # A role on a target of the wrong unit is refused before anything is written.
+    with pytest.raises(tactrace.InputError, match="position"):
+        tactrace.import_dataset(ring_set / "frames", ring_set / "labels.csv",
+                                ring_set / "roles-bad", target=["rx:deg:position"],
+                                image_column="image", sensor=sensor_file)
+    assert not (ring_set / "roles-bad").exists()

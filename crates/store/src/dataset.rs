@@ -3,7 +3,8 @@
 //! A dataset directory holds
 //! - `inputs.npy`: N x 2P float32 pin displacements in pixels (all x, then all y);
 //! - `targets.npy`: N x T float32, the T targets in `meta.json`'s order and
-//!   units (`target_names`, `target_units`, `target_circular`); for the edge
+//!   units (`target_names`, `target_units`, `target_circular`, and
+//!   `target_roles` when a role is marked); for the edge
 //!   task (and every dataset written before targets were named) T = 2, the
 //!   edge position r (mm) and angle theta (deg);
 //! - `meta.json`: how it was made ([`DatasetMeta`]): the layout of the
@@ -18,7 +19,7 @@ use crate::image_frames::{ImageFrames, FRAMES_NPY};
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use tactrace_learn::{ModelTarget, Unit};
+use tactrace_learn::{ModelTarget, Role, Unit};
 
 /// Provenance of a dataset, written as `meta.json`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -108,6 +109,26 @@ pub struct TargetColumns {
     /// Whether each is circular (an angle over the full circle).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub target_circular: Vec<bool>,
+    /// Each one's role in an edge task (`position`, `angle` or null);
+    /// written only when a role is marked.
+    #[serde(default, skip_serializing_if = "no_role")]
+    pub target_roles: Vec<Option<Role>>,
+}
+
+/// The targets' roles; empty when none is marked, as a file without
+/// `target_roles` reads.
+fn roles(targets: &[ModelTarget]) -> Vec<Option<Role>> {
+    let roles: Vec<_> = targets.iter().map(|t| t.role).collect();
+    if no_role(&roles) {
+        Vec::new()
+    } else {
+        roles
+    }
+}
+
+/// Whether no role is marked (so `target_roles` is left out).
+fn no_role(roles: &[Option<Role>]) -> bool {
+    roles.iter().all(Option::is_none)
 }
 
 impl TargetColumns {
@@ -117,6 +138,7 @@ impl TargetColumns {
             target_names: targets.iter().map(|t| t.name.clone()).collect(),
             target_units: targets.iter().map(|t| t.unit).collect(),
             target_circular: targets.iter().map(|t| t.circular).collect(),
+            target_roles: roles(targets),
         }
     }
 
@@ -155,12 +177,14 @@ impl DatasetMeta {
         }
         let t = c.target_names.len();
         let circular_ok = c.target_circular.is_empty() || c.target_circular.len() == t;
-        if c.target_units.len() != t || !circular_ok || self.targets.len() != t {
+        let roles_ok = c.target_roles.is_empty() || c.target_roles.len() == t;
+        if c.target_units.len() != t || !circular_ok || !roles_ok || self.targets.len() != t {
             return Err(format!(
-                "{t} target_names, {} target_units, {} target_circular and {} targets: \
-                 each lists every target",
+                "{t} target_names, {} target_units, {} target_circular, {} target_roles and \
+                 {} targets: each lists every target",
                 c.target_units.len(),
                 c.target_circular.len(),
+                c.target_roles.len(),
                 self.targets.len()
             ));
         }
@@ -169,6 +193,7 @@ impl DatasetMeta {
                 name: c.target_names[k].clone(),
                 unit: c.target_units[k],
                 circular: c.target_circular.get(k).copied().unwrap_or(false),
+                role: c.target_roles.get(k).copied().flatten(),
             })
             .collect();
         tactrace_learn::check_targets(&out).map_err(|e| e.to_string())?;

@@ -74,10 +74,10 @@ pub enum CollectionError {
          targets, an edge position (mm) then an angle (deg)"
     )]
     NotAnEdgeTask { targets: String },
-    /// A `--target` that is not `COLUMN:UNIT[:circular]`.
+    /// A `--target` that is not `COLUMN:UNIT[:circular][:ROLE]`.
     #[error(
-        "the target `{text}`: expected COLUMN:UNIT or COLUMN:UNIT:circular with unit mm or \
-         deg (e.g. pose_6:deg:circular)"
+        "the target `{text}`: expected COLUMN:UNIT[:circular][:ROLE] with unit mm or deg and \
+         role position or angle (e.g. pose_6:deg:circular, pose_2:mm:position)"
     )]
     TargetText { text: String },
     /// `--target` given with `--r-column` / `--theta-column`.
@@ -86,6 +86,9 @@ pub enum CollectionError {
          COLUMN:mm --target COLUMN:deg, not with --r-column/--theta-column"
     )]
     TargetsAndEdgeColumns,
+    /// Roles marked on targets of the wrong unit, or one role twice.
+    #[error("{reason}: mark one target `position` (mm) and one `angle` (deg), at most")]
+    Roles { reason: String },
     /// A circular target not in degrees.
     #[error("the target `{column}` is circular but not in degrees: only an angle wraps")]
     CircularNotDegrees { column: String },

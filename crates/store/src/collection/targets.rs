@@ -7,9 +7,10 @@ use serde::{Deserialize, Serialize};
 
 /// The unit of a target column (millimetres and degrees at every public
 /// boundary): the models' own, so a spec and a model name units alike.
-pub use tactrace_learn::Unit;
+pub use tactrace_learn::{Role, Unit};
 
-/// One target: a label column, its unit, and whether it is circular.
+/// One target: a label column, its unit, whether it is circular, and its
+/// role in an edge task when marked (needed only beside other targets).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Target {
@@ -19,39 +20,50 @@ pub struct Target {
     /// An angle over the full circle (its errors wrap at +-180 deg).
     #[serde(default)]
     pub circular: bool,
+    /// The edge pose's position or angle, when marked.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub role: Option<Role>,
 }
 
 impl Target {
-    /// A target column in `unit`, not circular.
+    /// A target column in `unit`, not circular, no role marked.
     pub fn new(column: impl Into<String>, unit: Unit) -> Self {
         Self {
             column: column.into(),
             unit,
             circular: false,
+            role: None,
         }
     }
 
-    /// A target as the CLI writes it: `COLUMN:UNIT[:circular]`, unit `mm`
-    /// or `deg` (e.g. `pose_6:deg:circular`).
+    /// A target as the CLI writes it: `COLUMN:UNIT[:circular][:ROLE]`,
+    /// unit `mm` or `deg`, role `position` or `angle` (e.g.
+    /// `pose_6:deg:circular`, `pose_2:mm:position`).
     pub fn parse(text: &str) -> Result<Self, CollectionError> {
         let bad = || CollectionError::TargetText {
             text: text.to_string(),
         };
         let parts: Vec<&str> = text.split(':').map(str::trim).collect();
-        let (column, unit, circular) = match parts.as_slice() {
-            [c, u] => (c, u, false),
-            [c, u, "circular"] => (c, u, true),
-            _ => return Err(bad()),
+        let [column, unit, marks @ ..] = parts.as_slice() else {
+            return Err(bad());
         };
         let unit = match *unit {
             "mm" => Unit::Mm,
             "deg" => Unit::Deg,
             _ => return Err(bad()),
         };
+        let (circular, role) = match marks {
+            [] => (false, None),
+            ["circular"] => (true, None),
+            ["circular", r] => (true, Some(Role::parse(r).ok_or_else(bad)?)),
+            [r] => (false, Some(Role::parse(r).ok_or_else(bad)?)),
+            _ => return Err(bad()),
+        };
         Ok(Self {
             column: column.to_string(),
             unit,
             circular,
+            role,
         })
     }
 
@@ -61,13 +73,17 @@ impl Target {
             name: self.column.clone(),
             unit: self.unit,
             circular: self.circular,
+            role: self.role,
         }
     }
 
-    /// `COLUMN:UNIT[:circular]`, as [`Target::parse`] reads it.
+    /// `COLUMN:UNIT[:circular][:ROLE]`, as [`Target::parse`] reads it.
     pub fn text(&self) -> String {
         let circular = if self.circular { ":circular" } else { "" };
-        format!("{}:{}{circular}", self.column, self.unit.as_str())
+        let role = self
+            .role
+            .map_or(String::new(), |r| format!(":{}", r.as_str()));
+        format!("{}:{}{circular}{role}", self.column, self.unit.as_str())
     }
 }
 
@@ -137,6 +153,10 @@ impl TargetSpec {
                 column: t.column.clone(),
             });
         }
+        let model: Vec<_> = targets.iter().map(Target::model_target).collect();
+        tactrace_learn::check_targets(&model).map_err(|e| CollectionError::Roles {
+            reason: e.to_string(),
+        })?;
         Ok(Self {
             image_column,
             targets,
@@ -226,10 +246,33 @@ mod tests {
             Target::parse("pose_2:mm").unwrap(),
             Target::new("pose_2", Unit::Mm)
         );
-        for bad in ["pose_2", "pose_2:cm", "pose_2:mm:round", "a:mm:circular:x"] {
+        let marked = Target::parse("pose_6:deg:circular:angle").unwrap();
+        assert_eq!((marked.circular, marked.role), (true, Some(Role::Angle)));
+        assert_eq!(marked.text(), "pose_6:deg:circular:angle");
+        let position = Target::parse("pose_2:mm:position").unwrap();
+        assert_eq!(
+            (position.circular, position.role),
+            (false, Some(Role::Position))
+        );
+        assert_eq!(Target::parse(&position.text()).unwrap(), position);
+        for bad in [
+            "pose_2",
+            "pose_2:cm",
+            "pose_2:mm:round",
+            "a:mm:circular:x",
+            "a:deg:angle:circular",
+            "a:deg:circular:angle:angle",
+        ] {
             let err = Target::parse(bad).unwrap_err().to_string();
             assert!(err.contains(bad), "{err}");
         }
+        // A role on a target of the wrong unit, or marked twice, is refused.
+        let err = TargetSpec::new("image", vec![Target::parse("d:deg:position").unwrap()])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("`d`") && err.contains("position"), "{err}");
+        let twice = ["a:mm:position", "b:mm:position"].map(|t| Target::parse(t).unwrap());
+        assert!(TargetSpec::new("image", twice.to_vec()).is_err());
         // Only an angle wraps.
         let err = TargetSpec::new("image", vec![Target::parse("d:mm:circular").unwrap()])
             .unwrap_err()

@@ -49,10 +49,27 @@ pub fn held_out_lines(
     train: &TapData,
     val: &TapData,
 ) -> Vec<String> {
-    let taps = crate::train::held_out_taps_line(data, split);
+    let taps = held_out_taps_line(data, split);
     taps.into_iter()
         .chain(held_out_copies_warning(train, val))
         .collect()
+}
+
+/// What `train` says of a held-out part dealt by tap: how many rows, and
+/// that they are every copy of so many taps; `None` for a split by row.
+fn held_out_taps_line(data: &TapData, split: &tactrace_store::HeldOut) -> Option<String> {
+    if split.unit != tactrace_store::tap_split::SplitUnit::Tap {
+        return None;
+    }
+    let groups = tactrace_store::tap_split::tap_groups(data)?;
+    let held: std::collections::HashSet<usize> = split.rows.iter().copied().collect();
+    let taps = groups.iter().filter(|g| held.contains(&g[0])).count();
+    Some(format!(
+        "held out {} rows: every copy of {taps} of the {} taps (the dataset shows some taps \
+         more than once, as a twin's renders: no held-out tap is seen in training)",
+        split.rows.len(),
+        groups.len()
+    ))
 }
 
 #[cfg(test)]

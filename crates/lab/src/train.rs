@@ -141,23 +141,6 @@ pub fn holdout_split(
     Ok((tr, va, unit))
 }
 
-/// What `train` says of a held-out part dealt by tap: how many rows, and
-/// that they are every copy of so many taps; `None` for a split by row.
-pub fn held_out_taps_line(data: &TapData, split: &HeldOut) -> Option<String> {
-    if split.unit != SplitUnit::Tap {
-        return None;
-    }
-    let groups = tactrace_store::tap_split::tap_groups(data)?;
-    let held: std::collections::HashSet<usize> = split.rows.iter().copied().collect();
-    let taps = groups.iter().filter(|g| held.contains(&g[0])).count();
-    Some(format!(
-        "held out {} rows: every copy of {taps} of the {} taps (the dataset shows some taps \
-         more than once, as a twin's renders: no held-out tap is seen in training)",
-        split.rows.len(),
-        groups.len()
-    ))
-}
-
 /// The data a model is fitted on, the part held out, and the record of
 /// both the model folder keeps ([`TrainingRecord`]).
 pub struct TrainingSplit {

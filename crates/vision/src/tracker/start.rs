@@ -48,7 +48,7 @@ impl PinTracker {
     /// gave. With fewer points than pins some pin is missing whatever the
     /// stages match, so an unsettled first matching cannot hold: unless
     /// `pins_wanted`, the stages stop there (`Err(None)`).
-    fn try_start(
+    pub(super) fn try_start(
         &self,
         start: Vec<[f64; 2]>,
         points: &[[f64; 2]],

@@ -10,12 +10,15 @@
 //! the field of their neighbours puts them, next to the new centres. Those
 //! pins stand in for the nearest-neighbour start's prediction (the pairs
 //! and the field of 2 spacings fitted to them, `tracker/grid.rs`): the
-//! narrow stages run from them and the result is kept by the start's own
-//! rule (no triangle turned over; no pin missing, or the first narrow
-//! matching settled by the margin), else the points are ordered from
-//! scratch as before. A kept result is the one any kept start gives when
-//! its first matching is the same; checked bit for bit on the shared sets
-//! (`tests/speed_cuts.rs`) and on synthetic taps (the tests here).
+//! last stage alone runs from them (its matching, then the fill), or when
+//! that does not hold the two narrow stages, each kept by the start's own
+//! rule (no triangle turned over; no pin missing, or the first matching
+//! settled by the margin); else the points are ordered from scratch as
+//! before. A kept result is the one any kept start gives when its last
+//! matching is the same (the pins follow from that matching alone);
+//! checked bit for bit on the shared sets (`tests/speed_cuts.rs`, and
+//! `examples/order_timing.rs --dump` on every frame of the 331-pin shear
+//! set and the 127-pin edge set) and on synthetic taps (the tests here).
 
 use super::grid::{Grid, CELL};
 use super::{FirstPass, PinTracker, Tracked, CLUSTER_REACH};
@@ -92,14 +95,19 @@ impl PinTracker {
         }
     }
 
-    /// The narrow stages from the pins `seed` when the result holds by the
-    /// nearest-neighbour start's rule, else `None` (also when the seeded
-    /// start or the nearest-neighbour start is off).
+    /// The last stage from the pins `seed`, else the two narrow stages
+    /// from them, when the result holds by the nearest-neighbour start's
+    /// rule; `None` when neither does (or the seeded start or the
+    /// nearest-neighbour start is off).
     fn seeded_start(&self, points: &[[f64; 2]], seed: &[[f64; 2]]) -> Option<Found> {
         if !(self.seeded && self.nearest) {
             return None;
         }
         let grid = Grid::new(points, CELL * self.spacing)?;
+        let last = &self.stages[self.stages.len() - 1..];
+        if let Ok(found) = self.try_stages(last, seed.to_vec(), points, &grid, false) {
+            return Some(found);
+        }
         self.try_start(seed.to_vec(), points, &grid, false).ok()
     }
 

@@ -256,7 +256,8 @@ mod tests {
 
     /// On synthetic taps with touching pins, the split pass started from
     /// the first pass's pins gives the pins of the split pass from
-    /// scratch, bit for bit, and the seeded start holds on most of them.
+    /// scratch, bit for bit, and the seeded start holds on most of them
+    /// (its last stage alone on most, too).
     #[test]
     fn seeded_split_pass_is_the_one_from_scratch_bit_for_bit() {
         let reference = crate::field::tests::rings();
@@ -265,7 +266,7 @@ mod tests {
             .expect("tracker")
             .with_seeded_split(false);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1933);
-        let (mut split, mut held) = (0, 0);
+        let (mut split, mut held, mut alone) = (0, 0, 0);
         for trial in 0..60 {
             let (keypoints, clusters) = touching_tap(&reference, 1 + trial % 5, &mut rng);
             let a = seeded.order_with_clusters(&keypoints, &clusters);
@@ -295,12 +296,20 @@ mod tests {
             retry.extend(clusters.iter().flat_map(|c| c.split(2)));
             let found = seeded.seeded_start(&retry, &first.tracked.pins);
             held += usize::from(found.is_some_and(|(t, _)| t.missing == 0));
+            let grid = Grid::new(&retry, CELL * seeded.spacing).expect("grid");
+            let last = &seeded.stages[seeded.stages.len() - 1..];
+            let seed = first.tracked.pins.clone();
+            alone += usize::from(seeded.try_stages(last, seed, &retry, &grid, false).is_ok());
             assert!(scratch.seeded_start(&retry, &first.tracked.pins).is_none());
         }
         assert!(split >= 40, "only {split} taps left pins missing");
         assert!(
             held * 2 >= split,
             "the seeded start held on {held} of {split}"
+        );
+        assert!(
+            alone * 2 >= split,
+            "the last stage alone held on {alone} of {split}"
         );
     }
 }

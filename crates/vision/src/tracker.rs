@@ -271,10 +271,9 @@ impl PinTracker {
     /// This tracker ordering the split pass's points from the first
     /// pass's pins (the default: its last stage, else its narrow stages,
     /// predicted from them, kept by the nearest-neighbour start's rule;
-    /// see `tracker/split.rs`)
-    /// or from scratch (`false`: every start tried anew, as before). The
-    /// same pins on the shared sets (`tests/speed_cuts.rs`); kept to check
-    /// that and to time it.
+    /// see `tracker/split.rs`) or from scratch (`false`: every start
+    /// tried anew, as before). The same pins on the shared sets
+    /// (`tests/speed_cuts.rs`); kept to check that and to time it.
     pub fn with_seeded_split(mut self, on: bool) -> Self {
         self.seeded = on;
         self

@@ -22,10 +22,10 @@
 
 use super::grid::{Grid, CELL};
 use super::{FirstPass, PinTracker, Tracked, CLUSTER_REACH};
+use crate::merged::Cluster;
 
 /// An ordering: the pins and, per pin, the index of its point.
 type Found = (Tracked, Vec<Option<usize>>);
-use crate::merged::Cluster;
 
 impl PinTracker {
     /// The rest of [`PinTracker::order_with_clusters`] after `first` (on

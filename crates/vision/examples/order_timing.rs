@@ -15,7 +15,9 @@
 //! the other tracker is the one without the speed cuts that change no pin
 //! (`PinTracker::with_speed_cuts(false)`). With `--once`, the other tracker
 //! is the one without the second nearest-neighbour start
-//! (`PinTracker::with_second_start(false)`). With `--dump
+//! (`PinTracker::with_second_start(false)`). With `--unseeded`, the other
+//! tracker orders the split pass from scratch
+//! (`PinTracker::with_seeded_split(false)`). With `--dump
 //! FILE`, every frame's pins from the default tracker are written to FILE
 //! bit for bit (per pin x and y as little-endian f64 bits and the matched
 //! flag; per frame the missing and extra counts), so two versions of the
@@ -26,7 +28,7 @@
 //!
 //! `cargo run --release -p tactrace-vision --example order_timing -- \
 //!     --fit DIR --frames DIR [--rest-frames K] [--limit N] [--reps R] [--compare]
-//!     [--full] [--plain] [--once] [--margin M|none] [--dump FILE]`
+//!     [--full] [--plain] [--once] [--unseeded] [--margin M|none] [--dump FILE]`
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -45,13 +47,15 @@ struct Args {
     full: bool,
     plain: bool,
     once: bool,
+    unseeded: bool,
     margin: Option<f64>,
     dump: Option<PathBuf>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage = "usage: order_timing --fit DIR --frames DIR [--rest-frames K] [--limit N] \
-                 [--reps R] [--compare] [--full] [--plain] [--once] [--margin M|none] [--dump FILE]";
+                 [--reps R] [--compare] [--full] [--plain] [--once] [--unseeded] [--margin M|none] \
+                 [--dump FILE]";
     let mut args = std::env::args().skip(1);
     let mut a = Args {
         fit: PathBuf::new(),
@@ -63,6 +67,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         full: false,
         plain: false,
         once: false,
+        unseeded: false,
         margin: Some(0.25),
         dump: None,
     };
@@ -78,6 +83,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--full" => a.full = true,
             "--plain" => a.plain = true,
             "--once" => a.once = true,
+            "--unseeded" => a.unseeded = true,
             "--dump" => a.dump = Some(value()?.into()),
             "--margin" => {
                 a.margin = match value()?.as_str() {
@@ -220,6 +226,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (PinTracker::new(rest.pins)?.with_speed_cuts(false), "plain")
     } else if a.once {
         (PinTracker::new(rest.pins)?.with_second_start(false), "once")
+    } else if a.unseeded {
+        (
+            PinTracker::new(rest.pins)?.with_seeded_split(false),
+            "unseeded",
+        )
     } else {
         (PinTracker::new(rest.pins)?.with_exact_field(true), "exact")
     };
@@ -238,7 +249,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         dump(path, &tracker, &detections)?;
         println!("pins of every frame written to {}", path.display());
     }
-    let timed = match (a.reps, a.compare || a.full || a.plain || a.once) {
+    let timed = match (
+        a.reps,
+        a.compare || a.full || a.plain || a.once || a.unseeded,
+    ) {
         (0, _) => 0,
         (_, false) => 1,
         (_, true) => 2,

@@ -99,6 +99,9 @@ pub struct PinTracker {
     /// Radius (spacings) of the pins' windows of the fast path, `None`
     /// for none ([`PinTracker::with_windows`]).
     windows: Option<f64>,
+    /// Whether the split pass starts from the first pass's pins
+    /// ([`PinTracker::with_seeded_split`]).
+    seeded: bool,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -184,6 +187,7 @@ impl PinTracker {
             second: true,
             grow: true,
             windows: Some(window::WINDOW_REACH),
+            seeded: true,
         })
     }
 
@@ -261,6 +265,17 @@ impl PinTracker {
     /// are not used); kept to check that (`tests/speed.rs`) and to time it.
     pub fn with_windows(mut self, reach: Option<f64>) -> Self {
         self.windows = reach;
+        self
+    }
+
+    /// This tracker ordering the split pass's points from the first
+    /// pass's pins (the default: its last stage, else its narrow stages,
+    /// predicted from them, kept by the nearest-neighbour start's rule;
+    /// see `tracker/split.rs`) or from scratch (`false`: every start
+    /// tried anew, as before). The same pins on the shared sets
+    /// (`tests/speed_cuts.rs`); kept to check that and to time it.
+    pub fn with_seeded_split(mut self, on: bool) -> Self {
+        self.seeded = on;
         self
     }
 

@@ -6,6 +6,8 @@
 //! fail when the data is absent unless TACTRACE_SKIP_REAL_DATA=1 (see
 //! `tactrace_testdata`). Every frame of both parts of the 331-pin set is
 //! compared by `examples/order_timing.rs --plain --compare` and `--dump`.
+//! So is the split pass started from the first pass's pins
+//! (`PinTracker::with_seeded_split`; `order_timing --unseeded --compare`).
 
 mod common;
 
@@ -101,6 +103,29 @@ fn speed_cuts_order_331_pin_frames_bit_for_bit() {
         assert_same(&a, &b, &path.display().to_string());
     }
     assert!(split >= 100, "only {split} frames with touching pins");
+}
+
+/// The same 600 val frames: the split pass started from the first
+/// pass's pins (the default) gives the pins of the split pass from scratch
+/// (`PinTracker::with_seeded_split(false)`), bit for bit.
+#[test]
+fn seeded_split_pass_orders_331_pin_frames_bit_for_bit() {
+    let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
+        return;
+    };
+    let (held, rest) = shear_set_331(&set);
+    let seeded = PinTracker::new(rest.clone()).expect("tracker");
+    let scratch = PinTracker::new(rest)
+        .expect("tracker")
+        .with_seeded_split(false);
+    let mut split = 0;
+    for (path, detection) in &held {
+        let (a, b) = (seeded.track(detection), scratch.track(detection));
+        let first = seeded.first_pass(&detection.points);
+        split += usize::from(first.tracked().missing > 0 && !detection.clusters.is_empty());
+        assert_same(&a, &b, &path.display().to_string());
+    }
+    assert!(split >= 100, "only {split} frames through the split pass");
 }
 
 /// Every 5th frame of the shared 127-pin set, as `PinExtractor::extract`

@@ -23,7 +23,7 @@
 //! synthetic taps (the tests here).
 
 use super::grid::{Grid, NEAREST_STAGE};
-use super::{PinTracker, Tracked};
+use super::{PinTracker, Stage, Tracked};
 
 /// An ordering: the pins and, per pin, the index of its point.
 type Found = (Tracked, Vec<Option<usize>>);
@@ -48,7 +48,7 @@ impl PinTracker {
     /// gave. With fewer points than pins some pin is missing whatever the
     /// stages match, so an unsettled first matching cannot hold: unless
     /// `pins_wanted`, the stages stop there (`Err(None)`).
-    fn try_start(
+    pub(super) fn try_start(
         &self,
         start: Vec<[f64; 2]>,
         points: &[[f64; 2]],
@@ -56,6 +56,20 @@ impl PinTracker {
         pins_wanted: bool,
     ) -> Result<Found, Option<Vec<[f64; 2]>>> {
         let after = &self.stages[NEAREST_STAGE + 1..];
+        self.try_stages(after, start, points, grid, pins_wanted)
+    }
+
+    /// [`PinTracker::try_start`] running the stages `after` (at least one)
+    /// from the pins at `start`, kept by the same rule (its first matching
+    /// settled by the gate of the first of `after`).
+    pub(super) fn try_stages(
+        &self,
+        after: &[Stage],
+        start: Vec<[f64; 2]>,
+        points: &[[f64; 2]],
+        grid: &Grid,
+        pins_wanted: bool,
+    ) -> Result<Found, Option<Vec<[f64; 2]>>> {
         let must_miss = points.len() < self.reference.len();
         let settled =
             |first: &[Option<usize>]| self.settled(&start, points, first, after[0].gate, grid);

@@ -111,3 +111,50 @@ fn band_err(reason: String) -> LearnError {
         reason,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::targets::{encode_into, Unit};
+
+    /// The edge's distance, its angle over the full circle and the tap's
+    /// depth: the depth's encoded column comes after the angle's two.
+    fn edge_and_depth() -> Vec<ModelTarget> {
+        vec![
+            ModelTarget::new("pose_2", Unit::Mm),
+            ModelTarget::circular("pose_6"),
+            ModelTarget::new("pose_3", Unit::Mm),
+        ]
+    }
+
+    #[test]
+    fn a_band_under_a_value_picks_the_shallow_rows_after_a_circular_target() {
+        // Depths 3.0 .. 4.8 mm; distances and angles chosen so that a band
+        // read from the wrong column (the distance, or the angle's sine or
+        // cosine) would pick other rows.
+        let outputs = edge_and_depth();
+        let depths = [3.0, 4.8, 3.5, 4.2, 3.69, 3.71];
+        let mut y = Vec::new();
+        for (i, d) in depths.iter().enumerate() {
+            let r = 6.0 - i as f32;
+            encode_into(&outputs, &[r, 170.0 - 60.0 * i as f32, *d], &mut y);
+        }
+        let n = depths.len();
+        let data = Dataset::new(vec![0.0; n], y, n, 1, 4).expect("data");
+        let shallow = BandWeight {
+            target: "pose_3".into(),
+            min: None,
+            max: Some(3.7),
+            weight: 3,
+        };
+        shallow.validate().expect("a band with only `max` is valid");
+        let rows = shallow.epoch_rows(&outputs, &data).expect("rows");
+        assert_eq!(rows, [0, 1, 2, 3, 4, 5, 0, 2, 4, 0, 2, 4]);
+        let angle = BandWeight {
+            target: "pose_6".into(),
+            ..shallow
+        };
+        let err = angle.epoch_rows(&outputs, &data).expect_err("circular");
+        assert!(err.to_string().contains("circular"), "{err}");
+    }
+}

@@ -221,8 +221,9 @@ pub struct LabelArgs {
     /// for --target COLUMN:deg second) [default: pose_6].
     #[arg(long)]
     pub theta_column: Option<String>,
-    /// A target column as COLUMN:UNIT[:circular][:ROLE], unit mm or deg,
-    /// role position or angle (repeatable, in order; e.g. --target
+    /// A target column as COLUMN:UNIT, optionally followed by :circular
+    /// and then by a role, :position or :angle; unit mm or deg
+    /// (repeatable, in order; e.g. --target
     /// pose_2:mm --target pose_6:deg:circular); replaces
     /// --r-column/--theta-column. The roles say which targets the servo
     /// loop reads as the edge pose when there are other targets beside

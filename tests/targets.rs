@@ -92,23 +92,7 @@ fn three_targets_import_train_validate_and_import_like() {
 
     for kind in ["pdennn", "mlp"] {
         let out = format!("m-{kind}");
-        let r = tactrace(
-            &t.0,
-            &[
-                "train",
-                "--train",
-                "fit",
-                "--model",
-                kind,
-                "--config",
-                "small.toml",
-                "--epochs",
-                "3",
-                "--out",
-                &out,
-            ],
-        );
-        ok(&r, "train");
+        ok(&train_small(&t, kind, &out), "train");
         let r = tactrace(
             &t.0,
             &["validate", "--model", &out, "--data", "score", "--json"],
@@ -216,23 +200,7 @@ fn marked_roles_let_a_model_of_three_targets_follow() {
     );
     let meta = json(&std::fs::read_to_string(t.join("fit/meta.json")).unwrap());
     assert_eq!(meta["target_roles"], json(r#"["position", null, "angle"]"#));
-    let r = tactrace(
-        &t.0,
-        &[
-            "train",
-            "--train",
-            "fit",
-            "--model",
-            "pdennn",
-            "--config",
-            "small.toml",
-            "--epochs",
-            "3",
-            "--out",
-            "m",
-        ],
-    );
-    ok(&r, "train");
+    ok(&train_small(&t, "pdennn", "m"), "train");
     let model = json(&std::fs::read_to_string(t.join("m/model.json")).unwrap());
     let roles: Vec<_> = model["outputs"]
         .as_array()
@@ -309,6 +277,24 @@ fn import_fit(t: &TempDir, data: &Path, extra: &[&str]) -> Run {
     let init = data.join("frames/init_0.png").display().to_string();
     let extra = [&["--reference", &init], extra].concat();
     import_labels(t, data, "fit.csv", &extra, "fit")
+}
+
+/// `train` of a `kind` model on the dataset `fit` in `t` for 3 epochs of
+/// the small nets (`small.toml`), into `out`.
+fn train_small(t: &TempDir, kind: &str, out: &str) -> Run {
+    let args = [
+        "train",
+        "--train",
+        "fit",
+        "--model",
+        kind,
+        "--config",
+        "small.toml",
+    ];
+    tactrace(
+        &t.0,
+        &[&args[..], &["--epochs", "3", "--out", out]].concat(),
+    )
 }
 
 /// `import` of the real set's frames labelled in `labels` (a CSV in `t`)

@@ -17,7 +17,9 @@
 //! is the one without the second nearest-neighbour start
 //! (`PinTracker::with_second_start(false)`). With `--unseeded`, the other
 //! tracker orders the split pass from scratch
-//! (`PinTracker::with_seeded_split(false)`). With `--dump
+//! (`PinTracker::with_seeded_split(false)`). With `--unpropagated`, the
+//! other tracker is the one without the propagated start of the first
+//! pass (`PinTracker::with_propagated_start(false)`). With `--dump
 //! FILE`, every frame's pins from the default tracker are written to FILE
 //! bit for bit (per pin x and y as little-endian f64 bits and the matched
 //! flag; per frame the missing and extra counts), so two versions of the
@@ -28,7 +30,8 @@
 //!
 //! `cargo run --release -p tactrace-vision --example order_timing -- \
 //!     --fit DIR --frames DIR [--rest-frames K] [--limit N] [--reps R] [--compare]
-//!     [--full] [--plain] [--once] [--unseeded] [--margin M|none] [--dump FILE]`
+//!     [--full] [--plain] [--once] [--unseeded] [--unpropagated] [--margin M|none]
+//!     [--dump FILE]`
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -48,14 +51,15 @@ struct Args {
     plain: bool,
     once: bool,
     unseeded: bool,
+    unpropagated: bool,
     margin: Option<f64>,
     dump: Option<PathBuf>,
 }
 
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage = "usage: order_timing --fit DIR --frames DIR [--rest-frames K] [--limit N] \
-                 [--reps R] [--compare] [--full] [--plain] [--once] [--unseeded] [--margin M|none] \
-                 [--dump FILE]";
+                 [--reps R] [--compare] [--full] [--plain] [--once] [--unseeded] [--unpropagated] \
+                 [--margin M|none] [--dump FILE]";
     let mut args = std::env::args().skip(1);
     let mut a = Args {
         fit: PathBuf::new(),
@@ -68,6 +72,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         plain: false,
         once: false,
         unseeded: false,
+        unpropagated: false,
         margin: Some(0.25),
         dump: None,
     };
@@ -84,6 +89,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--plain" => a.plain = true,
             "--once" => a.once = true,
             "--unseeded" => a.unseeded = true,
+            "--unpropagated" => a.unpropagated = true,
             "--dump" => a.dump = Some(value()?.into()),
             "--margin" => {
                 a.margin = match value()?.as_str() {
@@ -226,6 +232,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         (PinTracker::new(rest.pins)?.with_speed_cuts(false), "plain")
     } else if a.once {
         (PinTracker::new(rest.pins)?.with_second_start(false), "once")
+    } else if a.unpropagated {
+        (
+            PinTracker::new(rest.pins)?.with_propagated_start(false),
+            "unpropagated",
+        )
     } else if a.unseeded {
         (
             PinTracker::new(rest.pins)?.with_seeded_split(false),
@@ -251,7 +262,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let timed = match (
         a.reps,
-        a.compare || a.full || a.plain || a.once || a.unseeded,
+        a.compare || a.full || a.plain || a.once || a.unseeded || a.unpropagated,
     ) {
         (0, _) => 0,
         (_, false) => 1,

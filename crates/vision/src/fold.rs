@@ -68,7 +68,7 @@ impl FoldCheck {
     }
 
     /// Reference neighbours of pin `i`, ascending.
-    fn around(&self, i: usize) -> &[usize] {
+    pub(crate) fn around(&self, i: usize) -> &[usize] {
         &self.neighbours[self.starts[i]..self.starts[i + 1]]
     }
 

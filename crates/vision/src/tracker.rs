@@ -17,6 +17,7 @@ use crate::fold::FoldCheck;
 use crate::merged::Cluster;
 
 mod grid;
+mod propagate;
 mod repair;
 mod split;
 mod start;
@@ -102,6 +103,9 @@ pub struct PinTracker {
     /// Whether the split pass starts from the first pass's pins
     /// ([`PinTracker::with_seeded_split`]).
     seeded: bool,
+    /// Whether the first pass tries the propagated start first
+    /// ([`PinTracker::with_propagated_start`]).
+    propagated: bool,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -188,6 +192,7 @@ impl PinTracker {
             grow: true,
             windows: Some(window::WINDOW_REACH),
             seeded: true,
+            propagated: true,
         })
     }
 
@@ -279,6 +284,20 @@ impl PinTracker {
         self
     }
 
+    /// This tracker trying the propagated start first in the first pass
+    /// (the default: matches grown outward from the nearest-neighbour
+    /// pairs over the reference neighbours, each pin then predicted by
+    /// its matched neighbours' mean displacement, and the last stage
+    /// alone run from there, kept by the nearest-neighbour start's rule;
+    /// see `tracker/propagate.rs`) or not (`false`: the nearest-neighbour
+    /// start and the narrow stages, as before). The same pins on the
+    /// shared sets (docs/results/speed.md); kept to check that and to
+    /// time it (`examples/order_timing.rs --unpropagated`).
+    pub fn with_propagated_start(mut self, on: bool) -> Self {
+        self.propagated = on;
+        self
+    }
+
     /// The rest pin centres, px.
     pub fn reference(&self) -> &[[f64; 2]] {
         &self.reference
@@ -355,7 +374,8 @@ impl PinTracker {
     }
 
     /// The coarse-to-fine stages and the fill of missing pins: from the
-    /// nearest-neighbour start where it holds (no pin missing, or its first
+    /// propagated start where it holds (`tracker/propagate.rs`), else from
+    /// the nearest-neighbour start where it holds (no pin missing, or its first
     /// matching settled; see `tracker/grid.rs`), or from the second start
     /// taken from a dropped one's pins (`tracker/start.rs`), else every
     /// stage from the centroid shift. With fewer points than pins some pin
@@ -366,7 +386,12 @@ impl PinTracker {
     fn coarse_to_fine(&self, points: &[[f64; 2]]) -> (Tracked, Vec<Option<usize>>) {
         let grid = Grid::new(points, grid::CELL * self.spacing);
         if let (true, Some(grid)) = (self.nearest, &grid) {
-            if let Some(found) = self.order_from_nearest(points, grid) {
+            // The pairs of the centroid shift, which both starts begin from.
+            let pairs = self.centroid_pairs(points, grid);
+            if let Some(found) = self.order_propagated(points, grid, &pairs) {
+                return found;
+            }
+            if let Some(found) = self.order_from_nearest(points, grid, pairs) {
                 return found;
             }
         }

@@ -7,7 +7,10 @@
 //! `tactrace_testdata`). Every frame of both parts of the 331-pin set is
 //! compared by `examples/order_timing.rs --plain --compare` and `--dump`.
 //! So is the split pass started from the first pass's pins
-//! (`PinTracker::with_seeded_split`; `order_timing --unseeded --compare`).
+//! (`PinTracker::with_seeded_split`; `order_timing --unseeded --compare`),
+//! and the first pass's propagated start
+//! (`PinTracker::with_propagated_start`; `order_timing --unpropagated
+//! --compare`, and `--dump` of both builds on every frame of both sets).
 
 mod common;
 
@@ -138,6 +141,48 @@ fn speed_cuts_order_127_pin_frames_bit_for_bit() {
     for path in frames.iter().step_by(5) {
         let frame: Frame = load(path).to_luma8();
         match (fast.extract(&frame), plain.extract(&frame)) {
+            (Ok(a), Ok(b)) => assert_same(&a, &b, &path.display().to_string()),
+            (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", path.display()),
+        }
+    }
+}
+
+/// The same 600 val frames: the first pass from the propagated start (the
+/// default) gives the pins of the tracker without it
+/// (`PinTracker::with_propagated_start(false)`), bit for bit, with and
+/// without the split pass.
+#[test]
+fn propagated_start_orders_331_pin_frames_bit_for_bit() {
+    let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
+        return;
+    };
+    let (held, rest) = shear_set_331(&set);
+    let on = PinTracker::new(rest.clone()).expect("tracker");
+    let off = PinTracker::new(rest)
+        .expect("tracker")
+        .with_propagated_start(false);
+    for (path, detection) in &held {
+        let what = path.display().to_string();
+        assert_same(&on.track(detection), &off.track(detection), &what);
+        let (a, b) = (
+            on.first_pass(&detection.points),
+            off.first_pass(&detection.points),
+        );
+        assert_same(a.tracked(), b.tracked(), &what);
+    }
+}
+
+/// Every 5th frame of the shared 127-pin set, as `PinExtractor::extract`
+/// reads it: the same pins bit for bit with the propagated start as
+/// without.
+#[test]
+fn propagated_start_orders_127_pin_frames_bit_for_bit() {
+    let Some((on, off, frames)) = real_127_extractors(|t| t.with_propagated_start(false)) else {
+        return;
+    };
+    for path in frames.iter().step_by(5) {
+        let frame: Frame = load(path).to_luma8();
+        match (on.extract(&frame), off.extract(&frame)) {
             (Ok(a), Ok(b)) => assert_same(&a, &b, &path.display().to_string()),
             (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", path.display()),
         }

@@ -65,6 +65,10 @@ pub(super) const NEAREST_STAGE: usize = 1;
 /// ([`PinTracker::settled`]); chosen on the 331-pin shear set's train part.
 pub(super) const NEAREST_MARGIN: f64 = 0.25;
 
+/// Nearest-neighbour pairs: per pin, the index of its point, and how many
+/// pins have one.
+pub(super) type Pairs = (Vec<Option<usize>>, usize);
+
 /// Points bucketed by cell, each cell's points in index order.
 pub(super) struct Grid {
     cell: f64,
@@ -172,8 +176,22 @@ impl PinTracker {
     /// Every pin's prediction from the nearest-neighbour pairs of the
     /// reference shifted by the centroids' difference (see the module
     /// docs), or `None` when too few pins pair up.
+    #[cfg(test)]
     pub(super) fn nearest_start(&self, points: &[[f64; 2]], grid: &Grid) -> Option<Vec<[f64; 2]>> {
-        self.nearest_from(&self.centroid_shift(points), points, grid)
+        self.grown_start(self.centroid_pairs(points, grid), points, grid)
+    }
+
+    /// The nearest-neighbour pairs of the reference shifted by the
+    /// centroids' difference, before any growth.
+    pub(super) fn centroid_pairs(&self, points: &[[f64; 2]], grid: &Grid) -> Pairs {
+        self.first_pairs(&self.centroid_shift(points), points, grid)
+    }
+
+    /// The nearest-neighbour pairs of the pins at `shifted` (px).
+    fn first_pairs(&self, shifted: &[[f64; 2]], points: &[[f64; 2]], grid: &Grid) -> Pairs {
+        let mut pairs = vec![None; shifted.len()];
+        let paired = self.pair_nearest(shifted, points, grid, &mut pairs);
+        (pairs, paired)
     }
 
     /// [`PinTracker::nearest_start`] with the pins at `shifted` (px, one
@@ -187,8 +205,17 @@ impl PinTracker {
         points: &[[f64; 2]],
         grid: &Grid,
     ) -> Option<Vec<[f64; 2]>> {
-        let mut pairs = vec![None; shifted.len()];
-        let mut paired = self.pair_nearest(shifted, points, grid, &mut pairs);
+        self.grown_start(self.first_pairs(shifted, points, grid), points, grid)
+    }
+
+    /// The rest of [`PinTracker::nearest_from`] after its first `pairs`:
+    /// the pairs grown, then every pin predicted from them.
+    pub(super) fn grown_start(
+        &self,
+        (mut pairs, mut paired): Pairs,
+        points: &[[f64; 2]],
+        grid: &Grid,
+    ) -> Option<Vec<[f64; 2]>> {
         let kernel = &self.stages[GROW_STAGE].kernel;
         let grows = self.grow && (paired as f64) < GROW_BELOW * pairs.len() as f64;
         for _ in 0..if grows { GROW_ROUNDS } else { 0 } {

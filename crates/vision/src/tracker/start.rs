@@ -22,7 +22,7 @@
 //! all 5000 train/ and 2000 val/ frames of the 331-pin shear set) and on
 //! synthetic taps (the tests here).
 
-use super::grid::{Grid, NEAREST_STAGE};
+use super::grid::{Grid, Pairs, NEAREST_STAGE};
 use super::{PinTracker, Stage, Tracked};
 
 /// An ordering: the pins and, per pin, the index of its point.
@@ -32,9 +32,15 @@ impl PinTracker {
     /// The ordering from the nearest-neighbour start, or from the second
     /// start when the first is dropped ([`PinTracker::with_second_start`]);
     /// `None` when neither holds (the caller runs every stage from the
-    /// centroid shift).
-    pub(super) fn order_from_nearest(&self, points: &[[f64; 2]], grid: &Grid) -> Option<Found> {
-        let start = self.nearest_start(points, grid)?;
+    /// centroid shift). `pairs`: the nearest-neighbour pairs of the
+    /// centroid shift ([`PinTracker::centroid_pairs`]).
+    pub(super) fn order_from_nearest(
+        &self,
+        points: &[[f64; 2]],
+        grid: &Grid,
+        pairs: Pairs,
+    ) -> Option<Found> {
+        let start = self.grown_start(pairs, points, grid)?;
         let pins = match self.try_start(start, points, grid, self.second) {
             Ok(found) => return Some(found),
             Err(pins) => pins.filter(|_| self.second)?,

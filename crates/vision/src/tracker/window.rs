@@ -54,22 +54,10 @@ impl PinTracker {
         if !(reach > 0.0 && outer < gate) {
             return None;
         }
-        let (reach2, outer2) = (reach * reach, outer * outer);
         let mut taken = vec![false; points.len()];
         let mut matches = Vec::with_capacity(predicted.len());
         for p in predicted {
-            let (mut own, mut clear) = (None, true);
-            grid.around(p, outer, |k| {
-                // The matching's cost, by the same expression.
-                let dy2 = (p[1] - points[k][1]).powi(2);
-                let d2 = (p[0] - points[k][0]).powi(2) + dy2;
-                if d2 >= outer2 {
-                    return;
-                }
-                clear &= d2 < reach2 && own.is_none();
-                own = Some(k);
-            });
-            let k = own.filter(|_| clear)?;
+            let k = window_point(p, points, grid, reach, outer)?;
             if std::mem::replace(&mut taken[k], true) {
                 return None;
             }
@@ -77,6 +65,30 @@ impl PinTracker {
         }
         Some(matches)
     }
+}
+
+/// The only point within `reach` px of `p` when no other point lies
+/// within `outer` px of it (the window and its band), else `None`.
+pub(super) fn window_point(
+    p: &[f64; 2],
+    points: &[[f64; 2]],
+    grid: &Grid,
+    reach: f64,
+    outer: f64,
+) -> Option<usize> {
+    let (reach2, outer2) = (reach * reach, outer * outer);
+    let (mut own, mut clear) = (None, true);
+    grid.around(p, outer, |k| {
+        // The matching's cost, by the same expression.
+        let dy2 = (p[1] - points[k][1]).powi(2);
+        let d2 = (p[0] - points[k][0]).powi(2) + dy2;
+        if d2 >= outer2 {
+            return;
+        }
+        clear &= d2 < reach2 && own.is_none();
+        own = Some(k);
+    });
+    own.filter(|_| clear)
 }
 
 #[cfg(test)]

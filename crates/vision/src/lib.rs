@@ -30,6 +30,7 @@ mod rest;
 mod row_bits;
 mod runs;
 mod shape;
+mod spot_runs;
 mod spots;
 mod tracker;
 

@@ -23,10 +23,10 @@ use crate::shape::Octagon;
 
 /// A horizontal run of white pixels `x0..=x1` in row `y`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Run {
-    y: u32,
-    x0: u32,
-    x1: u32,
+pub(crate) struct Run {
+    pub(crate) y: u32,
+    pub(crate) x0: u32,
+    pub(crate) x1: u32,
 }
 
 /// What [`RunDetector::join`] sums over a component's runs.
@@ -338,7 +338,7 @@ fn white_runs(
 /// set where pixel x is white, no bit set past the row) appended to `runs`:
 /// a run starts or ends at every bit that differs from the bit before it
 /// (the one before the row counts as clear).
-fn row_runs(masks: &[u64], y: u32, width: u32, runs: &mut Vec<Run>) {
+pub(crate) fn row_runs(masks: &[u64], y: u32, width: u32, runs: &mut Vec<Run>) {
     let mut open: Option<u32> = None;
     let mut carry = 0;
     for (c, &mask) in masks.iter().enumerate() {
@@ -375,7 +375,8 @@ fn merge(parent: &mut [u32], sums: &mut [Sums], a: usize, b: usize) -> usize {
     keep
 }
 
-fn find(parent: &mut [u32], mut i: usize) -> usize {
+/// The root of run `i`'s component, halving the path on the way.
+pub(crate) fn find(parent: &mut [u32], mut i: usize) -> usize {
     while parent[i] as usize != i {
         parent[i] = parent[parent[i] as usize];
         i = parent[i] as usize;

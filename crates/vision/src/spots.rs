@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::blob::{Frame, KeyPoint};
 use crate::error::VisionError;
 use crate::merged::Cluster;
+use crate::spot_runs::SpotRuns;
 
 /// Which neighbours join two white pixels into one component.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -132,33 +133,46 @@ impl SpotDetector {
         &self.params
     }
 
-    /// The pins and clusters of `frame`.
+    /// The pins and clusters of `frame`: its white components of pin or
+    /// cluster size from pixel runs (`spot_runs.rs`), in raster order of
+    /// their first pixels, each with its pixels in raster order.
     pub fn detect(&self, frame: &Frame) -> Spots {
         let p = &self.params;
         let mut out = Spots::default();
-        for pixels in white_components(frame, p.level, p.connectivity) {
-            let n = pixels.len();
-            if n < p.min_pixels || n > p.max_cluster_pixels {
-                continue;
-            }
-            let passed = n <= p.max_pixels;
-            if passed {
-                let [x, y] = weighted_centre(frame, &pixels, p.level);
-                out.pins.push(Spot { x, y, pixels: n });
-            }
-            let mut pixels = pixels;
-            pixels.sort_unstable_by_key(|q| (q[1], q[0]));
-            out.clusters.push(Cluster { pixels, passed });
-        }
+        let sizes = p.min_pixels..=p.max_cluster_pixels;
+        SPOT_RUNS.with_borrow_mut(|runs| {
+            runs.for_each_component(frame, p.level, p.connectivity, sizes, |pixels| {
+                let n = pixels.len();
+                let passed = n <= p.max_pixels;
+                if passed {
+                    let [x, y] = weighted_centre(frame, pixels, p.level);
+                    out.pins.push(Spot { x, y, pixels: n });
+                }
+                out.clusters.push(Cluster {
+                    pixels: pixels.to_vec(),
+                    passed,
+                });
+            });
+        });
         out
     }
 }
 
+thread_local! {
+    /// The run-based component finder's buffers, kept between frames.
+    static SPOT_RUNS: std::cell::RefCell<SpotRuns> = std::cell::RefCell::new(SpotRuns::default());
+}
+
 /// Mean of the pixel centres weighted by their grey level above `level`.
+/// Every product and partial sum is an integer, exact in f64 while below
+/// 2^53 (weights below 2^8: any pin of fewer than 2^20 pixels in a frame
+/// less than 2^25 pixels wide and high), so the centre does not depend on
+/// the order of the pixels.
 fn weighted_centre(frame: &Frame, pixels: &[[i32; 2]], level: u8) -> [f64; 2] {
+    let (width, raw) = (frame.width() as usize, frame.as_raw());
     let (mut sw, mut sx, mut sy) = (0.0, 0.0, 0.0);
     for q in pixels {
-        let w = f64::from(frame.get_pixel(q[0] as u32, q[1] as u32)[0] - level);
+        let w = f64::from(raw[q[1] as usize * width + q[0] as usize] - level);
         sw += w;
         sx += w * f64::from(q[0]);
         sy += w * f64::from(q[1]);

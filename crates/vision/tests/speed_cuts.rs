@@ -17,7 +17,7 @@ mod common;
 use common::{load, merged_dropped_shuffled, real_127_extractors, rings, shear_set_331};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tactrace_vision::{Frame, KeyPoint, PinTracker, Tracked};
+use tactrace_vision::{Detection, Frame, KeyPoint, PinTracker, Tracked};
 
 /// `a` and `b` the same, bit for bit (pins, flags and counts).
 fn assert_same(a: &Tracked, b: &Tracked, what: &str) {
@@ -30,6 +30,37 @@ fn assert_same(a: &Tracked, b: &Tracked, what: &str) {
     assert_eq!(bits(a), bits(b), "{what}: pins differ");
     assert_eq!(a.matched, b.matched, "{what}: matched flags differ");
     assert_eq!((a.missing, a.extra), (b.missing, b.extra), "{what}");
+}
+
+/// Held-out frames and their detections.
+type HeldFrames = Vec<(std::path::PathBuf, Detection)>;
+
+/// The 600 val frames of the 331-pin shear set with the default tracker
+/// and one with `change` made, or `None` when the set is absent.
+fn trackers_331(
+    change: impl FnOnce(PinTracker) -> PinTracker,
+) -> Option<(HeldFrames, PinTracker, PinTracker)> {
+    let set = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md")?;
+    let (held, rest) = shear_set_331(&set);
+    let usual = PinTracker::new(rest.clone()).expect("tracker");
+    let changed = change(PinTracker::new(rest).expect("tracker"));
+    Some((held, usual, changed))
+}
+
+/// Every 5th frame of the shared 127-pin set, as `PinExtractor::extract`
+/// reads it, with the default tracker and one with `change` made: the same
+/// pins bit for bit (or the same refusal).
+fn same_on_127_frames(change: impl FnOnce(PinTracker) -> PinTracker) {
+    let Some((usual, changed, frames)) = real_127_extractors(change) else {
+        return;
+    };
+    for path in frames.iter().step_by(5) {
+        let frame: Frame = load(path).to_luma8();
+        match (usual.extract(&frame), changed.extract(&frame)) {
+            (Ok(a), Ok(b)) => assert_same(&a, &b, &path.display().to_string()),
+            (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", path.display()),
+        }
+    }
 }
 
 /// A tap on `reference` (spacing `s` px, centre `c`): sheared and bumped,
@@ -91,14 +122,9 @@ fn speed_cuts_order_synthetic_taps_bit_for_bit() {
 /// `tests/speed.rs` reads them: the same pins bit for bit with the cuts.
 #[test]
 fn speed_cuts_order_331_pin_frames_bit_for_bit() {
-    let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
+    let Some((held, fast, plain)) = trackers_331(|t| t.with_speed_cuts(false)) else {
         return;
     };
-    let (held, rest) = shear_set_331(&set);
-    let fast = PinTracker::new(rest.clone()).expect("tracker");
-    let plain = PinTracker::new(rest)
-        .expect("tracker")
-        .with_speed_cuts(false);
     let mut split = 0;
     for (path, detection) in &held {
         let (a, b) = (fast.track(detection), plain.track(detection));
@@ -113,14 +139,9 @@ fn speed_cuts_order_331_pin_frames_bit_for_bit() {
 /// (`PinTracker::with_seeded_split(false)`), bit for bit.
 #[test]
 fn seeded_split_pass_orders_331_pin_frames_bit_for_bit() {
-    let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
+    let Some((held, seeded, scratch)) = trackers_331(|t| t.with_seeded_split(false)) else {
         return;
     };
-    let (held, rest) = shear_set_331(&set);
-    let seeded = PinTracker::new(rest.clone()).expect("tracker");
-    let scratch = PinTracker::new(rest)
-        .expect("tracker")
-        .with_seeded_split(false);
     let mut split = 0;
     for (path, detection) in &held {
         let (a, b) = (seeded.track(detection), scratch.track(detection));
@@ -135,16 +156,7 @@ fn seeded_split_pass_orders_331_pin_frames_bit_for_bit() {
 /// reads it: the same pins bit for bit with the cuts.
 #[test]
 fn speed_cuts_order_127_pin_frames_bit_for_bit() {
-    let Some((fast, plain, frames)) = real_127_extractors(|t| t.with_speed_cuts(false)) else {
-        return;
-    };
-    for path in frames.iter().step_by(5) {
-        let frame: Frame = load(path).to_luma8();
-        match (fast.extract(&frame), plain.extract(&frame)) {
-            (Ok(a), Ok(b)) => assert_same(&a, &b, &path.display().to_string()),
-            (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", path.display()),
-        }
-    }
+    same_on_127_frames(|t| t.with_speed_cuts(false));
 }
 
 /// The same 600 val frames: the first pass from the propagated start (the
@@ -153,14 +165,9 @@ fn speed_cuts_order_127_pin_frames_bit_for_bit() {
 /// without the split pass.
 #[test]
 fn propagated_start_orders_331_pin_frames_bit_for_bit() {
-    let Some(set) = tactrace_testdata::shared_set("tactip331-edge2d-shear", "README.md") else {
+    let Some((held, on, off)) = trackers_331(|t| t.with_propagated_start(false)) else {
         return;
     };
-    let (held, rest) = shear_set_331(&set);
-    let on = PinTracker::new(rest.clone()).expect("tracker");
-    let off = PinTracker::new(rest)
-        .expect("tracker")
-        .with_propagated_start(false);
     for (path, detection) in &held {
         let what = path.display().to_string();
         assert_same(&on.track(detection), &off.track(detection), &what);
@@ -177,14 +184,5 @@ fn propagated_start_orders_331_pin_frames_bit_for_bit() {
 /// without.
 #[test]
 fn propagated_start_orders_127_pin_frames_bit_for_bit() {
-    let Some((on, off, frames)) = real_127_extractors(|t| t.with_propagated_start(false)) else {
-        return;
-    };
-    for path in frames.iter().step_by(5) {
-        let frame: Frame = load(path).to_luma8();
-        match (on.extract(&frame), off.extract(&frame)) {
-            (Ok(a), Ok(b)) => assert_same(&a, &b, &path.display().to_string()),
-            (a, b) => assert_eq!(a.is_ok(), b.is_ok(), "{}", path.display()),
-        }
-    }
+    same_on_127_frames(|t| t.with_propagated_start(false));
 }

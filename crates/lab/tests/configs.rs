@@ -100,3 +100,53 @@ fn the_shipped_edge_config_is_the_preset_without_the_tilt_integral() {
 fn the_shipped_corner_config_is_the_preset_without_the_surface_integral() {
     assert_preset_without_integral("edge5d-no-surface-integral.toml", &[2, 3, 4]);
 }
+
+/// The 331-pin edge's three shipped members
+/// (configs/pcadennn-edge331-*.toml) are one PCADenNN recipe of 60
+/// components on the six turned copies, the edge angle turned back at
+/// prediction; they differ only in the seed and the band of r weighted
+/// twice, so the recipe cannot drift between them.
+#[test]
+fn the_shipped_331_edge_members_differ_only_in_seed_and_band() {
+    use tactrace_learn::{ModelKind, Preset};
+    let resolve = |name: &str| {
+        tactrace_lab::train::resolve_config(
+            ModelKind::PcaDenNN,
+            Preset::Default,
+            Some(&shipped(name)),
+            Some(100),
+        )
+        .unwrap()
+    };
+    let members = [
+        ("pcadennn-edge331-rim5.toml", 0, 5.0),
+        ("pcadennn-edge331-rim5-seed1.toml", 1, 5.0),
+        ("pcadennn-edge331-rim3.toml", 0, 3.0),
+    ];
+    let first = resolve(members[0].0);
+    for (name, seed, min) in members {
+        let mut cfg = resolve(name);
+        assert_eq!(cfg.seed, seed, "{name}");
+        let band = cfg.band_weight.clone().expect("a band of r weighted");
+        assert_eq!(
+            (band.target.as_str(), band.min, band.max, band.weight),
+            ("pose_2", Some(min), None, 2),
+            "{name}"
+        );
+        let pose = cfg.pose.as_ref().expect("one pose net");
+        assert_eq!(pose.n_components, Some(60), "{name}");
+        assert_eq!(pose.hidden, vec![512, 256], "{name}");
+        let turns = cfg.rotations.expect("turned copies");
+        assert_eq!(
+            (turns.order, turns.angle_sign, turns.at_prediction),
+            (6, -1, true),
+            "{name}"
+        );
+        cfg.seed = first.seed;
+        cfg.band_weight = first.band_weight.clone();
+        assert_eq!(
+            cfg, first,
+            "{name} differs from the first member beyond seed and band"
+        );
+    }
+}

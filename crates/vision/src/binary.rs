@@ -10,7 +10,7 @@
 //! list of centres. Same keypoints, bit for bit, as the threshold-by-threshold
 //! path (see the tests here and `detect_blobs`).
 
-use crate::blob::KeyPoint;
+use crate::blob::{KeyPoint, Radius};
 use crate::grouping::{joins, keypoint_of, Centre, Grouper};
 use crate::params::BlobParams;
 use crate::row_bits::any_in_span;
@@ -45,8 +45,41 @@ pub(crate) fn detect_unchanging(
     let Some(&level) = levels.first() else {
         return Vec::new();
     };
-    let found = found_centres(pixels, width, height, level, p);
+    let found = found_centres(pixels, [width, height], level, p, Radius::Median);
     group_unchanging(found, width, height, levels.len(), p)
+}
+
+/// [`detect_unchanging`] with the centres only (`crate::blob::
+/// detect_blob_centres`): the blobs' radii bounded, not measured, and
+/// when with those bounds no two blobs join each other's group (a
+/// positive `min_dist_between_blobs` makes each join its own), OpenCV's
+/// grouping is the trivial one whatever the exact radii (each at or
+/// under its bound), so the keypoints are the same but for their sizes,
+/// left NaN. Otherwise the sizes are measured and the grouping runs
+/// as in [`detect_unchanging`].
+pub(crate) fn detect_unchanging_centres(
+    pixels: &[u8],
+    width: usize,
+    height: usize,
+    levels: &[i16],
+    p: &BlobParams,
+) -> Vec<KeyPoint> {
+    let Some(&level) = levels.first() else {
+        return Vec::new();
+    };
+    let found = found_centres(pixels, [width, height], level, p, Radius::Bound);
+    let min_dist = f64::from(p.min_dist_between_blobs);
+    if min_dist > 0.0 && apart(&found, min_dist) {
+        let n = levels.len();
+        if n < p.min_repeatability {
+            return Vec::new();
+        }
+        return found
+            .iter()
+            .map(|c| keypoint_of(std::iter::repeat_n(*c, n), f64::NAN))
+            .collect();
+    }
+    detect_unchanging(pixels, width, height, levels, p)
 }
 
 /// The keypoints of the same `found` list at each of `n` thresholds.
@@ -78,12 +111,12 @@ fn group_unchanging(
 /// OpenCV's contour order (the reverse of discovery in raster order).
 fn found_centres(
     pixels: &[u8],
-    width: usize,
-    height: usize,
+    size: [usize; 2],
     level: i16,
     p: &BlobParams,
+    radius: Radius,
 ) -> Vec<Centre> {
-    RUNS.with_borrow_mut(|runs| runs.centres(pixels, width, height, level, p))
+    RUNS.with_borrow_mut(|runs| runs.centres(pixels, size, level, p, radius))
 }
 
 thread_local! {
@@ -179,7 +212,7 @@ mod tests {
     #[test]
     fn binary_frames_match_the_threshold_loop() {
         let mut rng = ChaCha8Rng::seed_from_u64(21);
-        let mut branches = [0; 2];
+        let (mut branches, mut unmeasured) = ([0; 2], [0; 2]);
         for case in 0..100 {
             let size = rng.random_range(20..90u32);
             let discs: Vec<(f64, f64, f64, f64)> = (0..rng.random_range(0..25))
@@ -211,11 +244,69 @@ mod tests {
             let want = detect_blobs_by_threshold(&frame, &p);
             let got = detect_unchanging(frame.as_raw(), size as usize, size as usize, &levels, &p);
             assert_eq!(got, want, "case {case}");
-            let found = found_centres(frame.as_raw(), size as usize, size as usize, levels[0], &p);
+            let at = [size as usize; 2];
+            let found = found_centres(frame.as_raw(), at, levels[0], &p, Radius::Median);
             let min_dist = f64::from(p.min_dist_between_blobs);
             branches[usize::from(apart(&found, min_dist))] += usize::from(!found.is_empty());
+            check_centres_only(&frame, &p, &want, &mut unmeasured);
         }
-        // Both the direct grouping and the fallback were exercised.
+        // Both the direct grouping and the fallback were exercised, and
+        // the centres-only path both skipped sizes and measured them.
         assert!(branches.iter().all(|&b| b >= 10), "{branches:?}");
+        assert!(unmeasured.iter().all(|&b| b >= 10), "{unmeasured:?}");
+    }
+
+    /// `detect_blob_centres` gives `want`'s centres bit for bit, in order,
+    /// with every size NaN or all of them `want`'s; counts which in
+    /// `unmeasured` ([measured, NaN]).
+    fn check_centres_only(
+        frame: &Frame,
+        p: &BlobParams,
+        want: &[KeyPoint],
+        unmeasured: &mut [usize; 2],
+    ) {
+        let got = crate::blob::detect_blob_centres(frame, p);
+        let bits = |k: &KeyPoint| (k.x.to_bits(), k.y.to_bits());
+        assert_eq!(
+            got.iter().map(bits).collect::<Vec<_>>(),
+            want.iter().map(bits).collect::<Vec<_>>()
+        );
+        if got.iter().all(|k| k.size.is_nan()) && !got.is_empty() {
+            unmeasured[1] += 1;
+        } else {
+            assert_eq!(got, want, "measured sizes");
+            unmeasured[0] += usize::from(!got.is_empty());
+        }
+    }
+
+    /// The radius bound of the centres-only path is at or above OpenCV's
+    /// median radius, on every blob of random frames (holes, specks,
+    /// strokes and all).
+    #[test]
+    fn the_radius_bound_is_never_under_the_median() {
+        let mut rng = ChaCha8Rng::seed_from_u64(2211);
+        let p = BlobParams {
+            filter_by_area: false,
+            filter_by_circularity: false,
+            filter_by_convexity: false,
+            filter_by_inertia: false,
+            ..BlobParams::preset("real256").expect("preset")
+        };
+        let mut blobs = 0;
+        for _ in 0..1000 {
+            let (w, h) = (rng.random_range(1..40usize), rng.random_range(1..40usize));
+            let px: Vec<u8> = (0..w * h)
+                .map(|_| if rng.random_bool(0.2) { 255 } else { 0 })
+                .collect();
+            let exact = found_centres(&px, [w, h], 127, &p, Radius::Median);
+            let bound = found_centres(&px, [w, h], 127, &p, Radius::Bound);
+            assert_eq!(exact.len(), bound.len());
+            for (e, b) in exact.iter().zip(&bound) {
+                assert_eq!((e.x, e.y, e.confidence), (b.x, b.y, b.confidence));
+                assert!(b.radius >= e.radius, "{} < {}", b.radius, e.radius);
+            }
+            blobs += exact.len();
+        }
+        assert!(blobs > 3000, "{blobs} blobs");
     }
 }

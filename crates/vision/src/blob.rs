@@ -6,11 +6,13 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::binary::{detect_unchanging, same_at_levels};
+use crate::binary::{detect_unchanging, detect_unchanging_centres, same_at_levels};
+use crate::chain::{border_len, chain_border, chain_moments};
 use crate::components::label_components;
 use crate::contour::ContourScanner;
 use crate::grouping::{Centre, Grouper};
 use crate::params::BlobParams;
+use crate::runs::Run;
 use crate::shape::{
     circularity, hull_area_upper_bound, hull_area_with, median_radius, perimeter,
     perimeter_of_steps, HullScratch, MedianScratch, Moments, Octagon,
@@ -68,6 +70,23 @@ pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
         return detect_unchanging(img.as_raw(), width, height, &levels, p);
     }
     detect_blobs_by_threshold(img, p)
+}
+
+/// The keypoints of [`detect_blobs`] with their centres only: the same
+/// `x` and `y`, bit for bit, and `size` NaN (not measured) wherever the
+/// sizes were not needed to group the blobs: on binary frames whose blobs
+/// lie apart (`binary.rs`). What the pin tracker reads (it reads no
+/// size), without the median radius of every blob.
+pub(crate) fn detect_blob_centres(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
+    let (width, height) = (img.width() as usize, img.height() as usize);
+    let levels: Vec<i16> = p.thresholds().into_iter().map(level_of).collect();
+    let (Some(&lo), Some(&hi)) = (levels.iter().min(), levels.iter().max()) else {
+        return Vec::new();
+    };
+    if width > 0 && height > 0 && same_at_levels(img.as_raw(), lo, hi) {
+        return detect_unchanging_centres(img.as_raw(), width, height, &levels, p);
+    }
+    detect_blobs(img, p)
 }
 
 /// The grey level a threshold binarises at: white where the pixel value
@@ -170,6 +189,8 @@ pub(crate) fn colour_passes(
 pub(crate) struct Scratch {
     radii: MedianScratch,
     hull: HullScratch,
+    /// A chain's border points, when a test needs them.
+    border: Vec<[i32; 2]>,
 }
 
 /// Row-major index of the pixel nearest to (x, y) (ties to even), if inside.
@@ -200,32 +221,93 @@ pub(crate) fn measure_shape(
     p: &BlobParams,
     scratch: &mut Scratch,
 ) -> Option<Centre> {
-    measure_shape_in(contour, Known::default(), p, scratch)
+    measure_shape_in(Contour::Points(contour), Known::default(), p, scratch)
 }
 
 /// What is known of a contour before it is measured, from the runs and
-/// the walk that found it.
+/// the walk that found it, and how its radius is wanted.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Known<'a> {
     /// The extremes of x, y, x + y and x - y over its points.
     pub octagon: Option<&'a Octagon>,
     /// How many of its steps are diagonal (every step one pixel).
     pub diagonal_steps: Option<usize>,
+    /// The radius measured, or only bounded.
+    pub radius: Radius,
+}
+
+/// What a blob's radius is taken as.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Radius {
+    /// OpenCV's: the median distance of the border's points from the
+    /// centre (`shape::median_radius`).
+    #[default]
+    Median,
+    /// A bound at or above the median, from the points' box alone
+    /// ([`radius_bound`]): enough to tell that no two blobs group
+    /// together, for a caller that reads the centres only.
+    Bound,
+}
+
+/// A contour to measure: its points in order, or the runs of a
+/// component with one run a row, whose border's points
+/// ([`chain_border`]) are written only for a test that needs them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Contour<'a> {
+    Points(&'a [[i32; 2]]),
+    Chain(&'a [Run]),
+}
+
+impl<'a> Contour<'a> {
+    /// The points, in the border's order (a chain's written into
+    /// `buffer`).
+    fn points<'b>(self, buffer: &'b mut Vec<[i32; 2]>) -> &'b [[i32; 2]]
+    where
+        'a: 'b,
+    {
+        match self {
+            Self::Points(points) => points,
+            Self::Chain(runs) => {
+                chain_border(runs, buffer);
+                buffer
+            }
+        }
+    }
+
+    /// How many points.
+    fn len(self) -> usize {
+        match self {
+            Self::Points(points) => points.len(),
+            Self::Chain(runs) => border_len(runs).max(1),
+        }
+    }
+
+    /// The polygon moments ([`Moments::of_polygon`] of the points).
+    fn moments(self, buffer: &mut Vec<[i32; 2]>) -> Moments {
+        match self {
+            Self::Points(points) => Moments::of_polygon(points),
+            Self::Chain(runs) => {
+                chain_moments(runs).unwrap_or_else(|| Moments::of_polygon(self.points(buffer)))
+            }
+        }
+    }
 }
 
 /// [`measure_shape`] with what is `known` of the contour already.
 pub(crate) fn measure_shape_in(
-    contour: &[[i32; 2]],
+    contour: Contour,
     known: Known,
     p: &BlobParams,
     scratch: &mut Scratch,
 ) -> Option<Centre> {
-    let moments = Moments::of_polygon(contour);
+    let moments = contour.moments(&mut scratch.border);
     let area = moments.m00;
     if p.filter_by_area && !within(area, p.min_area, p.max_area) {
         return None;
     }
-    if p.filter_by_circularity && !circularity_passes(contour, known.diagonal_steps, area, p) {
+    if p.filter_by_circularity
+        && !circularity_passes(contour, known.diagonal_steps, area, p, scratch)
+    {
         return None;
     }
     let mut confidence = 1.0;
@@ -236,8 +318,11 @@ pub(crate) fn measure_shape_in(
         }
         confidence = ratio * ratio;
     }
-    if p.filter_by_convexity && !surely_convex_enough(contour, known.octagon, area, p) {
-        let hull = hull_area_with(contour, &mut scratch.hull);
+    if p.filter_by_convexity
+        && !surely_convex_enough(contour, known.octagon, area, p, &mut scratch.border)
+    {
+        let points = contour.points(&mut scratch.border);
+        let hull = hull_area_with(points, &mut scratch.hull);
         if hull.abs() < f64::EPSILON || !within(area / hull, p.min_convexity, p.max_convexity) {
             return None;
         }
@@ -246,7 +331,13 @@ pub(crate) fn measure_shape_in(
         return None;
     }
     let (x, y) = (moments.m10 / area, moments.m01 / area);
-    let radius = median_radius(contour, [x, y], &mut scratch.radii);
+    let radius = match known.radius {
+        Radius::Median => {
+            let points = contour.points(&mut scratch.border);
+            median_radius(points, [x, y], &mut scratch.radii)
+        }
+        Radius::Bound => radius_bound(contour, known.octagon, [x, y], &mut scratch.border),
+    };
     Some(Centre {
         x,
         y,
@@ -264,20 +355,23 @@ pub(crate) fn measure_shape_in(
 /// / 4 for n < 2^20, and both fall on the same side of each bound. Else,
 /// or near a bound, from the sum step by step ([`perimeter`]), as OpenCV.
 fn circularity_passes(
-    contour: &[[i32; 2]],
+    contour: Contour,
     diagonal_steps: Option<usize>,
     area: f64,
     p: &BlobParams,
+    scratch: &mut Scratch,
 ) -> bool {
     let (min, max) = (p.min_circularity, p.max_circularity);
-    if let Some(diagonal) = diagonal_steps.filter(|_| contour.len() < 1 << 20) {
-        let c = circularity(area, perimeter_of_steps(contour.len(), diagonal));
+    let n = contour.len();
+    if let Some(diagonal) = diagonal_steps.filter(|_| n < 1 << 20) {
+        let c = circularity(area, perimeter_of_steps(n, diagonal));
         let clear = |bound: f32| (c - f64::from(bound)).abs() > 1e-9 * c.abs();
         if c.is_finite() && clear(min) && clear(max) {
             return within(c, min, max);
         }
     }
-    within(circularity(area, perimeter(contour)), min, max)
+    let points = contour.points(&mut scratch.border);
+    within(circularity(area, perimeter(points)), min, max)
 }
 
 /// True when the convexity test `area / hull` in `[min, max)` passes
@@ -287,14 +381,46 @@ fn circularity_passes(
 /// (area > 0 rules out a degenerate hull: collinear points enclose nothing.)
 /// Saves the exact hull for most pins.
 fn surely_convex_enough(
-    contour: &[[i32; 2]],
+    contour: Contour,
     octagon: Option<&Octagon>,
     area: f64,
     p: &BlobParams,
+    buffer: &mut Vec<[i32; 2]>,
 ) -> bool {
     let (min, max) = (f64::from(p.min_convexity), f64::from(p.max_convexity));
-    let bound = || octagon.map_or_else(|| hull_area_upper_bound(contour), Octagon::area);
+    let mut bound = || {
+        octagon.map_or_else(
+            || hull_area_upper_bound(contour.points(buffer)),
+            Octagon::area,
+        )
+    };
     min > 0.0 && area > 0.0 && 2.0 * area < max && area / bound() >= min
+}
+
+/// A bound at or above the median radius of `contour` about `centre`
+/// (finite): every point lies in the box of the points (the `octagon`'s
+/// when known), so no distance exceeds that to the box's farthest corner,
+/// and the median of two distances (their mean) exceeds neither. The
+/// bound is enlarged by a millionth, far beyond any rounding of the
+/// median's `hypot` and mean.
+fn radius_bound(
+    contour: Contour,
+    octagon: Option<&Octagon>,
+    centre: [f64; 2],
+    buffer: &mut Vec<[i32; 2]>,
+) -> f64 {
+    let ([x0, x1], [y0, y1]) = match octagon {
+        Some(o) => (o.x, o.y),
+        None => contour.points(buffer).iter().fold(
+            ([i64::MAX, i64::MIN], [i64::MAX, i64::MIN]),
+            |([a, b], [c, d]), &[x, y]| {
+                let (x, y) = (i64::from(x), i64::from(y));
+                ([a.min(x), b.max(x)], [c.min(y), d.max(y)])
+            },
+        ),
+    };
+    let far = |lo: i64, hi: i64, at: f64| (at - lo as f64).abs().max((hi as f64 - at).abs());
+    far(x0, x1, centre[0]).hypot(far(y0, y1, centre[1])) * (1.0 + 1e-6)
 }
 
 /// OpenCV's range test: NaN-tolerant `!(v < min || v >= max)`.
@@ -419,7 +545,8 @@ mod tests {
                         ..white_blobs()
                     };
                     let want = within(circularity(area, perimeter(contour)), min, max);
-                    let got = circularity_passes(contour, Some(diagonal), area, &p);
+                    let (points, mut scratch) = (Contour::Points(contour), Scratch::default());
+                    let got = circularity_passes(points, Some(diagonal), area, &p, &mut scratch);
                     assert_eq!(got, want, "{contour:?} [{min}, {max})");
                     checked += 1;
                 }

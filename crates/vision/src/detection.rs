@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::blob::{detect_blobs, Frame, KeyPoint};
+use crate::blob::{detect_blob_centres, detect_blobs, Frame, KeyPoint};
 use crate::error::VisionError;
 use crate::merged::{find_clusters, Cluster};
 use crate::params::BlobParams;
@@ -85,6 +85,20 @@ impl Detector {
                     clusters: spots.clusters,
                 }
             }
+        }
+    }
+
+    /// [`Detector::detect`] for a caller that reads the pins' centres
+    /// only (the tracker): the same centres, bit for bit, and for the
+    /// blob detector the sizes left NaN wherever they were not needed to
+    /// group the blobs (`crate::blob::detect_blob_centres`).
+    pub(crate) fn detect_centres(&self, frame: &Frame) -> Detection {
+        match self {
+            Self::Blobs(p) => Detection {
+                points: detect_blob_centres(frame, p),
+                clusters: Vec::new(),
+            },
+            Self::Spots(_) => self.detect(frame),
         }
     }
 

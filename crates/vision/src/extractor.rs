@@ -60,15 +60,16 @@ impl PinExtractor {
 }
 
 /// The pins of `frame` ordered by `tracker`, and the detection they came
-/// from: a first pass over the detected points, then, when pins are
-/// missing, a pass splitting the clusters of touching pins (found here for
-/// the blob detector).
+/// from (its centres: the blob detector's sizes may be NaN, see
+/// [`Detector::detect_centres`]): a first pass over the detected points,
+/// then, when pins are missing, a pass splitting the clusters of touching
+/// pins (found here for the blob detector).
 pub(crate) fn track(
     detector: &Detector,
     tracker: &PinTracker,
     frame: &Frame,
 ) -> (Tracked, Detection) {
-    let mut detection = detector.detect(frame);
+    let mut detection = detector.detect_centres(frame);
     let first = tracker.first_pass(&detection.points);
     let tracked = if first.tracked().missing > 0 {
         detector.add_clusters(frame, &mut detection);

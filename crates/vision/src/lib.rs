@@ -13,6 +13,7 @@
 mod assign;
 mod binary;
 mod blob;
+mod chain;
 mod components;
 mod contour;
 mod detection;

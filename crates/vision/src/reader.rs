@@ -217,12 +217,13 @@ impl PinReader {
 
     /// The detection of a grey frame as [`PinReader::read_grey`] sees it
     /// (without the clusters the blob detector finds only when pins are
-    /// missing): what `bench` times as detection.
+    /// missing, and the blobs' sizes NaN where the tracker's detection
+    /// leaves them unmeasured): what `bench` times as detection.
     pub fn detect_grey(&self, frame: &Frame) -> Result<Detection, VisionError> {
         let detector = self.frames.detector();
         Ok(match self.preprocessed_grey(frame)? {
-            Some(seen) => detector.detect(&seen),
-            None => detector.detect(frame),
+            Some(seen) => detector.detect_centres(&seen),
+            None => detector.detect_centres(frame),
         })
     }
 

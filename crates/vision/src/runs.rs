@@ -9,17 +9,25 @@
 //! from the runs alone (its area is at least the number of squares of four
 //! white pixels and at most its box's: the rim's long arcs, the specks),
 //! it is never walked; otherwise it is walked directly from there
-//! (`ContourScanner::outer_border_at`, the tracer's own walk). A component
+//! (`ContourScanner::outer_border_at`, the tracer's own walk), or, for a
+//! component of one run a row (nearly every pin), written from its runs
+//! with the walk's points in the walk's order (`chain.rs`). A component
 //! with holes is traced in a window of its own. Every contour is measured
 //! by the same functions, so the blobs are the full-frame tracer's, bit
 //! for bit (the tests here, in `binary.rs` and `tests/runs.rs`).
 
-use crate::blob::{colour_passes, measure_shape, measure_shape_in, Known, Scratch};
+use crate::blob::{
+    colour_passes, measure_shape, measure_shape_in, Contour, Known, Radius, Scratch,
+};
+use crate::chain::diagonal_steps;
 use crate::contour::ContourScanner;
 use crate::grouping::Centre;
 use crate::params::BlobParams;
 use crate::row_bits::row_mask;
 use crate::shape::Octagon;
+
+/// No run (a link to nothing).
+const NONE: u32 = u32::MAX;
 
 /// A horizontal run of white pixels `x0..=x1` in row `y`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -90,6 +98,10 @@ pub(crate) struct RunDetector {
     /// only the earlier of two is still a root).
     firsts: Vec<u32>,
     grouped: Vec<Run>,
+    /// Per run, the last run of the next row found touching it (`NONE`
+    /// if none): a component of one run a row is its first run and these
+    /// links.
+    below: Vec<u32>,
     found: Vec<(usize, Centre)>,
     /// The whole binary frame (its outer borders are walked on it).
     frame: ContourScanner,
@@ -102,14 +114,15 @@ impl RunDetector {
     /// The centres of the blobs of `pixels` (`width` x `height`, white
     /// above `level`, at least -1) that pass every filter of `p`, in
     /// OpenCV's contour order (the reverse of discovery in raster order):
-    /// the same list as tracing the whole binarised frame.
+    /// the same list as tracing the whole binarised frame. Hole-free
+    /// blobs' radii as `radius` says (those with holes are measured).
     pub(crate) fn centres(
         &mut self,
         pixels: &[u8],
-        width: usize,
-        height: usize,
+        [width, height]: [usize; 2],
         level: i16,
         p: &BlobParams,
+        radius: Radius,
     ) -> Vec<Centre> {
         // The binary frame, for the border walks, is written row by row as
         // the runs are read (every label rewritten, walk marks included).
@@ -140,12 +153,19 @@ impl RunDetector {
                     continue;
                 }
                 let (x, y) = (self.runs[i].x0 as usize, self.runs[i].y as usize);
-                let (points, diagonal) = self.frame.outer_border_at(x, y);
+                let (contour, diagonal) = if self.gather_chain(i) {
+                    let runs = &self.grouped[..];
+                    (Contour::Chain(runs), diagonal_steps(runs))
+                } else {
+                    let (points, diagonal) = self.frame.outer_border_at(x, y);
+                    (Contour::Points(points), diagonal)
+                };
                 let known = Known {
                     octagon: Some(&self.sums[i].octagon),
                     diagonal_steps: Some(diagonal),
+                    radius,
                 };
-                if let Some(c) = measure_shape_in(points, known, p, &mut self.shape) {
+                if let Some(c) = measure_shape_in(contour, known, p, &mut self.shape) {
                     if colour_passes(&c, pixels, width, height, level, p) {
                         self.found.push((y * width + x, c));
                     }
@@ -194,6 +214,7 @@ impl RunDetector {
             parent,
             sums,
             firsts,
+            below,
             ..
         } = self;
         firsts.clear();
@@ -203,6 +224,8 @@ impl RunDetector {
             parent.resize(n, 0);
             sums.resize(n, Sums::default());
         }
+        below.clear();
+        below.resize(n, NONE);
         let (mut above, mut row_start, mut row_y) = (0, 0, u32::MAX);
         for (i, &r) in runs.iter().enumerate() {
             if r.y != row_y {
@@ -231,6 +254,7 @@ impl RunDetector {
                     merge(parent, sums, root, top)
                 };
                 touching += 1;
+                below[above + j] = i as u32;
                 // x and x + 1 in both runs: a square of four white pixels.
                 blocks += q.x1.min(r.x1).saturating_sub(q.x0.max(r.x0));
             }
@@ -242,6 +266,24 @@ impl RunDetector {
                 sums[root].add_run(r, touching, blocks);
             }
         }
+    }
+
+    /// Whether the component whose first run is `root` has one run a row
+    /// (after [`RunDetector::join`]); if so, its runs from the top into
+    /// `grouped`, by the links to the run below (with one run a row, the
+    /// only run touching a run from below).
+    fn gather_chain(&mut self, root: usize) -> bool {
+        let Octagon { y, .. } = self.sums[root].octagon;
+        if i64::from(self.sums[root].count) != y[1] - y[0] + 1 {
+            return false;
+        }
+        self.grouped.clear();
+        let mut at = root as u32;
+        while at != NONE {
+            self.grouped.push(self.runs[at as usize]);
+            at = self.below[at as usize];
+        }
+        true
     }
 
     /// The runs of the component whose first run is `root`, in raster
@@ -387,6 +429,7 @@ pub(crate) fn find(parent: &mut [u32], mut i: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::chain::{chain_border, chain_moments};
     use crate::shape::Moments;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -431,13 +474,14 @@ mod tests {
 
     /// The outer border walked from a component's first pixel, without
     /// the raster scan, is exactly the tracer's (same points, same order)
-    /// for every component, and the Euler number of the runs counts the
+    /// for every component, so is the border written from the runs of a
+    /// component of one run a row, and the Euler number of the runs counts the
     /// hole borders: the tracer's contours are one a component plus one a
     /// hole.
     #[test]
     fn run_walk_equals_the_traced_border() {
         let mut rng = ChaCha8Rng::seed_from_u64(2105);
-        let (mut walked, mut with_holes) = (0, 0);
+        let (mut walked, mut with_holes, mut chains) = (0, 0, 0);
         for case in 0..400 {
             let (w, h) = (rng.random_range(1..48), rng.random_range(1..48));
             let px = random_frame(&mut rng, w, h);
@@ -470,6 +514,23 @@ mod tests {
                 let holes = (d.sums[i].touching + 1 - d.sums[i].count) as usize;
                 if holes == 0 {
                     check_area_bounds(&d, i, &got);
+                    if d.gather_chain(i) {
+                        let mut written = Vec::new();
+                        let steps = chain_border(&d.grouped, &mut written);
+                        assert_eq!(written, got, "case {case}: chain at {start:?}");
+                        assert_eq!(steps, diagonal, "case {case}: chain's diagonal steps");
+                        assert_eq!(diagonal_steps(&d.grouped), diagonal, "case {case}");
+                        let bits = |m: Moments| {
+                            [m.m00, m.m10, m.m01, m.mu20, m.mu11, m.mu02].map(f64::to_bits)
+                        };
+                        let moments = chain_moments(&d.grouped).expect("small enough");
+                        assert_eq!(
+                            bits(moments),
+                            bits(Moments::of_polygon(&got)),
+                            "case {case}"
+                        );
+                        chains += 1;
+                    }
                     // The octagon of the runs is the border's.
                     let mut octagon = Octagon::row(got[0][1], got[0][0], got[0][0]);
                     got.iter().for_each(|&[x, y]| octagon.add_row(y, x, x));
@@ -486,8 +547,8 @@ mod tests {
             );
         }
         assert!(
-            walked > 2000 && with_holes > 100,
-            "{walked} components walked, {with_holes} with holes"
+            walked > 2000 && with_holes > 100 && chains > 1000,
+            "{walked} components walked, {with_holes} with holes, {chains} chains"
         );
     }
 

@@ -36,6 +36,13 @@ impl Moments {
             a[5] += cross * (yi * yi + yi * yj + yj * yj);
             prev = (xj, yj);
         }
+        Self::of_sums(a)
+    }
+
+    /// The moments from the polygon's six edge sums (`a[0]`: twice the
+    /// signed area; then x, y, x^2, xy and y^2, as summed by
+    /// [`Moments::of_polygon`]), either orientation.
+    pub(crate) fn of_sums(a: [f64; 6]) -> Self {
         if a[0].abs() <= f64::from(f32::EPSILON) {
             return Self::default();
         }

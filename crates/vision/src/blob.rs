@@ -402,7 +402,7 @@ fn surely_convex_enough(
 /// when known), so no distance exceeds that to the box's farthest corner,
 /// and the median of two distances (their mean) exceeds neither. The
 /// bound is enlarged by a millionth, far beyond any rounding of the
-/// median's `hypot` and mean.
+/// median's `hypot` and mean or of this square root.
 fn radius_bound(
     contour: Contour,
     octagon: Option<&Octagon>,
@@ -420,7 +420,8 @@ fn radius_bound(
         ),
     };
     let far = |lo: i64, hi: i64, at: f64| (at - lo as f64).abs().max((hi as f64 - at).abs());
-    far(x0, x1, centre[0]).hypot(far(y0, y1, centre[1])) * (1.0 + 1e-6)
+    let (dx, dy) = (far(x0, x1, centre[0]), far(y0, y1, centre[1]));
+    (dx * dx + dy * dy).sqrt() * (1.0 + 1e-6)
 }
 
 /// OpenCV's range test: NaN-tolerant `!(v < min || v >= max)`.

@@ -2,7 +2,9 @@
 //! from pixel runs, `runs.rs`, and the grouping built once, `binary.rs`)
 //! against the reference, the frame binarised and traced threshold by
 //! threshold (`detect_blobs_by_threshold`): the same keypoints, bit for
-//! bit, on synthetic frames and on every frame of the shared 127-pin set.
+//! bit, on synthetic frames and on every frame of the shared 127-pin set;
+//! and the tracker's detection (the centres only, the sizes left
+//! unmeasured) against it on every frame of both shared 127-pin sets.
 //! The shared-set test fails when the data is absent unless
 //! TACTRACE_SKIP_REAL_DATA=1 (see `tactrace_testdata`).
 
@@ -115,31 +117,32 @@ fn run_detector_equals_the_traced_detector_on_every_shared_127_pin_frame() {
 }
 
 /// The detection the pin tracker reads (`PinReader::detect_grey`, the
-/// centres only) on every frame of the shared 127-pin set: the keypoints'
-/// centres of `detect_blobs` bit for bit, in the same order, and each
-/// frame's sizes either all left unmeasured (NaN) or all the same.
+/// centres only) on every frame of the shared 127-pin edge and surface
+/// sets: the keypoints' centres of `detect_blobs` bit for bit, in the same
+/// order, and each frame's sizes either all left unmeasured (NaN) or all
+/// the same.
 #[test]
 fn the_trackers_detection_has_the_detectors_centres_on_every_shared_127_pin_frame() {
-    let Some(set) = tactrace_testdata::real_edge_set() else {
+    let (Some(edge), Some(surface)) = (
+        tactrace_testdata::real_edge_set(),
+        tactrace_testdata::shared_set("tactip127-surface2d", "targets.csv"),
+    ) else {
         return;
     };
-    let dir = set.join("frames");
     let p = BlobParams::preset("real256").expect("preset");
-    let reference: Frame = load(&dir.join("init_0.png")).to_luma8();
+    let reference: Frame = load(&edge.join("frames/init_0.png")).to_luma8();
     let reader =
         PinReader::from_reference_frame(Detector::Blobs(p.clone()), &reference).expect("reader");
-    let frames = pngs(&dir, "");
+    let mut frames = pngs(&edge.join("frames"), "");
+    frames.extend(pngs(&surface.join("frames"), ""));
     let mut unmeasured = 0;
     for path in &frames {
         let frame: Frame = load(path).to_luma8();
         let want = detect_blobs(&frame, &p);
         let got = reader.detect_grey(&frame).expect("detection").points;
         let centre = |k: &KeyPoint| [k.x.to_bits(), k.y.to_bits()];
-        let (got_c, want_c): (Vec<_>, Vec<_>) = (
-            got.iter().map(centre).collect(),
-            want.iter().map(centre).collect(),
-        );
-        assert_eq!(got_c, want_c, "{}", path.display());
+        let centres = |points: &[KeyPoint]| points.iter().map(centre).collect::<Vec<_>>();
+        assert_eq!(centres(&got), centres(&want), "{}", path.display());
         if got.iter().all(|k| k.size.is_nan()) {
             unmeasured += 1;
         } else {
@@ -151,7 +154,7 @@ fn the_trackers_detection_has_the_detectors_centres_on_every_shared_127_pin_fram
         frames.len()
     );
     assert!(
-        frames.len() > 3700 && unmeasured > 3700,
+        frames.len() > 7500 && unmeasured > 7500,
         "{unmeasured} of {}",
         frames.len()
     );

@@ -52,8 +52,9 @@ pub struct KeyPoint {
 /// same image at every threshold and takes a shorter, equivalent path
 /// (`binary.rs`): its white pixels read as runs and joined into components
 /// in one pass, the components the area filter surely rejects dropped from
-/// their runs, each other hole-free component's outer border walked from
-/// its first pixel, only components with holes traced in a window
+/// their runs, each other hole-free component measured from its runs
+/// where it has one run a row (`chain.rs`), else its outer border walked
+/// from its first pixel, only components with holes traced in a window
 /// (`runs.rs`). The same keypoints, bit for bit, as
 /// [`detect_blobs_by_threshold`] (tested on synthetic frames and every
 /// frame of the shared 127-pin set).

@@ -218,14 +218,16 @@ impl RunDetector {
             ..
         } = self;
         firsts.clear();
-        // Each run's parent and root's sums are written before being read.
+        // Each run's parent, link below and root's sums are written before
+        // being read (a run's link when the next row is joined).
         let n = runs.len();
         if parent.len() < n {
             parent.resize(n, 0);
             sums.resize(n, Sums::default());
         }
-        below.clear();
-        below.resize(n, NONE);
+        if below.len() < n {
+            below.resize(n, NONE);
+        }
         let (mut above, mut row_start, mut row_y) = (0, 0, u32::MAX);
         for (i, &r) in runs.iter().enumerate() {
             if r.y != row_y {
@@ -259,6 +261,7 @@ impl RunDetector {
                 blocks += q.x1.min(r.x1).saturating_sub(q.x0.max(r.x0));
             }
             parent[i] = root as u32;
+            below[i] = NONE;
             if root == i {
                 sums[i] = Sums::of_run(r);
                 firsts.push(i as u32);

@@ -19,7 +19,12 @@
 //! tracker orders the split pass from scratch
 //! (`PinTracker::with_seeded_split(false)`). With `--unpropagated`, the
 //! other tracker is the one without the propagated start of the first
-//! pass (`PinTracker::with_propagated_start(false)`). With `--dump
+//! pass (`PinTracker::with_propagated_start(false)`). With `--unscaled`,
+//! the other tracker starts from the reference only moved, not scaled
+//! (`PinTracker::with_scaled_start(false)`). With `--reference FRAME`, the
+//! rest layout is the pins detected in FRAME (an undeformed frame, as
+//! `import --reference` and `bench`'s 127-pin frames take it) instead of
+//! the one estimated from the taps. With `--dump
 //! FILE`, every frame's pins from the default tracker are written to FILE
 //! bit for bit (per pin x and y as little-endian f64 bits and the matched
 //! flag; per frame the missing and extra counts), so two versions of the
@@ -30,8 +35,8 @@
 //!
 //! `cargo run --release -p tactrace-vision --example order_timing -- \
 //!     --fit DIR --frames DIR [--rest-frames K] [--limit N] [--reps R] [--compare]
-//!     [--full] [--plain] [--once] [--unseeded] [--unpropagated] [--margin M|none]
-//!     [--dump FILE]`
+//!     [--full] [--plain] [--once] [--unseeded] [--unpropagated] [--unscaled]
+//!     [--reference FRAME] [--margin M|none] [--dump FILE]`
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -52,6 +57,8 @@ struct Args {
     once: bool,
     unseeded: bool,
     unpropagated: bool,
+    unscaled: bool,
+    reference: Option<PathBuf>,
     margin: Option<f64>,
     dump: Option<PathBuf>,
 }
@@ -59,7 +66,7 @@ struct Args {
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage = "usage: order_timing --fit DIR --frames DIR [--rest-frames K] [--limit N] \
                  [--reps R] [--compare] [--full] [--plain] [--once] [--unseeded] [--unpropagated] \
-                 [--margin M|none] [--dump FILE]";
+                 [--unscaled] [--reference FRAME] [--margin M|none] [--dump FILE]";
     let mut args = std::env::args().skip(1);
     let mut a = Args {
         fit: PathBuf::new(),
@@ -73,6 +80,8 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         once: false,
         unseeded: false,
         unpropagated: false,
+        unscaled: false,
+        reference: None,
         margin: Some(0.25),
         dump: None,
     };
@@ -90,6 +99,8 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--once" => a.once = true,
             "--unseeded" => a.unseeded = true,
             "--unpropagated" => a.unpropagated = true,
+            "--unscaled" => a.unscaled = true,
+            "--reference" => a.reference = Some(value()?.into()),
             "--dump" => a.dump = Some(value()?.into()),
             "--margin" => {
                 a.margin = match value()?.as_str() {
@@ -221,29 +232,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .iter()
         .map(|p| Ok(detector.detect(&load(p)?)?))
         .collect::<Result<_, Box<dyn std::error::Error>>>()?;
-    let rest = estimate_rest(&fitting, found.pins, &RestParams::default())?;
-    let tracker = PinTracker::new(rest.pins.clone())?.with_nearest_margin(a.margin);
+    let rest = match &a.reference {
+        Some(frame) => detector
+            .detect(&load(frame)?)?
+            .points
+            .iter()
+            .map(|k| [k.x, k.y])
+            .collect(),
+        None => estimate_rest(&fitting, found.pins, &RestParams::default())?.pins,
+    };
+    let tracker = PinTracker::new(rest.clone())?.with_nearest_margin(a.margin);
     let (exact, other) = if a.full {
-        (
-            PinTracker::new(rest.pins)?.with_nearest_start(false),
-            "full",
-        )
+        (PinTracker::new(rest)?.with_nearest_start(false), "full")
     } else if a.plain {
-        (PinTracker::new(rest.pins)?.with_speed_cuts(false), "plain")
+        (PinTracker::new(rest)?.with_speed_cuts(false), "plain")
     } else if a.once {
-        (PinTracker::new(rest.pins)?.with_second_start(false), "once")
+        (PinTracker::new(rest)?.with_second_start(false), "once")
     } else if a.unpropagated {
         (
-            PinTracker::new(rest.pins)?.with_propagated_start(false),
+            PinTracker::new(rest)?.with_propagated_start(false),
             "unpropagated",
         )
+    } else if a.unscaled {
+        (PinTracker::new(rest)?.with_scaled_start(false), "unscaled")
     } else if a.unseeded {
-        (
-            PinTracker::new(rest.pins)?.with_seeded_split(false),
-            "unseeded",
-        )
+        (PinTracker::new(rest)?.with_seeded_split(false), "unseeded")
     } else {
-        (PinTracker::new(rest.pins)?.with_exact_field(true), "exact")
+        (PinTracker::new(rest)?.with_exact_field(true), "exact")
     };
     let paths: Vec<PathBuf> = pngs(&a.frames)?.into_iter().take(a.limit).collect();
     let detections: Vec<Detection> = paths
@@ -262,7 +277,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let timed = match (
         a.reps,
-        a.compare || a.full || a.plain || a.once || a.unseeded || a.unpropagated,
+        a.compare || a.full || a.plain || a.once || a.unseeded || a.unpropagated || a.unscaled,
     ) {
         (0, _) => 0,
         (_, false) => 1,

@@ -1,8 +1,9 @@
 //! The fast paths of pin ordering give the results of the slow ones on the
 //! shared real sets (issue 21, item 6): the tracker's nearest-neighbour
 //! start (`tracker/grid.rs`) against every coarse-to-fine stage from the
-//! centroid shift, and the windowed matchings (`tracker/window.rs`)
-//! against the full ones. Fails when the data is absent unless
+//! centroid shift, the windowed matchings (`tracker/window.rs`)
+//! against the full ones, and the scaled start against the start only
+//! moved. Fails when the data is absent unless
 //! TACTRACE_SKIP_REAL_DATA=1 (see `tactrace_testdata`).
 
 mod common;
@@ -82,6 +83,25 @@ fn windowed_matchings_order_every_shared_127_pin_frame_as_before() {
 #[test]
 fn windowed_matchings_order_331_pin_frames_as_before() {
     if let Some((d, path)) = largest_331_difference(|t| t.with_windows(None)) {
+        assert_eq!(d, 0.0, "{}", path.display());
+    }
+}
+
+/// The scaled start (`PinTracker::with_scaled_start`) against the start
+/// only moved on every 127-pin frame (ordered against the undeformed
+/// frame's pins, which the taps' pins spread from by about 4 %): the same
+/// pins, bit for bit.
+#[test]
+fn scaled_start_orders_every_shared_127_pin_frame_as_before() {
+    if let Some((d, path)) = largest_127_difference(|t| t.with_scaled_start(false)) {
+        assert_eq!(d, 0.0, "{}", path.display());
+    }
+}
+
+/// The same on the 331-pin frames.
+#[test]
+fn scaled_start_orders_331_pin_frames_as_before() {
+    if let Some((d, path)) = largest_331_difference(|t| t.with_scaled_start(false)) {
         assert_eq!(d, 0.0, "{}", path.display());
     }
 }

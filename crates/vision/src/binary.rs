@@ -42,11 +42,7 @@ pub(crate) fn detect_unchanging(
     levels: &[i16],
     p: &BlobParams,
 ) -> Vec<KeyPoint> {
-    let Some(&level) = levels.first() else {
-        return Vec::new();
-    };
-    let found = found_centres(pixels, [width, height], level, p, Radius::Median);
-    group_unchanging(found, width, height, levels.len(), p)
+    detect_measured(pixels, [width, height], levels, p, Radius::Median)
 }
 
 /// [`detect_unchanging`] with the centres only (`crate::blob::
@@ -64,47 +60,48 @@ pub(crate) fn detect_unchanging_centres(
     levels: &[i16],
     p: &BlobParams,
 ) -> Vec<KeyPoint> {
+    detect_measured(pixels, [width, height], levels, p, Radius::Bound)
+}
+
+/// The keypoints of the blobs found once at `levels[0]` with their radii
+/// as `radius` says, grouped over `levels.len()` identical lists; with
+/// bounded radii, only where the grouping is surely the trivial one, else
+/// measured again.
+fn detect_measured(
+    pixels: &[u8],
+    size: [usize; 2],
+    levels: &[i16],
+    p: &BlobParams,
+    radius: Radius,
+) -> Vec<KeyPoint> {
     let Some(&level) = levels.first() else {
         return Vec::new();
     };
-    let found = found_centres(pixels, [width, height], level, p, Radius::Bound);
-    let min_dist = f64::from(p.min_dist_between_blobs);
-    if min_dist > 0.0 && apart(&found, min_dist) {
-        let n = levels.len();
-        if n < p.min_repeatability {
-            return Vec::new();
+    let found = found_centres(pixels, size, level, p, radius);
+    let (n, min_dist) = (levels.len(), f64::from(p.min_dist_between_blobs));
+    let trivial = apart(&found, min_dist);
+    match radius {
+        _ if trivial && n < p.min_repeatability => Vec::new(),
+        Radius::Median if trivial => one_group_each(&found, n, |c| c.radius),
+        Radius::Bound if trivial && min_dist > 0.0 => one_group_each(&found, n, |_| f64::NAN),
+        Radius::Bound => detect_measured(pixels, size, levels, p, Radius::Median),
+        Radius::Median => {
+            let mut grouper = Grouper::new(size[0], size[1], n);
+            for _ in 0..n {
+                grouper.add(&found, min_dist);
+            }
+            grouper.keypoints(p.min_repeatability)
         }
-        return found
-            .iter()
-            .map(|c| keypoint_of(std::iter::repeat_n(*c, n), f64::NAN))
-            .collect();
     }
-    detect_unchanging(pixels, width, height, levels, p)
 }
 
-/// The keypoints of the same `found` list at each of `n` thresholds.
-fn group_unchanging(
-    found: Vec<Centre>,
-    width: usize,
-    height: usize,
-    n: usize,
-    p: &BlobParams,
-) -> Vec<KeyPoint> {
-    let min_dist = f64::from(p.min_dist_between_blobs);
-    if apart(&found, min_dist) {
-        if n < p.min_repeatability {
-            return Vec::new();
-        }
-        return found
-            .iter()
-            .map(|c| keypoint_of(std::iter::repeat_n(*c, n), c.radius))
-            .collect();
-    }
-    let mut grouper = Grouper::new(width, height, n);
-    for _ in 0..n {
-        grouper.add(&found, min_dist);
-    }
-    grouper.keypoints(p.min_repeatability)
+/// The keypoints of `found` when each centre is a group of its own `n`
+/// copies, with the representative radius `radius` gives.
+fn one_group_each(found: &[Centre], n: usize, radius: impl Fn(&Centre) -> f64) -> Vec<KeyPoint> {
+    found
+        .iter()
+        .map(|c| keypoint_of(std::iter::repeat_n(*c, n), radius(c)))
+        .collect()
 }
 
 /// The centres of the blobs that pass every filter at `level`, in

@@ -30,44 +30,21 @@ pub(crate) fn same_at_levels(pixels: &[u8], lo: i16, hi: i16) -> bool {
     !any_in_span(pixels, base, span)
 }
 
-/// [`crate::detect_blobs`] for a `width` x `height` frame that binarises the
-/// same at all `levels` (the floors of the thresholds, see
+/// [`crate::detect_blobs`] for a frame of `size` (width, height) that
+/// binarises the same at all `levels` (the floors of the thresholds, see
 /// [`same_at_levels`]): the contours found from the pixel runs and measured
 /// once at `levels[0]` (`runs.rs`; the same list as tracing the whole
 /// binarised frame), then the grouping of `levels.len()` identical lists.
+///
+/// With `radius` [`Radius::Bound`] (`crate::blob::detect_blob_centres`)
+/// the blobs' radii are bounded, not measured, and when with those bounds
+/// no two blobs join each other's group (a positive
+/// `min_dist_between_blobs` makes each join its own), OpenCV's grouping is
+/// the trivial one whatever the exact radii (each at or under its bound),
+/// so the keypoints are the same but for their sizes, left NaN. Otherwise
+/// the sizes are measured and the grouping runs as with
+/// [`Radius::Median`].
 pub(crate) fn detect_unchanging(
-    pixels: &[u8],
-    width: usize,
-    height: usize,
-    levels: &[i16],
-    p: &BlobParams,
-) -> Vec<KeyPoint> {
-    detect_measured(pixels, [width, height], levels, p, Radius::Median)
-}
-
-/// [`detect_unchanging`] with the centres only (`crate::blob::
-/// detect_blob_centres`): the blobs' radii bounded, not measured, and
-/// when with those bounds no two blobs join each other's group (a
-/// positive `min_dist_between_blobs` makes each join its own), OpenCV's
-/// grouping is the trivial one whatever the exact radii (each at or
-/// under its bound), so the keypoints are the same but for their sizes,
-/// left NaN. Otherwise the sizes are measured and the grouping runs
-/// as in [`detect_unchanging`].
-pub(crate) fn detect_unchanging_centres(
-    pixels: &[u8],
-    width: usize,
-    height: usize,
-    levels: &[i16],
-    p: &BlobParams,
-) -> Vec<KeyPoint> {
-    detect_measured(pixels, [width, height], levels, p, Radius::Bound)
-}
-
-/// The keypoints of the blobs found once at `levels[0]` with their radii
-/// as `radius` says, grouped over `levels.len()` identical lists; with
-/// bounded radii, only where the grouping is surely the trivial one, else
-/// measured again.
-fn detect_measured(
     pixels: &[u8],
     size: [usize; 2],
     levels: &[i16],
@@ -84,7 +61,7 @@ fn detect_measured(
         _ if trivial && n < p.min_repeatability => Vec::new(),
         Radius::Median if trivial => one_group_each(&found, n, |c| c.radius),
         Radius::Bound if trivial && min_dist > 0.0 => one_group_each(&found, n, |_| f64::NAN),
-        Radius::Bound => detect_measured(pixels, size, levels, p, Radius::Median),
+        Radius::Bound => detect_unchanging(pixels, size, levels, p, Radius::Median),
         Radius::Median => {
             let mut grouper = Grouper::new(size[0], size[1], n);
             for _ in 0..n {
@@ -239,7 +216,8 @@ mod tests {
             };
             let levels: Vec<i16> = p.thresholds().iter().map(|t| t.floor() as i16).collect();
             let want = detect_blobs_by_threshold(&frame, &p);
-            let got = detect_unchanging(frame.as_raw(), size as usize, size as usize, &levels, &p);
+            let at = [size as usize; 2];
+            let got = detect_unchanging(frame.as_raw(), at, &levels, &p, Radius::Median);
             assert_eq!(got, want, "case {case}");
             let at = [size as usize; 2];
             let found = found_centres(frame.as_raw(), at, levels[0], &p, Radius::Median);

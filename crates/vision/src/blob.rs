@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::binary::{detect_unchanging, detect_unchanging_centres, same_at_levels};
+use crate::binary::{detect_unchanging, same_at_levels};
 use crate::chain::{border_len, chain_border, chain_moments};
 use crate::components::label_components;
 use crate::contour::ContourScanner;
@@ -59,6 +59,21 @@ pub struct KeyPoint {
 /// [`detect_blobs_by_threshold`] (tested on synthetic frames and every
 /// frame of the shared 127-pin set).
 pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
+    detect_with(img, p, Radius::Median)
+}
+
+/// The keypoints of [`detect_blobs`] with their centres only: the same
+/// `x` and `y`, bit for bit, and `size` NaN (not measured) wherever the
+/// sizes were not needed to group the blobs: on binary frames whose blobs
+/// lie apart (`binary.rs`). What the pin tracker reads (it reads no
+/// size), without the median radius of every blob.
+pub(crate) fn detect_blob_centres(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
+    detect_with(img, p, Radius::Bound)
+}
+
+/// [`detect_blobs`] with the radii of a binary frame's blobs as `radius`
+/// says (the threshold-by-threshold path measures them always).
+fn detect_with(img: &Frame, p: &BlobParams, radius: Radius) -> Vec<KeyPoint> {
     let (width, height) = (img.width() as usize, img.height() as usize);
     let levels: Vec<i16> = p.thresholds().into_iter().map(level_of).collect();
     let (Some(&lo), Some(&hi)) = (levels.iter().min(), levels.iter().max()) else {
@@ -68,26 +83,9 @@ pub fn detect_blobs(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
         return Vec::new();
     }
     if same_at_levels(img.as_raw(), lo, hi) {
-        return detect_unchanging(img.as_raw(), width, height, &levels, p);
+        return detect_unchanging(img.as_raw(), [width, height], &levels, p, radius);
     }
     detect_blobs_by_threshold(img, p)
-}
-
-/// The keypoints of [`detect_blobs`] with their centres only: the same
-/// `x` and `y`, bit for bit, and `size` NaN (not measured) wherever the
-/// sizes were not needed to group the blobs: on binary frames whose blobs
-/// lie apart (`binary.rs`). What the pin tracker reads (it reads no
-/// size), without the median radius of every blob.
-pub(crate) fn detect_blob_centres(img: &Frame, p: &BlobParams) -> Vec<KeyPoint> {
-    let (width, height) = (img.width() as usize, img.height() as usize);
-    let levels: Vec<i16> = p.thresholds().into_iter().map(level_of).collect();
-    let (Some(&lo), Some(&hi)) = (levels.iter().min(), levels.iter().max()) else {
-        return Vec::new();
-    };
-    if width > 0 && height > 0 && same_at_levels(img.as_raw(), lo, hi) {
-        return detect_unchanging_centres(img.as_raw(), width, height, &levels, p);
-    }
-    detect_blobs(img, p)
 }
 
 /// The grey level a threshold binarises at: white where the pixel value

@@ -5,9 +5,11 @@
 #    maturin, numpy, pytest, ur_rtde and ray from the package registry
 #    (ray: crates/py/tests/test_ray.py starts a local two-node Ray cluster
 #    and runs search and sim-fit on it);
-# 2. `cargo test --workspace --release` (builds target/release/tactrace,
-#    which the Python tests compare with; the RTDE conformance test runs
-#    ur_rtde from the venv);
+# 2. `cargo test --workspace --release`: the unit tests, each crate's
+#    integration tests (one binary a crate, `tests/it/`) and the doc tests
+#    (builds target/release/tactrace, which the Python tests compare with;
+#    the RTDE conformance test runs ur_rtde from the venv). The examples
+#    are left out of this build: `.ci/run`'s clippy checks them;
 # 3. `pip install ./crates/py` (maturin through pip, sharing cargo's target
 #    folder so the crates are not compiled twice);
 # 4. pytest on crates/py/tests.
@@ -25,12 +27,13 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 export PATH=$venv/bin:$PATH
 # The venv's interpreter, with ur_rtde, checks the fake RTDE controller
-# (crates/hw/tests/rtde_conformance.rs; required here, not skipped).
+# (crates/hw/tests/it/rtde_conformance.rs; required here, not skipped).
 pip install --quiet --disable-pip-version-check \
     "maturin==1.16.0" "numpy==2.4.6" "pytest==9.2.0" "ur_rtde==1.6.5" "ray==2.60.0"
 export TACTRACE_PYTHON=$venv/bin/python TACTRACE_REQUIRE_UR_RTDE=1
 
-cargo test --workspace --release
+cargo test --workspace --release --lib --bins --tests
+cargo test --workspace --release --doc
 
 export CARGO_TARGET_DIR=$root/target
 start=$(date +%s)

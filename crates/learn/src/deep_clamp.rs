@@ -14,7 +14,7 @@
 //! hidden layer `G(1) G(1)^T = W2^T D^2 W2 = A`, the one-layer closed form.
 //! The update then uses `e(l)` and the clamped activity `phi(s(l)) + D(l)
 //! ds(l)`; its first-order part is `(I + sum_l G G^T)^-1 beta` times the
-//! backprop gradient (tested in `tests/two_hidden_layers.rs`).
+//! backprop gradient (tested in `tests/it/two_hidden_layers.rs`).
 use crate::kernels::{dot, madd};
 use crate::net::{Layers, States};
 

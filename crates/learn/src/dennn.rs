@@ -41,7 +41,7 @@ pub enum ClampedPhase {
     /// of W1, b1 and b2 are then exactly `-eta beta (I + A)^-1` times the
     /// backprop gradient; W2's gets a second-order term `eta2 c^2 delta^2 D u`
     /// (c = beta / (1 + a), one output) from the clamped activity
-    /// `phi + D e(1)` (docs/learning.md; `tests/ep_beta.rs`). Any other depth
+    /// `phi + D e(1)` (docs/learning.md; `tests/it/ep_beta.rs`). Any other depth
     /// or output count takes the same closed form through every hidden
     /// layer, `(I + sum_l G(l) G(l)^T) e(N) = beta (t - y)` with
     /// `G(l) = dy/ds(l)` (`crate::deep_clamp`).

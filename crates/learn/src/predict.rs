@@ -298,7 +298,7 @@ fn madd64<const F: bool>(a: f64, b: f64, c: f64) -> f64 {
 
 /// The crate's test data (its integration tests' `mod support`).
 #[cfg(test)]
-#[path = "../tests/support/mod.rs"]
+#[path = "../tests/it/support/mod.rs"]
 mod test_support;
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Timing and checking of the pin ordering on any TacTip's frames (issue
 //! 21, item 6): the sensor proposed from 20 frames of the fitting part, the
 //! rest layout estimated from `--rest-frames` of its taps (as
-//! `tests/speed.rs` does), then every frame of `--frames` detected once
+//! `tests/it/speed.rs` does), then every frame of `--frames` detected once
 //! and ordered `--reps` times (0: not timed): the mean thread CPU time a frame (the time a
 //! loaded machine makes the thread wait is not counted), the median and
 //! p95 of each frame's least thread CPU time, and the median and p95 of

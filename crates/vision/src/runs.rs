@@ -14,7 +14,7 @@
 //! with the walk's points in the walk's order (`chain.rs`). A component
 //! with holes is traced in a window of its own. Every contour is measured
 //! by the same functions, so the blobs are the full-frame tracer's, bit
-//! for bit (the tests here, in `binary.rs` and `tests/runs.rs`).
+//! for bit (the tests here, in `binary.rs` and `tests/it/runs.rs`).
 
 use crate::blob::{
     colour_passes, measure_shape, measure_shape_in, Contour, Known, Radius, Scratch,

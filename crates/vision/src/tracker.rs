@@ -204,7 +204,7 @@ impl PinTracker {
     /// to [`EXACT_TOLERANCE`]; the default below [`CUT_MIN_PINS`] pins) or
     /// the cut one (the wide stages' kernels cut at [`CUT_TOLERANCE`]; the
     /// default from [`CUT_MIN_PINS`] pins). Kept to check that the cut
-    /// changes nothing that matters (`tests/cut_field.rs`).
+    /// changes nothing that matters (`tests/it/cut_field.rs`).
     pub fn with_exact_field(mut self, exact: bool) -> Self {
         self.stages = stages(&self.reference, self.spacing, exact);
         self
@@ -213,7 +213,7 @@ impl PinTracker {
     /// This tracker with the nearest-neighbour start on (the default) or
     /// off. Off, every frame runs all the coarse-to-fine stages from the
     /// centroid shift: slower, the same result on the shared sets
-    /// (`tests/speed.rs`), kept to check that.
+    /// (`tests/it/speed.rs`), kept to check that.
     pub fn with_nearest_start(mut self, on: bool) -> Self {
         self.nearest = on;
         self
@@ -236,7 +236,7 @@ impl PinTracker {
     /// lookups pruned (`tracker/split.rs`); an unsettled nearest-neighbour
     /// start with fewer points than pins dropped right after its first
     /// matching (`PinTracker::coarse_to_fine`). Off, the ordering is computed as before them, to the
-    /// same pins bit for bit; kept to check that (`tests/speed_cuts.rs`,
+    /// same pins bit for bit; kept to check that (`tests/it/speed_cuts.rs`,
     /// `examples/order_timing.rs --plain`).
     pub fn with_speed_cuts(mut self, on: bool) -> Self {
         self.cuts = on;
@@ -246,7 +246,7 @@ impl PinTracker {
     /// This tracker trying a dropped nearest-neighbour start once more,
     /// from the nearest neighbours of the pins it gave (the default), or
     /// not (every such frame runs all the stages from the centroid shift,
-    /// as before). The same pins on the shared sets (`tests/speed.rs`);
+    /// as before). The same pins on the shared sets (`tests/it/speed.rs`);
     /// kept to check that and to time it (`tracker/start.rs`).
     pub fn with_second_start(mut self, on: bool) -> Self {
         self.second = on;
@@ -258,7 +258,7 @@ impl PinTracker {
     /// pairs puts them, pair with free points by the same rule, a few
     /// rounds; see `tracker/grid.rs`) or not (the start from the first
     /// pairs alone, as before). The same pins on the shared sets
-    /// (`tests/speed.rs`); kept to check that and to time it.
+    /// (`tests/it/speed.rs`); kept to check that and to time it.
     pub fn with_grown_pairs(mut self, on: bool) -> Self {
         self.grow = on;
         self
@@ -271,7 +271,7 @@ impl PinTracker {
     /// (`None`: every stage lists its candidates and solves the
     /// assignment, as before). The same matchings by construction, for any
     /// reach whose window and band fit in the stage's gate (wider ones
-    /// are not used); kept to check that (`tests/speed.rs`) and to time it.
+    /// are not used); kept to check that (`tests/it/speed.rs`) and to time it.
     pub fn with_windows(mut self, reach: Option<f64>) -> Self {
         self.windows = reach;
         self
@@ -282,7 +282,7 @@ impl PinTracker {
     /// predicted from them, kept by the nearest-neighbour start's rule;
     /// see `tracker/split.rs`) or from scratch (`false`: every start
     /// tried anew, as before). The same pins on the shared sets
-    /// (`tests/speed_cuts.rs`); kept to check that and to time it.
+    /// (`tests/it/speed_cuts.rs`); kept to check that and to time it.
     pub fn with_seeded_split(mut self, on: bool) -> Self {
         self.seeded = on;
         self
@@ -312,7 +312,7 @@ impl PinTracker {
     /// on those frames changed a synthetic sensor's ordering), so those
     /// frames are only moved. Both starts, the stages' and the
     /// nearest-neighbour ones, begin there. The same pins, bit for bit, on every frame of the
-    /// shared sets (`tests/speed.rs`), for fewer failed starts; kept to
+    /// shared sets (`tests/it/speed.rs`), for fewer failed starts; kept to
     /// check that and to time it (`examples/order_timing.rs --unscaled`).
     pub fn with_scaled_start(mut self, on: bool) -> Self {
         self.scaled = on;

@@ -16,7 +16,7 @@
 //! settled by the margin); else the points are ordered from scratch as
 //! before. A kept result is the one any kept start gives when its last
 //! matching is the same (the pins follow from that matching alone);
-//! checked bit for bit on the shared sets (`tests/speed_cuts.rs`, and
+//! checked bit for bit on the shared sets (`tests/it/speed_cuts.rs`, and
 //! `examples/order_timing.rs --dump` on every frame of the 331-pin shear
 //! set and the 127-pin edge set) and on synthetic taps (the tests here).
 

@@ -17,7 +17,7 @@
 //! settled; its stages then run on all the same, to give the second its
 //! pins. A result so kept is the full path's whenever the first one would
 //! have been (the rule, not the way there, decides): checked bit for bit
-//! on every frame of the shared sets (`tests/speed.rs`,
+//! on every frame of the shared sets (`tests/it/speed.rs`,
 //! `examples/order_timing.rs --full --compare`: all 3763 127-pin frames,
 //! all 5000 train/ and 2000 val/ frames of the 331-pin shear set) and on
 //! synthetic taps (the tests here).

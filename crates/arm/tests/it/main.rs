@@ -1,0 +1,8 @@
+//! The integration tests of `arm`, built as one test binary (one
+//! compile of the shared code and one link, not one a file): each
+//! file of this folder is a module. `cargo test --test it NAME` runs
+//! those whose path contains NAME, e.g. the module's name.
+
+mod fuzz_regressions;
+mod limiter;
+mod se3;

@@ -1,0 +1,10 @@
+//! The integration tests of `control`, built as one test binary (one
+//! compile of the shared code and one link, not one a file): each
+//! file of this folder is a module. `cargo test --test it NAME` runs
+//! those whose path contains NAME, e.g. the module's name.
+
+mod move_clip_heading;
+mod pbts;
+mod se3;
+mod se3_oracle;
+mod se3_policy;

@@ -1,0 +1,7 @@
+//! The integration tests of `servo`, built as one test binary (one
+//! compile of the shared code and one link, not one a file): each
+//! file of this folder is a module. `cargo test --test it NAME` runs
+//! those whose path contains NAME, e.g. the module's name.
+
+mod detect_rendered;
+mod tilt_refused;

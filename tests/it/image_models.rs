@@ -48,7 +48,14 @@ fn synthetic_dataset(dir: &Path, n: usize) {
         targets.extend(t);
         inputs.extend([cx as f32, cy as f32, 0.0, 0.0, 0.0, 0.0]);
     }
-    util::write_spot_frames(dir, "tests/it/image_models.rs", SIDE, inputs, targets, pixels);
+    util::write_spot_frames(
+        dir,
+        "tests/it/image_models.rs",
+        SIDE,
+        inputs,
+        targets,
+        pixels,
+    );
 }
 
 /// A small network for the 16 px frames.

@@ -2,6 +2,7 @@
 with, and the data and models it makes (once per session)."""
 
 import os
+import signal
 import subprocess
 from pathlib import Path
 
@@ -29,6 +30,16 @@ def run_cli(*args, cwd=None, check=True) -> subprocess.CompletedProcess:
         raise AssertionError(f"tactrace {' '.join(map(str, args))} exited "
                              f"{got.returncode}: {got.stderr}")
     return got
+
+
+@pytest.fixture
+def ctrl_c():
+    """Python's own Ctrl-C handler for the test, whatever the runner was
+    started with: a shell's background job (`cmd &`) inherits SIGINT
+    ignored, and then `_thread.interrupt_main` delivers nothing."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
 
 
 @pytest.fixture(scope="session")

@@ -131,7 +131,7 @@ def test_a_python_arm_that_fails_stops_the_run_with_its_error(sim_model):
     assert isinstance(info.value.__cause__, Fault)
 
 
-def test_ctrl_c_stops_a_run_and_keeps_its_partial_folder(sim_model, tmp_path):
+def test_ctrl_c_stops_a_run_and_keeps_its_partial_folder(sim_model, tmp_path, ctrl_c):
     timer = threading.Timer(0.5, _thread.interrupt_main)
     t0 = time.monotonic()
     timer.start()

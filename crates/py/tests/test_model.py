@@ -97,7 +97,7 @@ def test_bad_model_input_is_refused(sim_set, sim_model):
         model.predict(bad, reference_pins=pins)
 
 
-def test_ctrl_c_stops_training(sim_set):
+def test_ctrl_c_stops_training(sim_set, ctrl_c):
     inputs, targets, meta = tactrace.load_dataset(sim_set)
     timer = threading.Timer(0.5, _thread.interrupt_main)
     t0 = time.monotonic()

@@ -39,6 +39,7 @@ mod small_pins;
 mod steer_cli;
 mod targets;
 mod task3d;
+mod test_layout;
 mod train_sets;
 mod tune;
 mod turned_views;

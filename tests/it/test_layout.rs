@@ -33,9 +33,8 @@ fn rust_files(dir: &Path) -> Vec<PathBuf> {
     files
 }
 
-/// Whether `module_file` declares `mod name;` (or `pub mod name;`).
-fn declares(module_file: &Path, name: &str) -> bool {
-    let text = std::fs::read_to_string(module_file).unwrap_or_default();
+/// Whether a module file's `text` declares `mod name;` (or `pub mod name;`).
+fn declares(text: &str, name: &str) -> bool {
     text.lines().any(|line| {
         let line = line.trim();
         line == format!("mod {name};") || line == format!("pub mod {name};")
@@ -45,12 +44,13 @@ fn declares(module_file: &Path, name: &str) -> bool {
 /// The files of `dir` (a module folder under `tests/it/`) and of its
 /// sub-folders that their module file (`parent`) does not declare.
 fn undeclared(dir: &Path, parent: &Path, found: &mut Vec<PathBuf>) {
+    let text = std::fs::read_to_string(parent).unwrap_or_default();
     for file in rust_files(dir) {
         let stem = file.file_stem().and_then(|s| s.to_str()).unwrap_or("");
         if file == parent || stem == "mod" {
             continue;
         }
-        if !declares(parent, stem) {
+        if !declares(&text, stem) {
             found.push(file);
         }
     }
@@ -61,7 +61,7 @@ fn undeclared(dir: &Path, parent: &Path, found: &mut Vec<PathBuf>) {
         let module = sub.join("mod.rs");
         if sub.is_dir() && module.is_file() {
             let name = sub.file_name().and_then(|s| s.to_str()).unwrap_or("");
-            if !declares(parent, name) {
+            if !declares(&text, name) {
                 found.push(module.clone());
             }
             undeclared(&sub, &module, found);

@@ -268,7 +268,9 @@ mod tests {
                 assert_eq!(a.1, b.1, "trial {trial}");
             }
         }
-        eprintln!("the propagated start held on {held_on} of 60 taps, {held_off} without the release");
+        eprintln!(
+            "the propagated start held on {held_on} of 60 taps, {held_off} without the release"
+        );
         assert!(held_on > held_off + 10, "{held_on} against {held_off}");
     }
 }

@@ -325,9 +325,9 @@ impl PinTracker {
     }
 
     /// This tracker matching again the propagated start's growth where it
-    /// stalls (the default: the ungrown pins and two rings of their
-    /// neighbours assigned anew, jointly, the growth resumed, then the
-    /// last stage; see `tracker/stalled.rs`) or not (`false`: such a frame
+    /// stalls (the default: the ungrown pins and a ring of their
+    /// neighbours, two in the later rounds, assigned anew, jointly, the
+    /// growth resumed, then the last stage; see `tracker/stalled.rs`) or not (`false`: such a frame
     /// goes on to the nearest-neighbour start, as before). The same pins,
     /// bit for bit, on every frame of the shared sets
     /// (docs/results/speed.md); kept to check that and to time it

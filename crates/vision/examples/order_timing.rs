@@ -21,7 +21,10 @@
 //! other tracker is the one without the propagated start of the first
 //! pass (`PinTracker::with_propagated_start(false)`). With `--unscaled`,
 //! the other tracker starts from the reference only moved, not scaled
-//! (`PinTracker::with_scaled_start(false)`). With `--reference FRAME`, the
+//! (`PinTracker::with_scaled_start(false)`). With `--unstalled`, the other
+//! tracker sends a stalled propagated growth on to the nearest-neighbour
+//! start instead of matching it again
+//! (`PinTracker::with_stalled_growth(false)`). With `--reference FRAME`, the
 //! rest layout is the pins detected in FRAME (an undeformed frame, as
 //! `import --reference` and `bench`'s 127-pin frames take it) instead of
 //! the one estimated from the taps. With `--dump
@@ -36,6 +39,7 @@
 //! `cargo run --release -p tactrace-vision --example order_timing -- \
 //!     --fit DIR --frames DIR [--rest-frames K] [--limit N] [--reps R] [--compare]
 //!     [--full] [--plain] [--once] [--unseeded] [--unpropagated] [--unscaled]
+//!     [--unstalled]
 //!     [--reference FRAME] [--margin M|none] [--dump FILE]`
 
 use std::path::{Path, PathBuf};
@@ -58,6 +62,7 @@ struct Args {
     unseeded: bool,
     unpropagated: bool,
     unscaled: bool,
+    unstalled: bool,
     reference: Option<PathBuf>,
     margin: Option<f64>,
     dump: Option<PathBuf>,
@@ -66,7 +71,7 @@ struct Args {
 fn parse() -> Result<Args, Box<dyn std::error::Error>> {
     let usage = "usage: order_timing --fit DIR --frames DIR [--rest-frames K] [--limit N] \
                  [--reps R] [--compare] [--full] [--plain] [--once] [--unseeded] [--unpropagated] \
-                 [--unscaled] [--reference FRAME] [--margin M|none] [--dump FILE]";
+                 [--unscaled] [--unstalled] [--reference FRAME] [--margin M|none] [--dump FILE]";
     let mut args = std::env::args().skip(1);
     let mut a = Args {
         fit: PathBuf::new(),
@@ -81,6 +86,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
         unseeded: false,
         unpropagated: false,
         unscaled: false,
+        unstalled: false,
         reference: None,
         margin: Some(0.25),
         dump: None,
@@ -100,6 +106,7 @@ fn parse() -> Result<Args, Box<dyn std::error::Error>> {
             "--unseeded" => a.unseeded = true,
             "--unpropagated" => a.unpropagated = true,
             "--unscaled" => a.unscaled = true,
+            "--unstalled" => a.unstalled = true,
             "--reference" => a.reference = Some(value()?.into()),
             "--dump" => a.dump = Some(value()?.into()),
             "--margin" => {
@@ -255,6 +262,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )
     } else if a.unscaled {
         (PinTracker::new(rest)?.with_scaled_start(false), "unscaled")
+    } else if a.unstalled {
+        (
+            PinTracker::new(rest)?.with_stalled_growth(false),
+            "unstalled",
+        )
     } else if a.unseeded {
         (PinTracker::new(rest)?.with_seeded_split(false), "unseeded")
     } else {
@@ -277,7 +289,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let timed = match (
         a.reps,
-        a.compare || a.full || a.plain || a.once || a.unseeded || a.unpropagated || a.unscaled,
+        a.compare
+            || a.full
+            || a.plain
+            || a.once
+            || a.unseeded
+            || a.unpropagated
+            || a.unscaled
+            || a.unstalled,
     ) {
         (0, _) => 0,
         (_, false) => 1,

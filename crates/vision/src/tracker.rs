@@ -20,6 +20,7 @@ mod grid;
 mod propagate;
 mod repair;
 mod split;
+mod stalled;
 mod start;
 mod window;
 
@@ -109,6 +110,9 @@ pub struct PinTracker {
     /// Whether the start scales the reference to the points' spread
     /// ([`PinTracker::with_scaled_start`]).
     scaled: bool,
+    /// Whether a stalled propagated growth is matched again
+    /// ([`PinTracker::with_stalled_growth`]).
+    stalled: bool,
 }
 
 /// The first pass of the ordering on one frame's keypoints
@@ -197,6 +201,7 @@ impl PinTracker {
             seeded: true,
             propagated: true,
             scaled: true,
+            stalled: true,
         })
     }
 
@@ -316,6 +321,19 @@ impl PinTracker {
     /// check that and to time it (`examples/order_timing.rs --unscaled`).
     pub fn with_scaled_start(mut self, on: bool) -> Self {
         self.scaled = on;
+        self
+    }
+
+    /// This tracker matching again the propagated start's growth where it
+    /// stalls (the default: the ungrown pins and a ring of their
+    /// neighbours, two in the later rounds, assigned anew, jointly, the
+    /// growth resumed, then the last stage; see `tracker/stalled.rs`) or not (`false`: such a frame
+    /// goes on to the nearest-neighbour start, as before). The same pins,
+    /// bit for bit, on every frame of the shared sets
+    /// (docs/results/speed.md); kept to check that and to time it
+    /// (`examples/order_timing.rs --unstalled`).
+    pub fn with_stalled_growth(mut self, on: bool) -> Self {
+        self.stalled = on;
         self
     }
 

@@ -26,7 +26,9 @@
 //! growth leaves [`UNGROWN_BEYOND_DEFICIT`] or more pins unmatched beyond
 //! those that must be (more pins than points) skips the last stage: on the
 //! fitting part such a start almost never held, and the attempt only
-//! added to the frames that go on to the slower starts.
+//! added to the frames that go on to the slower starts. Such a growth is
+//! matched again instead (`tracker/stalled.rs`), and only a frame where
+//! that does not hold goes on to the nearest-neighbour start.
 //!
 //! The pins follow from the last matching alone (matched pins at their
 //! points, the others filled from the observations), so a kept result is
@@ -55,10 +57,17 @@ pub(super) const UNGROWN_BEYOND_DEFICIT: usize = 2;
 
 /// The grown matches and, per pin, the summed displacement (px) of its
 /// matched neighbours and their count.
-struct Grown {
-    matches: Vec<Option<usize>>,
+pub(super) struct Grown {
+    pub(super) matches: Vec<Option<usize>>,
     sums: Vec<[f64; 2]>,
     counts: Vec<u32>,
+}
+
+impl Grown {
+    /// Pins left unmatched.
+    pub(super) fn ungrown(&self) -> usize {
+        self.matches.iter().filter(|m| m.is_none()).count()
+    }
 }
 
 impl PinTracker {
@@ -75,10 +84,12 @@ impl PinTracker {
             return None;
         }
         let grown = self.grow_matches(&pairs.0, points, grid);
-        let ungrown = grown.matches.iter().filter(|m| m.is_none()).count();
         let deficit = self.reference.len().saturating_sub(points.len());
-        if ungrown >= deficit + UNGROWN_BEYOND_DEFICIT {
-            return None;
+        if grown.ungrown() >= deficit + UNGROWN_BEYOND_DEFICIT {
+            return self
+                .stalled
+                .then(|| self.order_stalled(grown, points, grid))
+                .flatten();
         }
         let predicted = self.neighbour_means(&grown, points);
         let last = &self.stages[self.stages.len() - 1..];
@@ -87,7 +98,12 @@ impl PinTracker {
 
     /// The matches grown from the `seed` pairs over the reference
     /// neighbours (see the module docs).
-    fn grow_matches(&self, seed: &[Option<usize>], points: &[[f64; 2]], grid: &Grid) -> Grown {
+    pub(super) fn grow_matches(
+        &self,
+        seed: &[Option<usize>],
+        points: &[[f64; 2]],
+        grid: &Grid,
+    ) -> Grown {
         let n = self.reference.len();
         let mut grown = Grown {
             matches: seed.to_vec(),

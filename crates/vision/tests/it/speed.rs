@@ -2,8 +2,9 @@
 //! shared real sets (issue 21, item 6): the tracker's nearest-neighbour
 //! start (`tracker/grid.rs`) against every coarse-to-fine stage from the
 //! centroid shift, the windowed matchings (`tracker/window.rs`)
-//! against the full ones, and the scaled start against the start only
-//! moved. Fails when the data is absent unless
+//! against the full ones, the scaled start against the start only
+//! moved, and the stalled growth matched again (`tracker/stalled.rs`)
+//! against the nearest-neighbour start it spares. Fails when the data is absent unless
 //! TACTRACE_SKIP_REAL_DATA=1 (see `tactrace_testdata`).
 
 use crate::common;
@@ -102,6 +103,24 @@ fn scaled_start_orders_every_shared_127_pin_frame_as_before() {
 #[test]
 fn scaled_start_orders_331_pin_frames_as_before() {
     if let Some((d, path)) = largest_331_difference(|t| t.with_scaled_start(false)) {
+        assert_eq!(d, 0.0, "{}", path.display());
+    }
+}
+
+/// The stalled growth matched again (`PinTracker::with_stalled_growth`)
+/// against such frames sent on to the nearest-neighbour start, on every
+/// 127-pin frame: the same pins, bit for bit.
+#[test]
+fn stalled_growth_orders_every_shared_127_pin_frame_as_before() {
+    if let Some((d, path)) = largest_127_difference(|t| t.with_stalled_growth(false)) {
+        assert_eq!(d, 0.0, "{}", path.display());
+    }
+}
+
+/// The same on the 331-pin frames.
+#[test]
+fn stalled_growth_orders_331_pin_frames_as_before() {
+    if let Some((d, path)) = largest_331_difference(|t| t.with_stalled_growth(false)) {
         assert_eq!(d, 0.0, "{}", path.display());
     }
 }

@@ -14,7 +14,8 @@
 #    package's crate (crates/py, a workspace member with no Rust tests) is
 #    not built here, but it is in the selection, so every crate it shares
 #    is compiled with the features its own build asks for (an explicit
-#    `--lib` would build its test binary, which cannot link);
+#    `--lib` would build its test binary, which cannot link; `--doc` warns
+#    that a cdylib has no doc tests, and it has none);
 # 3. `pip install ./crates/py`: maturin through pip builds the package's
 #    crate in the same workspace and target folder, reusing every crate
 #    step 2 compiled (only pyo3, numpy and the package's crate compile);

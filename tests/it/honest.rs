@@ -376,7 +376,7 @@ fn an_io_cause_is_printed_once() {
 
 /// Rust debug values reached messages (`Pose { x: ... }`, `[Double, ...]`,
 /// `StepsDone`): no `{:?}` formats a message outside tests. (The Python
-/// package, its own workspace, is not scanned here.)
+/// package's crate, crates/py, is not scanned here.)
 #[test]
 fn no_debug_formatting_in_messages() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 /// The crates whose Rust tests cargo builds: the root and `crates/*`
-/// but the Python package (its own workspace, tested by pytest).
+/// but the Python package's (no Rust tests: pytest tests it).
 fn crate_dirs(root: &Path) -> Vec<PathBuf> {
     let mut dirs = vec![root.to_path_buf()];
     let crates = std::fs::read_dir(root.join("crates")).expect("crates/");

@@ -193,7 +193,7 @@ impl PinTracker {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use tactrace_testdata::layouts::hex_lattice;
@@ -232,12 +232,12 @@ mod tests {
     }
 
     /// The pins' coordinates' bits.
-    fn bits(t: &Tracked) -> Vec<[u64; 2]> {
+    pub(in crate::tracker) fn bits(t: &Tracked) -> Vec<[u64; 2]> {
         t.pins.iter().map(|p| p.map(f64::to_bits)).collect()
     }
 
     /// Whether the propagated start holds on `points`.
-    fn holds(tracker: &PinTracker, points: &[[f64; 2]]) -> bool {
+    pub(in crate::tracker) fn holds(tracker: &PinTracker, points: &[[f64; 2]]) -> bool {
         let grid = Grid::new(points, super::super::grid::CELL * tracker.spacing).expect("grid");
         let pairs = tracker.centroid_pairs(points, &grid);
         tracker.order_propagated(points, &grid, &pairs).is_some()

@@ -183,6 +183,7 @@ impl PinTracker {
 
 #[cfg(test)]
 mod tests {
+    use super::super::propagate::tests::{bits, holds};
     use super::*;
     use rand::{Rng, SeedableRng};
     use tactrace_testdata::layouts::hex_lattice;
@@ -226,13 +227,6 @@ mod tests {
         (points, truth)
     }
 
-    /// Whether the propagated start holds on `points`.
-    fn holds(tracker: &PinTracker, points: &[[f64; 2]]) -> bool {
-        let grid = Grid::new(points, super::super::grid::CELL * tracker.spacing).expect("grid");
-        let pairs = tracker.centroid_pairs(points, &grid);
-        tracker.order_propagated(points, &grid, &pairs).is_some()
-    }
-
     /// On 60 taps that press a line into a 127-pin hexagonal layout, the
     /// tracker orders every tap as the full path (no nearest-neighbour
     /// start) and as the tracker without the stalled growth's release,
@@ -261,9 +255,6 @@ mod tests {
             assert_eq!(a.1, expected, "trial {trial}: a pin off its own point");
             for other in [&off, &full] {
                 let b = other.order_points(&points);
-                let bits = |t: &Tracked| -> Vec<[u64; 2]> {
-                    t.pins.iter().map(|p| p.map(f64::to_bits)).collect()
-                };
                 assert_eq!(bits(&a.0), bits(&b.0), "trial {trial}");
                 assert_eq!(a.1, b.1, "trial {trial}");
             }
